@@ -1,0 +1,47 @@
+#pragma once
+#include <Eigen/Core>
+#include <optional>
+#include <string>
+
+#include "core/grid.hpp"
+
+namespace ps::core {
+
+// A parametrization of the planet's surface by a (2^n+1)^2 grid. Everything that needs to know
+// where a vertex is in R^3, which grid vertices are the same point, or how to go from a point in
+// space back to the grid asks the chart; a new surface shape is one new subclass.
+class Chart {
+ public:
+  virtual ~Chart() = default;
+
+  virtual std::string name() const = 0;
+  const GridSize& grid() const { return grid_; }
+
+  // Position in the planet frame of grid vertex (u, v) displaced by height h along up().
+  virtual Eigen::Vector3d position(int u, int v, double h) const = 0;
+  // The direction heights displace along at (u, v) (unit length).
+  virtual Eigen::Vector3d up(int u, int v) const = 0;
+  // Continuous version of position() for parameter coordinates in grid units.
+  virtual Eigen::Vector3d positionAt(double u, double v, double h) const = 0;
+
+  // Parameter coordinates (grid units, possibly fractional) of the surface point "under" p:
+  // the inverse mapping. Returns nullopt where p has no well-defined foot point (e.g. the
+  // planet's centre).
+  virtual std::optional<Eigen::Vector2d> inverse(const Eigen::Vector3d& p) const = 0;
+
+  // Topology: columns u = 0 and u = m are one meridian (the seam) when wrapsU().
+  virtual bool wrapsU() const = 0;
+  // Rows v = 0 and v = m each collapse to a single point (the poles) when hasPoleRows().
+  virtual bool hasPoleRows() const = 0;
+
+  // Reference radius heights are measured from (0 for a flat chart).
+  virtual double radius() const = 0;
+
+ protected:
+  explicit Chart(GridSize grid) : grid_(grid) {}
+
+ private:
+  GridSize grid_;
+};
+
+}  // namespace ps::core

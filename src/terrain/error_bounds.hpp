@@ -1,0 +1,64 @@
+#pragma once
+#include <cstdint>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "core/chart.hpp"
+#include "terrain/bound_code.hpp"
+#include "terrain/grid_region.hpp"
+
+namespace ps::terrain {
+
+// How the nested per-vertex error is derived (docs/ERROR-BOUNDS.md compares them).
+enum class ErrorRule {
+  // Paper 003 / ROAM: eps(v) = max over children eps(c) + |P(v) - (P(b0) + P(b1)) / 2|, with the
+  // midpoint error taken as a 3D vector length (heights displace radially, the chart is curved).
+  kWedgie,
+  // Ours: for diamonds up to kExactMaxHalfSize the exact maximum 3D deviation of the
+  // full-resolution vertices from the diamond's two triangles (maxed with the children's, to
+  // stay nested), the wedgie rule above that.
+  kHybridExact,
+};
+
+std::string toString(ErrorRule rule);
+ErrorRule errorRuleFromString(const std::string& s);  // throws core::InputError
+
+// For every split vertex v of the 4-8 hierarchy two nested bounds:
+//   error(v)  >= the largest 3D distance between a full-resolution vertex inside v's diamond and
+//                the point the diamond's two triangles put it at (parameter-space barycentric
+//                interpolation of the corners' 3D positions);
+//   radius(v) >= the largest distance from P(v) to a full-resolution vertex inside the diamond.
+// Nested: error(child) <= error(parent), radius(child) + |P(child) - P(parent)| <= radius(parent),
+// across the seam too (twins hold the same, combined values). Grid corners store 0.
+class ErrorBounds {
+ public:
+  static constexpr int kExactMaxHalfSize = 4;
+
+  ErrorBounds() = default;
+
+  void build(const core::Chart& chart, std::span<const float> heights, ErrorRule rule);
+  // Recomputes only the vertices whose bounds can depend on heights inside `dirty`, level by
+  // level up to the root. Bit-for-bit equal to build() on the same heights.
+  void update(const core::Chart& chart, std::span<const float> heights, const GridRegion& dirty);
+
+  ErrorRule rule() const { return rule_; }
+  float error(std::size_t index) const { return BoundCode::decode(errorCodes_[index]); }
+  float radius(std::size_t index) const { return BoundCode::decode(radiusCodes_[index]); }
+  const std::vector<std::uint16_t>& errorCodes() const { return errorCodes_; }
+  const std::vector<std::uint16_t>& radiusCodes() const { return radiusCodes_; }
+  std::size_t bytes() const { return (errorCodes_.size() + radiusCodes_.size()) * sizeof(std::uint16_t); }
+
+  // Vertices recomputed by the last update() (for benchmarks: the work done).
+  std::size_t lastUpdateVertexCount() const { return lastUpdateCount_; }
+
+ private:
+  template <class ChartT>
+  void computeLevel(const ChartT& chart, std::span<const float> heights, int level, const GridRegion& region);
+
+  ErrorRule rule_ = ErrorRule::kHybridExact;
+  std::vector<std::uint16_t> errorCodes_, radiusCodes_;
+  std::size_t lastUpdateCount_ = 0;
+};
+
+}  // namespace ps::terrain

@@ -1,0 +1,24 @@
+#pragma once
+#include <Eigen/Core>
+#include <cstdint>
+#include <vector>
+
+namespace ps::terrain {
+
+// A tessellated view: unique vertices (grid index + position relative to the eye, so float
+// keeps full precision near the camera) and CCW triangles (seen from outside the planet).
+struct Mesh {
+  Eigen::Vector3d eye = Eigen::Vector3d::Zero();  // planet-frame origin of `positions`
+  std::vector<std::uint64_t> gridIndex;           // per vertex: v * side + u
+  std::vector<Eigen::Vector3f> positions;          // per vertex: P - eye
+  std::vector<std::uint32_t> indices;              // 3 per triangle
+
+  std::size_t triangleCount() const { return indices.size() / 3; }
+  void clear() {
+    gridIndex.clear();
+    positions.clear();
+    indices.clear();
+  }
+};
+
+}  // namespace ps::terrain

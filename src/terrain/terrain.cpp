@@ -1,0 +1,103 @@
+#include "terrain/terrain.hpp"
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <sstream>
+
+#include "core/input_error.hpp"
+
+namespace ps::terrain {
+
+namespace {
+std::uint64_t nextRevision() {
+  static std::atomic<std::uint64_t> counter{1};
+  return counter.fetch_add(1);
+}
+
+std::string at(int u, int v) { return "vertex (u=" + std::to_string(u) + ", v=" + std::to_string(v) + ")"; }
+}  // namespace
+
+void Terrain::validateHeights(const core::Chart& chart, std::span<const float> h) {
+  const core::GridSize g = chart.grid();
+  if (h.size() != g.count()) {
+    throw core::InputError("got " + std::to_string(h.size()) + " heights, a " + g.label() + " grid needs " +
+                           std::to_string(g.count()));
+  }
+  const double limit = 0.25 * chart.radius();
+  const int m = g.m();
+  for (int v = 0; v <= m; ++v) {
+    for (int u = 0; u <= m; ++u) {
+      const float x = h[g.index(u, v)];
+      if (!std::isfinite(x)) {
+        std::ostringstream os;
+        os << "height at " << at(u, v) << " is " << x << ": heights must be finite";
+        throw core::InputError(os.str());
+      }
+      if (std::abs(double(x)) > limit) {
+        std::ostringstream os;
+        os << "height " << x << " m at " << at(u, v) << " exceeds the limit of +-" << limit
+           << " m (a quarter of the radius)";
+        throw core::InputError(os.str());
+      }
+    }
+  }
+  if (chart.wrapsU()) {
+    for (int v = 0; v <= m; ++v) {
+      if (h[g.index(0, v)] != h[g.index(m, v)]) {
+        throw core::InputError("seam twins differ: height at " + at(0, v) + " != " + at(m, v) +
+                               "; u = 0 and u = m are the same meridian");
+      }
+    }
+  }
+  if (chart.hasPoleRows()) {
+    for (int v : {0, m}) {
+      for (int u = 1; u <= m; ++u) {
+        if (h[g.index(u, v)] != h[g.index(0, v)]) {
+          throw core::InputError("pole row v = " + std::to_string(v) + " is not one point: height at " + at(u, v) +
+                                 " differs from " + at(0, v));
+        }
+      }
+    }
+  }
+}
+
+Terrain::Terrain(std::shared_ptr<const core::Chart> chart, std::vector<float> heights, ErrorRule rule)
+    : chart_(std::move(chart)), heights_(std::move(heights)) {
+  if (!chart_) throw core::InputError("terrain needs a chart");
+  validateHeights(*chart_, heights_);
+  bounds_.build(*chart_, heights_, rule);
+  refreshHeightRange();
+  revision_ = nextRevision();
+}
+
+void Terrain::refreshHeightRange() {
+  const auto [lo, hi] = std::minmax_element(heights_.begin(), heights_.end());
+  minHeight_ = *lo;
+  maxHeight_ = *hi;
+}
+
+void Terrain::commitEdit(const GridRegion& changed) {
+  if (changed.empty()) return;
+  bounds_.update(*chart_, heights_, changed);
+  // The global range only widens cheaply; a full scan is O(N^2) and the range is only used as
+  // a conservative occluder, so track it incrementally over the changed region.
+  changed.forEachColumnRange(grid(), [&](int uA, int uB) {
+    for (int v = changed.vBegin; v <= changed.vEnd; ++v) {
+      for (int u = uA; u <= uB; ++u) {
+        const float x = heights_[grid().index(u, v)];
+        minHeight_ = std::min(minHeight_, x);
+        maxHeight_ = std::max(maxHeight_, x);
+      }
+    }
+  });
+  revision_ = nextRevision();
+}
+
+void Terrain::rebuildBounds(ErrorRule rule) {
+  bounds_.build(*chart_, heights_, rule);
+  refreshHeightRange();
+  revision_ = nextRevision();
+}
+
+}  // namespace ps::terrain

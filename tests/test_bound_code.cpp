@@ -1,0 +1,34 @@
+#include <gtest/gtest.h>
+
+#include <random>
+
+#include "terrain/bound_code.hpp"
+
+using ps::terrain::BoundCode;
+
+TEST(BoundCode, DecodesToABoundWithinAFractionOfAPermille) {
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> expo(-19.0, 40.0);
+  for (int i = 0; i < 200000; ++i) {
+    const double x = std::exp2(expo(rng));
+    const auto code = BoundCode::encodeUp(x);
+    const double back = BoundCode::decode(code);
+    ASSERT_GE(back, x) << x;
+    ASSERT_LE(back, x * 1.0007) << x;
+    if (code > 1) {
+      ASSERT_LT(double(BoundCode::decode(std::uint16_t(code - 1))), x) << "smallest bounding code";
+    }
+  }
+  EXPECT_EQ(BoundCode::encodeUp(0.0), 0);
+  EXPECT_EQ(BoundCode::decode(0), 0.0f);
+}
+
+TEST(BoundCode, EncodingIsMonotone) {
+  double prev = 0;
+  std::uint16_t prevCode = 0;
+  for (double x = 1e-7; x < 1e12; x *= 1.013) {
+    const auto c = BoundCode::encodeUp(x);
+    ASSERT_GE(c, prevCode) << prev << " -> " << x;
+    prev = x, prevCode = c;
+  }
+}
