@@ -1,0 +1,529 @@
+#include "terrain/relief.hpp"
+
+#include <algorithm>
+#include <array>
+#include <atomic>
+#include <cmath>
+#include <cstring>
+#include <exception>
+#include <limits>
+#include <numbers>
+#include <sstream>
+#include <string>
+
+#include "core/input_error.hpp"
+#include "core/latlong_chart.hpp"
+
+#ifdef _OPENMP
+#include <omp.h>
+#endif
+
+namespace ps::terrain {
+
+namespace {
+
+// ---- Seeding -----------------------------------------------------------------------------------
+
+std::uint64_t splitmix64(std::uint64_t x) {
+  x += 0x9E3779B97F4A7C15ULL;
+  x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ULL;
+  x = (x ^ (x >> 27)) * 0x94D049BB133111EBULL;
+  return x ^ (x >> 31);
+}
+
+// 53 random bits as a double in [0, 1): exact, so identical everywhere.
+double unitInterval(std::uint64_t bits) {
+  return double(bits >> 11) * 0x1.0p-53;
+}
+
+// ---- Gradient noise ----------------------------------------------------------------------------
+// Improved Perlin noise, four points at a time with GCC vector extensions (SSE2 pairs in a
+// baseline x86-64 build, single AVX2 registers in the avx2 clone of noiseBatch). Every point,
+// reliefAt's lone one included, goes through the same lane code using only + - * and exact
+// conversions (the avx2 target does not enable FMA), so all paths agree to the bit.
+//
+// Vectors are passed by reference: 32-byte vectors by value draw GCC's -Wpsabi warning about the
+// AVX calling convention.
+
+using VecD = double __attribute__((vector_size(32)));
+using VecL = std::int64_t __attribute__((vector_size(32)));
+using VecI = std::int32_t __attribute__((vector_size(16)));
+using VecU = std::uint32_t __attribute__((vector_size(16)));
+constexpr int kLanes = 4;
+
+// Multipliers that spread lattice coordinates over 32 bits before the avalanche below.
+constexpr std::uint32_t kPx = 0x8DA6B343u;
+constexpr std::uint32_t kPy = 0xD8163841u;
+constexpr std::uint32_t kPz = 0xCB1AB31Fu;
+
+// Truncation plus a fix-up is exact and much cheaper than std::floor; coordinates are far inside
+// int range (|p| <= 1, frequencies below 2^21, offsets below 256).
+int fastFloor(double x) {
+  const int i = static_cast<int>(x);
+  return i - (x < static_cast<double>(i) ? 1 : 0);
+}
+
+[[gnu::always_inline]] inline VecI floor4(const VecD& x) {
+  const VecI i = __builtin_convertvector(x, VecI);
+  const VecL below = x < __builtin_convertvector(i, VecD);  // -1 where truncation rounded up
+  return i + __builtin_convertvector(below, VecI);
+}
+
+double fade(double t) {
+  return t * t * t * (t * (t * 6.0 - 15.0) + 10.0);
+}
+
+// Avalanches lattice code h like lowbias32's first half and keeps the top four bits, which the
+// multiplies mix best: the index of one of Ken Perlin's improved gradients (the 12 cube edge
+// midpoints, four of them twice). Widened to 64-bit lanes to line up with the doubles.
+[[gnu::always_inline]] inline void gradientCode(VecU h, VecL& code) {
+  h ^= h >> 16;
+  h *= 0x7FEB352Du;
+  h ^= h >> 15;
+  h *= 0x846CA68Bu;
+  // Zero-extension written as an interleave with zeros: a single vpmovzxdq, where
+  // __builtin_convertvector makes GCC 12 split the vector in halves.
+  const VecU zero{};
+  code = reinterpret_cast<VecL>(__builtin_shufflevector(h >> 28, zero, 0, 4, 1, 4, 2, 4, 3, 4));
+}
+
+// Perlin's selection (u, v and two signs) instead of a table lookup, so the lanes need no gather.
+[[gnu::always_inline]] inline void gradDot(const VecL& g, const VecD& fx, const VecD& fy,
+                                           const VecD& fz, VecD& out) {
+  const VecD u = g < 8 ? fx : fy;
+  const VecD v = g < 4 ? fy : ((g == 12) | (g == 14)) ? fx : fz;
+  const VecL uSign = (g & 1) << 63, vSign = (g & 2) << 62;
+  out = reinterpret_cast<VecD>(reinterpret_cast<VecL>(u) ^ uSign) +
+        reinterpret_cast<VecD>(reinterpret_cast<VecL>(v) ^ vSign);
+}
+
+// The same gradients as vectors, for the cached path of noiseBatch.
+struct Gradient {
+  double x, y, z;
+};
+constexpr std::array<Gradient, 16> makeGradients() {
+  std::array<Gradient, 16> table{};
+  for (int g = 0; g < 16; ++g) {
+    double c[3] = {0.0, 0.0, 0.0};
+    c[g < 8 ? 0 : 1] = (g & 1) ? -1.0 : 1.0;
+    c[g < 4 ? 1 : (g == 12 || g == 14) ? 0 : 2] = (g & 2) ? -1.0 : 1.0;
+    table[std::size_t(g)] = {c[0], c[1], c[2]};
+  }
+  return table;
+}
+constexpr std::array<Gradient, 16> kGradients = makeGradients();
+
+// One noise layer: lattice frequency, a seeded offset (so octaves do not share lattice points at
+// the origin) and a seeded hash.
+struct Octave {
+  double freq = 1.0;
+  double ox = 0.0, oy = 0.0, oz = 0.0;
+  std::uint32_t seed = 0;
+};
+
+Octave makeOctave(std::uint64_t seed, std::uint64_t layer, int k, double freq) {
+  // Derived from (seed, layer, k) alone so that adding octaves (a finer grid) keeps the coarse
+  // shape of the planet unchanged.
+  const std::uint64_t base = splitmix64(seed ^ splitmix64(layer * 64 + std::uint64_t(k) + 1));
+  Octave o;
+  o.freq = freq;
+  o.ox = 256.0 * unitInterval(splitmix64(base + 1));
+  o.oy = 256.0 * unitInterval(splitmix64(base + 2));
+  o.oz = 256.0 * unitInterval(splitmix64(base + 3));
+  o.seed = static_cast<std::uint32_t>(splitmix64(base + 4) >> 32);
+  return o;
+}
+
+// Noise of octave `o` (range about [-1, 1]) at the points (x[i], y[i], z), i < count, times
+// `scale`, stored into out[i] or, with `accumulate`, added to it. The arrays must be readable and
+// writable up to count rounded up to kLanes.
+//
+// Two savings, neither of which changes a bit of the result:
+//  - A lat-long row has one z, so the z half of the lattice lookup is done once per call.
+//  - Below the finest octaves, runs of neighbouring vertices share a lattice cell. When all four
+//    lanes sit in the cell of the previous block, the eight gradients are reused and each corner
+//    costs two multiplies and two adds instead of a hash. The cached form g.x*fx + g.y*fy + g.z*fz
+//    adds a zero term to the selected u + v, which leaves every non-zero dot product unchanged;
+//    at worst a zero's sign differs, and such a zero disappears in the next sum.
+__attribute__((target_clones("avx2", "default"))) void noiseBatch(const Octave& o, double z,
+                                                                  const double* x, const double* y,
+                                                                  int count, double* out,
+                                                                  double scale, bool accumulate) {
+  const double zz = z * o.freq + o.oz;
+  const int iz = fastFloor(zz);
+  const double fzs[2] = {zz - iz, zz - iz - 1.0};
+  const VecD fz[2] = {VecD{} + fzs[0], VecD{} + fzs[1]};
+  const VecD wz = VecD{} + fade(fzs[0]);
+  const std::uint32_t hz = o.seed + static_cast<std::uint32_t>(iz) * kPz;
+  const VecU h[2] = {VecU{} + hz, VecU{} + (hz + kPz)};
+
+  int cellX = std::numeric_limits<int>::min(), cellY = cellX;  // no cell cached yet
+  double cgx[8] = {}, cgy[8] = {}, cgz[8] = {};                // cgz: g.z * fz, per row
+
+  for (int i = 0; i < count; i += kLanes) {
+    VecD px, py;
+    std::memcpy(&px, x + i, sizeof px);
+    std::memcpy(&py, y + i, sizeof py);
+    const VecD xx = px * o.freq + o.ox;
+    const VecD yy = py * o.freq + o.oy;
+    const VecI ix = floor4(xx), iy = floor4(yy);
+    const VecD fx[2] = {xx - __builtin_convertvector(ix, VecD), fx[0] - 1.0};
+    const VecD fy[2] = {yy - __builtin_convertvector(iy, VecD), fy[0] - 1.0};
+    const VecD wx = fx[0] * fx[0] * fx[0] * (fx[0] * (fx[0] * 6.0 - 15.0) + 10.0);
+    const VecD wy = fy[0] * fy[0] * fy[0] * (fy[0] * (fy[0] * 6.0 - 15.0) + 10.0);
+
+    // Corner c is (ix + (c & 1), iy + (c >> 1 & 1), iz + (c >> 2)).
+    VecD n[8];
+    std::uint64_t other[2];
+    const VecI moved = (ix ^ cellX) | (iy ^ cellY);
+    std::memcpy(other, &moved, sizeof other);
+    if ((other[0] | other[1]) == 0) {
+#pragma GCC unroll 8
+      for (int c = 0; c < 8; ++c) n[c] = cgx[c] * fx[c & 1] + cgy[c] * fy[c >> 1 & 1] + cgz[c];
+    } else {
+      const VecU bx = reinterpret_cast<const VecU&>(ix) * kPx;
+      const VecU b00 = bx + reinterpret_cast<const VecU&>(iy) * kPy;
+      const VecU b[4] = {b00, b00 + kPx, b00 + kPy, b00 + (kPx + kPy)};
+      VecL g[8];
+#pragma GCC unroll 8
+      for (int c = 0; c < 8; ++c) {
+        gradientCode(h[c >> 2] + b[c & 3], g[c]);
+        gradDot(g[c], fx[c & 1], fy[c >> 1 & 1], fz[c >> 2], n[c]);
+      }
+      // Cache the last lane's cell: the next block most likely starts in it.
+      cellX = ix[kLanes - 1];
+      cellY = iy[kLanes - 1];
+      for (int c = 0; c < 8; ++c) {
+        const Gradient& grad = kGradients[std::size_t(g[c][kLanes - 1])];
+        cgx[c] = grad.x;
+        cgy[c] = grad.y;
+        cgz[c] = grad.z * fzs[c >> 2];
+      }
+    }
+    // Trilinear blend with the faded weights: x, then y, then z.
+    const VecD n00 = n[0] + wx * (n[1] - n[0]), n10 = n[2] + wx * (n[3] - n[2]);
+    const VecD n01 = n[4] + wx * (n[5] - n[4]), n11 = n[6] + wx * (n[7] - n[6]);
+    const VecD n0 = n00 + wy * (n10 - n00), n1 = n01 + wy * (n11 - n01);
+    VecD result = scale * (n0 + wz * (n1 - n0));
+    if (accumulate) {
+      VecD previous;
+      std::memcpy(&previous, out + i, sizeof previous);
+      result = previous + result;
+    }
+    std::memcpy(out + i, &result, sizeof result);
+  }
+}
+
+// ---- Shaping -----------------------------------------------------------------------------------
+// Elevations here are in units of the amplitude (1 = 8 km by default). The per-vertex stages are
+// free of branches (clamps are written with fabs, which GCC's vectoriser takes where it refuses
+// std::min/max on doubles) so that `omp simd` vectorises them; elementwise IEEE arithmetic gives
+// the same bits in vector and scalar code.
+
+// max(y, 0) and clamp(y, 0, 1). Exact for y >= 0 and y in [0, 1] respectively, up to rounding in
+// the last bit of the latter, which is harmless in a ramp.
+[[gnu::always_inline]] inline double positive(double y) {
+  return 0.5 * (y + std::abs(y));
+}
+[[gnu::always_inline]] inline double clamp01(double y) {
+  return 0.5 * ((std::abs(y) - std::abs(y - 1.0)) + 1.0);
+}
+
+// Smoothstep from 0 at x = e0 to 1 at x = e0 + 1/invWidth (invWidth < 0 runs downhill).
+[[gnu::always_inline]] inline double ramp(double x, double e0, double invWidth) {
+  const double t = clamp01((x - e0) * invWidth);
+  return t * (t * (3.0 - 2.0 * t));
+}
+
+// Hypsometric curve from the continent signal t (0 at the coast) to base elevation: a sum of
+// smoothsteps, so it is monotone with flat stretches where Earth's hypsometry has its two humps,
+// the abyssal plains and the continental lowlands, and steep ones at the continental slope.
+[[gnu::always_inline]] inline double hypsometry(double t) {
+  return -0.78                              // deep basins, ~-6.2 km
+         + 0.16 * ramp(t, -0.60, 1 / 0.40)  // up to the abyssal plains, ~-5 km
+         + 0.54 * ramp(t, -0.15, 1 / 0.10)  // continental slope up to the shelf break, ~-500 m
+         + 0.08 * ramp(t, -0.07, 1 / 0.08)  // shelf, reaching the coast near t = 0
+         + 0.24 * ramp(t, 0.00, 1 / 0.70);  // lowlands to high plateaus, ~1.9 km
+}
+
+// Smooth clamp into (-1, 1), tanh-like: the identity up to |e| = 1/2 (sea floor and land keep
+// their shape), then a C1 rational saturation 1 - 1/(1 + r + r^2/2 + r^3/6), which closes in on 1
+// as fast as 1/r^3. Division only: libm's tanh is not bitwise the same everywhere, and
+// std::sqrt blocks vectorisation (errno).
+[[gnu::always_inline]] inline double softClamp(double e) {
+  constexpr double kKnee = 0.5;
+  const double a = std::abs(e);
+  const double excess = positive(a - kKnee);
+  const double r = excess * (1.0 / (1.0 - kKnee));
+  const double saturated = 1.0 - 1.0 / (1.0 + r * (1.0 + r * (0.5 + r * (1.0 / 6.0))));
+  return std::copysign((a - excess) + (1.0 - kKnee) * saturated, e);
+}
+
+constexpr double kSeaLevel = 0.12;  // continent signal at the coast: about 30% land
+
+// Base elevation and mountain mask from the fBm split (cont: coarse octaves, detail: the rest)
+// and the belt noise.
+__attribute__((target_clones("avx2", "default"))) void shapeStage(int count, const double* cont,
+                                                                  const double* detail,
+                                                                  const double* beltNoise,
+                                                                  double* base, double* mask) {
+#pragma omp simd
+  for (int i = 0; i < count; ++i) {
+    const double t = cont[i] + detail[i] - kSeaLevel;
+    const double land = ramp(t, 0.0, 1 / 0.12);
+    const double deep = ramp(t, -0.12, -1 / 0.18);
+    // The detail octaves bend the belts so ranges wander instead of following smooth arcs.
+    const double belt = std::abs(beltNoise[i] + 0.5 * detail[i]);
+    double e = hypsometry(t);
+    e += (0.02 + 0.2 * land) * detail[i];  // gentle sea floor, hills on land
+    // Broad uplift around the ranges (plateaus, foothills), and mid-ocean ridges along the same
+    // lines on the deep sea floor.
+    e += 0.08 * land * ramp(belt, 0.2, -1 / 0.2);
+    e += 0.2 * deep * ramp(belt, 0.12, -1 / 0.12);
+    base[i] = e;
+    mask[i] = land * ramp(belt, 0.07, -1 / 0.07);
+  }
+}
+
+// Adds the mountains (ridged signal where mask > 0) and clamps into [-amplitude, amplitude].
+__attribute__((target_clones("avx2", "default"))) void finishStage(int count, const double* base,
+                                                                   const double* mask,
+                                                                   const double* ridge,
+                                                                   double amplitude, double* out) {
+#pragma omp simd
+  for (int i = 0; i < count; ++i) {
+    // The ridged sum mostly lies in [0.6, 1.8]: crests near the top carry the peaks.
+    const double q = positive(ridge[i] - 0.6) * (1.0 / 1.2);
+    out[i] = amplitude * softClamp(base[i] + mask[i] * (q * q));
+  }
+}
+
+// ---- The field ---------------------------------------------------------------------------------
+
+constexpr double kContinentFreq = 1.1;  // a handful of continents
+constexpr double kBeltFreq = 1.3;       // layout of mountain belts and mid-ocean ridges
+constexpr double kRidgeFreq = 2.2;      // first ridged octave: individual ranges
+constexpr double kLacunarity = 2.0;
+constexpr int kMaxDefaultOctaves = 14;
+constexpr int kMaxOctaves = 20;
+constexpr int kCoarseOctaves = 2;  // continent octaves that are not also "detail"
+
+constexpr std::size_t padded(int count) {
+  return static_cast<std::size_t>((count + kLanes - 1) / kLanes * kLanes);
+}
+
+// Per-thread buffers for one row.
+struct Scratch {
+  std::vector<double> noise, cont, detail, belt, base, mask, ridge, cx, cy, cr, cw;
+  std::vector<int> active;
+  explicit Scratch(int count) {
+    const std::size_t n = padded(count);
+    for (auto* v : {&noise, &cont, &detail, &belt, &base, &mask, &ridge, &cx, &cy, &cr, &cw}) {
+      v->resize(n);
+    }
+    active.resize(n);
+  }
+};
+
+class ReliefField {
+ public:
+  ReliefField(const ReliefParams& params, int octaves) : amplitude_(params.amplitudeMetres) {
+    double f = kContinentFreq;
+    for (int k = 0; k < octaves; ++k, f *= kLacunarity) {
+      fbm_.push_back(makeOctave(params.seed, 1, k, f));
+    }
+    // Same finest frequency as the fBm: the ridges start one octave higher.
+    f = kRidgeFreq;
+    for (int k = 0; k + 1 < octaves; ++k, f *= kLacunarity) {
+      ridged_.push_back(makeOctave(params.seed, 2, k, f));
+    }
+    belt_ = makeOctave(params.seed, 3, 0, kBeltFreq);
+  }
+
+  // Heights in metres for the `count` directions (x[i], y[i], z); x and y padded as noiseBatch
+  // requires.
+  void evalRow(const double* x, const double* y, double z, int count, double* out,
+               Scratch& s) const {
+    double amp = 1.0;
+    for (std::size_t k = 0; k < fbm_.size(); ++k, amp *= 0.5) {
+      const bool coarse = static_cast<int>(k) < kCoarseOctaves;
+      const bool first = k == 0 || static_cast<int>(k) == kCoarseOctaves;
+      noiseBatch(fbm_[k], z, x, y, count, (coarse ? s.cont : s.detail).data(), amp, !first);
+    }
+    if (static_cast<int>(fbm_.size()) <= kCoarseOctaves) {
+      std::fill(s.detail.begin(), s.detail.end(), 0.0);
+    }
+    noiseBatch(belt_, z, x, y, count, s.belt.data(), 1.0, false);
+    shapeStage(count, s.cont.data(), s.detail.data(), s.belt.data(), s.base.data(), s.mask.data());
+
+    std::fill(s.ridge.begin(), s.ridge.end(), 0.0);
+    std::size_t nActive = 0;
+    for (int i = 0; i < count; ++i) {
+      if (s.mask[std::size_t(i)] > 0.0) {
+        s.active[nActive] = i;
+        s.cx[nActive] = x[i];
+        s.cy[nActive] = y[i];
+        s.cr[nActive] = 0.0;
+        s.cw[nActive] = 1.0;
+        ++nActive;
+      }
+    }
+
+    // Ridged multifractal (Musgrave) on the mountain belts only, over a packed list of their
+    // vertices: each octave is weighted by the previous one's signal, so detail piles up on crests
+    // and valleys stay smooth. A vertex whose weight has all but vanished (finer octaves could
+    // add about a metre) leaves the list.
+    double octaveAmp = 1.0;
+    for (std::size_t k = 0; k < ridged_.size() && nActive > 0; ++k, octaveAmp *= 0.5) {
+      for (std::size_t j = nActive; j < padded(int(nActive)); ++j) {
+        s.cx[j] = s.cx[j - 1];
+        s.cy[j] = s.cy[j - 1];
+      }
+      noiseBatch(ridged_[k], z, s.cx.data(), s.cy.data(), int(nActive), s.noise.data(), 1.0, false);
+      std::size_t nNext = 0;
+      for (std::size_t j = 0; j < nActive; ++j) {
+        double signal = 1.0 - std::abs(s.noise[j]);
+        signal *= signal;
+        signal *= s.cw[j];
+        const double r = s.cr[j] + signal * octaveAmp;
+        const double w = std::min(1.0, signal * 2.0);
+        if (w > kRidgeCutoff) {
+          s.active[nNext] = s.active[j];
+          s.cx[nNext] = s.cx[j];
+          s.cy[nNext] = s.cy[j];
+          s.cr[nNext] = r;
+          s.cw[nNext] = w;
+          ++nNext;
+        } else {
+          s.ridge[std::size_t(s.active[j])] = r;
+        }
+      }
+      nActive = nNext;
+    }
+    for (std::size_t j = 0; j < nActive; ++j) s.ridge[std::size_t(s.active[j])] = s.cr[j];
+
+    finishStage(count, s.base.data(), s.mask.data(), s.ridge.data(), amplitude_, out);
+  }
+
+ private:
+  static constexpr double kRidgeCutoff = 1.0 / 8192.0;
+
+  double amplitude_;
+  std::vector<Octave> fbm_, ridged_;
+  Octave belt_;
+};
+
+void validate(const ReliefParams& params) {
+  if (!std::isfinite(params.amplitudeMetres) || params.amplitudeMetres <= 0.0) {
+    std::ostringstream msg;
+    msg << "relief amplitude " << params.amplitudeMetres << " m must be positive and finite";
+    throw core::InputError(msg.str());
+  }
+  if (params.octaves < 0 || params.octaves > kMaxOctaves) {
+    throw core::InputError("relief octaves = " + std::to_string(params.octaves) +
+                           " is out of range: 0 (automatic) to " + std::to_string(kMaxOctaves));
+  }
+}
+
+}  // namespace
+
+int reliefOctaves(const core::GridSize& grid, const ReliefParams& params) {
+  validate(params);
+  if (params.octaves > 0) return params.octaves;
+  // Noise at lattice frequency f repeats about every 1/f radians. Keep octaves while that still
+  // spans two cells where the grid is coarsest, along the equator (2*pi/m per cell).
+  const double fMax = grid.m() / (4.0 * std::numbers::pi);
+  int n = 1;
+  for (double f = kContinentFreq * kLacunarity; f <= fMax && n < kMaxDefaultOctaves;
+       f *= kLacunarity) {
+    ++n;
+  }
+  return n;
+}
+
+double reliefAt(const Eigen::Vector3d& unitDirection, const ReliefParams& params, int octaves) {
+  validate(params);
+  if (octaves < 1 || octaves > kMaxOctaves) {
+    throw core::InputError("relief octaves = " + std::to_string(octaves) +
+                           " is out of range: 1 to " + std::to_string(kMaxOctaves));
+  }
+  const ReliefField field(params, octaves);
+  Scratch s(1);
+  double x[kLanes], y[kLanes], h[kLanes];
+  std::fill_n(x, kLanes, unitDirection.x());
+  std::fill_n(y, kLanes, unitDirection.y());
+  field.evalRow(x, y, unitDirection.z(), 1, h, s);
+  return h[0];
+}
+
+std::vector<float> generateRelief(const core::Chart& chart, const ReliefParams& params,
+                                  const std::function<void(double)>& progress) {
+  const core::GridSize grid = chart.grid();
+  const int octaves = reliefOctaves(grid, params);
+  const ReliefField field(params, octaves);
+  const int side = grid.side();
+  std::vector<float> heights(grid.count());
+  const auto* latLong = dynamic_cast<const core::LatLongChart*>(&chart);
+
+  if (progress) progress(0.0);
+  std::atomic<int> rowsDone{0};
+  std::atomic<bool> stop{false};
+  std::exception_ptr error;
+  // Only the calling thread reports, after its own rows, about every 1% of the grid.
+  const int reportEvery = std::max(1, side / 100);
+  int lastReported = 0;
+
+#pragma omp parallel
+  {
+    Scratch s(side);
+    const std::size_t n = padded(side);
+    std::vector<double> x(n), y(n), out(n);
+#pragma omp for schedule(dynamic, 4)
+    for (int v = 0; v < side; ++v) {
+      if (stop.load(std::memory_order_relaxed)) continue;
+      float* row = heights.data() + grid.index(0, v);
+      if (latLong) {
+        for (int u = 0; u < side; ++u) {
+          const Eigen::Vector3d d = latLong->direction(u, v);
+          x[std::size_t(u)] = d.x();
+          y[std::size_t(u)] = d.y();
+        }
+        std::fill(x.begin() + side, x.end(), x[std::size_t(side) - 1]);
+        std::fill(y.begin() + side, y.end(), y[std::size_t(side) - 1]);
+        field.evalRow(x.data(), y.data(), latLong->direction(0, v).z(), side, out.data(), s);
+        for (int u = 0; u < side; ++u) row[u] = static_cast<float>(out[std::size_t(u)]);
+      } else {
+        // Any other chart: no shared z per row, so one direction at a time.
+        for (int u = 0; u < side; ++u) {
+          const Eigen::Vector3d d = chart.up(u, v);
+          double dx[kLanes], dy[kLanes], h[kLanes];
+          std::fill_n(dx, kLanes, d.x());
+          std::fill_n(dy, kLanes, d.y());
+          field.evalRow(dx, dy, d.z(), 1, h, s);
+          row[u] = static_cast<float>(h[0]);
+        }
+      }
+      const int done = rowsDone.fetch_add(1, std::memory_order_relaxed) + 1;
+#ifdef _OPENMP
+      const bool caller = omp_get_thread_num() == 0;  // the master thread is the calling thread
+#else
+      const bool caller = true;
+#endif
+      if (caller && progress && done - lastReported >= reportEvery) {
+        lastReported = done;
+        try {
+          progress(double(done) / side);
+        } catch (...) {
+          // An exception must not leave the parallel region: stop the others, rethrow after it.
+          error = std::current_exception();
+          stop.store(true, std::memory_order_relaxed);
+        }
+      }
+    }
+  }
+  if (error) std::rethrow_exception(error);
+  if (progress) progress(1.0);
+  return heights;
+}
+
+}  // namespace ps::terrain
