@@ -25,7 +25,8 @@ inline std::string conformityDefect(const terrain::Terrain& t, const terrain::Me
   };
   std::map<std::pair<std::int64_t, std::int64_t>, int> directed;
   for (std::size_t k = 0; k < mesh.triangleCount(); ++k) {
-    const std::int64_t a = id(mesh.gridIndex[mesh.indices[3 * k]]), b = id(mesh.gridIndex[mesh.indices[3 * k + 1]]),
+    const std::int64_t a = id(mesh.gridIndex[mesh.indices[3 * k]]),
+                       b = id(mesh.gridIndex[mesh.indices[3 * k + 1]]),
                        c = id(mesh.gridIndex[mesh.indices[3 * k + 2]]);
     if (a == b || b == c || a == c) continue;
     for (auto e : {std::pair{a, b}, std::pair{b, c}, std::pair{c, a}}) {
@@ -36,9 +37,11 @@ inline std::string conformityDefect(const terrain::Terrain& t, const terrain::Me
     if (!directed.count({e.second, e.first})) {
       auto name = [&](std::int64_t x) {
         return x < 0 ? std::string(x == -1 ? "south pole" : "north pole")
-                     : "(" + std::to_string(x % std::int64_t(side)) + "," + std::to_string(x / std::int64_t(side)) + ")";
+                     : "(" + std::to_string(x % std::int64_t(side)) + "," +
+                           std::to_string(x / std::int64_t(side)) + ")";
       };
-      return "edge " + name(e.first) + "-" + name(e.second) + " has no partner: a crack or T-junction";
+      return "edge " + name(e.first) + "-" + name(e.second) +
+             " has no partner: a crack or T-junction";
     }
   }
   return "";

@@ -38,8 +38,9 @@ TEST(LatLongChart, FollowsPaperEquations) {
     for (int u = 0; u <= m; u += 5) {
       const double lat = v * std::numbers::pi / m - std::numbers::pi / 2;
       const double lon = 2.0 * u * std::numbers::pi / m - std::numbers::pi;
-      const Eigen::Vector3d expect = 2.5 * Eigen::Vector3d(std::cos(lon) * std::cos(lat),
-                                                           std::sin(lon) * std::cos(lat), std::sin(lat));
+      const Eigen::Vector3d expect =
+          2.5 * Eigen::Vector3d(std::cos(lon) * std::cos(lat), std::sin(lon) * std::cos(lat),
+                                std::sin(lat));
       EXPECT_LT((c.position(u, v, 0.5) - expect).norm(), 1e-12);
       EXPECT_LT((c.positionAt(u, v, 0.5) - expect).norm(), 1e-12);
     }
@@ -49,7 +50,8 @@ TEST(LatLongChart, FollowsPaperEquations) {
 TEST(LatLongChart, SeamTwinsAndPoleRowsAreBitwiseOnePoint) {
   const LatLongChart c(GridSize(9), 6372790.0);
   const int m = c.grid().m();
-  for (int v = 0; v <= m; ++v) EXPECT_EQ(c.position(0, v, 10.0), c.position(m, v, 10.0)) << "v=" << v;
+  for (int v = 0; v <= m; ++v)
+    EXPECT_EQ(c.position(0, v, 10.0), c.position(m, v, 10.0)) << "v=" << v;
   for (int u = 0; u <= m; ++u) {
     EXPECT_EQ(c.position(u, 0, 3.0), c.position(0, 0, 3.0)) << "south pole u=" << u;
     EXPECT_EQ(c.position(u, m, 3.0), c.position(0, m, 3.0)) << "north pole u=" << u;
@@ -65,7 +67,8 @@ TEST(LatLongChart, InverseRecoversGridCoordinates) {
       ASSERT_TRUE(uv.has_value());
       EXPECT_NEAR((*uv).y(), v, 1e-9);
       // u = 0 and u = m are one meridian: either answer is right there.
-      const double du = u == 0 ? std::min(std::abs((*uv).x()), std::abs((*uv).x() - m)) : std::abs((*uv).x() - u);
+      const double du =
+          u == 0 ? std::min(std::abs((*uv).x()), std::abs((*uv).x() - m)) : std::abs((*uv).x() - u);
       EXPECT_LT(du, 1e-9) << u << "," << v;
     }
   }

@@ -40,12 +40,16 @@ Exact exactDiamond(const terrain::Terrain& t, GridPoint p) {
     const Eigen::Vector3d pa = pos(a), d0 = pos(b0) - pa, d1 = pos(b1) - pa;
     for (int v = 0; v <= m; ++v) {
       for (int u = 0; u <= m; ++u) {
-        const long long da = (long long)(u - a.u) * (b0.u - a.u) + (long long)(v - a.v) * (b0.v - a.v);
-        const long long db = (long long)(u - a.u) * (b1.u - a.u) + (long long)(v - a.v) * (b1.v - a.v);
-        const long long l2 = (long long)(b0.u - a.u) * (b0.u - a.u) + (long long)(b0.v - a.v) * (b0.v - a.v);
+        const long long da =
+            (long long)(u - a.u) * (b0.u - a.u) + (long long)(v - a.v) * (b0.v - a.v);
+        const long long db =
+            (long long)(u - a.u) * (b1.u - a.u) + (long long)(v - a.v) * (b1.v - a.v);
+        const long long l2 =
+            (long long)(b0.u - a.u) * (b0.u - a.u) + (long long)(b0.v - a.v) * (b0.v - a.v);
         if (da < 0 || db < 0 || da + db > l2) continue;
         const Eigen::Vector3d q = pos({u, v});
-        const Eigen::Vector3d lin = pa + double(da) / double(l2) * d0 + double(db) / double(l2) * d1;
+        const Eigen::Vector3d lin =
+            pa + double(da) / double(l2) * d0 + double(db) / double(l2) * d1;
         e.deviation = std::max(e.deviation, (q - lin).norm());
         e.reach = std::max(e.reach, (q - P).norm());
       }
@@ -83,8 +87,8 @@ TEST(Diamond, LevelsAndChildrenFollowTheHierarchy) {
         ++parents;
         const Diamond pd = Diamond::of(a);
         EXPECT_EQ(pd.level, d.level + 1);
-        const bool found = std::find(pd.children.begin(), pd.children.begin() + pd.childCount, GridPoint{u, v}) !=
-                           pd.children.begin() + pd.childCount;
+        const bool found = std::find(pd.children.begin(), pd.children.begin() + pd.childCount,
+                                     GridPoint{u, v}) != pd.children.begin() + pd.childCount;
         EXPECT_TRUE(found) << u << "," << v;
       }
       EXPECT_GE(parents, 1);
@@ -118,13 +122,16 @@ TEST_P(BoundsRule, ErrorAndRadiusAreGuaranteedAndNested) {
           const std::size_t pi = g.index(a.u, a.v);
           ASSERT_LE(b.error(i), b.error(pi)) << "error nesting at " << u << "," << v;
           const Eigen::Vector3d Pp = t.chart().position(a.u, a.v, t.height(a.u, a.v));
-          ASSERT_LE(double(b.radius(i)) + (P - Pp).norm(), double(b.radius(pi))) << "radius nesting at " << u << "," << v;
+          ASSERT_LE(double(b.radius(i)) + (P - Pp).norm(), double(b.radius(pi)))
+              << "radius nesting at " << u << "," << v;
         }
       }
     }
     for (int v = 0; v <= m; ++v) {
-      ASSERT_EQ(b.errorCodes()[g.index(0, v)], b.errorCodes()[g.index(m, v)]) << "seam twins v=" << v;
-      ASSERT_EQ(b.radiusCodes()[g.index(0, v)], b.radiusCodes()[g.index(m, v)]) << "seam twins v=" << v;
+      ASSERT_EQ(b.errorCodes()[g.index(0, v)], b.errorCodes()[g.index(m, v)])
+          << "seam twins v=" << v;
+      ASSERT_EQ(b.radiusCodes()[g.index(0, v)], b.radiusCodes()[g.index(m, v)])
+          << "seam twins v=" << v;
     }
     EXPECT_GT(worstRatio, 0.3) << "the bound is not uselessly loose everywhere";
   }
@@ -161,13 +168,17 @@ TEST_P(BoundsRule, LocalUpdateEqualsFullRebuildBitForBit) {
     t.commitEdit(region.unite(GridRegion{0, 0, v0, v1}, g, true));
     terrain::ErrorBounds full;
     full.build(t.chart(), t.heights(), GetParam());
-    ASSERT_EQ(full.errorCodes(), t.bounds().errorCodes()) << "trial " << trial << " " << region.describe();
+    ASSERT_EQ(full.errorCodes(), t.bounds().errorCodes())
+        << "trial " << trial << " " << region.describe();
     ASSERT_EQ(full.radiusCodes(), t.bounds().radiusCodes()) << "trial " << trial;
   }
 }
 
-INSTANTIATE_TEST_SUITE_P(Rules, BoundsRule, ::testing::Values(ErrorRule::kWedgie, ErrorRule::kHybridExact),
-                         [](const auto& p) { return p.param == ErrorRule::kWedgie ? "Wedgie" : "HybridExact"; });
+INSTANTIATE_TEST_SUITE_P(Rules, BoundsRule,
+                         ::testing::Values(ErrorRule::kWedgie, ErrorRule::kHybridExact),
+                         [](const auto& p) {
+                           return p.param == ErrorRule::kWedgie ? "Wedgie" : "HybridExact";
+                         });
 
 TEST(Terrain, RejectsBadHeightsNamingTheVertex) {
   auto chart = testkit::earthChart(5);

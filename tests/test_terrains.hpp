@@ -14,8 +14,8 @@ namespace ps::testkit {
 
 inline constexpr double kEarthRadius = 6372790.0;
 
-inline std::vector<float> bumpyHeights(const core::LatLongChart& chart, std::uint32_t seed, double amplitude,
-                                       int bumps = 40) {
+inline std::vector<float> bumpyHeights(const core::LatLongChart& chart, std::uint32_t seed,
+                                       double amplitude, int bumps = 40) {
   std::mt19937 rng(seed);
   std::uniform_real_distribution<double> uni(-1.0, 1.0);
   struct Bump {
@@ -34,8 +34,10 @@ inline std::vector<float> bumpyHeights(const core::LatLongChart& chart, std::uin
   for (int v = 0; v <= g.m(); ++v) {
     for (int u = 0; u <= g.m(); ++u) {
       const Eigen::Vector3d d = chart.direction(u, v);
-      double x = 0.15 * amplitude * std::sin(23 * d.x() + 7) * std::cos(19 * d.y() - 3) * std::sin(29 * d.z());
-      for (const Bump& b : list) x += b.height * std::exp(-(d - b.c).squaredNorm() / (b.width * b.width));
+      double x = 0.15 * amplitude * std::sin(23 * d.x() + 7) * std::cos(19 * d.y() - 3) *
+                 std::sin(29 * d.z());
+      for (const Bump& b : list)
+        x += b.height * std::exp(-(d - b.c).squaredNorm() / (b.width * b.width));
       h[g.index(u, v)] = float(x);
     }
   }

@@ -27,10 +27,13 @@ Camera randomCamera(std::mt19937& rng, double R, int width = 640, int height = 4
   dir.normalize();
   const double altitude = R * std::pow(10.0, -4 + 4.5 * unit(rng));  // 0.0001 R .. 3 R
   const Eigen::Vector3d eye = dir * (R + 9000 + altitude);
-  Eigen::Vector3d target = (unit(rng) < 0.5) ? Eigen::Vector3d::Zero()
-                                              : Eigen::Vector3d(dir * R + R * 0.3 * Eigen::Vector3d(uni(rng), uni(rng), uni(rng)));
+  Eigen::Vector3d target =
+      (unit(rng) < 0.5)
+          ? Eigen::Vector3d::Zero()
+          : Eigen::Vector3d(dir * R + R * 0.3 * Eigen::Vector3d(uni(rng), uni(rng), uni(rng)));
   if ((target - eye).norm() < 1) target = Eigen::Vector3d::Zero();
-  return Camera::lookAt(eye, target, Eigen::Vector3d(0.3, 0.1, 1), width, height, 0.5 + 1.2 * unit(rng));
+  return Camera::lookAt(eye, target, Eigen::Vector3d(0.3, 0.1, 1), width, height,
+                        0.5 + 1.2 * unit(rng));
 }
 
 }  // namespace
@@ -55,7 +58,8 @@ TEST(Tessellator, WholePlanetMeshIsCrackFreeForManyViews) {
 
 TEST(Tessellator, FullResolutionMeshIsCrackFreeAndComplete) {
   const auto t = testkit::bumpyTerrain(5, 4, 20000.0);
-  Camera cam = Camera::lookAt({0, 0, 3 * testkit::kEarthRadius}, {0, 0, 0}, {1, 0, 0}, 640, 480, 1.0);
+  Camera cam =
+      Camera::lookAt({0, 0, 3 * testkit::kEarthRadius}, {0, 0, 0}, {1, 0, 0}, 640, 480, 1.0);
   TessellationSettings s;
   s.cull = false;
   s.triangleBudget = 0;
@@ -88,8 +92,8 @@ TEST(Tessellator, MeasuredScreenErrorNeverExceedsDistMax) {
 
 TEST(Tessellator, BudgetCoarsensTheWholeViewAndStaysBounded) {
   const auto t = testkit::bumpyTerrain(10, 2, 30000.0);
-  const Camera cam = Camera::lookAt({0, -2.0 * testkit::kEarthRadius, 0.2 * testkit::kEarthRadius}, {0, 0, 0},
-                                    {0, 0, 1}, 1280, 720, 1.0);
+  const Camera cam = Camera::lookAt({0, -2.0 * testkit::kEarthRadius, 0.2 * testkit::kEarthRadius},
+                                    {0, 0, 0}, {0, 0, 1}, 1280, 720, 1.0);
   Tessellator tess;
   TessellationSettings s;
   s.distMaxPx = 0.5;
@@ -102,13 +106,14 @@ TEST(Tessellator, BudgetCoarsensTheWholeViewAndStaysBounded) {
   EXPECT_GT(mesh.triangleCount(), s.triangleBudget / 3) << "budget used, not wasted";
   EXPECT_GT(tess.stats().effectiveDistMaxPx, s.distMaxPx);
   const auto rep = terrain::measureScreenError(t, cam, mesh);
-  EXPECT_LE(rep.maxPx, tess.stats().effectiveDistMaxPx) << "coarsened evenly: one raised threshold holds everywhere";
+  EXPECT_LE(rep.maxPx, tess.stats().effectiveDistMaxPx)
+      << "coarsened evenly: one raised threshold holds everywhere";
 }
 
 TEST(Tessellator, CullingSkipsWorkAndUnchangedViewsAreReused) {
   const auto t = testkit::bumpyTerrain(8, 2, 8000.0);
-  const Camera cam = Camera::lookAt({0, 0, testkit::kEarthRadius + 500000}, {0, testkit::kEarthRadius, 0},
-                                    {0, 0, 1}, 1280, 720, 1.0);
+  const Camera cam = Camera::lookAt({0, 0, testkit::kEarthRadius + 500000},
+                                    {0, testkit::kEarthRadius, 0}, {0, 0, 1}, 1280, 720, 1.0);
   Tessellator culled, unculled;
   TessellationSettings s;
   s.triangleBudget = 0;
@@ -134,7 +139,8 @@ TEST(Tessellator, PositionsAreEyeRelativeAndPreciseNearTheCamera) {
   const int m = t.grid().m();
   const Eigen::Vector3d ground = t.chart().position(m / 2, m / 2, t.height(m / 2, m / 2));
   const Eigen::Vector3d eye = ground * (1 + 1.0 / ground.norm());
-  const Camera cam = Camera::lookAt(eye, ground + Eigen::Vector3d(0, 50, 0), {0, 0, 1}, 640, 480, 1.2);
+  const Camera cam =
+      Camera::lookAt(eye, ground + Eigen::Vector3d(0, 50, 0), {0, 0, 1}, 640, 480, 1.2);
   Tessellator tess;
   const auto& mesh = tess.tessellate(t, cam, {});
   bool sawGround = false;

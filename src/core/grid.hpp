@@ -21,7 +21,9 @@ class GridSize {
   int m() const { return 1 << n_; }  // cells per side
   int side() const { return m() + 1; }
   std::size_t count() const { return std::size_t(side()) * std::size_t(side()); }
-  std::size_t index(int u, int v) const { return std::size_t(v) * std::size_t(side()) + std::size_t(u); }
+  std::size_t index(int u, int v) const {
+    return std::size_t(v) * std::size_t(side()) + std::size_t(u);
+  }
   std::string label() const { return std::to_string(side()) + "x" + std::to_string(side()); }
 
  private:

@@ -44,13 +44,17 @@ LatLongChart::LatLongChart(GridSize grid, double radius) : Chart(grid), radius_(
   }
 }
 
-double LatLongChart::latitude(double v) const { return v * kPi / grid().m() - kPi / 2; }
-double LatLongChart::longitude(double u) const { return 2.0 * u * kPi / grid().m() - kPi; }
+double LatLongChart::latitude(double v) const {
+  return v * kPi / grid().m() - kPi / 2;
+}
+double LatLongChart::longitude(double u) const {
+  return 2.0 * u * kPi / grid().m() - kPi;
+}
 
 Eigen::Vector3d LatLongChart::positionAt(double u, double v, double h) const {
   const double lat = latitude(v), lon = longitude(u);
-  return (radius_ + h) *
-         Eigen::Vector3d(std::cos(lon) * std::cos(lat), std::sin(lon) * std::cos(lat), std::sin(lat));
+  return (radius_ + h) * Eigen::Vector3d(std::cos(lon) * std::cos(lat),
+                                         std::sin(lon) * std::cos(lat), std::sin(lat));
 }
 
 std::optional<Eigen::Vector2d> LatLongChart::inverse(const Eigen::Vector3d& p) const {

@@ -17,17 +17,20 @@ void Camera::validate() const {
     bad(os.str());
   }
   if (!std::isfinite(cx) || !std::isfinite(cy)) bad("principal point is not finite");
-  if (width <= 0 || height <= 0) bad("viewport " + std::to_string(width) + "x" + std::to_string(height) + " is empty");
-  const double orth = (rotation * rotation.transpose() - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff();
+  if (width <= 0 || height <= 0)
+    bad("viewport " + std::to_string(width) + "x" + std::to_string(height) + " is empty");
+  const double orth =
+      (rotation * rotation.transpose() - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff();
   if (orth > 1e-6 || rotation.determinant() < 0) {
     std::ostringstream os;
-    os << "rotation is not a proper rotation (|R R^T - I| = " << orth << ", det = " << rotation.determinant() << ")";
+    os << "rotation is not a proper rotation (|R R^T - I| = " << orth
+       << ", det = " << rotation.determinant() << ")";
     bad(os.str());
   }
 }
 
-Camera Camera::lookAt(const Eigen::Vector3d& eye, const Eigen::Vector3d& target, const Eigen::Vector3d& upHint,
-                      int width, int height, double horizontalFov) {
+Camera Camera::lookAt(const Eigen::Vector3d& eye, const Eigen::Vector3d& target,
+                      const Eigen::Vector3d& upHint, int width, int height, double horizontalFov) {
   const Eigen::Vector3d z = (target - eye).normalized();
   Eigen::Vector3d x = z.cross(upHint);  // right; y = z x x then points down on screen
   if (x.norm() < 1e-12) x = z.unitOrthogonal();

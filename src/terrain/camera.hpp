@@ -24,8 +24,8 @@ struct Camera {
 
   // A camera at `eye` looking at `target`, with `upHint` roughly up on screen, and a horizontal
   // field of view in radians.
-  static Camera lookAt(const Eigen::Vector3d& eye, const Eigen::Vector3d& target, const Eigen::Vector3d& upHint,
-                       int width, int height, double horizontalFov);
+  static Camera lookAt(const Eigen::Vector3d& eye, const Eigen::Vector3d& target,
+                       const Eigen::Vector3d& upHint, int width, int height, double horizontalFov);
 
   bool operator==(const Camera&) const = default;
 };

@@ -22,7 +22,7 @@ using core::GridPoint;
 // sub-triangles) are one level down, its two parents (the apexes of its diamond) one level up.
 struct Diamond {
   GridPoint centre;
-  int s = 0;            // half-size
+  int s = 0;  // half-size
   bool isCentre = false;
   int level = 0;
   GridPoint base0, base1;  // hypotenuse ends
@@ -53,7 +53,8 @@ struct Diamond {
         d.apex0 = {u - s, v - s}, d.apex1 = {u + s, v + s};
       }
       d.childCount = 4;
-      d.children = {GridPoint{u - s, v}, GridPoint{u + s, v}, GridPoint{u, v - s}, GridPoint{u, v + s}};
+      d.children = {GridPoint{u - s, v}, GridPoint{u + s, v}, GridPoint{u, v - s},
+                    GridPoint{u, v + s}};
     } else {
       if (uOdd) {  // horizontal edge
         d.base0 = {u - s, v}, d.base1 = {u + s, v};
@@ -74,11 +75,17 @@ struct Diamond {
 };
 
 // Number of levels of split vertices on a grid of 2^n cells: 0 .. 2n-1.
-inline int levelCount(const core::GridSize& g) { return 2 * g.n(); }
+inline int levelCount(const core::GridSize& g) {
+  return 2 * g.n();
+}
 
 // Half-size and kind of the vertices of a level.
-inline int levelHalfSize(int level) { return 1 << (level / 2); }
-inline bool levelIsCentre(int level) { return (level & 1) != 0; }
+inline int levelHalfSize(int level) {
+  return 1 << (level / 2);
+}
+inline bool levelIsCentre(int level) {
+  return (level & 1) != 0;
+}
 
 inline bool inGrid(const core::GridSize& g, GridPoint p) {
   return p.u >= 0 && p.v >= 0 && p.u <= g.m() && p.v <= g.m();

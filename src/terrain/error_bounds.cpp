@@ -9,7 +9,9 @@
 
 namespace ps::terrain {
 
-std::string toString(ErrorRule rule) { return rule == ErrorRule::kWedgie ? "wedgie" : "hybrid-exact"; }
+std::string toString(ErrorRule rule) {
+  return rule == ErrorRule::kWedgie ? "wedgie" : "hybrid-exact";
+}
 
 ErrorRule errorRuleFromString(const std::string& s) {
   if (s == "wedgie") return ErrorRule::kWedgie;
@@ -29,7 +31,9 @@ struct Sampler {
   const ChartT& chart;
   const float* h;
   core::GridSize g;
-  Eigen::Vector3d pos(GridPoint p) const { return chart.position(p.u, p.v, double(h[g.index(p.u, p.v)])); }
+  Eigen::Vector3d pos(GridPoint p) const {
+    return chart.position(p.u, p.v, double(h[g.index(p.u, p.v)]));
+  }
 };
 
 // Largest |P(q) - L_T(q)| over grid points q of triangle (a, b0, b1) (right angle at a).
@@ -67,8 +71,7 @@ void ErrorBounds::computeLevel(const ChartT& chart, std::span<const float> heigh
   const bool centre = levelIsCentre(level);
   const Sampler<ChartT> sampler{chart, heights.data(), g};
   const ErrorRule rule = rule_;
-  std::uint16_t* eps = errorCodes_.data();
-  std::uint16_t* rad = radiusCodes_.data();
+  BoundCodes* codes = codes_.data();
 
   auto computeVertex = [&](GridPoint p) {
     const Diamond d = Diamond::of(p);
@@ -81,21 +84,24 @@ void ErrorBounds::computeLevel(const ChartT& chart, std::span<const float> heigh
       const GridPoint c = d.children[std::size_t(i)];
       if (!inGrid(g, c)) continue;
       const std::size_t ci = g.index(c.u, c.v);
-      childEps = std::max(childEps, double(BoundCode::decode(eps[ci])));
-      radius = std::max(radius, (double(BoundCode::decode(rad[ci])) + (sampler.pos(c) - P).norm()) * kRadiusMargin);
+      childEps = std::max(childEps, double(BoundCode::decode(codes[ci].error)));
+      radius = std::max(
+          radius, (double(BoundCode::decode(codes[ci].radius)) + (sampler.pos(c) - P).norm()) *
+                      kRadiusMargin);
     }
     double e;
     if (rule == ErrorRule::kHybridExact && s <= kExactMaxHalfSize) {
       e = childEps;
-      if (inGrid(g, d.apex0)) e = std::max(e, exactTriangleDeviation(sampler, d.apex0, d.base0, d.base1));
-      if (inGrid(g, d.apex1)) e = std::max(e, exactTriangleDeviation(sampler, d.apex1, d.base1, d.base0));
+      if (inGrid(g, d.apex0))
+        e = std::max(e, exactTriangleDeviation(sampler, d.apex0, d.base0, d.base1));
+      if (inGrid(g, d.apex1))
+        e = std::max(e, exactTriangleDeviation(sampler, d.apex1, d.base1, d.base0));
     } else {
       const Eigen::Vector3d mid = 0.5 * (sampler.pos(d.base0) + sampler.pos(d.base1));
       e = childEps + (P - mid).norm();
     }
     const std::size_t i = g.index(p.u, p.v);
-    eps[i] = BoundCode::encodeUp(e);
-    rad[i] = BoundCode::encodeUp(radius);
+    codes[i] = {BoundCode::encodeUp(e), BoundCode::encodeUp(radius)};
   };
 
   // Rows of this level inside the region.
@@ -132,13 +138,15 @@ void ErrorBounds::computeLevel(const ChartT& chart, std::span<const float> heigh
     region.forEachColumnRange(g, [&](int uA, int uB) { touchesSeam |= (uA == 0 || uB == m); });
     if (touchesSeam) {
       for (int v : rows) {
-        if ((((v / s) & 1) == 0) || v == 0 || v == m) continue;  // seam vertices: u = 0 is even, so v/s odd
+        if ((((v / s) & 1) == 0) || v == 0 || v == m)
+          continue;  // seam vertices: u = 0 is even, so v/s odd
         const std::size_t a = g.index(0, v), b = g.index(m, v);
         // Recompute both halves in case the region only reached one of them.
         computeVertex({0, v});
         computeVertex({m, v});
-        eps[a] = eps[b] = std::max(eps[a], eps[b]);
-        rad[a] = rad[b] = std::max(rad[a], rad[b]);
+        const BoundCodes both{std::max(codes[a].error, codes[b].error),
+                              std::max(codes[a].radius, codes[b].radius)};
+        codes[a] = codes[b] = both;
       }
     }
   }
@@ -152,22 +160,35 @@ void dispatchChart(const core::Chart& chart, F&& f) {
 }
 }  // namespace
 
+std::vector<std::uint16_t> ErrorBounds::errorCodes() const {
+  std::vector<std::uint16_t> out(codes_.size());
+  for (std::size_t i = 0; i < codes_.size(); ++i) out[i] = codes_[i].error;
+  return out;
+}
+
+std::vector<std::uint16_t> ErrorBounds::radiusCodes() const {
+  std::vector<std::uint16_t> out(codes_.size());
+  for (std::size_t i = 0; i < codes_.size(); ++i) out[i] = codes_[i].radius;
+  return out;
+}
+
 void ErrorBounds::build(const core::Chart& chart, std::span<const float> heights, ErrorRule rule) {
   const core::GridSize g = chart.grid();
   if (heights.size() != g.count()) {
-    throw core::InputError("heights hold " + std::to_string(heights.size()) + " values, the " + g.label() +
-                           " grid needs " + std::to_string(g.count()));
+    throw core::InputError("heights hold " + std::to_string(heights.size()) + " values, the " +
+                           g.label() + " grid needs " + std::to_string(g.count()));
   }
   rule_ = rule;
-  errorCodes_.assign(g.count(), 0);
-  radiusCodes_.assign(g.count(), 0);
+  codes_.assign(g.count(), BoundCodes{});
   lastUpdateCount_ = 0;
   dispatchChart(chart, [&](const auto& c) {
-    for (int level = 0; level < levelCount(g); ++level) computeLevel(c, heights, level, GridRegion::all(g));
+    for (int level = 0; level < levelCount(g); ++level)
+      computeLevel(c, heights, level, GridRegion::all(g));
   });
 }
 
-void ErrorBounds::update(const core::Chart& chart, std::span<const float> heights, const GridRegion& dirty) {
+void ErrorBounds::update(const core::Chart& chart, std::span<const float> heights,
+                         const GridRegion& dirty) {
   const core::GridSize g = chart.grid();
   lastUpdateCount_ = 0;
   if (dirty.empty()) return;

@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "core/chart.hpp"
+#include "core/huge_page_allocator.hpp"
 #include "terrain/bound_code.hpp"
 #include "terrain/grid_region.hpp"
 
@@ -31,8 +32,18 @@ ErrorRule errorRuleFromString(const std::string& s);  // throws core::InputError
 //   radius(v) >= the largest distance from P(v) to a full-resolution vertex inside the diamond.
 // Nested: error(child) <= error(parent), radius(child) + |P(child) - P(parent)| <= radius(parent),
 // across the seam too (twins hold the same, combined values). Grid corners store 0.
+// The two codes of one vertex sit side by side: the tessellator reads both for every triangle it
+// visits, so they should cost one cache miss, not two.
+struct BoundCodes {
+  std::uint16_t error = 0;
+  std::uint16_t radius = 0;
+  bool operator==(const BoundCodes&) const = default;
+};
+
 class ErrorBounds {
  public:
+  using CodeArray = std::vector<BoundCodes, core::HugePageAllocator<BoundCodes>>;
+
   static constexpr int kExactMaxHalfSize = 4;
 
   ErrorBounds() = default;
@@ -43,21 +54,24 @@ class ErrorBounds {
   void update(const core::Chart& chart, std::span<const float> heights, const GridRegion& dirty);
 
   ErrorRule rule() const { return rule_; }
-  float error(std::size_t index) const { return BoundCode::decode(errorCodes_[index]); }
-  float radius(std::size_t index) const { return BoundCode::decode(radiusCodes_[index]); }
-  const std::vector<std::uint16_t>& errorCodes() const { return errorCodes_; }
-  const std::vector<std::uint16_t>& radiusCodes() const { return radiusCodes_; }
-  std::size_t bytes() const { return (errorCodes_.size() + radiusCodes_.size()) * sizeof(std::uint16_t); }
+  float error(std::size_t index) const { return BoundCode::decode(codes_[index].error); }
+  float radius(std::size_t index) const { return BoundCode::decode(codes_[index].radius); }
+  const CodeArray& codes() const { return codes_; }
+  // Copies of one half of the codes, for comparisons in tests and tools.
+  std::vector<std::uint16_t> errorCodes() const;
+  std::vector<std::uint16_t> radiusCodes() const;
+  std::size_t bytes() const { return codes_.size() * sizeof(BoundCodes); }
 
   // Vertices recomputed by the last update() (for benchmarks: the work done).
   std::size_t lastUpdateVertexCount() const { return lastUpdateCount_; }
 
  private:
   template <class ChartT>
-  void computeLevel(const ChartT& chart, std::span<const float> heights, int level, const GridRegion& region);
+  void computeLevel(const ChartT& chart, std::span<const float> heights, int level,
+                    const GridRegion& region);
 
   ErrorRule rule_ = ErrorRule::kHybridExact;
-  std::vector<std::uint16_t> errorCodes_, radiusCodes_;
+  CodeArray codes_;
   std::size_t lastUpdateCount_ = 0;
 };
 

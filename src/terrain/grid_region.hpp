@@ -68,8 +68,8 @@ struct GridRegion {
   }
 
   std::string describe() const {
-    return "u[" + std::to_string(uBegin) + "," + std::to_string(uEnd) + "] v[" + std::to_string(vBegin) +
-           "," + std::to_string(vEnd) + "]";
+    return "u[" + std::to_string(uBegin) + "," + std::to_string(uEnd) + "] v[" +
+           std::to_string(vBegin) + "," + std::to_string(vEnd) + "]";
   }
 
  private:

@@ -10,8 +10,8 @@ namespace ps::terrain {
 struct Mesh {
   Eigen::Vector3d eye = Eigen::Vector3d::Zero();  // planet-frame origin of `positions`
   std::vector<std::uint64_t> gridIndex;           // per vertex: v * side + u
-  std::vector<Eigen::Vector3f> positions;          // per vertex: P - eye
-  std::vector<std::uint32_t> indices;              // 3 per triangle
+  std::vector<Eigen::Vector3f> positions;         // per vertex: P - eye
+  std::vector<std::uint32_t> indices;             // 3 per triangle
 
   std::size_t triangleCount() const { return indices.size() / 3; }
   void clear() {

@@ -1,6 +1,5 @@
 #include "terrain/screen_error.hpp"
 
-
 #include <algorithm>
 #include <cmath>
 
@@ -12,7 +11,8 @@ namespace {
 
 // Calls f(q_true, q_mesh) for every grid vertex in the triangle (a, b0, b1), right angle at a.
 template <class F>
-void forEachVertexIn(const Terrain& t, std::uint64_t ia, std::uint64_t ib0, std::uint64_t ib1, F&& f) {
+void forEachVertexIn(const Terrain& t, std::uint64_t ia, std::uint64_t ib0, std::uint64_t ib1,
+                     F&& f) {
   const core::GridSize g = t.grid();
   const auto side = std::uint64_t(g.side());
   const GridPoint a{int(ia % side), int(ia / side)}, b0{int(ib0 % side), int(ib0 / side)},
@@ -29,7 +29,8 @@ void forEachVertexIn(const Terrain& t, std::uint64_t ia, std::uint64_t ib0, std:
       const long long da = (u - a.u) * e0u + (v - a.v) * e0v;
       const long long db = (u - a.u) * e1u + (v - a.v) * e1v;
       if (da < 0 || db < 0 || da + db > len2) continue;
-      const Eigen::Vector3d lin = pa + (double(da) / double(len2)) * d0 + (double(db) / double(len2)) * d1;
+      const Eigen::Vector3d lin =
+          pa + (double(da) / double(len2)) * d0 + (double(db) / double(len2)) * d1;
       f(pos({u, v}), lin);
     }
   }
@@ -37,28 +38,33 @@ void forEachVertexIn(const Terrain& t, std::uint64_t ia, std::uint64_t ib0, std:
 
 }  // namespace
 
-ScreenErrorReport measureScreenError(const Terrain& terrain, const Camera& camera, const Mesh& mesh) {
+ScreenErrorReport measureScreenError(const Terrain& terrain, const Camera& camera,
+                                     const Mesh& mesh) {
   ScreenErrorReport rep;
   const std::size_t tris = mesh.triangleCount();
   double worst = 0;
   std::size_t checked = 0;
 #pragma omp parallel for schedule(dynamic, 64) reduction(max : worst) reduction(+ : checked)
   for (std::size_t t = 0; t < tris; ++t) {
-    const auto ia = mesh.gridIndex[mesh.indices[3 * t]], ib0 = mesh.gridIndex[mesh.indices[3 * t + 1]],
+    const auto ia = mesh.gridIndex[mesh.indices[3 * t]],
+               ib0 = mesh.gridIndex[mesh.indices[3 * t + 1]],
                ib1 = mesh.gridIndex[mesh.indices[3 * t + 2]];
-    forEachVertexIn(terrain, ia, ib0, ib1, [&](const Eigen::Vector3d& truth, const Eigen::Vector3d& onMesh) {
-      const Eigen::Vector3d ct = camera.toCamera(truth);
-      if (ct.z() <= 1e-6) return;
-      const Eigen::Vector2d pt = camera.project(ct);
-      if (pt.x() < -0.5 || pt.y() < -0.5 || pt.x() > camera.width - 0.5 || pt.y() > camera.height - 0.5) return;
-      ++checked;
-      const Eigen::Vector3d cm = camera.toCamera(onMesh);
-      if (cm.z() <= 1e-6) {
-        worst = INFINITY;
-        return;
-      }
-      worst = std::max(worst, (camera.project(cm) - pt).norm());
-    });
+    forEachVertexIn(terrain, ia, ib0, ib1,
+                    [&](const Eigen::Vector3d& truth, const Eigen::Vector3d& onMesh) {
+                      const Eigen::Vector3d ct = camera.toCamera(truth);
+                      if (ct.z() <= 1e-6) return;
+                      const Eigen::Vector2d pt = camera.project(ct);
+                      if (pt.x() < -0.5 || pt.y() < -0.5 || pt.x() > camera.width - 0.5 ||
+                          pt.y() > camera.height - 0.5)
+                        return;
+                      ++checked;
+                      const Eigen::Vector3d cm = camera.toCamera(onMesh);
+                      if (cm.z() <= 1e-6) {
+                        worst = INFINITY;
+                        return;
+                      }
+                      worst = std::max(worst, (camera.project(cm) - pt).norm());
+                    });
   }
   rep.maxPx = worst;
   rep.verticesChecked = checked;
@@ -71,9 +77,12 @@ double measureTrueError(const Terrain& terrain, const Mesh& mesh) {
   double worst = 0;
 #pragma omp parallel for schedule(dynamic, 64) reduction(max : worst)
   for (std::size_t t = 0; t < tris; ++t) {
-    forEachVertexIn(terrain, mesh.gridIndex[mesh.indices[3 * t]], mesh.gridIndex[mesh.indices[3 * t + 1]],
+    forEachVertexIn(terrain, mesh.gridIndex[mesh.indices[3 * t]],
+                    mesh.gridIndex[mesh.indices[3 * t + 1]],
                     mesh.gridIndex[mesh.indices[3 * t + 2]],
-                    [&](const Eigen::Vector3d& a, const Eigen::Vector3d& b) { worst = std::max(worst, (a - b).norm()); });
+                    [&](const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+                      worst = std::max(worst, (a - b).norm());
+                    });
   }
   return worst;
 }

@@ -6,8 +6,8 @@
 namespace ps::terrain {
 
 struct ScreenErrorReport {
-  double maxPx = 0;                  // largest measured screen error
-  std::size_t verticesChecked = 0;   // full-resolution vertices in view
+  double maxPx = 0;                 // largest measured screen error
+  std::size_t verticesChecked = 0;  // full-resolution vertices in view
   std::size_t trianglesChecked = 0;
 };
 
@@ -16,7 +16,8 @@ struct ScreenErrorReport {
 // the camera and inside the image, the pixel distance between the projections of its true
 // position and of the point the triangle puts it at. The mesh's triangles must be the
 // tessellator's (right angle at the first corner).
-ScreenErrorReport measureScreenError(const Terrain& terrain, const Camera& camera, const Mesh& mesh);
+ScreenErrorReport measureScreenError(const Terrain& terrain, const Camera& camera,
+                                     const Mesh& mesh);
 
 // Largest 3D distance between a full-resolution vertex and the mesh over all triangles (the
 // view-independent error, for exports).

@@ -15,14 +15,16 @@ std::uint64_t nextRevision() {
   return counter.fetch_add(1);
 }
 
-std::string at(int u, int v) { return "vertex (u=" + std::to_string(u) + ", v=" + std::to_string(v) + ")"; }
+std::string at(int u, int v) {
+  return "vertex (u=" + std::to_string(u) + ", v=" + std::to_string(v) + ")";
+}
 }  // namespace
 
 void Terrain::validateHeights(const core::Chart& chart, std::span<const float> h) {
   const core::GridSize g = chart.grid();
   if (h.size() != g.count()) {
-    throw core::InputError("got " + std::to_string(h.size()) + " heights, a " + g.label() + " grid needs " +
-                           std::to_string(g.count()));
+    throw core::InputError("got " + std::to_string(h.size()) + " heights, a " + g.label() +
+                           " grid needs " + std::to_string(g.count()));
   }
   const double limit = 0.25 * chart.radius();
   const int m = g.m();
@@ -54,18 +56,22 @@ void Terrain::validateHeights(const core::Chart& chart, std::span<const float> h
     for (int v : {0, m}) {
       for (int u = 1; u <= m; ++u) {
         if (h[g.index(u, v)] != h[g.index(0, v)]) {
-          throw core::InputError("pole row v = " + std::to_string(v) + " is not one point: height at " + at(u, v) +
-                                 " differs from " + at(0, v));
+          throw core::InputError("pole row v = " + std::to_string(v) +
+                                 " is not one point: height at " + at(u, v) + " differs from " +
+                                 at(0, v));
         }
       }
     }
   }
 }
 
-Terrain::Terrain(std::shared_ptr<const core::Chart> chart, std::vector<float> heights, ErrorRule rule)
-    : chart_(std::move(chart)), heights_(std::move(heights)) {
+Terrain::Terrain(std::shared_ptr<const core::Chart> chart, std::vector<float> heights,
+                 ErrorRule rule)
+    : chart_(std::move(chart)) {
   if (!chart_) throw core::InputError("terrain needs a chart");
-  validateHeights(*chart_, heights_);
+  validateHeights(*chart_, heights);
+  heights_.assign(heights.begin(), heights.end());
+  heights = {};
   bounds_.build(*chart_, heights_, rule);
   refreshHeightRange();
   revision_ = nextRevision();

@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "core/chart.hpp"
+#include "core/huge_page_allocator.hpp"
 #include "terrain/error_bounds.hpp"
 #include "terrain/grid_region.hpp"
 
@@ -54,7 +55,7 @@ class Terrain {
   void refreshHeightRange();
 
   std::shared_ptr<const core::Chart> chart_;
-  std::vector<float> heights_;
+  std::vector<float, core::HugePageAllocator<float>> heights_;
   ErrorBounds bounds_;
   std::uint64_t revision_ = 0;
   float minHeight_ = 0, maxHeight_ = 0;

@@ -16,7 +16,8 @@ constexpr double kNear = 0.01;  // metres; balls reaching closer to the eye plan
 
 struct Node {
   GridPoint a, b0, b1;
-  std::uint8_t inside;  // bit i: ball known to lie inside frustum plane i; bit 5: in front of the horizon plane
+  std::uint8_t inside;  // bit i: ball known to lie inside frustum plane i; bit 5: in front of the
+                        // horizon plane
 };
 
 constexpr std::uint8_t kAllPlanes = 0x1f;
@@ -70,13 +71,12 @@ bool behindHorizon(const ViewGeometry& g, const Eigen::Vector3d& w, double r) {
 }  // namespace
 
 template <class ChartT>
-bool Tessellator::pass(const ChartT& chart, const Terrain& terrain, const Camera& camera, double distMax,
-                       bool cull, std::size_t abortAbove) {
+bool Tessellator::pass(const ChartT& chart, const Terrain& terrain, const Camera& camera,
+                       double distMax, bool cull, std::size_t abortAbove) {
   const core::GridSize g = chart.grid();
   const int m = g.m();
   const float* h = terrain.heights().data();
-  const std::uint16_t* epsCodes = terrain.bounds().errorCodes().data();
-  const std::uint16_t* radCodes = terrain.bounds().radiusCodes().data();
+  const BoundCodes* codes = terrain.bounds().codes().data();
   const ViewGeometry view = makeView(camera, chart.radius() + terrain.minHeight());
   const Eigen::Matrix3d& R = camera.rotation;
   const Eigen::Vector3d eye = camera.eye;
@@ -101,8 +101,9 @@ bool Tessellator::pass(const ChartT& chart, const Terrain& terrain, const Camera
     if (((su | sv) & 1) == 0) {  // the hypotenuse has a midpoint on the grid
       const GridPoint c{su / 2, sv / 2};
       const std::size_t ci = g.index(c.u, c.v);
-      const double eps = BoundCode::decode(epsCodes[ci]);
-      const double r = double(BoundCode::decode(radCodes[ci])) + eps;
+      const BoundCodes bc = codes[ci];
+      const double eps = BoundCode::decode(bc.error);
+      const double r = double(BoundCode::decode(bc.radius)) + eps;
       const Eigen::Vector3d w = chart.position(c.u, c.v, double(h[ci])) - eye;
       const Eigen::Vector3d cam = R * w;
       if (inside != (kAllPlanes | kHorizonClear)) {
@@ -110,8 +111,10 @@ bool Tessellator::pass(const ChartT& chart, const Terrain& terrain, const Camera
         for (int i = 0; i < 5 && !outside; ++i) {
           if (inside & (1u << i)) continue;
           const double d = view.planes[i].dot(cam) - (i == 4 ? kNear : 0.0);
-          if (d < -r) outside = true;
-          else if (d >= r) inside |= std::uint8_t(1u << i);
+          if (d < -r)
+            outside = true;
+          else if (d >= r)
+            inside |= std::uint8_t(1u << i);
         }
         if (outside) {
           ++stats_.culledFrustum;
@@ -164,7 +167,8 @@ void Tessellator::buildVertices(const Terrain& terrain, const Camera& camera) {
   for (std::size_t i = 0; i < triangleCorners_.size(); ++i) {
     const std::uint64_t key = triangleCorners_[i];
     std::size_t slot = std::size_t((key * 0x9E3779B97F4A7C15ull) >> 20) & (cap - 1);
-    while (hashKeys_[slot] != key && hashKeys_[slot] != ~std::uint64_t(0)) slot = (slot + 1) & (cap - 1);
+    while (hashKeys_[slot] != key && hashKeys_[slot] != ~std::uint64_t(0))
+      slot = (slot + 1) & (cap - 1);
     if (hashKeys_[slot] != key) {
       hashKeys_[slot] = key;
       hashValues_[slot] = std::uint32_t(mesh_.gridIndex.size());
@@ -183,10 +187,11 @@ const Mesh& Tessellator::tessellate(const Terrain& terrain, const Camera& camera
                                     const TessellationSettings& settings) {
   camera.validate();
   if (!std::isfinite(settings.distMaxPx) || settings.distMaxPx <= 0) {
-    throw core::InputError("dist_max " + std::to_string(settings.distMaxPx) + " px must be positive and finite");
+    throw core::InputError("dist_max " + std::to_string(settings.distMaxPx) +
+                           " px must be positive and finite");
   }
-  if (cacheValid_ && cachedRevision_ == terrain.revision() &&
-      cachedCamera_ == camera && cachedSettings_ == settings) {
+  if (cacheValid_ && cachedRevision_ == terrain.revision() && cachedCamera_ == camera &&
+      cachedSettings_ == settings) {
     stats_.reused = true;
     return mesh_;
   }

@@ -38,15 +38,16 @@ struct TessellationStats {
 class Tessellator {
  public:
   // Throws core::InputError for a degenerate camera or non-positive/non-finite distMax.
-  const Mesh& tessellate(const Terrain& terrain, const Camera& camera, const TessellationSettings& settings);
+  const Mesh& tessellate(const Terrain& terrain, const Camera& camera,
+                         const TessellationSettings& settings);
   const TessellationStats& stats() const { return stats_; }
   const Mesh& mesh() const { return mesh_; }
   void invalidate() { cacheValid_ = false; }
 
  private:
   template <class ChartT>
-  bool pass(const ChartT& chart, const Terrain& terrain, const Camera& camera, double distMax, bool cull,
-            std::size_t abortAbove);
+  bool pass(const ChartT& chart, const Terrain& terrain, const Camera& camera, double distMax,
+            bool cull, std::size_t abortAbove);
   void buildVertices(const Terrain& terrain, const Camera& camera);
 
   Mesh mesh_;
