@@ -1,0 +1,195 @@
+#include "edit/brush.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+#include <vector>
+
+#include "core/input_error.hpp"
+
+namespace ps::edit {
+
+namespace {
+
+std::string num(double x) {
+  std::ostringstream os;
+  os.precision(17);
+  os << x;
+  return os.str();
+}
+
+void checkRadius(double r) {
+  if (!std::isfinite(r) || !(r > 0.0)) {
+    throw core::InputError("radius of deformation r_d = " + num(r) + " m must be finite and > 0");
+  }
+}
+void checkSigma(double sigma) {
+  if (!std::isfinite(sigma) || !(sigma > 0.0)) {
+    throw core::InputError("sigma = " + num(sigma) + " must be finite and > 0");
+  }
+  if (sigma < 1e-6 || sigma > 1e6) {
+    throw core::InputError("sigma = " + num(sigma) + " is outside the usable range [1e-6, 1e6]");
+  }
+}
+void checkMu(double mu) {
+  if (!std::isfinite(mu) || !(mu > 0.5) || mu > 1e6) {
+    throw core::InputError(
+        "mu = " + num(mu) +
+        " must be in (0.5, 1e6]: the Gaussian must be higher at the control vertex "
+        "(x = 1) than on the border (x = 0)");
+  }
+}
+
+}  // namespace
+
+GaussianProfile::GaussianProfile(double radius, double sigma, double mu) {
+  checkRadius(radius);
+  checkSigma(sigma);
+  checkMu(mu);
+  radius_ = radius;
+  invRadius_ = 1.0 / radius;
+  c_ = -1.0 / (2.0 * sigma * sigma);
+  twoMuMinus2_ = 2.0 * mu - 2.0;
+  const double q0 = c_ * (2.0 * mu - 1.0);  // < 0
+  e0_ = std::exp(q0);
+  invDenominator_ = -1.0 / std::expm1(q0);
+}
+
+std::string toString(BrushMode mode) {
+  switch (mode) {
+    case BrushMode::kRaise:
+      return "raise";
+    case BrushMode::kLower:
+      return "lower";
+    case BrushMode::kSet:
+      return "set";
+  }
+  return "?";
+}
+
+BrushMode brushModeFromString(const std::string& s) {
+  if (s == "raise") return BrushMode::kRaise;
+  if (s == "lower") return BrushMode::kLower;
+  if (s == "set") return BrushMode::kSet;
+  throw core::InputError("brush mode '" + s + "' is not one of raise, lower, set");
+}
+
+void BrushSettings::validate() const {
+  checkRadius(radius);
+  checkSigma(sigma);
+  checkMu(mu);
+  if (!std::isfinite(strength) || strength < 0.0) {
+    throw core::InputError("strength = " + num(strength) + (rate ? " m/s" : " m") +
+                           " must be finite and >= 0");
+  }
+  if (!std::isfinite(target))
+    throw core::InputError("target = " + num(target) + " m must be finite");
+  if (!std::isfinite(spacing) || !(spacing > 0.0) || spacing > 1.0) {
+    throw core::InputError("spacing = " + num(spacing) + " (a fraction of r_d) must be in (0, 1]");
+  }
+  if (mode != BrushMode::kRaise && mode != BrushMode::kLower && mode != BrushMode::kSet) {
+    throw core::InputError("brush mode " + std::to_string(int(mode)) +
+                           " is not raise, lower or set");
+  }
+}
+
+float floatAtMost(double limit) {
+  float f = static_cast<float>(limit);
+  if (double(f) > limit) f = std::nextafter(f, -INFINITY);
+  return f;
+}
+
+namespace {
+
+// New height from the old one and the brush weight w = a * shape >= 0.
+struct Raise {
+  double operator()(float h, double w) const { return double(h) + w; }
+};
+struct Lower {
+  double operator()(float h, double w) const { return double(h) - w; }
+};
+struct SetToward {
+  double target;
+  double operator()(float h, double w) const {
+    return double(h) + std::clamp(target - double(h), -w, w);
+  }
+};
+
+template <class Op>
+void applyRows(const ToolContext& ctx, const GaussianProfile& profile, double amount, const Op& op,
+               std::span<float> heights) {
+  const Region& region = ctx.region;
+  const DistanceField& field = ctx.field;
+  const core::GridSize g = field.grid();
+  const std::size_t side = std::size_t(g.side());
+  const double limit = ctx.heightLimit;
+  float* const h = heights.data();
+  auto store = [limit](float& x, double y) {
+    x = static_cast<float>(std::clamp(y, -limit, limit));
+  };
+  const int v0 = region.vBegin(), v1 = region.vEnd();
+  const bool parallel = region.vertexCount() > 8192;
+
+  if (field.latLong() && region.symmetric()) {
+#pragma omp parallel if (parallel)
+    {
+      std::vector<double> weight;  // per folded column distance k
+#pragma omp for schedule(dynamic, 2)
+      for (int v = v0; v <= v1; ++v) {
+        const auto spans = region.row(v);
+        if (spans.empty()) continue;
+        float* row = h + std::size_t(v) * side;
+        const DistanceField::Row terms = field.row(v);
+        if (terms.f == 0.0) {  // every vertex of the row at one distance (pole rows, polar centre)
+          const double w = amount * profile.fromDistance2(field.distance2(terms, 0));
+          for (const Span& s : spans) {
+            for (int u = s.uBegin; u <= s.uEnd; ++u) store(row[u], op(row[u], w));
+          }
+          continue;
+        }
+        const int kMax = region.halfWidth(v);
+        weight.resize(std::size_t(kMax) + 1);
+        for (int k = 0; k <= kMax; ++k)
+          weight[std::size_t(k)] = amount * profile.fromDistance2(field.distance2(terms, k));
+        for (const Span& s : spans) {
+          for (int u = s.uBegin; u <= s.uEnd; ++u)
+            store(row[u], op(row[u], weight[std::size_t(field.fold(u))]));
+        }
+      }
+    }
+    return;
+  }
+  // Any chart: one distance per vertex.
+#pragma omp parallel for schedule(dynamic, 2) if (parallel)
+  for (int v = v0; v <= v1; ++v) {
+    float* row = h + std::size_t(v) * side;
+    for (const Span& s : region.row(v)) {
+      for (int u = s.uBegin; u <= s.uEnd; ++u) {
+        store(row[u], op(row[u], amount * profile.fromDistance2(field.distance2(u, v))));
+      }
+    }
+  }
+}
+
+}  // namespace
+
+terrain::GridRegion GaussianBrush::apply(const ToolContext& ctx, std::span<float> heights) const {
+  settings_.validate();
+  const GaussianProfile profile(settings_.radius, settings_.sigma, settings_.mu);
+  const double amount = settings_.rate ? settings_.strength * ctx.input.dt : settings_.strength;
+  if (ctx.region.empty()) return terrain::GridRegion::none();
+  switch (settings_.mode) {
+    case BrushMode::kRaise:
+      applyRows(ctx, profile, amount, Raise{}, heights);
+      break;
+    case BrushMode::kLower:
+      applyRows(ctx, profile, amount, Lower{}, heights);
+      break;
+    case BrushMode::kSet:
+      applyRows(ctx, profile, amount, SetToward{settings_.target}, heights);
+      break;
+  }
+  return ctx.region.bounds();
+}
+
+}  // namespace ps::edit

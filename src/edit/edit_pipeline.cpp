@@ -1,0 +1,229 @@
+#include "edit/edit_pipeline.hpp"
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstring>
+#include <sstream>
+
+#include "core/input_error.hpp"
+#include "edit/brush.hpp"
+#include "edit/control_vertex.hpp"
+#include "edit/grid_consistency.hpp"
+
+namespace ps::edit {
+
+namespace {
+using Clock = std::chrono::steady_clock;
+double ms(Clock::time_point a, Clock::time_point b) {
+  return std::chrono::duration<double, std::milli>(b - a).count();
+}
+
+std::string num(double x) {
+  std::ostringstream os;
+  os.precision(17);
+  os << x;
+  return os.str();
+}
+}  // namespace
+
+void StrokeReport::add(const EditReport& r) {
+  ++stamps;
+  modifiedVertices += r.modifiedVertices;
+  growMs += r.growMs;
+  heightsMs += r.heightsMs;
+  errorsMs += r.errorsMs;
+  journalMs += r.journalMs;
+  totalMs += r.totalMs;
+}
+
+void StrokeReport::add(const StrokeReport& r) {
+  stamps += r.stamps;
+  modifiedVertices += r.modifiedVertices;
+  growMs += r.growMs;
+  heightsMs += r.heightsMs;
+  errorsMs += r.errorsMs;
+  journalMs += r.journalMs;
+  totalMs += r.totalMs;
+}
+
+Eigen::Vector3d slerpUnit(const Eigen::Vector3d& a, const Eigen::Vector3d& b, double t) {
+  const Eigen::Vector3d cross = a.cross(b);
+  const double s = cross.norm(), c = a.dot(b);
+  const double theta = std::atan2(s, c);
+  if (theta < 1e-15) return a;
+  Eigen::Vector3d axis;
+  if (s > 1e-12) {
+    axis = cross / s;
+  } else {  // antipodal: any axis perpendicular to a
+    axis = a.unitOrthogonal();
+  }
+  const double phi = t * theta;
+  return (a * std::cos(phi) + axis.cross(a) * std::sin(phi)).normalized();
+}
+
+EditPipeline::EditPipeline(terrain::Terrain& terrain)
+    : terrain_(terrain),
+      field_(terrain.chartPtr()),
+      heightLimit_(floatAtMost(terrain.heightLimit())) {}
+
+void EditPipeline::setUndoEnabled(bool on) {
+  if (inStroke()) throw core::InputError("cannot switch undo on or off during a stroke");
+  undoEnabled_ = on;
+  if (!on) journal_.clear();
+}
+
+void EditPipeline::validate(const Tool& tool, const ToolInput& input) const {
+  tool.validate();
+  const double r = tool.radius();
+  if (!std::isfinite(r) || !(r > 0.0)) {
+    throw core::InputError("radius of deformation r_d = " + num(r) + " m must be finite and > 0");
+  }
+  const double sp = tool.spacing();
+  if (!std::isfinite(sp) || !(sp > 0.0)) {
+    throw core::InputError("stroke spacing " + num(sp) + " m must be finite and > 0");
+  }
+  if (!std::isfinite(input.dt) || input.dt < 0.0) {
+    throw core::InputError("dt = " + num(input.dt) + " s must be finite and >= 0");
+  }
+  (void)nearestVertex(terrain_.chart(), input.position);  // throws for a bad position
+}
+
+EditReport EditPipeline::stamp(const Tool& tool, const ToolInput& input) {
+  EditReport rep;
+  const auto t0 = Clock::now();
+  const core::Chart& chart = terrain_.chart();
+  const core::GridSize g = chart.grid();
+  field_.setCentre(nearestVertex(chart, input.position));
+  grower_.grow(field_, tool.radius(), region_);
+  const auto t1 = Clock::now();
+
+  const ToolContext ctx{terrain_, field_, region_, field_.centre(), input, heightLimit_};
+  auto heights = terrain_.mutableHeights();
+  const Region* footprint = nullptr;
+  if (undoEnabled_) {
+    footprint = &tool.footprint(ctx);
+    snapshot_.resize(footprint->vertexCount());
+    std::size_t i = 0;
+    footprint->forEachSpan([&](int v, int a, int b) {
+      std::memcpy(snapshot_.data() + i, heights.data() + g.index(a, v),
+                  std::size_t(b - a + 1) * sizeof(float));
+      i += std::size_t(b - a + 1);
+    });
+  }
+  const auto t2 = Clock::now();
+  const terrain::GridRegion dirty = tool.apply(ctx, heights);
+  enforceConsistency(chart, heights, dirty);
+  const auto t3 = Clock::now();
+  if (undoEnabled_) journal_.recordStamp(*footprint, snapshot_, heights, g, dirty, chart.wrapsU());
+  const auto t4 = Clock::now();
+  terrain_.commitEdit(dirty);
+  const auto t5 = Clock::now();
+
+  rep.control = field_.centre();
+  rep.modifiedVertices = region_.vertexCount();
+  rep.modifiedPoints = region_.pointCount();
+  rep.dirty = dirty;
+  rep.boundsVertices = dirty.empty() ? 0 : terrain_.bounds().lastUpdateVertexCount();
+  rep.growMs = ms(t0, t1);
+  rep.heightsMs = ms(t2, t3);
+  rep.journalMs = ms(t1, t2) + ms(t3, t4);
+  rep.errorsMs = ms(t4, t5);
+  rep.totalMs = ms(t0, t5);
+  last_ = rep;
+  return rep;
+}
+
+EditReport EditPipeline::apply(const Tool& tool, const ToolInput& input) {
+  if (inStroke())
+    throw core::InputError("apply() while a stroke is open: use moveTo() or end the stroke first");
+  validate(tool, input);
+  if (observer_) {
+    observer_->onBeginStroke(tool, input);
+    observer_->onEndStroke();
+  }
+  if (undoEnabled_) journal_.beginStroke();
+  const EditReport rep = stamp(tool, input);
+  if (undoEnabled_) journal_.endStroke(terrain_.grid());
+  return rep;
+}
+
+EditReport EditPipeline::beginStroke(const Tool& tool, const ToolInput& start) {
+  if (inStroke())
+    throw core::InputError("a stroke is already open: end it before beginning another");
+  validate(tool, start);
+  if (observer_) observer_->onBeginStroke(tool, start);
+  if (undoEnabled_) journal_.beginStroke();
+  strokeTool_ = &tool;
+  lastStamp_ = pathPoint(start.position);
+  return stamp(tool, start);
+}
+
+StrokeReport EditPipeline::moveTo(const ToolInput& sample) {
+  if (!inStroke()) throw core::InputError("moveTo outside a stroke: call beginStroke first");
+  const Tool& tool = *strokeTool_;
+  validate(tool, sample);
+  if (observer_) observer_->onMoveStroke(sample);
+  StrokeReport rep;
+  const Eigen::Vector3d from = lastStamp_, to = pathPoint(sample.position);
+  const double arc = pathLength(from, to);
+  const double spacing = tool.spacing();
+  if (tool.rateBased()) {
+    const int n = int(std::min(std::max(1.0, std::ceil(arc / spacing)), 1e6));
+    for (int i = 1; i <= n; ++i)
+      rep.add(stamp(tool, ToolInput{pathAt(from, to, double(i) / n), sample.dt / n}));
+    lastStamp_ = to;
+    return rep;
+  }
+  const int n = int(std::min(std::floor(arc / spacing), 1e6));
+  for (int i = 1; i <= n; ++i) {
+    const Eigen::Vector3d p = pathAt(from, to, double(i) * spacing / arc);
+    rep.add(stamp(tool, ToolInput{p, sample.dt / n}));
+    lastStamp_ = p;
+  }
+  return rep;
+}
+
+Eigen::Vector3d EditPipeline::pathPoint(const Eigen::Vector3d& p) const {
+  const double R = terrain_.chart().radius();
+  return R > 0.0 ? Eigen::Vector3d(R * p.normalized()) : p;
+}
+
+double EditPipeline::pathLength(const Eigen::Vector3d& a, const Eigen::Vector3d& b) const {
+  const double R = terrain_.chart().radius();
+  if (R > 0.0) return R * std::atan2(a.cross(b).norm(), a.dot(b));
+  return (b - a).norm();
+}
+
+Eigen::Vector3d EditPipeline::pathAt(const Eigen::Vector3d& a, const Eigen::Vector3d& b,
+                                     double t) const {
+  const double R = terrain_.chart().radius();
+  if (R > 0.0) return R * slerpUnit(a.normalized(), b.normalized(), t);
+  return a + t * (b - a);
+}
+
+void EditPipeline::endStroke() {
+  if (!inStroke()) throw core::InputError("endStroke without an open stroke");
+  if (observer_) observer_->onEndStroke();
+  strokeTool_ = nullptr;
+  if (undoEnabled_) journal_.endStroke(terrain_.grid());
+}
+
+void EditPipeline::undo() {
+  if (inStroke()) throw core::InputError("cannot undo while a stroke is open");
+  if (!undoEnabled_) throw core::InputError("undo is disabled on this edit pipeline");
+  if (journal_.undoCount() == 0) throw core::InputError("nothing to undo");
+  if (observer_) observer_->onUndo();
+  journal_.undo(terrain_);
+}
+
+void EditPipeline::redo() {
+  if (inStroke()) throw core::InputError("cannot redo while a stroke is open");
+  if (!undoEnabled_) throw core::InputError("undo is disabled on this edit pipeline");
+  if (journal_.redoCount() == 0) throw core::InputError("nothing to redo");
+  if (observer_) observer_->onRedo();
+  journal_.redo(terrain_);
+}
+
+}  // namespace ps::edit

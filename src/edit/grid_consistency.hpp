@@ -1,0 +1,19 @@
+#pragma once
+#include <span>
+
+#include "core/chart.hpp"
+#include "terrain/grid_region.hpp"
+
+namespace ps::edit {
+
+// Writes height h at grid vertex (u, v) and at every grid entry that is the same point: the seam
+// twin (u = 0 <-> u = m) on a seamed chart, the whole row at a pole.
+void applyToVertex(const core::Chart& chart, std::span<float> heights, int u, int v, float h);
+
+// Makes the grid entries of `region` that are one point agree: u = m takes u = 0's height on
+// every row of the region that touches the seam, and a pole row in the region takes its u = 0
+// height everywhere. O(rows + m). The edit pipeline runs it after every tool.
+void enforceConsistency(const core::Chart& chart, std::span<float> heights,
+                        const terrain::GridRegion& region);
+
+}  // namespace ps::edit

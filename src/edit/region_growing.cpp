@@ -1,0 +1,398 @@
+#include "edit/region_growing.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+#include "core/input_error.hpp"
+
+namespace ps::edit {
+
+namespace {
+
+// Sorts spans by start and merges overlapping or touching ones.
+void mergeSpans(std::vector<Span>& s) {
+  std::sort(s.begin(), s.end(), [](const Span& a, const Span& b) { return a.uBegin < b.uBegin; });
+  std::size_t out = 0;
+  for (std::size_t i = 0; i < s.size(); ++i) {
+    if (out > 0 && s[i].uBegin <= s[out - 1].uEnd + 1) {
+      s[out - 1].uEnd = std::max(s[out - 1].uEnd, s[i].uEnd);
+    } else {
+      s[out++] = s[i];
+    }
+  }
+  s.resize(out);
+}
+
+// Adds the seam twin of column 0 / m where only one of them is present (spans sorted, merged).
+void addTwins(std::vector<Span>& s, int m) {
+  if (s.empty()) return;
+  const bool has0 = s.front().uBegin == 0, hasM = s.back().uEnd == m;
+  if (has0 && !hasM) s.push_back({m, m});
+  if (hasM && !has0) s.insert(s.begin(), Span{0, 0});
+  mergeSpans(s);
+}
+
+bool inRun(const ColumnRun& r, int c, int cols) {
+  int d = c - r.start;
+  if (d < 0) d += cols;
+  return d < r.len;
+}
+
+bool covered(const std::vector<ColumnRun>& runs, int c, int cols) {
+  for (const ColumnRun& r : runs) {
+    if (inRun(r, c, cols)) return true;
+  }
+  return false;
+}
+
+// Columns under a run widened by one on each side: its 4-8 neighbourhood in the next row.
+ColumnRun neighbourRange(const ColumnRun& s, int cols, bool wraps) {
+  if (s.len >= cols) return {0, cols};
+  if (wraps) {
+    if (s.len + 2 >= cols) return {0, cols};
+    return {s.start == 0 ? cols - 1 : s.start - 1, s.len + 2};
+  }
+  const int a = std::max(0, s.start - 1), b = std::min(cols - 1, s.start + s.len);
+  return {a, b - a + 1};
+}
+
+// Lat-long chart: a row's inside set is {u : fold(u) <= K_v}; K_v by bisection, cached per row.
+struct LatLongOracle {
+  const DistanceField& f;
+  double r2;
+  int m;
+  std::vector<int>& halfWidth;  // -2: not computed
+  std::size_t& evaluations;
+
+  int rowHalfWidth(int v) const {
+    int& k = halfWidth[std::size_t(v)];
+    if (k != -2) return k;
+    const DistanceField::Row row = f.row(v);
+    ++evaluations;
+    if (!(f.distance2(row, 0) <= r2)) return k = -1;
+    int lo = 0, hi = m / 2;
+    ++evaluations;
+    if (f.distance2(row, hi) <= r2) return k = hi;
+    while (hi - lo > 1) {  // invariant: lo inside, hi outside (the predicate is monotone in k)
+      const int mid = lo + (hi - lo) / 2;
+      ++evaluations;
+      if (f.distance2(row, mid) <= r2) {
+        lo = mid;
+      } else {
+        hi = mid;
+      }
+    }
+    return k = lo;
+  }
+  bool inside(int v, int c) const { return f.fold(c) <= rowHalfWidth(v); }
+  ColumnRun span(int v, int /*c*/) const {
+    const int k = rowHalfWidth(v);
+    if (2 * k + 1 >= m) return {0, m};
+    int s = f.centre().u - k;
+    if (s < 0) s += m;
+    return {s, 2 * k + 1};
+  }
+  template <class Push>
+  void seeds(int v, const ColumnRun& range, const std::vector<ColumnRun>& found,
+             Push&& push) const {
+    if (!found.empty() || rowHalfWidth(v) < 0) return;  // one run per row: already found, or none
+    // The run is an arc about the centre column: it meets `range` at the centre or at an end.
+    const int uc = f.centre().u;
+    const int last = (range.start + range.len - 1) % m;
+    if (inRun(range, uc, m)) {
+      push(uc);
+    } else if (inside(v, range.start)) {
+      push(range.start);
+    } else if (inside(v, last)) {
+      push(last);
+    }
+  }
+};
+
+// Any chart: vertex-by-vertex scans.
+struct GenericOracle {
+  const DistanceField& f;
+  double r2;
+  int m, cols;
+  bool wraps, poles;
+  std::size_t& evaluations;
+
+  bool pole(int v) const { return poles && (v == 0 || v == m); }
+  bool inside(int v, int c) const {
+    ++evaluations;
+    return f.distance2(pole(v) ? 0 : c, v) <= r2;
+  }
+  ColumnRun span(int v, int c) const {
+    if (pole(v)) return {0, cols};
+    int start = c, len = 1;
+    for (int next = c + 1;; ++next) {  // rightwards
+      if (len >= cols) break;
+      if (next >= cols) {
+        if (!wraps) break;
+        next -= cols;
+      }
+      if (!inside(v, next)) break;
+      ++len;
+    }
+    for (int prev = c - 1;; --prev) {  // leftwards
+      if (len >= cols) break;
+      if (prev < 0) {
+        if (!wraps) break;
+        prev += cols;
+      }
+      if (!inside(v, prev)) break;
+      start = prev;
+      ++len;
+    }
+    return {start, len};
+  }
+  template <class Push>
+  void seeds(int v, const ColumnRun& range, const std::vector<ColumnRun>& found,
+             Push&& push) const {
+    if (pole(v)) {
+      if (found.empty() && inside(v, 0)) push(0);
+      return;
+    }
+    for (int i = 0; i < range.len; ++i) {
+      const int c = (range.start + i) % cols;
+      if (covered(found, c, cols) || !inside(v, c)) continue;
+      push(c);
+      // The rest of this run belongs to the same span.
+      while (i + 1 < range.len && inside(v, (range.start + i + 1) % cols)) ++i;
+    }
+  }
+};
+
+}  // namespace
+
+// ---------------------------------------------------------------------------------------------
+// Region
+
+void Region::clear() {
+  vBegin_ = 0;
+  vEnd_ = -1;
+  rowStart_.assign(1, 0);
+  spans_.clear();
+  halfWidth_.clear();
+  vertexCount_ = pointCount_ = 0;
+  bounds_ = terrain::GridRegion::none();
+  symmetric_ = false;
+  centreU_ = 0;
+}
+
+void Region::addRow(int v, std::span<const Span> spans, int halfWidth) {
+  if (vEnd_ < vBegin_) {
+    vBegin_ = v;
+    vEnd_ = v - 1;
+  }
+  while (vEnd_ < v - 1) {
+    ++vEnd_;
+    rowStart_.push_back(rowStart_.back());
+    halfWidth_.push_back(-1);
+  }
+  spans_.insert(spans_.end(), spans.begin(), spans.end());
+  rowStart_.push_back(std::uint32_t(spans_.size()));
+  halfWidth_.push_back(halfWidth);
+  vEnd_ = v;
+}
+
+bool Region::contains(int u, int v) const {
+  for (const Span& s : row(v)) {
+    if (u >= s.uBegin && u <= s.uEnd) return true;
+  }
+  return false;
+}
+
+void Region::finish(const core::GridSize& g, bool wrapsU, bool hasPoleRows, bool symmetric,
+                    int centreU) {
+  const int m = g.m();
+  symmetric_ = symmetric;
+  centreU_ = centreU;
+  vertexCount_ = pointCount_ = 0;
+  for (int v = vBegin_; v <= vEnd_; ++v) {
+    const auto r = row(v);
+    if (r.empty()) continue;
+    std::size_t n = 0;
+    for (const Span& s : r) n += std::size_t(s.size());
+    vertexCount_ += n;
+    if (hasPoleRows && (v == 0 || v == m)) {
+      pointCount_ += 1;
+    } else {
+      pointCount_ += n - ((wrapsU && r.front().uBegin == 0 && r.back().uEnd == m) ? 1 : 0);
+    }
+  }
+  if (spans_.empty()) {
+    bounds_ = terrain::GridRegion::none();
+    return;
+  }
+  terrain::GridRegion b;
+  b.vBegin = vBegin_;
+  b.vEnd = vEnd_;
+  if (!wrapsU) {
+    b.uBegin = m;
+    b.uEnd = 0;
+    for (const Span& s : spans_)
+      b.uBegin = std::min(b.uBegin, s.uBegin), b.uEnd = std::max(b.uEnd, s.uEnd);
+    bounds_ = b;
+    return;
+  }
+  // Columns on the circle of m (u = m is column 0): merge the covered arcs and leave out the
+  // largest gap.
+  std::vector<Span> arcs;
+  arcs.reserve(spans_.size());
+  for (const Span& s : spans_) {
+    if (s.uBegin < m) arcs.push_back({s.uBegin, std::min(s.uEnd, m - 1)});
+    if (s.uEnd == m) arcs.push_back({0, 0});
+  }
+  mergeSpans(arcs);
+  int gapLen = arcs.front().uBegin + m - (arcs.back().uEnd + 1);  // around the seam
+  int coverStart = arcs.front().uBegin;
+  for (std::size_t i = 1; i < arcs.size(); ++i) {
+    const int gap = arcs[i].uBegin - arcs[i - 1].uEnd - 1;
+    if (gap > gapLen) gapLen = gap, coverStart = arcs[i].uBegin;
+  }
+  const int len = m - gapLen;
+  if (len >= m) {
+    b.uBegin = 0, b.uEnd = m;
+  } else {
+    const int end = coverStart + len - 1;
+    if (coverStart == 0) {
+      b.uBegin = m, b.uEnd = m + end;  // u = m and 0 .. end (see GridRegion::forEachColumnRange)
+    } else if (end >= m) {
+      b.uBegin = coverStart - m, b.uEnd = end - m;  // coverStart .. m and 0 .. end - m
+    } else {
+      b.uBegin = coverStart, b.uEnd = end;
+    }
+  }
+  bounds_ = b;
+}
+
+Region Region::fromRectangle(const terrain::GridRegion& r, const core::GridSize& g, bool wrapsU,
+                             bool hasPoleRows) {
+  Region out;
+  out.clear();
+  const int m = g.m();
+  std::vector<Span> spans;
+  for (int v = std::max(0, r.vBegin); v <= std::min(m, r.vEnd); ++v) {
+    spans.clear();
+    if (hasPoleRows && (v == 0 || v == m)) {
+      spans.push_back({0, m});
+    } else {
+      r.forEachColumnRange(g, [&](int a, int b) { spans.push_back({a, b}); });
+      mergeSpans(spans);
+      if (wrapsU) addTwins(spans, m);
+    }
+    out.addRow(v, spans);
+  }
+  out.finish(g, wrapsU, hasPoleRows, false, 0);
+  return out;
+}
+
+// ---------------------------------------------------------------------------------------------
+// RegionGrower
+
+template <class Oracle>
+void RegionGrower::fill(const Oracle& oracle, const core::GridSize& g, bool wraps,
+                        core::GridPoint seed) {
+  const int m = g.m(), cols = wraps ? m : m + 1;
+  stack_.clear();
+  stack_.push_back({seed.v, seed.u});
+  while (!stack_.empty()) {
+    const auto [v, c] = stack_.back();
+    stack_.pop_back();
+    auto& runs = rowSpans_[std::size_t(v)];
+    if (covered(runs, c, cols) || !oracle.inside(v, c)) continue;
+    if (runs.empty()) touched_.push_back(v);
+    const ColumnRun s = oracle.span(v, c);
+    runs.push_back(s);
+    const ColumnRun range = neighbourRange(s, cols, wraps);
+    for (const int nv : {v - 1, v + 1}) {
+      if (nv < 0 || nv > m) continue;
+      oracle.seeds(nv, range, rowSpans_[std::size_t(nv)], [&](int col) {
+        stack_.push_back({nv, col});
+      });
+    }
+  }
+}
+
+void RegionGrower::emit(const core::GridSize& g, bool wraps, bool poles, bool symmetric,
+                        int centreU, Region& out) {
+  const int m = g.m();
+  out.clear();
+  std::sort(touched_.begin(), touched_.end());
+  for (const int v : touched_) {
+    auto& runs = rowSpans_[std::size_t(v)];
+    scratch_.clear();
+    for (const ColumnRun& r : runs) {
+      if (!wraps) {
+        scratch_.push_back({r.start, r.start + r.len - 1});
+      } else if (r.len >= m) {
+        scratch_.push_back({0, m});
+      } else {
+        const int end = r.start + r.len - 1;
+        if (end < m) {
+          scratch_.push_back({r.start, end});
+        } else {
+          scratch_.push_back({r.start, m});  // u = m is column 0
+          if (end > m) scratch_.push_back({0, end - m});
+        }
+      }
+    }
+    mergeSpans(scratch_);
+    if (wraps) addTwins(scratch_, m);
+    if (poles && (v == 0 || v == m)) scratch_.assign(1, Span{0, m});
+    out.addRow(v, scratch_, symmetric ? std::min(halfWidth_[std::size_t(v)], m / 2) : -1);
+    runs.clear();
+  }
+  touched_.clear();
+  out.finish(g, wraps, poles, symmetric, centreU);
+}
+
+void RegionGrower::grow(const DistanceField& field, double radius, Region& out) {
+  if (!std::isfinite(radius) || !(radius > 0.0)) {
+    throw core::InputError("radius of deformation " + std::to_string(radius) +
+                           " m must be finite and > 0");
+  }
+  const core::GridSize g = field.grid();
+  const int m = g.m();
+  const core::Chart& chart = field.chart();
+  const bool wraps = chart.wrapsU(), poles = chart.hasPoleRows();
+  const double r2 = radius * radius;
+  if (rowSpans_.size() != std::size_t(m) + 1) rowSpans_.assign(std::size_t(m) + 1, {});
+  touched_.clear();
+  evaluations_ = 0;
+  const core::GridPoint seed = field.centre();
+  if (field.latLong()) {
+    halfWidth_.assign(std::size_t(m) + 1, -2);
+    const LatLongOracle oracle{field, r2, m, halfWidth_, evaluations_};
+    fill(oracle, g, true, seed);
+    emit(g, true, true, true, seed.u, out);
+  } else {
+    const GenericOracle oracle{field, r2, m, wraps ? m : m + 1, wraps, poles, evaluations_};
+    fill(oracle, g, wraps, seed);
+    emit(g, wraps, poles, false, seed.u, out);
+  }
+}
+
+std::size_t bruteForceRegion(const DistanceField& field, double radius,
+                             std::vector<std::uint8_t>* mask) {
+  const core::GridSize g = field.grid();
+  const int m = g.m();
+  const double r2 = radius * radius;
+  if (mask) mask->assign(g.count(), 0);
+  std::uint8_t* out = mask ? mask->data() : nullptr;
+  std::size_t count = 0;
+#pragma omp parallel for schedule(dynamic, 16) reduction(+ : count)
+  for (int v = 0; v <= m; ++v) {
+    for (int u = 0; u <= m; ++u) {
+      if (field.distance2(u, v) <= r2) {
+        ++count;
+        if (out) out[g.index(u, v)] = 1;
+      }
+    }
+  }
+  return count;
+}
+
+}  // namespace ps::edit

@@ -1,0 +1,80 @@
+#pragma once
+#include <cstddef>
+#include <cstdint>
+#include <deque>
+#include <span>
+#include <vector>
+
+#include "edit/region_growing.hpp"
+#include "terrain/grid_region.hpp"
+#include "terrain/terrain.hpp"
+
+namespace ps::edit {
+
+// One vertex a stroke changed: its height before the stroke and after it.
+struct HeightChange {
+  std::uint32_t index = 0;  // v * side + u (32769^2 < 2^32)
+  float before = 0, after = 0;
+};
+
+// Undo and redo of whole strokes. A stroke stores only the vertices whose height it changed
+// (bitwise), each once with its height before the stroke's first stamp and after its last:
+// 12 bytes per changed vertex, plus the stroke's dirty rectangle. Undo writes the "before"
+// heights back and commits the dirty rectangle, so the error bounds are recomputed over it and -
+// being bit-for-bit a function of the heights - come back bit for bit too. (Terrain's
+// minHeight/maxHeight only ever widen and are not restored.)
+//
+// When the strokes held exceed maxBytes the oldest are forgotten (no longer undoable).
+class UndoJournal {
+ public:
+  explicit UndoJournal(std::size_t maxBytes = std::size_t(256) << 20) : maxBytes_(maxBytes) {}
+
+  // Strokes. A new stroke drops everything that could be redone.
+  void beginStroke();
+  bool inStroke() const { return open_; }
+  // During a stroke, after a stamp: `before` holds the heights of `footprint` in its span order
+  // as they were before the stamp, `heights` the current ones; changed vertices are recorded.
+  void recordStamp(const Region& footprint, std::span<const float> before,
+                   std::span<const float> heights, const core::GridSize& grid,
+                   const terrain::GridRegion& dirty, bool wrapsU);
+  // Closes the stroke and returns its changed-vertex count. A stroke that changed nothing is still
+  // one undo step (so "undo" always takes back the user's last stroke).
+  std::size_t endStroke(const core::GridSize& grid);
+
+  std::size_t undoCount() const { return done_.size(); }
+  std::size_t redoCount() const { return undone_.size(); }
+  // Throws core::InputError when there is nothing to undo/redo, a stroke is open, or `terrain`
+  // is not the grid the journal recorded.
+  void undo(terrain::Terrain& terrain);
+  void redo(terrain::Terrain& terrain);
+  void clear();
+
+  std::size_t bytes() const { return bytes_; }
+  std::size_t maxBytes() const { return maxBytes_; }
+  // Lowering the cap forgets the oldest strokes until the journal fits (always keeping one).
+  void setMaxBytes(std::size_t maxBytes);
+  // Changed vertices of the most recent undoable stroke (0 when none).
+  std::size_t lastStrokeChanges() const { return done_.empty() ? 0 : done_.back().changes.size(); }
+
+ private:
+  struct Stroke {
+    std::vector<HeightChange> changes;  // sorted by index, unique
+    terrain::GridRegion dirty;
+    std::size_t gridCount = 0;
+    std::size_t bytes() const { return changes.capacity() * sizeof(HeightChange) + sizeof(Stroke); }
+  };
+  void apply(terrain::Terrain& terrain, const Stroke& s, bool forward);
+  void trim();
+  void compact();  // pending_: one entry per vertex, no-op entries dropped
+
+  std::size_t maxBytes_;
+  std::size_t bytes_ = 0;
+  bool open_ = false;
+  std::vector<HeightChange> pending_;
+  std::size_t compacted_ = 0;  // pending_.size() after the last compact()
+  terrain::GridRegion pendingDirty_;
+  std::deque<Stroke> done_;
+  std::vector<Stroke> undone_;
+};
+
+}  // namespace ps::edit

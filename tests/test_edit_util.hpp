@@ -1,0 +1,144 @@
+#pragma once
+// Helpers shared by the edit tests (tests/test_edit_*.cpp).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <memory>
+#include <numbers>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "core/latlong_chart.hpp"
+#include "edit/distance_field.hpp"
+#include "edit/region_growing.hpp"
+#include "terrain/terrain.hpp"
+#include "test_terrains.hpp"
+
+namespace ps::edittest {
+
+// The lat-long geometry behind a chart that is not a LatLongChart: drives the edit layer's
+// generic (any chart) paths on a seamed chart with poles.
+class OpaqueChart final : public core::Chart {
+ public:
+  explicit OpaqueChart(std::shared_ptr<const core::LatLongChart> c)
+      : Chart(c->grid()), c_(std::move(c)) {}
+  std::string name() const override { return "opaque-latlong"; }
+  Eigen::Vector3d position(int u, int v, double h) const override { return c_->position(u, v, h); }
+  Eigen::Vector3d up(int u, int v) const override { return c_->up(u, v); }
+  Eigen::Vector3d positionAt(double u, double v, double h) const override {
+    return c_->positionAt(u, v, h);
+  }
+  std::optional<Eigen::Vector2d> inverse(const Eigen::Vector3d& p) const override {
+    return c_->inverse(p);
+  }
+  bool wrapsU() const override { return true; }
+  bool hasPoleRows() const override { return true; }
+  double radius() const override { return c_->radius(); }
+
+ private:
+  std::shared_ptr<const core::LatLongChart> c_;
+};
+
+// A centre anywhere, biased to the hard places: poles, the seam, next to the poles.
+inline core::GridPoint randomCentre(std::mt19937& rng, int m) {
+  const int kind = int(rng() % 7);
+  const int u = int(rng() % unsigned(m + 1)), v = int(rng() % unsigned(m + 1));
+  const int near = 1 + int(rng() % 3);
+  switch (kind) {
+    case 0:
+      return {u, (rng() & 1) ? 0 : m};  // a pole (any u: the whole row is one point)
+    case 1:
+      return {(rng() & 1) ? 0 : m, v};  // the seam, either twin
+    case 2:
+      return {u, (rng() & 1) ? near : m - near};  // next to a pole
+    case 3:
+      return {(rng() & 1) ? 0 : m, (rng() & 1) ? near : m - near};  // seam next to a pole
+    default:
+      return {u, v};
+  }
+}
+
+// Log-uniform from 0.3 cell to beyond the diameter, sometimes exactly the diameter.
+inline double randomRadius(std::mt19937& rng, double R, int m) {
+  const double cell = std::numbers::pi * R / m;
+  if (rng() % 12 == 0) return 2.0 * R;
+  std::uniform_real_distribution<double> e(std::log(0.3 * cell), std::log(2.05 * R));
+  return std::exp(e(rng));
+}
+
+// Region == brute force, entry by entry.
+inline ::testing::AssertionResult equalsBruteForce(const edit::DistanceField& field, double radius,
+                                                   const edit::Region& region) {
+  std::vector<std::uint8_t> mask;
+  const std::size_t count = edit::bruteForceRegion(field, radius, &mask);
+  const core::GridSize g = field.grid();
+  if (count != region.vertexCount()) {
+    return ::testing::AssertionFailure()
+           << "brute force " << count << " vertices, region " << region.vertexCount();
+  }
+  for (int v = 0; v <= g.m(); ++v) {
+    for (int u = 0; u <= g.m(); ++u) {
+      if (bool(mask[g.index(u, v)]) != region.contains(u, v)) {
+        return ::testing::AssertionFailure()
+               << "vertex (" << u << "," << v << ") brute force " << int(mask[g.index(u, v)])
+               << " region " << region.contains(u, v);
+      }
+    }
+  }
+  return ::testing::AssertionSuccess();
+}
+
+// Seam twins equal, pole rows one value, everything finite and within the limit.
+inline ::testing::AssertionResult consistentHeights(const terrain::Terrain& t) {
+  const auto g = t.grid();
+  const int m = g.m();
+  const auto h = t.heights();
+  for (int v = 0; v <= m; ++v) {
+    for (int u = 0; u <= m; ++u) {
+      const float x = h[g.index(u, v)];
+      if (!std::isfinite(x) || std::abs(double(x)) > t.heightLimit()) {
+        return ::testing::AssertionFailure() << "height " << x << " at (" << u << "," << v << ")";
+      }
+    }
+    if (std::memcmp(&h[g.index(0, v)], &h[g.index(m, v)], sizeof(float)) != 0) {
+      return ::testing::AssertionFailure() << "seam twins differ on row " << v;
+    }
+  }
+  for (int v : {0, m}) {
+    for (int u = 0; u <= m; ++u) {
+      if (std::memcmp(&h[g.index(u, v)], &h[g.index(0, v)], sizeof(float)) != 0) {
+        return ::testing::AssertionFailure() << "pole row " << v << " differs at u=" << u;
+      }
+    }
+  }
+  return ::testing::AssertionSuccess();
+}
+
+// Bounds after the local updates == a full rebuild, bit for bit.
+inline ::testing::AssertionResult boundsEqualFullRebuild(const terrain::Terrain& t) {
+  terrain::ErrorBounds full;
+  full.build(t.chart(), t.heights(), t.bounds().rule());
+  if (full.errorCodes() != t.bounds().errorCodes()) {
+    return ::testing::AssertionFailure() << "error codes differ from a full rebuild";
+  }
+  if (full.radiusCodes() != t.bounds().radiusCodes()) {
+    return ::testing::AssertionFailure() << "radius codes differ from a full rebuild";
+  }
+  return ::testing::AssertionSuccess();
+}
+
+inline bool sameBits(std::span<const float> a, std::span<const float> b) {
+  return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(float)) == 0;
+}
+
+// A point of the planet frame at latitude/longitude (degrees) and altitude factor k (|p| = kR).
+inline Eigen::Vector3d latLon(double latDeg, double lonDeg, double R, double k = 1.0) {
+  const double la = latDeg * std::numbers::pi / 180, lo = lonDeg * std::numbers::pi / 180;
+  return k * R *
+         Eigen::Vector3d(std::cos(lo) * std::cos(la), std::sin(lo) * std::cos(la), std::sin(la));
+}
+
+}  // namespace ps::edittest
