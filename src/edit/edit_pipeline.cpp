@@ -127,8 +127,8 @@ EditReport EditPipeline::stamp(const Tool& tool, const ToolInput& input) {
   rep.dirty = dirty;
   rep.boundsVertices = dirty.empty() ? 0 : terrain_.bounds().lastUpdateVertexCount();
   rep.growMs = ms(t0, t1);
-  rep.heightsMs = ms(t2, t3);
-  rep.journalMs = ms(t1, t2) + ms(t3, t4);
+  rep.heightsMs = undoEnabled_ ? ms(t2, t3) : ms(t1, t3);
+  rep.journalMs = undoEnabled_ ? ms(t1, t2) + ms(t3, t4) : 0.0;
   rep.errorsMs = ms(t4, t5);
   rep.totalMs = ms(t0, t5);
   last_ = rep;

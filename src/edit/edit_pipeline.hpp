@@ -79,6 +79,7 @@ class EditPipeline {
 
   // `tool` must outlive the stroke.
   EditReport beginStroke(const Tool& tool, const ToolInput& start);
+  EditReport beginStroke(const Tool&& tool, const ToolInput& start) = delete;  // would dangle
   StrokeReport moveTo(const ToolInput& sample);
   void endStroke();
   bool inStroke() const { return strokeTool_ != nullptr; }
