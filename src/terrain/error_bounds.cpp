@@ -114,7 +114,10 @@ void ErrorBounds::computeLevel(const ChartT& chart, std::span<const float> heigh
   }
   std::size_t count = 0;
   region.forEachColumnRange(g, [&](int uA, int uB) {
-#pragma omp parallel for schedule(dynamic, 4) reduction(+ : count)
+    // Small regions (a typical edit near the fine levels) stay on this thread: waking the team
+    // costs more than the work, and much more when the machine is busy.
+    const bool parallel = double(rows.size()) * double(uB - uA + 1) / double(2 * s) > 20000.0;
+#pragma omp parallel for schedule(dynamic, 4) reduction(+ : count) if (parallel)
     for (std::size_t r = 0; r < rows.size(); ++r) {
       const int v = rows[r];
       const bool vOdd = ((v / s) & 1) != 0;

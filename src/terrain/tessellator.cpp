@@ -14,27 +14,23 @@ namespace {
 
 constexpr double kNear = 0.01;  // metres; balls reaching closer to the eye plane always split
 
-struct Node {
-  GridPoint a, b0, b1;
-  std::uint8_t inside;  // bit i: ball known to lie inside frustum plane i; bit 5: in front of the
-                        // horizon plane
-};
-
 constexpr std::uint8_t kAllPlanes = 0x1f;
 constexpr std::uint8_t kHorizonClear = 0x20;
 
 struct ViewGeometry {
   Eigen::Vector3d planes[5];  // camera-frame unit normals; plane 4 is the near plane (offset kNear)
-  double focal;
+  // f * kappa, where kappa bounds |X|/z over the image grown by distMax pixels: the screen
+  // displacement of a 3D displacement d at X is at most f |X| / z^2 |d| <= f kappa |d| / z.
+  double focalKappa;
+  double focal;  // max(fx, fy)
   // Horizon (occluder: the sphere of radius R + min height, which is solid).
   bool horizonCull;
   Eigen::Vector3d towardCentre;  // unit, from eye
   double horizonPlaneDist;       // along towardCentre
-  double sinCone;                // sin of the occluder cone's half angle
-  double cosCone;
+  double cosCone;                // cos of the occluder cone's half angle
 };
 
-ViewGeometry makeView(const Camera& c, double occluderRadius) {
+ViewGeometry makeView(const Camera& c, double occluderRadius, double distMax) {
   ViewGeometry g;
   // Pixel extents [-1, W] x [-1, H]: a little beyond the image, so culling is conservative.
   g.planes[0] = Eigen::Vector3d(c.fx, 0, c.cx + 1).normalized();
@@ -42,14 +38,20 @@ ViewGeometry makeView(const Camera& c, double occluderRadius) {
   g.planes[2] = Eigen::Vector3d(0, c.fy, c.cy + 1).normalized();
   g.planes[3] = Eigen::Vector3d(0, -c.fy, c.height - c.cy).normalized();
   g.planes[4] = Eigen::Vector3d(0, 0, 1);
+  // A displacement whose projection reaches distMax pixels stays, up to that moment, within the
+  // image grown by distMax (+1 for pixel edges); kappa is the largest |X|/z there.
+  const double grow = distMax + 1;
+  const double tx = std::max(std::abs(-grow - c.cx), std::abs(c.width + grow - c.cx)) / c.fx;
+  const double ty = std::max(std::abs(-grow - c.cy), std::abs(c.height + grow - c.cy)) / c.fy;
   g.focal = std::max(c.fx, c.fy);
+  g.focalKappa = g.focal * std::sqrt(1 + tx * tx + ty * ty);
   const double d = c.eye.norm();
   g.horizonCull = occluderRadius > 0 && d > occluderRadius * (1 + 1e-9);
   if (g.horizonCull) {
     g.towardCentre = -c.eye / d;
     g.horizonPlaneDist = (d * d - occluderRadius * occluderRadius) / d;
-    g.sinCone = occluderRadius / d;
-    g.cosCone = std::sqrt(std::max(0.0, 1 - g.sinCone * g.sinCone));
+    const double sinCone = occluderRadius / d;
+    g.cosCone = std::sqrt(std::max(0.0, 1 - sinCone * sinCone));
   }
   return g;
 }
@@ -64,11 +66,36 @@ bool behindHorizon(const ViewGeometry& g, const Eigen::Vector3d& w, double r) {
   // theta + beta <= alpha, with cos(theta) = along/dist, sin(beta) = r/dist, sin(alpha) = sinCone.
   const double cosT = along / dist, sinT = std::sqrt(std::max(0.0, 1 - cosT * cosT));
   const double sinB = r / dist, cosB = std::sqrt(std::max(0.0, 1 - sinB * sinB));
-  // cos(theta + beta) >= cos(alpha)
-  return cosT * cosB - sinT * sinB >= g.cosCone;
+  return cosT * cosB - sinT * sinB >= g.cosCone;  // cos(theta + beta) >= cos(alpha)
 }
 
 }  // namespace
+
+std::uint32_t Tessellator::vertexFor(std::uint64_t gridIndex,
+                                     const Eigen::Vector3d& relativeToEye) {
+  if (2 * (mesh_.gridIndex.size() + 1) > hashKeys_.size()) {
+    // Grow the open-addressing table and reinsert.
+    const std::size_t cap = std::max<std::size_t>(4096, 2 * hashKeys_.size());
+    hashKeys_.assign(cap, kEmpty);
+    hashValues_.resize(cap);
+    for (std::uint32_t i = 0; i < mesh_.gridIndex.size(); ++i) {
+      std::size_t slot = hashSlot(mesh_.gridIndex[i]);
+      while (hashKeys_[slot] != kEmpty) slot = (slot + 1) & (hashKeys_.size() - 1);
+      hashKeys_[slot] = mesh_.gridIndex[i];
+      hashValues_[slot] = i;
+    }
+  }
+  std::size_t slot = hashSlot(gridIndex);
+  while (hashKeys_[slot] != gridIndex && hashKeys_[slot] != kEmpty)
+    slot = (slot + 1) & (hashKeys_.size() - 1);
+  if (hashKeys_[slot] == gridIndex) return hashValues_[slot];
+  hashKeys_[slot] = gridIndex;
+  const auto index = std::uint32_t(mesh_.gridIndex.size());
+  hashValues_[slot] = index;
+  mesh_.gridIndex.push_back(gridIndex);
+  mesh_.positions.push_back(relativeToEye.cast<float>());
+  return index;
+}
 
 template <class ChartT>
 bool Tessellator::pass(const ChartT& chart, const Terrain& terrain, const Camera& camera,
@@ -77,27 +104,44 @@ bool Tessellator::pass(const ChartT& chart, const Terrain& terrain, const Camera
   const int m = g.m();
   const float* h = terrain.heights().data();
   const BoundCodes* codes = terrain.bounds().codes().data();
-  const ViewGeometry view = makeView(camera, chart.radius() + terrain.minHeight());
+  const ViewGeometry view = makeView(camera, chart.radius() + terrain.minHeight(), distMax);
   const Eigen::Matrix3d& R = camera.rotation;
+  const Eigen::Vector3d forward = R.row(2).transpose();
   const Eigen::Vector3d eye = camera.eye;
 
-  triangleCorners_.clear();
+  mesh_.clear();
+  mesh_.eye = eye;
+  std::fill(hashKeys_.begin(), hashKeys_.end(), kEmpty);
   stats_.visited = stats_.culledFrustum = stats_.culledHorizon = 0;
 
-  std::vector<Node> stack;
-  stack.reserve(256);
+  auto corner = [&](GridPoint p) {
+    const std::size_t k = g.index(p.u, p.v);
+    return vertexFor(k, chart.position(p.u, p.v, double(h[k])) - eye);
+  };
+  const std::uint32_t c00 = corner({0, 0}), cmm = corner({m, m}), c0m = corner({0, m}),
+                      cm0 = corner({m, 0});
+
+  std::vector<Node>& stack = stack_;
+  stack.clear();
   const std::uint8_t startInside = cull ? 0 : std::uint8_t(kAllPlanes | kHorizonClear);
   // Two root triangles over the main diagonal, CCW in (u, v) = CCW seen from outside.
-  stack.push_back({{0, m}, {0, 0}, {m, m}, startInside});
-  stack.push_back({{m, 0}, {m, m}, {0, 0}, startInside});
+  stack.push_back({{0, m}, {0, 0}, {m, m}, c0m, c00, cmm, startInside});
+  stack.push_back({{m, 0}, {m, m}, {0, 0}, cm0, cmm, c00, startInside});
+
+  auto prefetchSplitVertex = [&](GridPoint p, GridPoint q) {
+    const int su = p.u + q.u, sv = p.v + q.v;
+    if (((su | sv) & 1) == 0) {
+      const std::size_t k = g.index(su / 2, sv / 2);
+      __builtin_prefetch(h + k);
+      __builtin_prefetch(codes + k);
+    }
+  };
 
   while (!stack.empty()) {
     const Node n = stack.back();
     stack.pop_back();
     ++stats_.visited;
     const int su = n.b0.u + n.b1.u, sv = n.b0.v + n.b1.v;
-    bool split = false;
-    std::uint8_t inside = n.inside;
     if (((su | sv) & 1) == 0) {  // the hypotenuse has a midpoint on the grid
       const GridPoint c{su / 2, sv / 2};
       const std::size_t ci = g.index(c.u, c.v);
@@ -105,25 +149,25 @@ bool Tessellator::pass(const ChartT& chart, const Terrain& terrain, const Camera
       const double eps = BoundCode::decode(bc.error);
       const double r = double(BoundCode::decode(bc.radius)) + eps;
       const Eigen::Vector3d w = chart.position(c.u, c.v, double(h[ci])) - eye;
-      const Eigen::Vector3d cam = R * w;
+      std::uint8_t inside = n.inside;
       if (inside != (kAllPlanes | kHorizonClear)) {
+        const Eigen::Vector3d cam = R * w;
         bool outside = false;
         for (int i = 0; i < 5 && !outside; ++i) {
           if (inside & (1u << i)) continue;
           const double d = view.planes[i].dot(cam) - (i == 4 ? kNear : 0.0);
-          if (d < -r)
+          if (d < -r) {
             outside = true;
-          else if (d >= r)
+          } else if (d >= r) {
             inside |= std::uint8_t(1u << i);
+          }
         }
         if (outside) {
           ++stats_.culledFrustum;
           continue;
         }
         if (!(inside & kHorizonClear)) {
-          if (!view.horizonCull) {
-            inside |= kHorizonClear;
-          } else if (w.dot(view.towardCentre) + r < view.horizonPlaneDist) {
+          if (!view.horizonCull || w.dot(view.towardCentre) + r < view.horizonPlaneDist) {
             inside |= kHorizonClear;  // wholly in front of the horizon plane: children too
           } else if (behindHorizon(view, w, r)) {
             ++stats_.culledHorizon;
@@ -132,55 +176,28 @@ bool Tessellator::pass(const ChartT& chart, const Terrain& terrain, const Camera
         }
       }
       if (eps > 0) {
-        const double zr = cam.z() - r;
-        if (zr <= kNear) {
-          split = true;
-        } else {
-          split = view.focal * eps * (w.norm() + r) > distMax * zr * zr;
+        const double zr = forward.dot(w) - r;
+        // Two valid bounds on the screen error; the smaller decides (both are nested, so their
+        // minimum is too). The cheap one first: if it allows no split, the other cannot either.
+        if (zr <= kNear || (view.focalKappa * eps > distMax * zr &&
+                            view.focal * eps * (w.norm() + r) > distMax * zr * zr)) {
+          const std::uint32_t ic = vertexFor(ci, w);
+          stack.push_back({c, n.b1, n.a, ic, n.ib1, n.ia, inside});
+          stack.push_back({c, n.a, n.b0, ic, n.ia, n.ib0, inside});
+          // Split vertices two levels down are far away in memory at coarse levels: ask for
+          // their height and bounds now so the loads overlap with the work in between.
+          prefetchSplitVertex(n.a, n.b0);
+          prefetchSplitVertex(n.b1, n.a);
+          continue;
         }
       }
-      if (split) {
-        stack.push_back({c, n.b1, n.a, inside});
-        stack.push_back({c, n.a, n.b0, inside});
-        continue;
-      }
     }
-    triangleCorners_.push_back(g.index(n.a.u, n.a.v));
-    triangleCorners_.push_back(g.index(n.b0.u, n.b0.v));
-    triangleCorners_.push_back(g.index(n.b1.u, n.b1.v));
-    if (abortAbove && triangleCorners_.size() > 3 * abortAbove) return false;
+    mesh_.indices.push_back(n.ia);
+    mesh_.indices.push_back(n.ib0);
+    mesh_.indices.push_back(n.ib1);
+    if (abortAbove && mesh_.indices.size() > 3 * abortAbove) return false;
   }
   return true;
-}
-
-void Tessellator::buildVertices(const Terrain& terrain, const Camera& camera) {
-  mesh_.clear();
-  mesh_.eye = camera.eye;
-  const std::size_t tris = triangleCorners_.size() / 3;
-  std::size_t cap = std::bit_ceil(std::max<std::size_t>(64, 2 * tris + 8));
-  hashKeys_.assign(cap, ~std::uint64_t(0));
-  hashValues_.resize(cap);
-  mesh_.indices.resize(triangleCorners_.size());
-  const core::GridSize g = terrain.grid();
-  const auto side = std::uint64_t(g.side());
-  const core::Chart& chart = terrain.chart();
-  for (std::size_t i = 0; i < triangleCorners_.size(); ++i) {
-    const std::uint64_t key = triangleCorners_[i];
-    std::size_t slot = std::size_t((key * 0x9E3779B97F4A7C15ull) >> 20) & (cap - 1);
-    while (hashKeys_[slot] != key && hashKeys_[slot] != ~std::uint64_t(0))
-      slot = (slot + 1) & (cap - 1);
-    if (hashKeys_[slot] != key) {
-      hashKeys_[slot] = key;
-      hashValues_[slot] = std::uint32_t(mesh_.gridIndex.size());
-      mesh_.gridIndex.push_back(key);
-      const int u = int(key % side), v = int(key / side);
-      const Eigen::Vector3d p = chart.position(u, v, double(terrain.heights()[key])) - camera.eye;
-      mesh_.positions.push_back(p.cast<float>());
-    }
-    mesh_.indices[i] = hashValues_[slot];
-  }
-  stats_.triangles = tris;
-  stats_.vertices = mesh_.gridIndex.size();
 }
 
 const Mesh& Tessellator::tessellate(const Terrain& terrain, const Camera& camera,
@@ -195,6 +212,7 @@ const Mesh& Tessellator::tessellate(const Terrain& terrain, const Camera& camera
     stats_.reused = true;
     return mesh_;
   }
+  cacheValid_ = false;
   stats_.reused = false;
   double distMax = settings.distMaxPx;
   const std::size_t budget = settings.triangleBudget;
@@ -211,16 +229,13 @@ const Mesh& Tessellator::tessellate(const Terrain& terrain, const Camera& camera
     } else {
       complete = pass(terrain.chart(), terrain, camera, distMax, settings.cull, abortAbove);
     }
-    const std::size_t tris = triangleCorners_.size() / 3;
-    if (budget == 0 || (complete && tris <= budget)) break;
-    if (stats_.passes >= kMaxPasses) {
-      // Keep the first `budget` triangles' worth of coarsening honest: report the overrun.
-      break;
-    }
+    const std::size_t tris = mesh_.triangleCount();
+    if (budget == 0 || (complete && tris <= budget) || stats_.passes >= kMaxPasses) break;
     distMax *= complete ? std::max(1.02, 1.03 * double(tris) / double(budget)) : 4.0;
   }
   stats_.effectiveDistMaxPx = distMax;
-  buildVertices(terrain, camera);
+  stats_.triangles = mesh_.triangleCount();
+  stats_.vertices = mesh_.gridIndex.size();
   cacheValid_ = true;
   cachedRevision_ = terrain.revision();
   cachedCamera_ = camera;

@@ -28,10 +28,12 @@ struct TessellationStats {
 
 // View-dependent, crack-free tessellation of the 4-8 bintree. A triangle splits when its
 // hypotenuse midpoint c has
-//     f * eps(c) * (|c - eye| + r) / (z(c) - r)^2  >  distMax,   r = radius(c) + eps(c),
-// a bound on the screen distance between any full-resolution vertex in c's diamond and the
-// point the unsplit triangles put it at (the projection's Jacobian norm is f|X|/z^2 for X in the
-// camera frame; X ranges over the ball of radius r around c). Both bounds are nested, so a split
+//     f * eps(c) * min(kappa / (z(c) - r), (|c - eye| + r) / (z(c) - r)^2)  >  distMax,
+// with r = radius(c) + eps(c): a bound on the screen distance between any full-resolution vertex
+// in view inside c's diamond and the point the unsplit triangles put it at. The projection's
+// Jacobian norm is f|X|/z^2 for X in the camera frame; over the ball of radius r around c,
+// |X| <= |c - eye| + r and z >= z(c) - r, and over the image (grown by distMax) |X|/z <= kappa.
+// Both bounds are nested, so a split
 // vertex always has split parents and the mesh has no T-junctions, including across the seam
 // (twins hold the same bounds) and at the poles. Balls outside the frustum or behind the
 // planet's horizon are culled.
@@ -48,11 +50,22 @@ class Tessellator {
   template <class ChartT>
   bool pass(const ChartT& chart, const Terrain& terrain, const Camera& camera, double distMax,
             bool cull, std::size_t abortAbove);
-  void buildVertices(const Terrain& terrain, const Camera& camera);
+  // Mesh vertex of a grid vertex, added with its eye-relative position on first use.
+  std::uint32_t vertexFor(std::uint64_t gridIndex, const Eigen::Vector3d& relativeToEye);
+  std::size_t hashSlot(std::uint64_t key) const {
+    return std::size_t((key * 0x9E3779B97F4A7C15ull) >> 20) & (hashKeys_.size() - 1);
+  }
+  static constexpr std::uint64_t kEmpty = ~std::uint64_t(0);
 
   Mesh mesh_;
   TessellationStats stats_;
-  std::vector<std::uint64_t> triangleCorners_;  // 3 grid indices per emitted triangle
+  struct Node {
+    core::GridPoint a, b0, b1;
+    std::uint32_t ia, ib0, ib1;  // mesh vertex indices of the corners
+    std::uint8_t
+        inside;  // bit i: ball inside frustum plane i; bit 5: in front of the horizon plane
+  };
+  std::vector<Node> stack_;
   std::vector<std::uint64_t> hashKeys_;
   std::vector<std::uint32_t> hashValues_;
 
