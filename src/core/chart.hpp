@@ -36,6 +36,9 @@ class Chart {
 
   // Reference radius heights are measured from (0 for a flat chart).
   virtual double radius() const = 0;
+  // Heights beyond +-heightLimit() are refused on load and saturate in edits. A sphere's is a
+  // quarter of its radius (relief beyond that is not terrain); charts without a radius override.
+  virtual double heightLimit() const { return 0.25 * radius(); }
 
  protected:
   explicit Chart(GridSize grid) : grid_(grid) {}

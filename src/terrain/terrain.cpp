@@ -26,7 +26,7 @@ void Terrain::validateHeights(const core::Chart& chart, std::span<const float> h
     throw core::InputError("got " + std::to_string(h.size()) + " heights, a " + g.label() +
                            " grid needs " + std::to_string(g.count()));
   }
-  const double limit = 0.25 * chart.radius();
+  const double limit = chart.heightLimit();
   const int m = g.m();
   for (int v = 0; v <= m; ++v) {
     for (int u = 0; u <= m; ++u) {
@@ -39,7 +39,7 @@ void Terrain::validateHeights(const core::Chart& chart, std::span<const float> h
       if (std::abs(double(x)) > limit) {
         std::ostringstream os;
         os << "height " << x << " m at " << at(u, v) << " exceeds the limit of +-" << limit
-           << " m (a quarter of the radius)";
+           << " m (the chart's height limit)";
         throw core::InputError(os.str());
       }
     }

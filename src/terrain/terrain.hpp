@@ -29,7 +29,7 @@ class Terrain {
   const ErrorBounds& bounds() const { return bounds_; }
 
   // Saturation limit for heights (edits clamp to it).
-  double heightLimit() const { return 0.25 * chart_->radius(); }
+  double heightLimit() const { return chart_->heightLimit(); }
 
   // Editing: change heights through mutableHeights(), then report what changed with
   // commitEdit(); the bounds are updated above that region only and the revision advances.
