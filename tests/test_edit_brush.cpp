@@ -152,8 +152,11 @@ TEST(EditBrush, RateModeScalesWithDt) {
   pipe.apply(brush, {at, 2.0});
   EXPECT_FLOAT_EQ(t.height(c.u, c.v), 250.0f);
   const std::vector<float> before(t.heights().begin(), t.heights().end());
-  pipe.apply(brush, {at, 0.0});
+  const auto revision = t.revision();
+  const auto still = pipe.apply(brush, {at, 0.0});
   EXPECT_TRUE(edittest::sameBits(t.heights(), before)) << "dt = 0 changes nothing";
+  EXPECT_TRUE(still.dirty.empty());
+  EXPECT_EQ(t.revision(), revision) << "nothing to commit";
   // Elsewhere in V_d the change scales with dt too.
   const int u = (c.u + 2) % m, v = c.v + 1;
   const float h1 = t.height(u, v);

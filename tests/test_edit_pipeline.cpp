@@ -34,6 +34,31 @@ void checkEdit(const terrain::Terrain& t, const edit::EditPipeline& pipe,
                const std::vector<float>& before, const std::string& what) {
   const auto g = t.grid();
   const edit::Region& region = pipe.lastRegion();
+  // The dirty rectangle holds every changed vertex and is tight in v.
+  const terrain::GridRegion& dirty = pipe.lastReport().dirty;
+  std::vector<std::uint8_t> inDirty(g.count(), 0);
+  dirty.forEachColumnRange(g, [&](int a, int b) {
+    for (int v = dirty.vBegin; v <= dirty.vEnd; ++v) {
+      for (int u = a; u <= b; ++u) inDirty[g.index(u, v)] = 1;
+    }
+  });
+  int firstChanged = -1, lastChanged = -1;
+  for (int v = 0; v <= g.m(); ++v) {
+    for (int u = 0; u <= g.m(); ++u) {
+      if (std::memcmp(&before[g.index(u, v)], &t.heights()[g.index(u, v)], sizeof(float)) == 0)
+        continue;
+      ASSERT_TRUE(inDirty[g.index(u, v)])
+          << what << ": changed (" << u << "," << v << ") outside " << dirty.describe();
+      if (firstChanged < 0) firstChanged = v;
+      lastChanged = v;
+    }
+  }
+  if (firstChanged >= 0) {
+    ASSERT_EQ(dirty.vBegin, firstChanged) << what;
+    ASSERT_EQ(dirty.vEnd, lastChanged) << what;
+  } else {
+    ASSERT_TRUE(dirty.empty()) << what;
+  }
   // Only V_d changes.
   for (int v = 0; v <= g.m(); ++v) {
     for (int u = 0; u <= g.m(); ++u) {

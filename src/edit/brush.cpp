@@ -1,7 +1,9 @@
 #include "edit/brush.hpp"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
+#include <cstdint>
 #include <sstream>
 #include <vector>
 
@@ -115,20 +117,45 @@ struct SetToward {
   }
 };
 
+// The seam-wrapped rectangle of the columns within folded distance k of column uc, rows v0..v1.
+terrain::GridRegion symmetricBounds(int uc, int k, int v0, int v1, int m) {
+  terrain::GridRegion r{0, m, v0, v1};
+  if (2 * k + 1 >= m) return r;
+  r.uBegin = uc - k;
+  r.uEnd = uc + k;
+  if (r.uEnd >= m) r.uBegin -= m, r.uEnd -= m;  // wrap through u = m / 0: both twins included
+  if (r.uBegin == 0) {                          // column 0 without wrapping: name u = m as well
+    if (r.uEnd == 0) {
+      r.uBegin = -1;  // {0, m} alone has no GridRegion: take m - 1 too
+    } else {
+      r.uBegin = m, r.uEnd += m;  // u = m, then 0 .. uEnd
+    }
+  }
+  return r;
+}
+
+// Writes the new heights of V_d and returns the rectangle of the vertices that actually changed
+// (bitwise): far out, where the Gaussian is below half a float step, heights stay as they were
+// and the bounds above them need no update.
 template <class Op>
-void applyRows(const ToolContext& ctx, const GaussianProfile& profile, double amount, const Op& op,
-               std::span<float> heights) {
+terrain::GridRegion applyRows(const ToolContext& ctx, const GaussianProfile& profile, double amount,
+                              const Op& op, std::span<float> heights) {
   const Region& region = ctx.region;
   const DistanceField& field = ctx.field;
   const core::GridSize g = field.grid();
   const std::size_t side = std::size_t(g.side());
   const double limit = ctx.heightLimit;
   float* const h = heights.data();
-  auto store = [limit](float& x, double y) {
+  auto store = [limit](float& x, double y) {  // true when the stored height changed
+    const float old = x;
     x = static_cast<float>(std::clamp(y, -limit, limit));
+    return std::bit_cast<std::uint32_t>(x) != std::bit_cast<std::uint32_t>(old);
   };
   const int v0 = region.vBegin(), v1 = region.vEnd();
   const bool parallel = region.vertexCount() > 8192;
+  // Per row: the largest folded column distance of a changed vertex (symmetric regions), or
+  // 0 when anything changed (other regions); -1 when nothing did.
+  std::vector<int> reach(std::size_t(v1 - v0 + 1), -1);
 
   if (field.latLong() && region.symmetric()) {
 #pragma omp parallel if (parallel)
@@ -140,35 +167,62 @@ void applyRows(const ToolContext& ctx, const GaussianProfile& profile, double am
         if (spans.empty()) continue;
         float* row = h + std::size_t(v) * side;
         const DistanceField::Row terms = field.row(v);
+        int kChanged = -1;
         if (terms.f == 0.0) {  // every vertex of the row at one distance (pole rows, polar centre)
           const double w = amount * profile.fromDistance2(field.distance2(terms, 0));
           for (const Span& s : spans) {
-            for (int u = s.uBegin; u <= s.uEnd; ++u) store(row[u], op(row[u], w));
+            for (int u = s.uBegin; u <= s.uEnd; ++u) {
+              if (store(row[u], op(row[u], w))) kChanged = std::max(kChanged, field.fold(u));
+            }
           }
-          continue;
+        } else {
+          const int kMax = region.halfWidth(v);
+          weight.resize(std::size_t(kMax) + 1);
+          for (int k = 0; k <= kMax; ++k) {
+            weight[std::size_t(k)] = amount * profile.fromDistance2(field.distance2(terms, k));
+          }
+          for (const Span& s : spans) {
+            for (int u = s.uBegin; u <= s.uEnd; ++u) {
+              const int k = field.fold(u);
+              if (store(row[u], op(row[u], weight[std::size_t(k)])))
+                kChanged = std::max(kChanged, k);
+            }
+          }
         }
-        const int kMax = region.halfWidth(v);
-        weight.resize(std::size_t(kMax) + 1);
-        for (int k = 0; k <= kMax; ++k)
-          weight[std::size_t(k)] = amount * profile.fromDistance2(field.distance2(terms, k));
-        for (const Span& s : spans) {
-          for (int u = s.uBegin; u <= s.uEnd; ++u)
-            store(row[u], op(row[u], weight[std::size_t(field.fold(u))]));
-        }
+        reach[std::size_t(v - v0)] = kChanged;
       }
     }
-    return;
-  }
-  // Any chart: one distance per vertex.
+  } else {
+    // Any chart: one distance per vertex.
 #pragma omp parallel for schedule(dynamic, 2) if (parallel)
-  for (int v = v0; v <= v1; ++v) {
-    float* row = h + std::size_t(v) * side;
-    for (const Span& s : region.row(v)) {
-      for (int u = s.uBegin; u <= s.uEnd; ++u) {
-        store(row[u], op(row[u], amount * profile.fromDistance2(field.distance2(u, v))));
+    for (int v = v0; v <= v1; ++v) {
+      float* row = h + std::size_t(v) * side;
+      bool changed = false;
+      for (const Span& s : region.row(v)) {
+        for (int u = s.uBegin; u <= s.uEnd; ++u) {
+          changed |=
+              store(row[u], op(row[u], amount * profile.fromDistance2(field.distance2(u, v))));
+        }
       }
+      reach[std::size_t(v - v0)] = changed ? 0 : -1;
     }
   }
+  int first = -1, last = -1, kMax = -1;
+  for (int v = v0; v <= v1; ++v) {
+    const int k = reach[std::size_t(v - v0)];
+    if (k < 0) continue;
+    if (first < 0) first = v;
+    last = v;
+    kMax = std::max(kMax, k);
+  }
+  if (first < 0) return terrain::GridRegion::none();
+  if (field.latLong() && region.symmetric()) {
+    return symmetricBounds(region.centreU(), kMax, first, last, g.m());
+  }
+  terrain::GridRegion r = region.bounds();
+  r.vBegin = first;
+  r.vEnd = last;
+  return r;
 }
 
 }  // namespace
@@ -180,14 +234,11 @@ terrain::GridRegion GaussianBrush::apply(const ToolContext& ctx, std::span<float
   if (ctx.region.empty()) return terrain::GridRegion::none();
   switch (settings_.mode) {
     case BrushMode::kRaise:
-      applyRows(ctx, profile, amount, Raise{}, heights);
-      break;
+      return applyRows(ctx, profile, amount, Raise{}, heights);
     case BrushMode::kLower:
-      applyRows(ctx, profile, amount, Lower{}, heights);
-      break;
+      return applyRows(ctx, profile, amount, Lower{}, heights);
     case BrushMode::kSet:
-      applyRows(ctx, profile, amount, SetToward{settings_.target}, heights);
-      break;
+      return applyRows(ctx, profile, amount, SetToward{settings_.target}, heights);
   }
   return ctx.region.bounds();
 }

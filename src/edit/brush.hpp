@@ -68,7 +68,9 @@ struct BrushSettings {
 };
 
 // The Gaussian brush: the first Tool. Heights are computed in double from the old float height,
-// clamped to +-heightLimit and rounded to float. Rows are processed in parallel (OpenMP); on the
+// clamped to +-heightLimit and rounded to float. apply() returns the rectangle of the vertices
+// whose height actually changed (far out, where a * shape is below half a float step, heights
+// stay bitwise the same and need no bounds update). Rows are processed in parallel (OpenMP); on the
 // lat-long chart the Gaussian is evaluated once per distinct (row, folded column distance), so a
 // row costs about half its length in exp() calls and a row at constant distance (any row when
 // the control vertex is a pole) one call.

@@ -257,7 +257,9 @@ void Region::finish(const core::GridSize& g, bool wrapsU, bool hasPoleRows, bool
     b.uBegin = 0, b.uEnd = m;
   } else {
     const int end = coverStart + len - 1;
-    if (coverStart == 0) {
+    if (coverStart == 0 && end == 0) {
+      b.uBegin = -1, b.uEnd = 0;  // u = 0 and m (plus m - 1: {0, m} alone has no GridRegion)
+    } else if (coverStart == 0) {
       b.uBegin = m, b.uEnd = m + end;  // u = m and 0 .. end (see GridRegion::forEachColumnRange)
     } else if (end >= m) {
       b.uBegin = coverStart - m, b.uEnd = end - m;  // coverStart .. m and 0 .. end - m
