@@ -2,6 +2,7 @@
 // Benchmarks run by `planetsculpt bench [NAME]`. Each prints one JSON object per line to `out`
 // and progress to stderr. Timings are medians of repeated runs; ratios compare against a
 // baseline measured in the same run.
+#include <map>
 #include <ostream>
 #include <string>
 
@@ -15,5 +16,13 @@ struct BenchOptions {
 
 void benchTessellate(const BenchOptions& options, std::ostream& out);
 void benchDeform(const BenchOptions& options, std::ostream& out);
+
+// Benchmarks register themselves by name (one static BenchRegistration per bench file), so the
+// command line lists whatever was built.
+using BenchFunction = void (*)(const BenchOptions&, std::ostream&);
+std::map<std::string, BenchFunction>& registeredBenchmarks();
+struct BenchRegistration {
+  BenchRegistration(const char* name, BenchFunction fn) { registeredBenchmarks()[name] = fn; }
+};
 
 }  // namespace ps::bench

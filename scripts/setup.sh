@@ -7,7 +7,7 @@ PACKAGES=(
   build-essential cmake ninja-build pkg-config
   libeigen3-dev libgtest-dev libbenchmark-dev
   libcli11-dev nlohmann-json3-dev libfmt-dev
-  libopencv-dev libopencv-contrib-dev libapriltag-dev
+  libopencv-dev libopencv-contrib-dev libapriltag-dev libtiff-dev zlib1g-dev
 )
 
 missing=()

@@ -1,0 +1,120 @@
+// `planetsculpt bench tessellate`: view-dependent tessellation time against measured screen
+// error, on the default planet, from orbit, 1,000 km and 1 km up, at 1280x720.
+#include <cmath>
+#include <iostream>
+#include <nlohmann/json.hpp>
+#include <numbers>
+
+#include "app/default_planet.hpp"
+#include "bench/bench.hpp"
+#include "bench/bench_util.hpp"
+#include "terrain/screen_error.hpp"
+#include "terrain/tessellator.hpp"
+
+namespace ps::bench {
+
+namespace {
+
+struct View {
+  std::string label;
+  terrain::Camera camera;
+};
+
+std::vector<View> standardViews(const terrain::Terrain& t) {
+  const double R = t.chart().radius();
+  // Over land at 30 deg N, 20 deg E looking east-north-east, so every view sees relief.
+  const double lat = 30 * std::numbers::pi / 180, lon = 20 * std::numbers::pi / 180;
+  const Eigen::Vector3d up(std::cos(lon) * std::cos(lat), std::sin(lon) * std::cos(lat),
+                           std::sin(lat));
+  const Eigen::Vector3d east = Eigen::Vector3d(-std::sin(lon), std::cos(lon), 0);
+  const Eigen::Vector3d north = up.cross(east);
+  const Eigen::Vector3d heading = (east + 0.3 * north).normalized();
+  const double fov = 60 * std::numbers::pi / 180;
+  std::vector<View> views;
+  views.push_back({"orbit_3R", terrain::Camera::lookAt(3 * R * up, Eigen::Vector3d::Zero(), north,
+                                                       1280, 720, fov)});
+  {
+    const Eigen::Vector3d eye = (R + 1.0e6) * up;
+    views.push_back({"altitude_1000km",
+                     terrain::Camera::lookAt(eye, eye + heading - 0.8 * up, up, 1280, 720, fov)});
+  }
+  {
+    // 1 km above the ground under the camera.
+    const auto uv = *t.chart().inverse(up);
+    const double ground = t.height(int(std::lround(uv.x())), int(std::lround(uv.y())));
+    const Eigen::Vector3d eye = (R + std::max(0.0, ground) + 1000.0) * up;
+    views.push_back({"altitude_1km",
+                     terrain::Camera::lookAt(eye, eye + heading - 0.15 * up, up, 1280, 720, fov)});
+  }
+  return views;
+}
+
+}  // namespace
+
+void benchTessellate(const BenchOptions& options, std::ostream& out) {
+  const int level = options.quick ? 11 : 13;
+  const double rssBefore = procStatusMiB("VmRSS");
+  double buildS = 0;
+  std::unique_ptr<terrain::Terrain> planet;
+  buildS = timeMs([&] { planet = app::makeDefaultPlanet(level, 1); }) / 1000.0;
+  const double rssAfter = procStatusMiB("VmRSS");
+  out << nlohmann::json{{"bench", "tessellate_memory"},
+                        {"grid", planet->grid().label()},
+                        {"planet_mib", double(planet->bytes()) / (1 << 20)},
+                        {"bytes_per_vertex",
+                         double(planet->bytes()) / double(planet->grid().count())},
+                        {"rss_delta_mib", rssAfter - rssBefore},
+                        {"rss_mib", rssAfter},
+                        {"generate_and_build_s", buildS}}
+             .dump()
+      << std::endl;
+
+  const std::vector<double> sweep =
+      options.quick ? std::vector<double>{1, 4, 16} : std::vector<double>{0.5, 1, 2, 4, 8, 16};
+  for (const View& view : standardViews(*planet)) {
+    for (const double distMax : sweep) {
+      for (const std::size_t budget : {std::size_t(70000), std::size_t(0)}) {
+        if (budget == 0 && distMax < 2 && view.label != "orbit_3R")
+          continue;  // unbudgeted fine views are huge
+        terrain::TessellationSettings s;
+        s.distMaxPx = distMax;
+        s.triangleBudget = budget;
+        terrain::Tessellator tess;
+        std::vector<double> full, cached;
+        for (int r = 0; r < options.repeats; ++r) {
+          tess.invalidate();
+          full.push_back(timeMs([&] { tess.tessellate(*planet, view.camera, s); }));
+          cached.push_back(timeMs([&] { tess.tessellate(*planet, view.camera, s); }));
+        }
+        const auto st = tess.stats();
+        const auto err = terrain::measureScreenError(*planet, view.camera, tess.mesh());
+        const double fullMs = median(full), cachedMs = median(cached);
+        out << nlohmann::json{{"bench", "tessellate"},
+                              {"grid", planet->grid().label()},
+                              {"view", view.label},
+                              {"width", 1280},
+                              {"height", 720},
+                              {"dist_max", distMax},
+                              {"budget", budget},
+                              {"effective_dist_max", st.effectiveDistMaxPx},
+                              {"passes", st.passes},
+                              {"triangles", st.triangles},
+                              {"ms", fullMs},
+                              {"ms_p90", percentile(full, 0.9)},
+                              {"unchanged_view_ms", cachedMs},
+                              {"unchanged_over_full", cachedMs / fullMs},
+                              {"max_screen_error_px", err.maxPx},
+                              {"vertices_checked", err.verticesChecked},
+                              {"culled_frustum", st.culledFrustum},
+                              {"culled_horizon", st.culledHorizon},
+                              {"rule", terrain::toString(planet->bounds().rule())}}
+                   .dump()
+            << std::endl;
+      }
+    }
+  }
+}
+
+static const BenchRegistration kRegistered("tessellate", benchTessellate);
+
+}  // namespace ps::bench

@@ -1,0 +1,84 @@
+// `planetsculpt export INPUT --out FILE`: a planet file (or a heightmap, taken as a flat terrain)
+// -> 16-bit PNG, float TIFF, raw float32 + sidecar, or a mesh (OBJ, binary PLY, GLB) at a
+// view-independent maximum error.
+#include <iostream>
+#include <limits>
+#include <memory>
+
+#include "app/command_registry.hpp"
+#include "core/input_error.hpp"
+#include "io/export.hpp"
+
+namespace ps::app {
+
+namespace {
+
+struct ExportArgs {
+  std::string input, output, format, noData = "fill", noDataValue;
+  int width = 0, height = 0;
+  std::optional<double> maxError, scale, offset, spacing;
+  long long grid = 0;
+};
+
+int runExport(const ExportArgs& a) {
+  io::ImportOptions heightmap;
+  heightmap.chart = io::ChartKind::kFlat;
+  heightmap.scale = a.scale;
+  heightmap.offset = a.offset;
+  heightmap.spacing = a.spacing;
+  heightmap.gridSide = a.grid;
+  heightmap.noData = io::noDataPolicyFromString(a.noData);
+  if (!a.noDataValue.empty()) {
+    heightmap.noDataValue = a.noDataValue == "nan" ? std::numeric_limits<double>::quiet_NaN()
+                                                   : std::stod(a.noDataValue);
+  }
+  io::ExportOptions o;
+  if (!a.format.empty()) o.format = io::exportFormatFromName(a.format);
+  o.width = a.width;
+  o.height = a.height;
+  o.maxErrorM = a.maxError;
+  // Check the output side before the (possibly long) load.
+  const io::ExportFormat format = o.format ? *o.format : io::exportFormatFromPath(a.output);
+  if (io::isMeshFormat(format) && !o.maxErrorM)
+    throw core::InputError("a mesh export needs --max-error METRES");
+
+  io::ExportInput in = io::loadExportInput(a.input, heightmap);
+  for (const auto& note : in.notes) std::cerr << "export: " << a.input << ": " << note << "\n";
+  const nlohmann::json summary = io::exportTerrain(*in.terrain, a.output, o);
+  std::cout << summary.dump() << "\n";
+  return 0;
+}
+
+const CommandRegistration kExport([](CLI::App& root, CLI::App*& sub) -> CommandAction {
+  auto a = std::make_shared<ExportArgs>();
+  sub = root.add_subcommand(
+      "export", "Export a planet (or a heightmap as a flat terrain) as a heightmap or a mesh");
+  sub->add_option("input", a->input,
+                  "Planet file, or a heightmap (PNG, TIFF, raw + sidecar) meshed as a flat terrain")
+      ->required();
+  sub->add_option("--out", a->output,
+                  "Output file; the format follows the extension (.png .tif .raw .obj .ply .glb)")
+      ->required();
+  sub->add_option("--format", a->format,
+                  "png16 | tiff | raw | obj | ply | glb (overrides the extension)");
+  sub->add_option("--width", a->width,
+                  "Heightmap width in pixels (default: the grid's resolution)");
+  sub->add_option("--height", a->height, "Heightmap height in pixels");
+  sub->add_option(
+      "--max-error", a->maxError,
+      "Meshes: the largest distance in metres between the mesh and any full-resolution vertex");
+  sub->add_option("--spacing", a->spacing,
+                  "Heightmap input: metres between pixels (default: from the file, else 1)");
+  sub->add_option("--scale", a->scale, "Heightmap input: metres = value * scale + offset");
+  sub->add_option("--offset", a->offset, "Heightmap input: metres = value * scale + offset");
+  sub->add_option("--grid", a->grid,
+                  "Heightmap input: grid side 2^n+1 (default: the smallest holding every pixel)");
+  sub->add_option("--nodata", a->noData, "Heightmap input: fill or refuse no-data pixels")
+      ->capture_default_str();
+  sub->add_option("--nodata-value", a->noDataValue,
+                  "Heightmap input: declare the no-data value (number or nan)");
+  return [a] { return runExport(*a); };
+});
+
+}  // namespace
+}  // namespace ps::app

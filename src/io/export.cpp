@@ -1,0 +1,148 @@
+#include "io/export.hpp"
+
+#include <algorithm>
+#include <cctype>
+#include <fstream>
+
+#include "core/input_error.hpp"
+#include "io/heightmap_export.hpp"
+#include "io/mesh_export.hpp"
+#include "io/planet_file.hpp"
+
+namespace ps::io {
+
+std::string toString(ExportFormat f) {
+  switch (f) {
+    case ExportFormat::kPng16:
+      return "png16";
+    case ExportFormat::kTiff32:
+      return "tiff";
+    case ExportFormat::kRaw32:
+      return "raw";
+    case ExportFormat::kObj:
+      return "obj";
+    case ExportFormat::kPly:
+      return "ply";
+    case ExportFormat::kGlb:
+      return "glb";
+  }
+  return "?";
+}
+
+ExportFormat exportFormatFromName(const std::string& name) {
+  std::string s = name;
+  for (char& c : s) c = char(std::tolower(static_cast<unsigned char>(c)));
+  if (s == "png16" || s == "png") return ExportFormat::kPng16;
+  if (s == "tiff" || s == "tif") return ExportFormat::kTiff32;
+  if (s == "raw" || s == "f32") return ExportFormat::kRaw32;
+  if (s == "obj") return ExportFormat::kObj;
+  if (s == "ply") return ExportFormat::kPly;
+  if (s == "glb") return ExportFormat::kGlb;
+  throw core::InputError("unknown export format '" + name +
+                         "' (expected png16, tiff, raw, obj, ply or glb)");
+}
+
+ExportFormat exportFormatFromPath(const std::filesystem::path& path) {
+  std::string ext = path.extension().string();
+  if (ext.empty()) {
+    throw core::InputError(path.string() +
+                           ": no file extension to tell the format from; add one or pass --format");
+  }
+  try {
+    return exportFormatFromName(ext.substr(1));
+  } catch (const core::InputError&) {
+    throw core::InputError(path.string() + ": unknown extension '" + ext +
+                           "' (use .png .tif .tiff .raw .f32 .obj .ply .glb, or --format)");
+  }
+}
+
+bool isMeshFormat(ExportFormat f) {
+  return f == ExportFormat::kObj || f == ExportFormat::kPly || f == ExportFormat::kGlb;
+}
+
+nlohmann::json exportTerrain(const terrain::Terrain& t, const std::filesystem::path& out,
+                             const ExportOptions& o) {
+  const ExportFormat format = o.format ? *o.format : exportFormatFromPath(out);
+  nlohmann::json summary = {{"file", out.string()},
+                            {"format", toString(format)},
+                            {"chart", t.chart().name()},
+                            {"grid", t.grid().label()}};
+  if (isMeshFormat(format)) {
+    if (!o.maxErrorM) throw core::InputError("a mesh export needs --max-error METRES");
+    if (o.width || o.height)
+      throw core::InputError("--width/--height apply to heightmaps, not to meshes");
+    const MeshFormat mf = format == ExportFormat::kObj   ? MeshFormat::kObj
+                          : format == ExportFormat::kPly ? MeshFormat::kPly
+                                                         : MeshFormat::kGlb;
+    const MeshExportReport r = exportMesh(t, *o.maxErrorM, mf, out);
+    summary["max_error_m"] = r.requestedErrorM;
+    summary["meshed_at_error_m"] = r.meshedErrorM;
+    summary["coordinate_rounding_m"] = r.roundingM;
+    summary["vertices"] = r.vertices;
+    summary["triangles"] = r.triangles;
+    return summary;
+  }
+  if (o.maxErrorM)
+    throw core::InputError("--max-error applies to meshes (obj, ply, glb), not to heightmaps");
+  const bool flat = !t.chart().wrapsU() && !t.chart().hasPoleRows();
+  int w = o.width, h = o.height;
+  if (w < 0 || h < 0) throw core::InputError("--width and --height must be positive");
+  const int m = t.grid().m();
+  if (flat) {
+    if (w == 0 && h == 0) w = h = m + 1;
+    if (w == 0) w = h;
+    if (h == 0) h = w;
+  } else {
+    if (w == 0 && h == 0) h = std::min(m, 8192);
+    if (w == 0) w = 2 * h;
+    if (h == 0) h = std::max(1, w / 2);
+  }
+  if (double(w) * h > 4e8 || w > 1 << 20 || h > 1 << 20) {
+    throw core::InputError("heightmap size " + std::to_string(w) + "x" + std::to_string(h) +
+                           " is too large");
+  }
+  const Raster raster = flat ? resampleFlat(t, w, h) : resampleEquirectangular(t, w, h);
+  switch (format) {
+    case ExportFormat::kPng16:
+      writeHeightPng16(raster, out);
+      break;
+    case ExportFormat::kTiff32:
+      writeHeightTiff32(raster, out);
+      break;
+    default:
+      writeHeightRaw32(raster, out);
+      break;
+  }
+  summary["width"] = w;
+  summary["height"] = h;
+  summary["sidecar"] = out.string() + ".json";
+  return summary;
+}
+
+ExportInput loadExportInput(const std::filesystem::path& path,
+                            const ImportOptions& heightmapOptions) {
+  ExportInput in;
+  std::vector<unsigned char> head(8, 0);
+  {
+    std::ifstream f(path, std::ios::binary);
+    if (f) f.read(reinterpret_cast<char*>(head.data()), 8);
+    head.resize(std::size_t(std::max<std::streamsize>(0, f.gcount())));
+  }
+  if (looksLikePlanetFile(head)) {
+    in.terrain = loadPlanet(path);
+    in.kind = "planet file";
+    return in;
+  }
+  ImportResult r = importHeightmap(path, heightmapOptions);
+  in.notes = std::move(r.notes);
+  in.kind = "heightmap";
+  try {
+    in.terrain = std::make_unique<terrain::Terrain>(r.planet.chart, std::move(r.planet.heights),
+                                                    r.planet.rule);
+  } catch (const core::InputError& e) {
+    throw core::InputError(path.string() + ": " + e.what());
+  }
+  return in;
+}
+
+}  // namespace ps::io

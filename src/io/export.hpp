@@ -1,0 +1,44 @@
+#pragma once
+// `planetsculpt export`: a planet (or a heightmap taken as a flat terrain) -> heightmap or mesh.
+#include <filesystem>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "io/heightmap_import.hpp"
+#include "terrain/terrain.hpp"
+
+namespace ps::io {
+
+enum class ExportFormat { kPng16, kTiff32, kRaw32, kObj, kPly, kGlb };
+
+std::string toString(ExportFormat f);
+// "png16"/"png", "tiff"/"tif", "raw"/"f32", "obj", "ply", "glb"; throws core::InputError.
+ExportFormat exportFormatFromName(const std::string& name);
+// From the file name's extension (.png .tif .tiff .raw .f32 .obj .ply .glb).
+ExportFormat exportFormatFromPath(const std::filesystem::path& path);
+bool isMeshFormat(ExportFormat f);
+
+struct ExportOptions {
+  std::optional<ExportFormat> format;  // unset: from the extension
+  int width = 0, height = 0;           // heightmaps; 0: the default size
+  std::optional<double> maxErrorM;     // meshes (required for them)
+};
+
+// Writes `out` (and a sidecar JSON for heightmaps); returns a summary of what was written.
+nlohmann::json exportTerrain(const terrain::Terrain& terrain, const std::filesystem::path& out,
+                             const ExportOptions& options);
+
+// The input of `export`: a planet file, or any heightmap `import` reads, which becomes a flat
+// terrain (heightmapOptions.chart decides; its notes are what the user must be told).
+struct ExportInput {
+  std::unique_ptr<terrain::Terrain> terrain;
+  std::string kind;  // "planet file" | "heightmap"
+  std::vector<std::string> notes;
+};
+ExportInput loadExportInput(const std::filesystem::path& path,
+                            const ImportOptions& heightmapOptions);
+
+}  // namespace ps::io

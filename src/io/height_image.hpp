@@ -1,0 +1,77 @@
+#pragma once
+// Decoding a user's heightmap file into raw sample values (before scale, offset, no-data
+// filling and resampling; see io/heightmap_import.hpp). Every parser here checks dimensions
+// before it allocates and throws core::InputError "<file>: <what is wrong>".
+#include <cstdint>
+#include <filesystem>
+#include <optional>
+#include <span>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace ps::io {
+
+// Images larger than this are refused before any pixel is decoded (1 GiB of float samples).
+inline constexpr std::uint64_t kMaxImagePixels = std::uint64_t(1) << 28;
+inline constexpr std::uint64_t kMaxImageSide = std::uint64_t(1) << 20;
+
+// GeoTIFF georeferencing (ModelPixelScale + ModelTiepoint + GTModelType), when present.
+struct GeoReference {
+  double pixelScaleX = 0, pixelScaleY = 0;  // CRS units per pixel
+  double originX = 0, originY = 0;          // CRS coordinates of the raster's top-left corner
+  bool geographic = false;                  // CRS in degrees (GTModelType 2)
+};
+
+struct HeightImage {
+  int width = 0, height = 0;
+  std::vector<float> values;  // samples as stored, row-major, row 0 at the top
+  std::string kind;           // e.g. "16-bit grey PNG", "int16 TIFF", "float32 raw"
+  // Declared no-data value in stored units (NaN: NaN marks no data) and where it came from.
+  std::optional<double> noData;
+  std::string noDataSource;
+  // A PlanetSculpt 16-bit PNG's tEXt chunks: the metres that 0 and 65535 stand for.
+  std::optional<double> value0Metres, value65535Metres;
+  // Longitude of the western edge, when a sidecar says so.
+  std::optional<double> column0LongitudeDeg;
+  // "equirectangular" or "flat" when the file says which (our own exports do).
+  std::string projection;
+  // Flat exports' sidecars: metres between pixel centres.
+  std::optional<double> pixelSpacingX, pixelSpacingY;
+  std::optional<GeoReference> geo;
+
+  std::uint64_t pixelCount() const { return std::uint64_t(width) * std::uint64_t(height); }
+  float at(int x, int y) const {
+    return values[std::size_t(y) * std::size_t(width) + std::size_t(x)];
+  }
+};
+
+enum class ImageFormat { kUnknown, kPng, kTiff, kPlanet };
+ImageFormat sniffFormat(std::span<const unsigned char> firstBytes);
+
+// PNG (8/16-bit grey) or TIFF (one sample per pixel: 8/16/32-bit integers, 32/64-bit floats,
+// strips or tiles, any compression libtiff reads; GDAL_NODATA tag 42113 and the GeoTIFF pixel
+// scale/tie point are read), chosen by the magic bytes.
+HeightImage decodeHeightImage(std::span<const unsigned char> bytes, const std::string& name);
+
+// Raw little-endian float32 samples described by a sidecar JSON (what `export --format raw`
+// writes next to the data as `<file>.json`).
+struct RawSidecar {
+  int width = 0, height = 0;
+  std::optional<double> noData;  // "nodata": number or "nan"
+  std::optional<double> column0LongitudeDeg;
+  std::string projection;
+  std::optional<double> pixelSpacingX, pixelSpacingY;
+};
+RawSidecar parseRawSidecar(std::string_view json, const std::string& name);
+HeightImage decodeRaw(std::span<const unsigned char> bytes, const RawSidecar& sidecar,
+                      const std::string& name);
+
+// Reads a file: PNG or TIFF by their magic, otherwise raw float32 when `<file>.json` exists.
+HeightImage readHeightImage(const std::filesystem::path& path);
+
+// The whole file, refusing more than maxBytes (named in the error).
+std::vector<unsigned char> readFileBytes(const std::filesystem::path& path,
+                                         std::uint64_t maxBytes = std::uint64_t(8) << 30);
+
+}  // namespace ps::io

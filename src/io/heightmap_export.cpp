@@ -1,0 +1,339 @@
+#include "io/heightmap_export.hpp"
+
+#include <tiffio.h>
+
+#include <algorithm>
+#include <bit>
+#include <cmath>
+#include <cstring>
+#include <fstream>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+#include <stdexcept>
+
+#include "core/flat_chart.hpp"
+#include "io/atomic_file.hpp"
+#include "io/png_text.hpp"
+
+namespace ps::io {
+
+Raster resampleEquirectangular(const terrain::Terrain& t, int width, int height) {
+  if (width <= 0 || height <= 0 || double(width) * height > 4e8) {
+    throw std::invalid_argument("raster size " + std::to_string(width) + "x" +
+                                std::to_string(height) + " is empty or too large");
+  }
+  if (!t.chart().wrapsU() || !t.chart().hasPoleRows()) {
+    throw std::invalid_argument("an equirectangular raster needs a lat-long planet, not a '" +
+                                t.chart().name() + "' chart");
+  }
+  Raster r{width, height, std::vector<float>(std::size_t(width) * std::size_t(height))};
+  r.radiusMetres = t.chart().radius();
+  const int m = t.grid().m();
+#pragma omp parallel for schedule(static)
+  for (int y = 0; y < height; ++y) {
+    const double v = (1.0 - (y + 0.5) / height) * m;
+    const int v0 = std::min(m - 1, int(v));
+    const double fv = v - v0;
+    for (int x = 0; x < width; ++x) {
+      const double u = (x + 0.5) / width * m;
+      const int u0 = std::min(m - 1, int(u));
+      const double fu = u - u0;
+      const double h = (1 - fv) * ((1 - fu) * t.height(u0, v0) + fu * t.height(u0 + 1, v0)) +
+                       fv * ((1 - fu) * t.height(u0, v0 + 1) + fu * t.height(u0 + 1, v0 + 1));
+      r.metres[std::size_t(y) * std::size_t(width) + std::size_t(x)] = float(h);
+    }
+  }
+  return r;
+}
+
+namespace {
+
+std::string decimal(double x) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.17g", x);
+  return buf;
+}
+
+std::string projectionText(const Raster& r) {
+  if (r.layout == Raster::Layout::kFlat) return "flat, pixel is point, row 0 at v = m";
+  return "equirectangular, row 0 north, column 0 at -180 deg";
+}
+
+void checkRaster(const Raster& r, const std::filesystem::path& path) {
+  if (r.width <= 0 || r.height <= 0 ||
+      r.metres.size() != std::size_t(r.width) * std::size_t(r.height)) {
+    throw std::invalid_argument("raster for " + path.string() + " is empty or inconsistent");
+  }
+}
+
+// The sidecar JSON common to every heightmap format.
+nlohmann::json describe(const Raster& r, const std::filesystem::path& path,
+                        const std::string& format) {
+  nlohmann::json j = {{"file", path.filename().string()},
+                      {"format", format},
+                      {"width", r.width},
+                      {"height", r.height},
+                      {"units", "m"}};
+  if (r.layout == Raster::Layout::kFlat) {
+    j["projection"] = "flat";
+    j["pixel_is"] = "point";
+    j["row0"] = "v = m (north)";
+    j["pixel_spacing_m"] = {r.pixelWidthM, r.pixelHeightM};
+  } else {
+    j["projection"] = "equirectangular";
+    j["pixel_is"] = "area";
+    j["row0"] = "north";
+    j["column0_longitude_deg"] = -180.0;
+    if (r.radiusMetres > 0) j["radius_m"] = r.radiusMetres;
+  }
+  return j;
+}
+
+void writeSidecar(const nlohmann::json& side, const std::filesystem::path& path) {
+  auto sidecar = path;
+  sidecar += ".json";
+  writeAtomically(sidecar, [&](const std::filesystem::path& tmp) {
+    std::ofstream f(tmp);
+    f << side.dump(2) << "\n";
+    f.close();
+    if (!f) throw std::runtime_error("cannot write " + sidecar.string());
+  });
+}
+
+// GeoTIFF tags libtiff does not know; registered per file before they are set.
+const TIFFFieldInfo kGeoTiffFields[] = {
+    {33550, -1, -1, TIFF_DOUBLE, FIELD_CUSTOM, 1, 1, const_cast<char*>("ModelPixelScaleTag")},
+    {33922, -1, -1, TIFF_DOUBLE, FIELD_CUSTOM, 1, 1, const_cast<char*>("ModelTiepointTag")},
+    {34735, -1, -1, TIFF_SHORT, FIELD_CUSTOM, 1, 1, const_cast<char*>("GeoKeyDirectoryTag")},
+    {34736, -1, -1, TIFF_DOUBLE, FIELD_CUSTOM, 1, 1, const_cast<char*>("GeoDoubleParamsTag")},
+};
+
+}  // namespace
+
+Raster resampleFlat(const terrain::Terrain& t, int width, int height) {
+  const auto* flat = dynamic_cast<const core::FlatChart*>(&t.chart());
+  if (!flat)
+    throw std::invalid_argument("resampleFlat needs a flat chart, not '" + t.chart().name() + "'");
+  if (width <= 0 || height <= 0 || double(width) * height > 4e8) {
+    throw std::invalid_argument("raster size " + std::to_string(width) + "x" +
+                                std::to_string(height) + " is empty or too large");
+  }
+  Raster r{width, height, std::vector<float>(std::size_t(width) * std::size_t(height))};
+  r.layout = Raster::Layout::kFlat;
+  const int m = t.grid().m();
+  const double kx = width > 1 ? double(m) / (width - 1) : 0.0,
+               ky = height > 1 ? double(m) / (height - 1) : 0.0;
+  r.pixelWidthM = width > 1 ? flat->dx() * kx : flat->dx() * m;
+  r.pixelHeightM = height > 1 ? flat->dy() * ky : flat->dy() * m;
+#pragma omp parallel for schedule(static)
+  for (int y = 0; y < height; ++y) {
+    const double v = m - y * ky;
+    const int v0 = std::clamp(int(v), 0, m - 1);
+    const double fv = std::clamp(v - v0, 0.0, 1.0);
+    for (int x = 0; x < width; ++x) {
+      const double u = x * kx;
+      const int u0 = std::clamp(int(u), 0, m - 1);
+      const double fu = std::clamp(u - u0, 0.0, 1.0);
+      double h;
+      if (fu == 0.0 && fv == 0.0) {
+        h = t.height(u0, v0);  // exact at vertices (no 0 * x rounding)
+      } else {
+        h = (1 - fv) * ((1 - fu) * t.height(u0, v0) + fu * t.height(u0 + 1, v0)) +
+            fv * ((1 - fu) * t.height(u0, v0 + 1) + fu * t.height(u0 + 1, v0 + 1));
+      }
+      r.metres[std::size_t(y) * std::size_t(width) + std::size_t(x)] = float(h);
+    }
+  }
+  return r;
+}
+
+void writeHeightPng16(const Raster& raster, const std::filesystem::path& path) {
+  checkRaster(raster, path);
+  const auto [lo, hi] = std::minmax_element(raster.metres.begin(), raster.metres.end());
+  const double minM = *lo, maxM = *hi;
+  const double span = std::max(maxM - minM, 1e-6);
+  cv::Mat img(raster.height, raster.width, CV_16UC1);
+  for (int y = 0; y < raster.height; ++y) {
+    auto* row = img.ptr<std::uint16_t>(y);
+    for (int x = 0; x < raster.width; ++x) {
+      const double h = raster.metres[std::size_t(y) * std::size_t(raster.width) + std::size_t(x)];
+      row[x] = std::uint16_t(std::lround(std::clamp((h - minM) / span, 0.0, 1.0) * 65535.0));
+    }
+  }
+  std::vector<unsigned char> png;
+  if (!cv::imencode(".png", img, png))
+    throw std::runtime_error("cannot encode PNG for " + path.string());
+  std::vector<std::pair<std::string, std::string>> text = {
+      {"planetsculpt:min_m", decimal(minM)},
+      {"planetsculpt:max_m", decimal(maxM)},
+      {"planetsculpt:projection", projectionText(raster)}};
+  if (raster.layout == Raster::Layout::kFlat) {
+    text.emplace_back("planetsculpt:pixel_spacing_m",
+                      decimal(raster.pixelWidthM) + " " + decimal(raster.pixelHeightM));
+  }
+  png = addPngTextChunks(png, text);
+  writeAtomically(path, [&](const std::filesystem::path& tmp) {
+    std::ofstream f(tmp, std::ios::binary);
+    f.write(reinterpret_cast<const char*>(png.data()), std::streamsize(png.size()));
+    if (!f) throw std::runtime_error("cannot write " + path.string());
+  });
+  nlohmann::json side = describe(raster, path, "png16");
+  side["value_0_m"] = minM;
+  side["value_65535_m"] = maxM;
+  side["metres_per_unit"] = span / 65535.0;
+  side["height_m"] = "value * metres_per_unit + value_0_m";
+  writeSidecar(side, path);
+}
+
+void writeHeightTiff32(const Raster& raster, const std::filesystem::path& path) {
+  checkRaster(raster, path);
+  writeAtomically(path, [&](const std::filesystem::path& tmp) {
+    std::unique_ptr<TIFF, void (*)(TIFF*)> tif(TIFFOpen(tmp.c_str(), "w"), [](TIFF* t) {
+      if (t) TIFFClose(t);
+    });
+    if (!tif)
+      throw std::runtime_error("cannot create " + tmp.string() + " to write " + path.string());
+    TIFF* t = tif.get();
+    TIFFMergeFieldInfo(t, kGeoTiffFields, sizeof kGeoTiffFields / sizeof kGeoTiffFields[0]);
+    TIFFSetField(t, TIFFTAG_IMAGEWIDTH, std::uint32_t(raster.width));
+    TIFFSetField(t, TIFFTAG_IMAGELENGTH, std::uint32_t(raster.height));
+    TIFFSetField(t, TIFFTAG_SAMPLESPERPIXEL, std::uint16_t(1));
+    TIFFSetField(t, TIFFTAG_BITSPERSAMPLE, std::uint16_t(32));
+    TIFFSetField(t, TIFFTAG_SAMPLEFORMAT, std::uint16_t(SAMPLEFORMAT_IEEEFP));
+    TIFFSetField(t, TIFFTAG_PHOTOMETRIC, std::uint16_t(PHOTOMETRIC_MINISBLACK));
+    TIFFSetField(t, TIFFTAG_PLANARCONFIG, std::uint16_t(PLANARCONFIG_CONTIG));
+    TIFFSetField(t, TIFFTAG_COMPRESSION, std::uint16_t(COMPRESSION_NONE));
+    TIFFSetField(t, TIFFTAG_ROWSPERSTRIP, TIFFDefaultStripSize(t, 0));
+    TIFFSetField(t, TIFFTAG_SOFTWARE, "PlanetSculpt");
+    const std::string description = "heights in metres; " + projectionText(raster);
+    TIFFSetField(t, TIFFTAG_IMAGEDESCRIPTION, description.c_str());
+    if (raster.layout == Raster::Layout::kEquirectangular && raster.radiusMetres > 0) {
+      // Geographic degrees on a sphere of the planet's radius, pixel-is-area.
+      double scale[3] = {360.0 / raster.width, 180.0 / raster.height, 0.0};
+      double tie[6] = {0, 0, 0, -180.0, 90.0, 0};
+      std::uint16_t keys[] = {1,    1,     0, 9,      //
+                              1024, 0,     1, 2,      // GTModelType: geographic
+                              1025, 0,     1, 1,      // GTRasterType: pixel is area
+                              2048, 0,     1, 32767,  // GeographicType: user-defined
+                              2050, 0,     1, 32767,  // GeodeticDatum: user-defined
+                              2052, 0,     1, 9001,   // GeogLinearUnits: metre
+                              2054, 0,     1, 9102,   // GeogAngularUnits: degree
+                              2056, 0,     1, 32767,  // Ellipsoid: user-defined
+                              2057, 34736, 1, 0,      // SemiMajorAxis = doubles[0]
+                              2058, 34736, 1, 1};     // SemiMinorAxis = doubles[1]
+      double radii[2] = {raster.radiusMetres, raster.radiusMetres};
+      TIFFSetField(t, 33550, 3, scale);
+      TIFFSetField(t, 33922, 6, tie);
+      TIFFSetField(t, 34735, int(sizeof keys / sizeof keys[0]), keys);
+      TIFFSetField(t, 34736, 2, radii);
+    } else if (raster.layout == Raster::Layout::kFlat && raster.pixelWidthM > 0 &&
+               raster.pixelHeightM > 0) {
+      // Metres, no CRS: pixel centres at (x * dx, (height - 1 - y) * dy), like the flat chart.
+      double scale[3] = {raster.pixelWidthM, raster.pixelHeightM, 0.0};
+      double tie[6] = {
+          0, 0, 0, -0.5 * raster.pixelWidthM, (raster.height - 0.5) * raster.pixelHeightM, 0};
+      TIFFSetField(t, 33550, 3, scale);
+      TIFFSetField(t, 33922, 6, tie);
+    }
+    std::vector<float> row(std::size_t(raster.width));
+    for (int y = 0; y < raster.height; ++y) {
+      std::memcpy(row.data(), raster.metres.data() + std::size_t(y) * std::size_t(raster.width),
+                  row.size() * sizeof(float));
+      if (TIFFWriteScanline(t, row.data(), std::uint32_t(y), 0) < 0) {
+        throw std::runtime_error("cannot write row " + std::to_string(y) + " of " + path.string());
+      }
+    }
+    if (!TIFFFlush(t)) throw std::runtime_error("cannot write " + path.string() + " (disk full?)");
+  });
+  nlohmann::json side = describe(raster, path, "tiff-float32");
+  writeSidecar(side, path);
+}
+
+void writeHeightRaw32(const Raster& raster, const std::filesystem::path& path) {
+  checkRaster(raster, path);
+  writeAtomically(path, [&](const std::filesystem::path& tmp) {
+    std::ofstream f(tmp, std::ios::binary | std::ios::trunc);
+    if constexpr (std::endian::native == std::endian::little) {
+      f.write(reinterpret_cast<const char*>(raster.metres.data()),
+              std::streamsize(raster.metres.size() * 4));
+    } else {
+      for (const float x : raster.metres) {
+        char b[4];
+        std::memcpy(b, &x, 4);
+        std::reverse(b, b + 4);
+        f.write(b, 4);
+      }
+    }
+    f.close();
+    if (!f) throw std::runtime_error("cannot write " + path.string() + " (disk full?)");
+  });
+  nlohmann::json side = describe(raster, path, "float32le");
+  side["height_m"] = "value";
+  writeSidecar(side, path);
+}
+
+namespace {
+// Hypsometric ramp (metres -> BGR): deep sea, shallow sea, lowland, upland, mountain, snow.
+cv::Vec3f tint(double h) {
+  struct Stop {
+    double h;
+    float b, g, r;
+  };
+  static const Stop stops[] = {{-8000, 90, 30, 10},   {-3000, 160, 70, 25},  {-200, 210, 150, 70},
+                               {0, 110, 160, 80},     {600, 70, 150, 120},   {2000, 60, 110, 150},
+                               {4000, 100, 110, 130}, {6000, 235, 235, 240}, {9000, 255, 255, 255}};
+  if (h <= stops[0].h) return {stops[0].b, stops[0].g, stops[0].r};
+  for (std::size_t i = 1; i < std::size(stops); ++i) {
+    if (h <= stops[i].h) {
+      const double f = (h - stops[i - 1].h) / (stops[i].h - stops[i - 1].h);
+      auto mix = [&](float a, float b) { return float(a + f * (b - a)); };
+      return {mix(stops[i - 1].b, stops[i].b), mix(stops[i - 1].g, stops[i].g),
+              mix(stops[i - 1].r, stops[i].r)};
+    }
+  }
+  const Stop& s = stops[std::size(stops) - 1];
+  return {s.b, s.g, s.r};
+}
+}  // namespace
+
+void writeReliefPreview(const Raster& raster, double metresPerPixel,
+                        const std::filesystem::path& path) {
+  cv::Mat img(raster.height, raster.width, CV_8UC3);
+  const int w = raster.width, hgt = raster.height;
+  auto at = [&](int x, int y) {
+    x = (x + w) % w;
+    y = std::clamp(y, 0, hgt - 1);
+    return double(raster.metres[std::size_t(y) * std::size_t(w) + std::size_t(x)]);
+  };
+  const Eigen::Vector3d light = Eigen::Vector3d(-1, -1, 1.5).normalized();
+  for (int y = 0; y < hgt; ++y) {
+    // East-west pixels shrink with cos(latitude).
+    const double lat = (0.5 - (y + 0.5) / hgt) * M_PI;
+    const double dxm = std::max(metresPerPixel * std::cos(lat), 1e-3 * metresPerPixel);
+    for (int x = 0; x < w; ++x) {
+      const double h = at(x, y);
+      const double gx = (at(x + 1, y) - at(x - 1, y)) / (2 * dxm),
+                   gy = (at(x, y + 1) - at(x, y - 1)) / (2 * metresPerPixel);
+      const Eigen::Vector3d n =
+          Eigen::Vector3d(-gx * 8, gy * 8, 1).normalized();  // 8x vertical exaggeration
+      const double shade = h < 0 ? 0.85 + 0.15 * std::max(0.0, n.dot(light))
+                                 : 0.35 + 0.75 * std::max(0.0, n.dot(light));
+      const cv::Vec3f c = tint(h) * float(shade);
+      img.at<cv::Vec3b>(y, x) =
+          cv::Vec3b(cv::saturate_cast<uchar>(c[0]), cv::saturate_cast<uchar>(c[1]),
+                    cv::saturate_cast<uchar>(c[2]));
+    }
+  }
+  std::vector<unsigned char> png;
+  if (!cv::imencode(".png", img, png))
+    throw std::runtime_error("cannot encode PNG for " + path.string());
+  writeAtomically(path, [&](const std::filesystem::path& tmp) {
+    std::ofstream f(tmp, std::ios::binary);
+    f.write(reinterpret_cast<const char*>(png.data()), std::streamsize(png.size()));
+    if (!f) throw std::runtime_error("cannot write " + path.string());
+  });
+}
+
+}  // namespace ps::io

@@ -1,0 +1,297 @@
+#include "io/heightmap_import.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <opencv2/imgproc.hpp>
+#include <sstream>
+
+#include "core/flat_chart.hpp"
+#include "core/input_error.hpp"
+#include "core/latlong_chart.hpp"
+#include "io/nodata_fill.hpp"
+
+namespace ps::io {
+
+namespace {
+
+[[noreturn]] void fail(const std::string& name, const std::string& what) {
+  throw core::InputError(name + ": " + what);
+}
+
+std::string num(double x) {
+  std::ostringstream os;
+  os.precision(10);
+  os << x;
+  return os.str();
+}
+
+int levelFor(long long cells) {
+  int n = core::GridSize::kMinLevel;
+  while (n < 13 && (1LL << n) < cells) ++n;
+  return n;
+}
+
+// Bilinear sample at pixel coordinates (x, y) (pixel centres at integers); x wraps when asked,
+// y (and x otherwise) clamps to the image.
+double bilinear(const std::vector<float>& v, int w, int h, double x, double y, bool wrapX) {
+  y = std::clamp(y, 0.0, double(h - 1));
+  if (wrapX) {
+    x = std::fmod(x, double(w));
+    if (x < 0) x += w;
+  } else {
+    x = std::clamp(x, 0.0, double(w - 1));
+  }
+  const int x0 = std::min(int(x), w - 1), y0 = std::min(int(y), h - 1);
+  const int x1 = wrapX ? (x0 + 1) % w : std::min(x0 + 1, w - 1), y1 = std::min(y0 + 1, h - 1);
+  const double fx = x - x0, fy = y - y0;
+  auto at = [&](int xi, int yi) {
+    return double(v[std::size_t(yi) * std::size_t(w) + std::size_t(xi)]);
+  };
+  return (1 - fy) * ((1 - fx) * at(x0, y0) + fx * at(x1, y0)) +
+         fy * ((1 - fx) * at(x0, y1) + fx * at(x1, y1));
+}
+
+}  // namespace
+
+ChartKind chartKindFromString(const std::string& s) {
+  if (s == "latlong") return ChartKind::kLatLong;
+  if (s == "flat") return ChartKind::kFlat;
+  throw core::InputError("unknown chart '" + s + "' (expected latlong or flat)");
+}
+
+NoDataPolicy noDataPolicyFromString(const std::string& s) {
+  if (s == "fill") return NoDataPolicy::kFill;
+  if (s == "refuse") return NoDataPolicy::kRefuse;
+  throw core::InputError("unknown no-data policy '" + s + "' (expected fill or refuse)");
+}
+
+long long defaultGridSide(ChartKind chart, int width, int height) {
+  // latlong: m cells span 360 deg of longitude and 180 deg of latitude.
+  const long long cells = chart == ChartKind::kLatLong ? std::max<long long>(width, 2LL * height)
+                                                       : std::max<long long>(width, height) - 1;
+  return (1LL << levelFor(cells)) + 1;
+}
+
+ImportResult importHeightImage(HeightImage img, const ImportOptions& o, const std::string& name) {
+  ImportResult res;
+  const int w = img.width, h = img.height;
+  const std::size_t n = img.values.size();
+  if (w <= 0 || h <= 0 || n != std::size_t(w) * std::size_t(h)) fail(name, "image has no pixels");
+  if (o.chart == ChartKind::kLatLong && (!std::isfinite(o.radius) || o.radius <= 0)) {
+    fail(name, "--radius " + num(o.radius) + " m must be positive and finite");
+  }
+
+  // 1. No-data: declared by the file (GDAL_NODATA, sidecar) or by the user.
+  std::optional<double> noData = img.noData;
+  std::string noDataSource = img.noDataSource;
+  if (o.noDataValue) {
+    noData = o.noDataValue;
+    noDataSource = "--nodata-value";
+  }
+  const bool nanIsNoData = noData && std::isnan(*noData);
+  const float noDataF = noData && !nanIsNoData ? float(*noData) : 0.0f;
+  std::vector<std::uint8_t> hole(n, 0);
+  std::size_t holes = 0, nonFinite = 0, firstBad = n;
+  for (std::size_t i = 0; i < n; ++i) {
+    const float x = img.values[i];
+    if (noData && (nanIsNoData ? std::isnan(x) : x == noDataF)) {
+      hole[i] = 1;
+      ++holes;
+    } else if (!std::isfinite(x)) {
+      if (firstBad == n) firstBad = i;
+      ++nonFinite;
+    }
+  }
+  if (nonFinite > 0) {
+    const float x = img.values[firstBad];
+    fail(name,
+         "pixel (x=" + std::to_string(firstBad % std::size_t(w)) +
+             ", y=" + std::to_string(firstBad / std::size_t(w)) + ") is " +
+             (std::isnan(x) ? "NaN" : "infinite") +
+             (nonFinite > 1 ? " (and " + std::to_string(nonFinite - 1) + " more non-finite pixels)"
+                            : "") +
+             ": a height must be finite; if these mark missing data, say so with "
+             "--nodata-value nan");
+  }
+  res.noDataPixels = holes;
+  if (holes == n)
+    fail(name, "every pixel is no-data (value " + num(*noData) + ", " + noDataSource + ")");
+  if (holes > 0 && o.noData == NoDataPolicy::kRefuse) {
+    fail(name, std::to_string(holes) + " pixels are no-data (value " + num(*noData) + ", " +
+                   noDataSource +
+                   "); refused as asked (--nodata refuse); --nodata fill fills them from their "
+                   "surroundings");
+  }
+
+  // 2. Stored values -> metres.
+  double scale = 1.0, offset = 0.0;
+  if (o.scale || o.offset) {
+    scale = o.scale.value_or(1.0);
+    offset = o.offset.value_or(0.0);
+    res.notes.push_back("heights: value x " + num(scale) + " + " + num(offset) + " m");
+  } else if (img.value0Metres && img.value65535Metres && img.kind == "16-bit grey PNG") {
+    offset = *img.value0Metres;
+    scale = (*img.value65535Metres - *img.value0Metres) / 65535.0;
+    res.notes.push_back("heights: the PNG's PlanetSculpt text chunks map 0 to " + num(offset) +
+                        " m and 65535 to " + num(*img.value65535Metres) + " m");
+  } else {
+    res.notes.push_back(
+        "heights: the stored values are taken as metres (scale 1, offset 0); "
+        "--scale and --offset map them otherwise");
+  }
+  if (!std::isfinite(scale) || scale == 0 || !std::isfinite(offset)) {
+    fail(name, "height scale " + num(scale) + " and offset " + num(offset) +
+                   " must be finite, scale non-zero");
+  }
+  std::vector<float>& v = img.values;
+  for (std::size_t i = 0; i < n; ++i) {
+    if (hole[i]) continue;
+    const double m = double(v[i]) * scale + offset;
+    if (!std::isfinite(float(m))) {
+      fail(name, "pixel (x=" + std::to_string(i % std::size_t(w)) +
+                     ", y=" + std::to_string(i / std::size_t(w)) + ") becomes " + num(m) +
+                     " m after scale and offset, beyond float range");
+    }
+    v[i] = float(m);
+  }
+
+  // 3. Fill the holes.
+  if (holes > 0) {
+    const FillReport fr = fillHoles(v, w, h, hole, o.chart == ChartKind::kLatLong);
+    res.notes.push_back(
+        std::to_string(holes) + " no-data pixels (value " + num(*noData) + ", " + noDataSource +
+        ") filled by harmonic interpolation from the surrounding heights (" +
+        std::to_string(fr.sweeps) + " relaxation sweeps); none of them became a height as stored");
+  }
+
+  // 4. Resample onto the grid.
+  const long long side = o.gridSide > 0 ? o.gridSide : defaultGridSide(o.chart, w, h);
+  core::GridSize g(5);
+  try {
+    g = core::GridSize::fromSide(side);
+  } catch (const core::InputError& e) {
+    fail(name, std::string("--grid: ") + e.what());
+  }
+  const int m = g.m();
+  std::vector<float> heights(g.count());
+  nlohmann::json source = {{"file", std::filesystem::path(name).filename().string()},
+                           {"kind", img.kind},
+                           {"width", w},
+                           {"height", h},
+                           {"scale", scale},
+                           {"offset_m", offset},
+                           {"nodata_pixels", holes}};
+  if (holes > 0) {
+    source["nodata_value"] = nanIsNoData ? nlohmann::json("nan") : nlohmann::json(*noData);
+    source["nodata_fill"] = "harmonic";
+  }
+
+  if (o.chart == ChartKind::kLatLong) {
+    double west = -180.0;
+    if (o.westLongitudeDeg) {
+      west = *o.westLongitudeDeg;
+    } else if (img.column0LongitudeDeg) {
+      west = *img.column0LongitudeDeg;
+    } else if (img.geo && img.geo->geographic) {
+      west = img.geo->originX;
+    }
+    if (!std::isfinite(west)) fail(name, "western longitude must be finite");
+    res.notes.push_back("equirectangular: column 0 starts at " + num(west) +
+                        " deg longitude, row 0 at 90 deg N");
+    // Area-average first where the image is finer than the grid, then bilinear.
+    std::vector<float> src = v;
+    int sw = w, sh = h;
+    if (w > m || h > m) {
+      sw = std::min(w, m);
+      sh = std::min(h, m);
+      cv::Mat in(h, w, CV_32F, v.data()), out;
+      cv::resize(in, out, cv::Size(sw, sh), 0, 0, cv::INTER_AREA);
+      src.assign(out.begin<float>(), out.end<float>());
+    }
+    for (int gv = 1; gv < m; ++gv) {
+      const double lat = 180.0 * gv / m - 90.0;
+      const double y = (90.0 - lat) / 180.0 * sh - 0.5;
+      for (int gu = 0; gu < m; ++gu) {
+        const double lon = 360.0 * gu / m - 180.0;
+        const double x = (lon - west) / 360.0 * sw - 0.5;
+        heights[g.index(gu, gv)] = float(bilinear(src, sw, sh, x, y, true));
+      }
+      heights[g.index(m, gv)] = heights[g.index(0, gv)];
+    }
+    // Pole rows: one point each, the mean of the image's samples along the pole's edge.
+    for (const int gv : {0, m}) {
+      const double y = gv == 0 ? double(sh - 1) : 0.0;
+      double sum = 0;
+      for (int gu = 0; gu < m; ++gu) {
+        const double lon = 360.0 * gu / m - 180.0;
+        sum += bilinear(src, sw, sh, (lon - west) / 360.0 * sw - 0.5, y, true);
+      }
+      const float pole = float(sum / m);
+      for (int gu = 0; gu <= m; ++gu) heights[g.index(gu, gv)] = pole;
+    }
+    res.planet.chart = std::make_shared<core::LatLongChart>(g, o.radius);
+    source["column0_longitude_deg"] = west;
+  } else {
+    double sx = 1.0, sy = 1.0;
+    std::string from = "default 1 m per pixel (--spacing sets it)";
+    if (o.spacing) {
+      sx = sy = *o.spacing;
+      from = "--spacing";
+    } else if (img.pixelSpacingX && img.pixelSpacingY) {
+      sx = *img.pixelSpacingX;
+      sy = *img.pixelSpacingY;
+      from = "the sidecar";
+    } else if (img.geo) {
+      if (img.geo->geographic) {
+        // Degrees on the Earth: metres along a parallel shrink with cos(latitude).
+        constexpr double kEarthMean = 6371008.8;
+        const double latC = img.geo->originY - 0.5 * h * img.geo->pixelScaleY;
+        const double k = kEarthMean * std::numbers::pi / 180.0;
+        sx = img.geo->pixelScaleX * k * std::cos(latC * std::numbers::pi / 180.0);
+        sy = img.geo->pixelScaleY * k;
+        from = "the GeoTIFF's pixel scale in degrees, at latitude " + num(latC) +
+               " on the Earth's mean sphere";
+      } else {
+        sx = img.geo->pixelScaleX;
+        sy = img.geo->pixelScaleY;
+        from = "the GeoTIFF's pixel scale (taken as metres)";
+      }
+    }
+    if (!std::isfinite(sx) || sx <= 0 || !std::isfinite(sy) || sy <= 0) {
+      fail(name, "pixel spacing " + num(sx) + " x " + num(sy) + " m must be positive and finite");
+    }
+    res.notes.push_back("flat: " + num(sx) + " x " + num(sy) + " m between pixels, from " + from +
+                        "; image row 0 is the north (v = m) edge");
+    const double kx = w > 1 ? double(w - 1) / m : 0.0, ky = h > 1 ? double(h - 1) / m : 0.0;
+    for (int gv = 0; gv <= m; ++gv) {
+      for (int gu = 0; gu <= m; ++gu) {
+        heights[g.index(gu, gv)] = float(bilinear(v, w, h, gu * kx, (m - gv) * ky, false));
+      }
+    }
+    const double dx = w > 1 ? sx * kx : sx, dy = h > 1 ? sy * ky : sy;
+    res.planet.chart = std::make_shared<core::FlatChart>(g, dx, dy);
+    source["pixel_spacing_m"] = {sx, sy};
+  }
+  if (side != (long long)(std::max(w, h))) {
+    res.notes.push_back(
+        "resampled " + std::to_string(w) + "x" + std::to_string(h) + " pixels onto the " +
+        g.label() + " grid (bilinear" +
+        (o.chart == ChartKind::kLatLong && (w > m || h > m) ? ", area-averaged first" : "") + ")");
+  }
+  try {
+    terrain::Terrain::validateHeights(*res.planet.chart, heights);
+  } catch (const core::InputError& e) {
+    fail(name, e.what());
+  }
+  res.planet.heights = std::move(heights);
+  res.planet.rule = o.rule;
+  res.planet.metadata = {{"generator", "planetsculpt import"}, {"source", source}};
+  return res;
+}
+
+ImportResult importHeightmap(const std::filesystem::path& path, const ImportOptions& options) {
+  return importHeightImage(readHeightImage(path), options, path.string());
+}
+
+}  // namespace ps::io

@@ -1,0 +1,48 @@
+#pragma once
+// `planetsculpt import`: a user's heightmap -> a planet (chart + heights on a (2^n+1)^2 grid).
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "io/height_image.hpp"
+#include "io/planet_file.hpp"
+
+namespace ps::io {
+
+enum class ChartKind { kLatLong, kFlat };
+enum class NoDataPolicy { kFill, kRefuse };
+
+ChartKind chartKindFromString(const std::string& s);        // "latlong" | "flat"; InputError
+NoDataPolicy noDataPolicyFromString(const std::string& s);  // "fill" | "refuse"; InputError
+
+struct ImportOptions {
+  ChartKind chart = ChartKind::kLatLong;
+  double radius = 6372790.0;  // latlong: metres
+  // metres = value * scale + offset. Unset: a PlanetSculpt 16-bit PNG's own range, else 1 and 0.
+  std::optional<double> scale, offset;
+  long long gridSide = 0;  // 2^n+1; 0 picks the smallest grid that keeps the image's detail
+  NoDataPolicy noData = NoDataPolicy::kFill;
+  std::optional<double> noDataValue;  // declares (or overrides) the no-data value; NaN allowed
+  // latlong: longitude of the image's western edge (default: the file's, else -180).
+  std::optional<double> westLongitudeDeg;
+  // flat: metres between pixel centres (default: the file's or the GeoTIFF's, else 1).
+  std::optional<double> spacing;
+  terrain::ErrorRule rule = terrain::ErrorRule::kHybridExact;
+};
+
+struct ImportResult {
+  PlanetData planet;
+  std::vector<std::string> notes;  // what the user must be told (scale chosen, holes filled, ...)
+  std::size_t noDataPixels = 0;
+};
+
+// Applies no-data, scale/offset and resampling to a decoded image. `name` is used in errors.
+ImportResult importHeightImage(HeightImage image, const ImportOptions& options,
+                               const std::string& name);
+ImportResult importHeightmap(const std::filesystem::path& path, const ImportOptions& options);
+
+// The default grid side for an image (see ImportOptions::gridSide).
+long long defaultGridSide(ChartKind chart, int width, int height);
+
+}  // namespace ps::io
