@@ -211,3 +211,38 @@ TEST(EditBrush, GenericChartPathAgreesWithTheLatLongPath) {
   EXPECT_TRUE(edittest::consistentHeights(b));
   EXPECT_TRUE(edittest::boundsEqualFullRebuild(b));
 }
+
+TEST(EditBrush, ExtremeButValidSettingsNeverProduceNaN) {
+  auto t = flatPlanet(6, 10.0f);
+  edit::EditPipeline pipe(t);
+  const Eigen::Vector3d at = t.chart().position(11, 40, 0.0);
+  std::vector<BrushSettings> list;
+  BrushSettings s;
+  s.radius = 5e5;
+  s.mu = 0.6;  // a ring profile: shape far above 1 inside with a tiny sigma
+  s.sigma = 1e-3;
+  s.strength = 1e300;
+  list.push_back(s);
+  s.rate = true;  // strength * dt overflows
+  list.push_back(s);
+  s.rate = false;
+  s.mode = BrushMode::kLower;
+  s.sigma = 1e6;
+  s.mu = 1e6;
+  list.push_back(s);
+  s.mode = BrushMode::kSet;
+  s.target = -1e300;
+  s.radius = 1e-3;  // the smallest radius: only the control vertex
+  list.push_back(s);
+  s.radius = 1e300;  // the whole planet
+  s.target = 7;
+  list.push_back(s);
+  for (const BrushSettings& b : list) {
+    pipe.apply(GaussianBrush(b), {at, 1e10});
+    ASSERT_TRUE(edittest::consistentHeights(t));
+  }
+  EXPECT_FLOAT_EQ(t.height(0, 0), 7.0f);
+  BrushSettings tiny;
+  tiny.radius = 1e-4;
+  EXPECT_THROW(tiny.validate(), core::InputError);
+}

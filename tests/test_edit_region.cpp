@@ -240,3 +240,27 @@ TEST(EditControlVertex, RejectsTheCentreAndNonFinitePoints) {
   expectError({NAN, 0, 1}, "not finite");
   expectError({0, INFINITY, 1}, "inf");
 }
+
+TEST(EditRegion, FromRectangleAddsTwinsAndWholePoleRows) {
+  const core::GridSize g(5);
+  const int m = g.m();
+  const Region r =
+      Region::fromRectangle({-3, 2, 0, 4}, g, true, true);  // across the seam, at the pole
+  EXPECT_EQ(r.vBegin(), 0);
+  EXPECT_EQ(r.vEnd(), 4);
+  for (int u = 0; u <= m; ++u) EXPECT_TRUE(r.contains(u, 0)) << "pole row whole";
+  for (int v = 1; v <= 4; ++v) {
+    for (int u = 0; u <= m; ++u) {
+      EXPECT_EQ(r.contains(u, v), u <= 2 || u >= m - 3) << u << "," << v;
+    }
+  }
+  EXPECT_EQ(r.vertexCount(), std::size_t(m + 1) + 4u * 7u);
+  EXPECT_EQ(r.pointCount(), 1u + 4u * 6u);
+  const Region twin = Region::fromRectangle({m, m, 7, 7}, g, true, true);  // only u = m named
+  EXPECT_TRUE(twin.contains(0, 7));
+  EXPECT_EQ(twin.vertexCount(), 2u);
+  EXPECT_EQ(twin.pointCount(), 1u);
+  const Region flat = Region::fromRectangle({-3, 2, 0, 1}, g, false, false);  // no seam: clipped
+  EXPECT_EQ(flat.vertexCount(), 2u * 3u);
+  EXPECT_FALSE(flat.contains(m, 1));
+}

@@ -4,6 +4,7 @@
 #include <bit>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <sstream>
 #include <vector>
 
@@ -23,6 +24,10 @@ std::string num(double x) {
 void checkRadius(double r) {
   if (!std::isfinite(r) || !(r > 0.0)) {
     throw core::InputError("radius of deformation r_d = " + num(r) + " m must be finite and > 0");
+  }
+  if (r < 1e-3) {
+    throw core::InputError("radius of deformation r_d = " + num(r) +
+                           " m is below the smallest usable 1 mm");
   }
 }
 void checkSigma(double sigma) {
@@ -230,7 +235,10 @@ terrain::GridRegion applyRows(const ToolContext& ctx, const GaussianProfile& pro
 terrain::GridRegion GaussianBrush::apply(const ToolContext& ctx, std::span<float> heights) const {
   settings_.validate();
   const GaussianProfile profile(settings_.radius, settings_.sigma, settings_.mu);
-  const double amount = settings_.rate ? settings_.strength * ctx.input.dt : settings_.strength;
+  // Capped so that amount * shape can overflow to inf (which clamps) but never be inf * 0 = NaN.
+  const double amount =
+      std::min(settings_.rate ? settings_.strength * ctx.input.dt : settings_.strength,
+               std::numeric_limits<double>::max());
   if (ctx.region.empty()) return terrain::GridRegion::none();
   switch (settings_.mode) {
     case BrushMode::kRaise:

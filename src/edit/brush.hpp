@@ -1,4 +1,5 @@
 #pragma once
+#include <algorithm>
 #include <cmath>
 #include <span>
 #include <string>
@@ -31,7 +32,9 @@ class GaussianProfile {
 
   double operator()(double d) const {
     const double y = d * invRadius_;
-    const double s = (std::exp(c_ * y * (y + twoMuMinus2_)) - e0_) * invDenominator_;
+    // q > 0 only inside the ring of a mu < 1 profile; capped so that shape stays finite.
+    const double q = std::min(c_ * y * (y + twoMuMinus2_), 700.0);
+    const double s = (std::exp(q) - e0_) * invDenominator_;
     return s > 0.0 ? s : 0.0;
   }
   double fromDistance2(double d2) const { return (*this)(std::sqrt(d2)); }
@@ -51,7 +54,7 @@ std::string toString(BrushMode mode);
 BrushMode brushModeFromString(const std::string& s);  // throws core::InputError
 
 struct BrushSettings {
-  double radius = 300e3;  // r_d (m)
+  double radius = 300e3;  // r_d (m), at least 1 mm
   double sigma = 0.17;    // paper 003 used 0.17 and 0.75
   double mu = 1.0;        // paper 003 used 1
   BrushMode mode = BrushMode::kRaise;

@@ -281,9 +281,13 @@ Region Region::fromRectangle(const terrain::GridRegion& r, const core::GridSize&
     if (hasPoleRows && (v == 0 || v == m)) {
       spans.push_back({0, m});
     } else {
-      r.forEachColumnRange(g, [&](int a, int b) { spans.push_back({a, b}); });
-      mergeSpans(spans);
-      if (wrapsU) addTwins(spans, m);
+      if (wrapsU) {
+        r.forEachColumnRange(g, [&](int a, int b) { spans.push_back({a, b}); });
+        mergeSpans(spans);
+        addTwins(spans, m);
+      } else if (std::max(0, r.uBegin) <= std::min(m, r.uEnd)) {
+        spans.push_back({std::max(0, r.uBegin), std::min(m, r.uEnd)});  // no seam: clipped
+      }
     }
     out.addRow(v, spans);
   }
