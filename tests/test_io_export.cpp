@@ -1,0 +1,393 @@
+// Exports: meshes whose written coordinates stay within the requested error of every
+// full-resolution vertex (OBJ, PLY, GLB), well-formed GLB, heightmap exports, the flat chart.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "core/flat_chart.hpp"
+#include "core/input_error.hpp"
+#include "io/export.hpp"
+#include "io/heightmap_export.hpp"
+#include "io/heightmap_import.hpp"
+#include "io/mesh_export.hpp"
+#include "mesh_checks.hpp"
+#include "terrain/error_mesher.hpp"
+#include "terrain/screen_error.hpp"
+#include "test_terrains.hpp"
+
+using namespace ps;
+namespace fs = std::filesystem;
+
+namespace {
+
+fs::path freshDir(const std::string& name) {
+  const fs::path d =
+      fs::temp_directory_path() / ("ps_test_io_" + name + "_" + std::to_string(::getpid()));
+  fs::remove_all(d);
+  fs::create_directories(d);
+  return d;
+}
+
+std::vector<unsigned char> readAll(const fs::path& p) {
+  std::ifstream f(p, std::ios::binary);
+  return {std::istreambuf_iterator<char>(f), std::istreambuf_iterator<char>()};
+}
+
+template <class T>
+T le(const unsigned char* p) {
+  T x;
+  std::memcpy(&x, p, sizeof(T));
+  return x;
+}
+
+// A rough flat terrain: ridges and bumps, metres.
+terrain::Terrain flatTerrain(int n, double dx = 30.0, double amplitude = 800.0) {
+  auto chart = std::make_shared<core::FlatChart>(core::GridSize(n), dx, dx);
+  const int m = chart->grid().m();
+  std::vector<float> h(chart->grid().count());
+  for (int v = 0; v <= m; ++v) {
+    for (int u = 0; u <= m; ++u) {
+      const double x = double(u) / m, y = double(v) / m;
+      h[chart->grid().index(u, v)] =
+          float(amplitude * (0.5 * std::sin(9 * x + 2 * y) * std::cos(7 * y) +
+                             0.3 * std::exp(-40 * ((x - 0.3) * (x - 0.3) + (y - 0.6) * (y - 0.6))) +
+                             0.05 * std::sin(80 * x * y)));
+    }
+  }
+  return terrain::Terrain(chart, std::move(h));
+}
+
+// Largest distance between a full-resolution vertex and the surface the written triangles
+// span, where `written[i]` is mesh vertex i as read back from the file (planet frame).
+double writtenMeshError(const terrain::Terrain& t, const terrain::Mesh& mesh,
+                        const std::vector<Eigen::Vector3d>& written) {
+  const auto side = std::uint64_t(t.grid().side());
+  double worst = 0;
+  for (std::size_t k = 0; k < mesh.triangleCount(); ++k) {
+    const std::uint32_t ia = mesh.indices[3 * k], ib = mesh.indices[3 * k + 1],
+                        ic = mesh.indices[3 * k + 2];
+    const auto grid = [&](std::uint32_t i) {
+      return std::pair<int, int>(int(mesh.gridIndex[i] % side), int(mesh.gridIndex[i] / side));
+    };
+    const auto [au, av] = grid(ia);
+    const auto [bu, bv] = grid(ib);
+    const auto [cu, cv] = grid(ic);
+    const long long e0u = bu - au, e0v = bv - av, e1u = cu - au, e1v = cv - av;
+    const long long len2 = e0u * e0u + e0v * e0v;
+    for (int v = std::min({av, bv, cv}); v <= std::max({av, bv, cv}); ++v) {
+      for (int u = std::min({au, bu, cu}); u <= std::max({au, bu, cu}); ++u) {
+        const long long da = (u - au) * e0u + (v - av) * e0v, db = (u - au) * e1u + (v - av) * e1v;
+        if (da < 0 || db < 0 || da + db > len2) continue;
+        const double wb = double(da) / double(len2), wc = double(db) / double(len2);
+        const Eigen::Vector3d onMesh =
+            (1 - wb - wc) * written[ia] + wb * written[ib] + wc * written[ic];
+        worst = std::max(worst, (t.chart().position(u, v, t.height(u, v)) - onMesh).norm());
+      }
+    }
+  }
+  return worst;
+}
+
+// A flat mesh is conforming when every edge has a partner of opposite direction, except edges
+// along the grid's border.
+std::string flatConformityDefect(const terrain::Terrain& t, const terrain::Mesh& mesh) {
+  const auto side = std::uint64_t(t.grid().side());
+  const int m = t.grid().m();
+  std::map<std::pair<std::uint64_t, std::uint64_t>, int> directed;
+  for (std::size_t k = 0; k < mesh.triangleCount(); ++k) {
+    const std::uint64_t a = mesh.gridIndex[mesh.indices[3 * k]],
+                        b = mesh.gridIndex[mesh.indices[3 * k + 1]],
+                        c = mesh.gridIndex[mesh.indices[3 * k + 2]];
+    for (auto e : {std::pair{a, b}, std::pair{b, c}, std::pair{c, a}}) {
+      if (++directed[e] > 1) return "directed edge used twice";
+    }
+  }
+  for (const auto& [e, n] : directed) {
+    if (directed.count({e.second, e.first})) continue;
+    const int u0 = int(e.first % side), v0 = int(e.first / side), u1 = int(e.second % side),
+              v1 = int(e.second / side);
+    const bool border = (u0 == u1 && (u0 == 0 || u0 == m)) || (v0 == v1 && (v0 == 0 || v0 == m));
+    if (!border) return "interior edge without a partner: a crack or T-junction";
+  }
+  return "";
+}
+
+struct ReadMesh {
+  std::vector<Eigen::Vector3d> positions, normals;  // planet frame
+  std::vector<std::uint32_t> indices;
+};
+
+ReadMesh readGlb(const fs::path& p) {
+  const auto b = readAll(p);
+  ReadMesh r;
+  EXPECT_GE(b.size(), 28u);
+  EXPECT_EQ(le<std::uint32_t>(b.data()), 0x46546C67u);
+  EXPECT_EQ(le<std::uint32_t>(b.data() + 4), 2u);
+  EXPECT_EQ(le<std::uint32_t>(b.data() + 8), b.size());
+  const std::uint32_t jsonLen = le<std::uint32_t>(b.data() + 12);
+  EXPECT_EQ(le<std::uint32_t>(b.data() + 16), 0x4E4F534Au);
+  EXPECT_EQ(jsonLen % 4, 0u);
+  const auto gltf = nlohmann::json::parse(std::string(b.begin() + 20, b.begin() + 20 + jsonLen));
+  const unsigned char* binHeader = b.data() + 20 + jsonLen;
+  const std::uint32_t binLen = le<std::uint32_t>(binHeader);
+  EXPECT_EQ(le<std::uint32_t>(binHeader + 4), 0x004E4942u);
+  EXPECT_EQ(20 + jsonLen + 8 + binLen, b.size());
+  EXPECT_EQ(gltf["buffers"][0]["byteLength"].get<std::uint32_t>(), binLen);
+  EXPECT_EQ(gltf["asset"]["version"], "2.0");
+  const unsigned char* bin = binHeader + 8;
+  const auto& prim = gltf["meshes"][0]["primitives"][0];
+  auto view = [&](int accessor) {
+    const auto& a = gltf["accessors"][accessor];
+    const auto& v = gltf["bufferViews"][a["bufferView"].get<int>()];
+    return std::pair<const unsigned char*, std::size_t>(bin + v["byteOffset"].get<std::size_t>(),
+                                                        a["count"].get<std::size_t>());
+  };
+  const int posAcc = prim["attributes"]["POSITION"], nrmAcc = prim["attributes"]["NORMAL"],
+            idxAcc = prim["indices"];
+  const auto [pos, nv] = view(posAcc);
+  const auto [nrm, nn] = view(nrmAcc);
+  const auto [idx, ni] = view(idxAcc);
+  EXPECT_EQ(nv, nn);
+  EXPECT_EQ(gltf["accessors"][idxAcc]["componentType"], 5125);
+  const auto& lo = gltf["accessors"][posAcc]["min"];
+  const auto& hi = gltf["accessors"][posAcc]["max"];
+  for (std::size_t i = 0; i < nv; ++i) {
+    const float x = le<float>(pos + 12 * i), y = le<float>(pos + 12 * i + 4),
+                z = le<float>(pos + 12 * i + 8);
+    for (int k = 0; k < 3; ++k) {
+      const float c = k == 0 ? x : k == 1 ? y : z;
+      EXPECT_GE(c, lo[k].get<float>());
+      EXPECT_LE(c, hi[k].get<float>());
+    }
+    r.positions.emplace_back(x, -double(z), y);  // glTF +Y up -> planet frame
+    r.normals.emplace_back(le<float>(nrm + 12 * i), -double(le<float>(nrm + 12 * i + 8)),
+                           le<float>(nrm + 12 * i + 4));
+  }
+  for (std::size_t i = 0; i < ni; ++i) {
+    r.indices.push_back(le<std::uint32_t>(idx + 4 * i));
+    EXPECT_LT(r.indices.back(), nv);
+  }
+  return r;
+}
+
+ReadMesh readPly(const fs::path& p) {
+  const auto b = readAll(p);
+  const std::string text(b.begin(), b.end());
+  const std::size_t end = text.find("end_header\n");
+  EXPECT_NE(end, std::string::npos);
+  std::istringstream header(text.substr(0, end));
+  std::size_t nv = 0, nf = 0;
+  std::string line;
+  while (std::getline(header, line)) {
+    if (line.rfind("element vertex ", 0) == 0) nv = std::stoul(line.substr(15));
+    if (line.rfind("element face ", 0) == 0) nf = std::stoul(line.substr(13));
+  }
+  EXPECT_NE(text.find("format binary_little_endian 1.0"), std::string::npos);
+  const unsigned char* d = b.data() + end + 11;
+  EXPECT_EQ(b.size(), end + 11 + nv * 24 + nf * 13);
+  ReadMesh r;
+  for (std::size_t i = 0; i < nv; ++i, d += 24) {
+    r.positions.emplace_back(le<float>(d), le<float>(d + 4), le<float>(d + 8));
+    r.normals.emplace_back(le<float>(d + 12), le<float>(d + 16), le<float>(d + 20));
+  }
+  for (std::size_t k = 0; k < nf; ++k, d += 13) {
+    EXPECT_EQ(d[0], 3);
+    for (int j = 0; j < 3; ++j) r.indices.push_back(std::uint32_t(le<std::int32_t>(d + 1 + 4 * j)));
+  }
+  return r;
+}
+
+ReadMesh readObj(const fs::path& p) {
+  std::ifstream f(p);
+  ReadMesh r;
+  std::string tag;
+  while (f >> tag) {
+    if (tag == "v") {
+      double x, y, z;
+      f >> x >> y >> z;
+      r.positions.emplace_back(x, y, z);
+    } else if (tag == "f") {
+      for (int j = 0; j < 3; ++j) {
+        std::uint32_t i;
+        f >> i;
+        r.indices.push_back(i - 1);
+      }
+    } else {
+      std::getline(f, tag);
+    }
+  }
+  return r;
+}
+
+void checkWrittenMeshes(const terrain::Terrain& t, const std::vector<double>& errors,
+                        const std::string& label) {
+  const fs::path dir = freshDir("mesh_" + label);
+  for (const auto format : {io::MeshFormat::kObj, io::MeshFormat::kPly, io::MeshFormat::kGlb}) {
+    for (const double maxErr : errors) {
+      const fs::path file = dir / ("m." + io::toString(format));
+      terrain::Mesh mesh;
+      const auto rep = io::exportMesh(t, maxErr, format, file, &mesh);
+      const std::string what =
+          label + " " + io::toString(format) + " at " + std::to_string(maxErr) + " m";
+      EXPECT_LE(rep.meshedErrorM, maxErr) << what;
+      EXPECT_EQ(rep.triangles, mesh.triangleCount());
+      // The mesh the error hierarchy chose, in double: within what it was asked for.
+      EXPECT_LE(terrain::measureTrueError(t, mesh), rep.meshedErrorM) << what;
+      EXPECT_EQ(t.chart().hasPoleRows() ? testkit::conformityDefect(t, mesh)
+                                        : flatConformityDefect(t, mesh),
+                "")
+          << what;
+      // The file as written (float32 / 4 decimals): within the user's request.
+      const ReadMesh r = format == io::MeshFormat::kObj   ? readObj(file)
+                         : format == io::MeshFormat::kPly ? readPly(file)
+                                                          : readGlb(file);
+      ASSERT_EQ(r.positions.size(), mesh.gridIndex.size()) << what;
+      ASSERT_EQ(r.indices, mesh.indices) << what;
+      EXPECT_LE(writtenMeshError(t, mesh, r.positions), maxErr) << what;
+      for (const auto& n : r.normals) ASSERT_NEAR(n.norm(), 1.0, 1e-5) << what;
+    }
+  }
+  fs::remove_all(dir);
+}
+
+}  // namespace
+
+TEST(IoExport, PlanetMeshesAsWrittenStayWithinTheRequestedError) {
+  const auto t = testkit::bumpyTerrain(7, 9, 12000.0);
+  checkWrittenMeshes(t, {3000.0, 400.0}, "latlong");
+}
+
+TEST(IoExport, FlatMeshesAsWrittenStayWithinTheRequestedError) {
+  const auto t = flatTerrain(7);
+  checkWrittenMeshes(t, {50.0, 2.0}, "flat");
+  // Seen from +z, every triangle faces up (CCW in (u, v) is CCW from above).
+  const auto mesh = terrain::meshToError(t, 2.0);
+  for (std::size_t k = 0; k < mesh.triangleCount(); ++k) {
+    const auto& a = mesh.positions[mesh.indices[3 * k]];
+    const auto& b = mesh.positions[mesh.indices[3 * k + 1]];
+    const auto& c = mesh.positions[mesh.indices[3 * k + 2]];
+    ASSERT_GT((b - a).cross(c - a).z(), 0.0f);
+  }
+}
+
+TEST(IoExport, ZeroErrorFlatMeshIsTheFullGridAndExact) {
+  const auto t = flatTerrain(5, 10.0, 100.0);
+  const auto mesh = terrain::meshToError(t, 0.0);
+  EXPECT_EQ(mesh.triangleCount(), std::size_t(2 * 32 * 32));
+  EXPECT_EQ(terrain::measureTrueError(t, mesh), 0.0);
+}
+
+TEST(IoExport, GlbNormalsPointOutwardAndSeamTwinsShareThem) {
+  const auto t = testkit::bumpyTerrain(6, 2, 3000.0);
+  const fs::path dir = freshDir("glbnormals");
+  terrain::Mesh mesh;
+  io::exportMesh(t, 5000.0, io::MeshFormat::kGlb, dir / "p.glb", &mesh);
+  const ReadMesh r = readGlb(dir / "p.glb");
+  const auto side = std::uint64_t(t.grid().side());
+  const int m = t.grid().m();
+  std::map<int, Eigen::Vector3d> seam;
+  for (std::size_t i = 0; i < r.normals.size(); ++i) {
+    const int u = int(mesh.gridIndex[i] % side), v = int(mesh.gridIndex[i] / side);
+    EXPECT_GT(r.normals[i].dot(t.chart().up(u, v)), 0.3) << "(" << u << "," << v << ")";
+    if (u == 0 || u == m) {
+      auto [it, fresh] = seam.try_emplace(v, r.normals[i]);
+      if (!fresh) EXPECT_LT((it->second - r.normals[i]).norm(), 1e-6) << "seam row " << v;
+    }
+  }
+  fs::remove_all(dir);
+}
+
+TEST(IoExport, BadRequestsAreRefused) {
+  const auto t = testkit::bumpyTerrain(5, 1, 1000.0);
+  const fs::path dir = freshDir("badexport");
+  // float32 cannot place a vertex of a 6,372 km planet closer than ~0.4 m.
+  EXPECT_THROW(io::exportMesh(t, 0.1, io::MeshFormat::kGlb, dir / "x.glb"), core::InputError);
+  EXPECT_NO_THROW(io::exportMesh(t, 0.1, io::MeshFormat::kObj, dir / "x.obj"));
+  EXPECT_THROW(io::exportTerrain(t, dir / "x.glb", {}), core::InputError);  // no --max-error
+  EXPECT_THROW(io::exportTerrain(t, dir / "x.xyz", {}), core::InputError);
+  EXPECT_THROW(io::exportTerrain(t, dir / "noext", {}), core::InputError);
+  io::ExportOptions o;
+  o.maxErrorM = 10.0;
+  EXPECT_THROW(io::exportTerrain(t, dir / "x.png", o), core::InputError);  // error on a heightmap
+  EXPECT_THROW(io::exportFormatFromName("jpeg"), core::InputError);
+  fs::remove_all(dir);
+}
+
+TEST(IoExport, FlatHeightmapsAtGridSizeAreExactAndCarryTheirSpacing) {
+  const auto t = flatTerrain(6, 25.0);
+  const fs::path dir = freshDir("flatmaps");
+  for (const char* ext : {"raw", "tif", "png"}) {
+    const fs::path file = dir / (std::string("h.") + ext);
+    io::exportTerrain(t, file, {});
+    io::ImportOptions o;
+    o.chart = io::ChartKind::kFlat;
+    const auto r = io::importHeightmap(file, o);
+    const auto* flat = dynamic_cast<const core::FlatChart*>(r.planet.chart.get());
+    ASSERT_NE(flat, nullptr);
+    EXPECT_DOUBLE_EQ(flat->dx(), 25.0) << ext;
+    EXPECT_DOUBLE_EQ(flat->dy(), 25.0) << ext;
+    ASSERT_EQ(r.planet.heights.size(), t.heights().size());
+    const double tol =
+        std::string(ext) == "png" ? (t.maxHeight() - t.minHeight()) / 65535.0 * 0.51 : 0.0;
+    double worst = 0;
+    for (std::size_t i = 0; i < r.planet.heights.size(); ++i) {
+      worst = std::max(worst, std::abs(double(r.planet.heights[i]) - double(t.heights()[i])));
+    }
+    EXPECT_LE(worst, tol) << ext;
+    const auto side = nlohmann::json::parse(std::ifstream(file.string() + ".json"));
+    EXPECT_EQ(side["projection"], "flat");
+  }
+  fs::remove_all(dir);
+}
+
+TEST(IoExport, EquirectangularExportsOfAnySizeReimportCloseToThePlanet) {
+  // A smooth planet, so resampling (export, then import) adds little.
+  auto chart = testkit::earthChart(7);
+  const int m = chart->grid().m();
+  std::vector<float> h(chart->grid().count());
+  for (int v = 0; v <= m; ++v) {
+    for (int u = 0; u <= m; ++u) {
+      const Eigen::Vector3d d = chart->direction(u, v);
+      h[chart->grid().index(u, v)] = float(3000.0 * d.x() * d.z() + 1500.0 * d.y());
+    }
+  }
+  const terrain::Terrain t(chart, h);
+  const fs::path dir = freshDir("equirect");
+  for (const char* ext : {"tif", "raw", "png"}) {
+    const fs::path file = dir / (std::string("e.") + ext);
+    io::ExportOptions eo;
+    eo.width = 512;
+    eo.height = 256;
+    io::exportTerrain(t, file, eo);
+    io::ImportOptions o;
+    o.gridSide = m + 1;
+    const auto r = io::importHeightmap(file, o);
+    double worst = 0;
+    for (std::size_t i = 0; i < h.size(); ++i)
+      worst = std::max(worst, std::abs(double(r.planet.heights[i]) - h[i]));
+    EXPECT_LT(worst, 60.0) << ext;  // of +-4500 m relief, after two bilinear resamplings
+    EXPECT_NO_THROW(terrain::Terrain::validateHeights(*r.planet.chart, r.planet.heights));
+  }
+  fs::remove_all(dir);
+}
+
+TEST(IoFlatChart, PositionsInverseAndLimits) {
+  const core::FlatChart c(core::GridSize(5), 2.0, 3.0);
+  EXPECT_EQ(c.position(4, 5, 7.0), Eigen::Vector3d(8.0, 15.0, 7.0));
+  EXPECT_EQ(c.positionAt(0.5, 1.5, -1.0), Eigen::Vector3d(1.0, 4.5, -1.0));
+  EXPECT_EQ(c.up(3, 3), Eigen::Vector3d::UnitZ());
+  EXPECT_EQ(*c.inverse({8.0, 15.0, 100.0}), Eigen::Vector2d(4.0, 5.0));
+  EXPECT_EQ(*c.inverse({-8.0, 1e9, 0.0}), Eigen::Vector2d(0.0, 32.0));
+  EXPECT_FALSE(c.wrapsU());
+  EXPECT_FALSE(c.hasPoleRows());
+  EXPECT_EQ(c.radius(), 0.0);
+  EXPECT_GT(c.heightLimit(), 1e5);
+  EXPECT_THROW(core::FlatChart(core::GridSize(5), 0.0, 1.0), core::InputError);
+  EXPECT_THROW(core::FlatChart(core::GridSize(5), 1.0, NAN), core::InputError);
+}
