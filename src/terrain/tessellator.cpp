@@ -175,8 +175,11 @@ bool Tessellator::pass(const ChartT& chart, const Terrain& terrain, const Camera
           }
         }
       }
-      if (eps > 0) {
-        const double zr = forward.dot(w) - r;
+      const double zc = forward.dot(w);
+      // A ball wholly behind the near plane shows nothing (the culling pass drops it too): its
+      // error cannot reach the screen, so it never needs to split.
+      if (eps > 0 && zc + r >= kNear) {
+        const double zr = zc - r;
         // Two valid bounds on the screen error; the smaller decides (both are nested, so their
         // minimum is too). The cheap one first: if it allows no split, the other cannot either.
         if (zr <= kNear || (view.focalKappa * eps > distMax * zr &&
