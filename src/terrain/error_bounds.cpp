@@ -90,7 +90,10 @@ void ErrorBounds::computeLevel(const ChartT& chart, std::span<const float> heigh
                       kRadiusMargin);
     }
     double e;
-    if (rule == ErrorRule::kHybridExact && s <= kExactMaxHalfSize) {
+    // At level 0 a diamond's triangles hold no grid vertex but their corners and v itself, so
+    // the exact deviation is the midpoint error: the wedgie formula below (half of all vertices
+    // take this path, so skipping the triangle scans matters).
+    if (rule == ErrorRule::kHybridExact && s <= kExactMaxHalfSize && level > 0) {
       e = childEps;
       if (inGrid(g, d.apex0))
         e = std::max(e, exactTriangleDeviation(sampler, d.apex0, d.base0, d.base1));
