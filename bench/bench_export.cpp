@@ -1,0 +1,295 @@
+// `planetsculpt bench export`: view-independent meshes of flat heightmaps (a real SRTM tile
+// with its holes filled, and a synthetic fractal) swept over the requested error, against
+// Martini (@mapbox/martini, run with node) on the same heights in the same run. For both tools
+// the true error is measured here, against every full-resolution vertex, with the same code.
+//
+// JSON lines:
+//   tool planetsculpt | martini: heightmap, grid, requested_error_m, true_error_m, triangles,
+//     ms (error table build + mesh), build_ms, mesh_ms (medians);
+//   tool compare: for each planetsculpt request E, the fewest triangles Martini needs for a
+//     true error <= E (its threshold swept finely below E) and the time it takes.
+#include <unistd.h>
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <nlohmann/json.hpp>
+#include <random>
+
+#include "bench/bench.hpp"
+#include "bench/bench_util.hpp"
+#include "core/flat_chart.hpp"
+#include "io/height_image.hpp"
+#include "io/heightmap_import.hpp"
+#include "terrain/error_mesher.hpp"
+#include "terrain/screen_error.hpp"
+
+namespace ps::bench {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+struct Heightmap {
+  std::string name;
+  int side = 0;
+  double dx = 1, dy = 1;
+  std::vector<float> heights;  // index v * side + u
+  nlohmann::json info;
+};
+
+// fBm of value noise (8 octaves, persistence 0.5), scaled to 0 .. 2000 m: a rough synthetic
+// terrain whose features are not aligned with the bintree.
+Heightmap fractal(int side, std::uint32_t seed) {
+  Heightmap h;
+  h.name = "synthetic-fbm";
+  h.side = side;
+  h.dx = h.dy = 30.0;
+  std::mt19937 rng(seed);
+  const int lattice = 257;
+  std::vector<double> noise(std::size_t(lattice) * lattice);
+  for (double& x : noise) x = std::uniform_real_distribution<double>(-1.0, 1.0)(rng);
+  auto value = [&](double x, double y) {
+    const int x0 = int(std::floor(x)), y0 = int(std::floor(y));
+    const double fx = x - x0, fy = y - y0;
+    const double sx = fx * fx * (3 - 2 * fx), sy = fy * fy * (3 - 2 * fy);
+    auto at = [&](int xi, int yi) {
+      return noise[std::size_t(((yi % lattice) + lattice) % lattice) * lattice +
+                   std::size_t(((xi % lattice) + lattice) % lattice)];
+    };
+    return (1 - sy) * ((1 - sx) * at(x0, y0) + sx * at(x0 + 1, y0)) +
+           sy * ((1 - sx) * at(x0, y0 + 1) + sx * at(x0 + 1, y0 + 1));
+  };
+  h.heights.resize(std::size_t(side) * side);
+  for (int v = 0; v < side; ++v) {
+    for (int u = 0; u < side; ++u) {
+      double sum = 0, amp = 1, freq = 4.0 / (side - 1);
+      for (int o = 0; o < 8; ++o) {
+        sum += amp * value(u * freq + 17.3 * o, v * freq + 5.1 * o);
+        amp *= 0.5;
+        freq *= 2.0;
+      }
+      h.heights[std::size_t(v) * side + u] = float(sum);
+    }
+  }
+  const auto [lo, hi] = std::minmax_element(h.heights.begin(), h.heights.end());
+  const float a = *lo, span = *hi - *lo;
+  for (float& x : h.heights) x = 2000.0f * (x - a) / span;
+  h.info = {{"source", "fBm value noise, seed " + std::to_string(seed)}, {"relief_m", 2000}};
+  return h;
+}
+
+// The top-left side x side window of the SRTM tile (Mount Rainier is in it), holes filled.
+std::optional<Heightmap> srtm(int side) {
+  const fs::path file =
+      fs::path(PS_SOURCE_DIR) / ".." / "shared" / "data" / "dem" / "srtm_mt_rainier_90m.tif";
+  if (!fs::exists(file)) {
+    std::cerr << "bench export: " << file.string() << " is absent; the real heightmap is skipped\n";
+    return std::nullopt;
+  }
+  io::HeightImage img = io::readHeightImage(file);
+  if (img.width < side || img.height < side) return std::nullopt;
+  io::HeightImage crop = img;
+  crop.width = crop.height = side;
+  crop.values.resize(std::size_t(side) * side);
+  for (int y = 0; y < side; ++y) {
+    std::copy_n(img.values.begin() + std::ptrdiff_t(y) * img.width, side,
+                crop.values.begin() + std::ptrdiff_t(y) * side);
+  }
+  io::ImportOptions o;
+  o.chart = io::ChartKind::kFlat;
+  o.gridSide = side;
+  const io::ImportResult r = io::importHeightImage(std::move(crop), o, file.string());
+  const auto* flat = dynamic_cast<const core::FlatChart*>(r.planet.chart.get());
+  Heightmap h;
+  h.name = "srtm-rainier";
+  h.side = side;
+  h.dx = flat->dx();
+  h.dy = flat->dy();
+  h.heights = r.planet.heights;
+  h.info = {{"source", "srtm_mt_rainier_90m.tif, pixels [0, " + std::to_string(side) + ")^2"},
+            {"nodata_filled", r.noDataPixels}};
+  return h;
+}
+
+// Runs scripts/martini/mesh.mjs; "" and a reason on stderr when it cannot.
+std::string runMartini(const Heightmap& h, const std::vector<double>& thresholds, int repeats,
+                       const fs::path& work) {
+  const fs::path dir = fs::path(PS_SOURCE_DIR) / "scripts" / "martini";
+  if (std::system("command -v node >/dev/null 2>&1") != 0) {
+    std::cerr << "bench export: node is not installed; Martini is skipped\n";
+    return "";
+  }
+  if (!fs::exists(dir / "node_modules" / "@mapbox" / "martini")) {
+    if (std::system("command -v npm >/dev/null 2>&1") != 0) {
+      std::cerr << "bench export: npm is not installed and @mapbox/martini is absent; Martini is "
+                   "skipped\n";
+      return "";
+    }
+    std::cerr << "bench export: npm install @mapbox/martini in " << dir.string() << "\n";
+    const std::string cmd =
+        "cd '" + dir.string() + "' && npm install --no-audit --no-fund --silent >&2";
+    if (std::system(cmd.c_str()) != 0) {
+      std::cerr << "bench export: npm install failed (offline?); Martini is skipped\n";
+      return "";
+    }
+  }
+  const fs::path heights = work / (h.name + ".f32"), result = work / (h.name + ".martini.json");
+  {
+    std::ofstream f(heights, std::ios::binary);
+    f.write(reinterpret_cast<const char*>(h.heights.data()),
+            std::streamsize(h.heights.size() * sizeof(float)));
+  }
+  std::string csv;
+  for (const double t : thresholds) {
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "%s%.6g", csv.empty() ? "" : ",", t);
+    csv += buf;
+  }
+  const std::string cmd = "node '" + (dir / "mesh.mjs").string() + "' '" + heights.string() + "' " +
+                          std::to_string(h.side) + " " + csv + " '" + result.string() + "' " +
+                          std::to_string(repeats);
+  if (std::system(cmd.c_str()) != 0) {
+    std::cerr << "bench export: node " << (dir / "mesh.mjs").string()
+              << " failed; Martini is skipped\n";
+    return "";
+  }
+  return result.string();
+}
+
+}  // namespace
+
+void benchExport(const BenchOptions& options, std::ostream& out) {
+  const int side = options.quick ? 513 : 1025;
+  const int repeats = std::max(3, options.repeats / 5);
+  const std::vector<double> requests =
+      options.quick ? std::vector<double>{2, 8, 32} : std::vector<double>{1, 2, 5, 10, 20, 50};
+  // Martini's threshold is not a bound (its true error runs over it), so it is swept finely
+  // from half the smallest request up: 2^(1/4) steps.
+  std::vector<double> thresholds;
+  for (double t = 0.5 * requests.front(); t <= requests.back() * 1.0001; t *= std::pow(2.0, 0.25)) {
+    thresholds.push_back(std::round(t * 1000) / 1000);
+  }
+  const fs::path work =
+      fs::temp_directory_path() / ("ps_bench_export_" + std::to_string(::getpid()));
+  fs::create_directories(work);
+
+  std::vector<Heightmap> maps;
+  if (auto real = srtm(side)) maps.push_back(std::move(*real));
+  maps.push_back(fractal(side, 7));
+
+  for (const Heightmap& h : maps) {
+    const std::string grid = std::to_string(side) + "x" + std::to_string(side);
+    std::cerr << "bench export: " << h.name << " " << grid << "\n";
+    auto chart = std::make_shared<core::FlatChart>(core::GridSize::fromSide(side), h.dx, h.dy);
+    terrain::Terrain t(chart, h.heights);
+    std::vector<double> builds;
+    for (int r = 0; r < repeats; ++r)
+      builds.push_back(timeMs([&] { t.rebuildBounds(terrain::ErrorRule::kHybridExact); }));
+    const double buildMs = median(builds);
+    struct Ours {
+      double request, trueError, ms;
+      std::size_t triangles;
+    };
+    std::vector<Ours> ours;
+    for (const double e : requests) {
+      terrain::Mesh mesh;
+      std::vector<double> ms;
+      for (int r = 0; r < repeats; ++r)
+        ms.push_back(timeMs([&] { mesh = terrain::meshToError(t, e); }));
+      const double trueErr = terrain::measureTrueError(t, mesh);
+      ours.push_back({e, trueErr, buildMs + median(ms), mesh.triangleCount()});
+      out << nlohmann::json{{"bench", "export"},          {"tool", "planetsculpt"},
+                            {"heightmap", h.name},        {"grid", grid},
+                            {"rule", "hybrid-exact"},     {"requested_error_m", e},
+                            {"true_error_m", trueErr},    {"triangles", mesh.triangleCount()},
+                            {"ms", buildMs + median(ms)}, {"build_ms", buildMs},
+                            {"mesh_ms", median(ms)},      {"info", h.info}}
+                 .dump()
+          << std::endl;
+    }
+
+    const std::string martiniJson = runMartini(h, thresholds, repeats, work);
+    if (martiniJson.empty()) {
+      out << nlohmann::json{{"bench", "export"},
+                            {"tool", "martini"},
+                            {"heightmap", h.name},
+                            {"skipped", true}}
+                 .dump()
+          << std::endl;
+      continue;
+    }
+    std::ifstream f(martiniJson);
+    const nlohmann::json m = nlohmann::json::parse(f);
+    const double martiniBuild = median(m["build_ms"].get<std::vector<double>>());
+    struct Theirs {
+      double threshold, trueError, ms;
+      std::size_t triangles;
+    };
+    std::vector<Theirs> theirs;
+    const auto gside = std::uint64_t(side);
+    for (const auto& mesh : m["meshes"]) {
+      const auto verts = mesh["vertices"].get<std::vector<std::uint32_t>>();
+      const auto tris = mesh["triangles"].get<std::vector<std::uint32_t>>();
+      // Martini's triangle (a, b, c) has its right angle at c; the measure wants it first.
+      terrain::Mesh tm;
+      for (std::size_t i = 0; i + 1 < verts.size(); i += 2)
+        tm.gridIndex.push_back(std::uint64_t(verts[i + 1]) * gside + verts[i]);
+      tm.positions.assign(tm.gridIndex.size(), Eigen::Vector3f::Zero());
+      for (std::size_t k = 0; k + 2 < tris.size(); k += 3) {
+        tm.indices.insert(tm.indices.end(), {tris[k + 2], tris[k], tris[k + 1]});
+      }
+      const double trueErr = terrain::measureTrueError(t, tm);
+      const double meshMs = median(mesh["mesh_ms"].get<std::vector<double>>());
+      const double e = mesh["max_error"].get<double>();
+      theirs.push_back({e, trueErr, martiniBuild + meshMs, tm.triangleCount()});
+      out << nlohmann::json{{"bench", "export"},
+                            {"tool", "martini"},
+                            {"heightmap", h.name},
+                            {"grid", grid},
+                            {"requested_error_m", e},
+                            {"true_error_m", trueErr},
+                            {"true_over_requested", trueErr / e},
+                            {"triangles", tm.triangleCount()},
+                            {"ms", martiniBuild + meshMs},
+                            {"build_ms", martiniBuild},
+                            {"mesh_ms", meshMs},
+                            {"init_ms", m["init_ms"]}}
+                 .dump()
+          << std::endl;
+    }
+    // At equal *true* error: Martini's cheapest mesh whose measured error meets each request.
+    for (const Ours& o : ours) {
+      const Theirs* best = nullptr;
+      for (const Theirs& th : theirs) {
+        if (th.trueError <= o.request && (!best || th.triangles < best->triangles)) best = &th;
+      }
+      nlohmann::json line = {{"bench", "export"},
+                             {"tool", "compare"},
+                             {"heightmap", h.name},
+                             {"grid", grid},
+                             {"true_error_bound_m", o.request},
+                             {"planetsculpt_triangles", o.triangles},
+                             {"planetsculpt_true_error_m", o.trueError},
+                             {"planetsculpt_ms", o.ms}};
+      if (best) {
+        line["martini_threshold_m"] = best->threshold;
+        line["martini_triangles"] = best->triangles;
+        line["martini_true_error_m"] = best->trueError;
+        line["martini_ms"] = best->ms;
+        line["triangles_ratio"] = double(o.triangles) / double(best->triangles);
+        line["time_ratio"] = o.ms / best->ms;
+      } else {
+        line["martini_triangles"] = nullptr;  // no swept threshold met this bound
+      }
+      out << line.dump() << std::endl;
+    }
+  }
+  std::error_code ec;
+  fs::remove_all(work, ec);
+}
+
+static const BenchRegistration kRegistered("export", benchExport);
+
+}  // namespace ps::bench
