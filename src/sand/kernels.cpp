@@ -1,0 +1,235 @@
+// No trapping math lets GCC if-convert the loops that divide (the results are the same IEEE
+// operations); set for the whole file so that the inline helpers of kernels.hpp inline into the
+// kernels (functions with differing optimize attributes do not inline into each other).
+#if defined(__GNUC__) && !defined(__clang__)
+#pragma GCC optimize("no-trapping-math")
+#endif
+#include "sand/kernels.hpp"
+
+// The row kernels are compiled twice on x86-64 (baseline SSE2 and AVX2, picked at load time by
+// an ifunc). Neither clone may use FMA: contracting a * b + c would round differently in the two
+// and break bit-for-bit reproducibility across machines (AVX2 alone brings no FMA).
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && \
+    !defined(__SANITIZE_ADDRESS__)
+#define PS_SAND_CLONES __attribute__((target_clones("avx2", "default")))
+#else
+#define PS_SAND_CLONES
+#endif
+
+namespace ps::sand::kernels {
+
+namespace {
+constexpr int kW = kScratch;
+}
+
+PS_SAND_CLONES
+unsigned thermalPass1(const double* hm, const double* h0, const double* hp, double* s,
+                      const ThermalRow1& k) {
+  const double tH = k.tH, eH = k.eH, tS = k.tS, eS = k.eS, tN = k.tN, eN = k.eN;
+  const double tSD = k.tSD, eSD = k.eSD, tND = k.tND, eND = k.eND, hra = k.hra;
+  unsigned any = 0;
+  for (int c = 1; c < kW - 1; ++c) {
+    const double h = h0[c];
+    const double eW = act(h - h0[c - 1] - tH, eH);
+    const double eE = act(h - h0[c + 1] - tH, eH);
+    const double eSo = act(h - hm[c] - tS, eS);
+    const double eNo = act(h - hp[c] - tN, eN);
+    const double eSW = act(h - hm[c - 1] - tSD, eSD);
+    const double eSE = act(h - hm[c + 1] - tSD, eSD);
+    const double eNW = act(h - hp[c - 1] - tND, eND);
+    const double eNE = act(h - hp[c + 1] - tND, eND);
+    const double E = ((eW + eE) + (eSo + eNo)) + ((eSW + eNE) + (eSE + eNW));
+    const double mx = std::max(std::max(std::max(eW, eE), std::max(eSo, eNo)),
+                               std::max(std::max(eSW, eNE), std::max(eSE, eNW)));
+    const double q = hra * mx / (E > 0.0 ? E : 1.0);
+    const double sv = ((E > 0.0) & (h < kLive)) ? q : 0.0;
+    s[c] = sv;
+    any |= unsigned(sv > 0.0);
+  }
+  return any;
+}
+
+PS_SAND_CLONES
+void thermalPass2(const double* hm, const double* h0, const double* hp, const double* sm,
+                  const double* s0, const double* sp, double* out, const ThermalRow2& k) {
+  const double tH = k.tH, eH = k.eH, tS = k.tS, eS = k.eS, tN = k.tN, eN = k.eN;
+  const double tSD = k.tSD, eSD = k.eSD, tND = k.tND, eND = k.eND;
+  const double cap0 = k.cap0, capS = k.capS, capN = k.capN, invA = k.invA;
+  for (int c = 2; c < kW - 2; ++c) {
+    const double h = h0[c], si = s0[c];
+    // Per link: (what the neighbour sends here) - (what this cell sends there).
+    const double dW = h - h0[c - 1];
+    const double nW =
+        std::min(s0[c - 1], cap0) * act(-dW - tH, eH) - std::min(si, cap0) * act(dW - tH, eH);
+    const double dE = h - h0[c + 1];
+    const double nE =
+        std::min(s0[c + 1], cap0) * act(-dE - tH, eH) - std::min(si, cap0) * act(dE - tH, eH);
+    const double dS = h - hm[c];
+    const double nS =
+        std::min(sm[c], cap0) * act(-dS - tS, eS) - std::min(si, capS) * act(dS - tS, eS);
+    const double dN = h - hp[c];
+    const double nN =
+        std::min(sp[c], cap0) * act(-dN - tN, eN) - std::min(si, capN) * act(dN - tN, eN);
+    const double dSW = h - hm[c - 1];
+    const double nSW =
+        std::min(sm[c - 1], cap0) * act(-dSW - tSD, eSD) - std::min(si, capS) * act(dSW - tSD, eSD);
+    const double dSE = h - hm[c + 1];
+    const double nSE =
+        std::min(sm[c + 1], cap0) * act(-dSE - tSD, eSD) - std::min(si, capS) * act(dSE - tSD, eSD);
+    const double dNW = h - hp[c - 1];
+    const double nNW =
+        std::min(sp[c - 1], cap0) * act(-dNW - tND, eND) - std::min(si, capN) * act(dNW - tND, eND);
+    const double dNE = h - hp[c + 1];
+    const double nNE =
+        std::min(sp[c + 1], cap0) * act(-dNE - tND, eND) - std::min(si, capN) * act(dNE - tND, eND);
+    const double net = ((nW + nE) + (nS + nN)) + ((nSW + nNE) + (nSE + nNW));
+    out[c] = h + net * invA;
+  }
+}
+
+PS_SAND_CLONES
+unsigned diffusionRow(const double* hm, const double* h0, const double* hp, double* out,
+                      const DiffusionRow& k, const Repose& r) {
+  const Repose rr = r;
+  const double gH = k.gH, invH = k.invH, gS = k.gS, invS = k.invS, gN = k.gN, invN = k.invN;
+  const double dtInvA = k.dtInvA;
+  unsigned any = 0;
+  for (int c = 2; c < kW - 2; ++c) {
+    const double h = h0[c];
+    const double fW = faceFlux(h, h0[c - 1], gH, invH, rr);
+    const double fE = faceFlux(h, h0[c + 1], gH, invH, rr);
+    const double fS = faceFlux(h, hm[c], gS, invS, rr);
+    const double fN = faceFlux(h, hp[c], gN, invN, rr);
+    const double net = (fW + fE) + (fS + fN);
+    out[c] = h - dtInvA * net;
+    any |= unsigned(((std::abs(fW) + std::abs(fE)) + (std::abs(fS) + std::abs(fN))) > 0.0);
+  }
+  return any;
+}
+
+namespace {
+
+// Thomas algorithm for (1 + k_{i-1} + k_i) x_i - k_{i-1} x_{i-1} - k_i x_{i+1} = d_i, faces
+// k(i) between i and i + 1 for i < n - 1; x holds d on entry.
+template <class K>
+void thomas(double* x, int n, const K& k, double* cp) {
+  double kPrev = 0.0, cPrev = 0.0;
+  for (int i = 0; i < n; ++i) {
+    const double kr = i + 1 < n ? k(i) : 0.0;
+    const double denom = (1.0 + kPrev + kr) + kPrev * cPrev;  // sub-diagonal is -kPrev
+    cp[i] = -kr / denom;
+    x[i] = (x[i] + kPrev * (i > 0 ? x[i - 1] : 0.0)) / denom;
+    cPrev = cp[i];
+    kPrev = kr;
+  }
+  for (int i = n - 2; i >= 0; --i) x[i] -= cp[i] * x[i + 1];
+}
+
+}  // namespace
+
+void solveRow(std::vector<double>& x, const std::vector<double>& k, bool circle,
+              std::vector<double>& work) {
+  const int n = int(x.size());
+  if (n == 0) return;
+  const int faces = circle ? n : n - 1;
+  bool any = false;
+  int cut = -1;
+  for (int i = 0; i < faces; ++i) {
+    any |= k[std::size_t(i)] > 0.0;
+    if (cut < 0 && !(k[std::size_t(i)] > 0.0)) cut = i;
+  }
+  if (!any) return;
+  work.resize(std::size_t(3 * n + 2));
+  double* cp = work.data();
+  if (!circle) {
+    thomas(
+        x.data(), n, [&](int i) { return k[std::size_t(i)]; }, cp);
+    return;
+  }
+  if (cut >= 0) {
+    // A face at rest cuts the circle: solve the open chain starting just after it.
+    double* y = work.data() + n;
+    const int s = cut + 1;
+    for (int j = 0; j < n; ++j) y[j] = x[std::size_t((s + j) % n)];
+    thomas(
+        y, n, [&](int j) { return k[std::size_t((s + j) % n)]; }, cp);
+    for (int j = 0; j < n; ++j) x[std::size_t((s + j) % n)] = y[j];
+    return;
+  }
+  // Every face active: cyclic system by Sherman-Morrison, A = A' + u v^T with the corner
+  // entries -k[n-1] moved into the diagonal (gamma = -b_0).
+  const double kc = k[std::size_t(n - 1)];
+  double* z = work.data() + n;
+  double* zc = work.data() + 2 * n;
+  const double b0 = 1.0 + kc + k[0];
+  const double gamma = -b0;
+  // A' differs from the open chain in its first and last diagonal entries.
+  auto solveModified = [&](double* v) {
+    // Diagonal: b_0 - gamma at 0, b_{n-1} - kc * kc / gamma at n - 1, others as usual.
+    double kPrev = 0.0, cPrev = 0.0;
+    for (int i = 0; i < n; ++i) {
+      const double kl = i > 0 ? k[std::size_t(i - 1)] : kc;
+      const double kr = i + 1 < n ? k[std::size_t(i)] : kc;
+      double b = 1.0 + kl + kr;
+      if (i == 0) b -= gamma;
+      if (i == n - 1) b -= kc * kc / gamma;
+      const double sub = i > 0 ? kPrev : 0.0;
+      const double sup = i + 1 < n ? kr : 0.0;
+      const double denom = b + sub * cPrev;
+      zc[i] = -sup / denom;
+      v[i] = (v[i] + sub * (i > 0 ? v[i - 1] : 0.0)) / denom;
+      cPrev = zc[i];
+      kPrev = sup;
+    }
+    for (int i = n - 2; i >= 0; --i) v[i] -= zc[i] * v[i + 1];
+  };
+  solveModified(x.data());
+  for (int i = 0; i < n; ++i) z[i] = 0.0;
+  z[0] = gamma;
+  z[n - 1] = -kc;
+  solveModified(z);
+  const double fact =
+      (x[0] - kc * x[std::size_t(n - 1)] / gamma) / (1.0 + z[0] - kc * z[n - 1] / gamma);
+  for (int i = 0; i < n; ++i) x[std::size_t(i)] -= fact * z[i];
+}
+
+void solveColumns(std::vector<double>& x, const std::vector<double>& K,
+                  const std::vector<double>& a, int n, int lanes, std::vector<double>& work) {
+  work.resize(std::size_t(n) * std::size_t(lanes));
+  double* cp = work.data();
+  double* xs = x.data();
+  const double* Ks = K.data();
+  for (int i = 0; i < n; ++i) {
+    const double ai = a[std::size_t(i)];
+    double* xi = xs + std::size_t(i) * lanes;
+    double* ci = cp + std::size_t(i) * lanes;
+    const double* kr = Ks + std::size_t(i) * lanes;
+    if (i == 0) {
+      for (int l = 0; l < lanes; ++l) {
+        const double right = n > 1 ? kr[l] : 0.0;
+        const double denom = ai + right;
+        ci[l] = -right / denom;
+        xi[l] = ai * xi[l] / denom;
+      }
+      continue;
+    }
+    const double* kl = Ks + std::size_t(i - 1) * lanes;
+    const double* cPrev = cp + std::size_t(i - 1) * lanes;
+    const double* xPrev = xs + std::size_t(i - 1) * lanes;
+    const bool last = i + 1 == n;
+    for (int l = 0; l < lanes; ++l) {
+      const double right = last ? 0.0 : kr[l];
+      const double denom = (ai + kl[l] + right) + kl[l] * cPrev[l];
+      ci[l] = -right / denom;
+      xi[l] = (ai * xi[l] + kl[l] * xPrev[l]) / denom;
+    }
+  }
+  for (int i = n - 2; i >= 0; --i) {
+    double* xi = xs + std::size_t(i) * lanes;
+    const double* xn = xs + std::size_t(i + 1) * lanes;
+    const double* ci = cp + std::size_t(i) * lanes;
+    for (int l = 0; l < lanes; ++l) xi[l] -= ci[l] * xn[l];
+  }
+}
+
+}  // namespace ps::sand::kernels
