@@ -1,0 +1,155 @@
+#include "tracking/calibration.hpp"
+
+#include <cmath>
+#include <fstream>
+#include <sstream>
+
+#include "core/input_error.hpp"
+
+namespace ps::tracking {
+
+namespace {
+
+std::string fmt(double v) {
+  std::ostringstream s;
+  s.precision(10);
+  s << v;
+  return s.str();
+}
+
+bool allFinite(const cv::Mat& m) {
+  for (int i = 0; i < m.rows; ++i)
+    for (int j = 0; j < m.cols; ++j)
+      if (!std::isfinite(m.at<double>(i, j))) return false;
+  return true;
+}
+
+}  // namespace
+
+CameraCalibration CameraCalibration::pinhole(double fx, double fy, double cx, double cy,
+                                             cv::Size size) {
+  CameraCalibration c;
+  c.K = cv::Matx33d(fx, 0, cx, 0, fy, cy, 0, 0, 1);
+  c.imageSize = size;
+  return c;
+}
+
+void CameraCalibration::validate() const {
+  const cv::Mat k(K);
+  if (!allFinite(k)) throw core::InputError(source + ": camera_matrix is not finite");
+  if (!(K(0, 0) > 0) || !(K(1, 1) > 0))
+    throw core::InputError(source + ": camera_matrix has focal lengths fx = " + fmt(K(0, 0)) +
+                           ", fy = " + fmt(K(1, 1)) + " (must be > 0)");
+  if (K(1, 0) != 0 || K(2, 0) != 0 || K(2, 1) != 0 || K(2, 2) != 1)
+    throw core::InputError(source + ": camera_matrix is not of the form [fx s cx; 0 fy cy; 0 0 1]");
+  const int n = int(distortion.total());
+  if (distortion.type() != CV_64F || (distortion.rows != 1 && distortion.cols != 1) ||
+      (n != 4 && n != 5 && n != 8 && n != 12 && n != 14))
+    throw core::InputError(source +
+                           ": distortion_coefficients must be 1xN or Nx1 with N in "
+                           "{4, 5, 8, 12, 14}, not " +
+                           std::to_string(distortion.rows) + "x" + std::to_string(distortion.cols));
+  if (!allFinite(distortion))
+    throw core::InputError(source + ": distortion_coefficients are not finite");
+  if (imageSize.width < 0 || imageSize.height < 0 ||
+      (imageSize.width == 0) != (imageSize.height == 0))
+    throw core::InputError(source + ": image size " + std::to_string(imageSize.width) + "x" +
+                           std::to_string(imageSize.height) + " is not valid");
+}
+
+CameraCalibration CameraCalibration::forImageSize(cv::Size size) const {
+  if (size.width <= 0 || size.height <= 0)
+    throw core::InputError("image size " + std::to_string(size.width) + "x" +
+                           std::to_string(size.height) + " is not valid");
+  CameraCalibration c = *this;
+  if (imageSize.width == 0) {
+    c.imageSize = size;  // unknown: taken to be the video's
+    return c;
+  }
+  if (imageSize == size) return c;
+  const double sx = double(size.width) / imageSize.width;
+  const double sy = double(size.height) / imageSize.height;
+  if (std::abs(sx / sy - 1.0) > 0.01)
+    throw core::InputError(source + ": calibrated for " + std::to_string(imageSize.width) + "x" +
+                           std::to_string(imageSize.height) + ", the video is " +
+                           std::to_string(size.width) + "x" + std::to_string(size.height) +
+                           " (another aspect ratio: a crop cannot be rescaled; calibrate at this"
+                           " size)");
+  c.K(0, 0) *= sx;
+  c.K(0, 1) *= sx;
+  c.K(0, 2) = (K(0, 2) + 0.5) * sx - 0.5;
+  c.K(1, 1) *= sy;
+  c.K(1, 2) = (K(1, 2) + 0.5) * sy - 0.5;
+  c.imageSize = size;
+  return c;
+}
+
+CameraCalibration loadCalibration(const std::filesystem::path& path) {
+  const std::string name = path.string();
+  {
+    std::ifstream probe(path);
+    if (!probe) throw core::InputError(name + ": cannot open the calibration file");
+  }
+  cv::FileStorage fs;
+  try {
+    if (!fs.open(name, cv::FileStorage::READ))
+      throw core::InputError(name + ": not a calibration file OpenCV can read (YAML/XML/JSON)");
+  } catch (const cv::Exception& e) {
+    throw core::InputError(name + ": malformed calibration file (" + e.err + ")");
+  }
+  CameraCalibration c;
+  c.source = name;
+  try {
+    cv::Mat k, d;
+    fs["camera_matrix"] >> k;
+    if (k.empty()) throw core::InputError(name + ": no camera_matrix");
+    if (k.rows != 3 || k.cols != 3)
+      throw core::InputError(name + ": camera_matrix is " + std::to_string(k.rows) + "x" +
+                             std::to_string(k.cols) + ", not 3x3");
+    k.convertTo(k, CV_64F);
+    c.K = cv::Matx33d(k);
+    fs["distortion_coefficients"] >> d;
+    if (d.empty()) throw core::InputError(name + ": no distortion_coefficients");
+    d.convertTo(d, CV_64F);
+    c.distortion = d.reshape(1, 1).clone();
+    if (d.rows != 1 && d.cols != 1) c.distortion = d;  // validate() names the shape
+    const cv::FileNode w = fs["image_width"], h = fs["image_height"];
+    if (!w.empty() || !h.empty()) {
+      if (w.empty() || h.empty() || !w.isInt() || !h.isInt())
+        throw core::InputError(name + ": image_width and image_height must both be integers");
+      c.imageSize = {int(w), int(h)};
+      if (c.imageSize.width <= 0 || c.imageSize.height <= 0)
+        throw core::InputError(name + ": image size " + std::to_string(c.imageSize.width) + "x" +
+                               std::to_string(c.imageSize.height) + " is not valid");
+    }
+    const cv::FileNode e = fs["avg_reprojection_error"];
+    if (!e.empty() && e.isReal()) c.rms = double(e);
+  } catch (const cv::Exception& e) {
+    throw core::InputError(name + ": malformed calibration file (" + e.err + ")");
+  }
+  c.validate();
+  return c;
+}
+
+void saveCalibration(const CameraCalibration& c, const std::filesystem::path& path,
+                     const std::string& comment) {
+  c.validate();
+  const std::string tmp = path.string() + ".part";
+  cv::FileStorage fs(tmp, cv::FileStorage::WRITE | cv::FileStorage::FORMAT_YAML);
+  if (!fs.isOpened()) throw std::runtime_error("cannot write " + tmp);
+  if (!comment.empty()) fs << "info" << comment;
+  if (c.imageSize.width > 0) {
+    fs << "image_width" << c.imageSize.width;
+    fs << "image_height" << c.imageSize.height;
+  }
+  fs << "camera_matrix" << cv::Mat(c.K);
+  fs << "distortion_coefficients" << c.distortion.reshape(1, 1);
+  if (c.rms >= 0) fs << "avg_reprojection_error" << c.rms;
+  fs.release();
+  std::error_code ec;
+  std::filesystem::rename(tmp, path, ec);
+  if (ec)
+    throw std::runtime_error("cannot rename " + tmp + " to " + path.string() + ": " + ec.message());
+}
+
+}  // namespace ps::tracking

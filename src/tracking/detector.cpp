@@ -1,0 +1,96 @@
+#include "tracking/detector.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <opencv2/imgproc.hpp>
+
+#include "core/input_error.hpp"
+
+namespace ps::tracking {
+
+std::string toString(ArucoRefinement r) {
+  switch (r) {
+    case ArucoRefinement::kNone:
+      return "none";
+    case ArucoRefinement::kSubpix:
+      return "subpix";
+    case ArucoRefinement::kContour:
+      return "contour";
+    case ArucoRefinement::kAprilTag:
+      return "apriltag";
+  }
+  return "?";
+}
+
+ArucoRefinement arucoRefinementFromString(const std::string& s) {
+  if (s == "none") return ArucoRefinement::kNone;
+  if (s == "subpix") return ArucoRefinement::kSubpix;
+  if (s == "contour") return ArucoRefinement::kContour;
+  if (s == "apriltag") return ArucoRefinement::kAprilTag;
+  throw core::InputError("aruco corner refinement '" + s +
+                         "' is not one of none, subpix, contour, apriltag");
+}
+
+void DetectorConfig::validate() const {
+  const FamilyInfo info = familyInfo(family);
+  for (int id : ids)
+    if (id < 0 || id >= info.markerCount)
+      throw core::InputError("marker id " + std::to_string(id) + " is not in " + family + " (0.." +
+                             std::to_string(info.markerCount - 1) + ")");
+  if (!std::isfinite(decimate) || decimate < 1.0 || decimate > 8.0)
+    throw core::InputError("AprilTag decimate = " + std::to_string(decimate) + " is not in [1, 8]");
+  if (!std::isfinite(blurSigma) || std::abs(blurSigma) > 10.0)
+    throw core::InputError("AprilTag blur sigma = " + std::to_string(blurSigma) +
+                           " is not in [-10, 10]");
+  if (!std::isfinite(sharpening) || sharpening < 0 || sharpening > 10)
+    throw core::InputError("AprilTag sharpening = " + std::to_string(sharpening) +
+                           " is not in [0, 10]");
+  if (maxHamming < 0 || maxHamming > 3)
+    throw core::InputError("max hamming = " + std::to_string(maxHamming) + " is not in 0..3");
+  if (threads < 1 || threads > 64)
+    throw core::InputError("detector threads = " + std::to_string(threads) + " is not in 1..64");
+}
+
+cv::Mat toGrey(const cv::Mat& image) {
+  if (image.empty()) throw core::InputError("empty image");
+  if (image.depth() != CV_8U)
+    throw core::InputError("image depth " + std::to_string(image.depth()) + " is not 8-bit");
+  if (image.channels() == 1) return image;
+  cv::Mat grey;
+  if (image.channels() == 3)
+    cv::cvtColor(image, grey, cv::COLOR_BGR2GRAY);
+  else if (image.channels() == 4)
+    cv::cvtColor(image, grey, cv::COLOR_BGRA2GRAY);
+  else
+    throw core::InputError("image with " + std::to_string(image.channels()) + " channels");
+  return grey;
+}
+
+void finishDetections(const DetectorConfig& config, std::vector<Detection>& d) {
+  if (!config.ids.empty()) {
+    std::erase_if(d, [&](const Detection& x) {
+      return std::find(config.ids.begin(), config.ids.end(), x.id) == config.ids.end();
+    });
+  }
+  std::sort(d.begin(), d.end(), [](const Detection& a, const Detection& b) {
+    if (a.id != b.id) return a.id < b.id;
+    if (a.corners[0].y != b.corners[0].y) return a.corners[0].y < b.corners[0].y;
+    return a.corners[0].x < b.corners[0].x;
+  });
+}
+
+std::unique_ptr<Detector> makeDetector(const DetectorConfig& config) {
+  config.validate();
+  const FamilyInfo info = familyInfo(config.family);
+  Backend b = config.backend;
+  if (b == Backend::kAuto) b = info.apriltag ? Backend::kAprilTag : Backend::kAruco;
+  if (b == Backend::kAprilTag && !info.apriltag)
+    throw core::InputError("the AprilTag library cannot read " + config.family +
+                           " (use --detector aruco, or an AprilTag family such as tag36h11)");
+  if (b == Backend::kAruco && info.arucoDictionary < 0)
+    throw core::InputError("OpenCV's aruco module has no dictionary for " + config.family +
+                           " (use --detector apriltag)");
+  return b == Backend::kAprilTag ? makeAprilTagDetector(config) : makeArucoDetector(config);
+}
+
+}  // namespace ps::tracking

@@ -1,0 +1,72 @@
+#pragma once
+// Marker detection behind one interface, with two back ends: OpenCV's aruco module (4.6 API)
+// and the AprilTag C library (3.3). Whatever the back end, corners come out
+//   * in the order TL, TR, BR, BL of the marker's canonical image (marker_family.hpp), and
+//   * in OpenCV's pixel convention (pixel centres at integer coordinates; AprilTag's +0.5 is
+//     taken off),
+// so poses, calibrations and tests never know which library found a marker.
+#include <array>
+#include <memory>
+#include <opencv2/core.hpp>
+#include <string>
+#include <vector>
+
+#include "tracking/marker_family.hpp"
+
+namespace ps::tracking {
+
+struct Detection {
+  int id = -1;
+  std::array<cv::Point2d, 4> corners;  // TL, TR, BR, BL
+  int hamming = 0;                     // bits corrected (AprilTag), 0 for aruco
+  double decisionMargin = 0;           // AprilTag's decision margin, 0 for aruco
+};
+
+enum class ArucoRefinement { kNone, kSubpix, kContour, kAprilTag };
+std::string toString(ArucoRefinement r);
+ArucoRefinement arucoRefinementFromString(const std::string& s);  // InputError
+
+struct DetectorConfig {
+  std::string family = "tag36h11";
+  Backend backend = Backend::kAuto;  // auto: AprilTag for tag* families, aruco for DICT_*
+  std::vector<int> ids;              // keep only these ids (empty: every id of the family)
+
+  // AprilTag back end.
+  double decimate = 2.0;     // quad_decimate: quads are found on a 1/decimate image; the edges are
+                             // then refined on the full image (refineEdges)
+  double blurSigma = 0.0;    // quad_sigma
+  bool refineEdges = true;   // refine_edges
+  double sharpening = 0.25;  // decode_sharpening
+  int maxHamming = 2;        // bits corrected when decoding (<= 2 for tag36h11; memory grows fast)
+  int threads = 1;           // nthreads (1: deterministic and on one core)
+
+  // aruco back end.
+  ArucoRefinement arucoRefinement = ArucoRefinement::kContour;  // passes the real photographs
+
+  // Throws core::InputError naming the bad field.
+  void validate() const;
+};
+
+class Detector {
+ public:
+  virtual ~Detector() = default;
+  // "apriltag tag36h11 d2" etc. (benchmarks and logs)
+  virtual std::string name() const = 0;
+  virtual Backend backend() const = 0;
+  // Markers in an 8-bit grey image (a BGR image is converted), sorted by id, then by TL corner.
+  virtual std::vector<Detection> detect(const cv::Mat& image) = 0;
+};
+
+// The back end named in config (kAuto: AprilTag when the family is one of its own). Throws
+// core::InputError for a family the back end cannot read or a bad setting.
+std::unique_ptr<Detector> makeDetector(const DetectorConfig& config);
+
+// Internal helpers, exposed for tests.
+std::unique_ptr<Detector> makeArucoDetector(const DetectorConfig& config);
+std::unique_ptr<Detector> makeAprilTagDetector(const DetectorConfig& config);
+// Grey view of an image (no copy when it already is CV_8UC1); InputError for other types.
+cv::Mat toGrey(const cv::Mat& image);
+// Keeps the configured ids and sorts.
+void finishDetections(const DetectorConfig& config, std::vector<Detection>& detections);
+
+}  // namespace ps::tracking

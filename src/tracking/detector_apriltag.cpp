@@ -1,0 +1,79 @@
+// The AprilTag C library back end (3.3; Debian splits it into apriltag and apriltag-utils).
+#include <stdexcept>
+
+#include "core/input_error.hpp"
+#include "tracking/apriltag_families.hpp"
+#include "tracking/detector.hpp"
+
+namespace ps::tracking {
+
+namespace {
+
+class AprilTagDetector final : public Detector {
+ public:
+  explicit AprilTagDetector(const DetectorConfig& c)
+      : config_(c), family_(detail::createAprilTagFamily(c.family)) {
+    if (!family_) throw core::InputError("the AprilTag library cannot read " + c.family);
+    td_ = apriltag_detector_create();
+    if (!td_) throw std::runtime_error("apriltag_detector_create failed");
+    apriltag_detector_add_family_bits(td_, family_.get(), c.maxHamming);
+    td_->quad_decimate = float(c.decimate);
+    td_->quad_sigma = float(c.blurSigma);
+    td_->refine_edges = c.refineEdges;
+    td_->decode_sharpening = c.sharpening;
+    td_->nthreads = c.threads;
+  }
+  ~AprilTagDetector() override {
+    apriltag_detector_remove_family(td_, family_.get());
+    apriltag_detector_destroy(td_);
+  }
+  AprilTagDetector(const AprilTagDetector&) = delete;
+  AprilTagDetector& operator=(const AprilTagDetector&) = delete;
+
+  std::string name() const override {
+    char d[16];
+    std::snprintf(d, sizeof d, "%g", config_.decimate);
+    return "apriltag " + config_.family + " d" + d;
+  }
+  Backend backend() const override { return Backend::kAprilTag; }
+
+  std::vector<Detection> detect(const cv::Mat& image) override {
+    const cv::Mat grey = toGrey(image);
+    image_u8_t im{grey.cols, grey.rows, int(grey.step[0]), grey.data};
+    zarray_t* found = apriltag_detector_detect(td_, &im);
+    std::vector<Detection> out;
+    out.reserve(std::size_t(zarray_size(found)));
+    for (int i = 0; i < zarray_size(found); ++i) {
+      apriltag_detection_t* a = nullptr;
+      zarray_get(found, i, &a);
+      Detection d;
+      d.id = a->id;
+      d.hamming = a->hamming;
+      d.decisionMargin = a->decision_margin;
+      // AprilTag lists the corners counter-clockwise from the canonical image's bottom-left
+      // (p[0] = BL, p[1] = BR, p[2] = TR, p[3] = TL) with pixel centres at +0.5.
+      static constexpr int kFromAprilTag[4] = {3, 2, 1, 0};
+      for (int k = 0; k < 4; ++k) {
+        const double* p = a->p[kFromAprilTag[k]];
+        d.corners[std::size_t(k)] = {p[0] - 0.5, p[1] - 0.5};
+      }
+      out.push_back(d);
+    }
+    apriltag_detections_destroy(found);
+    finishDetections(config_, out);
+    return out;
+  }
+
+ private:
+  DetectorConfig config_;
+  detail::FamilyPtr family_;
+  apriltag_detector_t* td_ = nullptr;
+};
+
+}  // namespace
+
+std::unique_ptr<Detector> makeAprilTagDetector(const DetectorConfig& config) {
+  return std::make_unique<AprilTagDetector>(config);
+}
+
+}  // namespace ps::tracking
