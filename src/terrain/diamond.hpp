@@ -1,4 +1,5 @@
 #pragma once
+#include <algorithm>
 #include <array>
 #include <bit>
 #include <cassert>
@@ -85,6 +86,25 @@ inline int levelHalfSize(int level) {
 }
 inline bool levelIsCentre(int level) {
   return (level & 1) != 0;
+}
+
+// Calls f(u, v, wb0, wb1) for every grid point of the right isosceles triangle (a, b0, b1), right
+// angle at a, where wb0, wb1 are the point's barycentric weights of b0 and b1 (a's is the rest).
+template <class F>
+void forEachGridPointInTriangle(GridPoint a, GridPoint b0, GridPoint b1, F&& f) {
+  const long long e0u = b0.u - a.u, e0v = b0.v - a.v, e1u = b1.u - a.u, e1v = b1.v - a.v;
+  const long long len2 = e0u * e0u + e0v * e0v;  // legs are equal
+  const double inv = 1.0 / double(len2);
+  const int u0 = std::min({a.u, b0.u, b1.u}), u1 = std::max({a.u, b0.u, b1.u});
+  const int v0 = std::min({a.v, b0.v, b1.v}), v1 = std::max({a.v, b0.v, b1.v});
+  for (int v = v0; v <= v1; ++v) {
+    for (int u = u0; u <= u1; ++u) {
+      const long long da = (u - a.u) * e0u + (v - a.v) * e0v;
+      const long long db = (u - a.u) * e1u + (v - a.v) * e1v;
+      if (da < 0 || db < 0 || da + db > len2) continue;
+      f(u, v, double(da) * inv, double(db) * inv);
+    }
+  }
 }
 
 inline bool inGrid(const core::GridSize& g, GridPoint p) {

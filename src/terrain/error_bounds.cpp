@@ -39,24 +39,12 @@ struct Sampler {
 // Largest |P(q) - L_T(q)| over grid points q of triangle (a, b0, b1) (right angle at a).
 template <class ChartT>
 double exactTriangleDeviation(const Sampler<ChartT>& s, GridPoint a, GridPoint b0, GridPoint b1) {
-  const Eigen::Vector3d pa = s.pos(a), pb0 = s.pos(b0), pb1 = s.pos(b1);
-  const Eigen::Vector3d d0 = pb0 - pa, d1 = pb1 - pa;
-  const int e0u = b0.u - a.u, e0v = b0.v - a.v, e1u = b1.u - a.u, e1v = b1.v - a.v;
-  const long long len2 = (long long)e0u * e0u + (long long)e0v * e0v;
-  const double inv = 1.0 / double(len2);
-  const int u0 = std::min({a.u, b0.u, b1.u}), u1 = std::max({a.u, b0.u, b1.u});
-  const int v0 = std::min({a.v, b0.v, b1.v}), v1 = std::max({a.v, b0.v, b1.v});
+  const Eigen::Vector3d pa = s.pos(a), d0 = s.pos(b0) - pa, d1 = s.pos(b1) - pa;
   double worst2 = 0.0;
-  for (int v = v0; v <= v1; ++v) {
-    for (int u = u0; u <= u1; ++u) {
-      const long long da = (long long)(u - a.u) * e0u + (long long)(v - a.v) * e0v;
-      const long long db = (long long)(u - a.u) * e1u + (long long)(v - a.v) * e1v;
-      if (da < 0 || db < 0 || da + db > len2) continue;
-      const Eigen::Vector3d q = s.pos({u, v});
-      const Eigen::Vector3d lin = pa + (double(da) * inv) * d0 + (double(db) * inv) * d1;
-      worst2 = std::max(worst2, (q - lin).squaredNorm());
-    }
-  }
+  forEachGridPointInTriangle(a, b0, b1, [&](int u, int v, double w0, double w1) {
+    const Eigen::Vector3d lin = pa + w0 * d0 + w1 * d1;
+    worst2 = std::max(worst2, (s.pos({u, v}) - lin).squaredNorm());
+  });
   return std::sqrt(worst2);
 }
 

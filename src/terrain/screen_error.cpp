@@ -20,20 +20,9 @@ void forEachVertexIn(const Terrain& t, std::uint64_t ia, std::uint64_t ib0, std:
   const core::Chart& chart = t.chart();
   auto pos = [&](GridPoint p) { return chart.position(p.u, p.v, double(t.height(p.u, p.v))); };
   const Eigen::Vector3d pa = pos(a), d0 = pos(b0) - pa, d1 = pos(b1) - pa;
-  const long long e0u = b0.u - a.u, e0v = b0.v - a.v, e1u = b1.u - a.u, e1v = b1.v - a.v;
-  const long long len2 = e0u * e0u + e0v * e0v;
-  const int u0 = std::min({a.u, b0.u, b1.u}), u1 = std::max({a.u, b0.u, b1.u});
-  const int v0 = std::min({a.v, b0.v, b1.v}), v1 = std::max({a.v, b0.v, b1.v});
-  for (int v = v0; v <= v1; ++v) {
-    for (int u = u0; u <= u1; ++u) {
-      const long long da = (u - a.u) * e0u + (v - a.v) * e0v;
-      const long long db = (u - a.u) * e1u + (v - a.v) * e1v;
-      if (da < 0 || db < 0 || da + db > len2) continue;
-      const Eigen::Vector3d lin =
-          pa + (double(da) / double(len2)) * d0 + (double(db) / double(len2)) * d1;
-      f(pos({u, v}), lin);
-    }
-  }
+  forEachGridPointInTriangle(a, b0, b1, [&](int u, int v, double w0, double w1) {
+    f(pos({u, v}), pa + w0 * d0 + w1 * d1);
+  });
 }
 
 }  // namespace
