@@ -644,11 +644,6 @@ void SandField::finishStep(StepReport& rep) {
 
 double SandField::explicitBound(const Material& material, bool wholeGrid) const {
   material.validate();
-  const double D = material.diffusion;
-  if (!(D > 0.0)) return std::numeric_limits<double>::infinity();
-  const double l2 = grid_.cellSize() * grid_.cellSize();
-  auto gH = [&](int v) { return D * l2 * grid_.horizontalFace(v) / grid_.horizontal(v); };
-  auto gV = [&](int v) { return D * l2 * grid_.verticalFace(v) / grid_.vertical(v); };
   std::vector<std::uint8_t> rowUsed(std::size_t(m_) + 1, wholeGrid ? 1 : 0);
   bool polesUsed[2] = {wholeGrid, wholeGrid};
   if (!wholeGrid) {
@@ -661,6 +656,16 @@ double SandField::explicitBound(const Material& material, bool wholeGrid) const 
       for (int p = 0; p < 2; ++p) polesUsed[p] = poles_[p].busy || poles_[p].marked;
     }
   }
+  return boundOverRows(material, rowUsed, polesUsed);
+}
+
+double SandField::boundOverRows(const Material& material, const std::vector<std::uint8_t>& rowUsed,
+                                const bool polesUsed[2]) const {
+  const double D = material.diffusion;
+  if (!(D > 0.0)) return std::numeric_limits<double>::infinity();
+  const double l2 = grid_.cellSize() * grid_.cellSize();
+  auto gH = [&](int v) { return D * l2 * grid_.horizontalFace(v) / grid_.horizontal(v); };
+  auto gV = [&](int v) { return D * l2 * grid_.verticalFace(v) / grid_.vertical(v); };
   double bound = std::numeric_limits<double>::infinity();
   for (int v = 0; v <= m_; ++v) {
     if (!rowUsed[std::size_t(v)]) continue;
@@ -810,10 +815,22 @@ StepReport SandField::diffusionStep(const Material& material, double dt, Diffusi
     markForce(*force);
   }
   StepReport rep;
+  buildActiveSet(Predicate::kDiffusion, material);
   if (scheme == DiffusionScheme::kExplicit) {
-    const double bound = explicitBound(material, false);
+    // The bound over the rows this step visits (the closed active set).
+    std::vector<std::uint8_t> rowUsed(std::size_t(m_) + 1, 0);
+    for (int t : tileList_) {
+      const int tv = t / tilesU_;
+      for (int v = tv * kT; v < std::min(m_ + 1, tv * kT + kT); ++v) rowUsed[std::size_t(v)] = 1;
+    }
+    const bool polesUsed[2] = {grid_.sphere() && poles_[0].inP, grid_.sphere() && poles_[1].inP};
+    const double bound = boundOverRows(material, rowUsed, polesUsed);
     if (dt > bound) {
       if (policy == StepPolicy::kRefuse) {
+        // Nothing has moved: forget the set this step would have visited.
+        for (int t : tileList_) inP_[std::size_t(t)] = 0;
+        tileList_.clear();
+        if (grid_.sphere()) poles_[0].inP = poles_[1].inP = false;
         throw core::InputError("explicit diffusion time step dt = " + num(dt) +
                                " exceeds the stability bound " + num(bound) +
                                " (dt <= min A_i / (D l^2 sum L_f / d_f))");
@@ -822,7 +839,6 @@ StepReport SandField::diffusionStep(const Material& material, double dt, Diffusi
     }
   }
   rep.dt = dt;
-  buildActiveSet(Predicate::kDiffusion, material);
   // Tables.
   DiffusionTables tb;
   tb.repose = kernels::Repose::of(material);

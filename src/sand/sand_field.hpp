@@ -96,8 +96,9 @@ class SandField {
   StepReport diffusionStep(const Material& material, double dt, DiffusionScheme scheme,
                            StepPolicy policy = StepPolicy::kClamp,
                            const PushForce* force = nullptr);
-  // The explicit scheme's stability bound on dt over the rows of the given tiles (all rows when
-  // `wholeGrid`, else the rows the next step would visit):
+  // The explicit scheme's stability bound on dt over all rows (`wholeGrid`) or over the rows of
+  // the tiles pending for the next step (before its closure, which may add rows; the step itself
+  // uses the bound over the rows it actually visits):
   //   dt <= min over cells i of A_i / (D l^2 sum_faces L_f / d_f),
   // A_i the cell's area, L_f and d_f a face's length and the distance across it, l cellSize().
   // On a flat grid with dx = dy this is dt <= 1 / (4 D). +inf for D = 0.
@@ -141,6 +142,8 @@ class SandField {
 
   // Builds P (inP_ flags, tileList_) from busy/marked and closes it under active links.
   void buildActiveSet(Predicate pred, const Material& material);
+  double boundOverRows(const Material& material, const std::vector<std::uint8_t>& rowUsed,
+                       const bool polesUsed[2]) const;
   bool linkActive(Predicate pred, int ua, int va, int ub, int vb, const Material& material) const;
   bool poleLinkActive(Predicate pred, int p, int u, const Material& material) const;
   void markForce(const PushForce& force);

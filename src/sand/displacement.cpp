@@ -1,0 +1,197 @@
+#include "sand/displacement.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <sstream>
+#include <vector>
+
+#include "core/flat_chart.hpp"
+#include "core/input_error.hpp"
+#include "core/latlong_chart.hpp"
+
+namespace ps::sand {
+
+namespace {
+
+std::string num(double x) {
+  std::ostringstream os;
+  os.precision(17);
+  os << x;
+  return os.str();
+}
+
+}  // namespace
+
+double largestSpacing(const core::Chart& chart) {
+  if (const auto* ll = dynamic_cast<const core::LatLongChart*>(&chart)) {
+    return 2.0 * std::numbers::pi * ll->radius() / chart.grid().m();
+  }
+  if (const auto* flat = dynamic_cast<const core::FlatChart*>(&chart)) {
+    return std::max(flat->dx(), flat->dy());
+  }
+  throw core::InputError("the sand core works on the lat-long and flat charts, not on '" +
+                         chart.name() + "'");
+}
+
+void DisplacementSettings::validate(const core::Chart* chart) const {
+  if (!std::isfinite(radius) || !(radius > 0.0)) {
+    throw core::InputError("tool radius r = " + num(radius) + " m must be finite and > 0");
+  }
+  if (chart) {
+    const double cell = largestSpacing(*chart);
+    if (radius < cell) {
+      throw core::InputError("tool radius r = " + num(radius) + " m is below one grid cell (" +
+                             num(cell) + " m)");
+    }
+    if (chart->radius() > 0.0) {
+      if (radius > chart->radius()) {
+        throw core::InputError("tool radius r = " + num(radius) +
+                               " m is larger than the planet (radius " + num(chart->radius()) +
+                               " m)");
+      }
+    } else if (const auto* flat = dynamic_cast<const core::FlatChart*>(chart)) {
+      const double extent = chart->grid().m() * std::max(flat->dx(), flat->dy());
+      if (radius > extent) {
+        throw core::InputError("tool radius r = " + num(radius) +
+                               " m is larger than the grid (extent " + num(extent) + " m)");
+      }
+    }
+  }
+  if (!std::isfinite(rampartWidth) || !(rampartWidth > 0.0) || rampartWidth > 4.0) {
+    throw core::InputError("rampart width = " + num(rampartWidth) +
+                           " (a multiple of the tool radius) must be in (0, 4]");
+  }
+  if (!std::isfinite(spacing) || !(spacing > 0.0) || spacing > 1.0) {
+    throw core::InputError("spacing = " + num(spacing) +
+                           " (a fraction of the tool radius) must be in (0, 1]");
+  }
+  material.validate();
+}
+
+DisplacementTool::DisplacementTool(std::shared_ptr<const core::Chart> chart,
+                                   DisplacementSettings settings, EditListener* listener)
+    : grid_(std::move(chart)), settings_(std::move(settings)), listener_(listener) {}
+
+double DisplacementTool::reach(const edit::ToolContext& ctx) const {
+  const double r = settings_.radius;
+  const double R = grid_.chart().radius();
+  if (!(R > 0.0)) return r;
+  const double L = ctx.input.position.norm();
+  if (!(L > r)) return 2.0 * R;  // the sphere holds the planet's centre: it can reach anywhere
+  const double theta = std::asin(std::min(1.0, r / L));
+  return 2.0 * R * std::sin(0.5 * theta);
+}
+
+const edit::Region& DisplacementTool::grow(const edit::ToolContext& ctx) const {
+  double radius =
+      reach(ctx) + settings_.rampartWidth * settings_.radius + 2.0 * largestSpacing(grid_.chart());
+  const double R = grid_.chart().radius();
+  if (R > 0.0) radius = std::min(radius, 2.05 * R);
+  grower_.grow(ctx.field, radius, footprint_);
+  return footprint_;
+}
+
+const edit::Region& DisplacementTool::footprint(const edit::ToolContext& ctx) const {
+  return grow(ctx);
+}
+
+terrain::GridRegion DisplacementTool::apply(const edit::ToolContext& ctx,
+                                            std::span<float> heights) const {
+  settings_.validate(&ctx.terrain.chart());
+  stats_ = {};
+  const edit::Region& F = grow(ctx);
+  const core::Chart& chart = ctx.terrain.chart();
+  const core::GridSize g = chart.grid();
+  const int m = g.m();
+  const bool sphere = grid_.sphere();
+  const Eigen::Vector3d c = ctx.input.position;
+  const double r = settings_.radius;
+  const double r2 = r * r;
+
+  // Negative filter: per distinct point, the depth removed and the distance from the control
+  // vertex.
+  struct Entry {
+    int u, v;
+    double dh, d;
+  };
+  std::vector<Entry> entries;
+  entries.reserve(F.pointCount());
+  CompensatedSum removed;
+  double a = 0.0;
+  F.forEachSpan([&](int v, int ub, int ue) {
+    for (int u = ub; u <= ue; ++u) {
+      if (sphere && (u == m || ((v == 0 || v == m) && u != 0))) continue;  // one entry a point
+      const double h = double(heights[g.index(u, v)]);
+      const Eigen::Vector3d base = chart.position(u, v, 0.0);
+      const Eigen::Vector3d n = chart.up(u, v);
+      const Eigen::Vector3d q = base - c;
+      const double p = n.dot(q);
+      double qq = q.x() * q.x() + q.y() * q.y();
+      qq += q.z() * q.z();
+      const double disc = p * p - qq + r2;
+      double dh = 0.0;
+      if (disc >= 0.0) {
+        const double low = -p - std::sqrt(disc);  // the sphere's lower surface on this line
+        if (h > low) dh = h - low;
+      }
+      const double d = std::sqrt(ctx.field.distance2(u, v));
+      entries.push_back({u, v, dh, d});
+      if (dh > 0.0) {
+        removed.add(grid_.area(v) * dh);
+        a = std::max(a, d);
+        ++stats_.lowered;
+      }
+    }
+  });
+  const double V = removed.value();
+  if (!(V > 0.0)) return terrain::GridRegion::none();
+
+  // Positive filter: the rampart ring (a, a + w).
+  const double w = settings_.rampartWidth * r;
+  auto profile = [&](const Entry& e) {
+    if (e.dh > 0.0 || !(e.d > a) || !(e.d < a + w)) return 0.0;
+    const double t = (e.d - a) / w;
+    return 1.0 - t * t * (3.0 - 2.0 * t);
+  };
+  CompensatedSum weights;
+  for (const Entry& e : entries) weights.add(grid_.area(e.v) * profile(e));
+  const double S = weights.value();
+  if (!(S > 0.0)) return terrain::GridRegion::none();  // nowhere to put it (the whole planet)
+  const double k = V / S;
+
+  const double limit = ctx.heightLimit;
+  CompensatedSum deposited, floatChange;
+  int vFirst = m + 1, vLast = -1;
+  for (const Entry& e : entries) {
+    const double p = profile(e);
+    if (!(e.dh > 0.0) && !(p > 0.0)) continue;
+    const double add = e.dh > 0.0 ? -e.dh : k * p;
+    if (add > 0.0) {
+      deposited.add(grid_.area(e.v) * add);
+      ++stats_.raised;
+    }
+    const float old = heights[g.index(e.u, e.v)];
+    const float f = static_cast<float>(std::clamp(double(old) + add, -limit, limit));
+    floatChange.add(grid_.area(e.v) * (double(f) - double(old)));
+    if (sphere && (e.v == 0 || e.v == m)) {
+      std::fill_n(heights.begin() + std::ptrdiff_t(g.index(0, e.v)), g.side(), f);
+    } else {
+      heights[g.index(e.u, e.v)] = f;
+      if (sphere && e.u == 0) heights[g.index(m, e.v)] = f;
+    }
+    vFirst = std::min(vFirst, e.v);
+    vLast = std::max(vLast, e.v);
+  }
+  stats_.removedVolume = V;
+  stats_.depositedVolume = deposited.value();
+  stats_.floatVolumeChange = floatChange.value();
+  stats_.contactRadius = a;
+  terrain::GridRegion dirty = F.bounds();
+  dirty.vBegin = vFirst;
+  dirty.vEnd = vLast;
+  if (listener_) listener_->edited(dirty, settings_.material);
+  return dirty;
+}
+
+}  // namespace ps::sand
