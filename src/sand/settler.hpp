@@ -27,7 +27,7 @@ struct SettleSettings {
   // Cell-steps one frame may spend (steps run whole: a frame runs steps until the next would
   // exceed the budget, and at least one). >= 1.
   std::size_t cellBudget = std::size_t(1) << 20;
-  int maxStepsPerFrame = 64;  // >= 1
+  int maxStepsPerFrame = 256;  // >= 1
   // Diffusion: time per step (paper 002's frame units); the explicit scheme clamps it to its
   // stability bound. Finite, > 0.
   double diffusionDt = 0.25;

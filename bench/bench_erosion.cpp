@@ -1,0 +1,206 @@
+// `planetsculpt bench erosion`: throughput of the sand core (src/sand) and the frames a standard
+// crater needs to settle under a per-frame budget.
+//
+// Throughput: a 2049^2 window (a flat chart, 1 m cells; --quick: 513^2) of uniform noise +-10 m,
+// steep everywhere, so that every step visits every cell; the state is loaded and warmed up, then
+// `repeats` steps are timed one by one. One JSON line per method and thread count (1 and 2, set
+// with omp_set_num_threads): cell_steps_per_s from the median step, volume_drift = |V_after -
+// V_before| / sum A |h| over all steps run. Methods: thermal erosion (sand, talus 30 deg, c = 1),
+// explicit drift-diffusion at its stability bound (sand, D = 1: dt = 0.25), semi-implicit
+// drift-diffusion at dt = 1 (4x the explicit bound).
+//
+// Crater: sand 20 m deep on a 1025^2 flat grid of 1 m cells (--quick: 257^2), the displacement
+// tool (r = 16 m) pressed 12 m deep at the centre through the edit pipeline, then settled by the
+// Settler frame by frame with a budget of 2^20 cell-steps per frame (whole steps, at most 256
+// per frame: the Settler's defaults); and the same
+// crater scaled to the default planet (2049^2 lat-long, 6,372.79 km; r = 200 km, 80 km deep, at
+// 45 degrees north; --quick: 513^2).
+// Reports frames, steps and cell-steps to rest, per-frame milliseconds (median and max; bounds
+// update included) and the volume drift of the float heights.
+//
+// The machine this was written on is shared with other builds: timings are noisy; compare runs
+// taken back to back.
+#include <omp.h>
+
+#include <cmath>
+#include <iostream>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <numeric>
+#include <random>
+#include <vector>
+
+#include "bench/bench.hpp"
+#include "bench/bench_util.hpp"
+#include "core/flat_chart.hpp"
+#include "core/latlong_chart.hpp"
+#include "edit/edit_pipeline.hpp"
+#include "sand/displacement.hpp"
+#include "sand/sand_field.hpp"
+#include "sand/settler.hpp"
+#include "terrain/terrain.hpp"
+
+namespace ps::bench {
+
+namespace {
+
+enum class Method { kThermal, kExplicit, kSemiImplicit };
+
+const char* methodName(Method m) {
+  switch (m) {
+    case Method::kThermal:
+      return "thermal";
+    case Method::kExplicit:
+      return "diffusion-explicit";
+    case Method::kSemiImplicit:
+      return "diffusion-implicit";
+  }
+  return "?";
+}
+
+void throughput(int n, Method method, int threads, int repeats, std::ostream& out) {
+  auto chart = std::make_shared<core::FlatChart>(core::GridSize(n), 1.0, 1.0);
+  const core::GridSize g = chart->grid();
+  std::vector<float> h(g.count());
+  std::mt19937 rng(1234);
+  std::uniform_real_distribution<float> noise(-10.0f, 10.0f);
+  for (float& x : h) x = 100.0f + noise(rng);
+  const sand::SandGrid grid(chart);
+  const double scale = grid.absVolume(h);
+  sand::SandField field(chart, h);
+  const sand::Material mat = sand::Material::sand();
+  omp_set_num_threads(threads);
+  field.markAll();
+  auto step = [&] {
+    switch (method) {
+      case Method::kThermal:
+        return field.thermalStep(mat);
+      case Method::kExplicit:
+        return field.diffusionStep(mat, 0.25, sand::DiffusionScheme::kExplicit,
+                                   sand::StepPolicy::kRefuse);
+      case Method::kSemiImplicit:
+        return field.diffusionStep(mat, 1.0, sand::DiffusionScheme::kSemiImplicit);
+    }
+    return sand::StepReport{};
+  };
+  step();  // loads every tile
+  const double v0 = field.volume();
+  std::vector<double> rates;
+  std::size_t cells = 0;
+  double totalMs = 0;
+  for (int k = 0; k < repeats; ++k) {
+    sand::StepReport r;
+    const double t = timeMs([&] { r = step(); });
+    rates.push_back(double(r.cells) / (t * 1e-3));
+    cells += r.cells;
+    totalMs += t;
+  }
+  const double drift = std::abs(field.volume() - v0) / scale;
+  nlohmann::json j = {{"bench", "erosion"},
+                      {"method", methodName(method)},
+                      {"grid", g.label()},
+                      {"threads", threads},
+                      {"steps", repeats},
+                      {"cells_per_step", cells / std::size_t(std::max(1, repeats))},
+                      {"cell_steps_per_s", median(rates)},
+                      {"cell_steps_per_s_best", *std::max_element(rates.begin(), rates.end())},
+                      {"ms_per_step", totalMs / repeats},
+                      {"volume_drift", drift},
+                      {"resident_mb", double(field.residentBytes()) / (1 << 20)},
+                      {"note", "shared machine: timings are noisy"}};
+  out << j.dump() << "\n" << std::flush;
+  std::cerr << "erosion " << methodName(method) << " " << g.label() << " threads " << threads
+            << ": " << median(rates) / 1e6 << " M cell-steps/s, drift " << drift << "\n";
+}
+
+void crater(bool sphere, bool quick, int threads, std::ostream& out) {
+  std::shared_ptr<const core::Chart> chart;
+  double r, depth, base;
+  if (sphere) {
+    chart = std::make_shared<core::LatLongChart>(core::GridSize(quick ? 9 : 11), 6372790.0);
+    r = 200e3;
+    depth = 80e3;
+    base = 0.0;
+  } else {
+    chart = std::make_shared<core::FlatChart>(core::GridSize(quick ? 8 : 10), 1.0, 1.0);
+    r = 16.0;
+    depth = 12.0;
+    base = 20.0;
+  }
+  const core::GridSize g = chart->grid();
+  terrain::Terrain t(chart, std::vector<float>(g.count(), float(base)));
+  edit::EditPipeline pipe(t);
+  pipe.setUndoEnabled(false);
+  omp_set_num_threads(threads);
+  const std::size_t budget = std::size_t(1) << 20;
+  sand::Settler settler(t, sand::Material::sand(), {.cellBudget = budget});
+  sand::DisplacementTool tool(chart, {.radius = r}, &settler);
+  const sand::SandGrid grid(chart);
+  const double v0 = grid.volume(t.heights());
+  Eigen::Vector3d at;
+  if (sphere) {
+    at = (chart->radius() + base + r - depth) *
+         Eigen::Vector3d(0.5, 0.5, std::sqrt(0.5)).normalized();
+  } else {
+    at = Eigen::Vector3d(0.5 * g.m(), 0.5 * g.m(), base + r - depth);
+  }
+  const double stampMs = timeMs([&] { pipe.apply(tool, {at, 0.0}); });
+  std::vector<double> frameMs;
+  int frames = 0, steps = 0;
+  std::size_t cellSteps = 0, boundsVertices = 0;
+  while (frames < 100000) {
+    const sand::FrameReport f = settler.frame();
+    ++frames;
+    steps += f.steps;
+    cellSteps += f.cellSteps;
+    boundsVertices += f.boundsVertices;
+    frameMs.push_back(f.totalMs);
+    if (f.atRest) break;
+  }
+  const double drift = std::abs(grid.volume(t.heights()) - v0) / grid.absVolume(t.heights());
+  nlohmann::json j = {
+      {"bench", "erosion"},
+      {"method", "crater-settle"},
+      {"chart", sphere ? "latlong" : "flat"},
+      {"grid", g.label()},
+      {"threads", threads},
+      {"tool_radius_m", r},
+      {"depth_m", depth},
+      {"removed_m3", tool.lastStats().removedVolume},
+      {"stamp_ms", stampMs},
+      {"budget_cell_steps", budget},
+      {"frames", frames},
+      {"steps", steps},
+      {"cell_steps", cellSteps},
+      {"cell_steps_per_s",
+       double(cellSteps) / (std::accumulate(frameMs.begin(), frameMs.end(), 0.0) * 1e-3)},
+      {"frame_ms_median", median(frameMs)},
+      {"frame_ms_max", *std::max_element(frameMs.begin(), frameMs.end())},
+      {"bounds_vertices", boundsVertices},
+      {"volume_drift", drift},
+      {"note", "volume_drift of the float heights; shared machine: timings are noisy"}};
+  out << j.dump() << "\n" << std::flush;
+  std::cerr << "erosion crater " << (sphere ? "sphere " : "flat ") << g.label() << " threads "
+            << threads << ": " << frames << " frames, " << steps << " steps, median frame "
+            << median(frameMs) << " ms\n";
+}
+
+}  // namespace
+
+void benchErosion(const BenchOptions& options, std::ostream& out) {
+  const int saved = omp_get_max_threads();
+  const int n = options.quick ? 9 : 11;
+  const int repeats =
+      std::max(3, options.quick ? std::min(options.repeats, 5) : std::min(options.repeats, 9));
+  for (Method method : {Method::kThermal, Method::kExplicit, Method::kSemiImplicit}) {
+    for (int threads : {1, 2}) throughput(n, method, threads, repeats, out);
+  }
+  for (bool sphere : {false, true}) {
+    for (int threads : {1, 2}) crater(sphere, options.quick, threads, out);
+  }
+  omp_set_num_threads(saved);
+}
+
+static const BenchRegistration kRegistered("erosion", benchErosion);
+
+}  // namespace ps::bench
