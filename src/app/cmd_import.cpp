@@ -6,7 +6,6 @@
 #include <memory>
 
 #include "app/command_registry.hpp"
-#include "app/default_planet.hpp"
 #include "core/input_error.hpp"
 #include "io/heightmap_import.hpp"
 #include "io/planet_file.hpp"
@@ -18,8 +17,7 @@ namespace {
 struct ImportArgs {
   std::string input, output, chart = "latlong", noData = "fill", noDataValue, encoding = "f32",
                              rule = "hybrid-exact";
-  double radius = kDefaultRadiusMetres;
-  std::optional<double> scale, offset, westLon, spacing;
+  std::optional<double> radius, scale, offset, westLon, spacing;
   long long grid = 0;
 };
 
@@ -76,8 +74,9 @@ const CommandRegistration kImport([](CLI::App& root, CLI::App*& sub) -> CommandA
   sub->add_option("--chart", a->chart,
                   "latlong (a global equirectangular image) or flat (a terrain tile)")
       ->capture_default_str();
-  sub->add_option("--radius", a->radius, "Planet radius in metres (latlong)")
-      ->capture_default_str();
+  sub->add_option("--radius", a->radius,
+                  "Planet radius in metres (latlong; default: the file's, else " +
+                      std::to_string(int(io::kDefaultImportRadius)) + ")");
   sub->add_option("--scale", a->scale, "Height in metres = value * scale + offset");
   sub->add_option("--offset", a->offset, "Height in metres = value * scale + offset");
   sub->add_option("--grid", a->grid,

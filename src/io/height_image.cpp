@@ -259,12 +259,21 @@ std::optional<GeoReference> readGeoReference(TIFF* t) {
   g.originX = tie[3] - tie[0] * g.pixelScaleX;
   g.originY = tie[4] + tie[1] * g.pixelScaleY;
   std::vector<std::uint16_t> keys;
+  std::vector<double> doubles;
+  getDoubles(t, 34736, doubles);
   if (getShorts(t, 34735, keys) && keys.size() >= 4) {
     const std::size_t n = keys[3];
+    std::optional<double> major, minor;
     for (std::size_t k = 0; k < n && 4 + 4 * k + 3 < keys.size(); ++k) {
       const std::uint16_t* e = keys.data() + 4 + 4 * k;
       if (e[0] == 1024 && e[1] == 0) g.geographic = e[3] == 2;  // GTModelTypeGeoKey
+      // GeogSemiMajorAxisGeoKey / GeogSemiMinorAxisGeoKey, stored in GeoDoubleParams.
+      if ((e[0] == 2057 || e[0] == 2058) && e[1] == 34736 && e[2] == 1 && e[3] < doubles.size()) {
+        (e[0] == 2057 ? major : minor) = doubles[e[3]];
+      }
     }
+    if (major && minor && *major == *minor && std::isfinite(*major) && *major > 0)
+      g.sphereRadius = *major;
   }
   for (double x : {g.pixelScaleX, g.pixelScaleY, g.originX, g.originY}) {
     if (!std::isfinite(x)) return std::nullopt;
@@ -333,6 +342,7 @@ HeightImage decodeTiff(std::span<const unsigned char> b, const std::string& name
     img.noDataSource = "GDAL_NODATA tag";
   }
   img.geo = readGeoReference(t);
+  if (img.geo && img.geo->sphereRadius) img.radiusMetres = img.geo->sphereRadius;
 
   img.values.resize(img.pixelCount());
   auto bad = [&](const std::string& what) {
@@ -470,6 +480,10 @@ RawSidecar parseRawSidecar(std::string_view text, const std::string& name) {
       fail(name, "sidecar projection '" + s.projection + "' is unknown (equirectangular or flat)");
     }
   }
+  if (j.contains("radius_m")) {
+    s.radiusMetres = numberField(j, "radius_m", name);
+    if (!(*s.radiusMetres > 0)) fail(name, "sidecar \"radius_m\" must be positive");
+  }
   if (j.contains("pixel_spacing_m")) {
     const auto& v = j["pixel_spacing_m"];
     if (!v.is_array() || v.size() != 2 || !v[0].is_number() || !v[1].is_number() ||
@@ -511,6 +525,7 @@ HeightImage decodeRaw(std::span<const unsigned char> bytes, const RawSidecar& s,
   img.projection = s.projection;
   img.pixelSpacingX = s.pixelSpacingX;
   img.pixelSpacingY = s.pixelSpacingY;
+  img.radiusMetres = s.radiusMetres;
   return img;
 }
 

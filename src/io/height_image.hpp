@@ -21,6 +21,7 @@ struct GeoReference {
   double pixelScaleX = 0, pixelScaleY = 0;  // CRS units per pixel
   double originX = 0, originY = 0;          // CRS coordinates of the raster's top-left corner
   bool geographic = false;                  // CRS in degrees (GTModelType 2)
+  std::optional<double> sphereRadius;       // a user-defined ellipsoid with equal axes (metres)
 };
 
 struct HeightImage {
@@ -39,6 +40,9 @@ struct HeightImage {
   // Flat exports' sidecars: metres between pixel centres.
   std::optional<double> pixelSpacingX, pixelSpacingY;
   std::optional<GeoReference> geo;
+  // The sphere's radius, when the file names one (a GeoTIFF's user-defined ellipsoid with equal
+  // axes, a raw sidecar's "radius_m").
+  std::optional<double> radiusMetres;
 
   std::uint64_t pixelCount() const { return std::uint64_t(width) * std::uint64_t(height); }
   float at(int x, int y) const {
@@ -62,6 +66,7 @@ struct RawSidecar {
   std::optional<double> column0LongitudeDeg;
   std::string projection;
   std::optional<double> pixelSpacingX, pixelSpacingY;
+  std::optional<double> radiusMetres;
 };
 RawSidecar parseRawSidecar(std::string_view json, const std::string& name);
 HeightImage decodeRaw(std::span<const unsigned char> bytes, const RawSidecar& sidecar,

@@ -78,8 +78,11 @@ ImportResult importHeightImage(HeightImage img, const ImportOptions& o, const st
   const int w = img.width, h = img.height;
   const std::size_t n = img.values.size();
   if (w <= 0 || h <= 0 || n != std::size_t(w) * std::size_t(h)) fail(name, "image has no pixels");
-  if (o.chart == ChartKind::kLatLong && (!std::isfinite(o.radius) || o.radius <= 0)) {
-    fail(name, "--radius " + num(o.radius) + " m must be positive and finite");
+  const double radius = o.radius           ? *o.radius
+                        : img.radiusMetres ? *img.radiusMetres
+                                           : kDefaultImportRadius;
+  if (o.chart == ChartKind::kLatLong && (!std::isfinite(radius) || radius <= 0)) {
+    fail(name, "radius " + num(radius) + " m must be positive and finite");
   }
 
   // 1. No-data: declared by the file (GDAL_NODATA, sidecar) or by the user.
@@ -230,7 +233,11 @@ ImportResult importHeightImage(HeightImage img, const ImportOptions& o, const st
       const float pole = float(sum / m);
       for (int gu = 0; gu <= m; ++gu) heights[g.index(gu, gv)] = pole;
     }
-    res.planet.chart = std::make_shared<core::LatLongChart>(g, o.radius);
+    res.planet.chart = std::make_shared<core::LatLongChart>(g, radius);
+    res.notes.push_back("radius " + num(radius) + " m, " +
+                        (o.radius           ? "as given"
+                         : img.radiusMetres ? "from the file"
+                                            : "the default (--radius sets it)"));
     source["column0_longitude_deg"] = west;
   } else {
     double sx = 1.0, sy = 1.0;
@@ -241,7 +248,7 @@ ImportResult importHeightImage(HeightImage img, const ImportOptions& o, const st
     } else if (img.pixelSpacingX && img.pixelSpacingY) {
       sx = *img.pixelSpacingX;
       sy = *img.pixelSpacingY;
-      from = "the sidecar";
+      from = "the file's own metadata";
     } else if (img.geo) {
       if (img.geo->geographic) {
         // Degrees on the Earth: metres along a parallel shrink with cos(latitude).

@@ -16,9 +16,13 @@ enum class NoDataPolicy { kFill, kRefuse };
 ChartKind chartKindFromString(const std::string& s);        // "latlong" | "flat"; InputError
 NoDataPolicy noDataPolicyFromString(const std::string& s);  // "fill" | "refuse"; InputError
 
+inline constexpr double kDefaultImportRadius = 6372790.0;  // paper 003's Earth
+
 struct ImportOptions {
   ChartKind chart = ChartKind::kLatLong;
-  double radius = 6372790.0;  // latlong: metres
+  // latlong: metres. Unset: the file's (a GeoTIFF's sphere, a sidecar's radius_m), else
+  // kDefaultImportRadius.
+  std::optional<double> radius;
   // metres = value * scale + offset. Unset: a PlanetSculpt 16-bit PNG's own range, else 1 and 0.
   std::optional<double> scale, offset;
   long long gridSide = 0;  // 2^n+1; 0 picks the smallest grid that keeps the image's detail
