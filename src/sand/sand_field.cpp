@@ -513,13 +513,11 @@ void SandField::thermalTile(int tu, int tv, const ThermalTables& tb, double* hs,
   busy = any ? 1 : 0;
 }
 
-StepReport SandField::thermalStep(const Material& material) {
-  material.validate();
-  buildActiveSet(Predicate::kThermal, material);
-  StepReport rep;
+const SandField::ThermalTables& SandField::thermalTables(const Material& material) {
+  if (thermalTables_ && thermalMaterial_ == material) return *thermalTables_;
+  auto tables = std::make_unique<ThermalTables>();
+  ThermalTables& tb = *tables;
   const bool sphere = grid_.sphere();
-  // Tables.
-  ThermalTables tb;
   const std::size_t rows = std::size_t(m_) + 5;
   for (auto* a : {&tb.tH, &tb.eH, &tb.tV, &tb.eV, &tb.tD, &tb.eD, &tb.cap, &tb.hra, &tb.invA})
     a->assign(rows, 0.0);
@@ -552,6 +550,18 @@ StepReport SandField::thermalStep(const Material& material) {
       }
     }
   }
+  thermalTables_ = std::move(tables);
+  thermalMaterial_ = material;
+  return *thermalTables_;
+}
+
+StepReport SandField::thermalStep(const Material& material) {
+  material.validate();
+  StepReport rep;
+  if (atRest()) return rep;
+  buildActiveSet(Predicate::kThermal, material);
+  const bool sphere = grid_.sphere();
+  const ThermalTables& tb = thermalTables(material);
   // Poles, pass 1 (before the tiles, which read s).
   if (sphere) {
     for (int p = 0; p < 2; ++p) {
@@ -801,6 +811,32 @@ void SandField::markForce(const PushForce& force) {
   mark(r);
 }
 
+const SandField::DiffusionTables& SandField::diffusionTables(const Material& material) {
+  if (diffusionTables_ && diffusionMaterial_ == material) return *diffusionTables_;
+  auto tables = std::make_unique<DiffusionTables>();
+  DiffusionTables& tb = *tables;
+  tb.repose = kernels::Repose::of(material);
+  tb.zetaInv = material.frictionInverse;
+  const std::size_t rows = std::size_t(m_) + 5;
+  for (auto* a : {&tb.gH, &tb.gV, &tb.invH, &tb.invV, &tb.invA}) a->assign(rows, 0.0);
+  const double Dl2 = material.diffusion * grid_.cellSize() * grid_.cellSize();
+  for (int v = 0; v <= m_; ++v) {
+    const std::size_t i = std::size_t(v + 2);
+    tb.invA[i] = 1.0 / grid_.area(v);
+    if (grid_.ordinaryRow(v)) {
+      tb.gH[i] = Dl2 * grid_.horizontalFace(v) / grid_.horizontal(v);
+      tb.invH[i] = 1.0 / grid_.horizontal(v);
+    }
+    if (v < m_ && (grid_.ordinaryRow(v) || grid_.ordinaryRow(v + 1))) {
+      tb.gV[i] = Dl2 * grid_.verticalFace(v) / grid_.vertical(v);
+      tb.invV[i] = 1.0 / grid_.vertical(v);
+    }
+  }
+  diffusionTables_ = std::move(tables);
+  diffusionMaterial_ = material;
+  return *diffusionTables_;
+}
+
 StepReport SandField::diffusionStep(const Material& material, double dt, DiffusionScheme scheme,
                                     StepPolicy policy, const PushForce* force) {
   material.validate();
@@ -815,6 +851,8 @@ StepReport SandField::diffusionStep(const Material& material, double dt, Diffusi
     markForce(*force);
   }
   StepReport rep;
+  rep.dt = dt;
+  if (atRest()) return rep;
   buildActiveSet(Predicate::kDiffusion, material);
   if (scheme == DiffusionScheme::kExplicit) {
     // The bound over the rows this step visits (the closed active set).
@@ -839,26 +877,8 @@ StepReport SandField::diffusionStep(const Material& material, double dt, Diffusi
     }
   }
   rep.dt = dt;
-  // Tables.
-  DiffusionTables tb;
-  tb.repose = kernels::Repose::of(material);
-  tb.zetaInv = material.frictionInverse;
-  const std::size_t rows = std::size_t(m_) + 5;
-  for (auto* a : {&tb.gH, &tb.gV, &tb.invH, &tb.invV, &tb.invA}) a->assign(rows, 0.0);
-  const double Dl2 = material.diffusion * grid_.cellSize() * grid_.cellSize();
+  const DiffusionTables& tb = diffusionTables(material);
   const bool sphere = grid_.sphere();
-  for (int v = 0; v <= m_; ++v) {
-    const std::size_t i = std::size_t(v + 2);
-    tb.invA[i] = 1.0 / grid_.area(v);
-    if (grid_.ordinaryRow(v)) {
-      tb.gH[i] = Dl2 * grid_.horizontalFace(v) / grid_.horizontal(v);
-      tb.invH[i] = 1.0 / grid_.horizontal(v);
-    }
-    if (v < m_ && (grid_.ordinaryRow(v) || grid_.ordinaryRow(v + 1))) {
-      tb.gV[i] = Dl2 * grid_.verticalFace(v) / grid_.vertical(v);
-      tb.invV[i] = 1.0 / grid_.vertical(v);
-    }
-  }
   if (sphere) {
     for (int p = 0; p < 2; ++p) {
       if (poles_[p].inP) std::fill(poleFlux_[p].begin(), poleFlux_[p].end(), 0.0);
@@ -1004,31 +1024,49 @@ void SandField::semiImplicit(const DiffusionTables& tb, double dt, const PushFor
   const kernels::Repose rep = tb.repose;
 #pragma omp parallel if (nTiles >= kParallelTiles)
   {
-    std::vector<double> x, k, work;
+    std::vector<double> x, hn, k, work;
 #pragma omp for schedule(dynamic, 8)
     for (int j = 0; j < int(runs.size()); ++j) {
       const RowRun run = runs[std::size_t(j)];
       const int v = run.v;
       const std::size_t iv = std::size_t(v + 2);
       const int n = run.len;
-      auto U = [&](int i) { return sphere ? (run.u0 + i) % m_ : run.u0 + i; };
+      const int tv = v / kT, lv = v % kT;
+      // The run's cells tile by tile: next (b) and cur (the heights the weights come from).
       x.resize(std::size_t(n));
-      k.assign(std::size_t(n), 0.0);  // k[i]: face between i and i + 1 (circle: n - 1 -> 0)
+      hn.resize(std::size_t(n));
+      for (int i = 0; i < n; i += kT) {
+        const int tu = ((run.u0 + i) / kT) % tilesU_;
+        const Tile& tile = *tiles_[std::size_t(tileIndex(tu, tv))];
+        const int cnt = std::min(kT, n - i);
+        std::copy_n(tile.next.get() + lv * kT, cnt, x.data() + i);
+        std::copy_n(tile.cur.get() + lv * kT, cnt, hn.data() + i);
+      }
       const int faces = run.circle ? n : n - 1;
-      const double scale = dt * tb.invA[iv];
-      for (int i = 0; i < n; ++i) x[std::size_t(i)] = cell(&Tile::next, U(i), v);
+      const double scale = dt * tb.invA[iv] * tb.gH[iv], invH = tb.invH[iv];
+      k.resize(std::size_t(n));
+      bool any = false;
       for (int i = 0; i < faces; ++i) {
-        const int a = U(i), b = U((i + 1) % n);
-        const double w = kernels::weight(std::abs(cell(&Tile::cur, a, v) - cell(&Tile::cur, b, v)),
-                                         tb.invH[iv], rep);
-        k[std::size_t(i)] = scale * tb.gH[iv] * w;
-        if (w > 0.0) {
-          setBusy(a, v);
-          setBusy(b, v);
+        const double w =
+            kernels::weight(std::abs(hn[std::size_t(i)] - hn[std::size_t((i + 1) % n)]), invH, rep);
+        k[std::size_t(i)] = scale * w;
+        any |= w > 0.0;
+      }
+      if (!run.circle) k[std::size_t(n - 1)] = 0.0;
+      if (!any) continue;
+      auto U = [&](int i) { return sphere ? (run.u0 + i) % m_ : run.u0 + i; };
+      for (int i = 0; i < faces; ++i) {
+        if (k[std::size_t(i)] > 0.0) {
+          setBusy(U(i), v);
+          setBusy(U((i + 1) % n), v);
         }
       }
       kernels::solveRow(x, k, run.circle, work);
-      for (int i = 0; i < n; ++i) cell(&Tile::next, U(i), v) = x[std::size_t(i)];
+      for (int i = 0; i < n; i += kT) {
+        const int tu = ((run.u0 + i) / kT) % tilesU_;
+        Tile& tile = *tiles_[std::size_t(tileIndex(tu, tv))];
+        std::copy_n(x.data() + i, std::min(kT, n - i), tile.next.get() + lv * kT);
+      }
     }
   }
 

@@ -142,6 +142,8 @@ class SandField {
 
   // Builds P (inP_ flags, tileList_) from busy/marked and closes it under active links.
   void buildActiveSet(Predicate pred, const Material& material);
+  const ThermalTables& thermalTables(const Material& material);
+  const DiffusionTables& diffusionTables(const Material& material);
   double boundOverRows(const Material& material, const std::vector<std::uint8_t>& rowUsed,
                        const bool polesUsed[2]) const;
   bool linkActive(Predicate pred, int ua, int va, int ub, int vb, const Material& material) const;
@@ -167,6 +169,10 @@ class SandField {
   std::vector<int> tileList_;
   std::vector<double> poleFlux_[2];  // per column: net flux into the pole this step
   std::size_t totalCellSteps_ = 0;
+  // Per-row constants of the last material used (rebuilt when it changes).
+  std::unique_ptr<ThermalTables> thermalTables_;
+  std::unique_ptr<DiffusionTables> diffusionTables_;
+  Material thermalMaterial_, diffusionMaterial_;
 };
 
 }  // namespace ps::sand
