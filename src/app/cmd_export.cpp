@@ -2,7 +2,6 @@
 // -> 16-bit PNG, float TIFF, raw float32 + sidecar, or a mesh (OBJ, binary PLY, GLB) at a
 // view-independent maximum error.
 #include <iostream>
-#include <limits>
 #include <memory>
 
 #include "app/command_registry.hpp"
@@ -29,8 +28,7 @@ int runExport(const ExportArgs& a) {
   heightmap.gridSide = a.grid;
   heightmap.noData = io::noDataPolicyFromString(a.noData);
   if (!a.noDataValue.empty()) {
-    heightmap.noDataValue = a.noDataValue == "nan" ? std::numeric_limits<double>::quiet_NaN()
-                                                   : std::stod(a.noDataValue);
+    heightmap.noDataValue = io::noDataValueFromString(a.noDataValue);
   }
   io::ExportOptions o;
   if (!a.format.empty()) o.format = io::exportFormatFromName(a.format);

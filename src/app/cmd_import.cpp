@@ -2,7 +2,6 @@
 // raw float32 + sidecar) becomes a planet file. No-data is filled or refused, and the user is told.
 #include <cmath>
 #include <iostream>
-#include <limits>
 #include <memory>
 
 #include "app/command_registry.hpp"
@@ -21,21 +20,6 @@ struct ImportArgs {
   long long grid = 0;
 };
 
-// Shared with cmd_export: "nan" or a number.
-double parseNoDataValue(const std::string& s) {
-  if (s == "nan" || s == "NaN") return std::numeric_limits<double>::quiet_NaN();
-  std::size_t used = 0;
-  double x = 0;
-  try {
-    x = std::stod(s, &used);
-  } catch (const std::exception&) {
-    used = 0;
-  }
-  if (used != s.size() || s.empty())
-    throw core::InputError("--nodata-value '" + s + "' is not a number or nan");
-  return x;
-}
-
 int runImport(const ImportArgs& a) {
   io::ImportOptions o;
   o.chart = io::chartKindFromString(a.chart);
@@ -44,7 +28,7 @@ int runImport(const ImportArgs& a) {
   o.offset = a.offset;
   o.gridSide = a.grid;
   o.noData = io::noDataPolicyFromString(a.noData);
-  if (!a.noDataValue.empty()) o.noDataValue = parseNoDataValue(a.noDataValue);
+  if (!a.noDataValue.empty()) o.noDataValue = io::noDataValueFromString(a.noDataValue);
   o.westLongitudeDeg = a.westLon;
   o.spacing = a.spacing;
   o.rule = terrain::errorRuleFromString(a.rule);

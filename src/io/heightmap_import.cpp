@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numbers>
 #include <opencv2/imgproc.hpp>
 #include <sstream>
@@ -64,6 +65,21 @@ NoDataPolicy noDataPolicyFromString(const std::string& s) {
   if (s == "fill") return NoDataPolicy::kFill;
   if (s == "refuse") return NoDataPolicy::kRefuse;
   throw core::InputError("unknown no-data policy '" + s + "' (expected fill or refuse)");
+}
+
+double noDataValueFromString(const std::string& s) {
+  if (s == "nan" || s == "NaN" || s == "NAN") return std::numeric_limits<double>::quiet_NaN();
+  std::size_t used = 0;
+  double x = 0;
+  try {
+    x = std::stod(s, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  if (s.empty() || used != s.size() || !std::isfinite(x)) {
+    throw core::InputError("--nodata-value '" + s + "' is not a finite number or nan");
+  }
+  return x;
 }
 
 long long defaultGridSide(ChartKind chart, int width, int height) {

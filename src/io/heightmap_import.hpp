@@ -15,6 +15,7 @@ enum class NoDataPolicy { kFill, kRefuse };
 
 ChartKind chartKindFromString(const std::string& s);        // "latlong" | "flat"; InputError
 NoDataPolicy noDataPolicyFromString(const std::string& s);  // "fill" | "refuse"; InputError
+double noDataValueFromString(const std::string& s);         // a number or "nan"; InputError
 
 inline constexpr double kDefaultImportRadius = 6372790.0;  // paper 003's Earth
 
