@@ -55,33 +55,25 @@ void thermalPass2(const double* hm, const double* h0, const double* hp, const do
   const double tH = k.tH, eH = k.eH, tS = k.tS, eS = k.eS, tN = k.tN, eN = k.eN;
   const double tSD = k.tSD, eSD = k.eSD, tND = k.tND, eND = k.eND;
   const double cap0 = k.cap0, capS = k.capS, capN = k.capN, invA = k.invA;
+  // A link carries material one way at most (e_ij + e_ji = -2 threshold <= 0): its flux is
+  // act(|d| - t) times min(s_sender, cap_receiver), signed by which side is higher. The same
+  // operands as evaluating both directions, so both cells of a link get it bit for bit.
+  auto link = [](double d, double t, double e, double sOther, double capOther, double sSelf,
+                 double capSelf) {
+    const double a = act(std::abs(d) - t, e);
+    const double coef = d > 0.0 ? -std::min(sSelf, capOther) : std::min(sOther, capSelf);
+    return coef * a;
+  };
   for (int c = 2; c < kW - 2; ++c) {
     const double h = h0[c], si = s0[c];
-    // Per link: (what the neighbour sends here) - (what this cell sends there).
-    const double dW = h - h0[c - 1];
-    const double nW =
-        std::min(s0[c - 1], cap0) * act(-dW - tH, eH) - std::min(si, cap0) * act(dW - tH, eH);
-    const double dE = h - h0[c + 1];
-    const double nE =
-        std::min(s0[c + 1], cap0) * act(-dE - tH, eH) - std::min(si, cap0) * act(dE - tH, eH);
-    const double dS = h - hm[c];
-    const double nS =
-        std::min(sm[c], cap0) * act(-dS - tS, eS) - std::min(si, capS) * act(dS - tS, eS);
-    const double dN = h - hp[c];
-    const double nN =
-        std::min(sp[c], cap0) * act(-dN - tN, eN) - std::min(si, capN) * act(dN - tN, eN);
-    const double dSW = h - hm[c - 1];
-    const double nSW =
-        std::min(sm[c - 1], cap0) * act(-dSW - tSD, eSD) - std::min(si, capS) * act(dSW - tSD, eSD);
-    const double dSE = h - hm[c + 1];
-    const double nSE =
-        std::min(sm[c + 1], cap0) * act(-dSE - tSD, eSD) - std::min(si, capS) * act(dSE - tSD, eSD);
-    const double dNW = h - hp[c - 1];
-    const double nNW =
-        std::min(sp[c - 1], cap0) * act(-dNW - tND, eND) - std::min(si, capN) * act(dNW - tND, eND);
-    const double dNE = h - hp[c + 1];
-    const double nNE =
-        std::min(sp[c + 1], cap0) * act(-dNE - tND, eND) - std::min(si, capN) * act(dNE - tND, eND);
+    const double nW = link(h - h0[c - 1], tH, eH, s0[c - 1], cap0, si, cap0);
+    const double nE = link(h - h0[c + 1], tH, eH, s0[c + 1], cap0, si, cap0);
+    const double nS = link(h - hm[c], tS, eS, sm[c], capS, si, cap0);
+    const double nN = link(h - hp[c], tN, eN, sp[c], capN, si, cap0);
+    const double nSW = link(h - hm[c - 1], tSD, eSD, sm[c - 1], capS, si, cap0);
+    const double nSE = link(h - hm[c + 1], tSD, eSD, sm[c + 1], capS, si, cap0);
+    const double nNW = link(h - hp[c - 1], tND, eND, sp[c - 1], capN, si, cap0);
+    const double nNE = link(h - hp[c + 1], tND, eND, sp[c + 1], capN, si, cap0);
     const double net = ((nW + nE) + (nS + nN)) + ((nSW + nNE) + (nSE + nNW));
     out[c] = h + net * invA;
   }

@@ -32,9 +32,36 @@ std::string num(double x) {
 
 }  // namespace
 
+// A tile's heights are updated in place; before a step writes any tile, every tile of the step
+// copies its two outermost rows and columns (`edge`), and neighbours read their halo from there.
+// `next` exists only for the semi-implicit step (allocated on first use).
 struct SandField::Tile {
   std::unique_ptr<double[]> cur, next;
+  // rows 0, 1, kT-2, kT-1 (4 x kT), then columns 0, 1, kT-2, kT-1 (4 x kT, by row)
+  std::unique_ptr<double[]> edge;
   bool unwritten = false;  // cur may differ from the floats
+
+  void snapshot() {
+    double* e = edge.get();
+    const int rows[4] = {0, 1, kT - 2, kT - 1};
+    for (int k = 0; k < 4; ++k) std::copy_n(cur.get() + rows[k] * kT, kT, e + k * kT);
+    double* c = e + 4 * kT;
+    for (int lv = 0; lv < kT; ++lv) {
+      const double* row = cur.get() + lv * kT;
+      c[lv] = row[0];
+      c[kT + lv] = row[1];
+      c[2 * kT + lv] = row[kT - 2];
+      c[3 * kT + lv] = row[kT - 1];
+    }
+  }
+  // Value of (lu, lv) from the snapshot; (lu, lv) must lie in the two outer rows or columns.
+  double edgeAt(int lu, int lv) const {
+    const double* e = edge.get();
+    if (lv < 2) return e[lv * kT + lu];
+    if (lv >= kT - 2) return e[(lv - kT + 4) * kT + lu];
+    const int k = lu < 2 ? lu : lu - kT + 4;
+    return e[4 * kT + k * kT + lv];
+  }
 };
 
 struct SandField::Pole {
@@ -95,7 +122,7 @@ SandField::Tile& SandField::loadTile(int t) {
   if (ptr) return *ptr;
   ptr = std::make_unique<Tile>();
   ptr->cur = std::make_unique<double[]>(std::size_t(kT) * kT);
-  ptr->next = std::make_unique<double[]>(std::size_t(kT) * kT);
+  ptr->edge = std::make_unique<double[]>(std::size_t(8) * kT);
   const int tu = t % tilesU_, tv = t / tilesU_;
   const core::GridSize& g = grid_.grid();
   for (int lv = 0; lv < kT; ++lv) {
@@ -162,6 +189,15 @@ double SandField::volume() const {
     total.add(grid_.area(v) * row.value());
   }
   return total.value();
+}
+
+std::size_t SandField::residentBytes() const {
+  std::size_t bytes = 0;
+  for (const auto& t : tiles_) {
+    if (!t) continue;
+    bytes += (std::size_t(kT) * kT * (t->next ? 2 : 1) + std::size_t(8) * kT) * sizeof(double);
+  }
+  return bytes;
 }
 
 std::size_t SandField::residentTiles() const {
@@ -422,11 +458,16 @@ void SandField::gather(int tu, int tv, double* hs) const {
         std::fill(row + c0, row + c1, kWall);
         return;
       }
-      const double* src = tiles_[std::size_t(tileIndex(tw, tvr))]->cur.get() + lv * kT;
-      for (int c = c0; c < c1; ++c) {
-        const int lu = lu0 + (c - c0);
-        row[c] = (tw * kT + lu < cols_) ? src[lu] : kWall;
+      const Tile& src = *tiles_[std::size_t(tileIndex(tw, tvr))];
+      const int valid = std::max(0, std::min(c1 - c0, cols_ - (tw * kT + lu0)));
+      if (tw == tu && tvr == tv) {  // own heights (not yet written this step)
+        std::copy_n(src.cur.get() + lv * kT + lu0, valid, row + c0);
+      } else if (lv < 2 || lv >= kT - 2) {  // one of the neighbour's two outer rows
+        std::copy_n(src.edge.get() + (lv < 2 ? lv : lv - kT + 4) * kT + lu0, valid, row + c0);
+      } else {
+        for (int c = c0; c < c0 + valid; ++c) row[c] = src.edgeAt(lu0 + (c - c0), lv);
       }
+      std::fill(row + c0 + valid, row + c1, kWall);
     };
     piece(0, 2, tu - 1, kT - 2);
     piece(2, kT + 2, tu, 0);
@@ -476,7 +517,7 @@ void SandField::thermalTile(int tu, int tv, const ThermalTables& tb, double* hs,
   Tile& tile = *tiles_[std::size_t(tileIndex(tu, tv))];
   for (int lv = 0; lv < kT; ++lv) {
     const int r = lv + 2, v = v0 + r;
-    double* out = tile.next.get() + lv * kT - 2;
+    double* out = tile.cur.get() + lv * kT - 2;  // in place: the scratch holds the old values
     if (!grid_.ordinaryRow(v)) {
       std::fill_n(out + 2, kT, kWall);
       continue;
@@ -586,6 +627,9 @@ StepReport SandField::thermalStep(const Material& material) {
 #pragma omp parallel if (n >= kParallelTiles)
   {
     std::vector<double> hs(std::size_t(kW) * kW), ss(std::size_t(kW) * kW);
+#pragma omp for schedule(static)
+    for (int j = 0; j < n; ++j) tiles_[std::size_t(tileList_[std::size_t(j)])]->snapshot();
+      // (barrier: every tile's edge holds the heights before the step)
 #pragma omp for schedule(dynamic, 1)
     for (int j = 0; j < n; ++j) {
       const int t = tileList_[std::size_t(j)];
@@ -616,7 +660,6 @@ StepReport SandField::thermalStep(const Material& material) {
 void SandField::finishStep(StepReport& rep) {
   for (int t : tileList_) {
     Tile& tile = *tiles_[std::size_t(t)];
-    std::swap(tile.cur, tile.next);
     const int tu = t % tilesU_, tv = t / tilesU_;
     const int w = std::min(kT, cols_ - tu * kT);
     int h = 0;
@@ -704,7 +747,7 @@ void SandField::diffusionTile(int tu, int tv, const DiffusionTables& tb, double 
   Tile& tile = *tiles_[std::size_t(tileIndex(tu, tv))];
   for (int lv = 0; lv < kT; ++lv) {
     const int r = lv + 2, v = v0 + r;
-    double* out = tile.next.get() + lv * kT - 2;
+    double* out = tile.cur.get() + lv * kT - 2;  // in place: the scratch holds the old values
     if (!grid_.ordinaryRow(v)) {
       std::fill_n(out + 2, kT, kWall);
       continue;
@@ -890,6 +933,8 @@ StepReport SandField::diffusionStep(const Material& material, double dt, Diffusi
 #pragma omp parallel if (n >= kParallelTiles)
     {
       std::vector<double> hs(std::size_t(kW) * kW);
+#pragma omp for schedule(static)
+      for (int j = 0; j < n; ++j) tiles_[std::size_t(tileList_[std::size_t(j)])]->snapshot();
 #pragma omp for schedule(dynamic, 1)
       for (int j = 0; j < n; ++j) {
         const int t = tileList_[std::size_t(j)];
@@ -937,6 +982,7 @@ void SandField::semiImplicit(const DiffusionTables& tb, double dt, const PushFor
   // next = cur (+ the drift of the force, explicit: it does not depend on h).
   for (int t : tileList_) {
     Tile& tile = *tiles_[std::size_t(t)];
+    if (!tile.next) tile.next = std::make_unique<double[]>(std::size_t(kT) * kT);
     std::copy_n(tile.cur.get(), kT * kT, tile.next.get());
   }
   if (force) {
@@ -1172,8 +1218,11 @@ void SandField::semiImplicit(const DiffusionTables& tb, double dt, const PushFor
       pole.busy = moved;
     }
   }
-  for (int t : tileList_)
+  for (int t : tileList_) {
     busy_[std::size_t(t)] = busyAt[std::size_t(t)].load(std::memory_order_relaxed);
+    Tile& tile = *tiles_[std::size_t(t)];
+    std::swap(tile.cur, tile.next);
+  }
 }
 
 // ---------------------------------------------------------------------------------------------

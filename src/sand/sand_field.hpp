@@ -52,8 +52,9 @@ struct StepReport {
 //   active" (checked with the real heights on the border; the pole points likewise). Outside P
 //   nothing can move, so a step over P is bit for bit the step over the whole grid, in any
 //   thread count. P is empty, and stays empty, once the terrain is at rest.
-// * Each step is a Jacobi step (all tiles read the heights before the step; two buffers per
-//   tile), in parallel over tiles (OpenMP). Material moves only along links between two cells of
+// * Each step is a Jacobi step (all tiles read the heights before the step: a tile is updated
+//   in place after every tile of the step copied its two outer rows and columns), in parallel
+//   over tiles (OpenMP). Material moves only along links between two cells of
 //   P, and each link's flux is computed bit for bit identically on both sides, so the volume
 //   sum_i A_i h_i changes only by the rounding of the double additions.
 // * The float heights are written back by writeBack(), which returns the rectangle of floats
@@ -119,7 +120,7 @@ class SandField {
   // Writes back and forgets every resident tile that has nothing pending (frees memory).
   terrain::GridRegion release(double limit);
   std::size_t residentTiles() const;
-  std::size_t residentBytes() const { return residentTiles() * 2 * kTile * kTile * sizeof(double); }
+  std::size_t residentBytes() const;
 
   // Work counters since construction.
   std::size_t totalCellSteps() const { return totalCellSteps_; }
