@@ -99,6 +99,13 @@ const edit::Region& DisplacementTool::footprint(const edit::ToolContext& ctx) co
 terrain::GridRegion DisplacementTool::apply(const edit::ToolContext& ctx,
                                             std::span<float> heights) const {
   settings_.validate(&ctx.terrain.chart());
+  if (ctx.terrain.grid().n() != grid_.grid().n() ||
+      ctx.terrain.chart().name() != grid_.chart().name() ||
+      ctx.terrain.chart().radius() != grid_.chart().radius()) {
+    throw core::InputError("displacement tool: made for a " + grid_.chart().name() + " " +
+                           grid_.grid().label() + " chart, applied to a " +
+                           ctx.terrain.chart().name() + " " + ctx.terrain.grid().label() + " one");
+  }
   stats_ = {};
   const edit::Region& F = grow(ctx);
   const core::Chart& chart = ctx.terrain.chart();
