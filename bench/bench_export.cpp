@@ -135,7 +135,7 @@ std::string runMartini(const Heightmap& h, const std::vector<double>& thresholds
       return "";
     }
   }
-  const fs::path heights = work / (h.name + ".f32"), result = work / (h.name + ".martini.json");
+  const fs::path heights = work / (h.name + ".f32"), result = work / (h.name + ".martini.jsonl");
   {
     std::ofstream f(heights, std::ios::binary);
     f.write(reinterpret_cast<const char*>(h.heights.data()),
@@ -221,7 +221,9 @@ void benchExport(const BenchOptions& options, std::ostream& out) {
       continue;
     }
     std::ifstream f(martiniJson);
-    const nlohmann::json m = nlohmann::json::parse(f);
+    std::string text;
+    std::getline(f, text);
+    const nlohmann::json m = nlohmann::json::parse(text);
     const double martiniBuild = median(m["build_ms"].get<std::vector<double>>());
     struct Theirs {
       double threshold, trueError, ms;
@@ -229,7 +231,8 @@ void benchExport(const BenchOptions& options, std::ostream& out) {
     };
     std::vector<Theirs> theirs;
     const auto gside = std::uint64_t(side);
-    for (const auto& mesh : m["meshes"]) {
+    while (std::getline(f, text)) {
+      const nlohmann::json mesh = nlohmann::json::parse(text);
       const auto verts = mesh["vertices"].get<std::vector<std::uint32_t>>();
       const auto tris = mesh["triangles"].get<std::vector<std::uint32_t>>();
       // Martini's triangle (a, b, c) has its right angle at c; the measure wants it first.
