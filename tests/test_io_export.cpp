@@ -308,7 +308,7 @@ TEST(IoExport, GlbNormalsPointOutwardAndSeamTwinsShareThem) {
 TEST(IoExport, BadRequestsAreRefused) {
   const auto t = testkit::bumpyTerrain(5, 1, 1000.0);
   const fs::path dir = freshDir("badexport");
-  // float32 cannot place a vertex of a 6,372 km planet closer than ~0.4 m.
+  // float32 cannot place a vertex of a 6,372 km planet closer than ~0.66 m.
   EXPECT_THROW(io::exportMesh(t, 0.1, io::MeshFormat::kGlb, dir / "x.glb"), core::InputError);
   EXPECT_NO_THROW(io::exportMesh(t, 0.1, io::MeshFormat::kObj, dir / "x.obj"));
   EXPECT_THROW(io::exportTerrain(t, dir / "x.glb", {}), core::InputError);  // no --max-error

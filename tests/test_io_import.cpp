@@ -335,6 +335,8 @@ TEST(IoImport, RealSrtmTileHolesAreFilled) {
   ASSERT_TRUE(img.geo.has_value());
   EXPECT_TRUE(img.geo->geographic);
   EXPECT_NEAR(img.geo->pixelScaleX, 1.0 / 1200, 1e-9);
+  EXPECT_NEAR(img.geo->originX, -122.0 - 0.5 / 1200, 1e-9);  // GDAL: -122.000417 (pixel is point)
+  EXPECT_NEAR(img.geo->originY, 47.0 + 0.5 / 1200, 1e-9);
   const auto r = io::importHeightImage(img, flatOptions(513), file.string());
   EXPECT_EQ(r.noDataPixels, 9033u);
   const auto [lo, hi] = std::minmax_element(r.planet.heights.begin(), r.planet.heights.end());

@@ -264,16 +264,24 @@ std::optional<GeoReference> readGeoReference(TIFF* t) {
   if (getShorts(t, 34735, keys) && keys.size() >= 4) {
     const std::size_t n = keys[3];
     std::optional<double> major, minor;
+    bool pixelIsPoint = false;
     for (std::size_t k = 0; k < n && 4 + 4 * k + 3 < keys.size(); ++k) {
       const std::uint16_t* e = keys.data() + 4 + 4 * k;
       if (e[0] == 1024 && e[1] == 0) g.geographic = e[3] == 2;  // GTModelTypeGeoKey
+      if (e[0] == 1025 && e[1] == 0) pixelIsPoint = e[3] == 2;  // GTRasterTypeGeoKey
       // GeogSemiMajorAxisGeoKey / GeogSemiMinorAxisGeoKey, stored in GeoDoubleParams.
       if ((e[0] == 2057 || e[0] == 2058) && e[1] == 34736 && e[2] == 1 && e[3] < doubles.size()) {
         (e[0] == 2057 ? major : minor) = doubles[e[3]];
       }
     }
-    if (major && minor && *major == *minor && std::isfinite(*major) && *major > 0)
+    if (major && minor && *major == *minor && std::isfinite(*major) && *major > 0) {
       g.sphereRadius = *major;
+    }
+    // Pixel-is-point: the tie point is a pixel's centre; the raster's corner is half a pixel out.
+    if (pixelIsPoint) {
+      g.originX -= 0.5 * g.pixelScaleX;
+      g.originY += 0.5 * g.pixelScaleY;
+    }
   }
   for (double x : {g.pixelScaleX, g.pixelScaleY, g.originX, g.originY}) {
     if (!std::isfinite(x)) return std::nullopt;

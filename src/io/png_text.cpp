@@ -26,7 +26,8 @@ std::uint32_t crc32(const unsigned char* data, std::size_t n, std::uint32_t crc 
 }
 
 std::uint32_t readBe32(const unsigned char* p) {
-  return (std::uint32_t(p[0]) << 24) | (std::uint32_t(p[1]) << 16) | (std::uint32_t(p[2]) << 8) | p[3];
+  return (std::uint32_t(p[0]) << 24) | (std::uint32_t(p[1]) << 16) | (std::uint32_t(p[2]) << 8) |
+         p[3];
 }
 void appendBe32(std::vector<unsigned char>& out, std::uint32_t x) {
   for (int s = 24; s >= 0; s -= 8) out.push_back(static_cast<unsigned char>(x >> s));
@@ -34,9 +35,11 @@ void appendBe32(std::vector<unsigned char>& out, std::uint32_t x) {
 
 }  // namespace
 
-std::vector<unsigned char> addPngTextChunks(const std::vector<unsigned char>& png,
-                                            const std::vector<std::pair<std::string, std::string>>& entries) {
-  if (png.size() < 33 || std::memcmp(png.data(), kSignature, 8) != 0 || std::memcmp(png.data() + 12, "IHDR", 4) != 0) {
+std::vector<unsigned char> addPngTextChunks(
+    const std::vector<unsigned char>& png,
+    const std::vector<std::pair<std::string, std::string>>& entries) {
+  if (png.size() < 33 || std::memcmp(png.data(), kSignature, 8) != 0 ||
+      std::memcmp(png.data() + 12, "IHDR", 4) != 0) {
     throw std::invalid_argument("not a PNG stream");
   }
   const std::size_t ihdrEnd = 8 + 12 + readBe32(png.data() + 8);
@@ -54,9 +57,11 @@ std::vector<unsigned char> addPngTextChunks(const std::vector<unsigned char>& pn
   return out;
 }
 
-std::vector<std::pair<std::string, std::string>> readPngTextChunks(const std::vector<unsigned char>& png) {
+std::vector<std::pair<std::string, std::string>> readPngTextChunks(
+    const std::vector<unsigned char>& png) {
   std::vector<std::pair<std::string, std::string>> out;
-  if (png.size() < 8 || std::memcmp(png.data(), kSignature, 8) != 0) throw std::invalid_argument("not a PNG stream");
+  if (png.size() < 8 || std::memcmp(png.data(), kSignature, 8) != 0)
+    throw std::invalid_argument("not a PNG stream");
   std::size_t p = 8;
   while (p + 12 <= png.size()) {
     const std::uint32_t len = readBe32(png.data() + p);

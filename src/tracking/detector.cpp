@@ -47,6 +47,11 @@ void DetectorConfig::validate() const {
                            " is not in [0, 10]");
   if (maxHamming < 0 || maxHamming > 3)
     throw core::InputError("max hamming = " + std::to_string(maxHamming) + " is not in 0..3");
+  if (searchEvery < 1 || searchEvery > 1000)
+    throw core::InputError("search every = " + std::to_string(searchEvery) + " is not in 1..1000");
+  if (!std::isfinite(regionMargin) || regionMargin < 0.1 || regionMargin > 5)
+    throw core::InputError("region margin = " + std::to_string(regionMargin) +
+                           " is not in [0.1, 5]");
   if (threads < 1 || threads > 64)
     throw core::InputError("detector threads = " + std::to_string(threads) + " is not in 1..64");
 }
@@ -90,7 +95,10 @@ std::unique_ptr<Detector> makeDetector(const DetectorConfig& config) {
   if (b == Backend::kAruco && info.arucoDictionary < 0)
     throw core::InputError("OpenCV's aruco module has no dictionary for " + config.family +
                            " (use --detector apriltag)");
-  return b == Backend::kAprilTag ? makeAprilTagDetector(config) : makeArucoDetector(config);
+  DetectorConfig c = config;
+  c.backend = b;
+  if (c.regions) return makeRegionDetector(c);
+  return b == Backend::kAprilTag ? makeAprilTagDetector(c) : makeArucoDetector(c);
 }
 
 }  // namespace ps::tracking

@@ -43,6 +43,15 @@ struct DetectorConfig {
   // aruco back end.
   ArucoRefinement arucoRefinement = ArucoRefinement::kContour;  // passes the real photographs
 
+  // Region tracking (video): markers found in the last frame are looked for again only in a
+  // box around where they were (moved on by their last motion), at full resolution
+  // (decimate 1); the whole frame is searched (at `decimate`) only when an id in `ids` (or,
+  // with no ids, any marker) is missing, at most every `searchEvery` frames, and what that
+  // search finds is refined at full resolution in its box. Off: every frame is searched whole.
+  bool regions = true;
+  int searchEvery = 2;
+  double regionMargin = 0.3;  // box margin, as a fraction of the marker's size in the image
+
   // Throws core::InputError naming the bad field.
   void validate() const;
 };
@@ -60,6 +69,9 @@ class Detector {
 // The back end named in config (kAuto: AprilTag when the family is one of its own). Throws
 // core::InputError for a family the back end cannot read or a bad setting.
 std::unique_ptr<Detector> makeDetector(const DetectorConfig& config);
+
+// The region-tracking wrapper (what makeDetector returns when config.regions is set).
+std::unique_ptr<Detector> makeRegionDetector(const DetectorConfig& config);
 
 // Internal helpers, exposed for tests.
 std::unique_ptr<Detector> makeArucoDetector(const DetectorConfig& config);

@@ -49,33 +49,60 @@ PoseCandidates solveMarkerPose(const std::array<cv::Point2d, 4>& corners, double
   const std::vector<cv::Point2d> image(corners.begin(), corners.end());
   for (const auto& p : image)
     if (!std::isfinite(p.x) || !std::isfinite(p.y)) return out;
+  // OpenCV 4.6's IPPE returns a wrong pose (up to a half turn off) for an exactly
+  // fronto-parallel square, which synthetic video produces. So the candidates are IPPE_SQUARE's
+  // two plus SQPNP's global minimum, each polished by Levenberg-Marquardt; the two best distinct
+  // ones are kept.
   std::vector<cv::Mat> rvecs, tvecs;
-  cv::Mat errors;
   try {
     cv::solvePnPGeneric(object, image, cv::Mat(calibration.K), calibration.distortion, rvecs, tvecs,
-                        false, cv::SOLVEPNP_IPPE_SQUARE, cv::noArray(), cv::noArray(), errors);
+                        false, cv::SOLVEPNP_IPPE_SQUARE);
+    std::vector<cv::Mat> r2, t2;
+    cv::solvePnPGeneric(object, image, cv::Mat(calibration.K), calibration.distortion, r2, t2,
+                        false, cv::SOLVEPNP_SQPNP);
+    rvecs.insert(rvecs.end(), r2.begin(), r2.end());
+    tvecs.insert(tvecs.end(), t2.begin(), t2.end());
   } catch (const cv::Exception&) {
     return out;
   }
-  std::array<std::pair<double, Pose>, 2> found;
-  int n = 0;
-  for (std::size_t i = 0; i < rvecs.size() && n < 2; ++i) {
+  std::vector<std::pair<double, Pose>> found;
+  for (std::size_t i = 0; i < rvecs.size(); ++i) {
+    cv::Mat rv, tv;
+    rvecs[i].convertTo(rv, CV_64F);
+    tvecs[i].convertTo(tv, CV_64F);
+    try {
+      cv::solvePnPRefineLM(object, image, cv::Mat(calibration.K), calibration.distortion, rv, tv);
+    } catch (const cv::Exception&) {
+      continue;
+    }
+    std::vector<cv::Point2d> projected;
+    cv::projectPoints(object, rv, tv, cv::Mat(calibration.K), calibration.distortion, projected);
+    double sum = 0;
+    for (std::size_t k = 0; k < 4; ++k) {
+      const cv::Point2d d = projected[k] - image[k];
+      sum += d.dot(d);
+    }
+    const double e = std::sqrt(sum / 4);
     cv::Matx33d r;
-    cv::Rodrigues(rvecs[i], r);
+    cv::Rodrigues(rv, r);
     Pose p;
     p.R = toEigen(r);
-    cv::Mat t;
-    tvecs[i].convertTo(t, CV_64F);
-    p.t = {t.at<double>(0), t.at<double>(1), t.at<double>(2)};
-    double e = errors.empty() ? 0.0 : errors.at<double>(int(i));
+    p.t = {tv.at<double>(0), tv.at<double>(1), tv.at<double>(2)};
     if (!p.finite() || !std::isfinite(e) || p.t.z() <= 0) continue;
-    found[std::size_t(n++)] = {e, p};
+    found.emplace_back(e, p);
   }
-  if (n == 2 && found[1].first < found[0].first) std::swap(found[0], found[1]);
-  out.count = n;
-  for (int i = 0; i < n; ++i) {
-    out.poses[std::size_t(i)] = found[std::size_t(i)].second;
-    out.rms[std::size_t(i)] = found[std::size_t(i)].first;
+  std::sort(found.begin(), found.end(),
+            [](const auto& a, const auto& b) { return a.first < b.first; });
+  for (const auto& [e, p] : found) {
+    bool duplicate = false;
+    for (int i = 0; i < out.count; ++i) {
+      duplicate |= rotationAngle(out.poses[std::size_t(i)].R, p.R) < 1e-4 &&
+                   (out.poses[std::size_t(i)].t - p.t).norm() < 1e-6 * p.t.norm();
+    }
+    if (duplicate) continue;
+    out.poses[std::size_t(out.count)] = p;
+    out.rms[std::size_t(out.count)] = e;
+    if (++out.count == 2) break;
   }
   return out;
 }

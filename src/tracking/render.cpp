@@ -59,7 +59,9 @@ void blend(cv::Mat& image, cv::Rect roi, const cv::Mat& colour, const cv::Mat& a
   dst.convertTo(d32, CV_32F);
   cv::Mat a = alpha;
   if (d32.channels() == 3) cv::merge(std::vector<cv::Mat>{alpha, alpha, alpha}, a);
-  cv::Mat out = d32.mul(1.0 - a) + colour;
+  cv::Mat inv;
+  cv::subtract(cv::Scalar::all(1.0), a, inv);  // (1.0 - a would only fill the first channel)
+  cv::Mat out = d32.mul(inv) + colour;
   out.convertTo(dst, image.type());
 }
 

@@ -1,0 +1,266 @@
+// `planetsculpt bench track`: marker tracking against synthetic ground truth (tracking/synth.hpp).
+// Per detector configuration: time per frame (detection + poses + filters + tip, one thread),
+// tool tip error in the planet's frame (filtered and raw), pose flips (filtered poses more than
+// 15 degrees off) and how often the control vertex on a 2049^2 planet lands within 3 mm of the
+// ground truth's in touching frames.
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <ctime>
+#include <iostream>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <opencv2/core/utility.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "app/progress.hpp"
+#include "bench/bench.hpp"
+#include "bench/bench_util.hpp"
+#include "core/latlong_chart.hpp"
+#include "edit/control_vertex.hpp"
+#include "tracking/detector.hpp"
+#include "tracking/synth.hpp"
+#include "tracking/tracker.hpp"
+
+namespace ps::bench {
+
+namespace {
+
+// CPU time of this thread (ms): on a shared machine, closer to "one core's time" than the wall
+// clock, which also counts waiting for a core.
+double threadCpuMs() {
+  timespec ts{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  return ts.tv_sec * 1e3 + ts.tv_nsec * 1e-6;
+}
+
+struct Recording {
+  std::string scene;
+  tracking::SynthScript script;
+  std::vector<cv::Mat> frames;  // grey
+  std::vector<tracking::FrameTruth> truth;
+};
+
+// Every frame of the scene, or (quick) only the shots whose index is a multiple of `shotStride`
+// (shots are 20 frames long in the sweep).
+Recording record(const std::string& scene, cv::Size size, int shotStride) {
+  Recording r;
+  r.scene = scene;
+  r.script = tracking::builtinScene(scene);
+  if (size != r.script.size) {
+    r.script.size = size;
+    r.script.camera = tracking::SynthScript::syntheticCamera(size);
+  }
+  const tracking::SynthRenderer renderer(r.script);
+  app::Progress p("render " + scene + " " + std::to_string(size.width) + "x" +
+                  std::to_string(size.height));
+  for (int f = 0; f < renderer.frames(); ++f) {
+    if ((f / 20) % shotStride != 0) continue;
+    cv::Mat grey;
+    cv::cvtColor(renderer.render(f), grey, cv::COLOR_BGR2GRAY);
+    r.frames.push_back(grey);
+    r.truth.push_back(renderer.truth(f));
+    p.update(double(f + 1) / renderer.frames());
+  }
+  p.done(std::to_string(r.frames.size()) + " frames");
+  return r;
+}
+
+struct Config {
+  std::string label;
+  tracking::DetectorConfig detector;
+  bool filter = true;
+};
+
+void evaluate(const Recording& rec, const Config& c, const core::LatLongChart& chart, double touch,
+              std::ostream& out) {
+  tracking::SceneConfig sc;
+  sc.planet.id = rec.script.planetId;
+  sc.planet.size = rec.script.planetMarkerSize;
+  sc.tool.id = rec.script.toolId;
+  sc.tool.size = rec.script.toolMarkerSize;
+  sc.planet.filter = sc.tool.filter = c.filter;
+  sc.planetRadius = rec.script.planetRadius;
+  sc.tipOffset = rec.script.tipOffset;
+  sc.touchDistance = touch;
+  if (const char* tune = std::getenv("PS_TRACK_TUNE")) {
+    double v[9];
+    if (std::sscanf(tune, "%lf,%lf,%lf,%lf,%lf,%lf,%lf,%lf,%lf", &v[0], &v[1], &v[2], &v[3], &v[4],
+                    &v[5], &v[6], &v[7], &v[8]) == 9) {
+      sc.planet.translation = sc.tool.translation = {v[0], v[1], v[2]};
+      sc.planet.rotation = sc.tool.rotation = {v[3], v[4], v[5]};
+      sc.tipFilter = {v[6], v[7], v[8]};
+    }
+  }
+  tracking::DetectorConfig dc = c.detector;
+  dc.ids = {sc.planet.id, sc.tool.id};
+  if (const char* e = std::getenv("PS_TRACK_SEARCH_EVERY")) dc.searchEvery = std::atoi(e);
+  if (const char* e = std::getenv("PS_TRACK_MARGIN")) dc.regionMargin = std::atof(e);
+  auto detector = tracking::makeDetector(dc);
+  auto rawDetector = tracking::makeDetector(dc);
+  tracking::SceneTracker tracker(sc);
+  tracking::SceneTracker rawTracker([&] {
+    auto r = sc;
+    r.planet.filter = r.tool.filter = false;
+    return r;
+  }());
+  std::vector<double> cpuMs, ms, tipErr, tipRawErr, tipCamErr, rotErr;
+  std::map<std::string, std::vector<double>> byDistance;
+  std::vector<std::pair<double, nlohmann::json>> worst;
+  int flips = 0, rawFlips = 0, visibleBoth = 0, trackedBoth = 0, touchingFrames = 0, cvWithin = 0;
+  int toolVisible = 0, toolFound = 0, planetVisible = 0, planetFound = 0;
+  const double dt = 1.0 / rec.script.fps;
+  for (std::size_t i = 0; i < rec.frames.size(); ++i) {
+    const auto& gt = rec.truth[i];
+    const double time = gt.frame * dt;
+    if (i > 0 && ((gt.camera.inverse().t - rec.truth[i - 1].camera.inverse().t).norm() > 0.01 ||
+                  tracking::rotationAngle(gt.camera.R, rec.truth[i - 1].camera.R) > 0.02)) {
+      tracker.reset();  // a cut to another camera placement: a new shot
+      rawTracker.reset();
+    }
+    tracking::SceneFrame f;
+    const double cpu0 = threadCpuMs();
+    const double t = timeMs([&] {
+      const auto d = detector->detect(rec.frames[i]);
+      f = tracker.update(d, rec.script.camera, gt.frame, time);
+    });
+    cpuMs.push_back(threadCpuMs() - cpu0);
+    ms.push_back(t);
+    const auto fr =
+        rawTracker.update(rawDetector->detect(rec.frames[i]), rec.script.camera, gt.frame, time);
+    toolVisible += gt.toolVisible;
+    planetVisible += gt.planetVisible;
+    toolFound += gt.toolVisible && f.tool.measured;
+    planetFound += gt.planetVisible && f.planet.measured;
+    if (!(gt.toolVisible && gt.planetVisible)) continue;
+    ++visibleBoth;
+    if (f.planet.usable()) {
+      const double e = tracking::rotationAngle(f.planet.pose.R, gt.planet.R) * 180 / M_PI;
+      rotErr.push_back(e);
+      flips += e > 15;
+    }
+    if (f.tool.usable()) {
+      const double e = tracking::rotationAngle(f.tool.pose.R, gt.tool.R) * 180 / M_PI;
+      rotErr.push_back(e);
+      flips += e > 15;
+    }
+    if (fr.planet.measured)
+      rawFlips += tracking::rotationAngle(fr.planet.pose.R, gt.planet.R) * 180 / M_PI > 15;
+    if (fr.tool.measured)
+      rawFlips += tracking::rotationAngle(fr.tool.pose.R, gt.tool.R) * 180 / M_PI > 15;
+    if (!f.tipValid) continue;
+    ++trackedBoth;
+    tipErr.push_back(1e3 * (f.tipPlanet - gt.tipPlanet).norm());
+    worst.emplace_back(
+        tipErr.back(),
+        nlohmann::json{
+            {"frame", gt.frame},
+            {"tip_mm", tipErr.back()},
+            {"planet_deg", tracking::rotationAngle(f.planet.pose.R, gt.planet.R) * 180 / M_PI},
+            {"tool_deg", tracking::rotationAngle(f.tool.pose.R, gt.tool.R) * 180 / M_PI},
+            {"planet_ratio", f.planet.ratio},
+            {"tool_ratio", f.tool.ratio},
+            {"planet_state", tracking::toString(f.planet.state)},
+            {"tool_state", tracking::toString(f.tool.state)},
+            {"planet_tilt", gt.planetTiltDeg},
+            {"tool_tilt", gt.toolTiltDeg}});
+    {
+      char key[16];
+      std::snprintf(key, sizeof key, "%.2f", std::round(gt.camera.t.norm() / 0.15) * 0.15);
+      byDistance[key].push_back(tipErr.back());
+    }
+    tipCamErr.push_back(1e3 * (f.tipCamera - gt.tipCamera).norm());
+    if (fr.tipValid) tipRawErr.push_back(1e3 * (fr.tipPlanet - gt.tipPlanet).norm());
+    if (gt.tipHeight <= touch) {
+      ++touchingFrames;
+      const auto a = edit::nearestVertex(chart, f.tipPlanet);
+      const auto b = edit::nearestVertex(chart, gt.tipPlanet);
+      const double d = (chart.position(a.u, a.v, 0) - chart.position(b.u, b.v, 0)).norm() *
+                       rec.script.planetRadius;
+      cvWithin += d <= 0.003;
+    }
+  }
+  auto r3 = [](double v) { return std::round(v * 1000) / 1000; };
+  nlohmann::json j = {
+      {"bench", "track"},
+      {"scene", rec.scene},
+      {"detector", c.label},
+      {"resolution",
+       std::to_string(rec.script.size.width) + "x" + std::to_string(rec.script.size.height)},
+      {"frames", rec.frames.size()},
+      {"ms", r3(median(ms))},
+      {"ms_p95", r3(percentile(ms, 0.95))},
+      {"cpu_ms", r3(median(cpuMs))},
+      {"cpu_ms_p95", r3(percentile(cpuMs, 0.95))},
+      {"tool_detected", r3(toolVisible ? double(toolFound) / toolVisible : 0)},
+      {"planet_detected", r3(planetVisible ? double(planetFound) / planetVisible : 0)},
+      {"tip_frames", trackedBoth},
+      {"tip_error_median_mm", r3(median(tipErr))},
+      {"tip_error_p95_mm", r3(percentile(tipErr, 0.95))},
+      {"tip_error_raw_median_mm", r3(median(tipRawErr))},
+      {"tip_error_raw_p95_mm", r3(percentile(tipRawErr, 0.95))},
+      {"tip_camera_error_median_mm", r3(median(tipCamErr))},
+      {"rotation_error_median_deg", r3(median(rotErr))},
+      {"flips", flips},
+      {"raw_flips", rawFlips},
+      {"touching_frames", touchingFrames},
+      {"control_vertex_within_3mm", r3(touchingFrames ? double(cvWithin) / touchingFrames : 0)},
+      {"filtered", c.filter}};
+  std::sort(worst.begin(), worst.end(),
+            [](const auto& a, const auto& b) { return a.first > b.first; });
+  for (std::size_t w = 0; w < std::min<std::size_t>(5, worst.size()); ++w)
+    j["worst"].push_back(worst[w].second);
+  for (const auto& [k, v] : byDistance)
+    j["tip_error_by_distance_m"][k] = {
+        {"median_mm", r3(median(v))}, {"p95_mm", r3(percentile(v, 0.95))}, {"n", v.size()}};
+  out << j.dump() << std::endl;
+}
+
+void benchTrack(const BenchOptions& o, std::ostream& out) {
+  const int threads = cv::getNumThreads();
+  cv::setNumThreads(1);  // "on one core": OpenCV's parallel loops off too
+  const core::LatLongChart chart(core::GridSize::fromSide(2049), 1.0);
+  std::vector<Config> configs;
+  auto add = [&](const std::string& label, tracking::Backend b, double decimate, bool regions,
+                 tracking::ArucoRefinement refine = tracking::ArucoRefinement::kContour) {
+    Config c;
+    c.label = label;
+    c.detector.regions = regions;
+    c.detector.backend = b;
+    c.detector.decimate = decimate;
+    c.detector.arucoRefinement = refine;
+    configs.push_back(c);
+  };
+  add("apriltag d2 + regions", tracking::Backend::kAprilTag, 2.0, true);
+  add("apriltag d2", tracking::Backend::kAprilTag, 2.0, false);
+  add("apriltag d1", tracking::Backend::kAprilTag, 1.0, false);
+  add("aruco contour + regions", tracking::Backend::kAruco, 1.0, true);
+  if (!o.quick) {
+    add("aruco contour", tracking::Backend::kAruco, 1.0, false);
+    add("aruco apriltag-refine", tracking::Backend::kAruco, 1.0, false,
+        tracking::ArucoRefinement::kAprilTag);
+  }
+  const int stride = o.quick ? 5 : 1;
+  std::vector<cv::Size> sizes = {{640, 480}};
+  if (!o.quick) sizes.push_back({1280, 720});
+  for (const auto& size : sizes) {
+    const Recording rec = record("sweep", size, stride);
+    const char* only = std::getenv("PS_TRACK_ONLY");
+    for (const auto& c : configs)
+      if (!only || c.label == only) evaluate(rec, c, chart, 0.004, out);
+    if (size.width == 640 && !only) {
+      Config raw = configs[0];
+      raw.filter = false;
+      raw.label += " unfiltered";
+      evaluate(rec, raw, chart, 0.004, out);
+    }
+  }
+  cv::setNumThreads(threads);
+}
+
+const BenchRegistration kTrack("track", benchTrack);
+
+}  // namespace
+}  // namespace ps::bench

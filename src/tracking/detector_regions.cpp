@@ -1,0 +1,139 @@
+// Region tracking around a back end (detector.hpp, DetectorConfig::regions).
+#include <algorithm>
+#include <cmath>
+#include <map>
+
+#include "tracking/detector.hpp"
+
+namespace ps::tracking {
+
+namespace {
+
+cv::Point2d centre(const Detection& d) {
+  return 0.25 * (d.corners[0] + d.corners[1] + d.corners[2] + d.corners[3]);
+}
+
+class RegionDetector final : public Detector {
+ public:
+  explicit RegionDetector(const DetectorConfig& c) : config_(c) {
+    DetectorConfig base = c;
+    base.regions = false;
+    base.ids.clear();  // filtered here, after merging
+    auto make = [&](const DetectorConfig& x) {
+      return x.backend == Backend::kAprilTag ? makeAprilTagDetector(x) : makeArucoDetector(x);
+    };
+    finder_ = make(base);
+    base.decimate = 1.0;
+    refiner_ = make(base);
+  }
+
+  std::string name() const override { return finder_->name() + " + regions"; }
+  Backend backend() const override { return finder_->backend(); }
+
+  std::vector<Detection> detect(const cv::Mat& image) override {
+    const cv::Mat grey = toGrey(image);
+    const cv::Rect frame(0, 0, grey.cols, grey.rows);
+    if (grey.size() != lastSize_) {
+      last_.clear();
+      previous_.clear();
+      lastSize_ = grey.size();
+    }
+    ++frameNo_;
+    std::vector<Detection> found;
+    // 1. Where each marker was, moved on by its last motion.
+    std::vector<cv::Rect> boxes;
+    for (const auto& [id, d] : last_) {
+      Detection p = d;
+      const auto prev = previous_.find(id);
+      if (prev != previous_.end()) {
+        const cv::Point2d motion = centre(d) - centre(prev->second);
+        for (auto& c : p.corners) c += motion;
+      }
+      boxes.push_back(box(p, frame));
+      boxes.back() |= box(d, frame);
+    }
+    for (const auto& b : mergeBoxes(boxes)) addFrom(grey, b, found);
+    // 2. The whole frame when something expected is missing.
+    bool missing = config_.ids.empty() ? true : false;
+    for (int id : config_.ids)
+      if (std::none_of(found.begin(), found.end(), [&](const Detection& d) { return d.id == id; }))
+        missing = true;
+    if (missing && frameNo_ - lastSearch_ >= config_.searchEvery) {
+      lastSearch_ = frameNo_;
+      std::vector<cv::Rect> fresh;
+      for (const auto& d : finder_->detect(grey)) {
+        if (!wanted(d.id) || known(found, d)) continue;
+        fresh.push_back(box(d, frame));
+      }
+      for (const auto& b : mergeBoxes(fresh)) addFrom(grey, b, found);
+    }
+    finishDetections(config_, found);
+    previous_.clear();
+    for (const auto& [id, d] : last_)
+      if (std::any_of(found.begin(), found.end(), [&](const Detection& x) { return x.id == id; }))
+        previous_[id] = d;
+    last_.clear();
+    std::map<int, int> count;
+    for (const auto& d : found) ++count[d.id];
+    for (const auto& d : found)
+      if (count[d.id] == 1) last_[d.id] = d;  // an id seen twice is not followed
+    return found;
+  }
+
+ private:
+  bool wanted(int id) const {
+    return config_.ids.empty() ||
+           std::find(config_.ids.begin(), config_.ids.end(), id) != config_.ids.end();
+  }
+  static bool known(const std::vector<Detection>& found, const Detection& d) {
+    return std::any_of(found.begin(), found.end(), [&](const Detection& x) {
+      return x.id == d.id && cv::norm(centre(x) - centre(d)) < 4.0;
+    });
+  }
+  cv::Rect box(const Detection& d, const cv::Rect& frame) const {
+    double x0 = 1e18, y0 = 1e18, x1 = -1e18, y1 = -1e18;
+    for (const auto& c : d.corners) {
+      x0 = std::min(x0, c.x), x1 = std::max(x1, c.x);
+      y0 = std::min(y0, c.y), y1 = std::max(y1, c.y);
+    }
+    const double m = config_.regionMargin * std::max(x1 - x0, y1 - y0) + 8.0;
+    const cv::Rect r(cv::Point(int(std::floor(x0 - m)), int(std::floor(y0 - m))),
+                     cv::Point(int(std::ceil(x1 + m)) + 1, int(std::ceil(y1 + m)) + 1));
+    return r & frame;
+  }
+  static std::vector<cv::Rect> mergeBoxes(std::vector<cv::Rect> boxes) {
+    bool merged = true;
+    while (merged) {
+      merged = false;
+      for (std::size_t i = 0; i < boxes.size() && !merged; ++i)
+        for (std::size_t j = i + 1; j < boxes.size() && !merged; ++j)
+          if ((boxes[i] & boxes[j]).area() > 0) {
+            boxes[i] |= boxes[j];
+            boxes.erase(boxes.begin() + std::ptrdiff_t(j));
+            merged = true;
+          }
+    }
+    std::erase_if(boxes, [](const cv::Rect& r) { return r.width < 16 || r.height < 16; });
+    return boxes;
+  }
+  void addFrom(const cv::Mat& grey, const cv::Rect& r, std::vector<Detection>& found) {
+    for (auto d : refiner_->detect(grey(r))) {
+      for (auto& c : d.corners) c += cv::Point2d(r.x, r.y);
+      if (wanted(d.id) && !known(found, d)) found.push_back(d);
+    }
+  }
+
+  DetectorConfig config_;
+  std::unique_ptr<Detector> finder_, refiner_;
+  std::map<int, Detection> last_, previous_;
+  cv::Size lastSize_;
+  long long frameNo_ = 0, lastSearch_ = -1000000;
+};
+
+}  // namespace
+
+std::unique_ptr<Detector> makeRegionDetector(const DetectorConfig& config) {
+  return std::make_unique<RegionDetector>(config);
+}
+
+}  // namespace ps::tracking

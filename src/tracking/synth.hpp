@@ -1,0 +1,129 @@
+#pragma once
+// Synthetic marker videos with exact ground truth: scripted camera and tool trajectories over a
+// textured table, the planet marker lying on the table, the tool marker on a stick; lighting
+// change, defocus blur, motion blur, sensor noise, partial occlusion and markers leaving the
+// frame. Rendering is deterministic (same script, same bytes) and exact to the pixel
+// convention: marker edges are anti-aliased at 8x8 samples per pixel.
+//
+// Script (JSON):
+//   { "size": [640, 480], "fps": 30, "seed": 1, "family": "tag36h11",
+//     "camera": {"fx": 600, "fy": 600, "cx": 319.5, "cy": 239.5},      (optional; default)
+//     "planet": {"id": 0, "size": 0.08, "radius": 0.06},
+//     "tool": {"id": 1, "size": 0.05, "tip": [0, -0.08, 0]},
+//     "exposure": 0.0, "motion_samples": 1,
+//     "keys": [ {"frame": 0,
+//                "camera": {"distance": 0.6, "elevation": 50, "azimuth": -90, "roll": 0},
+//                "tip": {"lat": 40, "lon": -90, "height_mm": 20},
+//                "tool": {"tilt": 20, "turn": 0},
+//                "blur": 0.4, "noise": 1.0, "gain": 1.0, "occlusion": 0.0}, ... ] }
+// Keys are interpolated with a smoothstep between consecutive key frames (values not given in
+// a key carry over from the previous key); the video has keys.back().frame + 1 frames.
+//   camera: orbit around the planet's centre (distance m, elevation and azimuth in degrees;
+//           azimuth -90 puts the camera on the planet frame's -y side, looking along +y).
+//   tip:    the tool tip in the planet frame: latitude/longitude (degrees; latitude 90 is the
+//           north pole, above the planet marker) and height above the planet's surface (mm).
+//   tool:   the stick runs from the tip across the line of sight, away from the planet as the
+//           camera sees it; `tilt` leans it toward the camera and `turn` turns the marker's face
+//           away from the camera about the stick (degrees).
+//   blur:   Gaussian defocus sigma (px); noise: Gaussian sensor noise sigma (grey levels);
+//   gain:   light level (1 = nominal); occlusion: radius of a hand-coloured disc over the planet
+//           marker's TR corner, as a fraction of the marker's image size (0 = none).
+// Frames: world = planet marker frame (table plane z = 0, z up); camera frame as OpenCV's.
+#include <Eigen/Core>
+#include <cstdint>
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <opencv2/core.hpp>
+#include <string>
+#include <vector>
+
+#include "tracking/calibration.hpp"
+#include "tracking/pose.hpp"
+
+namespace ps::tracking {
+
+struct SynthKey {
+  double frame = 0;
+  double camDistance = 0.6, camElevationDeg = 50, camAzimuthDeg = -90, camRollDeg = 0;
+  double tipLatDeg = 40, tipLonDeg = -90, tipHeightMm = 20;
+  double toolTiltDeg = 20, toolTurnDeg = 0;
+  double blur = 0.4, noise = 1.0, gain = 1.0, occlusion = 0.0;
+};
+
+struct SynthScript {
+  cv::Size size{640, 480};
+  double fps = 30;
+  std::uint64_t seed = 1;
+  std::string family = "tag36h11";
+  CameraCalibration camera = syntheticCamera({640, 480});
+  int planetId = 0, toolId = 1;
+  double planetMarkerSize = 0.08, planetRadius = 0.06, toolMarkerSize = 0.05;
+  Eigen::Vector3d tipOffset{0.0, -0.08, 0.0};
+  double exposure = 0.0;  // shutter open for this fraction of a frame period (motion blur)
+  int motionSamples = 1;
+  bool colour = true;
+  std::vector<SynthKey> keys;
+
+  int frames() const { return keys.empty() ? 0 : int(keys.back().frame) + 1; }
+  // The exact camera of synthetic videos: fx = fy = 0.9375 * width (about 56 degrees across),
+  // principal point at the image centre, no distortion.
+  static CameraCalibration syntheticCamera(cv::Size size);
+  void validate() const;  // InputError naming the field (and key)
+};
+
+// Throws core::InputError "SOURCE: ..." for malformed scripts.
+SynthScript parseSynthScript(const nlohmann::json& j, const std::string& source = "<script>");
+SynthScript loadSynthScript(const std::filesystem::path& path);
+nlohmann::json toJson(const SynthScript& s);
+
+// Built-in scenes: "demo" (about 10 s: the tool sculpts a few strokes while the camera moves,
+// with a lighting change, an occlusion and the tool leaving the frame), "sweep" (the benchmark:
+// distances 0.3-0.9 m and tilts up to 60 degrees), "still" (both markers at rest), "short"
+// (a few frames, for tests).
+SynthScript builtinScene(const std::string& name);
+std::vector<std::string> builtinSceneNames();
+
+struct FrameTruth {
+  int frame = 0;
+  double time = 0;
+  Pose camera;        // world -> camera
+  Pose planet, tool;  // marker -> camera
+  // All four corners inside the image, the face toward the camera, and nothing over it (the
+  // tool's card or stick over the planet marker, the hand over either).
+  bool planetVisible = false, toolVisible = false;
+  bool planetOccluded = false, toolOccluded = false;  // something drawn over the marker
+  double planetTiltDeg = 0, toolTiltDeg = 0;  // angle between marker normal and line of sight
+  Eigen::Vector3d tipCamera = Eigen::Vector3d::Zero();
+  Eigen::Vector3d tipPlanet = Eigen::Vector3d::Zero();  // planet frame (m)
+  double tipHeight = 0;                                 // above the planet's reference sphere (m)
+  nlohmann::json toJson() const;
+};
+
+class SynthRenderer {
+ public:
+  explicit SynthRenderer(SynthScript script);
+  const SynthScript& script() const { return script_; }
+  int frames() const { return script_.frames(); }
+  FrameTruth truth(double frame) const;
+  cv::Mat render(int frame) const;
+
+ private:
+  SynthKey keyAt(double frame) const;
+  void poses(const SynthKey& k, Pose& camera, Pose& tool) const;
+  cv::Mat background(const Pose& camera) const;
+  // What is drawn over the markers, in pixels: the tool's card and stick, the hand's disc.
+  struct Overlays {
+    std::vector<cv::Point2d> toolCard, stick;
+    bool stickOk = false;
+    cv::Point2d disc;
+    double discRadius = 0;
+  };
+  Overlays overlays(const SynthKey& k, const Pose& camera, const Pose& tool) const;
+
+  SynthScript script_;
+  cv::Mat table_;  // texture of the table (1.2 m square)
+  cv::Mat planetCard_, toolCard_;
+  int planetMargin_ = 2, toolMargin_ = 2;
+};
+
+}  // namespace ps::tracking

@@ -1,0 +1,161 @@
+// The built-in synthetic scenes (synth.hpp).
+#include <cmath>
+
+#include "core/input_error.hpp"
+#include "tracking/synth.hpp"
+
+namespace ps::tracking {
+
+namespace {
+
+struct KeyBuilder {
+  std::vector<SynthKey> keys;
+  SynthKey cur;
+  KeyBuilder& at(double frame) {
+    cur.frame = frame;
+    return *this;
+  }
+  KeyBuilder& cam(double distance, double elevation, double azimuth, double roll = 0) {
+    cur.camDistance = distance;
+    cur.camElevationDeg = elevation;
+    cur.camAzimuthDeg = azimuth;
+    cur.camRollDeg = roll;
+    return *this;
+  }
+  KeyBuilder& tip(double lat, double lon, double heightMm) {
+    cur.tipLatDeg = lat;
+    cur.tipLonDeg = lon;
+    cur.tipHeightMm = heightMm;
+    return *this;
+  }
+  KeyBuilder& tool(double tilt, double turn) {
+    cur.toolTiltDeg = tilt;
+    cur.toolTurnDeg = turn;
+    return *this;
+  }
+  KeyBuilder& look(double blur, double noise, double gain, double occlusion = 0) {
+    cur.blur = blur;
+    cur.noise = noise;
+    cur.gain = gain;
+    cur.occlusion = occlusion;
+    return *this;
+  }
+  KeyBuilder& key() {
+    keys.push_back(cur);
+    return *this;
+  }
+};
+
+SynthScript demo() {
+  SynthScript s;
+  s.seed = 11;
+  s.exposure = 0.3;
+  s.motionSamples = 3;
+  KeyBuilder b;
+  b.cur = SynthKey{};
+  b.look(0.4, 0.8, 1.0);
+  // Hover, come down, sculpt a ridge while the camera drifts round.
+  b.at(0).cam(0.55, 52, -95).tip(30, -100, 40).tool(15, 0).key();
+  b.at(25).tip(32, -98, 0).key();
+  b.at(30).tip(32, -98, -1).key();
+  b.at(110).cam(0.6, 55, -75).tip(48, -55, -1).tool(20, 10).key();
+  b.at(125).tip(50, -50, 30).key();
+  // The light drops; a second stroke under it, a hand passing over the planet marker.
+  b.at(150).cam(0.62, 50, -80).tip(15, -115, 25).look(0.5, 0.8, 0.65).key();
+  b.at(160).tip(15, -115, -1).key();
+  b.at(175).look(0.5, 0.8, 0.65, 0.0).key();
+  b.at(190).tip(10, -130, -1).look(0.5, 0.8, 0.65, 0.35).key();
+  b.at(205).look(0.5, 0.8, 0.7, 0.0).key();
+  b.at(225).tip(5, -140, -1).tool(25, -15).look(0.4, 0.8, 1.0).key();
+  // Lift, wave out of the frame and back, a last dab on the top.
+  b.at(240).tip(10, -135, 40).key();
+  b.at(260).tip(20, -30, 300).tool(40, 30).key();
+  b.at(275).tip(20, -30, 300).key();
+  b.at(300).tip(70, -90, 20).tool(20, 0).key();
+  b.at(310).tip(72, -90, -1).key();
+  b.at(325).tip(80, -60, -1).key();
+  b.at(340).cam(0.58, 56, -88).tip(80, -60, 40).key();
+  s.keys = b.keys;
+  return s;
+}
+
+// The benchmark: 20 shots of 20 frames, each from a fixed camera (a cut between shots): distances
+// 0.3 - 0.9 m, planet tilt 20 - 58 degrees (elevation 70 - 32), tool tilts up to about 60
+// degrees; in each shot the tool draws a short stroke (touching, or hovering 15 mm up) and rests.
+SynthScript sweep() {
+  SynthScript s;
+  s.seed = 5;
+  KeyBuilder b;
+  b.look(0.5, 1.5, 1.0);
+  const double dists[] = {0.3, 0.45, 0.6, 0.75, 0.9};
+  const double elev[] = {70, 55, 42, 32};
+  int f = 0;
+  int i = 0;
+  for (double d : dists) {
+    for (double e : elev) {
+      const double az = -90 + 25 * std::sin(0.7 * i);
+      const double lon = -90 + 40 * std::sin(1.3 * i + 0.5);
+      const double lat = 25 + 30 * (0.5 + 0.5 * std::sin(0.9 * i));
+      const double turn = (i % 3 == 0) ? 0 : (i % 3 == 1 ? 35 : -45);
+      const double tilt = 10 + 10 * (i % 2);
+      b.at(f).cam(d, e, az).tip(lat, lon, (i % 4 == 3) ? 15 : -1).tool(tilt, turn).key();
+      b.at(f + 14).tip(lat + 8, lon + 12, (i % 4 == 3) ? 15 : -1).key();  // a short stroke
+      b.at(f + 19).key();  // rest; the next key cuts to another camera placement
+      f += 20;
+      ++i;
+    }
+  }
+  s.keys = b.keys;
+  return s;
+}
+
+SynthScript still() {
+  SynthScript s;
+  s.seed = 3;
+  KeyBuilder b;
+  b.look(0.4, 1.5, 1.0);
+  b.at(0).cam(0.6, 50, -90).tip(40, -90, 5).tool(15, 0).key();
+  b.at(119).key();
+  s.keys = b.keys;
+  return s;
+}
+
+SynthScript shortScene() {
+  SynthScript s;
+  s.size = {320, 240};
+  s.camera = SynthScript::syntheticCamera(s.size);
+  s.seed = 2;
+  KeyBuilder b;
+  b.look(0.3, 1.0, 1.0);
+  b.at(0).cam(0.4, 55, -90).tip(35, -95, 10).tool(15, 0).key();
+  b.at(3).tip(35, -95, -1).key();
+  b.at(9).tip(45, -70, -1).key();
+  b.at(11).tip(45, -70, 20).key();
+  s.keys = b.keys;
+  return s;
+}
+
+}  // namespace
+
+std::vector<std::string> builtinSceneNames() {
+  return {"demo", "sweep", "still", "short"};
+}
+
+SynthScript builtinScene(const std::string& name) {
+  SynthScript s;
+  if (name == "demo")
+    s = demo();
+  else if (name == "sweep")
+    s = sweep();
+  else if (name == "still")
+    s = still();
+  else if (name == "short")
+    s = shortScene();
+  else
+    throw core::InputError("unknown synthetic scene '" + name +
+                           "' (built in: demo, sweep, still, short; or a JSON script file)");
+  s.validate();
+  return s;
+}
+
+}  // namespace ps::tracking

@@ -1,0 +1,213 @@
+#include "tracking/tracker.hpp"
+
+#include <cmath>
+#include <limits>
+#include <sstream>
+
+#include "core/input_error.hpp"
+
+namespace ps::tracking {
+
+namespace {
+std::string num(double v) {
+  std::ostringstream s;
+  s.precision(6);
+  s << v;
+  return s.str();
+}
+void checkPositive(double v, const std::string& what) {
+  if (!(v > 0) || !std::isfinite(v)) throw core::InputError(what + " = " + num(v) + " is not > 0");
+}
+void checkParams(const OneEuroParams& p, const std::string& what) {
+  checkPositive(p.minCutoff, what + " min cutoff (Hz)");
+  checkPositive(p.dCutoff, what + " speed cutoff (Hz)");
+  if (!(p.beta >= 0) || !std::isfinite(p.beta))
+    throw core::InputError(what + " beta = " + num(p.beta) + " is not >= 0");
+}
+Eigen::Vector2d centre(const std::array<cv::Point2d, 4>& c) {
+  return {0.25 * (c[0].x + c[1].x + c[2].x + c[3].x), 0.25 * (c[0].y + c[1].y + c[2].y + c[3].y)};
+}
+}  // namespace
+
+std::string toString(TrackState s) {
+  switch (s) {
+    case TrackState::kLost:
+      return "lost";
+    case TrackState::kTracked:
+      return "tracked";
+    case TrackState::kHeld:
+      return "held";
+  }
+  return "?";
+}
+
+void MarkerTrackerConfig::validate() const {
+  if (id < 0) throw core::InputError("marker id " + std::to_string(id) + " is negative");
+  checkPositive(size, "marker " + std::to_string(id) + " size (m)");
+  checkParams(translation, "translation filter");
+  checkParams(rotation, "rotation filter");
+  if (!(holdSeconds >= 0)) throw core::InputError("hold = " + num(holdSeconds) + " s is not >= 0");
+  if (!(ambiguityRatio >= 1))
+    throw core::InputError("ambiguity ratio = " + num(ambiguityRatio) + " is not >= 1");
+  checkPositive(maxReprojectionPx, "max reprojection error (px)");
+}
+
+MarkerTracker::MarkerTracker(MarkerTrackerConfig config)
+    : config_(config), tFilter_(config.translation), rFilter_(config.rotation) {
+  config_.validate();
+}
+
+void MarkerTracker::reset() {
+  tFilter_.reset();
+  rFilter_.reset();
+  have_ = false;
+}
+
+MarkerEstimate MarkerTracker::update(std::span<const Detection> detections,
+                                     const CameraCalibration& calib, double time) {
+  MarkerEstimate e;
+  e.id = config_.id;
+  const double dt = have_ ? time - lastTime_ : 0.0;
+  lastTime_ = time;
+  const Detection* use = nullptr;
+  if (detections.size() == 1) {
+    use = &detections[0];
+  } else if (detections.size() > 1) {
+    if (have_) {
+      // The one nearest where the marker was.
+      const auto expected = projectMarker(last_, config_.size, calib);
+      double best = std::numeric_limits<double>::infinity();
+      for (const auto& d : detections) {
+        const double dist = (centre(d.corners) - centre(expected)).norm();
+        if (dist < best) best = dist, use = &d;
+      }
+      e.note = "id " + std::to_string(config_.id) + " seen " + std::to_string(detections.size()) +
+               " times; used the one nearest its last pose";
+    } else {
+      e.note = "id " + std::to_string(config_.id) + " seen " + std::to_string(detections.size()) +
+               " times and no last pose to tell them apart; none used";
+    }
+  }
+  if (use) {
+    const auto cands = solveMarkerPose(use->corners, config_.size, calib);
+    const auto choice = choosePose(cands, have_ ? &last_ : nullptr, config_.ambiguityRatio);
+    if (!choice.valid) {
+      e.note = "id " + std::to_string(config_.id) + ": the pose solver gave no finite pose";
+    } else if (cands.rms[std::size_t(choice.candidate)] > config_.maxReprojectionPx) {
+      e.note = "id " + std::to_string(config_.id) + ": reprojection error " +
+               num(cands.rms[std::size_t(choice.candidate)]) + " px > " +
+               num(config_.maxReprojectionPx) + " px; not used";
+    } else {
+      e.measured = true;
+      e.raw = choice.pose;
+      e.corners = use->corners;
+      e.rms = cands.rms[std::size_t(choice.candidate)];
+      e.ratio = choice.ratio;
+      e.candidate = choice.candidate;
+      e.byContinuity = choice.byContinuity;
+    }
+  }
+  if (e.measured) {
+    // Filters restart after a loss (a held pose is no base to filter from).
+    const double fdt = have_ ? dt : 0.0;
+    if (!have_) {
+      tFilter_.reset();
+      rFilter_.reset();
+    }
+    Pose p = e.raw;
+    if (config_.filter) {
+      p.t = tFilter_.filter(e.raw.t, fdt);
+      p.R = rFilter_.filter(Eigen::Quaterniond(e.raw.R), fdt).toRotationMatrix();
+    }
+    e.pose = p;
+    e.state = TrackState::kTracked;
+    last_ = p;
+    have_ = true;
+    lastSeen_ = time;
+    return e;
+  }
+  if (have_ && time - lastSeen_ <= config_.holdSeconds + 1e-9) {
+    e.state = TrackState::kHeld;
+    e.pose = last_;
+    e.sinceSeen = time - lastSeen_;
+    return e;
+  }
+  if (have_) reset();
+  e.state = TrackState::kLost;
+  return e;
+}
+
+void SceneConfig::validate() const {
+  planet.validate();
+  tool.validate();
+  if (planet.id == tool.id)
+    throw core::InputError("the planet and tool markers have the same id " +
+                           std::to_string(planet.id));
+  checkPositive(planetRadius, "planet radius (m)");
+  checkParams(tipFilter, "tip filter");
+  if (!tipOffset.allFinite()) throw core::InputError("tool tip offset is not finite");
+  if (!(touchDistance >= 0) || !std::isfinite(touchDistance))
+    throw core::InputError("touch distance = " + num(touchDistance) + " m is not >= 0");
+}
+
+SceneTracker::SceneTracker(SceneConfig config)
+    : config_(config), planet_(config.planet), tool_(config.tool), tipFilter_(config.tipFilter) {
+  config_.validate();
+}
+
+void SceneTracker::reset() {
+  planet_.reset();
+  tool_.reset();
+  tipFilter_.reset();
+  tipHave_ = false;
+}
+
+Pose SceneTracker::planetFromMarker(const Pose& marker) const {
+  Pose offset;
+  offset.t = Eigen::Vector3d(0, 0, config_.planetRadius);
+  return marker * offset;
+}
+
+SceneFrame SceneTracker::update(const std::vector<Detection>& detections,
+                                const CameraCalibration& calib, int frame, double time) {
+  SceneFrame f;
+  f.frame = frame;
+  f.time = time;
+  std::vector<Detection> p, t;
+  std::vector<int> others;
+  for (const auto& d : detections) {
+    if (d.id == config_.planet.id)
+      p.push_back(d);
+    else if (d.id == config_.tool.id)
+      t.push_back(d);
+    else if (std::find(others.begin(), others.end(), d.id) == others.end())
+      others.push_back(d.id);
+  }
+  f.planet = planet_.update(p, calib, time);
+  f.tool = tool_.update(t, calib, time);
+  if (!f.planet.note.empty()) f.notes.push_back(f.planet.note);
+  if (!f.tool.note.empty()) f.notes.push_back(f.tool.note);
+  for (int id : others)
+    f.notes.push_back("id " + std::to_string(id) + " is neither planet nor tool");
+  if (f.tool.measured && config_.filterTip) {
+    const double dt = tipHave_ ? time - lastTipTime_ : 0.0;
+    tipFilter_.filter(tipFromMarker(f.tool.raw), dt);
+    tipHave_ = true;
+    lastTipTime_ = time;
+  } else if (!f.tool.usable()) {
+    tipFilter_.reset();
+    tipHave_ = false;
+  }
+  if (f.planet.usable() && f.tool.usable()) {
+    f.tipValid = true;
+    f.tipHeld = !f.tool.measured;
+    f.tipCamera = config_.filterTip && tipHave_ ? tipFilter_.value() : tipFromMarker(f.tool.pose);
+    f.tipPlanet = planetFromMarker(f.planet.pose).inverse().apply(f.tipCamera);
+    const double surface = surface_ ? surface_(f.tipPlanet) : config_.planetRadius;
+    f.tipHeight = f.tipPlanet.norm() - surface;
+    f.touching = f.tipHeight <= config_.touchDistance;
+  }
+  return f;
+}
+
+}  // namespace ps::tracking

@@ -1,0 +1,131 @@
+#pragma once
+// From detections to filtered marker poses, and from the planet and tool markers to the tool
+// tip in the planet's frame.
+//
+// Per marker (MarkerTracker): the detection of its id -> IPPE candidates -> the candidate chosen
+// by reprojection ratio, or by continuity with the last pose when the ratio is small -> One Euro
+// filters on translation and rotation. A marker not seen holds its last pose for holdSeconds,
+// then reports lost (and its filters start afresh when it comes back).
+//
+// The scene (SceneTracker): the planet sits on the planet marker, its centre planetRadius above
+// the marker's centre along the marker's normal; the planet frame has the marker's axes (north
+// pole along the normal). The tool tip is tipOffset in the tool marker's frame. The tip counts
+// as touching when its height above the surface (SurfaceFn, a sphere by default) is at most
+// touchDistance (inside the planet counts as touching too).
+#include <Eigen/Core>
+#include <functional>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "tracking/calibration.hpp"
+#include "tracking/detector.hpp"
+#include "tracking/filter.hpp"
+#include "tracking/pose.hpp"
+
+namespace ps::tracking {
+
+enum class TrackState { kLost, kTracked, kHeld };
+std::string toString(TrackState s);
+
+struct MarkerTrackerConfig {
+  int id = 0;
+  double size = 0.05;  // edge of the black border (m)
+  bool filter = true;
+  OneEuroParams translation{2.0, 400.0, 1.0};  // speed in m/s
+  OneEuroParams rotation{2.0, 8.0, 1.0};       // speed in rad/s
+  double holdSeconds = 0.25;
+  double ambiguityRatio = 4.0;     // below it, continuity decides between the two candidates
+  double maxReprojectionPx = 4.0;  // a detection whose best candidate is worse is not used
+  void validate() const;           // InputError
+};
+
+struct MarkerEstimate {
+  int id = -1;
+  TrackState state = TrackState::kLost;
+  bool measured = false;  // a detection was used this frame
+  Pose raw;               // the chosen candidate (when measured)
+  Pose pose;              // filtered (tracked) or held; meaningless when lost
+  std::array<cv::Point2d, 4> corners{};
+  double rms = 0;    // reprojection RMS of the chosen candidate (px)
+  double ratio = 0;  // second candidate's RMS / first's
+  int candidate = 0;
+  bool byContinuity = false;
+  double sinceSeen = 0;  // seconds since the last measurement
+  std::string note;      // why a detection was not used, if one was not
+  bool usable() const { return state != TrackState::kLost; }
+};
+
+class MarkerTracker {
+ public:
+  explicit MarkerTracker(MarkerTrackerConfig config);
+  const MarkerTrackerConfig& config() const { return config_; }
+  // `detections` are this frame's detections of the tracker's id (usually 0 or 1; with two,
+  // the one nearest the last pose is used, or none without a last pose). `time` in seconds,
+  // increasing.
+  MarkerEstimate update(std::span<const Detection> detections, const CameraCalibration& calib,
+                        double time);
+  void reset();
+
+ private:
+  MarkerTrackerConfig config_;
+  OneEuroVector tFilter_;
+  OneEuroRotation rFilter_;
+  bool have_ = false;  // a pose to hold or continue from
+  Pose last_;
+  double lastSeen_ = 0, lastTime_ = 0;
+};
+
+struct SceneConfig {
+  MarkerTrackerConfig planet{0, 0.08};
+  MarkerTrackerConfig tool{1, 0.05};
+  double planetRadius = 0.06;                  // m, the displayed planet
+  Eigen::Vector3d tipOffset{0.0, -0.08, 0.0};  // tool tip in the tool marker's frame (m)
+  double touchDistance = 0.004;                // m above the surface
+  // The tip is computed from the tool's unfiltered pose and filtered as a point (camera frame):
+  // the filter then acts on the quantity that matters, and rotation lag is not multiplied by
+  // the stick's length.
+  bool filterTip = true;
+  OneEuroParams tipFilter{2.0, 400.0, 1.0};  // speed in m/s
+  void validate() const;                     // InputError naming the field
+};
+
+// Radius of the surface (m, the displayed planet's scale) under a point of the planet frame.
+using SurfaceFn = std::function<double(const Eigen::Vector3d& pointInPlanetFrame)>;
+
+struct SceneFrame {
+  int frame = 0;
+  double time = 0;
+  MarkerEstimate planet, tool;
+  bool tipValid = false;  // both poses usable
+  bool tipHeld = false;   // the tool marker is held, not seen this frame
+  Eigen::Vector3d tipCamera = Eigen::Vector3d::Zero();
+  Eigen::Vector3d tipPlanet = Eigen::Vector3d::Zero();  // planet frame (m)
+  double tipHeight = 0;                                 // above the surface (m); negative inside
+  bool touching = false;
+  std::vector<std::string> notes;  // other ids seen, duplicates, rejected detections
+};
+
+class SceneTracker {
+ public:
+  explicit SceneTracker(SceneConfig config);
+  const SceneConfig& config() const { return config_; }
+  void setSurface(SurfaceFn f) { surface_ = std::move(f); }
+  SceneFrame update(const std::vector<Detection>& detections, const CameraCalibration& calib,
+                    int frame, double time);
+  // Camera-from-planet pose for a planet-marker pose.
+  Pose planetFromMarker(const Pose& marker) const;
+  // Tip in the camera frame for a tool-marker pose.
+  Eigen::Vector3d tipFromMarker(const Pose& tool) const { return tool.apply(config_.tipOffset); }
+  void reset();
+
+ private:
+  SceneConfig config_;
+  MarkerTracker planet_, tool_;
+  OneEuroVector tipFilter_;
+  double lastTipTime_ = 0;
+  bool tipHave_ = false;
+  SurfaceFn surface_;
+};
+
+}  // namespace ps::tracking

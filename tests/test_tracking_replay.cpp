@@ -1,0 +1,175 @@
+// Synthetic video (lossless FFV1, bit-exact read-back), replay determinism, bad input.
+#include <gtest/gtest.h>
+
+#include <unistd.h>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <opencv2/imgproc.hpp>
+#include <sstream>
+
+#include "core/input_error.hpp"
+#include "replay/replay.hpp"
+#include "test_terrains.hpp"
+#include "tracking/synth.hpp"
+#include "tracking/video.hpp"
+
+using namespace ps;
+
+namespace {
+
+std::filesystem::path tempDir() {
+  auto d =
+      std::filesystem::temp_directory_path() / ("ps_tracking_replay_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(d);
+  return d;
+}
+
+// The short built-in scene (12 frames at 320x240, grey) written once per process.
+const std::filesystem::path& shortVideo() {
+  static const std::filesystem::path path = [] {
+    const auto p = tempDir() / "short.mkv";
+    auto script = tracking::builtinScene("short");
+    script.colour = false;
+    const tracking::SynthRenderer r(script);
+    tracking::LosslessWriter w(p, script.size, script.fps, false);
+    for (int f = 0; f < r.frames(); ++f) w.write(r.render(f));
+    w.close();
+    return p;
+  }();
+  return path;
+}
+
+replay::ReplayOptions shortOptions() {
+  replay::ReplayOptions o;
+  const auto s = tracking::builtinScene("short");
+  o.scene.planet.size = s.planetMarkerSize;
+  o.scene.tool.size = s.toolMarkerSize;
+  o.scene.planetRadius = s.planetRadius;
+  o.scene.tipOffset = s.tipOffset;
+  return o;
+}
+
+std::string errorOf(const std::function<void()>& f) {
+  try {
+    f();
+  } catch (const core::InputError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+}  // namespace
+
+TEST(TrackingSynth, RenderingIsDeterministicAndFfv1IsLossless) {
+  auto script = tracking::builtinScene("short");
+  script.colour = false;
+  const tracking::SynthRenderer a(script), b(script);
+  EXPECT_EQ(cv::norm(a.render(5), b.render(5), cv::NORM_INF), 0.0);
+  tracking::FrameSource src(shortVideo());
+  EXPECT_EQ(src.size(), script.size);
+  cv::Mat frame;
+  int n = 0;
+  while (src.read(frame)) {
+    cv::Mat grey = frame;
+    if (frame.channels() == 3) cv::cvtColor(frame, grey, cv::COLOR_BGR2GRAY);
+    EXPECT_EQ(cv::norm(grey, a.render(n), cv::NORM_INF), 0.0) << "frame " << n;
+    ++n;
+  }
+  EXPECT_EQ(n, script.frames());
+  EXPECT_FALSE(src.truncated());
+  // Ground truth: the tip comes down (smoothstep) from 10 mm at frame 0 to 1 mm inside at frame
+  // 3: 7.2 mm at frame 1, 1.9 mm at frame 2.
+  EXPECT_NEAR(a.truth(1).tipHeight, 0.010 - 0.011 * (7.0 / 27), 1e-9);
+  EXPECT_NEAR(a.truth(2).tipHeight, 0.010 - 0.011 * (20.0 / 27), 1e-9);
+  EXPECT_NEAR(a.truth(5).tipHeight, -0.001, 1e-9);
+  // The tool marker is in full view; the tool card covers part of the planet marker's quiet
+  // zone (visible in the rendered frame), which the ground truth reports as occluded.
+  EXPECT_TRUE(a.truth(5).toolVisible);
+  EXPECT_TRUE(a.truth(5).planetOccluded);
+  EXPECT_FALSE(a.truth(5).planetVisible);
+}
+
+TEST(TrackingReplay, TwoReplaysAreBitIdenticalAndSculpt) {
+  std::string logs[2];
+  std::vector<float> heights[2];
+  replay::ReplaySummary s;
+  for (int run = 0; run < 2; ++run) {
+    auto planet = testkit::bumpyTerrain(7, 4, 3000.0);
+    tracking::FrameSource src(shortVideo());
+    std::ostringstream log;
+    s = replay::runReplay(src, tracking::SynthScript::syntheticCamera({320, 240}), planet,
+                          shortOptions(), log);
+    logs[run] = log.str();
+    heights[run].assign(planet.heights().begin(), planet.heights().end());
+  }
+  EXPECT_EQ(logs[0], logs[1]);
+  EXPECT_EQ(std::memcmp(heights[0].data(), heights[1].data(), heights[0].size() * sizeof(float)),
+            0);
+  EXPECT_EQ(s.frames, 12);
+  EXPECT_GE(s.framesWithTip, 10);
+  EXPECT_GE(s.touchingFrames, 4);
+  EXPECT_GE(s.strokes, 1);
+  EXPECT_GT(s.modifiedVertices, 0u);
+  EXPECT_TRUE(s.warnings.empty());
+  EXPECT_NE(logs[0].find("\"stroke\":\"begin\""), std::string::npos);
+}
+
+TEST(TrackingReplay, BadInputIsNamedAndPartialVideosReplayWhatTheyHold) {
+  const auto dir = tempDir();
+  EXPECT_NE(
+      errorOf([&] { tracking::FrameSource s(dir / "nope.mkv"); }).find("nope.mkv: no such file"),
+      std::string::npos);
+  std::ofstream(dir / "empty.mkv").close();
+  EXPECT_NE(errorOf([&] {
+              tracking::FrameSource s(dir / "empty.mkv");
+            }).find("empty.mkv: the file is empty"),
+            std::string::npos);
+  std::ofstream(dir / "junk.mkv") << "this is not a video at all";
+  EXPECT_NE(errorOf([&] { tracking::FrameSource s(dir / "junk.mkv"); }).find("junk.mkv"),
+            std::string::npos);
+  // A video cut in the middle: replays the frames that decode and says it was cut.
+  {
+    std::ifstream in(shortVideo(), std::ios::binary);
+    std::string bytes((std::istreambuf_iterator<char>(in)), {});
+    std::ofstream(dir / "cut.mkv", std::ios::binary) << bytes.substr(0, bytes.size() / 2);
+  }
+  try {
+    tracking::FrameSource src(dir / "cut.mkv");
+    auto planet = testkit::bumpyTerrain(6, 4, 3000.0);
+    std::ostringstream log;
+    const auto s = replay::runReplay(src, tracking::SynthScript::syntheticCamera({320, 240}),
+                                     planet, shortOptions(), log);
+    EXPECT_LT(s.frames, 12);
+    EXPECT_GT(s.frames, 0);
+  } catch (const core::InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("cut.mkv"), std::string::npos);  // refused, named
+  }
+  // No marker ever seen (a blank video): a warning, nothing sculpted.
+  {
+    tracking::LosslessWriter w(dir / "blank.mkv", {160, 120}, 30, false);
+    for (int i = 0; i < 3; ++i) w.write(cv::Mat(120, 160, CV_8U, cv::Scalar(128)));
+    w.close();
+    tracking::FrameSource src(dir / "blank.mkv");
+    auto planet = testkit::bumpyTerrain(6, 4, 3000.0);
+    std::ostringstream log;
+    const auto s = replay::runReplay(src, tracking::SynthScript::syntheticCamera({160, 120}),
+                                     planet, shortOptions(), log);
+    EXPECT_EQ(s.frames, 3);
+    ASSERT_EQ(s.warnings.size(), 1u);
+    EXPECT_NE(s.warnings[0].find("was ever seen"), std::string::npos);
+  }
+  // A calibration for another aspect ratio.
+  {
+    tracking::FrameSource src(shortVideo());
+    auto planet = testkit::bumpyTerrain(6, 4, 3000.0);
+    std::ostringstream log;
+    auto calib = tracking::SynthScript::syntheticCamera({640, 360});
+    calib.source = "wide.yml";
+    EXPECT_NE(errorOf([&] {
+                replay::runReplay(src, calib, planet, shortOptions(), log);
+              }).find("wide.yml: calibrated for 640x360"),
+              std::string::npos);
+  }
+  std::filesystem::remove_all(dir);
+}
