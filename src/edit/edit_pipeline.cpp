@@ -156,7 +156,7 @@ EditReport EditPipeline::beginStroke(const Tool& tool, const ToolInput& start) {
   if (observer_) observer_->onBeginStroke(tool, start);
   if (undoEnabled_) journal_.beginStroke();
   strokeTool_ = &tool;
-  lastStamp_ = pathPoint(start.position);
+  lastStamp_ = start.position;
   return stamp(tool, start);
 }
 
@@ -166,7 +166,7 @@ StrokeReport EditPipeline::moveTo(const ToolInput& sample) {
   validate(tool, sample);
   if (observer_) observer_->onMoveStroke(sample);
   StrokeReport rep;
-  const Eigen::Vector3d from = lastStamp_, to = pathPoint(sample.position);
+  const Eigen::Vector3d from = lastStamp_, to = sample.position;
   const double arc = pathLength(from, to);
   const double spacing = tool.spacing();
   if (tool.rateBased()) {
@@ -185,11 +185,6 @@ StrokeReport EditPipeline::moveTo(const ToolInput& sample) {
   return rep;
 }
 
-Eigen::Vector3d EditPipeline::pathPoint(const Eigen::Vector3d& p) const {
-  const double R = terrain_.chart().radius();
-  return R > 0.0 ? Eigen::Vector3d(R * p.normalized()) : p;
-}
-
 double EditPipeline::pathLength(const Eigen::Vector3d& a, const Eigen::Vector3d& b) const {
   const double R = terrain_.chart().radius();
   if (R > 0.0) return R * std::atan2(a.cross(b).norm(), a.dot(b));
@@ -199,7 +194,10 @@ double EditPipeline::pathLength(const Eigen::Vector3d& a, const Eigen::Vector3d&
 Eigen::Vector3d EditPipeline::pathAt(const Eigen::Vector3d& a, const Eigen::Vector3d& b,
                                      double t) const {
   const double R = terrain_.chart().radius();
-  if (R > 0.0) return R * slerpUnit(a.normalized(), b.normalized(), t);
+  // The distance from the centre is interpolated too: a tool held above or below the surface
+  // (the displacement sphere) keeps its altitude along the stroke.
+  if (R > 0.0)
+    return (a.norm() + t * (b.norm() - a.norm())) * slerpUnit(a.normalized(), b.normalized(), t);
   return a + t * (b - a);
 }
 

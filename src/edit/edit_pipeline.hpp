@@ -100,8 +100,8 @@ class EditPipeline {
 
  private:
   EditReport stamp(const Tool& tool, const ToolInput& input);
-  // Stroke paths: great circles on the reference sphere (radius() > 0), straight lines otherwise.
-  Eigen::Vector3d pathPoint(const Eigen::Vector3d& p) const;
+  // Stroke paths: great circles (radius() > 0; arc length measured on the reference sphere, the
+  // distance from the centre interpolated linearly), straight lines otherwise.
   double pathLength(const Eigen::Vector3d& a, const Eigen::Vector3d& b) const;
   Eigen::Vector3d pathAt(const Eigen::Vector3d& a, const Eigen::Vector3d& b, double t) const;
 
@@ -117,7 +117,7 @@ class EditPipeline {
   std::vector<float> snapshot_;
 
   const Tool* strokeTool_ = nullptr;
-  Eigen::Vector3d lastStamp_ = Eigen::Vector3d::Zero();  // the last stamp, on the reference surface
+  Eigen::Vector3d lastStamp_ = Eigen::Vector3d::Zero();  // where the last stamp was applied
   EditObserver* observer_ = nullptr;
 };
 

@@ -298,8 +298,7 @@ cv::Vec3f tint(double h) {
 }
 }  // namespace
 
-void writeReliefPreview(const Raster& raster, double metresPerPixel,
-                        const std::filesystem::path& path) {
+cv::Mat reliefImage(const Raster& raster, double metresPerPixel) {
   cv::Mat img(raster.height, raster.width, CV_8UC3);
   const int w = raster.width, hgt = raster.height;
   auto at = [&](int x, int y) {
@@ -326,6 +325,15 @@ void writeReliefPreview(const Raster& raster, double metresPerPixel,
                     cv::saturate_cast<uchar>(c[2]));
     }
   }
+  return img;
+}
+
+void writeReliefPreview(const Raster& raster, double metresPerPixel,
+                        const std::filesystem::path& path) {
+  writePngAtomically(reliefImage(raster, metresPerPixel), path);
+}
+
+void writePngAtomically(const cv::Mat& img, const std::filesystem::path& path) {
   std::vector<unsigned char> png;
   if (!cv::imencode(".png", img, png))
     throw std::runtime_error("cannot encode PNG for " + path.string());

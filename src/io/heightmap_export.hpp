@@ -1,5 +1,6 @@
 #pragma once
 #include <filesystem>
+#include <opencv2/core.hpp>
 #include <vector>
 
 #include "terrain/terrain.hpp"
@@ -49,5 +50,9 @@ void writeHeightPng16(const Raster& raster, const std::filesystem::path& path);
 // Colour preview: hypsometric tint with hill shading (8-bit RGB PNG). Atomic.
 void writeReliefPreview(const Raster& raster, double metresPerPixel,
                         const std::filesystem::path& path);
+// The same picture as an 8-bit BGR image.
+cv::Mat reliefImage(const Raster& raster, double metresPerPixel);
+// Any image as a PNG, written atomically (temporary file + rename).
+void writePngAtomically(const cv::Mat& image, const std::filesystem::path& path);
 
 }  // namespace ps::io

@@ -39,6 +39,23 @@ double msSince(std::chrono::steady_clock::time_point t0) {
 
 }  // namespace
 
+std::string toString(ReplayTool t) {
+  return t == ReplayTool::kBrush ? "brush" : "displace";
+}
+
+ReplayTool replayToolFromString(const std::string& s) {
+  if (s == "brush") return ReplayTool::kBrush;
+  if (s == "displace") return ReplayTool::kDisplace;
+  throw core::InputError("unknown replay tool '" + s + "' (brush or displace)");
+}
+
+sand::DisplacementSettings ReplayOptions::defaultDisplacement() {
+  sand::DisplacementSettings d;
+  d.radius = 400e3;
+  d.rampartWidth = 0.5;
+  return d;
+}
+
 edit::BrushSettings ReplayOptions::defaultBrush() {
   edit::BrushSettings b;
   b.radius = 250e3;
@@ -50,6 +67,11 @@ void ReplayOptions::validate() const {
   detector.validate();
   scene.validate();
   brush.validate();
+  displace.validate();
+  settling.validate();
+  if (!(std::isfinite(pressDepth) && pressDepth > 0 && pressDepth <= 2 * displace.radius))
+    throw core::InputError("press depth = " + std::to_string(pressDepth) +
+                           " m is not in (0, 2 x displacement radius]");
   if (!(fallbackFps > 0 && fallbackFps <= 1000))
     throw core::InputError("fps = " + std::to_string(fallbackFps) + " is not in (0, 1000]");
   if (maxFrames < 0)
@@ -58,7 +80,7 @@ void ReplayOptions::validate() const {
 
 ReplaySummary runReplay(tracking::FrameSource& source, const tracking::CameraCalibration& calibIn,
                         terrain::Terrain& planet, const ReplayOptions& o, std::ostream& log,
-                        std::ostream* timings, const ProgressFn& progress) {
+                        std::ostream* timings, const ProgressFn& progress, const FrameHook& hook) {
   o.validate();
   const tracking::CameraCalibration calib = calibIn.forImageSize(source.size());
   tracking::DetectorConfig dc = o.detector;
@@ -77,6 +99,25 @@ ReplaySummary runReplay(tracking::FrameSource& source, const tracking::CameraCal
   edit::EditPipeline pipeline(planet);
   pipeline.setUndoEnabled(o.undo);
   const edit::GaussianBrush brush(o.brush);
+  std::optional<sand::Settler> settler;
+  if (o.tool == ReplayTool::kDisplace && o.settle)
+    settler.emplace(planet, o.displace.material, o.settling);
+  const sand::DisplacementTool displacer(planet.chartPtr(), o.displace,
+                                         settler ? &*settler : nullptr);
+  if (o.tool == ReplayTool::kDisplace) displacer.validate();
+  const edit::Tool& tool =
+      o.tool == ReplayTool::kBrush ? static_cast<const edit::Tool&>(brush) : displacer;
+  // Where the tool acts for a tip over planet point p: the brush at p itself; the displacement
+  // sphere at a fixed altitude for the whole stroke (a plough), set when the stroke begins so
+  // that its lowest point is pressDepth below the surface at that control vertex. (Setting it
+  // from the surface under each stamp would dig deeper with every overlapping stamp.)
+  double strokeAltitude = 0;
+  auto toolPosition = [&](const Eigen::Vector3d& p, const core::GridPoint& c,
+                          bool begin) -> Eigen::Vector3d {
+    if (o.tool == ReplayTool::kBrush) return p;
+    if (begin) strokeAltitude = R + planet.height(c.u, c.v) - o.pressDepth + o.displace.radius;
+    return p.normalized() * strokeAltitude;
+  };
   const double fps = source.fps() > 0 ? source.fps() : o.fallbackFps;
 
   ReplaySummary s;
@@ -111,6 +152,7 @@ ReplaySummary runReplay(tracking::FrameSource& source, const tracking::CameraCal
     const auto t2 = std::chrono::steady_clock::now();
     std::string stroke = "none";
     bool touching = false;
+    std::optional<core::GridPoint> control;
     if (f.tipValid) {
       ++s.framesWithTip;
       const Eigen::Vector3d p = f.tipPlanet * scale;
@@ -121,11 +163,13 @@ ReplaySummary runReplay(tracking::FrameSource& source, const tracking::CameraCal
       if (touching) {
         ++s.touchingFrames;
         const auto c = edit::nearestVertex(chart, p);
+        control = c;
         j["control_vertex"] = {c.u, c.v};
-        const edit::ToolInput input{p, std::max(0.0, time - lastTime)};
+        const edit::ToolInput input{toolPosition(p, c, !pipeline.inStroke()),
+                                    std::max(0.0, time - lastTime)};
         try {
           if (!pipeline.inStroke()) {
-            const auto r = pipeline.beginStroke(brush, input);
+            const auto r = pipeline.beginStroke(tool, input);
             ++s.strokes;
             ++s.stamps;
             s.modifiedVertices += r.modifiedVertices;
@@ -152,8 +196,19 @@ ReplaySummary runReplay(tracking::FrameSource& source, const tracking::CameraCal
     }
     j["touching"] = touching;
     j["stroke"] = stroke;
+    if (settler) {
+      const auto r = settler->frame();
+      s.settleCellSteps += r.cellSteps;
+      s.settleFramesAtRest += r.atRest;
+      if (r.steps > 0) j["settle_steps"] = r.steps;
+    }
     editMs = msSince(t2);
     lastTime = time;
+    if (hook) {
+      const FrameContext ctx{frame,  time,  image,    f,       calib,
+                             planet, scale, touching, control, tool.radius()};
+      hook(ctx);
+    }
     log << j.dump() << "\n";
     if (timings)
       *timings << nlohmann::json{{"frame", frame},

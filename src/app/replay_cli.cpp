@@ -1,0 +1,62 @@
+#include "app/replay_cli.hpp"
+
+#include "core/grid.hpp"
+#include "core/input_error.hpp"
+
+namespace ps::app {
+
+void ReplayCli::addOptions(CLI::App* sub) {
+  auto& o = job.options;
+  sub->add_option("--planet", job.planetFile, "Sculpt this planet file instead of the default");
+  sub->add_option("--grid", grid, "Default planet's grid side (2^n+1)")->capture_default_str();
+  sub->add_option("--seed", job.seed, "Default planet's relief seed")->capture_default_str();
+  sub->add_option("--family", family, "Marker family")->capture_default_str();
+  sub->add_option("--decimate", o.detector.decimate, "AprilTag search decimation")
+      ->capture_default_str();
+  sub->add_option("--planet-id", o.scene.planet.id, "Planet marker id")->capture_default_str();
+  sub->add_option("--planet-marker-size", o.scene.planet.size, "Planet marker edge (m)")
+      ->capture_default_str();
+  sub->add_option("--planet-radius", o.scene.planetRadius, "Displayed planet radius (m)")
+      ->capture_default_str();
+  sub->add_option("--tool-id", o.scene.tool.id, "Tool marker id")->capture_default_str();
+  sub->add_option("--tool-marker-size", o.scene.tool.size, "Tool marker edge (m)")
+      ->capture_default_str();
+  sub->add_option("--tip", tip, "Tool tip in the tool marker's frame, X,Y,Z (m)")
+      ->delimiter(',')
+      ->capture_default_str();
+  sub->add_option("--touch", o.scene.touchDistance, "Touching within this height (m)")
+      ->capture_default_str();
+  sub->add_option("--tool", tool, "What touching does: brush (Gaussian) or displace (sand)")
+      ->capture_default_str();
+  sub->add_option("--brush-radius-km", brushRadiusKm, "Brush radius r_d on the planet (km)")
+      ->capture_default_str();
+  sub->add_option("--strength-m", strengthM, "Height change per stamp at the centre (m)")
+      ->capture_default_str();
+  sub->add_option("--mode", mode, "Brush mode: raise, lower or set")->capture_default_str();
+  sub->add_option("--displace-radius-km", displaceRadiusKm, "Displacement sphere radius (km)")
+      ->capture_default_str();
+  sub->add_option("--press-m", pressM, "How deep the displacement sphere presses in (m)")
+      ->capture_default_str();
+  sub->add_flag("--no-settle", noSettle, "Displace: do not let the sand settle");
+  sub->add_option("--max-frames", o.maxFrames, "Stop after this many frames (0: all)");
+  sub->add_flag("--no-filter", noFilter, "Use raw poses (no One Euro filters)");
+}
+
+void ReplayCli::apply() {
+  auto& o = job.options;
+  o.detector.family = family;
+  if (tip.size() != 3) throw core::InputError("--tip needs three numbers X,Y,Z (metres)");
+  o.scene.tipOffset = {tip[0], tip[1], tip[2]};
+  o.tool = replay::replayToolFromString(tool);
+  o.brush.radius = brushRadiusKm * 1e3;
+  o.brush.strength = strengthM;
+  o.brush.mode = edit::brushModeFromString(mode);
+  o.displace.radius = displaceRadiusKm * 1e3;
+  o.pressDepth = pressM;
+  o.settle = !noSettle;
+  if (noFilter) o.scene.planet.filter = o.scene.tool.filter = o.scene.filterTip = false;
+  job.gridLevel = core::GridSize::fromSide(grid).n();
+  o.validate();
+}
+
+}  // namespace ps::app

@@ -1,0 +1,25 @@
+#pragma once
+// The command-line options that `replay` and `demo` share: the markers, the tracker, the tool.
+#include <CLI/CLI.hpp>
+#include <string>
+#include <vector>
+
+#include "app/replay_job.hpp"
+
+namespace ps::app {
+
+struct ReplayCli {
+  ReplayJob job;
+  std::string family = "tag36h11", mode = "raise", tool = "brush";
+  long long grid = 2049;
+  std::vector<double> tip = {0.0, -0.08, 0.0};
+  double brushRadiusKm = 250, strengthM = 600, displaceRadiusKm = 400, pressM = 8000;
+  bool noFilter = false, noSettle = false;
+
+  // Adds the shared options to `sub` (they write into this object, which must outlive it).
+  void addOptions(CLI::App* sub);
+  // Copies the parsed options into job.options and validates them (core::InputError).
+  void apply();
+};
+
+}  // namespace ps::app

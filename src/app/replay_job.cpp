@@ -1,0 +1,205 @@
+#include "app/replay_job.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <iostream>
+#include <memory>
+#include <numbers>
+#include <opencv2/imgproc.hpp>
+
+#include "app/default_planet.hpp"
+#include "app/progress.hpp"
+#include "app/snapshot.hpp"
+#include "io/heightmap_export.hpp"
+#include "io/planet_file.hpp"
+#include "terrain/screen_error.hpp"
+#include "terrain/tessellator.hpp"
+
+namespace ps::app {
+
+namespace {
+
+void renameInto(const std::filesystem::path& from, const std::filesystem::path& to) {
+  std::error_code ec;
+  std::filesystem::rename(from, to, ec);
+  if (ec) throw std::runtime_error("cannot rename " + from.string() + " to " + to.string());
+}
+
+// The vertices the replay changed: their bounding box in equirectangular pixels of a w x h
+// raster, and the vertex whose height changed most (the view looks there).
+struct Change {
+  bool any = false;
+  cv::Rect box;
+  int u = 0, v = 0;
+  double largest = 0;
+};
+
+Change findChange(const terrain::Terrain& t, const std::vector<float>& before, int w, int h) {
+  Change c;
+  const int side = t.grid().side(), m = t.grid().m();
+  int x0 = w, x1 = -1, y0 = h, y1 = -1;
+  const auto now = t.heights();
+  for (int v = 0; v < side; ++v) {
+    for (int u = 0; u < m; ++u) {
+      const std::size_t i = std::size_t(v) * std::size_t(side) + std::size_t(u);
+      const double d = std::abs(double(now[i]) - double(before[i]));
+      if (d < 1.0) continue;  // metres: float noise of untouched cells is far below this
+      c.any = true;
+      if (d > c.largest) c = {true, {}, u, v, d};
+      const int x = int(double(u) / m * w), y = h - 1 - int(double(v) / (side - 1) * (h - 1));
+      x0 = std::min(x0, x), x1 = std::max(x1, x), y0 = std::min(y0, y), y1 = std::max(y1, y);
+    }
+  }
+  if (c.any) c.box = cv::Rect(cv::Point(x0, y0), cv::Point(x1 + 1, y1 + 1));
+  return c;
+}
+
+// An oblique view of vertex (u, v) from 350 km up and 900 km away.
+terrain::Camera viewOf(const terrain::Terrain& t, int u, int v) {
+  const Eigen::Vector3d up = t.chart().up(u, v);
+  Eigen::Vector3d east = Eigen::Vector3d::UnitZ().cross(up);
+  if (east.norm() < 1e-6) east = Eigen::Vector3d::UnitX();
+  east.normalize();
+  const Eigen::Vector3d north = up.cross(east);
+  const double R = t.chart().radius();
+  const Eigen::Vector3d target = (R + t.height(u, v)) * up;
+  const Eigen::Vector3d eye = (R + 3.5e5) * up - 9e5 * (0.8 * north + 0.6 * east).normalized();
+  return terrain::Camera::lookAt(eye, target, eye.normalized(), 1280, 720,
+                                 60 * std::numbers::pi / 180);
+}
+
+cv::Mat labelled(cv::Mat img, const std::string& text) {
+  cv::putText(img, text, {12, 30}, cv::FONT_HERSHEY_SIMPLEX, 0.8, {0, 0, 0}, 4, cv::LINE_AA);
+  cv::putText(img, text, {12, 30}, cv::FONT_HERSHEY_SIMPLEX, 0.8, {255, 255, 255}, 1, cv::LINE_AA);
+  return img;
+}
+
+// Before | after, cropped around `box` (padded to a 4:3 window) and scaled to 640 px each.
+cv::Mat closeup(const cv::Mat& before, const cv::Mat& after, cv::Rect box) {
+  const int pad = std::max(8, std::max(box.width, box.height) / 4);
+  box = cv::Rect(box.x - pad, box.y - pad, box.width + 2 * pad, box.height + 2 * pad);
+  const int wantW = std::max(box.width, box.height * 4 / 3);
+  const int wantH = wantW * 3 / 4;
+  box = cv::Rect(box.x + box.width / 2 - wantW / 2, box.y + box.height / 2 - wantH / 2, wantW,
+                 wantH) &
+        cv::Rect(0, 0, before.cols, before.rows);
+  cv::Mat a, b, both;
+  cv::resize(before(box), a, {640, 480}, 0, 0, cv::INTER_CUBIC);
+  cv::resize(after(box), b, {640, 480}, 0, 0, cv::INTER_CUBIC);
+  cv::hconcat(labelled(a, "before"), labelled(b, "after"), both);
+  return both;
+}
+
+}  // namespace
+
+nlohmann::json runReplayJob(const ReplayJob& job) {
+  job.options.validate();
+  // Inputs first: a bad video or calibration costs nothing.
+  tracking::FrameSource source(job.video.string());
+  const auto calib = tracking::loadCalibration(job.calibration);
+  calib.forImageSize(source.size());  // refuses another aspect ratio, naming the file
+  std::unique_ptr<terrain::Terrain> planet = job.planetFile.empty()
+                                                 ? makeDefaultPlanet(job.gridLevel, job.seed)
+                                                 : io::loadPlanet(job.planetFile);
+  const std::vector<float> before(planet->heights().begin(), planet->heights().end());
+
+  const std::filesystem::path& out = job.out;
+  std::filesystem::create_directories(out);
+  std::ofstream log(out / "log.jsonl.part"), timings(out / "timings.jsonl.part");
+  if (!log || !timings) throw std::runtime_error("cannot write in " + out.string());
+  replay::ReplaySummary s;
+  {
+    Progress p("replay " + job.video.filename().string());
+    s = replay::runReplay(
+        source, calib, *planet, job.options, log, &timings, [&](int f, int total) {
+          p.update(total > 0 ? double(f) / total : 0.0, std::to_string(f) + " frames");
+        });
+    p.done(std::to_string(s.frames) + " frames, " + std::to_string(s.strokes) + " strokes, " +
+           std::to_string(s.stamps) + " stamps");
+  }
+  log.close();
+  timings.close();
+  renameInto(out / "log.jsonl.part", out / "log.jsonl");
+  renameInto(out / "timings.jsonl.part", out / "timings.jsonl");
+
+  nlohmann::json files = {"heightmap.png", "heightmap.png.json", "planet.planet", "log.jsonl",
+                          "timings.jsonl"};
+  int hmW = 0, hmH = 0;
+  {
+    Progress p("heightmap");
+    hmH = std::min(planet->grid().m(), 4096), hmW = 2 * hmH;
+    io::writeHeightPng16(io::resampleEquirectangular(*planet, hmW, hmH), out / "heightmap.png");
+    p.update(0.6);
+    io::savePlanet(*planet, out / "planet.planet");
+    p.done((out / "heightmap.png").string() + ", planet.planet");
+  }
+  nlohmann::json summary = {{"video", job.video.string()},
+                            {"calibration", job.calibration.string()},
+                            {"tool", replay::toString(job.options.tool)},
+                            {"frames", s.frames},
+                            {"announced_frames", s.announcedFrames},
+                            {"truncated", s.truncated},
+                            {"frames_with_planet", s.framesWithPlanet},
+                            {"frames_with_tool", s.framesWithTool},
+                            {"frames_with_tip", s.framesWithTip},
+                            {"touching_frames", s.touchingFrames},
+                            {"strokes", s.strokes},
+                            {"stamps", s.stamps},
+                            {"modified_vertices", s.modifiedVertices},
+                            {"skipped_frames", s.skippedFrames},
+                            {"settle_cell_steps", s.settleCellSteps},
+                            {"warnings", s.warnings},
+                            {"grid", planet->grid().label()},
+                            {"radius_m", planet->chart().radius()},
+                            {"heightmap", {{"width", hmW}, {"height", hmH}}}};
+
+  if (job.pictures && planet->chart().radius() > 0) {
+    Progress p("pictures");
+    const int w = 2048, h = 1024;
+    const double mpp = std::numbers::pi * planet->chart().radius() / h;
+    const cv::Mat after = io::reliefImage(io::resampleEquirectangular(*planet, w, h), mpp);
+    auto beforeTerrain = terrain::Terrain(planet->chartPtr(), before);
+    const cv::Mat beforeImg =
+        io::reliefImage(io::resampleEquirectangular(beforeTerrain, w, h), mpp);
+    p.update(0.3);
+    cv::Mat small;
+    cv::resize(after, small, {1024, 512}, 0, 0, cv::INTER_AREA);
+    io::writePngAtomically(small, out / "relief.png");
+    cv::resize(beforeImg, small, {1024, 512}, 0, 0, cv::INTER_AREA);
+    io::writePngAtomically(small, out / "relief_before.png");
+    files.push_back("relief.png");
+    files.push_back("relief_before.png");
+    const Change change = findChange(*planet, before, w, h);
+    int vu = 0, vv = planet->grid().side() / 2;
+    if (change.any) {
+      io::writePngAtomically(closeup(beforeImg, after, change.box), out / "closeup.png");
+      files.push_back("closeup.png");
+      vu = change.u, vv = change.v;
+      summary["largest_change_m"] = change.largest;
+    }
+    p.update(0.6);
+    const terrain::Camera cam = viewOf(*planet, vu, vv);
+    terrain::Tessellator tess;
+    terrain::TessellationSettings ts;
+    ts.distMaxPx = job.distMaxPx;
+    ts.triangleBudget = job.triangleBudget;
+    const auto& mesh = tess.tessellate(*planet, cam, ts);
+    const auto err = terrain::measureScreenError(*planet, cam, mesh);
+    io::writePngAtomically(renderSnapshot(*planet, mesh, cam, false), out / "view.png");
+    io::writePngAtomically(renderSnapshot(*planet, mesh, cam, true), out / "view_wireframe.png");
+    files.push_back("view.png");
+    files.push_back("view_wireframe.png");
+    summary["view"] = {{"triangles", mesh.triangleCount()},
+                       {"dist_max_px", ts.distMaxPx},
+                       {"effective_dist_max_px", tess.stats().effectiveDistMaxPx},
+                       {"measured_max_screen_error_px", err.maxPx}};
+    p.done(std::to_string(mesh.triangleCount()) + " triangles in view");
+  }
+  summary["files"] = files;
+  std::ofstream(out / "summary.json") << summary.dump(2) << "\n";
+  for (const auto& w : s.warnings) std::cerr << "replay: warning: " << w << "\n";
+  return summary;
+}
+
+}  // namespace ps::app

@@ -1,0 +1,32 @@
+#pragma once
+// A replay from files to files, shared by `planetsculpt replay` and `planetsculpt demo`: loads
+// the video, calibration and planet (or makes the default one), replays (replay/replay.hpp), and
+// writes the sculpted planet, its heightmap, the logs, a summary and (optionally) pictures.
+#include <cstdint>
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "replay/replay.hpp"
+
+namespace ps::app {
+
+struct ReplayJob {
+  std::filesystem::path video, calibration, out = "out/replay";
+  std::filesystem::path planetFile;  // empty: the default planet
+  int gridLevel = 11;                // default planet: 2049^2
+  std::uint64_t seed = 1;
+  replay::ReplayOptions options;
+  // Pictures: relief.png (after), relief_before.png, closeup.png (before | after around what
+  // changed), view.png and view_wireframe.png (a tessellated view of the sculpted region).
+  bool pictures = false;
+  double distMaxPx = 4.0;
+  std::size_t triangleBudget = 70000;
+};
+
+// Runs the job; returns the summary it also writes to out/summary.json. Throws
+// core::InputError (bad settings or inputs, before anything is written) and std::runtime_error
+// (files that cannot be written).
+nlohmann::json runReplayJob(const ReplayJob& job);
+
+}  // namespace ps::app
