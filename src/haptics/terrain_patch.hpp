@@ -1,0 +1,63 @@
+#pragma once
+// A small copy of the heights around the tool, made on the editor thread and read by the haptic
+// thread through a TripleBuffer: the haptic loop never touches the live Terrain, the editor never
+// waits for the loop.
+#include <Eigen/Core>
+#include <cstdint>
+#include <optional>
+#include <vector>
+
+#include "core/chart.hpp"
+#include "terrain/terrain.hpp"
+
+namespace ps::haptics {
+
+// The surface under a point (planet frame, planet metres).
+struct SurfaceProbe {
+  double depth = 0;  // below the surface along `up` (planet metres); negative above
+  Eigen::Vector3d up = Eigen::Vector3d::UnitZ();      // outward radial direction at the foot point
+  Eigen::Vector3d surface = Eigen::Vector3d::Zero();  // the foot point on the surface
+  Eigen::Vector2d uv = Eigen::Vector2d::Zero();       // grid coordinates of the foot point
+};
+
+// Heights of grid rows v0 .. v0+rows-1 and columns u0 .. u0+cols-1 (columns taken modulo m on a
+// wrapping chart, so u0 may be negative). Next to a pole row the patch holds whole rows.
+// Reading is const, allocation-free and thread-compatible; capture() reuses its buffer.
+class TerrainPatch {
+ public:
+  // Copies the heights within `halfSize` grid cells (along v; along u widened by 1/cos(latitude)
+  // on a sphere) of the point under `centre` (planet frame). Returns false (and leaves the patch
+  // empty) when the point has no foot point on the chart.
+  bool capture(const terrain::Terrain& terrain, const Eigen::Vector3d& centre, int halfSize);
+  void clear() { valid_ = false; }
+
+  bool valid() const { return valid_; }
+  const core::Chart* chart() const { return chart_; }
+  std::uint64_t revision() const { return revision_; }
+  // Process-unique number of the capture that filled this patch (0: never captured): the loop
+  // notices a new snapshot by it.
+  std::uint64_t serial() const { return serial_; }
+  int u0() const { return u0_; }
+  int v0() const { return v0_; }
+  int cols() const { return cols_; }
+  int rows() const { return rows_; }
+  std::size_t capacity() const { return heights_.capacity(); }
+
+  // Bilinear height at grid coordinates (u, v); nullopt outside the patch.
+  std::optional<double> heightAt(double u, double v) const;
+  // Depth of `p` (planet frame) below the bilinear surface, radial on the chart; nullopt when
+  // the foot point is outside the patch or p has none.
+  std::optional<SurfaceProbe> probe(const Eigen::Vector3d& p) const;
+
+ private:
+  float at(int col, int row) const { return heights_[std::size_t(row) * cols_ + col]; }
+
+  const core::Chart* chart_ = nullptr;
+  bool valid_ = false;
+  std::uint64_t revision_ = 0, serial_ = 0;
+  int u0_ = 0, v0_ = 0, cols_ = 0, rows_ = 0, m_ = 0;
+  bool wraps_ = false;
+  std::vector<float> heights_;
+};
+
+}  // namespace ps::haptics
