@@ -1,0 +1,60 @@
+#pragma once
+// Print-ready sheets (what `planetsculpt markers` writes): the planet marker, the tool marker and
+// the ChArUco calibration board, each on an A4 or US Letter page at a given resolution (300 dpi
+// by default), black and white only, with the physical size, family and id printed on the sheet
+// and a 100 mm scale bar to check that it was printed at 100 %.
+//
+// Files: a 1-bit PNG with its resolution in a pHYs chunk, and a one-page PDF that embeds the same
+// compressed pixels (PNG's zlib stream with PNG predictors is a valid PDF FlateDecode stream), so
+// no PDF library and no second compressor are needed.
+#include <Eigen/Core>
+#include <array>
+#include <cstdint>
+#include <opencv2/core.hpp>
+#include <string>
+#include <vector>
+
+#include "tracking/charuco_calibration.hpp"
+
+namespace ps::tracking {
+
+struct Paper {
+  std::string name;  // "A4", "US Letter"
+  std::string tag;   // "a4", "letter" (file names)
+  double widthMm = 0, heightMm = 0;
+};
+Paper paperA4();
+Paper paperLetter();
+Paper paperFromString(const std::string& s);  // "a4" | "letter"; core::InputError
+
+struct MarkerSheetSpec {
+  std::string family = "tag36h11";
+  int id = 0;
+  double sizeMm = 80;                      // the marker's edge: outer edge of the black border
+  bool tool = false;                       // tool marker: draw the stick and the tip
+  Eigen::Vector3d tipOffsetMm{0, -80, 0};  // tool tip in the marker frame (x right, y up, z out)
+  double planetRadiusMm = 60;              // planet marker: the planet's radius (label only)
+};
+
+struct Sheet {
+  cv::Mat image;  // CV_8U, 0 or 255 only, portrait, paper size at `dpi`
+  double dpi = 300;
+  Paper paper;
+  std::string title;
+  // Where the marker's edge corners (TL, TR, BR, BL of the canonical image) are, in OpenCV's
+  // pixel convention (marker sheets; for the board, its outer corners TL, TR, BR, BL).
+  std::array<cv::Point2d, 4> corners{};
+};
+
+// Throws core::InputError for a bad family, id or size, or a marker that does not fit the page.
+Sheet renderMarkerSheet(const MarkerSheetSpec& spec, const Paper& paper, double dpi = 300);
+Sheet renderCharucoSheet(const CharucoBoardSpec& board, const Paper& paper, double dpi = 300);
+
+// A bilevel image (0 or 255) as a 1-bit PNG with a pHYs chunk saying `dpi`.
+std::vector<std::uint8_t> encodeSheetPng(const cv::Mat& image, double dpi);
+// The same pixels as a one-page PDF of the paper's size, the image at `dpi` (its physical size),
+// centred. `title` goes into the document information.
+std::vector<std::uint8_t> encodeSheetPdf(const cv::Mat& image, double dpi, const Paper& paper,
+                                         const std::string& title);
+
+}  // namespace ps::tracking

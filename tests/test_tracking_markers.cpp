@@ -1,0 +1,189 @@
+// Printable sheets: each sheet, rescaled as a camera or a scanner would see it, is read by the
+// project's own detectors with the right id and the right physical size (pixels / dpi); the PNG
+// carries its resolution and decodes to the same pixels; the PDF's structure is sound.
+#include <gtest/gtest.h>
+
+#include <cstring>
+#include <opencv2/aruco/charuco.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+#include <string>
+
+#include "core/input_error.hpp"
+#include "tracking/charuco_calibration.hpp"
+#include "tracking/detector.hpp"
+#include "tracking/marker_sheet.hpp"
+
+using namespace ps;
+
+namespace {
+
+// The sheet at `scale` of its size (area averaging), slightly blurred like a camera would.
+cv::Mat rescaled(const cv::Mat& sheet, double scale) {
+  cv::Mat small;
+  cv::resize(sheet, small, {}, scale, scale, cv::INTER_AREA);
+  cv::GaussianBlur(small, small, {0, 0}, 0.6);
+  return small;
+}
+
+double meanEdge(const std::array<cv::Point2d, 4>& c) {
+  double e = 0;
+  for (int k = 0; k < 4; ++k) e += cv::norm(c[std::size_t(k)] - c[std::size_t((k + 1) % 4)]);
+  return e / 4;
+}
+
+void expectMarkerSheetReads(const tracking::MarkerSheetSpec& spec, const tracking::Paper& paper) {
+  const auto sheet = tracking::renderMarkerSheet(spec, paper, 300);
+  SCOPED_TRACE(paper.name + " id " + std::to_string(spec.id));
+  // Paper size at 300 dpi.
+  EXPECT_EQ(sheet.image.cols, int(std::lround(paper.widthMm / 25.4 * 300)));
+  EXPECT_EQ(sheet.image.rows, int(std::lround(paper.heightMm / 25.4 * 300)));
+  // The marker's edge on the sheet is the size asked for, to the rounding of one pixel.
+  EXPECT_NEAR(meanEdge(sheet.corners) * 25.4 / 300, spec.sizeMm, 25.4 / 300);
+  const double scale = 0.25;  // 75 dpi
+  tracking::DetectorConfig dc;
+  dc.family = spec.family;
+  dc.regions = false;
+  dc.decimate = 1;
+  std::vector<tracking::Backend> backends = {tracking::Backend::kAruco};
+  if (tracking::familyInfo(spec.family).apriltag) backends.push_back(tracking::Backend::kAprilTag);
+  for (const auto backend : backends) {
+    dc.backend = backend;
+    const auto found = tracking::makeDetector(dc)->detect(rescaled(sheet.image, scale));
+    ASSERT_EQ(found.size(), 1u) << tracking::toString(backend) << ": one marker on the sheet";
+    EXPECT_EQ(found[0].id, spec.id);
+    std::array<cv::Point2d, 4> expected;
+    for (int k = 0; k < 4; ++k)
+      expected[std::size_t(k)] =
+          (sheet.corners[std::size_t(k)] + cv::Point2d(0.5, 0.5)) * scale - cv::Point2d(0.5, 0.5);
+    // AprilTag's edge refinement is exact to a fraction of a pixel; aruco's contour refinement
+    // puts corners about half a pixel inside the marker (docs/TRACKING.md).
+    const double tolerance = backend == tracking::Backend::kAprilTag ? 0.3 : 1.5;
+    for (int k = 0; k < 4; ++k)
+      EXPECT_LT(cv::norm(found[0].corners[std::size_t(k)] - expected[std::size_t(k)]), tolerance)
+          << tracking::toString(backend) << " corner " << k;
+    // Physical size from the detection: pixels at 75 dpi.
+    EXPECT_NEAR(meanEdge(found[0].corners) / scale * 25.4 / 300, spec.sizeMm, 0.02 * spec.sizeMm)
+        << tracking::toString(backend);
+  }
+}
+
+std::string asString(const std::vector<std::uint8_t>& v) {
+  return {v.begin(), v.end()};
+}
+
+}  // namespace
+
+TEST(TrackingMarkers, PlanetAndToolSheetsAreDetectedWithTheirIdsAndSizes) {
+  tracking::MarkerSheetSpec planet;  // tag36h11 id 0, 80 mm (SceneConfig's defaults)
+  tracking::MarkerSheetSpec tool;
+  tool.id = 1;
+  tool.sizeMm = 50;
+  tool.tool = true;
+  for (const auto& paper : {tracking::paperA4(), tracking::paperLetter()}) {
+    expectMarkerSheetReads(planet, paper);
+    expectMarkerSheetReads(tool, paper);
+  }
+  tracking::MarkerSheetSpec aruco;
+  aruco.family = "DICT_6X6_250";
+  aruco.id = 17;
+  aruco.sizeMm = 60;
+  expectMarkerSheetReads(aruco, tracking::paperA4());
+}
+
+TEST(TrackingMarkers, BoardSheetReadsWithItsSquareSize) {
+  const tracking::CharucoBoardSpec spec;
+  for (const auto& paper : {tracking::paperA4(), tracking::paperLetter()}) {
+    SCOPED_TRACE(paper.name);
+    const auto sheet = tracking::renderCharucoSheet(spec, paper, 300);
+    const double scale = 1.0 / 3;  // 100 dpi
+    const auto board = spec.create();
+    std::vector<cv::Point2f> corners;
+    std::vector<int> ids;
+    tracking::findCharucoCorners(rescaled(sheet.image, scale), board,
+                                 cv::aruco::DetectorParameters::create(), corners, ids);
+    ASSERT_EQ(int(ids.size()), spec.cornerCount());
+    // Neighbouring corners (ids i and i+1 in a row) are one square apart: 30 mm at 100 dpi.
+    const double squarePx = spec.squareLength * 1e3 / 25.4 * 300 * scale;
+    const int perRow = spec.squaresX - 1;
+    int pairs = 0;
+    for (std::size_t a = 0; a < ids.size(); ++a)
+      for (std::size_t b = 0; b < ids.size(); ++b)
+        if (ids[b] == ids[a] + 1 && ids[a] % perRow != perRow - 1) {
+          EXPECT_NEAR(cv::norm(corners[b] - corners[a]), squarePx, 0.25);
+          ++pairs;
+        }
+    EXPECT_EQ(pairs, (spec.squaresX - 2) * (spec.squaresY - 1));
+    // The board's outer size on the sheet.
+    EXPECT_NEAR(cv::norm(sheet.corners[1] - sheet.corners[0]) * 25.4 / 300,
+                spec.squaresX * spec.squareLength * 1e3, 25.4 / 300);
+  }
+}
+
+TEST(TrackingMarkers, PngHasItsResolutionAndThePixels) {
+  tracking::MarkerSheetSpec planet;
+  const auto sheet = tracking::renderMarkerSheet(planet, tracking::paperA4(), 300);
+  const auto png = tracking::encodeSheetPng(sheet.image, 300);
+  const std::string s = asString(png);
+  const auto at = s.find("pHYs");
+  ASSERT_NE(at, std::string::npos);
+  const auto u = [&](std::size_t i) { return std::uint8_t(s[i]); };
+  const std::uint32_t ppm = (std::uint32_t(u(at + 4)) << 24) | (std::uint32_t(u(at + 5)) << 16) |
+                            (std::uint32_t(u(at + 6)) << 8) | std::uint32_t(u(at + 7));
+  EXPECT_EQ(ppm, 11811u);  // 300 dpi in pixels per metre
+  const cv::Mat back = cv::imdecode(png, cv::IMREAD_GRAYSCALE);
+  ASSERT_EQ(back.size(), sheet.image.size());
+  EXPECT_EQ(cv::countNonZero(back != sheet.image), 0);
+  EXPECT_LT(png.size(), 64u * 1024) << "a 1-bit sheet should compress well";
+  cv::Mat grey = sheet.image.clone();
+  grey.at<uchar>(0, 0) = 128;
+  EXPECT_THROW(tracking::encodeSheetPng(grey, 300), std::invalid_argument);
+}
+
+TEST(TrackingMarkers, PdfIsOnePageOfThePapersSizeWithAConsistentXref) {
+  tracking::MarkerSheetSpec tool;
+  tool.id = 1;
+  tool.sizeMm = 50;
+  tool.tool = true;
+  const auto paper = tracking::paperA4();
+  const auto sheet = tracking::renderMarkerSheet(tool, paper, 300);
+  const std::string pdf = asString(tracking::encodeSheetPdf(sheet.image, 300, paper, sheet.title));
+  EXPECT_EQ(pdf.rfind("%PDF-1.4", 0), 0u);
+  EXPECT_EQ(pdf.substr(pdf.size() - 6), "%%EOF\n");
+  EXPECT_NE(pdf.find("/MediaBox [0 0 595.276 841.890]"), std::string::npos);
+  EXPECT_NE(pdf.find("/Width 2480 /Height 3508"), std::string::npos);
+  EXPECT_NE(pdf.find("/Count 1"), std::string::npos);
+  // startxref points at the xref table, and each entry at its object.
+  const auto sx = pdf.rfind("startxref\n");
+  ASSERT_NE(sx, std::string::npos);
+  const std::size_t xref = std::stoul(pdf.substr(sx + 10));
+  ASSERT_EQ(pdf.compare(xref, 5, "xref\n"), 0);
+  const int count = std::stoi(pdf.substr(xref + 7));
+  ASSERT_EQ(count, 7);
+  for (int i = 1; i < count; ++i) {
+    const std::size_t entry = xref + 7 + std::to_string(count).size() + 1 + 20 * std::size_t(i);
+    const std::size_t offset = std::stoul(pdf.substr(entry, 10));
+    EXPECT_EQ(pdf.compare(offset, std::to_string(i).size() + 6, std::to_string(i) + " 0 obj"), 0)
+        << "object " << i;
+  }
+  // The image stream is as long as its /Length says.
+  const auto lenAt = pdf.find("/Length ", pdf.find("/Subtype /Image"));
+  const std::size_t len = std::stoul(pdf.substr(lenAt + 8));
+  const auto start = pdf.find("stream\n", lenAt) + 7;
+  EXPECT_EQ(pdf.compare(start + len, 10, "\nendstream"), 0);
+  // Drawn at its physical size: 2480 px at 300 dpi = 595.2 points.
+  EXPECT_NE(pdf.find("q 595.2000 0 0 841.9200 "), std::string::npos);
+}
+
+TEST(TrackingMarkers, BadSheetsAreRefused) {
+  tracking::MarkerSheetSpec bad;
+  bad.id = 100000;
+  EXPECT_THROW(tracking::renderMarkerSheet(bad, tracking::paperA4()), core::InputError);
+  tracking::MarkerSheetSpec huge;
+  huge.sizeMm = 250;
+  EXPECT_THROW(tracking::renderMarkerSheet(huge, tracking::paperLetter()), core::InputError);
+  tracking::CharucoBoardSpec big;
+  big.squareLength = 0.05;
+  EXPECT_THROW(tracking::renderCharucoSheet(big, tracking::paperA4()), core::InputError);
+  EXPECT_THROW(tracking::paperFromString("a3"), core::InputError);
+}
