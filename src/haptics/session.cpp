@@ -49,7 +49,7 @@ int halfSizeFor(const SessionConfig& c, const core::Chart& chart) {
 
 }  // namespace
 
-HapticSession::HapticSession(terrain::Terrain& terrain, edit::EditPipeline* pipeline,
+HapticSession::HapticSession(const terrain::Terrain& terrain, edit::EditPipeline* pipeline,
                              SessionConfig config, sand::EditListener* listener)
     : terrain_(terrain),
       pipeline_(pipeline),

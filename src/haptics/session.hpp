@@ -61,9 +61,10 @@ struct FrameForces {
 
 class HapticSession {
  public:
-  // `pipeline` may be null (forces only, no sculpting); it must edit `terrain`. `listener`
-  // (e.g. a sand::Settler) is told what the displacement changed. All must outlive the session.
-  HapticSession(terrain::Terrain& terrain, edit::EditPipeline* pipeline, SessionConfig config,
+  // `pipeline` may be null (forces only, no sculpting: e.g. from replay's read-only frame hook);
+  // otherwise it must edit `terrain`. `listener` (e.g. a sand::Settler) is told what the
+  // displacement changed. All must outlive the session.
+  HapticSession(const terrain::Terrain& terrain, edit::EditPipeline* pipeline, SessionConfig config,
                 sand::EditListener* listener = nullptr);
   ~HapticSession();
 
@@ -93,7 +94,7 @@ class HapticSession {
   void consume(const std::vector<ForceRecord>& records, FrameForces& f);
   void press(const ForceRecord& r, FrameForces& f);
 
-  terrain::Terrain& terrain_;
+  const terrain::Terrain& terrain_;
   edit::EditPipeline* pipeline_;
   SessionConfig config_;
   int halfSize_;
