@@ -107,7 +107,8 @@ void evaluate(const Recording& rec, const Config& c, const core::LatLongChart& c
     return r;
   }());
   std::vector<double> cpuMs, ms, tipErr, tipRawErr, tipCamErr, rotErr;
-  std::map<std::string, std::vector<double>> byDistance;
+  std::map<std::string, std::vector<double>> byDistance, byTilt;
+  double maxToolTilt = 0;
   std::vector<std::pair<double, nlohmann::json>> worst;
   int flips = 0, rawFlips = 0, visibleBoth = 0, trackedBoth = 0, touchingFrames = 0, cvWithin = 0;
   int toolVisible = 0, toolFound = 0, planetVisible = 0, planetFound = 0;
@@ -171,6 +172,14 @@ void evaluate(const Recording& rec, const Config& c, const core::LatLongChart& c
       std::snprintf(key, sizeof key, "%.2f", std::round(gt.camera.t.norm() / 0.15) * 0.15);
       byDistance[key].push_back(tipErr.back());
     }
+    {
+      // The tool marker's tilt away from the line of sight, in 15-degree bins (0-15, 15-30, ...).
+      char key[16];
+      std::snprintf(key, sizeof key, "%02d-%02d", 15 * int(gt.toolTiltDeg / 15),
+                    15 * int(gt.toolTiltDeg / 15) + 15);
+      byTilt[key].push_back(tipErr.back());
+      maxToolTilt = std::max(maxToolTilt, gt.toolTiltDeg);
+    }
     tipCamErr.push_back(1e3 * (f.tipCamera - gt.tipCamera).norm());
     if (fr.tipValid) tipRawErr.push_back(1e3 * (fr.tipPlanet - gt.tipPlanet).norm());
     if (gt.tipHeight <= touch) {
@@ -207,6 +216,7 @@ void evaluate(const Recording& rec, const Config& c, const core::LatLongChart& c
       {"raw_flips", rawFlips},
       {"touching_frames", touchingFrames},
       {"control_vertex_within_3mm", r3(touchingFrames ? double(cvWithin) / touchingFrames : 0)},
+      {"tool_tilt_max_deg", r3(maxToolTilt)},
       {"filtered", c.filter}};
   std::sort(worst.begin(), worst.end(),
             [](const auto& a, const auto& b) { return a.first > b.first; });
@@ -214,6 +224,9 @@ void evaluate(const Recording& rec, const Config& c, const core::LatLongChart& c
     j["worst"].push_back(worst[w].second);
   for (const auto& [k, v] : byDistance)
     j["tip_error_by_distance_m"][k] = {
+        {"median_mm", r3(median(v))}, {"p95_mm", r3(percentile(v, 0.95))}, {"n", v.size()}};
+  for (const auto& [k, v] : byTilt)
+    j["tip_error_by_tool_tilt_deg"][k] = {
         {"median_mm", r3(median(v))}, {"p95_mm", r3(percentile(v, 0.95))}, {"n", v.size()}};
   out << j.dump() << std::endl;
 }
@@ -256,6 +269,12 @@ void benchTrack(const BenchOptions& o, std::ostream& out) {
       raw.label += " unfiltered";
       evaluate(rec, raw, chart, 0.004, out);
     }
+  }
+  // The tool marker turned up to 60 degrees away, 0.35-0.9 m: the default detector and aruco.
+  if (!std::getenv("PS_TRACK_ONLY")) {
+    const Recording tilted = record("tilt", {640, 480}, stride);
+    evaluate(tilted, configs[0], chart, 0.004, out);
+    evaluate(tilted, configs[3], chart, 0.004, out);
   }
   cv::setNumThreads(threads);
 }
