@@ -8,6 +8,7 @@ PACKAGES=(
   libeigen3-dev libgtest-dev libbenchmark-dev
   libcli11-dev nlohmann-json3-dev libfmt-dev
   libopencv-dev libopencv-contrib-dev libapriltag-dev libtiff-dev zlib1g-dev
+  libegl-dev libopengl-dev libgl-dev libegl-mesa0 libgl1-mesa-dri
 )
 
 missing=()

@@ -19,7 +19,11 @@ const CommandRegistration kReplay([](CLI::App& root, CLI::App*& sub) -> CommandA
   sub->add_option("video", a->job.video, "Video (or image folder) to replay")->required();
   sub->add_option("--calib", a->job.calibration, "Camera calibration (OpenCV YAML)")->required();
   sub->add_option("--out", a->job.out, "Output folder")->capture_default_str();
-  sub->add_flag("--pictures", a->job.pictures, "Also write relief, close-up and view pictures");
+  sub->add_flag("--pictures", a->job.pictures,
+                "Also write relief, close-up, view and AR showcase pictures");
+  sub->add_flag("--render", a->job.render, "Write the AR frames and overviews to OUT/ar/");
+  sub->add_option("--render-every", a->job.renderEvery, "Render every Nth frame")
+      ->capture_default_str();
   a->addOptions(sub);
   return [a] {
     a->apply();

@@ -8,9 +8,11 @@
 #include <numbers>
 #include <opencv2/imgproc.hpp>
 
+#include "app/ar_recorder.hpp"
 #include "app/default_planet.hpp"
 #include "app/progress.hpp"
 #include "app/snapshot.hpp"
+#include "core/input_error.hpp"
 #include "io/heightmap_export.hpp"
 #include "io/planet_file.hpp"
 #include "terrain/screen_error.hpp"
@@ -104,6 +106,24 @@ nlohmann::json runReplayJob(const ReplayJob& job) {
                                                  : io::loadPlanet(job.planetFile);
   const std::vector<float> before(planet->heights().begin(), planet->heights().end());
 
+  std::unique_ptr<ArRecorder> recorder;
+  std::string noRender;
+  if (job.render || job.pictures) {
+    if (job.renderEvery < 1)
+      throw core::InputError("--render-every = " + std::to_string(job.renderEvery) +
+                             " must be at least 1");
+    ArRecorderSettings rs;
+    if (job.render) rs.frameDir = job.out / "ar";
+    rs.every = job.renderEvery;
+    rs.showcase = job.pictures;
+    try {
+      recorder = std::make_unique<ArRecorder>(rs);
+    } catch (const std::runtime_error& e) {
+      if (job.render) throw;
+      noRender = e.what();  // pictures without the AR view; said in the summary
+    }
+  }
+
   const std::filesystem::path& out = job.out;
   std::filesystem::create_directories(out);
   std::ofstream log(out / "log.jsonl.part"), timings(out / "timings.jsonl.part");
@@ -111,10 +131,14 @@ nlohmann::json runReplayJob(const ReplayJob& job) {
   replay::ReplaySummary s;
   {
     Progress p("replay " + job.video.filename().string());
+    replay::FrameHook hook;
+    if (recorder) hook = [&](const replay::FrameContext& f) { recorder->onFrame(f); };
     s = replay::runReplay(
-        source, calib, *planet, job.options, log, &timings, [&](int f, int total) {
+        source, calib, *planet, job.options, log, &timings,
+        [&](int f, int total) {
           p.update(total > 0 ? double(f) / total : 0.0, std::to_string(f) + " frames");
-        });
+        },
+        hook);
     p.done(std::to_string(s.frames) + " frames, " + std::to_string(s.strokes) + " strokes, " +
            std::to_string(s.stamps) + " stamps");
   }
@@ -154,6 +178,21 @@ nlohmann::json runReplayJob(const ReplayJob& job) {
                             {"radius_m", planet->chart().radius()},
                             {"heightmap", {{"width", hmW}, {"height", hmH}}}};
 
+  if (recorder) {
+    summary["renderer"] = recorder->renderer();
+    summary["render_ms"] = recorder->renderMsTotal();
+    if (job.render) {
+      summary["ar_frames"] = recorder->framesWritten();
+      files.push_back("ar/");
+    }
+    if (job.pictures && recorder->writeShowcase(out)) {
+      files.push_back("ar_view.png");
+      files.push_back("overview.png");
+    }
+  } else if (!noRender.empty()) {
+    summary["ar_view_skipped"] = noRender;
+    std::cerr << "replay: no AR pictures: " << noRender << "\n";
+  }
   if (job.pictures && planet->chart().radius() > 0) {
     Progress p("pictures");
     const int w = 2048, h = 1024;

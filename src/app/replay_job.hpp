@@ -19,7 +19,13 @@ struct ReplayJob {
   replay::ReplayOptions options;
   // Pictures: relief.png (after), relief_before.png, closeup.png (before | after around what
   // changed), view.png and view_wireframe.png (a tessellated view of the sculpted region).
+  // With pictures, also the AR showcase (ar_view.png, overview.png: the middle frame of the
+  // longest touching run) when headless OpenGL is available.
   bool pictures = false;
+  // AR frames: DIR/ar/frame_NNNNN.png and overview_NNNNN.png every renderEvery frames (needs
+  // headless OpenGL; an error when there is none).
+  bool render = false;
+  int renderEvery = 1;
   double distMaxPx = 4.0;
   std::size_t triangleBudget = 70000;
 };

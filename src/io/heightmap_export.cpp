@@ -274,9 +274,8 @@ void writeHeightRaw32(const Raster& raster, const std::filesystem::path& path) {
   writeSidecar(side, path);
 }
 
-namespace {
 // Hypsometric ramp (metres -> BGR): deep sea, shallow sea, lowland, upland, mountain, snow.
-cv::Vec3f tint(double h) {
+cv::Vec3f hypsometricTint(double h) {
   struct Stop {
     double h;
     float b, g, r;
@@ -296,7 +295,6 @@ cv::Vec3f tint(double h) {
   const Stop& s = stops[std::size(stops) - 1];
   return {s.b, s.g, s.r};
 }
-}  // namespace
 
 cv::Mat reliefImage(const Raster& raster, double metresPerPixel) {
   cv::Mat img(raster.height, raster.width, CV_8UC3);
@@ -319,7 +317,7 @@ cv::Mat reliefImage(const Raster& raster, double metresPerPixel) {
           Eigen::Vector3d(-gx * 8, gy * 8, 1).normalized();  // 8x vertical exaggeration
       const double shade = h < 0 ? 0.85 + 0.15 * std::max(0.0, n.dot(light))
                                  : 0.35 + 0.75 * std::max(0.0, n.dot(light));
-      const cv::Vec3f c = tint(h) * float(shade);
+      const cv::Vec3f c = hypsometricTint(h) * float(shade);
       img.at<cv::Vec3b>(y, x) =
           cv::Vec3b(cv::saturate_cast<uchar>(c[0]), cv::saturate_cast<uchar>(c[1]),
                     cv::saturate_cast<uchar>(c[2]));

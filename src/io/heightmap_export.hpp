@@ -50,6 +50,8 @@ void writeHeightPng16(const Raster& raster, const std::filesystem::path& path);
 // Colour preview: hypsometric tint with hill shading (8-bit RGB PNG). Atomic.
 void writeReliefPreview(const Raster& raster, double metresPerPixel,
                         const std::filesystem::path& path);
+// The colour ramp of the previews and the renderer: metres -> BGR in [0, 255].
+cv::Vec3f hypsometricTint(double metres);
 // The same picture as an 8-bit BGR image.
 cv::Mat reliefImage(const Raster& raster, double metresPerPixel);
 // Any image as a PNG, written atomically (temporary file + rename).

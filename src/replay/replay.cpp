@@ -205,8 +205,10 @@ ReplaySummary runReplay(tracking::FrameSource& source, const tracking::CameraCal
     editMs = msSince(t2);
     lastTime = time;
     if (hook) {
-      const FrameContext ctx{frame,  time,  image,    f,       calib,
-                             planet, scale, touching, control, tool.radius()};
+      std::optional<tracking::Pose> planetPose;
+      if (f.planet.usable()) planetPose = scene.planetFromMarker(f.planet.pose);
+      const FrameContext ctx{frame, time,       image,    f,       calib,        planet,
+                             scale, planetPose, touching, control, tool.radius()};
       hook(ctx);
     }
     log << j.dump() << "\n";

@@ -79,6 +79,9 @@ struct FrameContext {
   const tracking::CameraCalibration& calibration;  // for the video's size
   const terrain::Terrain& planet;
   double scale = 1;  // planet metres per metre of the marker world
+  // The planet frame's pose in the camera frame (marker-world metres) while the planet marker
+  // is tracked or held.
+  std::optional<tracking::Pose> planetInCamera;
   bool touching = false;
   std::optional<core::GridPoint> control;  // the control vertex while touching
   double toolRadius = 0;                   // r_d of the active tool (m on the planet)

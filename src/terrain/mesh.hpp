@@ -12,6 +12,9 @@ struct Mesh {
   std::vector<std::uint64_t> gridIndex;           // per vertex: v * side + u
   std::vector<Eigen::Vector3f> positions;         // per vertex: P - eye
   std::vector<std::uint32_t> indices;             // 3 per triangle
+  // Advances every time the producer rebuilds this mesh in place (a renderer re-uploads only
+  // when it changed).
+  std::uint64_t generation = 0;
 
   std::size_t triangleCount() const { return indices.size() / 3; }
   void clear() {

@@ -111,6 +111,7 @@ bool Tessellator::pass(const ChartT& chart, const Terrain& terrain, const Camera
 
   mesh_.clear();
   mesh_.eye = eye;
+  ++mesh_.generation;
   std::fill(hashKeys_.begin(), hashKeys_.end(), kEmpty);
   stats_.visited = stats_.culledFrustum = stats_.culledHorizon = 0;
 

@@ -1,0 +1,87 @@
+#include "app/ar_recorder.hpp"
+
+#include <chrono>
+#include <cstdio>
+#include <opencv2/imgproc.hpp>
+
+#include "io/heightmap_export.hpp"
+#include "render/projection.hpp"
+
+namespace ps::app {
+
+namespace {
+constexpr std::size_t kMaxRun = 400;  // frames of one touching run kept for the showcase
+}
+
+ArRecorder::ArRecorder(ArRecorderSettings settings) : settings_(std::move(settings)) {
+  if (!settings_.frameDir.empty()) std::filesystem::create_directories(settings_.frameDir);
+}
+
+void ArRecorder::onFrame(const replay::FrameContext& f) {
+  const bool wantSequence = !settings_.frameDir.empty() && f.frame % settings_.every == 0;
+  const bool wantShowcase = settings_.showcase && f.touching && f.planetInCamera;
+  auto closeRun = [&] {
+    if (run_.size() > bestLength_) {
+      bestLength_ = run_.size();
+      best_ = run_[run_.size() / 2];
+    }
+    run_.clear();
+  };
+  if (!f.touching) closeRun();
+  if (!wantSequence && !wantShowcase) return;
+  const auto t0 = std::chrono::steady_clock::now();
+  cv::Mat view, overview;
+  if (f.planetInCamera) {
+    const cv::Matx33d& K = f.calibration.K;
+    Eigen::Matrix3d k;
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j) k(i, j) = K(i, j);
+    const terrain::Camera cam = render::arCamera(f.planetInCamera->R, f.planetInCamera->t, f.scale,
+                                                 k, f.image.cols, f.image.rows);
+    terrain::TessellationSettings ts;
+    ts.distMaxPx = settings_.distMaxPx;
+    ts.triangleBudget = settings_.triangleBudget;
+    const auto& mesh = tessellator_.tessellate(f.planet, cam, ts);
+    render::RenderStyle style;
+    style.wireframe = settings_.wireframe;
+    std::optional<render::Cursor> cursor;
+    if (f.control) cursor = render::Cursor{*f.control, f.toolRadius};
+    view = renderer_.renderAR(f.image, f.planet, mesh, cam, style, cursor);
+    overview = renderer_.renderOverview(f.planet, mesh, cam, 480, 480);
+  } else {
+    // No planet: the camera image alone (the planet is not drawn where it is not tracked).
+    if (f.image.channels() == 1)
+      cv::cvtColor(f.image, view, cv::COLOR_GRAY2BGR);
+    else
+      view = f.image.clone();
+  }
+  renderMs_ +=
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  if (wantSequence) {
+    char name[32];
+    std::snprintf(name, sizeof name, "frame_%05d.png", f.frame);
+    io::writePngAtomically(view, settings_.frameDir / name);
+    if (!overview.empty()) {
+      std::snprintf(name, sizeof name, "overview_%05d.png", f.frame);
+      io::writePngAtomically(overview, settings_.frameDir / name);
+    }
+    ++written_;
+  }
+  if (wantShowcase && run_.size() < kMaxRun) run_.emplace_back(view, overview);
+}
+
+bool ArRecorder::writeShowcase(const std::filesystem::path& dir) {
+  if (!run_.empty()) {
+    if (run_.size() > bestLength_) {
+      bestLength_ = run_.size();
+      best_ = run_[run_.size() / 2];
+    }
+    run_.clear();
+  }
+  if (best_.first.empty()) return false;
+  io::writePngAtomically(best_.first, dir / "ar_view.png");
+  if (!best_.second.empty()) io::writePngAtomically(best_.second, dir / "overview.png");
+  return true;
+}
+
+}  // namespace ps::app

@@ -1,0 +1,50 @@
+#pragma once
+// Watches a replay (replay::FrameHook) and renders what a user would have seen: the AR view
+// (camera image, planet on its marker, cursor) and the overview. Writes every `every`-th frame
+// to DIR/ar/frame_NNNNN.png (and DIR/ar/overview_NNNNN.png) when asked, and keeps the frame in
+// the middle of the longest touching run as the showcase (ar_view.png, overview.png).
+#include <filesystem>
+#include <memory>
+#include <opencv2/core.hpp>
+
+#include "render/egl_context.hpp"
+#include "render/planet_renderer.hpp"
+#include "replay/replay.hpp"
+#include "terrain/tessellator.hpp"
+
+namespace ps::app {
+
+struct ArRecorderSettings {
+  std::filesystem::path frameDir;  // empty: no frame sequence
+  int every = 1;
+  bool showcase = true;
+  double distMaxPx = 1.0;
+  std::size_t triangleBudget = 70000;
+  bool wireframe = false;
+};
+
+class ArRecorder {
+ public:
+  // Throws std::runtime_error when no headless OpenGL context can be made.
+  explicit ArRecorder(ArRecorderSettings settings);
+  void onFrame(const replay::FrameContext& frame);
+  // Writes ar_view.png and overview.png into `dir`; false when no frame touched.
+  bool writeShowcase(const std::filesystem::path& dir);
+  int framesWritten() const { return written_; }
+  std::string renderer() const { return context_.renderer(); }
+  double renderMsTotal() const { return renderMs_; }
+
+ private:
+  ArRecorderSettings settings_;
+  render::EglContext context_;
+  render::PlanetRenderer renderer_;
+  terrain::Tessellator tessellator_;
+  int written_ = 0;
+  double renderMs_ = 0;
+  // The current touching run's frames and the best (longest) run's middle frame.
+  std::vector<std::pair<cv::Mat, cv::Mat>> run_;
+  std::pair<cv::Mat, cv::Mat> best_;
+  std::size_t bestLength_ = 0;
+};
+
+}  // namespace ps::app

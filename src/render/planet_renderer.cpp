@@ -1,0 +1,471 @@
+#include "render/planet_renderer.hpp"
+
+#define GL_GLEXT_PROTOTYPES
+#include <GL/gl.h>
+#include <GL/glext.h>
+
+#include <Eigen/Geometry>
+#include <array>
+#include <cmath>
+#include <numbers>
+#include <opencv2/imgproc.hpp>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "io/heightmap_export.hpp"
+#include "render/projection.hpp"
+
+namespace ps::render {
+
+namespace {
+
+constexpr const char* kMeshVertex = R"(#version 330 core
+layout(location = 0) in vec3 position;  // relative to the mesh's eye (planet frame)
+layout(location = 1) in float height;   // metres above the reference surface
+uniform mat4 clipFromEyeRelative;       // projection * rotation * translate(meshEye - cameraEye)
+uniform vec3 offset;                    // meshEye - cameraEye
+out vec3 eyeRelative;                   // planet frame, relative to the camera
+out float metres;
+void main() {
+  eyeRelative = position + offset;
+  metres = height;
+  gl_Position = clipFromEyeRelative * vec4(position, 1.0);
+}
+)";
+
+constexpr const char* kMeshFragment = R"(#version 330 core
+in vec3 eyeRelative;
+in float metres;
+uniform sampler1D ramp;       // hypsometric colours over [rampLow, rampHigh] metres
+uniform float rampLow, rampHigh;
+uniform vec3 sun;             // planet frame
+uniform vec3 cameraPosition;  // planet frame (only for the outward direction)
+uniform float contourInterval;  // 0: none
+uniform int wireOnly;
+out vec4 colour;
+void main() {
+  if (wireOnly == 1) { colour = vec4(0.08, 0.08, 0.08, 1.0); return; }
+  // Flat normals from screen-space derivatives: the facets of the tessellation show, as in
+  // paper 003's figures.
+  vec3 n = normalize(cross(dFdx(eyeRelative), dFdy(eyeRelative)));
+  if (dot(n, normalize(eyeRelative + cameraPosition)) < 0.0) n = -n;
+  float light = 0.3 + 0.7 * max(dot(n, sun), 0.0);
+  vec3 c = texture(ramp, clamp((metres - rampLow) / (rampHigh - rampLow), 0.0, 1.0)).rgb;
+  c *= light;
+  if (contourInterval > 0.0) {
+    float x = metres / contourInterval;
+    float d = abs(fract(x - 0.5) - 0.5) / max(fwidth(x), 1e-6);
+    c = mix(vec3(0.05), c, clamp(d - 0.5, 0.0, 1.0) * 0.6 + 0.4);
+  }
+  colour = vec4(c, 1.0);
+}
+)";
+
+constexpr const char* kLineVertex = R"(#version 330 core
+layout(location = 0) in vec3 position;  // relative to the camera (planet frame)
+uniform mat4 clipFromEyeRelative;
+void main() { gl_Position = clipFromEyeRelative * vec4(position, 1.0); }
+)";
+
+constexpr const char* kLineFragment = R"(#version 330 core
+uniform vec3 lineColour;
+out vec4 colour;
+void main() { colour = vec4(lineColour, 1.0); }
+)";
+
+constexpr const char* kBackgroundVertex = R"(#version 330 core
+out vec2 uv;
+void main() {
+  // One triangle covering the screen; uv (0, 0) at the image's top-left.
+  vec2 p = vec2(float((gl_VertexID & 1) << 2) - 1.0, float((gl_VertexID & 2) << 1) - 1.0);
+  uv = vec2(0.5 * (p.x + 1.0), 0.5 * (1.0 - p.y));
+  gl_Position = vec4(p, 0.0, 1.0);
+}
+)";
+
+constexpr const char* kBackgroundFragment = R"(#version 330 core
+in vec2 uv;
+uniform sampler2D image;
+out vec4 colour;
+void main() { colour = vec4(texture(image, uv).rgb, 1.0); }
+)";
+
+GLuint compile(GLenum type, const char* source) {
+  const GLuint s = glCreateShader(type);
+  glShaderSource(s, 1, &source, nullptr);
+  glCompileShader(s);
+  GLint ok = 0;
+  glGetShaderiv(s, GL_COMPILE_STATUS, &ok);
+  if (!ok) {
+    std::array<char, 4096> log{};
+    glGetShaderInfoLog(s, GLsizei(log.size()), nullptr, log.data());
+    glDeleteShader(s);
+    throw std::runtime_error(std::string("renderer: shader does not compile: ") + log.data());
+  }
+  return s;
+}
+
+GLuint program(const char* vertex, const char* fragment) {
+  const GLuint v = compile(GL_VERTEX_SHADER, vertex), f = compile(GL_FRAGMENT_SHADER, fragment);
+  const GLuint p = glCreateProgram();
+  glAttachShader(p, v);
+  glAttachShader(p, f);
+  glLinkProgram(p);
+  glDeleteShader(v);
+  glDeleteShader(f);
+  GLint ok = 0;
+  glGetProgramiv(p, GL_LINK_STATUS, &ok);
+  if (!ok) {
+    std::array<char, 4096> log{};
+    glGetProgramInfoLog(p, GLsizei(log.size()), nullptr, log.data());
+    throw std::runtime_error(std::string("renderer: program does not link: ") + log.data());
+  }
+  return p;
+}
+
+std::array<float, 16> toGl(const Eigen::Matrix4d& m) {
+  std::array<float, 16> a{};
+  for (int c = 0; c < 4; ++c)
+    for (int r = 0; r < 4; ++r) a[std::size_t(4 * c + r)] = float(m(r, c));  // column-major
+  return a;
+}
+
+constexpr float kRampLow = -9000, kRampHigh = 9000;
+
+}  // namespace
+
+struct PlanetRenderer::Gl {
+  GLuint meshProgram = 0, lineProgram = 0, backgroundProgram = 0;
+  GLuint meshVao = 0, positionBuffer = 0, heightBuffer = 0, indexBuffer = 0;
+  GLuint lineVao = 0, lineBuffer = 0, emptyVao = 0;
+  GLuint rampTexture = 0, imageTexture = 0;
+  GLuint framebuffer = 0, colourBuffer = 0, depthBuffer = 0;
+  int width = 0, height = 0;
+};
+
+PlanetRenderer::PlanetRenderer() : gl_(new Gl) {
+  Gl& g = *gl_;
+  g.meshProgram = program(kMeshVertex, kMeshFragment);
+  g.lineProgram = program(kLineVertex, kLineFragment);
+  g.backgroundProgram = program(kBackgroundVertex, kBackgroundFragment);
+  glGenVertexArrays(1, &g.meshVao);
+  glGenBuffers(1, &g.positionBuffer);
+  glGenBuffers(1, &g.heightBuffer);
+  glGenBuffers(1, &g.indexBuffer);
+  glBindVertexArray(g.meshVao);
+  glBindBuffer(GL_ARRAY_BUFFER, g.positionBuffer);
+  glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, 3 * sizeof(float), nullptr);
+  glEnableVertexAttribArray(0);
+  glBindBuffer(GL_ARRAY_BUFFER, g.heightBuffer);
+  glVertexAttribPointer(1, 1, GL_FLOAT, GL_FALSE, sizeof(float), nullptr);
+  glEnableVertexAttribArray(1);
+  glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, g.indexBuffer);
+  glGenVertexArrays(1, &g.lineVao);
+  glGenBuffers(1, &g.lineBuffer);
+  glBindVertexArray(g.lineVao);
+  glBindBuffer(GL_ARRAY_BUFFER, g.lineBuffer);
+  glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, 3 * sizeof(float), nullptr);
+  glEnableVertexAttribArray(0);
+  glGenVertexArrays(1, &g.emptyVao);
+  glBindVertexArray(0);
+
+  // The colour ramp as a 1D texture, from the same function as the relief previews.
+  std::vector<float> ramp(3 * 512);
+  for (int i = 0; i < 512; ++i) {
+    const cv::Vec3f bgr = io::hypsometricTint(kRampLow + (kRampHigh - kRampLow) * i / 511.0);
+    for (int k = 0; k < 3; ++k) ramp[std::size_t(3 * i + k)] = bgr[2 - k] / 255.0f;
+  }
+  glGenTextures(1, &g.rampTexture);
+  glBindTexture(GL_TEXTURE_1D, g.rampTexture);
+  glTexImage1D(GL_TEXTURE_1D, 0, GL_RGB32F, 512, 0, GL_RGB, GL_FLOAT, ramp.data());
+  glTexParameteri(GL_TEXTURE_1D, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
+  glTexParameteri(GL_TEXTURE_1D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+  glTexParameteri(GL_TEXTURE_1D, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+  glGenTextures(1, &g.imageTexture);
+  if (glGetError() != GL_NO_ERROR) throw std::runtime_error("renderer: OpenGL setup failed");
+}
+
+PlanetRenderer::~PlanetRenderer() {
+  Gl& g = *gl_;
+  glDeleteProgram(g.meshProgram);
+  glDeleteProgram(g.lineProgram);
+  glDeleteProgram(g.backgroundProgram);
+  const GLuint buffers[] = {g.positionBuffer, g.heightBuffer, g.indexBuffer, g.lineBuffer};
+  glDeleteBuffers(4, buffers);
+  const GLuint arrays[] = {g.meshVao, g.lineVao, g.emptyVao};
+  glDeleteVertexArrays(3, arrays);
+  const GLuint textures[] = {g.rampTexture, g.imageTexture};
+  glDeleteTextures(2, textures);
+  if (g.framebuffer) {
+    glDeleteFramebuffers(1, &g.framebuffer);
+    const GLuint rb[] = {g.colourBuffer, g.depthBuffer};
+    glDeleteRenderbuffers(2, rb);
+  }
+  delete gl_;
+}
+
+void PlanetRenderer::target(int width, int height) {
+  Gl& g = *gl_;
+  if (width <= 0 || height <= 0 || width > 16384 || height > 16384)
+    throw std::invalid_argument("renderer: image size " + std::to_string(width) + "x" +
+                                std::to_string(height) + " is not in 1..16384");
+  if (g.framebuffer == 0 || g.width != width || g.height != height) {
+    if (g.framebuffer == 0) {
+      glGenFramebuffers(1, &g.framebuffer);
+      glGenRenderbuffers(1, &g.colourBuffer);
+      glGenRenderbuffers(1, &g.depthBuffer);
+    }
+    glBindRenderbuffer(GL_RENDERBUFFER, g.colourBuffer);
+    glRenderbufferStorage(GL_RENDERBUFFER, GL_RGBA8, width, height);
+    glBindRenderbuffer(GL_RENDERBUFFER, g.depthBuffer);
+    glRenderbufferStorage(GL_RENDERBUFFER, GL_DEPTH_COMPONENT32F, width, height);
+    glBindFramebuffer(GL_FRAMEBUFFER, g.framebuffer);
+    glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_RENDERBUFFER,
+                              g.colourBuffer);
+    glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, g.depthBuffer);
+    if (glCheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
+      throw std::runtime_error("renderer: framebuffer incomplete");
+    g.width = width;
+    g.height = height;
+  }
+  glBindFramebuffer(GL_FRAMEBUFFER, g.framebuffer);
+  glViewport(0, 0, width, height);
+}
+
+void PlanetRenderer::upload(const terrain::Terrain& planet, const terrain::Mesh& mesh) {
+  stats_.uploadedThisFrame = false;
+  if (uploadedMesh_ == &mesh && uploadedGeneration_ == mesh.generation) return;
+  Gl& g = *gl_;
+  const int side = planet.grid().side();
+  std::vector<float> heights(mesh.gridIndex.size());
+  for (std::size_t i = 0; i < heights.size(); ++i) {
+    const auto gi = mesh.gridIndex[i];
+    heights[i] = planet.height(int(gi % std::uint64_t(side)), int(gi / std::uint64_t(side)));
+  }
+  glBindBuffer(GL_ARRAY_BUFFER, g.positionBuffer);
+  glBufferData(GL_ARRAY_BUFFER, GLsizeiptr(mesh.positions.size() * sizeof(Eigen::Vector3f)),
+               mesh.positions.data(), GL_DYNAMIC_DRAW);
+  glBindBuffer(GL_ARRAY_BUFFER, g.heightBuffer);
+  glBufferData(GL_ARRAY_BUFFER, GLsizeiptr(heights.size() * sizeof(float)), heights.data(),
+               GL_DYNAMIC_DRAW);
+  glBindVertexArray(g.meshVao);
+  glBufferData(GL_ELEMENT_ARRAY_BUFFER, GLsizeiptr(mesh.indices.size() * sizeof(std::uint32_t)),
+               mesh.indices.data(), GL_DYNAMIC_DRAW);
+  glBindVertexArray(0);
+  uploadedMesh_ = &mesh;
+  uploadedGeneration_ = mesh.generation;
+  uploadedIndices_ = mesh.indices.size();
+  ++stats_.uploads;
+  stats_.uploadedBytes = mesh.positions.size() * sizeof(Eigen::Vector3f) +
+                         heights.size() * sizeof(float) +
+                         mesh.indices.size() * sizeof(std::uint32_t);
+  stats_.uploadedThisFrame = true;
+}
+
+void PlanetRenderer::drawMesh(const terrain::Mesh& mesh, const terrain::Camera& camera,
+                              const Eigen::Matrix4d& clip, const RenderStyle& style,
+                              bool wireOnly) {
+  Gl& g = *gl_;
+  const Eigen::Vector3d offset = mesh.eye - camera.eye;
+  glUseProgram(g.meshProgram);
+  const auto m = toGl(clipFromEyeRelative(clip, camera.rotation, offset));
+  glUniformMatrix4fv(glGetUniformLocation(g.meshProgram, "clipFromEyeRelative"), 1, GL_FALSE,
+                     m.data());
+  glUniform3f(glGetUniformLocation(g.meshProgram, "offset"), float(offset.x()), float(offset.y()),
+              float(offset.z()));
+  const Eigen::Vector3d sun = style.sun.normalized();
+  glUniform3f(glGetUniformLocation(g.meshProgram, "sun"), float(sun.x()), float(sun.y()),
+              float(sun.z()));
+  glUniform3f(glGetUniformLocation(g.meshProgram, "cameraPosition"), float(camera.eye.x()),
+              float(camera.eye.y()), float(camera.eye.z()));
+  glUniform1f(glGetUniformLocation(g.meshProgram, "rampLow"), kRampLow);
+  glUniform1f(glGetUniformLocation(g.meshProgram, "rampHigh"), kRampHigh);
+  glUniform1f(glGetUniformLocation(g.meshProgram, "contourInterval"),
+              style.contours ? float(style.contourIntervalM) : 0.0f);
+  glUniform1i(glGetUniformLocation(g.meshProgram, "wireOnly"), wireOnly ? 1 : 0);
+  glActiveTexture(GL_TEXTURE0);
+  glBindTexture(GL_TEXTURE_1D, g.rampTexture);
+  glUniform1i(glGetUniformLocation(g.meshProgram, "ramp"), 0);
+  glBindVertexArray(g.meshVao);
+  if (wireOnly) {
+    glPolygonMode(GL_FRONT_AND_BACK, GL_LINE);
+    glEnable(GL_POLYGON_OFFSET_LINE);
+    glPolygonOffset(-1, -1);
+  }
+  glDrawElements(GL_TRIANGLES, GLsizei(uploadedIndices_), GL_UNSIGNED_INT, nullptr);
+  if (wireOnly) {
+    glPolygonMode(GL_FRONT_AND_BACK, GL_FILL);
+    glDisable(GL_POLYGON_OFFSET_LINE);
+  }
+  glBindVertexArray(0);
+}
+
+void PlanetRenderer::drawLines(const std::vector<Eigen::Vector3d>& points, bool loop,
+                               const terrain::Camera& camera, const Eigen::Matrix4d& clip,
+                               const Eigen::Vector3f& colour, bool depthTest) {
+  if (points.size() < 2) return;
+  Gl& g = *gl_;
+  std::vector<Eigen::Vector3f> rel;
+  rel.reserve(points.size());
+  for (const auto& p : points) rel.push_back((p - camera.eye).cast<float>());
+  glBindVertexArray(g.lineVao);
+  glBindBuffer(GL_ARRAY_BUFFER, g.lineBuffer);
+  glBufferData(GL_ARRAY_BUFFER, GLsizeiptr(rel.size() * sizeof(Eigen::Vector3f)), rel.data(),
+               GL_STREAM_DRAW);
+  glUseProgram(g.lineProgram);
+  const auto m = toGl(clipFromEyeRelative(clip, camera.rotation, Eigen::Vector3d::Zero()));
+  glUniformMatrix4fv(glGetUniformLocation(g.lineProgram, "clipFromEyeRelative"), 1, GL_FALSE,
+                     m.data());
+  glUniform3f(glGetUniformLocation(g.lineProgram, "lineColour"), colour.x(), colour.y(),
+              colour.z());
+  if (!depthTest) glDisable(GL_DEPTH_TEST);
+  glDrawArrays(loop ? GL_LINE_LOOP : GL_LINES, 0, GLsizei(rel.size()));
+  glEnable(GL_DEPTH_TEST);
+  glBindVertexArray(0);
+}
+
+cv::Mat PlanetRenderer::readBack() const {
+  const Gl& g = *gl_;
+  cv::Mat rgba(g.height, g.width, CV_8UC4);
+  glPixelStorei(GL_PACK_ALIGNMENT, 1);
+  glReadPixels(0, 0, g.width, g.height, GL_RGBA, GL_UNSIGNED_BYTE, rgba.data);
+  cv::Mat bgr, flipped;
+  cv::cvtColor(rgba, bgr, cv::COLOR_RGBA2BGR);
+  cv::flip(bgr, flipped, 0);  // GL's row 0 is the bottom
+  return flipped;
+}
+
+cv::Mat PlanetRenderer::renderAR(const cv::Mat& background, const terrain::Terrain& planet,
+                                 const terrain::Mesh& mesh, const terrain::Camera& camera,
+                                 const RenderStyle& style, const std::optional<Cursor>& cursor) {
+  camera.validate();
+  if (!background.empty() && (background.cols != camera.width || background.rows != camera.height))
+    throw std::invalid_argument("renderer: background is " + std::to_string(background.cols) + "x" +
+                                std::to_string(background.rows) + ", the camera " +
+                                std::to_string(camera.width) + "x" + std::to_string(camera.height));
+  Gl& g = *gl_;
+  target(camera.width, camera.height);
+  upload(planet, mesh);
+  glClearColor(0, 0, 0, 1);
+  glClearDepth(1.0);
+  glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+  if (!background.empty()) {
+    cv::Mat rgb;
+    if (background.channels() == 1)
+      cv::cvtColor(background, rgb, cv::COLOR_GRAY2RGB);
+    else
+      cv::cvtColor(background, rgb, cv::COLOR_BGR2RGB);
+    glActiveTexture(GL_TEXTURE0);
+    glBindTexture(GL_TEXTURE_2D, g.imageTexture);
+    glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
+    glTexImage2D(GL_TEXTURE_2D, 0, GL_RGB8, rgb.cols, rgb.rows, 0, GL_RGB, GL_UNSIGNED_BYTE,
+                 rgb.data);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+    glUseProgram(g.backgroundProgram);
+    glUniform1i(glGetUniformLocation(g.backgroundProgram, "image"), 0);
+    glDisable(GL_DEPTH_TEST);
+    glBindVertexArray(g.emptyVao);
+    glDrawArrays(GL_TRIANGLES, 0, 3);
+    glBindVertexArray(0);
+  }
+  glEnable(GL_DEPTH_TEST);
+  glDepthFunc(GL_LESS);
+  glEnable(GL_CULL_FACE);
+  glCullFace(GL_BACK);
+  // Triangles are CCW seen from outside; the projection negates y (OpenCV's rows go down, GL's
+  // up), which keeps that winding in GL's window.
+  glFrontFace(GL_CCW);
+  const DepthRange depth = depthRangeFor(camera, planet);
+  const Eigen::Matrix4d clip = clipFromCamera(camera, depth.nearZ, depth.farZ);
+  drawMesh(mesh, camera, clip, style, false);
+  if (style.wireframe) drawMesh(mesh, camera, clip, style, true);
+  glDisable(GL_CULL_FACE);
+  if (cursor && planet.chart().radius() > 0) {
+    // A ring at geodesic distance r_d around the control vertex, lifted 0.2 % of r_d so that
+    // it stays above the facets, and a cross at the control vertex.
+    const core::Chart& chart = planet.chart();
+    const Eigen::Vector3d n = chart.up(cursor->control.u, cursor->control.v);
+    const double R = chart.radius();
+    const double h = planet.height(cursor->control.u, cursor->control.v);
+    Eigen::Vector3d e1 = n.unitOrthogonal(), e2 = n.cross(e1);
+    const double angle = cursor->radius / R;
+    std::vector<Eigen::Vector3d> ring;
+    for (int i = 0; i < 96; ++i) {
+      const double phi = 2 * std::numbers::pi * i / 96;
+      const Eigen::Vector3d dir =
+          (std::cos(angle) * n + std::sin(angle) * (std::cos(phi) * e1 + std::sin(phi) * e2));
+      ring.push_back(dir * (R + h + 0.002 * cursor->radius));
+    }
+    drawLines(ring, true, camera, clip, {1.0f, 0.85f, 0.1f}, false);
+    const Eigen::Vector3d c = n * (R + h);
+    const double arm = 0.15 * cursor->radius;
+    drawLines({c - arm * e1, c + arm * e1, c - arm * e2, c + arm * e2}, false, camera, clip,
+              {1.0f, 0.2f, 0.1f}, false);
+  }
+  return readBack();
+}
+
+cv::Mat PlanetRenderer::renderOverview(const terrain::Terrain& planet, const terrain::Mesh& arMesh,
+                                       const terrain::Camera& arCamera, int width, int height) {
+  const double R = planet.chart().radius();
+  if (!(R > 0)) throw std::invalid_argument("renderer: the overview needs a spherical planet");
+  // From 3.2 radii away, 60 degrees around from the AR
+  // camera's side (about the axis across both the AR direction and the pole), so that the AR
+  // camera's frustum crosses the picture.
+  Eigen::Vector3d side = arCamera.eye;
+  if (side.norm() < 1e-9 * R) side = Eigen::Vector3d::UnitX();
+  side.normalize();
+  Eigen::Vector3d axis = side.cross(Eigen::Vector3d::UnitZ());
+  if (axis.norm() < 1e-6) axis = side.unitOrthogonal();
+  const Eigen::Vector3d dir =
+      Eigen::AngleAxisd(std::numbers::pi / 3, axis.normalized()).toRotationMatrix() * side;
+  const terrain::Camera over =
+      terrain::Camera::lookAt(3.2 * R * dir, Eigen::Vector3d::Zero(), Eigen::Vector3d::UnitZ(),
+                              width, height, 40 * std::numbers::pi / 180);
+  target(width, height);
+  upload(planet, arMesh);
+  glClearColor(0.03f, 0.04f, 0.08f, 1);
+  glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+  glEnable(GL_DEPTH_TEST);
+  glDepthFunc(GL_LEQUAL);
+  glEnable(GL_CULL_FACE);
+  glFrontFace(GL_CCW);
+  const DepthRange depth = depthRangeFor(over, planet);
+  const Eigen::Matrix4d clip = clipFromCamera(over, depth.nearZ, depth.farZ);
+  RenderStyle style;
+  style.wireframe = true;
+  drawMesh(arMesh, over, clip, style, false);
+  drawMesh(arMesh, over, clip, style, true);
+  glDisable(GL_CULL_FACE);
+  // The AR camera's frustum: rays through the image corners, out to the planet's far side.
+  const double reach = arCamera.eye.norm() + R;
+  std::vector<Eigen::Vector3d> lines;
+  const Eigen::Matrix3d Rt = arCamera.rotation.transpose();
+  const double W = arCamera.width - 1, H = arCamera.height - 1;
+  std::array<Eigen::Vector3d, 4> corners;
+  const std::array<Eigen::Vector2d, 4> px = {Eigen::Vector2d(0, 0), Eigen::Vector2d(W, 0),
+                                             Eigen::Vector2d(W, H), Eigen::Vector2d(0, H)};
+  for (std::size_t i = 0; i < 4; ++i) {
+    const Eigen::Vector3d ray((px[i].x() - arCamera.cx) / arCamera.fx,
+                              (px[i].y() - arCamera.cy) / arCamera.fy, 1.0);
+    corners[i] = arCamera.eye + Rt * ray.normalized() * reach;
+    lines.push_back(arCamera.eye);
+    lines.push_back(corners[i]);
+  }
+  for (std::size_t i = 0; i < 4; ++i) {
+    lines.push_back(corners[i]);
+    lines.push_back(corners[(i + 1) % 4]);
+  }
+  // The optical axis: where the AR camera looks (its frustum is usually far wider than the
+  // planet, which fills a small part of a webcam image).
+  lines.push_back(arCamera.eye);
+  lines.push_back(arCamera.eye + Rt.col(2) * reach);
+  drawLines(lines, false, over, clip, {1.0f, 0.85f, 0.1f}, true);
+  return readBack();
+}
+
+}  // namespace ps::render

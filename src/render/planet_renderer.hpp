@@ -1,0 +1,84 @@
+#pragma once
+// The planet in OpenGL (3.3 core), one code path for the headless EGL context and a window:
+//   * AR view: the camera image as background, the tessellated planet over it with the
+//     calibrated intrinsics (render/projection.hpp), depth-tested, lit, hypsometric colours,
+//     optional contour lines and wireframe, and a cursor (the control vertex and a ring of
+//     radius r_d on the surface);
+//   * overview: the whole planet from outside with the AR view's mesh (its tessellation) and
+//     the AR camera's frustum.
+// Vertices are uploaded relative to the mesh's eye (terrain::Mesh), so float keeps full
+// precision near the camera: no jitter 1 m above a 6,372 km planet. A mesh is uploaded again
+// only when it changed (the tessellator returns the same mesh for an unchanged view and
+// terrain).
+#include <Eigen/Core>
+#include <cstdint>
+#include <opencv2/core.hpp>
+#include <optional>
+
+#include "core/grid.hpp"
+#include "terrain/camera.hpp"
+#include "terrain/mesh.hpp"
+#include "terrain/terrain.hpp"
+
+namespace ps::render {
+
+struct RenderStyle {
+  bool wireframe = false;
+  bool contours = false;
+  double contourIntervalM = 1000;
+  Eigen::Vector3d sun = Eigen::Vector3d(1, 1, 1).normalized();  // planet frame, toward the sun
+};
+
+// The edit cursor: the control vertex and the deformation radius r_d (planet metres).
+struct Cursor {
+  core::GridPoint control;
+  double radius = 0;
+};
+
+struct RenderStats {
+  std::size_t uploads = 0;        // mesh uploads so far
+  std::size_t uploadedBytes = 0;  // bytes sent by the last upload
+  bool uploadedThisFrame = false;
+};
+
+class PlanetRenderer {
+ public:
+  // Needs a current OpenGL 3.3 context (render/egl_context.hpp or a window's). Throws
+  // std::runtime_error with the compiler log if a shader does not build.
+  PlanetRenderer();
+  ~PlanetRenderer();
+  PlanetRenderer(const PlanetRenderer&) = delete;
+  PlanetRenderer& operator=(const PlanetRenderer&) = delete;
+
+  // The AR frame at the camera's size: `background` (BGR or grey, the camera's size; empty for
+  // a black background) with the planet drawn over it. Returns BGR 8-bit.
+  cv::Mat renderAR(const cv::Mat& background, const terrain::Terrain& planet,
+                   const terrain::Mesh& mesh, const terrain::Camera& camera,
+                   const RenderStyle& style, const std::optional<Cursor>& cursor = std::nullopt);
+
+  // The overview at width x height: the planet seen from outside (3.2 radii away, 60 degrees
+  // round from the AR camera) with `arMesh` in wireframe, the AR camera's frustum and its axis.
+  cv::Mat renderOverview(const terrain::Terrain& planet, const terrain::Mesh& arMesh,
+                         const terrain::Camera& arCamera, int width, int height);
+
+  const RenderStats& stats() const { return stats_; }
+
+ private:
+  struct Gl;
+  void upload(const terrain::Terrain& planet, const terrain::Mesh& mesh);
+  void target(int width, int height);
+  void drawMesh(const terrain::Mesh& mesh, const terrain::Camera& camera,
+                const Eigen::Matrix4d& clip, const RenderStyle& style, bool wireOnly);
+  void drawLines(const std::vector<Eigen::Vector3d>& planetPoints, bool loop,
+                 const terrain::Camera& camera, const Eigen::Matrix4d& clip,
+                 const Eigen::Vector3f& colour, bool depthTest);
+  cv::Mat readBack() const;
+
+  Gl* gl_;
+  RenderStats stats_;
+  const terrain::Mesh* uploadedMesh_ = nullptr;  // identity of what the buffers hold
+  std::uint64_t uploadedGeneration_ = 0;
+  std::size_t uploadedIndices_ = 0;
+};
+
+}  // namespace ps::render
