@@ -20,6 +20,7 @@ std::filesystem::path bundled(const std::filesystem::path& relative) {
 const CommandRegistration kDemo([](CLI::App& root, CLI::App*& sub) -> CommandAction {
   auto a = std::make_shared<ReplayCli>();
   a->grid = 4097;
+  a->strengthM = 1500;  // bolder than replay's default, so the README pictures show the strokes
   a->job.out = "out/demo";
   a->job.pictures = true;
   a->job.video = bundled("data/demo.mkv");
