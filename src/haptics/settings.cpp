@@ -53,8 +53,8 @@ void SafetySettings::validate(double rateHz) const {
           "must be in (0, 100]");
   require(std::isfinite(surfaceBlendTime) && surfaceBlendTime >= 0 && surfaceBlendTime <= 1,
           "surface blend time", surfaceBlendTime, "s", "must be in [0, 1]");
-  require(positive(velocityCutoffHz) && velocityCutoffHz < 0.5 * rateHz, "velocity cut-off",
-          velocityCutoffHz, "Hz", "must be > 0 and below half the loop rate");
+  require(positive(velocityCutoffHz) && velocityCutoffHz <= 0.5 * rateHz, "velocity cut-off",
+          velocityCutoffHz, "Hz", "must be > 0 and at most half the loop rate");
 }
 
 void HapticSettings::validate() const {

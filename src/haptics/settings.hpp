@@ -45,7 +45,7 @@ struct SafetySettings {
   // A move between ticks longer than maxSpeed * max(dt, 1/rate) is a jump (teleport, tracking
   // glitch): zero force, filters reset, ramp restarts. (0, 100] m/s.
   double maxSpeed = 3.0;
-  // Velocity filter: first-order low-pass on the position difference, this cut-off. (0, rate/2).
+  // Velocity filter: first-order low-pass on the position difference, this cut-off. (0, rate/2].
   double velocityCutoffHz = 50.0;
   // A new terrain snapshot (the editor moved sand under the tool) changes the depth at once; the
   // difference is blended out over this time instead of felt as a step. [0, 1] s.
