@@ -78,151 +78,236 @@ void ReplayOptions::validate() const {
     throw core::InputError("max frames = " + std::to_string(maxFrames) + " is negative");
 }
 
+struct FrameStepper::Parts {
+  std::unique_ptr<tracking::Detector> detector;
+  tracking::SceneTracker scene;
+  edit::EditPipeline pipeline;
+  std::optional<edit::GaussianBrush> brush;
+  std::optional<sand::Settler> settler;
+  std::optional<sand::DisplacementTool> displacer;
+  Parts(std::unique_ptr<tracking::Detector> d, const tracking::SceneConfig& sc,
+        terrain::Terrain& planet)
+      : detector(std::move(d)), scene(sc), pipeline(planet) {}
+  const edit::Tool& tool(ReplayTool t) const {
+    return t == ReplayTool::kBrush ? static_cast<const edit::Tool&>(*brush) : *displacer;
+  }
+};
+
+FrameStepper::FrameStepper(const tracking::CameraCalibration& calib, terrain::Terrain& planet,
+                           const ReplayOptions& options)
+    : o_(options), calib_(calib), planet_(planet) {
+  o_.validate();
+  tracking::DetectorConfig dc = o_.detector;
+  dc.ids = {o_.scene.planet.id, o_.scene.tool.id};
+  family_ = dc.family;
+  const core::Chart& chart = planet_.chart();
+  const double R = chart.radius();
+  if (!(R > 0)) throw core::InputError("replay needs a spherical planet (its chart has no radius)");
+  scale_ = R / o_.scene.planetRadius;
+  p_ = std::make_unique<Parts>(tracking::makeDetector(dc), o_.scene, planet_);
+  p_->scene.setSurface([this](const Eigen::Vector3d& p) {
+    if (!(p.norm() > 0)) return o_.scene.planetRadius;
+    const auto c = edit::nearestVertex(planet_.chart(), p);
+    return (planet_.chart().radius() + planet_.height(c.u, c.v)) / scale_;
+  });
+  p_->pipeline.setUndoEnabled(o_.undo);
+  rebuildTools();
+}
+
+FrameStepper::~FrameStepper() = default;
+
+edit::EditPipeline& FrameStepper::pipeline() {
+  return p_->pipeline;
+}
+
+double FrameStepper::toolRadius() const {
+  return p_->tool(o_.tool).radius();
+}
+
+void FrameStepper::rebuildTools() {
+  endStroke();
+  p_->brush.emplace(o_.brush);
+  const bool wantSettler = o_.tool == ReplayTool::kDisplace && o_.settle;
+  if (wantSettler && !p_->settler) p_->settler.emplace(planet_, o_.displace.material, o_.settling);
+  p_->displacer.emplace(planet_.chartPtr(), o_.displace, p_->settler ? &*p_->settler : nullptr);
+  if (o_.tool == ReplayTool::kDisplace) p_->displacer->validate();
+}
+
+void FrameStepper::endStroke() {
+  if (p_ && p_->pipeline.inStroke()) p_->pipeline.endStroke();
+}
+
+void FrameStepper::setTool(ReplayTool tool) {
+  if (tool == o_.tool) return;
+  o_.tool = tool;
+  rebuildTools();
+}
+
+void FrameStepper::setBrush(const edit::BrushSettings& brush) {
+  brush.validate();
+  o_.brush = brush;
+  rebuildTools();
+}
+
+void FrameStepper::setDisplacement(const sand::DisplacementSettings& displace, double pressDepth) {
+  ReplayOptions o = o_;
+  o.displace = displace;
+  o.pressDepth = pressDepth;
+  o.validate();
+  if (displace.material.name != o_.displace.material.name) {
+    endStroke();
+    p_->settler.reset();
+  }
+  o_ = o;
+  rebuildTools();
+}
+
+StepResult FrameStepper::step(const cv::Mat& image, int frame, double time) {
+  const core::Chart& chart = planet_.chart();
+  const double R = chart.radius();
+  const double scale = scale_;
+  const ReplayOptions& o = o_;
+  edit::EditPipeline& pipeline = p_->pipeline;
+  const edit::Tool& tool = p_->tool(o.tool);
+  ReplaySummary& s = s_;
+  // Where the tool acts for a tip over planet point p: the brush at p itself; the displacement
+  // sphere at a fixed altitude for the whole stroke (a plough), set when the stroke begins so
+  // that its lowest point is pressDepth below the surface at that control vertex. (Setting it
+  // from the surface under each stamp would dig deeper with every overlapping stamp.)
+  auto toolPosition = [&](const Eigen::Vector3d& p, const core::GridPoint& c,
+                          bool begin) -> Eigen::Vector3d {
+    if (o.tool == ReplayTool::kBrush) return p;
+    if (begin) strokeAltitude_ = R + planet_.height(c.u, c.v) - o.pressDepth + o.displace.radius;
+    return p.normalized() * strokeAltitude_;
+  };
+
+  StepResult out;
+  const auto t0 = std::chrono::steady_clock::now();
+  nlohmann::json j = {{"frame", frame}, {"time", std::round(time * 1e6) / 1e6}};
+  std::vector<tracking::Detection> found;
+  try {
+    found = p_->detector->detect(image);
+  } catch (const std::exception& e) {
+    j["notes"].push_back(std::string("detection failed: ") + e.what());
+  }
+  out.times.detectMs = msSince(t0);
+  const auto t1 = std::chrono::steady_clock::now();
+  out.scene = p_->scene.update(found, calib_, frame, time);
+  const tracking::SceneFrame& f = out.scene;
+  out.times.trackMs = msSince(t1);
+  anyMarker_ = anyMarker_ || !found.empty();
+  s.framesWithPlanet += f.planet.usable();
+  s.framesWithTool += f.tool.usable();
+  j["markers"] = found.size();
+  j["planet"] = markerJson(f.planet);
+  j["tool"] = markerJson(f.tool);
+  for (const auto& n : f.notes) j["notes"].push_back(n);
+
+  const auto t2 = std::chrono::steady_clock::now();
+  std::string stroke = "none";
+  bool touching = false;
+  std::optional<core::GridPoint> control;
+  if (f.tipValid) {
+    ++s.framesWithTip;
+    const Eigen::Vector3d p = f.tipPlanet * scale;
+    j["tip_planet_m"] = vec(f.tipPlanet);
+    j["tip_height_mm"] = std::round(f.tipHeight * 1e6) / 1e3;
+    if (f.tipHeld) j["tip_held"] = true;
+    touching = f.touching && p.allFinite() && p.norm() > 0;
+    if (touching) {
+      ++s.touchingFrames;
+      const auto c = edit::nearestVertex(chart, p);
+      control = c;
+      j["control_vertex"] = {c.u, c.v};
+      const edit::ToolInput input{toolPosition(p, c, !pipeline.inStroke()),
+                                  std::max(0.0, time - lastTime_)};
+      try {
+        if (!pipeline.inStroke()) {
+          const auto r = pipeline.beginStroke(tool, input);
+          ++s.strokes;
+          ++s.stamps;
+          s.modifiedVertices += r.modifiedVertices;
+          j["stamps"] = 1;
+          j["modified_vertices"] = r.modifiedVertices;
+          stroke = "begin";
+        } else {
+          const auto r = pipeline.moveTo(input);
+          s.stamps += r.stamps;
+          s.modifiedVertices += r.modifiedVertices;
+          j["stamps"] = r.stamps;
+          j["modified_vertices"] = r.modifiedVertices;
+          stroke = "move";
+        }
+      } catch (const core::InputError& e) {
+        ++s.skippedFrames;
+        j["notes"].push_back(std::string("edit skipped: ") + e.what());
+      }
+    }
+  }
+  if (!touching && pipeline.inStroke()) {
+    pipeline.endStroke();
+    stroke = "end";
+  }
+  j["touching"] = touching;
+  j["stroke"] = stroke;
+  if (p_->settler && o.tool == ReplayTool::kDisplace) {
+    const auto r = p_->settler->frame();
+    s.settleCellSteps += r.cellSteps;
+    s.settleFramesAtRest += r.atRest;
+    if (r.steps > 0) j["settle_steps"] = r.steps;
+  }
+  out.times.editMs = msSince(t2);
+  lastTime_ = time;
+  if (f.planet.usable()) out.planetInCamera = p_->scene.planetFromMarker(f.planet.pose);
+  out.touching = touching;
+  out.control = control;
+  out.stroke = stroke;
+  out.logLine = j.dump();
+  ++s.frames;
+  return out;
+}
+
 ReplaySummary runReplay(tracking::FrameSource& source, const tracking::CameraCalibration& calibIn,
                         terrain::Terrain& planet, const ReplayOptions& o, std::ostream& log,
                         std::ostream* timings, const ProgressFn& progress, const FrameHook& hook) {
   o.validate();
   const tracking::CameraCalibration calib = calibIn.forImageSize(source.size());
-  tracking::DetectorConfig dc = o.detector;
-  dc.ids = {o.scene.planet.id, o.scene.tool.id};
-  auto detector = tracking::makeDetector(dc);
-  tracking::SceneTracker scene(o.scene);
-  const core::Chart& chart = planet.chart();
-  const double R = chart.radius();
-  if (!(R > 0)) throw core::InputError("replay needs a spherical planet (its chart has no radius)");
-  const double scale = R / o.scene.planetRadius;  // planet metres per metre of the marker world
-  scene.setSurface([&](const Eigen::Vector3d& p) {
-    if (!(p.norm() > 0)) return o.scene.planetRadius;
-    const auto c = edit::nearestVertex(chart, p);
-    return (R + planet.height(c.u, c.v)) / scale;
-  });
-  edit::EditPipeline pipeline(planet);
-  pipeline.setUndoEnabled(o.undo);
-  const edit::GaussianBrush brush(o.brush);
-  std::optional<sand::Settler> settler;
-  if (o.tool == ReplayTool::kDisplace && o.settle)
-    settler.emplace(planet, o.displace.material, o.settling);
-  const sand::DisplacementTool displacer(planet.chartPtr(), o.displace,
-                                         settler ? &*settler : nullptr);
-  if (o.tool == ReplayTool::kDisplace) displacer.validate();
-  const edit::Tool& tool =
-      o.tool == ReplayTool::kBrush ? static_cast<const edit::Tool&>(brush) : displacer;
-  // Where the tool acts for a tip over planet point p: the brush at p itself; the displacement
-  // sphere at a fixed altitude for the whole stroke (a plough), set when the stroke begins so
-  // that its lowest point is pressDepth below the surface at that control vertex. (Setting it
-  // from the surface under each stamp would dig deeper with every overlapping stamp.)
-  double strokeAltitude = 0;
-  auto toolPosition = [&](const Eigen::Vector3d& p, const core::GridPoint& c,
-                          bool begin) -> Eigen::Vector3d {
-    if (o.tool == ReplayTool::kBrush) return p;
-    if (begin) strokeAltitude = R + planet.height(c.u, c.v) - o.pressDepth + o.displace.radius;
-    return p.normalized() * strokeAltitude;
-  };
+  FrameStepper stepper(calib, planet, o);
   const double fps = source.fps() > 0 ? source.fps() : o.fallbackFps;
 
-  ReplaySummary s;
-  s.announcedFrames = source.announcedFrames();
-  double lastTime = 0;
-  bool anyMarker = false;
   cv::Mat image;
-  while ((o.maxFrames == 0 || s.frames < o.maxFrames) && source.read(image)) {
+  while ((o.maxFrames == 0 || stepper.summary().frames < o.maxFrames) && source.read(image)) {
     const int frame = source.index();
     const double time = frame / fps;
-    const auto t0 = std::chrono::steady_clock::now();
-    nlohmann::json j = {{"frame", frame}, {"time", std::round(time * 1e6) / 1e6}};
-    std::vector<tracking::Detection> found;
-    double detectMs = 0, trackMs = 0, editMs = 0;
-    try {
-      found = detector->detect(image);
-    } catch (const std::exception& e) {
-      j["notes"].push_back(std::string("detection failed: ") + e.what());
-    }
-    detectMs = msSince(t0);
-    const auto t1 = std::chrono::steady_clock::now();
-    const auto f = scene.update(found, calib, frame, time);
-    trackMs = msSince(t1);
-    anyMarker = anyMarker || !found.empty();
-    s.framesWithPlanet += f.planet.usable();
-    s.framesWithTool += f.tool.usable();
-    j["markers"] = found.size();
-    j["planet"] = markerJson(f.planet);
-    j["tool"] = markerJson(f.tool);
-    for (const auto& n : f.notes) j["notes"].push_back(n);
-
-    const auto t2 = std::chrono::steady_clock::now();
-    std::string stroke = "none";
-    bool touching = false;
-    std::optional<core::GridPoint> control;
-    if (f.tipValid) {
-      ++s.framesWithTip;
-      const Eigen::Vector3d p = f.tipPlanet * scale;
-      j["tip_planet_m"] = vec(f.tipPlanet);
-      j["tip_height_mm"] = std::round(f.tipHeight * 1e6) / 1e3;
-      if (f.tipHeld) j["tip_held"] = true;
-      touching = f.touching && p.allFinite() && p.norm() > 0;
-      if (touching) {
-        ++s.touchingFrames;
-        const auto c = edit::nearestVertex(chart, p);
-        control = c;
-        j["control_vertex"] = {c.u, c.v};
-        const edit::ToolInput input{toolPosition(p, c, !pipeline.inStroke()),
-                                    std::max(0.0, time - lastTime)};
-        try {
-          if (!pipeline.inStroke()) {
-            const auto r = pipeline.beginStroke(tool, input);
-            ++s.strokes;
-            ++s.stamps;
-            s.modifiedVertices += r.modifiedVertices;
-            j["stamps"] = 1;
-            j["modified_vertices"] = r.modifiedVertices;
-            stroke = "begin";
-          } else {
-            const auto r = pipeline.moveTo(input);
-            s.stamps += r.stamps;
-            s.modifiedVertices += r.modifiedVertices;
-            j["stamps"] = r.stamps;
-            j["modified_vertices"] = r.modifiedVertices;
-            stroke = "move";
-          }
-        } catch (const core::InputError& e) {
-          ++s.skippedFrames;
-          j["notes"].push_back(std::string("edit skipped: ") + e.what());
-        }
-      }
-    }
-    if (!touching && pipeline.inStroke()) {
-      pipeline.endStroke();
-      stroke = "end";
-    }
-    j["touching"] = touching;
-    j["stroke"] = stroke;
-    if (settler) {
-      const auto r = settler->frame();
-      s.settleCellSteps += r.cellSteps;
-      s.settleFramesAtRest += r.atRest;
-      if (r.steps > 0) j["settle_steps"] = r.steps;
-    }
-    editMs = msSince(t2);
-    lastTime = time;
+    const StepResult r = stepper.step(image, frame, time);
     if (hook) {
-      std::optional<tracking::Pose> planetPose;
-      if (f.planet.usable()) planetPose = scene.planetFromMarker(f.planet.pose);
-      const FrameContext ctx{frame, time,       image,    f,       calib,        planet,
-                             scale, planetPose, touching, control, tool.radius()};
+      const FrameContext ctx{frame,
+                             time,
+                             image,
+                             r.scene,
+                             calib,
+                             planet,
+                             stepper.scale(),
+                             r.planetInCamera,
+                             r.touching,
+                             r.control,
+                             stepper.toolRadius()};
       hook(ctx);
     }
-    log << j.dump() << "\n";
+    log << r.logLine << "\n";
     if (timings)
       *timings << nlohmann::json{{"frame", frame},
-                                 {"detect_ms", std::round(detectMs * 1000) / 1000},
-                                 {"track_ms", std::round(trackMs * 1000) / 1000},
-                                 {"edit_ms", std::round(editMs * 1000) / 1000}}
+                                 {"detect_ms", std::round(r.times.detectMs * 1000) / 1000},
+                                 {"track_ms", std::round(r.times.trackMs * 1000) / 1000},
+                                 {"edit_ms", std::round(r.times.editMs * 1000) / 1000}}
                       .dump()
                << "\n";
-    ++s.frames;
-    if (progress) progress(s.frames, source.announcedFrames());
+    if (progress) progress(stepper.summary().frames, source.announcedFrames());
   }
-  if (pipeline.inStroke()) pipeline.endStroke();
+  stepper.endStroke();
+  ReplaySummary s = stepper.summary();
+  s.announcedFrames = source.announcedFrames();
+  const bool anyMarker = stepper.anyMarker();
   s.truncated = source.truncated();
   if (s.truncated)
     s.warnings.push_back(
@@ -230,7 +315,7 @@ ReplaySummary runReplay(tracking::FrameSource& source, const tracking::CameraCal
         std::to_string(s.announcedFrames) +
         " its container announced (truncated or corrupt); replayed what was there");
   if (!anyMarker)
-    s.warnings.push_back(source.name() + ": no marker of " + dc.family + " with id " +
+    s.warnings.push_back(source.name() + ": no marker of " + stepper.family() + " with id " +
                          std::to_string(o.scene.planet.id) + " or " +
                          std::to_string(o.scene.tool.id) + " was ever seen; nothing was sculpted");
   else if (s.framesWithPlanet == 0)

@@ -7,6 +7,7 @@
 // same video, calibration and settings write identical logs and planets, bit for bit; times
 // go to a separate stream.
 #include <functional>
+#include <memory>
 #include <optional>
 #include <ostream>
 #include <string>
@@ -14,6 +15,7 @@
 
 #include "core/grid.hpp"
 #include "edit/brush.hpp"
+#include "edit/edit_pipeline.hpp"
 #include "sand/displacement.hpp"
 #include "sand/settler.hpp"
 #include "terrain/terrain.hpp"
@@ -87,6 +89,68 @@ struct FrameContext {
   double toolRadius = 0;                   // r_d of the active tool (m on the planet)
 };
 using FrameHook = std::function<void(const FrameContext&)>;
+
+// One frame of the pipeline, shared by runReplay and the live app (app/cmd_live.cpp):
+// detections -> scene -> control vertex -> the active tool through the edit pipeline (+ sand
+// settling). Owns the detector, the scene tracker, the edit pipeline and the tools; counts into
+// a ReplaySummary. The tool and its settings may change between frames (live panel): a change
+// ends the open stroke first (a stroke keeps a pointer to its tool).
+struct StepTimes {
+  double detectMs = 0, trackMs = 0, editMs = 0;
+};
+struct StepResult {
+  tracking::SceneFrame scene;
+  std::optional<tracking::Pose> planetInCamera;  // planet frame in the camera frame, if usable
+  bool touching = false;
+  std::optional<core::GridPoint> control;
+  std::string stroke = "none";  // none, begin, move, end
+  std::string logLine;          // the replay log's JSON line for this frame (no newline)
+  StepTimes times;
+};
+
+class FrameStepper {
+ public:
+  // `calib` must already be for the frames' size (CameraCalibration::forImageSize). Throws
+  // core::InputError for unusable settings or a planet without a radius.
+  FrameStepper(const tracking::CameraCalibration& calib, terrain::Terrain& planet,
+               const ReplayOptions& options);
+  ~FrameStepper();
+  FrameStepper(const FrameStepper&) = delete;
+  FrameStepper& operator=(const FrameStepper&) = delete;
+
+  // One frame: `frame` is the source's index, `time` its time (s).
+  StepResult step(const cv::Mat& image, int frame, double time);
+  // Ends an open stroke (one undo step).
+  void endStroke();
+
+  // Live changes (each ends an open stroke; InputError for bad settings, nothing changed).
+  void setTool(ReplayTool tool);
+  void setBrush(const edit::BrushSettings& brush);
+  void setDisplacement(const sand::DisplacementSettings& displace, double pressDepth);
+
+  const ReplayOptions& options() const { return o_; }
+  edit::EditPipeline& pipeline();
+  const tracking::CameraCalibration& calibration() const { return calib_; }
+  double scale() const { return scale_; }  // planet metres per marker-world metre
+  double toolRadius() const;               // r_d of the active tool (m on the planet)
+  const ReplaySummary& summary() const { return s_; }
+  bool anyMarker() const { return anyMarker_; }
+  const std::string& family() const { return family_; }
+
+ private:
+  struct Parts;
+  void rebuildTools();
+  ReplayOptions o_;
+  tracking::CameraCalibration calib_;
+  terrain::Terrain& planet_;
+  double scale_ = 1;
+  std::unique_ptr<Parts> p_;
+  ReplaySummary s_;
+  bool anyMarker_ = false;
+  double lastTime_ = 0;
+  double strokeAltitude_ = 0;
+  std::string family_;
+};
 
 // Replays `source` onto `planet`. Writes one JSON line per frame to `log` and, if given, one
 // line of times per frame to `timings`. Throws core::InputError for unusable settings or a
