@@ -1,8 +1,12 @@
-// `planetsculpt bench [NAME]`: runs the registered benchmarks (bench/), JSON lines on stdout.
+// `planetsculpt bench [NAME]`: runs the registered benchmarks (bench/), JSON lines on stdout;
+// with --out DIR also PNG plots of the results (app/bench_plots.hpp).
 #include <fstream>
 #include <iostream>
 #include <memory>
+#include <nlohmann/json.hpp>
+#include <sstream>
 
+#include "app/bench_plots.hpp"
 #include "app/command_registry.hpp"
 #include "bench/bench.hpp"
 
@@ -50,14 +54,29 @@ const CommandRegistration kBench([](CLI::App& root, CLI::App*& sub) -> CommandAc
       file.open(args->jsonFile, std::ios::app);
       if (!file) throw std::runtime_error("cannot open " + args->jsonFile + " for appending");
     }
+    // Everything goes to stdout, the --json file and (for the plots) a copy in memory.
+    std::ostringstream copy;
+    TeeBuffer toFile;
+    toFile.a = copy.rdbuf();
+    toFile.b = file.is_open() ? file.rdbuf() : nullptr;
     TeeBuffer tee;
     tee.a = std::cout.rdbuf();
-    tee.b = file.is_open() ? file.rdbuf() : nullptr;
+    tee.b = &toFile;
     std::ostream out(&tee);
     for (const auto& [name, fn] : bench::registeredBenchmarks()) {
       if (args->name == "all" || args->name == name) fn(args->options, out);
     }
     out.flush();
+    if (!args->options.outDir.empty()) {
+      std::vector<nlohmann::json> records;
+      std::istringstream lines(copy.str());
+      for (std::string line; std::getline(lines, line);) {
+        auto j = nlohmann::json::parse(line, nullptr, false);
+        if (!j.is_discarded() && j.is_object()) records.push_back(std::move(j));
+      }
+      for (const auto& f : writeBenchPlots(records, args->options.outDir))
+        std::cerr << "bench: wrote " << f.string() << "\n";
+    }
     return 0;
   };
 });
