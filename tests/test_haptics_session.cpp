@@ -1,0 +1,250 @@
+// The haptic session: offline per-frame stepping (what a replay calls), presses through the edit
+// pipeline, lost tracking, and the live 1 kHz thread beside an editor loop (no timing asserted).
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <cmath>
+#include <numbers>
+#include <sstream>
+#include <thread>
+
+#include "core/input_error.hpp"
+#include "edit/edit_pipeline.hpp"
+#include "haptics/session.hpp"
+#include "sand/sand_grid.hpp"
+#include "terrain/terrain.hpp"
+#include "test_sand_util.hpp"
+
+using namespace ps;
+using namespace ps::haptics;
+
+namespace {
+
+constexpr double kR = 6372790.0;
+constexpr double kGlobe = 0.06;  // m: the displayed planet (tracking's default)
+
+terrain::Terrain flatPlanet(int n, float h = 2000.0f) {
+  auto chart = sandtest::sphereChart(n, kR);
+  return terrain::Terrain(chart, std::vector<float>(chart->grid().count(), h));
+}
+
+Eigen::Vector3d dirAt(double latDeg, double lonDeg) {
+  const double la = latDeg * std::numbers::pi / 180, lo = lonDeg * std::numbers::pi / 180;
+  return {std::cos(lo) * std::cos(la), std::sin(lo) * std::cos(la), std::sin(la)};
+}
+
+SessionConfig globeConfig() {
+  SessionConfig c;
+  c.map.scale = kR / kGlobe;
+  return c;
+}
+
+// The demo-like stroke, in the planet frame: down from 3 mm (device) above the surface to
+// `depth` below it in 1 s, dragged 5 degrees east in 1 s, back up in 1 s.
+Eigen::Vector3d strokeTip(double t, double surfaceR, double depthDevice) {
+  const double scale = kR / kGlobe;
+  const double above = 0.003 * scale, below = -depthDevice * scale;
+  double alt, lon = 40;
+  if (t < 1) {
+    alt = above + (below - above) * t;
+  } else if (t < 2) {
+    alt = below;
+    lon += 5 * (t - 1);
+  } else {
+    alt = below + (above - below) * std::min(1.0, t - 2);
+    lon += 5;
+  }
+  return dirAt(20, lon) * (surfaceR + alt);
+}
+
+struct StrokeRun {
+  std::string log;
+  std::vector<float> heights;
+  std::vector<FrameForces> frames;
+  std::uint64_t stamps = 0;
+};
+
+StrokeRun runStroke(double depthDevice, const std::function<bool(double)>& tracked = {}) {
+  terrain::Terrain t = flatPlanet(9);
+  edit::EditPipeline pipe(t);
+  pipe.setUndoEnabled(false);
+  HapticSession s(t, &pipe, globeConfig());
+  std::ostringstream log;
+  s.setLog(&log);
+  StrokeRun r;
+  for (int f = 0; f <= 90; ++f) {
+    const double time = f / 30.0;
+    std::optional<Eigen::Vector3d> tip = strokeTip(time, kR + 2000.0, depthDevice);
+    if (tracked && !tracked(time)) tip.reset();
+    r.frames.push_back(s.onFrame(tip, time));
+  }
+  r.log = log.str();
+  r.heights.assign(t.heights().begin(), t.heights().end());
+  r.stamps = s.totalStamps();
+  return r;
+}
+
+}  // namespace
+
+TEST(HapticsSession, ReplayStrokeIsLoggedDeterministicallyAndSculptsThroughThePipeline) {
+  const StrokeRun a = runStroke(0.0015);
+  std::istringstream in(a.log);
+  const std::vector<ForceRecord> rs = readForceLog(in);
+  ASSERT_EQ(rs.size(), 3001u);  // t = 0 .. 3 s at 1 kHz, each tick once
+  int touching = 0;
+  double maxF = 0;
+  for (std::size_t k = 0; k < rs.size(); ++k) {
+    const ForceRecord& r = rs[k];
+    EXPECT_NEAR(r.time, double(k) / 1000, 1e-9);
+    ASSERT_LE(r.force.norm(), HapticSettings{}.limits.maxForce + 1e-9);
+    if (!r.touching) {
+      EXPECT_EQ(r.force, Eigen::Vector3d::Zero()) << "t = " << r.time;
+    }
+    touching += r.touching;
+    maxF = std::max(maxF, r.force.norm());
+    if (k > 0) {
+      EXPECT_LE((r.force - rs[k - 1].force).norm(), 0.5) << "t = " << r.time;
+    }
+  }
+  EXPECT_GT(touching, 1000);
+  EXPECT_GT(maxF, 1.0);
+  EXPECT_GT(a.stamps, 3u);
+  // The displacement keeps volume (sand/displacement.hpp), and moved something.
+  auto chart = sandtest::sphereChart(9, kR);
+  const sand::SandGrid grid(chart);
+  const terrain::Terrain before = flatPlanet(9);
+  const double v0 = grid.volume(before.heights()), v1 = grid.volume(a.heights);
+  double moved = 0;
+  for (std::size_t i = 0; i < a.heights.size(); ++i)
+    moved += std::abs(double(a.heights[i]) - before.heights()[i]);
+  EXPECT_GT(moved, 1e5);
+  EXPECT_LT(std::abs(v1 - v0) / grid.absVolume(before.heights()), 1e-6);
+  // Same input, same log and planet, bit for bit.
+  const StrokeRun b = runStroke(0.0015);
+  EXPECT_EQ(a.log, b.log);
+  EXPECT_EQ(a.heights, b.heights);
+}
+
+TEST(HapticsSession, DeeperPushesMoveMoreSand) {
+  const terrain::Terrain base = flatPlanet(9);
+  auto removed = [&](const StrokeRun& r) {
+    double sum = 0;
+    for (std::size_t i = 0; i < r.heights.size(); ++i)
+      sum += std::max(0.0, double(base.heights()[i]) - r.heights[i]);
+    return sum;
+  };
+  const double shallow = removed(runStroke(0.0005)), deep = removed(runStroke(0.0015));
+  EXPECT_GT(shallow, 0.0);
+  EXPECT_GT(deep, 1.5 * shallow);
+}
+
+TEST(HapticsSession, LostTrackingGivesZeroForceAndTheSessionContinues) {
+  // The marker is not seen from 1.3 s to 1.7 s (mid-drag; last seen at 38/30 s): 0.2 s later the
+  // device stops answering, forces are zero, then they ramp back in and sculpting goes on.
+  const StrokeRun r = runStroke(0.0015, [](double t) { return t < 1.3 || t > 1.7; });
+  std::istringstream in(r.log);
+  const auto rs = readForceLog(in);
+  int lost = 0, after = 0;
+  for (const ForceRecord& x : rs) {
+    if (x.fault == Fault::kDeviceLost && x.time > 0) {  // t = 0: before the first sample
+      ++lost;
+      EXPECT_EQ(x.force, Eigen::Vector3d::Zero());
+      EXPECT_GT(x.time, 38 / 30.0 + 0.2);
+      EXPECT_LE(x.time, 52 / 30.0);
+    }
+    if (x.time > 1.85 && x.time < 2.0 && x.touching && x.force.norm() > 1.0) ++after;
+  }
+  EXPECT_GT(lost, 100);
+  EXPECT_GT(after, 50);
+  bool noted = false;
+  for (const FrameForces& f : r.frames) {
+    for (const std::string& n : f.notes) noted |= n.find("device-lost") != std::string::npos;
+  }
+  EXPECT_TRUE(noted);
+  EXPECT_GT(r.stamps, 3u);
+}
+
+TEST(HapticsSession, BadConfigurationNamesTheParameter) {
+  terrain::Terrain t = flatPlanet(9);
+  auto expectNamed = [&](SessionConfig c, const std::string& name) {
+    try {
+      HapticSession s(t, nullptr, c);
+      ADD_FAILURE() << "no InputError for " << name;
+    } catch (const core::InputError& e) {
+      EXPECT_NE(std::string(e.what()).find(name), std::string::npos) << e.what();
+    }
+  };
+  SessionConfig c = globeConfig();
+  c.haptics.rateHz = 20000;
+  expectNamed(c, "rate");
+  c = globeConfig();
+  c.haptics.constants.kc = 0;
+  expectNamed(c, "k_c");
+  c = globeConfig();
+  c.press.yield = 0;
+  expectNamed(c, "press yield");
+  c = globeConfig();
+  c.patchRadius = -1;
+  expectNamed(c, "patch radius");
+  c = globeConfig();
+  c.map.scale = std::numeric_limits<double>::quiet_NaN();
+  expectNamed(c, "workspace scale");
+  // A non-finite frame time is a note, not an exception.
+  HapticSession s(t, nullptr, globeConfig());
+  const FrameForces f = s.onFrame(Eigen::Vector3d(kR, 0, 0), std::nan(""));
+  EXPECT_EQ(f.ticks, 0);
+  EXPECT_FALSE(f.notes.empty());
+}
+
+TEST(HapticsLoop, LiveThreadFeedsTheEditorWithoutEditingItself) {
+  terrain::Terrain t = flatPlanet(9);
+  edit::EditPipeline pipe(t);
+  pipe.setUndoEnabled(false);
+  HapticSession s(t, &pipe, globeConfig());
+  const double scale = kR / kGlobe;
+  const double surface = (kR + 2000.0) / scale;  // device metres from the centre
+  const Eigen::Vector3d d0 = dirAt(20, 40), d1 = dirAt(20, 41);
+  // Device script (device frame = planet frame / scale): hover, press 1 mm in, drag, lift.
+  ScriptedDevice device(ScriptedDevice::keyframes({{0.0, d0 * (surface + 0.002)},
+                                                   {0.2, d0 * (surface - 0.001)},
+                                                   {0.6, d1 * (surface - 0.001)},
+                                                   {0.8, d1 * (surface + 0.002)}}));
+  s.focus(d0 * (kR + 2000.0));
+  LoopOptions opt;
+  opt.realtimePriority = false;
+  s.startLoop(device, opt);
+  std::vector<FrameForces> frames;
+  const auto wallStart = std::chrono::steady_clock::now();
+  double lastTime = -1;
+  std::uint64_t rev = t.revision();
+  int ticks = 0;
+  while (s.loop()->now() < 1.0 &&
+         std::chrono::steady_clock::now() - wallStart < std::chrono::seconds(30)) {
+    // Between editor frames the terrain does not change: the loop never edits.
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    EXPECT_EQ(t.revision(), rev);
+    frames.push_back(s.editorFrame());
+    rev = t.revision();
+    ticks += frames.back().ticks;
+    if (frames.back().last) {
+      EXPECT_GT(frames.back().last->time, lastTime);
+      lastTime = frames.back().last->time;
+    }
+  }
+  const LoopStats st = s.loop()->stats();
+  s.stopLoop();
+  EXPECT_GT(st.ticks, 100u);  // however loaded the machine, it ticked
+  EXPECT_EQ(st.droppedRecords, 0u);
+  int touching = 0;
+  double maxF = 0;
+  for (const FrameForces& f : frames) {
+    touching += f.touchingTicks;
+    maxF = std::max(maxF, f.maxForce);
+  }
+  EXPECT_GT(touching, 10);
+  EXPECT_GT(maxF, 0.5);
+  EXPECT_LE(maxF, HapticSettings{}.limits.maxForce + 1e-9);
+  EXPECT_GT(s.totalStamps(), 0u);
+  EXPECT_GT(device.commands(), 100u);
+  EXPECT_EQ(device.lastForce(), Eigen::Vector3d::Zero());  // stopped: zero force commanded
+}
