@@ -9,6 +9,7 @@ PACKAGES=(
   libcli11-dev nlohmann-json3-dev libfmt-dev
   libopencv-dev libopencv-contrib-dev libapriltag-dev libtiff-dev zlib1g-dev
   libegl-dev libopengl-dev libgl-dev libegl-mesa0 libgl1-mesa-dri
+  libglfw3-dev libimgui-dev libstb-dev xvfb xauth
 )
 
 missing=()

@@ -336,6 +336,16 @@ cv::Mat PlanetRenderer::readBack() const {
   return flipped;
 }
 
+void PlanetRenderer::present(int x, int y, int width, int height) const {
+  const Gl& g = *gl_;
+  if (g.framebuffer == 0 || width <= 0 || height <= 0) return;
+  glBindFramebuffer(GL_READ_FRAMEBUFFER, g.framebuffer);
+  glBindFramebuffer(GL_DRAW_FRAMEBUFFER, 0);
+  glBlitFramebuffer(0, 0, g.width, g.height, x, y, x + width, y + height, GL_COLOR_BUFFER_BIT,
+                    (width == g.width && height == g.height) ? GL_NEAREST : GL_LINEAR);
+  glBindFramebuffer(GL_FRAMEBUFFER, 0);
+}
+
 cv::Mat PlanetRenderer::renderAR(const cv::Mat& background, const terrain::Terrain& planet,
                                  const terrain::Mesh& mesh, const terrain::Camera& camera,
                                  const RenderStyle& style, const std::optional<Cursor>& cursor) {

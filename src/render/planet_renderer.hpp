@@ -61,6 +61,14 @@ class PlanetRenderer {
   cv::Mat renderOverview(const terrain::Terrain& planet, const terrain::Mesh& arMesh,
                          const terrain::Camera& arCamera, int width, int height);
 
+  // Copies the last rendered image (renderAR or renderOverview) into framebuffer 0 (a window's
+  // back buffer) at x, y, width, height (GL window coordinates: origin at the bottom left),
+  // scaled linearly. A blit on the
+  // GPU: the window shows the very pixels the headless path reads back, with no second
+  // upload of the image (the live app, app/cmd_live.cpp). Both the renderer's framebuffer and
+  // a window's keep GL's bottom-up rows, so no flip is needed. Leaves framebuffer 0 bound.
+  void present(int x, int y, int width, int height) const;
+
   const RenderStats& stats() const { return stats_; }
 
  private:

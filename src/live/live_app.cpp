@@ -1,0 +1,372 @@
+#include "live/live_app.hpp"
+
+#define GLFW_INCLUDE_NONE
+#include <GLFW/glfw3.h>
+#include <backends/imgui_impl_glfw.h>
+#include <backends/imgui_impl_opengl3.h>
+#include <imgui.h>
+#define GL_GLEXT_PROTOTYPES
+#include <GL/gl.h>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <csignal>
+#include <cstdint>
+#include <exception>
+#include <functional>
+#include <iostream>
+#include <opencv2/imgproc.hpp>
+#include <optional>
+#include <stdexcept>
+
+#include "core/input_error.hpp"
+#include "io/heightmap_export.hpp"
+#include "io/planet_file.hpp"
+#include "live/panel.hpp"
+#include "render/planet_renderer.hpp"
+#include "render/projection.hpp"
+#include "terrain/tessellator.hpp"
+
+namespace ps::live {
+
+namespace {
+
+std::atomic<bool> gInterrupted{false};
+void onInterrupt(int) {
+  gInterrupted = true;  // the loop saves and leaves; nothing else is safe in a handler
+}
+
+std::string gGlfwError;
+void onGlfwError(int code, const char* what) {
+  gGlfwError = "GLFW error " + std::to_string(code) + ": " + (what ? what : "");
+}
+
+// GLFW, initialised for the lifetime of the app.
+struct GlfwLibrary {
+  GlfwLibrary() {
+    glfwSetErrorCallback(onGlfwError);
+    if (!glfwInit())
+      throw std::runtime_error("live: cannot start GLFW (no display? " + gGlfwError + ")");
+  }
+  ~GlfwLibrary() { glfwTerminate(); }
+};
+
+// Dear ImGui with its GLFW and OpenGL 3 back ends, for one window.
+struct ImGuiLayer {
+  explicit ImGuiLayer(GLFWwindow* window) {
+    IMGUI_CHECKVERSION();
+    ImGui::CreateContext();
+    ImGui::GetIO().IniFilename = nullptr;  // no imgui.ini next to the user's files
+    ImGui::StyleColorsDark();
+    ImGui_ImplGlfw_InitForOpenGL(window, true);
+    ImGui_ImplOpenGL3_Init("#version 330 core");
+  }
+  ~ImGuiLayer() {
+    ImGui_ImplOpenGL3_Shutdown();
+    ImGui_ImplGlfw_Shutdown();
+    ImGui::DestroyContext();
+  }
+};
+
+// The overview inset. It is drawn by the renderer every Nth frame only, so it cannot be a blit
+// of the renderer's framebuffer (which holds the AR view the rest of the time): the image the
+// renderer returns goes into a texture that ImGui draws every frame.
+class Texture {
+ public:
+  Texture() { glGenTextures(1, &id_); }
+  ~Texture() { glDeleteTextures(1, &id_); }
+  Texture(const Texture&) = delete;
+  Texture& operator=(const Texture&) = delete;
+  void update(const cv::Mat& bgr) {
+    cv::cvtColor(bgr, rgb_, cv::COLOR_BGR2RGB);
+    glBindTexture(GL_TEXTURE_2D, id_);
+    glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
+    glTexImage2D(GL_TEXTURE_2D, 0, GL_RGB8, rgb_.cols, rgb_.rows, 0, GL_RGB, GL_UNSIGNED_BYTE,
+                 rgb_.data);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+    glBindTexture(GL_TEXTURE_2D, 0);
+    valid_ = true;
+  }
+  bool valid() const { return valid_; }
+  ImTextureID imgui() const {
+    return reinterpret_cast<ImTextureID>(static_cast<std::uintptr_t>(id_));
+  }
+
+ private:
+  GLuint id_ = 0;
+  cv::Mat rgb_;
+  bool valid_ = false;
+};
+
+Eigen::Matrix3d eigenK(const cv::Matx33d& K) {
+  Eigen::Matrix3d k;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) k(i, j) = K(i, j);
+  return k;
+}
+
+double msSince(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+}
+
+// The window's back buffer as BGR, top row first.
+cv::Mat windowPixels(int width, int height) {
+  cv::Mat rgba(height, width, CV_8UC4), bgr, flipped;
+  glBindFramebuffer(GL_READ_FRAMEBUFFER, 0);
+  glReadBuffer(GL_BACK);
+  glPixelStorei(GL_PACK_ALIGNMENT, 1);
+  glReadPixels(0, 0, width, height, GL_RGBA, GL_UNSIGNED_BYTE, rgba.data);
+  cv::cvtColor(rgba, bgr, cv::COLOR_RGBA2BGR);
+  cv::flip(bgr, flipped, 0);
+  return flipped;
+}
+
+PanelSettings panelFrom(const LiveSettings& s) {
+  PanelSettings p;
+  const auto& o = s.options;
+  p.displace = o.tool == replay::ReplayTool::kDisplace;
+  p.brushRadiusKm = float(o.brush.radius / 1e3);
+  p.strengthM = float(o.brush.strength);
+  p.lower = o.brush.mode == edit::BrushMode::kLower;
+  p.displaceRadiusKm = float(o.displace.radius / 1e3);
+  p.pressM = float(o.pressDepth);
+  p.distMaxPx = float(s.distMaxPx);
+  p.triangleBudget = int(s.triangleBudget);
+  return p;
+}
+
+// Hands changed panel settings to the stepper; a refused value is reported and the previous
+// one kept.
+void applyPanel(const PanelSettings& p, PanelSettings& applied, replay::FrameStepper& stepper,
+                std::string& message) {
+  if (p.displace == applied.displace && p.brushRadiusKm == applied.brushRadiusKm &&
+      p.strengthM == applied.strengthM && p.lower == applied.lower &&
+      p.displaceRadiusKm == applied.displaceRadiusKm && p.pressM == applied.pressM)
+    return;
+  try {
+    edit::BrushSettings b = stepper.options().brush;
+    b.radius = p.brushRadiusKm * 1e3;
+    b.strength = p.strengthM;
+    b.mode = p.lower ? edit::BrushMode::kLower : edit::BrushMode::kRaise;
+    if (!(b == stepper.options().brush)) stepper.setBrush(b);
+    sand::DisplacementSettings d = stepper.options().displace;
+    d.radius = p.displaceRadiusKm * 1e3;
+    if (!(d == stepper.options().displace) || p.pressM != float(stepper.options().pressDepth))
+      stepper.setDisplacement(d, p.pressM);
+    stepper.setTool(p.displace ? replay::ReplayTool::kDisplace : replay::ReplayTool::kBrush);
+    applied = p;
+  } catch (const core::InputError& e) {
+    message = e.what();
+  }
+}
+
+}  // namespace
+
+LiveResult runLive(FrameInput& input, const tracking::CameraCalibration& calibration,
+                   terrain::Terrain& planet, const LiveSettings& settings) {
+  if (settings.overviewEvery < 1) throw core::InputError("overview every N frames: N must be >= 1");
+  replay::ReplayOptions options = settings.options;
+  options.undo = true;
+  const tracking::CameraCalibration calib = calibration.forImageSize(input.size());
+  replay::FrameStepper stepper(calib, planet, options);
+  const std::filesystem::path savePath = settings.out / "planet.planet";
+  std::filesystem::create_directories(settings.out);
+
+  GlfwLibrary glfw;
+  glfwWindowHint(GLFW_CONTEXT_VERSION_MAJOR, 3);
+  glfwWindowHint(GLFW_CONTEXT_VERSION_MINOR, 3);
+  glfwWindowHint(GLFW_OPENGL_PROFILE, GLFW_OPENGL_CORE_PROFILE);
+  glfwWindowHint(GLFW_OPENGL_FORWARD_COMPAT, GLFW_TRUE);
+  const int W = input.size().width, H = input.size().height;
+  GLFWwindow* window =
+      glfwCreateWindow(std::max(W, 960), std::max(H, 720), "PlanetSculpt live", nullptr, nullptr);
+  if (!window)
+    throw std::runtime_error("live: cannot open a window with OpenGL 3.3 core (" + gGlfwError +
+                             ")");
+  struct WindowGuard {
+    GLFWwindow* w;
+    ~WindowGuard() { glfwDestroyWindow(w); }
+  } windowGuard{window};
+  glfwMakeContextCurrent(window);
+  glfwSwapInterval(settings.frames > 0 ? 0 : 1);
+
+  LiveResult result;
+  {
+    render::PlanetRenderer renderer;
+    terrain::Tessellator tessellator;
+    ImGuiLayer imgui(window);
+    Texture overview;
+    gInterrupted = false;
+    const auto previousHandler = std::signal(SIGINT, onInterrupt);
+
+    const Eigen::Matrix3d K = eigenK(calib.K);
+    const terrain::Mesh empty;
+    // With no planet pose yet: the camera image alone (an empty mesh, any valid camera).
+    const terrain::Camera placeholder = render::arCamera(
+        Eigen::Matrix3d::Identity(), Eigen::Vector3d(0, 0, 1), stepper.scale(), K, W, H);
+    PanelSettings panel = panelFrom(settings), applied = panel;
+    PanelStatus status;
+    status.savePath = savePath.string();
+    std::string note;  // last action's message (saved, undo refused, ...)
+    cv::Mat image = cv::Mat::zeros(H, W, CV_8UC3), frame;
+    std::optional<tracking::Pose> pose;
+    std::optional<core::GridPoint> control;
+    double smoothedMs = 0;
+    auto save = [&] {
+      io::savePlanet(planet, savePath);
+      note = "saved " + savePath.string();
+    };
+
+    // Whatever goes wrong inside the loop, the planet is saved before the error goes on.
+    struct SaveOnError {
+      const std::function<void()> save;
+      ~SaveOnError() {
+        if (std::uncaught_exceptions() > 0) try {
+            save();
+            std::cerr << "live: the planet was saved before the error\n";
+          } catch (...) {
+          }
+      }
+    } saveOnError{[&] {
+      stepper.endStroke();
+      io::savePlanet(planet, savePath);
+    }};
+    while (!glfwWindowShouldClose(window) && !gInterrupted &&
+           (settings.frames == 0 || result.frames < settings.frames)) {
+      const auto t0 = std::chrono::steady_clock::now();
+      glfwPollEvents();
+      status.trackMs = status.editMs = 0;
+      if (input.read(frame)) {
+        image = frame;
+        const auto r = stepper.step(frame, input.index(), input.time());
+        status.trackMs = r.times.detectMs + r.times.trackMs;
+        status.editMs = r.times.editMs;
+        pose = r.planetInCamera;
+        control = r.control;
+        status.touching = r.touching;
+        status.planetState = tracking::toString(r.scene.planet.state);
+        status.toolState = tracking::toString(r.scene.tool.state);
+      } else {
+        // No frame (camera lost, video ended): the tool is not seen, so no stroke goes on; the
+        // last image and the planet on it stay.
+        stepper.endStroke();
+        status.touching = false;
+        control.reset();
+      }
+      status.message = input.status();
+      if (!note.empty()) status.message += (status.message.empty() ? "" : "\n") + note;
+
+      // The AR view, through the renderer's framebuffer, blitted into the window.
+      auto t1 = std::chrono::steady_clock::now();
+      terrain::TessellationSettings ts;
+      ts.distMaxPx = panel.distMaxPx;
+      ts.triangleBudget = std::size_t(std::max(1000, panel.triangleBudget));
+      render::RenderStyle style;
+      style.wireframe = panel.wireframe;
+      style.contours = panel.contours;
+      std::optional<terrain::Camera> cam;
+      const terrain::Mesh* mesh = &empty;
+      if (pose) {
+        cam = render::arCamera(pose->R, pose->t, stepper.scale(), K, W, H);
+        mesh = &tessellator.tessellate(planet, *cam, ts);
+        status.reused = tessellator.stats().reused;
+        status.triangles = mesh->triangleCount();
+      } else {
+        status.triangles = 0;
+        status.reused = false;
+      }
+      status.tessellateMs = msSince(t1);
+      t1 = std::chrono::steady_clock::now();
+      std::optional<render::Cursor> cursor;
+      if (control) cursor = render::Cursor{*control, stepper.toolRadius()};
+      renderer.renderAR(image, planet, *mesh, cam ? *cam : placeholder, style, cursor);
+      int fbW = 0, fbH = 0;
+      glfwGetFramebufferSize(window, &fbW, &fbH);
+      glBindFramebuffer(GL_FRAMEBUFFER, 0);
+      glViewport(0, 0, fbW, fbH);
+      glClearColor(0.02f, 0.02f, 0.03f, 1);
+      glClear(GL_COLOR_BUFFER_BIT);
+      // Fit the camera's aspect into the window, centred.
+      const double fit = std::min(double(fbW) / W, double(fbH) / H);
+      const int vw = int(W * fit), vh = int(H * fit);
+      renderer.present((fbW - vw) / 2, (fbH - vh) / 2, vw, vh);
+      if (cam && panel.showOverview && result.frames % settings.overviewEvery == 0)
+        overview.update(renderer.renderOverview(planet, *mesh, *cam, 256, 256));
+      status.renderMs = msSince(t1);
+
+      // The panel.
+      ImGui_ImplOpenGL3_NewFrame();
+      ImGui_ImplGlfw_NewFrame();
+      ImGui::NewFrame();
+      PanelActions actions;
+      applyShortcuts(panel, actions);
+      status.undoCount = stepper.pipeline().journal().undoCount();
+      status.redoCount = stepper.pipeline().journal().redoCount();
+      drawPanel(panel, actions, status);
+      if (panel.showOverview && overview.valid()) {
+        const ImVec2 display = ImGui::GetIO().DisplaySize;
+        ImGui::SetNextWindowPos(ImVec2(display.x - 8, display.y - 8), ImGuiCond_Always,
+                                ImVec2(1, 1));
+        ImGui::SetNextWindowBgAlpha(0.6f);
+        ImGui::Begin("overview", nullptr,
+                     ImGuiWindowFlags_AlwaysAutoResize | ImGuiWindowFlags_NoDecoration);
+        ImGui::Image(overview.imgui(), ImVec2(256, 256));
+        ImGui::End();
+      }
+      if (!input.status().empty()) {
+        ImDrawList* draw = ImGui::GetForegroundDrawList();
+        const ImVec2 display = ImGui::GetIO().DisplaySize;
+        draw->AddText(nullptr, 22, ImVec2(16, display.y * 0.5f), IM_COL32(255, 90, 60, 255),
+                      input.status().c_str());
+      }
+      ImGui::Render();
+      glViewport(0, 0, fbW, fbH);
+      ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
+      if (!settings.screenshot.empty() && settings.frames > 0 &&
+          result.frames + 1 == settings.frames)
+        io::writePngAtomically(windowPixels(fbW, fbH), settings.screenshot);
+      glfwSwapBuffers(window);
+
+      // What the user asked for.
+      applyPanel(panel, applied, stepper, note);
+      try {
+        if (actions.undo) {
+          stepper.endStroke();
+          stepper.pipeline().undo();
+          note = "undone";
+        }
+        if (actions.redo) {
+          stepper.endStroke();
+          stepper.pipeline().redo();
+          note = "redone";
+        }
+      } catch (const core::InputError& e) {
+        note = e.what();
+      }
+      if (actions.save) {
+        try {
+          save();
+        } catch (const std::exception& e) {
+          note = std::string("not saved: ") + e.what();
+        }
+      }
+      if (actions.quit) glfwSetWindowShouldClose(window, GLFW_TRUE);
+      const double ms = msSince(t0);
+      smoothedMs = smoothedMs == 0 ? ms : 0.9 * smoothedMs + 0.1 * ms;
+      status.frameMs = smoothedMs;
+      status.fps = smoothedMs > 0 ? 1000 / smoothedMs : 0;
+      ++result.frames;
+    }
+    std::signal(SIGINT, previousHandler);
+    stepper.endStroke();
+    if (gInterrupted) std::cerr << "live: interrupted; saving the planet\n";
+    io::savePlanet(planet, savePath);  // throws (naming the file) if the disk refuses
+    result.saved = savePath;
+    result.strokes = stepper.summary().strokes;
+  }
+  return result;
+}
+
+}  // namespace ps::live

@@ -1,0 +1,110 @@
+#include "live/panel.hpp"
+
+#define GLFW_INCLUDE_NONE  // key codes only
+#include <GLFW/glfw3.h>
+#include <imgui.h>
+
+#include <algorithm>
+
+namespace ps::live {
+
+const char* shortcutHelp() {
+  return "?  or F1     this help\n"
+         "B            tool: brush\n"
+         "D            tool: displace (sand)\n"
+         "R            brush: raise / lower\n"
+         "[  ]         r_d smaller / larger (x 0.8 / x 1.25)\n"
+         "-  =         strength smaller / larger\n"
+         "W            wireframe\n"
+         "C            contour lines\n"
+         "O            overview inset\n"
+         "Ctrl+Z       undo the last stroke\n"
+         "Ctrl+Y, Ctrl+Shift+Z   redo\n"
+         "Ctrl+S       save the planet (OUT/planet.planet)\n"
+         "Esc          save and quit (also: close the window, Ctrl-C)\n";
+}
+
+void applyShortcuts(PanelSettings& s, PanelActions& a) {
+  const ImGuiIO& io = ImGui::GetIO();
+  if (io.WantTextInput) return;
+  auto pressed = [](int key) { return ImGui::IsKeyPressed(key, false); };
+  if ((pressed(GLFW_KEY_SLASH) && io.KeyShift) || pressed(GLFW_KEY_F1)) s.showHelp = !s.showHelp;
+  if (io.KeyCtrl) {
+    if (pressed(GLFW_KEY_Z)) (io.KeyShift ? a.redo : a.undo) = true;
+    if (pressed(GLFW_KEY_Y)) a.redo = true;
+    if (pressed(GLFW_KEY_S)) a.save = true;
+    return;
+  }
+  if (pressed(GLFW_KEY_B)) s.displace = false;
+  if (pressed(GLFW_KEY_D)) s.displace = true;
+  if (pressed(GLFW_KEY_R)) s.lower = !s.lower;
+  if (pressed(GLFW_KEY_W)) s.wireframe = !s.wireframe;
+  if (pressed(GLFW_KEY_C)) s.contours = !s.contours;
+  if (pressed(GLFW_KEY_O)) s.showOverview = !s.showOverview;
+  if (pressed(GLFW_KEY_LEFT_BRACKET)) s.brushRadiusKm = std::max(20.f, s.brushRadiusKm * 0.8f);
+  if (pressed(GLFW_KEY_RIGHT_BRACKET)) s.brushRadiusKm = std::min(2000.f, s.brushRadiusKm * 1.25f);
+  if (pressed(GLFW_KEY_MINUS)) s.strengthM = std::max(10.f, s.strengthM * 0.8f);
+  if (pressed(GLFW_KEY_EQUAL)) s.strengthM = std::min(5000.f, s.strengthM * 1.25f);
+  if (pressed(GLFW_KEY_ESCAPE)) a.quit = true;
+}
+
+void drawPanel(PanelSettings& s, PanelActions& a, const PanelStatus& st) {
+  ImGui::SetNextWindowPos(ImVec2(8, 8), ImGuiCond_FirstUseEver);
+  ImGui::SetNextWindowBgAlpha(0.75f);
+  ImGui::Begin("PlanetSculpt", nullptr, ImGuiWindowFlags_AlwaysAutoResize);
+  ImGui::Text("%.1f fps  (%.1f ms: track %.1f, edit %.1f, tess %.1f, render %.1f)", st.fps,
+              st.frameMs, st.trackMs, st.editMs, st.tessellateMs, st.renderMs);
+  ImGui::Text("triangles %zu%s", st.triangles, st.reused ? "  (view unchanged: reused)" : "");
+  ImGui::Text("planet marker: %s   tool marker: %s%s", st.planetState.c_str(), st.toolState.c_str(),
+              st.touching ? "   TOUCHING" : "");
+  if (!st.message.empty()) ImGui::TextColored(ImVec4(1, 0.4f, 0.3f, 1), "%s", st.message.c_str());
+  ImGui::Separator();
+  int tool = s.displace ? 1 : 0;
+  ImGui::RadioButton("brush (B)", &tool, 0);
+  ImGui::SameLine();
+  ImGui::RadioButton("displace (D)", &tool, 1);
+  s.displace = tool == 1;
+  if (!s.displace) {
+    ImGui::SliderFloat("r_d (km)", &s.brushRadiusKm, 20, 2000, "%.0f",
+                       ImGuiSliderFlags_Logarithmic);
+    ImGui::SliderFloat("strength (m)", &s.strengthM, 10, 5000, "%.0f",
+                       ImGuiSliderFlags_Logarithmic);
+    int lower = s.lower ? 1 : 0;
+    ImGui::RadioButton("raise", &lower, 0);
+    ImGui::SameLine();
+    ImGui::RadioButton("lower (R)", &lower, 1);
+    s.lower = lower == 1;
+  } else {
+    ImGui::SliderFloat("sphere r (km)", &s.displaceRadiusKm, 50, 2000, "%.0f",
+                       ImGuiSliderFlags_Logarithmic);
+    ImGui::SliderFloat("press (m)", &s.pressM, 500, 50000, "%.0f", ImGuiSliderFlags_Logarithmic);
+  }
+  ImGui::Separator();
+  ImGui::SliderFloat("dist_max (px)", &s.distMaxPx, 0.25f, 16, "%.2f",
+                     ImGuiSliderFlags_Logarithmic);
+  ImGui::SliderInt("triangle budget", &s.triangleBudget, 5000, 500000, "%d",
+                   ImGuiSliderFlags_Logarithmic);
+  ImGui::Checkbox("wireframe (W)", &s.wireframe);
+  ImGui::SameLine();
+  ImGui::Checkbox("contours (C)", &s.contours);
+  ImGui::SameLine();
+  ImGui::Checkbox("overview (O)", &s.showOverview);
+  ImGui::Separator();
+  if (ImGui::Button("undo (Ctrl+Z)")) a.undo = true;
+  ImGui::SameLine();
+  if (ImGui::Button("redo (Ctrl+Y)")) a.redo = true;
+  ImGui::SameLine();
+  ImGui::Text("%zu / %zu", st.undoCount, st.redoCount);
+  if (ImGui::Button("save (Ctrl+S)")) a.save = true;
+  ImGui::SameLine();
+  ImGui::TextDisabled("%s", st.savePath.c_str());
+  if (ImGui::Button("shortcuts (?)")) s.showHelp = !s.showHelp;
+  ImGui::End();
+  if (s.showHelp) {
+    ImGui::Begin("Shortcuts", &s.showHelp, ImGuiWindowFlags_AlwaysAutoResize);
+    ImGui::TextUnformatted(shortcutHelp());
+    ImGui::End();
+  }
+}
+
+}  // namespace ps::live

@@ -1,0 +1,48 @@
+#pragma once
+// The live app's on-screen panel (Dear ImGui) and its keyboard shortcuts: what the user can
+// change (tool, r_d, strength, raise/lower, dist_max, triangle budget, wireframe) and ask for
+// (undo, redo, save), and what the app shows (frame rate, triangles, tracking state, messages).
+// Drawing only: the app (live/live_app.cpp) applies the settings and runs the actions.
+#include <cstddef>
+#include <string>
+
+namespace ps::live {
+
+struct PanelSettings {
+  bool displace = false;  // tool: brush (false) or sand displacement (true)
+  float brushRadiusKm = 250, strengthM = 600;
+  bool lower = false;  // brush: raise (false) or lower
+  float displaceRadiusKm = 400, pressM = 8000;
+  float distMaxPx = 4;
+  int triangleBudget = 70000;
+  bool wireframe = false, contours = false;
+  bool showHelp = false, showOverview = true;
+  bool operator==(const PanelSettings&) const = default;
+};
+
+struct PanelActions {
+  bool undo = false, redo = false, save = false, quit = false;
+};
+
+struct PanelStatus {
+  double fps = 0, frameMs = 0, trackMs = 0, editMs = 0, tessellateMs = 0, renderMs = 0;
+  std::size_t triangles = 0;
+  bool reused = false;  // the tessellator handed back its previous mesh
+  std::string planetState, toolState;
+  bool touching = false;
+  std::size_t undoCount = 0, redoCount = 0;
+  std::string message;  // camera lost, video ended, saved, errors
+  std::string savePath;
+};
+
+// The shortcuts, as listed by `?` (and by `planetsculpt live --help`).
+const char* shortcutHelp();
+
+// Reads this frame's keys (ImGui's io, GLFW key codes) into settings and actions. Keys go to the
+// panel's own text fields while one has the keyboard.
+void applyShortcuts(PanelSettings& settings, PanelActions& actions);
+
+// Draws the panel (and the help window when settings.showHelp).
+void drawPanel(PanelSettings& settings, PanelActions& actions, const PanelStatus& status);
+
+}  // namespace ps::live

@@ -1,0 +1,35 @@
+#!/bin/sh
+# ctest live_smoke: `planetsculpt live` on 30 frames of the demo video in a window under Xvfb
+# must exit 0, say it drew 30 frames, show the camera image in the window (a marker is found in
+# its screenshot) and save a planet file that `live --planet` loads again.
+# Exit 77 (ctest SKIP_RETURN_CODE) when xvfb-run is not installed.
+# Usage: live_smoke.sh EXE SOURCE_DIR OUT_DIR
+set -u
+exe=$1 src=$2 out=$3
+if ! command -v xvfb-run >/dev/null 2>&1; then
+  echo "SKIP: xvfb-run not found (apt install xvfb xauth)"
+  exit 77
+fi
+rm -rf "$out" && mkdir -p "$out" || exit 1
+fail() { echo "FAIL: $*"; cat "$out/live.txt" 2>/dev/null; exit 1; }
+run() {  # run LOG ARGS...: the live command in a fresh virtual screen
+  log=$1
+  shift
+  xvfb-run -a -s "-screen 0 1280x1024x24" "$exe" live --video "$src/data/demo.mkv" \
+    --calib "$src/calib/synthetic-640x480.yml" --grid 1025 "$@" >"$log" 2>&1
+}
+run "$out/live.txt" --frames 30 --out "$out/a" --screenshot "$out/window.png"
+rc=$?
+[ $rc -eq 0 ] || fail "live exited with $rc"
+grep -q "live: 30 frames" "$out/live.txt" || fail "no 'live: 30 frames' line"
+[ -s "$out/a/planet.planet" ] || fail "no $out/a/planet.planet"
+[ -s "$out/window.png" ] || fail "no screenshot $out/window.png"
+"$exe" detect "$out/window.png" >"$out/detect.txt" 2>&1 || fail "detect on the screenshot failed"
+grep -q '"id":' "$out/detect.txt" || { cat "$out/detect.txt"; fail "no marker in the window"; }
+# The saved file is a planet: a second session starts from it and saves it again unchanged
+# (3 frames of the video's start: nobody touches the planet there).
+run "$out/live2.txt" --frames 3 --planet "$out/a/planet.planet" --out "$out/b"
+rc=$?
+[ $rc -eq 0 ] || { cat "$out/live2.txt"; fail "live --planet exited with $rc"; }
+cmp -s "$out/a/planet.planet" "$out/b/planet.planet" || fail "the reloaded planet changed"
+echo "PASS"
