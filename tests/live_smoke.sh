@@ -1,7 +1,8 @@
 #!/bin/sh
 # ctest live_smoke: `planetsculpt live` on 30 frames of the demo video in a window under Xvfb
 # must exit 0, say it drew 30 frames, show the camera image in the window (a marker is found in
-# its screenshot) and save a planet file that `live --planet` loads again.
+# its screenshot) and save a planet file that `live --planet` loads again; Ctrl-C (SIGINT) in
+# the window's loop saves the planet too.
 # Exit 77 (ctest SKIP_RETURN_CODE) when xvfb-run is not installed.
 # Usage: live_smoke.sh EXE SOURCE_DIR OUT_DIR
 set -u
@@ -32,4 +33,23 @@ run "$out/live2.txt" --frames 3 --planet "$out/a/planet.planet" --out "$out/b"
 rc=$?
 [ $rc -eq 0 ] || { cat "$out/live2.txt"; fail "live --planet exited with $rc"; }
 cmp -s "$out/a/planet.planet" "$out/b/planet.planet" || fail "the reloaded planet changed"
+# Ctrl-C (SIGINT) while the window is open: exits 0 and saves the planet.
+xvfb-run -a -s "-screen 0 1280x1024x24" "$exe" live --video "$src/data/demo.mkv" \
+  --calib "$src/calib/synthetic-640x480.yml" --grid 1025 --out "$out/c" >"$out/live3.txt" 2>&1 &
+wrapper=$!
+pid=""
+for i in $(seq 1 600); do
+  if grep -q "live: window open" "$out/live3.txt" 2>/dev/null; then
+    pid=$(pgrep -P "$wrapper" -x planetsculpt || true)
+    [ -n "$pid" ] && break
+  fi
+  sleep 0.1
+done
+[ -n "$pid" ] || { kill "$wrapper"; cat "$out/live3.txt"; fail "the window never opened"; }
+kill -INT "$pid"
+wait "$wrapper"
+rc=$?
+[ $rc -eq 0 ] || { cat "$out/live3.txt"; fail "live after SIGINT exited with $rc"; }
+grep -q "interrupted; saving" "$out/live3.txt" || fail "no 'interrupted; saving' line"
+[ -s "$out/c/planet.planet" ] || fail "SIGINT did not save $out/c/planet.planet"
 echo "PASS"

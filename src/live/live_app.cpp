@@ -233,6 +233,8 @@ LiveResult runLive(FrameInput& input, const tracking::CameraCalibration& calibra
       stepper.endStroke();
       io::savePlanet(planet, savePath);
     }};
+    std::cerr << "live: window open (" << reinterpret_cast<const char*>(glGetString(GL_RENDERER))
+              << "); close it, press Esc or Ctrl-C to save and quit" << std::endl;
     while (!glfwWindowShouldClose(window) && !gInterrupted &&
            (settings.frames == 0 || result.frames < settings.frames)) {
       const auto t0 = std::chrono::steady_clock::now();
