@@ -8,6 +8,7 @@
 #define GL_GLEXT_PROTOTYPES
 #include <GL/gl.h>
 
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <atomic>
 #include <chrono>
@@ -16,6 +17,7 @@
 #include <exception>
 #include <functional>
 #include <iostream>
+#include <numbers>
 #include <opencv2/imgproc.hpp>
 #include <optional>
 #include <stdexcept>
@@ -332,6 +334,14 @@ LiveResult runLive(FrameInput& input, const tracking::CameraCalibration& calibra
       glfwSwapBuffers(window);
 
       // What the user asked for.
+      if (panel.spinDeg != applied.spinDeg || panel.tiltDeg != applied.tiltDeg) {
+        const double deg = std::numbers::pi / 180;
+        stepper.setUserRotation((Eigen::AngleAxisd(panel.tiltDeg * deg, Eigen::Vector3d::UnitX()) *
+                                 Eigen::AngleAxisd(panel.spinDeg * deg, Eigen::Vector3d::UnitZ()))
+                                    .toRotationMatrix());
+        applied.spinDeg = panel.spinDeg;
+        applied.tiltDeg = panel.tiltDeg;
+      }
       applyPanel(panel, applied, stepper, note);
       try {
         if (actions.undo) {

@@ -5,6 +5,7 @@
 #include <imgui.h>
 
 #include <algorithm>
+#include <cmath>
 
 namespace ps::live {
 
@@ -18,6 +19,9 @@ const char* shortcutHelp() {
          "W            wireframe\n"
          "C            contour lines\n"
          "O            overview inset\n"
+         "Left/Right   turn the planet about its axis (5 degrees; or drag, right button)\n"
+         "Up/Down      tilt the planet (5 degrees)\n"
+         "Home         planet back as the marker holds it\n"
          "Ctrl+Z       undo the last stroke\n"
          "Ctrl+Y, Ctrl+Shift+Z   redo\n"
          "Ctrl+S       save the planet (OUT/planet.planet)\n"
@@ -46,6 +50,16 @@ void applyShortcuts(PanelSettings& s, PanelActions& a) {
   if (pressed(GLFW_KEY_MINUS)) s.strengthM = std::max(10.f, s.strengthM * 0.8f);
   if (pressed(GLFW_KEY_EQUAL)) s.strengthM = std::min(5000.f, s.strengthM * 1.25f);
   if (pressed(GLFW_KEY_ESCAPE)) a.quit = true;
+  auto wrap = [](float deg) { return std::remainder(deg, 360.f); };
+  if (ImGui::IsKeyPressed(GLFW_KEY_LEFT)) s.spinDeg = wrap(s.spinDeg - 5);
+  if (ImGui::IsKeyPressed(GLFW_KEY_RIGHT)) s.spinDeg = wrap(s.spinDeg + 5);
+  if (ImGui::IsKeyPressed(GLFW_KEY_UP)) s.tiltDeg = std::min(90.f, s.tiltDeg + 5);
+  if (ImGui::IsKeyPressed(GLFW_KEY_DOWN)) s.tiltDeg = std::max(-90.f, s.tiltDeg - 5);
+  if (pressed(GLFW_KEY_HOME)) s.spinDeg = s.tiltDeg = 0;
+  if (!io.WantCaptureMouse && ImGui::IsMouseDragging(ImGuiMouseButton_Right)) {
+    s.spinDeg = wrap(s.spinDeg + 0.3f * io.MouseDelta.x);
+    s.tiltDeg = std::clamp(s.tiltDeg + 0.3f * io.MouseDelta.y, -90.f, 90.f);
+  }
 }
 
 void drawPanel(PanelSettings& s, PanelActions& a, const PanelStatus& st) {
@@ -89,6 +103,10 @@ void drawPanel(PanelSettings& s, PanelActions& a, const PanelStatus& st) {
   ImGui::Checkbox("contours (C)", &s.contours);
   ImGui::SameLine();
   ImGui::Checkbox("overview (O)", &s.showOverview);
+  ImGui::SliderFloat("spin (Left/Right)", &s.spinDeg, -180, 180, "%.0f deg");
+  ImGui::SliderFloat("tilt (Up/Down)", &s.tiltDeg, -90, 90, "%.0f deg");
+  ImGui::SameLine();
+  if (ImGui::Button("reset")) s.spinDeg = s.tiltDeg = 0;
   ImGui::Separator();
   if (ImGui::Button("undo (Ctrl+Z)")) a.undo = true;
   ImGui::SameLine();

@@ -17,6 +17,7 @@ struct PanelSettings {
   int triangleBudget = 70000;
   bool wireframe = false, contours = false;
   bool showHelp = false, showOverview = true;
+  float spinDeg = 0, tiltDeg = 0;  // the planet turned by hand on its marker
   bool operator==(const PanelSettings&) const = default;
 };
 
@@ -38,8 +39,9 @@ struct PanelStatus {
 // The shortcuts, as listed by `?` (and by `planetsculpt live --help`).
 const char* shortcutHelp();
 
-// Reads this frame's keys (ImGui's io, GLFW key codes) into settings and actions. Keys go to the
-// panel's own text fields while one has the keyboard.
+// Reads this frame's keys and mouse (ImGui's io, GLFW key codes) into settings and actions:
+// keys go to the panel's own fields while one has the keyboard; a right-button drag outside
+// the panel turns the planet.
 void applyShortcuts(PanelSettings& settings, PanelActions& actions);
 
 // Draws the panel (and the help window when settings.showHelp).

@@ -105,8 +105,10 @@ FrameStepper::FrameStepper(const tracking::CameraCalibration& calib, terrain::Te
   if (!(R > 0)) throw core::InputError("replay needs a spherical planet (its chart has no radius)");
   scale_ = R / o_.scene.planetRadius;
   p_ = std::make_unique<Parts>(tracking::makeDetector(dc), o_.scene, planet_);
-  p_->scene.setSurface([this](const Eigen::Vector3d& p) {
-    if (!(p.norm() > 0)) return o_.scene.planetRadius;
+  p_->scene.setSurface([this](const Eigen::Vector3d& tracked) {
+    if (!(tracked.norm() > 0)) return o_.scene.planetRadius;
+    const Eigen::Vector3d p =
+        rotated_ ? Eigen::Vector3d(userRotation_.transpose() * tracked) : tracked;
     const auto c = edit::nearestVertex(planet_.chart(), p);
     return (planet_.chart().radius() + planet_.height(c.u, c.v)) / scale_;
   });
@@ -135,6 +137,16 @@ void FrameStepper::rebuildTools() {
 
 void FrameStepper::endStroke() {
   if (p_ && p_->pipeline.inStroke()) p_->pipeline.endStroke();
+}
+
+void FrameStepper::setUserRotation(const Eigen::Matrix3d& rotation) {
+  if (!rotation.allFinite() ||
+      !(rotation * rotation.transpose()).isApprox(Eigen::Matrix3d::Identity(), 1e-9))
+    throw core::InputError("planet rotation is not a rotation matrix");
+  if (rotation == userRotation_) return;
+  endStroke();  // the planet jumps under the tool
+  userRotation_ = rotation;
+  rotated_ = !rotation.isIdentity(0.0);
 }
 
 void FrameStepper::setTool(ReplayTool tool) {
@@ -193,6 +205,7 @@ StepResult FrameStepper::step(const cv::Mat& image, int frame, double time) {
   out.times.detectMs = msSince(t0);
   const auto t1 = std::chrono::steady_clock::now();
   out.scene = p_->scene.update(found, calib_, frame, time);
+  if (rotated_) out.scene.tipPlanet = userRotation_.transpose() * out.scene.tipPlanet;
   const tracking::SceneFrame& f = out.scene;
   out.times.trackMs = msSince(t1);
   anyMarker_ = anyMarker_ || !found.empty();
@@ -258,7 +271,10 @@ StepResult FrameStepper::step(const cv::Mat& image, int frame, double time) {
   }
   out.times.editMs = msSince(t2);
   lastTime_ = time;
-  if (f.planet.usable()) out.planetInCamera = p_->scene.planetFromMarker(f.planet.pose);
+  if (f.planet.usable()) {
+    out.planetInCamera = p_->scene.planetFromMarker(f.planet.pose);
+    if (rotated_) out.planetInCamera->R = out.planetInCamera->R * userRotation_;
+  }
   out.touching = touching;
   out.control = control;
   out.stroke = stroke;

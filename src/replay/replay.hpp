@@ -127,6 +127,12 @@ class FrameStepper {
   void setTool(ReplayTool tool);
   void setBrush(const edit::BrushSettings& brush);
   void setDisplacement(const sand::DisplacementSettings& displace, double pressDepth);
+  // The planet turned by hand on its marker (live app: keys and mouse): planet-frame points are
+  // `rotation` (planet from turned planet) applied to the turned planet's coordinates. The AR
+  // pose, the tip and the surface under it all follow, so the tool sculpts where the turned
+  // planet is drawn. Identity (the default) leaves everything bit-identical to a replay.
+  void setUserRotation(const Eigen::Matrix3d& rotation);
+  const Eigen::Matrix3d& userRotation() const { return userRotation_; }
 
   const ReplayOptions& options() const { return o_; }
   edit::EditPipeline& pipeline();
@@ -150,6 +156,8 @@ class FrameStepper {
   double lastTime_ = 0;
   double strokeAltitude_ = 0;
   std::string family_;
+  Eigen::Matrix3d userRotation_ = Eigen::Matrix3d::Identity();
+  bool rotated_ = false;
 };
 
 // Replays `source` onto `planet`. Writes one JSON line per frame to `log` and, if given, one

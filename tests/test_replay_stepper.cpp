@@ -1,0 +1,140 @@
+// replay::FrameStepper (the per-frame pipeline shared by runReplay and the live app): the same
+// log lines and heights as runReplay, tool and brush changes between frames, and the planet
+// turned by hand (live app) moving the AR pose and the tip together.
+#include <gtest/gtest.h>
+
+#include <unistd.h>
+#include <Eigen/Geometry>
+#include <cstring>
+#include <filesystem>
+#include <sstream>
+
+#include "core/input_error.hpp"
+#include "replay/replay.hpp"
+#include "test_terrains.hpp"
+#include "tracking/synth.hpp"
+#include "tracking/video.hpp"
+
+using namespace ps;
+
+namespace {
+
+// The built-in "short" scene (12 frames at 320x240, grey), written once per process.
+const std::filesystem::path& video() {
+  static const std::filesystem::path path = [] {
+    const auto dir = std::filesystem::temp_directory_path() /
+                     ("ps_replay_stepper_" + std::to_string(::getpid()));
+    std::filesystem::create_directories(dir);
+    const auto p = dir / "short.mkv";
+    auto script = tracking::builtinScene("short");
+    script.colour = false;
+    const tracking::SynthRenderer r(script);
+    tracking::LosslessWriter w(p, script.size, script.fps, false);
+    for (int f = 0; f < r.frames(); ++f) w.write(r.render(f));
+    w.close();
+    return p;
+  }();
+  return path;
+}
+
+replay::ReplayOptions options() {
+  replay::ReplayOptions o;
+  const auto s = tracking::builtinScene("short");
+  o.scene.planet.size = s.planetMarkerSize;
+  o.scene.tool.size = s.toolMarkerSize;
+  o.scene.planetRadius = s.planetRadius;
+  o.scene.tipOffset = s.tipOffset;
+  return o;
+}
+
+tracking::CameraCalibration calibration() {
+  return tracking::SynthScript::syntheticCamera({320, 240});
+}
+
+}  // namespace
+
+TEST(ReplayStepper, StepsWriteTheReplaysLogAndHeights) {
+  auto a = testkit::bumpyTerrain(7, 4, 3000.0);
+  tracking::FrameSource src(video());
+  std::ostringstream log;
+  const auto summary = replay::runReplay(src, calibration(), a, options(), log);
+
+  auto b = testkit::bumpyTerrain(7, 4, 3000.0);
+  tracking::FrameSource src2(video());
+  replay::FrameStepper stepper(calibration().forImageSize(src2.size()), b, options());
+  std::string lines;
+  cv::Mat image;
+  int withPose = 0;
+  while (src2.read(image)) {
+    const auto r = stepper.step(image, src2.index(), src2.index() / src2.fps());
+    lines += r.logLine + "\n";
+    withPose += r.planetInCamera.has_value();
+    if (r.touching) {
+      ASSERT_TRUE(r.control.has_value());
+    }
+  }
+  stepper.endStroke();
+  EXPECT_EQ(lines, log.str());
+  EXPECT_EQ(std::memcmp(a.heights().data(), b.heights().data(), a.heights().size() * sizeof(float)),
+            0);
+  EXPECT_EQ(stepper.summary().frames, summary.frames);
+  EXPECT_EQ(stepper.summary().strokes, summary.strokes);
+  EXPECT_GE(summary.strokes, 1);
+  EXPECT_EQ(withPose, summary.framesWithPlanet);
+}
+
+TEST(ReplayStepper, TurnedPlanetMovesPoseAndTipTogether) {
+  const Eigen::Matrix3d turn = (Eigen::AngleAxisd(0.4, Eigen::Vector3d::UnitX()) *
+                                Eigen::AngleAxisd(1.1, Eigen::Vector3d::UnitZ()))
+                                   .toRotationMatrix();
+  auto a = testkit::bumpyTerrain(7, 4, 3000.0), b = testkit::bumpyTerrain(7, 4, 3000.0);
+  tracking::FrameSource srcA(video()), srcB(video());
+  replay::FrameStepper plain(calibration().forImageSize(srcA.size()), a, options());
+  replay::FrameStepper turned(calibration().forImageSize(srcB.size()), b, options());
+  turned.setUserRotation(turn);
+  EXPECT_TRUE(turned.userRotation().isApprox(turn));
+  cv::Mat ia, ib;
+  int compared = 0;
+  while (srcA.read(ia) && srcB.read(ib)) {
+    const auto ra = plain.step(ia, srcA.index(), srcA.index() / srcA.fps());
+    const auto rb = turned.step(ib, srcB.index(), srcB.index() / srcB.fps());
+    ASSERT_EQ(ra.planetInCamera.has_value(), rb.planetInCamera.has_value());
+    if (ra.planetInCamera) {
+      // The turned planet's frame: camera-from-turned = camera-from-planet * turn.
+      EXPECT_TRUE(rb.planetInCamera->R.isApprox(ra.planetInCamera->R * turn, 1e-12));
+      EXPECT_TRUE(rb.planetInCamera->t.isApprox(ra.planetInCamera->t, 1e-12));
+    }
+    if (ra.scene.tipValid) {
+      // The tip in the turned planet's coordinates: the same point in the camera.
+      EXPECT_TRUE(rb.scene.tipPlanet.isApprox(turn.transpose() * ra.scene.tipPlanet, 1e-9));
+      if (rb.planetInCamera) {
+        EXPECT_TRUE(rb.planetInCamera->apply(rb.scene.tipPlanet)
+                        .isApprox(ra.planetInCamera->apply(ra.scene.tipPlanet), 1e-9));
+      }
+      ++compared;
+    }
+  }
+  EXPECT_GE(compared, 10);
+  // Not a rotation: refused, nothing changed.
+  EXPECT_THROW(turned.setUserRotation(2 * Eigen::Matrix3d::Identity()), core::InputError);
+  EXPECT_TRUE(turned.userRotation().isApprox(turn));
+}
+
+TEST(ReplayStepper, ToolAndBrushChangeBetweenFramesAndBadValuesAreRefused) {
+  auto planet = testkit::bumpyTerrain(7, 4, 3000.0);
+  tracking::FrameSource src(video());
+  replay::FrameStepper stepper(calibration().forImageSize(src.size()), planet, options());
+  edit::BrushSettings brush = stepper.options().brush;
+  brush.radius *= 2;
+  stepper.setBrush(brush);
+  EXPECT_DOUBLE_EQ(stepper.toolRadius(), brush.radius);
+  stepper.setTool(replay::ReplayTool::kDisplace);
+  EXPECT_DOUBLE_EQ(stepper.toolRadius(), stepper.options().displace.radius);
+  brush.radius = -1;
+  EXPECT_THROW(stepper.setBrush(brush), core::InputError);
+  EXPECT_EQ(stepper.options().tool, replay::ReplayTool::kDisplace);
+  EXPECT_GT(stepper.options().brush.radius, 0);
+  cv::Mat image;
+  while (src.read(image)) stepper.step(image, src.index(), src.index() / src.fps());
+  EXPECT_EQ(stepper.summary().frames, 12);
+}
