@@ -2,7 +2,7 @@
 # ctest live_smoke: `planetsculpt live` on 30 frames of the demo video in a window under Xvfb
 # must exit 0, say it drew 30 frames, show the camera image in the window (a marker is found in
 # its screenshot) and save a planet file that `live --planet` loads again; Ctrl-C (SIGINT) in
-# the window's loop saves the planet too.
+# the window's loop saves the planet too, and so does a run that outlasts the video.
 # Exit 77 (ctest SKIP_RETURN_CODE) when xvfb-run is not installed.
 # Usage: live_smoke.sh EXE SOURCE_DIR OUT_DIR
 set -u
@@ -33,6 +33,12 @@ run "$out/live2.txt" --frames 3 --planet "$out/a/planet.planet" --out "$out/b"
 rc=$?
 [ $rc -eq 0 ] || { cat "$out/live2.txt"; fail "live --planet exited with $rc"; }
 cmp -s "$out/a/planet.planet" "$out/b/planet.planet" || fail "the reloaded planet changed"
+# Past the video's end (341 frames): the window stays, the planet is kept and saved.
+run "$out/live4.txt" --frames 350 --out "$out/d"
+rc=$?
+[ $rc -eq 0 ] || { cat "$out/live4.txt"; fail "live past the video's end exited with $rc"; }
+grep -q "live: 350 frames" "$out/live4.txt" || { cat "$out/live4.txt"; fail "no 'live: 350 frames'"; }
+[ -s "$out/d/planet.planet" ] || fail "no $out/d/planet.planet after the video ended"
 # Ctrl-C (SIGINT) while the window is open: exits 0 and saves the planet.
 xvfb-run -a -s "-screen 0 1280x1024x24" "$exe" live --video "$src/data/demo.mkv" \
   --calib "$src/calib/synthetic-640x480.yml" --grid 1025 --out "$out/c" >"$out/live3.txt" 2>&1 &
