@@ -283,6 +283,10 @@ LiveResult runLive(FrameInput& input, const tracking::CameraCalibration& calibra
       }
       status.tessellateMs = msSince(t1);
       t1 = std::chrono::steady_clock::now();
+      // The overview first: it uses the renderer's framebuffer too, and the AR view must be
+      // the last image there when it is presented (and framebuffer 0 bound for the panel).
+      if (cam && panel.showOverview && result.frames % settings.overviewEvery == 0)
+        overview.update(renderer.renderOverview(planet, *mesh, *cam, 256, 256));
       std::optional<render::Cursor> cursor;
       if (control) cursor = render::Cursor{*control, stepper.toolRadius()};
       renderer.renderAR(image, planet, *mesh, cam ? *cam : placeholder, style, cursor);
@@ -296,8 +300,6 @@ LiveResult runLive(FrameInput& input, const tracking::CameraCalibration& calibra
       const double fit = std::min(double(fbW) / W, double(fbH) / H);
       const int vw = int(W * fit), vh = int(H * fit);
       renderer.present((fbW - vw) / 2, (fbH - vh) / 2, vw, vh);
-      if (cam && panel.showOverview && result.frames % settings.overviewEvery == 0)
-        overview.update(renderer.renderOverview(planet, *mesh, *cam, 256, 256));
       status.renderMs = msSince(t1);
 
       // The panel.
@@ -326,6 +328,7 @@ LiveResult runLive(FrameInput& input, const tracking::CameraCalibration& calibra
                       input.status().c_str());
       }
       ImGui::Render();
+      glBindFramebuffer(GL_FRAMEBUFFER, 0);  // the window, whatever the renderer left bound
       glViewport(0, 0, fbW, fbH);
       ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
       if (!settings.screenshot.empty() && settings.frames > 0 &&
