@@ -131,6 +131,7 @@ PanelSettings panelFrom(const LiveSettings& s) {
   p.displace = o.tool == replay::ReplayTool::kDisplace;
   p.brushRadiusKm = float(o.brush.radius / 1e3);
   p.strengthM = float(o.brush.strength);
+  p.sigma = float(o.brush.sigma);
   p.lower = o.brush.mode == edit::BrushMode::kLower;
   p.displaceRadiusKm = float(o.displace.radius / 1e3);
   p.pressM = float(o.pressDepth);
@@ -144,13 +145,14 @@ PanelSettings panelFrom(const LiveSettings& s) {
 void applyPanel(const PanelSettings& p, PanelSettings& applied, replay::FrameStepper& stepper,
                 std::string& message) {
   if (p.displace == applied.displace && p.brushRadiusKm == applied.brushRadiusKm &&
-      p.strengthM == applied.strengthM && p.lower == applied.lower &&
+      p.strengthM == applied.strengthM && p.sigma == applied.sigma && p.lower == applied.lower &&
       p.displaceRadiusKm == applied.displaceRadiusKm && p.pressM == applied.pressM)
     return;
   try {
     edit::BrushSettings b = stepper.options().brush;
     b.radius = p.brushRadiusKm * 1e3;
     b.strength = p.strengthM;
+    b.sigma = p.sigma;
     b.mode = p.lower ? edit::BrushMode::kLower : edit::BrushMode::kRaise;
     if (!(b == stepper.options().brush)) stepper.setBrush(b);
     sand::DisplacementSettings d = stepper.options().displace;

@@ -83,6 +83,7 @@ void drawPanel(PanelSettings& s, PanelActions& a, const PanelStatus& st) {
                        ImGuiSliderFlags_Logarithmic);
     ImGui::SliderFloat("strength (m)", &s.strengthM, 10, 5000, "%.0f",
                        ImGuiSliderFlags_Logarithmic);
+    ImGui::SliderFloat("sigma", &s.sigma, 0.05f, 1.0f, "%.2f");
     int lower = s.lower ? 1 : 0;
     ImGui::RadioButton("raise", &lower, 0);
     ImGui::SameLine();

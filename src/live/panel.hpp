@@ -10,7 +10,7 @@ namespace ps::live {
 
 struct PanelSettings {
   bool displace = false;  // tool: brush (false) or sand displacement (true)
-  float brushRadiusKm = 250, strengthM = 600;
+  float brushRadiusKm = 250, strengthM = 600, sigma = 0.17f;
   bool lower = false;  // brush: raise (false) or lower
   float displaceRadiusKm = 400, pressM = 8000;
   float distMaxPx = 4;
