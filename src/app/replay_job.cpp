@@ -10,9 +10,11 @@
 
 #include "app/ar_recorder.hpp"
 #include "app/default_planet.hpp"
+#include "app/plot.hpp"
 #include "app/progress.hpp"
 #include "app/snapshot.hpp"
 #include "core/input_error.hpp"
+#include "haptics/session.hpp"
 #include "io/heightmap_export.hpp"
 #include "io/planet_file.hpp"
 #include "terrain/screen_error.hpp"
@@ -128,11 +130,32 @@ nlohmann::json runReplayJob(const ReplayJob& job) {
   std::filesystem::create_directories(out);
   std::ofstream log(out / "log.jsonl.part"), timings(out / "timings.jsonl.part");
   if (!log || !timings) throw std::runtime_error("cannot write in " + out.string());
+  std::unique_ptr<haptics::HapticSession> haptic;
+  std::ofstream forces;
+  double peakForce = 0;
+  PlotSeries forceSeries;  // per frame: time, the largest force of its ticks
+  if (job.forces) {
+    haptics::SessionConfig hc;
+    hc.map.scale = planet->chart().radius() / job.options.scene.planetRadius;
+    forces.open(out / "forces.csv.part");
+    if (!forces) throw std::runtime_error("cannot write in " + out.string());
+    haptic = std::make_unique<haptics::HapticSession>(*planet, nullptr, hc);
+    haptic->setLog(&forces);
+  }
   replay::ReplaySummary s;
   {
     Progress p("replay " + job.video.filename().string());
-    replay::FrameHook hook;
-    if (recorder) hook = [&](const replay::FrameContext& f) { recorder->onFrame(f); };
+    replay::FrameHook hook = [&](const replay::FrameContext& f) {
+      if (recorder) recorder->onFrame(f);
+      if (haptic) {
+        std::optional<Eigen::Vector3d> tip;
+        if (f.scene.tipValid) tip = f.scene.tipPlanet * f.scale;
+        const double fmax = haptic->onFrame(tip, f.time).maxForce;
+        peakForce = std::max(peakForce, fmax);
+        forceSeries.x.push_back(f.time);
+        forceSeries.y.push_back(fmax);
+      }
+    };
     s = replay::runReplay(
         source, calib, *planet, job.options, log, &timings,
         [&](int f, int total) {
@@ -146,9 +169,18 @@ nlohmann::json runReplayJob(const ReplayJob& job) {
   timings.close();
   renameInto(out / "log.jsonl.part", out / "log.jsonl");
   renameInto(out / "timings.jsonl.part", out / "timings.jsonl");
+  std::size_t forceRows = 0;
+  if (haptic) {
+    forceRows = haptic->logRows();
+    haptic->setLog(nullptr);
+    haptic.reset();
+    forces.close();
+    renameInto(out / "forces.csv.part", out / "forces.csv");
+  }
 
   nlohmann::json files = {"heightmap.png", "heightmap.png.json", "planet.planet", "log.jsonl",
                           "timings.jsonl"};
+  if (job.forces) files.push_back("forces.csv");
   int hmW = 0, hmH = 0;
   {
     Progress p("heightmap");
@@ -173,6 +205,8 @@ nlohmann::json runReplayJob(const ReplayJob& job) {
                             {"modified_vertices", s.modifiedVertices},
                             {"skipped_frames", s.skippedFrames},
                             {"settle_cell_steps", s.settleCellSteps},
+                            {"force_ticks", forceRows},
+                            {"peak_force_n", peakForce},
                             {"warnings", s.warnings},
                             {"grid", planet->grid().label()},
                             {"radius_m", planet->chart().radius()},
@@ -192,6 +226,20 @@ nlohmann::json runReplayJob(const ReplayJob& job) {
   } else if (!noRender.empty()) {
     summary["ar_view_skipped"] = noRender;
     std::cerr << "replay: no AR pictures: " << noRender << "\n";
+  }
+  if (job.pictures && job.forces && !forceSeries.x.empty()) {
+    forceSeries.label = "largest force of the frame's 1 kHz ticks";
+    forceSeries.colour = seriesColour(3);
+    io::writePngAtomically(
+        drawPlots({PlotPanel{"Haptic force on the tool tip during the replay (paper 004 sand)",
+                             "time (s)",
+                             "force (N)",
+                             false,
+                             false,
+                             {forceSeries}}},
+                  1100, 360),
+        out / "forces.png");
+    files.push_back("forces.png");
   }
   if (job.pictures && planet->chart().radius() > 0) {
     Progress p("pictures");

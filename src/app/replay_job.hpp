@@ -26,6 +26,9 @@ struct ReplayJob {
   // headless OpenGL; an error when there is none).
   bool render = false;
   int renderEvery = 1;
+  // The haptic force path run offline beside the replay (forces only: the tool's edits stay the
+  // replay's): OUT/forces.csv, one row per 1 kHz tick (haptics/force_log.hpp).
+  bool forces = true;
   double distMaxPx = 4.0;
   std::size_t triangleBudget = 70000;
 };
