@@ -242,3 +242,41 @@ TEST(RenderGl, PlanetAnchorLandsOnTheDetectedMarker) {
   EXPECT_LT(std::hypot(px->x() - centre.x, px->y() - centre.y), 1.0)
       << "anchor " << px->transpose() << " marker centre " << centre;
 }
+
+// The cursor: the ring of r_d around the control vertex and the force arrow are drawn where
+// they are (the arrow across the view, in its own colour).
+TEST(RenderGl, CursorRingAndForceArrowAreDrawn) {
+  SKIP_WITHOUT_GL();
+  auto chart = testkit::earthChart(7);
+  const terrain::Terrain planet(chart, std::vector<float>(chart->grid().count(), 0.0f));
+  const double R = chart->radius();
+  render::EglContext gl;
+  render::PlanetRenderer renderer;
+  const auto cam = orbitCamera(3 * R, 320, 240);
+  terrain::Tessellator tess;
+  const auto& mesh = tess.tessellate(planet, cam, {});
+  // The vertex facing the camera most directly.
+  const int side = chart->grid().side();
+  core::GridPoint best;
+  double bestDot = -2;
+  for (int v = 1; v < side - 1; v += 4)
+    for (int u = 0; u < side - 1; u += 4) {
+      const double d = chart->up(u, v).dot(cam.eye.normalized());
+      if (d > bestDot) bestDot = d, best = {u, v};
+    }
+  render::Cursor c{best, 0.2 * R};
+  const Eigen::Vector3d n = chart->up(best.u, best.v);
+  c.arrowFrom = R * n;
+  c.arrow = 0.5 * R * n.cross(Eigen::Vector3d::UnitZ()).normalized();  // across the view
+  const cv::Mat img = renderer.renderAR({}, planet, mesh, cam, {}, c);
+  cv::Mat ring, arrow;
+  cv::inRange(img, cv::Scalar(0, 200, 240), cv::Scalar(60, 240, 255), ring);   // (1, .85, .1)
+  cv::inRange(img, cv::Scalar(50, 240, 30), cv::Scalar(100, 255, 80), arrow);  // (.2, 1, .3)
+  EXPECT_GT(cv::countNonZero(ring), 100);
+  EXPECT_GT(cv::countNonZero(arrow), 40);
+  // Without an arrow, no arrow colour anywhere.
+  c.arrow.setZero();
+  const cv::Mat none = renderer.renderAR({}, planet, mesh, cam, {}, c);
+  cv::inRange(none, cv::Scalar(50, 240, 30), cv::Scalar(100, 255, 80), arrow);
+  EXPECT_EQ(cv::countNonZero(arrow), 0);
+}

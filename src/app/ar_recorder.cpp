@@ -17,7 +17,8 @@ ArRecorder::ArRecorder(ArRecorderSettings settings) : settings_(std::move(settin
   if (!settings_.frameDir.empty()) std::filesystem::create_directories(settings_.frameDir);
 }
 
-void ArRecorder::onFrame(const replay::FrameContext& f) {
+void ArRecorder::onFrame(const replay::FrameContext& f, const Eigen::Vector3d& force,
+                         const Eigen::Vector3d& forceTip) {
   const bool wantSequence = !settings_.frameDir.empty() && f.frame % settings_.every == 0;
   const bool wantShowcase = settings_.showcase && f.touching && f.planetInCamera;
   auto closeRun = [&] {
@@ -45,7 +46,14 @@ void ArRecorder::onFrame(const replay::FrameContext& f) {
     render::RenderStyle style;
     style.wireframe = settings_.wireframe;
     std::optional<render::Cursor> cursor;
-    if (f.control) cursor = render::Cursor{*f.control, f.toolRadius};
+    if (f.control) {
+      cursor = render::Cursor{*f.control, f.toolRadius};
+      // 8 N (the haptic force clamp) draws as a quarter of the planet's radius.
+      if (force.allFinite() && force.norm() > 1e-6) {
+        cursor->arrowFrom = forceTip;
+        cursor->arrow = force * (0.25 * f.planet.chart().radius() / 8.0);
+      }
+    }
     view = renderer_.renderAR(f.image, f.planet, mesh, cam, style, cursor);
     overview = renderer_.renderOverview(f.planet, mesh, cam, 480, 480);
   } else {

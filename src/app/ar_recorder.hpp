@@ -3,6 +3,7 @@
 // (camera image, planet on its marker, cursor) and the overview. Writes every `every`-th frame
 // to DIR/ar/frame_NNNNN.png (and DIR/ar/overview_NNNNN.png) when asked, and keeps the frame in
 // the middle of the longest touching run as the showcase (ar_view.png, overview.png).
+#include <Eigen/Core>
 #include <filesystem>
 #include <memory>
 #include <opencv2/core.hpp>
@@ -27,7 +28,11 @@ class ArRecorder {
  public:
   // Throws std::runtime_error when no headless OpenGL context can be made.
   explicit ArRecorder(ArRecorderSettings settings);
-  void onFrame(const replay::FrameContext& frame);
+  // `force`: the haptic force of the frame (N, planet-frame direction) at `forceTip` (planet
+  // metres), drawn as an arrow; zero for none.
+  void onFrame(const replay::FrameContext& frame,
+               const Eigen::Vector3d& force = Eigen::Vector3d::Zero(),
+               const Eigen::Vector3d& forceTip = Eigen::Vector3d::Zero());
   // Writes ar_view.png and overview.png into `dir`; false when no frame touched.
   bool writeShowcase(const std::filesystem::path& dir);
   int framesWritten() const { return written_; }

@@ -146,15 +146,21 @@ nlohmann::json runReplayJob(const ReplayJob& job) {
   {
     Progress p("replay " + job.video.filename().string());
     replay::FrameHook hook = [&](const replay::FrameContext& f) {
-      if (recorder) recorder->onFrame(f);
+      Eigen::Vector3d force = Eigen::Vector3d::Zero(), forceTip = Eigen::Vector3d::Zero();
       if (haptic) {
         std::optional<Eigen::Vector3d> tip;
         if (f.scene.tipValid) tip = f.scene.tipPlanet * f.scale;
-        const double fmax = haptic->onFrame(tip, f.time).maxForce;
-        peakForce = std::max(peakForce, fmax);
+        const auto ff = haptic->onFrame(tip, f.time);
+        peakForce = std::max(peakForce, ff.maxForce);
         forceSeries.x.push_back(f.time);
-        forceSeries.y.push_back(fmax);
+        forceSeries.y.push_back(ff.maxForce);
+        // The workspace map is the identity rotation: device directions are planet directions.
+        if (ff.last && ff.last->touching && ff.last->tipPlanet.allFinite()) {
+          force = ff.last->force;
+          forceTip = ff.last->tipPlanet;
+        }
       }
+      if (recorder) recorder->onFrame(f, force, forceTip);
     };
     s = replay::runReplay(
         source, calib, *planet, job.options, log, &timings,

@@ -415,6 +415,17 @@ cv::Mat PlanetRenderer::renderAR(const cv::Mat& background, const terrain::Terra
     const double arm = 0.15 * cursor->radius;
     drawLines({c - arm * e1, c + arm * e1, c - arm * e2, c + arm * e2}, false, camera, clip,
               {1.0f, 0.2f, 0.1f}, false);
+    if (cursor->arrow.norm() > 0 && cursor->arrowFrom.allFinite() && cursor->arrow.allFinite()) {
+      // Shaft and a two-stroke head in the plane of the shaft and the view direction.
+      const Eigen::Vector3d a = cursor->arrowFrom, b = a + cursor->arrow;
+      const Eigen::Vector3d dir = cursor->arrow.normalized();
+      Eigen::Vector3d side = dir.cross(b - camera.eye);
+      side = side.norm() > 0 ? side.normalized() : dir.unitOrthogonal();
+      const double head = 0.25 * cursor->arrow.norm();
+      drawLines(
+          {a, b, b, b - head * dir + 0.5 * head * side, b, b - head * dir - 0.5 * head * side},
+          false, camera, clip, {0.2f, 1.0f, 0.3f}, false);
+    }
   }
   return readBack();
 }

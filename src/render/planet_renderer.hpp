@@ -33,6 +33,10 @@ struct RenderStyle {
 struct Cursor {
   core::GridPoint control;
   double radius = 0;
+  // The haptic force on the tool, as an arrow from the tool tip (planet frame, planet metres);
+  // a zero vector draws none.
+  Eigen::Vector3d arrowFrom = Eigen::Vector3d::Zero();
+  Eigen::Vector3d arrow = Eigen::Vector3d::Zero();
 };
 
 struct RenderStats {
