@@ -12,6 +12,7 @@
 #include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <cmath>
 #include <csignal>
 #include <cstdint>
 #include <exception>
@@ -23,6 +24,8 @@
 #include <stdexcept>
 
 #include "core/input_error.hpp"
+#include "haptics/device.hpp"
+#include "haptics/session.hpp"
 #include "io/heightmap_export.hpp"
 #include "io/planet_file.hpp"
 #include "live/panel.hpp"
@@ -237,6 +240,20 @@ LiveResult runLive(FrameInput& input, const tracking::CameraCalibration& calibra
       stepper.endStroke();
       io::savePlanet(planet, savePath);
     }};
+    // The haptic force path beside the frame loop (docs/HAPTICS.md): a 1 kHz thread reads the
+    // tracked tool tip (a position-only device) and the terrain near it; forces are computed,
+    // drawn as an arrow and shown in the panel. Forces only: the tool's edits stay the
+    // stepper's.
+    haptics::SessionConfig hapticConfig;
+    hapticConfig.map.scale = stepper.scale();
+    haptics::HapticSession haptic(planet, nullptr, hapticConfig);
+    haptics::TrackedMarkerDevice hapticDevice;
+    haptic.startLoop(hapticDevice);
+    struct LoopGuard {
+      haptics::HapticSession& h;
+      ~LoopGuard() { h.stopLoop(); }
+    } loopGuard{haptic};
+    std::optional<haptics::ForceRecord> lastForce;
     std::cerr << "live: window open (" << reinterpret_cast<const char*>(glGetString(GL_RENDERER))
               << "); close it, press Esc or Ctrl-C to save and quit" << std::endl;
     while (!glfwWindowShouldClose(window) && !gInterrupted &&
@@ -252,6 +269,11 @@ LiveResult runLive(FrameInput& input, const tracking::CameraCalibration& calibra
         pose = r.planetInCamera;
         control = r.control;
         status.touching = r.touching;
+        const double now = haptic.loop()->now();
+        if (r.scene.tipValid)
+          hapticDevice.push(r.scene.tipPlanet, now);
+        else
+          hapticDevice.push(Eigen::Vector3d::Constant(std::nan("")), now);
         status.planetState = tracking::toString(r.scene.planet.state);
         status.toolState = tracking::toString(r.scene.tool.state);
       } else {
@@ -260,6 +282,13 @@ LiveResult runLive(FrameInput& input, const tracking::CameraCalibration& calibra
         stepper.endStroke();
         status.touching = false;
         control.reset();
+      }
+      {
+        const auto forces = haptic.editorFrame();
+        if (forces.last) lastForce = forces.last;
+        status.forceN = lastForce && lastForce->touching ? lastForce->force.norm() : 0.0;
+        const double elapsed = haptic.loop()->now();
+        status.hapticHz = elapsed > 0 ? double(haptic.loop()->stats().ticks) / elapsed : 0.0;
       }
       status.message = input.status();
       if (!note.empty()) status.message += (status.message.empty() ? "" : "\n") + note;
@@ -290,7 +319,14 @@ LiveResult runLive(FrameInput& input, const tracking::CameraCalibration& calibra
       if (cam && panel.showOverview && result.frames % settings.overviewEvery == 0)
         overview.update(renderer.renderOverview(planet, *mesh, *cam, 256, 256));
       std::optional<render::Cursor> cursor;
-      if (control) cursor = render::Cursor{*control, stepper.toolRadius()};
+      if (control) {
+        cursor = render::Cursor{*control, stepper.toolRadius()};
+        // 8 N (the force clamp) draws as a quarter of the planet's radius.
+        if (lastForce && lastForce->touching && lastForce->tipPlanet.allFinite()) {
+          cursor->arrowFrom = lastForce->tipPlanet;
+          cursor->arrow = lastForce->force * (0.25 * planet.chart().radius() / 8.0);
+        }
+      }
       renderer.renderAR(image, planet, *mesh, cam ? *cam : placeholder, style, cursor);
       int fbW = 0, fbH = 0;
       glfwGetFramebufferSize(window, &fbW, &fbH);

@@ -71,6 +71,8 @@ void drawPanel(PanelSettings& s, PanelActions& a, const PanelStatus& st) {
   ImGui::Text("triangles %zu%s", st.triangles, st.reused ? "  (view unchanged: reused)" : "");
   ImGui::Text("planet marker: %s   tool marker: %s%s", st.planetState.c_str(), st.toolState.c_str(),
               st.touching ? "   TOUCHING" : "");
+  ImGui::Text("haptic force %.2f N  (loop %.0f Hz, tracked marker: computed, drawn, not felt)",
+              st.forceN, st.hapticHz);
   if (!st.message.empty()) ImGui::TextColored(ImVec4(1, 0.4f, 0.3f, 1), "%s", st.message.c_str());
   ImGui::Separator();
   int tool = s.displace ? 1 : 0;

@@ -31,6 +31,7 @@ struct PanelStatus {
   bool reused = false;  // the tessellator handed back its previous mesh
   std::string planetState, toolState;
   bool touching = false;
+  double forceN = 0, hapticHz = 0;  // the haptic loop's last force and its rate
   std::size_t undoCount = 0, redoCount = 0;
   std::string message;  // camera lost, video ended, saved, errors
   std::string savePath;
