@@ -10,8 +10,10 @@
 namespace ps::app {
 
 namespace {
-constexpr std::size_t kMaxRun = 400;  // frames of one touching run kept for the showcase
-}
+// Frames of one touching run kept for the showcase (each AR + overview pair is ~1.6 MB at
+// 640x480): a longer run is judged by its first kMaxRun frames.
+constexpr std::size_t kMaxRun = 60;
+}  // namespace
 
 ArRecorder::ArRecorder(ArRecorderSettings settings) : settings_(std::move(settings)) {
   if (!settings_.frameDir.empty()) std::filesystem::create_directories(settings_.frameDir);
@@ -20,7 +22,8 @@ ArRecorder::ArRecorder(ArRecorderSettings settings) : settings_(std::move(settin
 void ArRecorder::onFrame(const replay::FrameContext& f, const Eigen::Vector3d& force,
                          const Eigen::Vector3d& forceTip) {
   const bool wantSequence = !settings_.frameDir.empty() && f.frame % settings_.every == 0;
-  const bool wantShowcase = settings_.showcase && f.touching && f.planetInCamera;
+  const bool wantShowcase =
+      settings_.showcase && f.touching && f.planetInCamera && run_.size() < kMaxRun;
   auto closeRun = [&] {
     if (run_.size() > bestLength_) {
       bestLength_ = run_.size();
