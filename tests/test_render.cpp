@@ -31,6 +31,12 @@ terrain::Camera orbitCamera(double distance, int w, int h, double fovDeg = 40) {
                                  fovDeg * M_PI / 180);
 }
 
+// A sphere with every height 0: its silhouette and surface are known exactly.
+terrain::Terrain smoothPlanet(int n) {
+  auto chart = testkit::earthChart(n);
+  return terrain::Terrain(chart, std::vector<float>(chart->grid().count(), 0.0f));
+}
+
 // Mesa's llvmpipe keeps allocations made from its JIT-compiled code until exit; their stacks
 // end in code that belongs to no module, so no LSan suppression can name them. Leak checking is
 // off for a test process that made a GL context (ctest runs one test per process) and on for
@@ -136,8 +142,8 @@ TEST(RenderProjection, DepthRangeHoldsTheVisiblePlanet) {
 // more than a pixel outside it.
 TEST(RenderGl, SilhouetteMatchesTheAnalyticSphere) {
   SKIP_WITHOUT_GL();
-  auto chart = testkit::earthChart(8);
-  const terrain::Terrain planet(chart, std::vector<float>(chart->grid().count(), 0.0f));
+  const terrain::Terrain planet = smoothPlanet(8);
+  const core::Chart* chart = &planet.chart();
   const double R = chart->radius();
   render::EglContext gl;
   render::PlanetRenderer renderer;
@@ -259,8 +265,8 @@ TEST(RenderGl, PlanetAnchorLandsOnTheDetectedMarker) {
 // they are (the arrow across the view, in its own colour).
 TEST(RenderGl, CursorRingAndForceArrowAreDrawn) {
   SKIP_WITHOUT_GL();
-  auto chart = testkit::earthChart(7);
-  const terrain::Terrain planet(chart, std::vector<float>(chart->grid().count(), 0.0f));
+  const terrain::Terrain planet = smoothPlanet(7);
+  const core::Chart* chart = &planet.chart();
   const double R = chart->radius();
   render::EglContext gl;
   render::PlanetRenderer renderer;

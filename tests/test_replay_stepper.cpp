@@ -3,65 +3,33 @@
 // turned by hand (live app) moving the AR pose and the tip together.
 #include <gtest/gtest.h>
 
-#include <unistd.h>
 #include <Eigen/Geometry>
-#include <cstring>
 #include <filesystem>
 #include <sstream>
 
 #include "core/input_error.hpp"
 #include "replay/replay.hpp"
+#include "short_scene.hpp"
 #include "test_terrains.hpp"
 #include "tracking/synth.hpp"
 #include "tracking/video.hpp"
 
 using namespace ps;
 
-namespace {
-
-// The built-in "short" scene (12 frames at 320x240, grey), written once per process.
-const std::filesystem::path& video() {
-  static const std::filesystem::path path = [] {
-    const auto dir = std::filesystem::temp_directory_path() /
-                     ("ps_replay_stepper_" + std::to_string(::getpid()));
-    std::filesystem::create_directories(dir);
-    const auto p = dir / "short.mkv";
-    auto script = tracking::builtinScene("short");
-    script.colour = false;
-    const tracking::SynthRenderer r(script);
-    tracking::LosslessWriter w(p, script.size, script.fps, false);
-    for (int f = 0; f < r.frames(); ++f) w.write(r.render(f));
-    w.close();
-    return p;
-  }();
-  return path;
-}
-
-replay::ReplayOptions options() {
-  replay::ReplayOptions o;
-  const auto s = tracking::builtinScene("short");
-  o.scene.planet.size = s.planetMarkerSize;
-  o.scene.tool.size = s.toolMarkerSize;
-  o.scene.planetRadius = s.planetRadius;
-  o.scene.tipOffset = s.tipOffset;
-  return o;
-}
-
-tracking::CameraCalibration calibration() {
-  return tracking::SynthScript::syntheticCamera({320, 240});
-}
-
-}  // namespace
+using testkit::shortSceneCamera;
+using testkit::shortSceneOptions;
+using testkit::shortSceneVideo;
 
 TEST(ReplayStepper, StepsWriteTheReplaysLogAndHeights) {
   auto a = testkit::bumpyTerrain(7, 4, 3000.0);
-  tracking::FrameSource src(video());
+  tracking::FrameSource src(shortSceneVideo());
   std::ostringstream log;
-  const auto summary = replay::runReplay(src, calibration(), a, options(), log);
+  const auto summary = replay::runReplay(src, shortSceneCamera(), a, shortSceneOptions(), log);
 
   auto b = testkit::bumpyTerrain(7, 4, 3000.0);
-  tracking::FrameSource src2(video());
-  replay::FrameStepper stepper(calibration().forImageSize(src2.size()), b, options());
+  tracking::FrameSource src2(shortSceneVideo());
+  replay::FrameStepper stepper(shortSceneCamera().forImageSize(src2.size()), b,
+                               shortSceneOptions());
   std::string lines;
   cv::Mat image;
   int withPose = 0;
@@ -88,9 +56,9 @@ TEST(ReplayStepper, TurnedPlanetMovesPoseAndTipTogether) {
                                 Eigen::AngleAxisd(1.1, Eigen::Vector3d::UnitZ()))
                                    .toRotationMatrix();
   auto a = testkit::bumpyTerrain(7, 4, 3000.0), b = testkit::bumpyTerrain(7, 4, 3000.0);
-  tracking::FrameSource srcA(video()), srcB(video());
-  replay::FrameStepper plain(calibration().forImageSize(srcA.size()), a, options());
-  replay::FrameStepper turned(calibration().forImageSize(srcB.size()), b, options());
+  tracking::FrameSource srcA(shortSceneVideo()), srcB(shortSceneVideo());
+  replay::FrameStepper plain(shortSceneCamera().forImageSize(srcA.size()), a, shortSceneOptions());
+  replay::FrameStepper turned(shortSceneCamera().forImageSize(srcB.size()), b, shortSceneOptions());
   turned.setUserRotation(turn);
   EXPECT_TRUE(turned.userRotation().isApprox(turn));
   cv::Mat ia, ib;
@@ -122,8 +90,9 @@ TEST(ReplayStepper, TurnedPlanetMovesPoseAndTipTogether) {
 
 TEST(ReplayStepper, ToolAndBrushChangeBetweenFramesAndBadValuesAreRefused) {
   auto planet = testkit::bumpyTerrain(7, 4, 3000.0);
-  tracking::FrameSource src(video());
-  replay::FrameStepper stepper(calibration().forImageSize(src.size()), planet, options());
+  tracking::FrameSource src(shortSceneVideo());
+  replay::FrameStepper stepper(shortSceneCamera().forImageSize(src.size()), planet,
+                               shortSceneOptions());
   edit::BrushSettings brush = stepper.options().brush;
   brush.radius *= 2;
   stepper.setBrush(brush);

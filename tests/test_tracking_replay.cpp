@@ -10,6 +10,7 @@
 
 #include "core/input_error.hpp"
 #include "replay/replay.hpp"
+#include "short_scene.hpp"
 #include "test_terrains.hpp"
 #include "tracking/synth.hpp"
 #include "tracking/video.hpp"
@@ -23,31 +24,6 @@ std::filesystem::path tempDir() {
       std::filesystem::temp_directory_path() / ("ps_tracking_replay_" + std::to_string(::getpid()));
   std::filesystem::create_directories(d);
   return d;
-}
-
-// The short built-in scene (12 frames at 320x240, grey) written once per process.
-const std::filesystem::path& shortVideo() {
-  static const std::filesystem::path path = [] {
-    const auto p = tempDir() / "short.mkv";
-    auto script = tracking::builtinScene("short");
-    script.colour = false;
-    const tracking::SynthRenderer r(script);
-    tracking::LosslessWriter w(p, script.size, script.fps, false);
-    for (int f = 0; f < r.frames(); ++f) w.write(r.render(f));
-    w.close();
-    return p;
-  }();
-  return path;
-}
-
-replay::ReplayOptions shortOptions() {
-  replay::ReplayOptions o;
-  const auto s = tracking::builtinScene("short");
-  o.scene.planet.size = s.planetMarkerSize;
-  o.scene.tool.size = s.toolMarkerSize;
-  o.scene.planetRadius = s.planetRadius;
-  o.scene.tipOffset = s.tipOffset;
-  return o;
 }
 
 std::string errorOf(const std::function<void()>& f) {
@@ -66,7 +42,7 @@ TEST(TrackingSynth, RenderingIsDeterministicAndFfv1IsLossless) {
   script.colour = false;
   const tracking::SynthRenderer a(script), b(script);
   EXPECT_EQ(cv::norm(a.render(5), b.render(5), cv::NORM_INF), 0.0);
-  tracking::FrameSource src(shortVideo());
+  tracking::FrameSource src(testkit::shortSceneVideo());
   EXPECT_EQ(src.size(), script.size);
   cv::Mat frame;
   int n = 0;
@@ -96,10 +72,10 @@ TEST(TrackingReplay, TwoReplaysAreBitIdenticalAndSculpt) {
   replay::ReplaySummary s;
   for (int run = 0; run < 2; ++run) {
     auto planet = testkit::bumpyTerrain(7, 4, 3000.0);
-    tracking::FrameSource src(shortVideo());
+    tracking::FrameSource src(testkit::shortSceneVideo());
     std::ostringstream log;
-    s = replay::runReplay(src, tracking::SynthScript::syntheticCamera({320, 240}), planet,
-                          shortOptions(), log);
+    s = replay::runReplay(src, testkit::shortSceneCamera(), planet, testkit::shortSceneOptions(),
+                          log);
     logs[run] = log.str();
     heights[run].assign(planet.heights().begin(), planet.heights().end());
   }
@@ -130,7 +106,7 @@ TEST(TrackingReplay, BadInputIsNamedAndPartialVideosReplayWhatTheyHold) {
             std::string::npos);
   // A video cut in the middle: replays the frames that decode and says it was cut.
   {
-    std::ifstream in(shortVideo(), std::ios::binary);
+    std::ifstream in(testkit::shortSceneVideo(), std::ios::binary);
     std::string bytes((std::istreambuf_iterator<char>(in)), {});
     std::ofstream(dir / "cut.mkv", std::ios::binary) << bytes.substr(0, bytes.size() / 2);
   }
@@ -138,8 +114,8 @@ TEST(TrackingReplay, BadInputIsNamedAndPartialVideosReplayWhatTheyHold) {
     tracking::FrameSource src(dir / "cut.mkv");
     auto planet = testkit::bumpyTerrain(6, 4, 3000.0);
     std::ostringstream log;
-    const auto s = replay::runReplay(src, tracking::SynthScript::syntheticCamera({320, 240}),
-                                     planet, shortOptions(), log);
+    const auto s = replay::runReplay(src, testkit::shortSceneCamera(), planet,
+                                     testkit::shortSceneOptions(), log);
     EXPECT_LT(s.frames, 12);
     EXPECT_GT(s.frames, 0);
   } catch (const core::InputError& e) {
@@ -154,20 +130,20 @@ TEST(TrackingReplay, BadInputIsNamedAndPartialVideosReplayWhatTheyHold) {
     auto planet = testkit::bumpyTerrain(6, 4, 3000.0);
     std::ostringstream log;
     const auto s = replay::runReplay(src, tracking::SynthScript::syntheticCamera({160, 120}),
-                                     planet, shortOptions(), log);
+                                     planet, testkit::shortSceneOptions(), log);
     EXPECT_EQ(s.frames, 3);
     ASSERT_EQ(s.warnings.size(), 1u);
     EXPECT_NE(s.warnings[0].find("was ever seen"), std::string::npos);
   }
   // A calibration for another aspect ratio.
   {
-    tracking::FrameSource src(shortVideo());
+    tracking::FrameSource src(testkit::shortSceneVideo());
     auto planet = testkit::bumpyTerrain(6, 4, 3000.0);
     std::ostringstream log;
     auto calib = tracking::SynthScript::syntheticCamera({640, 360});
     calib.source = "wide.yml";
     EXPECT_NE(errorOf([&] {
-                replay::runReplay(src, calib, planet, shortOptions(), log);
+                replay::runReplay(src, calib, planet, testkit::shortSceneOptions(), log);
               }).find("wide.yml: calibrated for 640x360"),
               std::string::npos);
   }
