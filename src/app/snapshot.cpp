@@ -4,30 +4,16 @@
 #include <cmath>
 #include <opencv2/imgproc.hpp>
 
+#include "io/heightmap_export.hpp"
+
 namespace ps::app {
 
 namespace {
 
-// Hypsometric tint (BGR, 0..1) by height in metres.
+// The previews' hypsometric ramp (io::hypsometricTint), BGR in 0..1.
 Eigen::Vector3f tint(double h) {
-  struct Stop {
-    double h;
-    float b, g, r;
-  };
-  static const Stop stops[] = {
-      {-8000, 0.35f, 0.12f, 0.04f}, {-3000, 0.63f, 0.27f, 0.10f}, {-150, 0.82f, 0.59f, 0.27f},
-      {0, 0.43f, 0.63f, 0.31f},     {600, 0.27f, 0.59f, 0.47f},   {2000, 0.24f, 0.43f, 0.59f},
-      {4000, 0.39f, 0.43f, 0.51f},  {6000, 0.92f, 0.92f, 0.94f},  {9000, 1.0f, 1.0f, 1.0f}};
-  if (h <= stops[0].h) return {stops[0].b, stops[0].g, stops[0].r};
-  for (std::size_t i = 1; i < std::size(stops); ++i) {
-    if (h <= stops[i].h) {
-      const float f = float((h - stops[i - 1].h) / (stops[i].h - stops[i - 1].h));
-      const Eigen::Vector3f a(stops[i - 1].b, stops[i - 1].g, stops[i - 1].r),
-          b(stops[i].b, stops[i].g, stops[i].r);
-      return a + f * (b - a);
-    }
-  }
-  return {1, 1, 1};
+  const cv::Vec3f c = io::hypsometricTint(h) / 255.0f;
+  return {c[0], c[1], c[2]};
 }
 
 }  // namespace

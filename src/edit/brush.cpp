@@ -5,7 +5,6 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
-#include <sstream>
 #include <vector>
 
 #include "core/input_error.hpp"
@@ -14,34 +13,29 @@ namespace ps::edit {
 
 namespace {
 
-std::string num(double x) {
-  std::ostringstream os;
-  os.precision(17);
-  os << x;
-  return os.str();
-}
-
 void checkRadius(double r) {
   if (!std::isfinite(r) || !(r > 0.0)) {
-    throw core::InputError("radius of deformation r_d = " + num(r) + " m must be finite and > 0");
+    throw core::InputError("radius of deformation r_d = " + core::exactNumber(r) +
+                           " m must be finite and > 0");
   }
   if (r < 1e-3) {
-    throw core::InputError("radius of deformation r_d = " + num(r) +
+    throw core::InputError("radius of deformation r_d = " + core::exactNumber(r) +
                            " m is below the smallest usable 1 mm");
   }
 }
 void checkSigma(double sigma) {
   if (!std::isfinite(sigma) || !(sigma > 0.0)) {
-    throw core::InputError("sigma = " + num(sigma) + " must be finite and > 0");
+    throw core::InputError("sigma = " + core::exactNumber(sigma) + " must be finite and > 0");
   }
   if (sigma < 1e-6 || sigma > 1e6) {
-    throw core::InputError("sigma = " + num(sigma) + " is outside the usable range [1e-6, 1e6]");
+    throw core::InputError("sigma = " + core::exactNumber(sigma) +
+                           " is outside the usable range [1e-6, 1e6]");
   }
 }
 void checkMu(double mu) {
   if (!std::isfinite(mu) || !(mu > 0.5) || mu > 1e6) {
     throw core::InputError(
-        "mu = " + num(mu) +
+        "mu = " + core::exactNumber(mu) +
         " must be in (0.5, 1e6]: the Gaussian must be higher at the control vertex "
         "(x = 1) than on the border (x = 0)");
   }
@@ -86,13 +80,14 @@ void BrushSettings::validate() const {
   checkSigma(sigma);
   checkMu(mu);
   if (!std::isfinite(strength) || strength < 0.0) {
-    throw core::InputError("strength = " + num(strength) + (rate ? " m/s" : " m") +
+    throw core::InputError("strength = " + core::exactNumber(strength) + (rate ? " m/s" : " m") +
                            " must be finite and >= 0");
   }
   if (!std::isfinite(target))
-    throw core::InputError("target = " + num(target) + " m must be finite");
+    throw core::InputError("target = " + core::exactNumber(target) + " m must be finite");
   if (!std::isfinite(spacing) || !(spacing > 0.0) || spacing > 1.0) {
-    throw core::InputError("spacing = " + num(spacing) + " (a fraction of r_d) must be in (0, 1]");
+    throw core::InputError("spacing = " + core::exactNumber(spacing) +
+                           " (a fraction of r_d) must be in (0, 1]");
   }
   if (mode != BrushMode::kRaise && mode != BrushMode::kLower && mode != BrushMode::kSet) {
     throw core::InputError("brush mode " + std::to_string(int(mode)) +

@@ -5,7 +5,6 @@
 #include <chrono>
 #include <cmath>
 #include <cstring>
-#include <sstream>
 
 #include "core/input_error.hpp"
 #include "edit/brush.hpp"
@@ -20,12 +19,6 @@ double ms(Clock::time_point a, Clock::time_point b) {
   return std::chrono::duration<double, std::milli>(b - a).count();
 }
 
-std::string num(double x) {
-  std::ostringstream os;
-  os.precision(17);
-  os << x;
-  return os.str();
-}
 }  // namespace
 
 void StrokeReport::add(const EditReport& r) {
@@ -78,14 +71,15 @@ void EditPipeline::validate(const Tool& tool, const ToolInput& input) const {
   tool.validate();
   const double r = tool.radius();
   if (!std::isfinite(r) || !(r > 0.0)) {
-    throw core::InputError("radius of deformation r_d = " + num(r) + " m must be finite and > 0");
+    throw core::InputError("radius of deformation r_d = " + core::exactNumber(r) +
+                           " m must be finite and > 0");
   }
   const double sp = tool.spacing();
   if (!std::isfinite(sp) || !(sp > 0.0)) {
-    throw core::InputError("stroke spacing " + num(sp) + " m must be finite and > 0");
+    throw core::InputError("stroke spacing " + core::exactNumber(sp) + " m must be finite and > 0");
   }
   if (!std::isfinite(input.dt) || input.dt < 0.0) {
-    throw core::InputError("dt = " + num(input.dt) + " s must be finite and >= 0");
+    throw core::InputError("dt = " + core::exactNumber(input.dt) + " s must be finite and >= 0");
   }
   (void)nearestVertex(terrain_.chart(), input.position);  // throws for a bad position
 }

@@ -14,12 +14,6 @@ namespace ps::edit {
 
 namespace {
 
-std::string num(double x) {
-  char buf[40];
-  std::snprintf(buf, sizeof buf, "%.17g", x);
-  return buf;
-}
-
 [[noreturn]] void fail(const std::string& source, int line, const std::string& what) {
   throw core::InputError(source + ":" + std::to_string(line) + ": " + what);
 }
@@ -147,31 +141,35 @@ void parseBrush(const std::vector<std::string_view>& t, BrushSettings& b) {
 }
 
 std::string pointText(const ScriptPoint& p) {
-  if (p.xyz) return "xyz=" + num(p.value.x()) + "," + num(p.value.y()) + "," + num(p.value.z());
-  return num(p.value.x()) + " " + num(p.value.y());
+  if (p.xyz)
+    return "xyz=" + core::exactNumber(p.value.x()) + "," + core::exactNumber(p.value.y()) + "," +
+           core::exactNumber(p.value.z());
+  return core::exactNumber(p.value.x()) + " " + core::exactNumber(p.value.y());
 }
 
 std::string brushText(const BrushSettings& b) {
-  std::string s = "brush r_m=" + num(b.radius) + " sigma=" + num(b.sigma) + " mu=" + num(b.mu) +
+  std::string s = "brush r_m=" + core::exactNumber(b.radius) +
+                  " sigma=" + core::exactNumber(b.sigma) + " mu=" + core::exactNumber(b.mu) +
                   " mode=" + toString(b.mode) + (b.rate ? " rate_mps=" : " strength_m=") +
-                  num(b.strength);
-  s += " target_m=" + num(b.target) + " spacing=" + num(b.spacing);
+                  core::exactNumber(b.strength);
+  s += " target_m=" + core::exactNumber(b.target) + " spacing=" + core::exactNumber(b.spacing);
   return s;
 }
 
 void checkPoint(const ScriptCommand& c, const core::Chart& chart) {
   if (!std::isfinite(c.dt) || c.dt < 0.0)
-    throw core::InputError("dt = " + num(c.dt) + " s must be finite and >= 0");
+    throw core::InputError("dt = " + core::exactNumber(c.dt) + " s must be finite and >= 0");
   if (c.point.xyz) {
     (void)nearestVertex(chart, c.point.value);  // throws for non-finite or the centre
     return;
   }
   const double lat = c.point.value.x(), lon = c.point.value.y();
   if (!std::isfinite(lat) || lat < -90.0 || lat > 90.0) {
-    throw core::InputError("latitude " + num(lat) + " degrees is outside [-90, 90]");
+    throw core::InputError("latitude " + core::exactNumber(lat) + " degrees is outside [-90, 90]");
   }
   if (!std::isfinite(lon) || lon < -360.0 || lon > 360.0) {
-    throw core::InputError("longitude " + num(lon) + " degrees is outside [-360, 360]");
+    throw core::InputError("longitude " + core::exactNumber(lon) +
+                           " degrees is outside [-360, 360]");
   }
 }
 
@@ -206,7 +204,7 @@ std::string StrokeScript::toText() const {
     const bool hasPoint = c.kind == ScriptCommand::Kind::kStamp ||
                           c.kind == ScriptCommand::Kind::kStroke ||
                           c.kind == ScriptCommand::Kind::kTo;
-    if (hasPoint && c.dt != 0.0) os << " dt=" << num(c.dt);
+    if (hasPoint && c.dt != 0.0) os << " dt=" << core::exactNumber(c.dt);
     os << "\n";
   }
   return os.str();

@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
-#include <sstream>
 #include <vector>
 
 #include "core/flat_chart.hpp"
@@ -11,17 +10,6 @@
 #include "core/latlong_chart.hpp"
 
 namespace ps::sand {
-
-namespace {
-
-std::string num(double x) {
-  std::ostringstream os;
-  os.precision(17);
-  os << x;
-  return os.str();
-}
-
-}  // namespace
 
 double largestSpacing(const core::Chart& chart) {
   if (const auto* ll = dynamic_cast<const core::LatLongChart*>(&chart)) {
@@ -36,34 +24,36 @@ double largestSpacing(const core::Chart& chart) {
 
 void DisplacementSettings::validate(const core::Chart* chart) const {
   if (!std::isfinite(radius) || !(radius > 0.0)) {
-    throw core::InputError("tool radius r = " + num(radius) + " m must be finite and > 0");
+    throw core::InputError("tool radius r = " + core::exactNumber(radius) +
+                           " m must be finite and > 0");
   }
   if (chart) {
     const double cell = largestSpacing(*chart);
     if (radius < cell) {
-      throw core::InputError("tool radius r = " + num(radius) + " m is below one grid cell (" +
-                             num(cell) + " m)");
+      throw core::InputError("tool radius r = " + core::exactNumber(radius) +
+                             " m is below one grid cell (" + core::exactNumber(cell) + " m)");
     }
     if (chart->radius() > 0.0) {
       if (radius > chart->radius()) {
-        throw core::InputError("tool radius r = " + num(radius) +
-                               " m is larger than the planet (radius " + num(chart->radius()) +
-                               " m)");
+        throw core::InputError("tool radius r = " + core::exactNumber(radius) +
+                               " m is larger than the planet (radius " +
+                               core::exactNumber(chart->radius()) + " m)");
       }
     } else if (const auto* flat = dynamic_cast<const core::FlatChart*>(chart)) {
       const double extent = chart->grid().m() * std::max(flat->dx(), flat->dy());
       if (radius > extent) {
-        throw core::InputError("tool radius r = " + num(radius) +
-                               " m is larger than the grid (extent " + num(extent) + " m)");
+        throw core::InputError("tool radius r = " + core::exactNumber(radius) +
+                               " m is larger than the grid (extent " + core::exactNumber(extent) +
+                               " m)");
       }
     }
   }
   if (!std::isfinite(rampartWidth) || !(rampartWidth > 0.0) || rampartWidth > 4.0) {
-    throw core::InputError("rampart width = " + num(rampartWidth) +
+    throw core::InputError("rampart width = " + core::exactNumber(rampartWidth) +
                            " (a multiple of the tool radius) must be in (0, 4]");
   }
   if (!std::isfinite(spacing) || !(spacing > 0.0) || spacing > 1.0) {
-    throw core::InputError("spacing = " + num(spacing) +
+    throw core::InputError("spacing = " + core::exactNumber(spacing) +
                            " (a fraction of the tool radius) must be in (0, 1]");
   }
   material.validate();

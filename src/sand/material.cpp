@@ -2,7 +2,6 @@
 
 #include <cmath>
 #include <numbers>
-#include <sstream>
 
 #include "core/input_error.hpp"
 
@@ -10,29 +9,24 @@ namespace ps::sand {
 
 namespace {
 
-std::string num(double x) {
-  std::ostringstream os;
-  os.precision(17);
-  os << x;
-  return os.str();
-}
-
 void checkAngle(const char* what, double deg) {
   if (!std::isfinite(deg) || !(deg > 0.0) || !(deg < 90.0)) {
-    throw core::InputError(std::string(what) + " = " + num(deg) +
+    throw core::InputError(std::string(what) + " = " + core::exactNumber(deg) +
                            " deg must be inside (0, 90) degrees");
   }
 }
 
 void checkNonNegative(const char* what, double x) {
   if (!std::isfinite(x) || x < 0.0) {
-    throw core::InputError(std::string(what) + " = " + num(x) + " must be finite and >= 0");
+    throw core::InputError(std::string(what) + " = " + core::exactNumber(x) +
+                           " must be finite and >= 0");
   }
 }
 
 void checkTolerance(const char* what, double x) {
   if (!std::isfinite(x) || x < 1e-9 || x > 0.1) {
-    throw core::InputError(std::string(what) + " = " + num(x) + " must be in [1e-9, 0.1]");
+    throw core::InputError(std::string(what) + " = " + core::exactNumber(x) +
+                           " must be in [1e-9, 0.1]");
   }
 }
 
@@ -41,13 +35,14 @@ void checkTolerance(const char* what, double x) {
 void Material::validate() const {
   checkAngle("talus angle", talusDeg);
   if (!std::isfinite(erosionRate) || !(erosionRate > 0.0) || erosionRate > 1.0) {
-    throw core::InputError("erosion rate c = " + num(erosionRate) +
+    throw core::InputError("erosion rate c = " + core::exactNumber(erosionRate) +
                            " must be in (0, 1] (c > 1 overshoots; see docs/SAND.md)");
   }
   checkTolerance("talus tolerance", talusTolerance);
   checkNonNegative("diffusion D", diffusion);
   if (diffusion > 1e6) {
-    throw core::InputError("diffusion D = " + num(diffusion) + " exceeds the usable 1e6");
+    throw core::InputError("diffusion D = " + core::exactNumber(diffusion) +
+                           " exceeds the usable 1e6");
   }
   checkNonNegative("friction inverse zeta^-1", frictionInverse);
   checkAngle("angle of repose alpha", reposeDeg);

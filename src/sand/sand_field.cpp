@@ -5,7 +5,6 @@
 #include <cmath>
 #include <cstring>
 #include <numbers>
-#include <sstream>
 
 #include "core/input_error.hpp"
 #include "sand/kernels.hpp"
@@ -22,13 +21,6 @@ constexpr double kNever = 1e300;  // threshold of a link that does not exist
 // Steps over fewer tiles run on one thread: a fork/join costs more than a few tiles of work
 // (milliseconds when the cores are shared and a waiting thread is descheduled).
 constexpr int kParallelTiles = 64;
-
-std::string num(double x) {
-  std::ostringstream os;
-  os.precision(17);
-  os << x;
-  return os.str();
-}
 
 }  // namespace
 
@@ -884,7 +876,8 @@ StepReport SandField::diffusionStep(const Material& material, double dt, Diffusi
                                     StepPolicy policy, const PushForce* force) {
   material.validate();
   if (!std::isfinite(dt) || !(dt > 0.0)) {
-    throw core::InputError("diffusion time step dt = " + num(dt) + " must be finite and > 0");
+    throw core::InputError("diffusion time step dt = " + core::exactNumber(dt) +
+                           " must be finite and > 0");
   }
   if (force) {
     if (!force->centre.allFinite() || !std::isfinite(force->radius) || !(force->radius > 0.0) ||
@@ -912,8 +905,8 @@ StepReport SandField::diffusionStep(const Material& material, double dt, Diffusi
         for (int t : tileList_) inP_[std::size_t(t)] = 0;
         tileList_.clear();
         if (grid_.sphere()) poles_[0].inP = poles_[1].inP = false;
-        throw core::InputError("explicit diffusion time step dt = " + num(dt) +
-                               " exceeds the stability bound " + num(bound) +
+        throw core::InputError("explicit diffusion time step dt = " + core::exactNumber(dt) +
+                               " exceeds the stability bound " + core::exactNumber(bound) +
                                " (dt <= min A_i / (D l^2 sum L_f / d_f))");
       }
       if (policy == StepPolicy::kClamp) dt = bound;

@@ -2,7 +2,6 @@
 
 #include <chrono>
 #include <cmath>
-#include <sstream>
 
 #include "core/input_error.hpp"
 #include "edit/brush.hpp"
@@ -13,12 +12,6 @@ namespace {
 using Clock = std::chrono::steady_clock;
 double ms(Clock::time_point a, Clock::time_point b) {
   return std::chrono::duration<double, std::milli>(b - a).count();
-}
-std::string num(double x) {
-  std::ostringstream os;
-  os.precision(17);
-  os << x;
-  return os.str();
 }
 }  // namespace
 
@@ -49,7 +42,8 @@ void SettleSettings::validate() const {
                            " must be >= 1");
   }
   if (!std::isfinite(diffusionDt) || !(diffusionDt > 0.0)) {
-    throw core::InputError("diffusion dt = " + num(diffusionDt) + " must be finite and > 0");
+    throw core::InputError("diffusion dt = " + core::exactNumber(diffusionDt) +
+                           " must be finite and > 0");
   }
   if (method != SettleMethod::kThermal && method != SettleMethod::kDiffusionExplicit &&
       method != SettleMethod::kDiffusionSemiImplicit) {
