@@ -107,6 +107,12 @@ nlohmann::json runReplayJob(const ReplayJob& job) {
                                                  ? makeDefaultPlanet(job.gridLevel, job.seed)
                                                  : io::loadPlanet(job.planetFile);
   const std::vector<float> before(planet->heights().begin(), planet->heights().end());
+  // The pictures' "before" raster, resampled now rather than from a rebuilt terrain afterwards.
+  constexpr int kPictureW = 2048, kPictureH = 1024;
+  const bool sphere = planet->chart().radius() > 0;
+  io::Raster beforeRaster;
+  if (job.pictures && sphere)
+    beforeRaster = io::resampleEquirectangular(*planet, kPictureW, kPictureH);
 
   std::unique_ptr<ArRecorder> recorder;
   std::string noRender;
@@ -247,14 +253,12 @@ nlohmann::json runReplayJob(const ReplayJob& job) {
         out / "forces.png");
     files.push_back("forces.png");
   }
-  if (job.pictures && planet->chart().radius() > 0) {
+  if (job.pictures && sphere) {
     Progress p("pictures");
-    const int w = 2048, h = 1024;
+    const int w = kPictureW, h = kPictureH;
     const double mpp = std::numbers::pi * planet->chart().radius() / h;
     const cv::Mat after = io::reliefImage(io::resampleEquirectangular(*planet, w, h), mpp);
-    auto beforeTerrain = terrain::Terrain(planet->chartPtr(), before);
-    const cv::Mat beforeImg =
-        io::reliefImage(io::resampleEquirectangular(beforeTerrain, w, h), mpp);
+    const cv::Mat beforeImg = io::reliefImage(beforeRaster, mpp);
     p.update(0.3);
     cv::Mat small;
     cv::resize(after, small, {1024, 512}, 0, 0, cv::INTER_AREA);
