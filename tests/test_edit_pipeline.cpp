@@ -158,6 +158,32 @@ TEST(EditPipeline, FastStrokeLeavesNoGap) {
   EXPECT_EQ(pipe.journal().undoCount(), 1u) << "a stroke is one undo step";
 }
 
+TEST(EditPipeline, ATeleportStampsAtMostTheCapAndStillReachesItsEnd) {
+  // A 1 cm brush whose tool jumps half way round the planet in one sample (a tracking glitch):
+  // floor(arc / spacing) would be 8e9 stamps. The sample stamps kMaxStampsPerSample times at a
+  // stretched spacing, the last stamp at the sample, for stamp and rate tools alike.
+  auto chart = testkit::earthChart(6);
+  terrain::Terrain t(chart, std::vector<float>(chart->grid().count(), 0.0f));
+  edit::EditPipeline pipe(t);
+  const double R = testkit::kEarthRadius;
+  const Eigen::Vector3d a = edittest::latLon(5, 10, R), b = edittest::latLon(-5, -170, R);
+  for (bool rate : {false, true}) {
+    BrushSettings s;
+    s.radius = 0.01;
+    s.strength = 1;
+    s.rate = rate;
+    GaussianBrush brush(s);
+    pipe.beginStroke(brush, {a, 0.0});
+    const auto rep = pipe.moveTo({b, 1.0});
+    EXPECT_EQ(rep.stamps, edit::EditPipeline::kMaxStampsPerSample) << "rate " << rate;
+    // The last stamp was at the sample: the next sample at the same place stamps nothing (stamp
+    // tool) or once (rate tool).
+    EXPECT_EQ(pipe.moveTo({b, 0.5}).stamps, rate ? 1 : 0) << "rate " << rate;
+    pipe.endStroke();
+  }
+  EXPECT_TRUE(edittest::consistentHeights(t));
+}
+
 TEST(EditPipeline, RateToolHeldStillActsPerSecondNotPerSample) {
   auto chart = testkit::earthChart(6);
   terrain::Terrain t(chart, std::vector<float>(chart->grid().count(), 0.0f));

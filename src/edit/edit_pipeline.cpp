@@ -162,15 +162,19 @@ StrokeReport EditPipeline::moveTo(const ToolInput& sample) {
   StrokeReport rep;
   const Eigen::Vector3d from = lastStamp_, to = sample.position;
   const double arc = pathLength(from, to);
+  // A jump of more than kMaxStampsPerSample spacings (a tracking glitch, a tiny brush) stamps
+  // kMaxStampsPerSample times evenly, the last at the sample: the work of one sample stays
+  // bounded and nothing is left over for the next.
   const double spacing = tool.spacing();
-  if (tool.rateBased()) {
-    const int n = int(std::min(std::max(1.0, std::ceil(arc / spacing)), 1e6));
+  const bool stretched = arc > spacing * kMaxStampsPerSample;
+  if (tool.rateBased() || stretched) {
+    const int n = stretched ? kMaxStampsPerSample : int(std::max(1.0, std::ceil(arc / spacing)));
     for (int i = 1; i <= n; ++i)
       rep.add(stamp(tool, ToolInput{pathAt(from, to, double(i) / n), sample.dt / n}));
     lastStamp_ = to;
     return rep;
   }
-  const int n = int(std::min(std::floor(arc / spacing), 1e6));
+  const int n = int(std::floor(arc / spacing));
   for (int i = 1; i <= n; ++i) {
     const Eigen::Vector3d p = pathAt(from, to, double(i) * spacing / arc);
     rep.add(stamp(tool, ToolInput{p, sample.dt / n}));

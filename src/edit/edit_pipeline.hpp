@@ -59,12 +59,17 @@ class EditObserver {
 // samples, consecutive stamps are at most one spacing apart and the stroke leaves no gaps; the
 // remainder carries over to the next sample. A rate tool (rateBased()) instead spreads each
 // sample's dt over max(1, ceil(arc / spacing)) equal steps ending at the sample, so held still it
-// keeps acting per second, not per frame. A stroke is one undo step.
+// keeps acting per second, not per frame. One sample stamps at most kMaxStampsPerSample times:
+// a jump longer than that many spacings (a tracking glitch; 1,024 r_d for the brush) is stamped
+// at a stretched spacing of arc / kMaxStampsPerSample, so a teleport costs milliseconds, not
+// seconds. A stroke is one undo step.
 //
 // Bad input (a tool that fails validate(), a non-finite dt or position, a position at the
 // centre) throws core::InputError before anything changes.
 class EditPipeline {
  public:
+  static constexpr int kMaxStampsPerSample = 4096;
+
   explicit EditPipeline(terrain::Terrain& terrain);
 
   terrain::Terrain& terrain() { return terrain_; }
