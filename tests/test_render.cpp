@@ -298,3 +298,94 @@ TEST(RenderGl, CursorRingAndForceArrowAreDrawn) {
   cv::inRange(none, cv::Scalar(50, 240, 30), cv::Scalar(100, 255, 80), arrow);
   EXPECT_EQ(cv::countNonZero(arrow), 0);
 }
+
+// Issue 9's skips in the renderer, each against doing the work. The views: low over the
+// surface looking at the horizon (most of the planet behind it or outside the frustum), a
+// close-up off the centre, and the whole planet.
+std::vector<terrain::Camera> skipViews(double R, int w, int h) {
+  return {terrain::Camera::lookAt({1.05 * R, 0, 0}, {R * 0.94, R * 0.34, 0},
+                                  Eigen::Vector3d::UnitZ(), w, h, 50 * M_PI / 180),
+          terrain::Camera::lookAt({0.2 * R, -1.3 * R, 0.3 * R}, {0.3 * R, -0.9 * R, 0.2 * R},
+                                  Eigen::Vector3d::UnitZ(), w, h, 40 * M_PI / 180),
+          orbitCamera(3.0 * R, w, h)};
+}
+
+TEST(Skips, CullingDrawsTheSameImageAsTheWholePlanet) {
+  SKIP_WITHOUT_GL();
+  auto planet = testkit::bumpyTerrain(8, 11, 60000.0);
+  const double R = planet.chart().radius();
+  render::EglContext gl;
+  render::PlanetRenderer renderer;
+  int view = 0;
+  for (const auto& cam : skipViews(R, 240, 180)) {
+    terrain::TessellationSettings ts;
+    ts.triangleBudget = 0;
+    ts.cull = true;
+    terrain::Tessellator culledTess, wholeTess;
+    const auto& culled = culledTess.tessellate(planet, cam, ts);
+    ts.cull = false;
+    const auto& whole = wholeTess.tessellate(planet, cam, ts);
+    ASSERT_LT(culled.triangleCount(), whole.triangleCount()) << "view " << view << " culls nothing";
+    for (bool wire : {false, true}) {
+      render::RenderStyle style;
+      style.wireframe = wire;
+      const cv::Mat a = renderer.renderAR({}, planet, culled, cam, style);
+      const cv::Mat b = renderer.renderAR({}, planet, whole, cam, style);
+      EXPECT_EQ(cv::norm(a, b, cv::NORM_INF), 0.0)
+          << "view " << view << " wireframe " << wire << ": culling changed "
+          << cv::countNonZero(cv::Mat(a != b).reshape(1)) << " pixel channels";
+      EXPECT_GT(cv::countNonZero(cv::Mat(a).reshape(1)), 0) << "view " << view << " drew nothing";
+    }
+    ++view;
+  }
+}
+
+TEST(Skips, SkippedUploadsDrawWhatFreshUploadsDraw) {
+  // One renderer that uploads only when the mesh changed, against a new renderer (everything
+  // uploaded) every frame, over frames that hold the view, move it and edit the terrain.
+  SKIP_WITHOUT_GL();
+  auto planet = testkit::bumpyTerrain(7, 12, 8000.0);
+  const double R = planet.chart().radius();
+  render::EglContext gl;
+  render::PlanetRenderer kept;
+  terrain::Tessellator tess;
+  const auto views = skipViews(R, 200, 150);
+  int skipped = 0;
+  for (int frame = 0; frame < 9; ++frame) {
+    const auto& cam = views[std::size_t(frame / 3)];
+    if (frame == 4) {  // an edit under a held view: the mesh changes, the view does not
+      std::vector<float> h(planet.heights().begin(), planet.heights().end());
+      for (float& x : h) x *= 1.5f;
+      planet = terrain::Terrain(planet.chartPtr(), std::move(h));
+    }
+    const auto& mesh = tess.tessellate(planet, cam, {});
+    const cv::Mat a = kept.renderAR({}, planet, mesh, cam, {});
+    skipped += !kept.stats().uploadedThisFrame;
+    render::PlanetRenderer fresh;
+    const cv::Mat b = fresh.renderAR({}, planet, mesh, cam, {});
+    EXPECT_EQ(cv::norm(a, b, cv::NORM_INF), 0.0) << "frame " << frame;
+  }
+  EXPECT_GE(skipped, 4);  // frames 1, 2, 7, 8 held view and terrain
+}
+
+TEST(Skips, OverviewEveryFourthFrameIsWhatEveryFrameWouldDraw) {
+  // The live app draws the overview every 4th frame: when it does, the image is the one a
+  // renderer drawing it every frame shows at that frame (nothing carried over goes stale).
+  SKIP_WITHOUT_GL();
+  auto planet = testkit::bumpyTerrain(7, 13, 8000.0);
+  const double R = planet.chart().radius();
+  render::EglContext gl;
+  render::PlanetRenderer sometimes, always;
+  terrain::Tessellator tess;
+  const auto views = skipViews(R, 160, 120);
+  for (int frame = 0; frame < 9; ++frame) {
+    const auto& cam = views[std::size_t(frame % 3)];
+    const auto& mesh = tess.tessellate(planet, cam, {});
+    sometimes.renderAR({}, planet, mesh, cam, {});
+    always.renderAR({}, planet, mesh, cam, {});
+    const cv::Mat every = always.renderOverview(planet, mesh, cam, 120, 120);
+    if (frame % 4 != 0) continue;
+    const cv::Mat fourth = sometimes.renderOverview(planet, mesh, cam, 120, 120);
+    EXPECT_EQ(cv::norm(every, fourth, cv::NORM_INF), 0.0) << "frame " << frame;
+  }
+}
