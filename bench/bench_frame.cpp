@@ -25,6 +25,7 @@
 #include "app/default_planet.hpp"
 #include "bench/bench.hpp"
 #include "bench/bench_util.hpp"
+#include "bench/frame_skips.hpp"
 #include "render/egl_context.hpp"
 #include "render/planet_renderer.hpp"
 #include "render/projection.hpp"
@@ -146,6 +147,8 @@ void benchCase(const BenchOptions& options, std::ostream& out, nlohmann::json ma
   int frames = 0, planetFrames = 0, reused = 0, noUpload = 0, overviews = 0;
   std::size_t trianglesMax = 0;
   std::optional<terrain::Camera> lastView;
+  SkipInputs skips;  // a sample of the views and the edit times, for the skips' line
+  std::vector<double> idleEdit;
   cv::Mat image;
   const auto wall0 = std::chrono::steady_clock::now();
   while ((maxFrames == 0 || frames < maxFrames) && source.read(image)) {
@@ -174,6 +177,10 @@ void benchCase(const BenchOptions& options, std::ostream& out, nlohmann::json ma
         ++overviews;
       }
       lastView = cam;
+      if (planetFrames % 8 == 1 && skips.views.size() < 12) {
+        skips.views.push_back(cam);
+        skips.background = image.clone();
+      }
     } else {
       const auto t0 = std::chrono::steady_clock::now();
       renderer.renderAR(image, *planet, empty, lastView ? *lastView : placeholder,
@@ -181,6 +188,7 @@ void benchCase(const BenchOptions& options, std::ostream& out, nlohmann::json ma
       renderMs = ms(t0);
     }
     noUpload += !renderer.stats().uploadedThisFrame;
+    if (r.scene.tipValid && !r.touching) idleEdit.push_back(r.times.editMs);
     const double trackMs = r.times.detectMs + r.times.trackMs;
     for (Series* t : {&every, &s}) {
       if (t == &s && !r.planetInCamera) continue;
@@ -283,6 +291,23 @@ void benchCase(const BenchOptions& options, std::ostream& out, nlohmann::json ma
                .dump()
         << std::endl;
   }
+
+  // Each skip against doing the work, on views of this replay.
+  std::cerr << "bench frame: skips (" << name << ")\n";
+  skips.settings = ts;
+  skips.editTouchingMs = median(s.editTouching);
+  skips.editIdleMs = median(idleEdit);
+  skips.idleFrames = int(idleEdit.size());
+  skips.overviewMs = overviews ? s.sum(s.overview) / overviews : 0.0;
+  skips.overviewEvery = kOverviewEvery;
+  skips.repeats = options.quick ? 2 : 5;
+  out << nlohmann::json{{"bench", "frame"},
+                        {"case", name + "_skips"},
+                        {"grid", planet->grid().side()},
+                        {"skips", measureSkips(renderer, *planet, skips)},
+                        {"load_avg", loadAverage()}}
+             .dump()
+      << std::endl;
 }
 
 }  // namespace
