@@ -82,7 +82,7 @@ TEST(RenderProjection, ClipSpaceLandsOnOpenCVPixels) {
 
 // Issue 9's planet-scale check: vertices of a 6,372.79 km planet through the renderer's float
 // path land within 0.1 px of their double projection, from 1 m, 1 km and 100,000 km.
-TEST(RenderProjection, FloatPathWithinATenthOfAPixelAtPlanetScale) {
+TEST(StressPlanetScale, FloatPathWithinATenthOfAPixelFrom1mTo100000km) {
   const auto planet = testkit::bumpyTerrain(9, 3, 6000.0);
   const core::Chart& chart = planet.chart();
   for (double altitude : {1.0, 1e3, 1e8}) {

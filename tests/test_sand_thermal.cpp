@@ -9,6 +9,7 @@
 #include "core/input_error.hpp"
 #include "sand/sand_field.hpp"
 #include "sand/sand_grid.hpp"
+#include "stress_scale.hpp"
 #include "test_sand_util.hpp"
 
 using namespace ps;
@@ -170,7 +171,7 @@ TEST(SandThermal, ThreadCountDoesNotChangeTheResult) {
   EXPECT_EQ(std::memcmp(ha.data(), hb.data(), ha.size() * sizeof(double)), 0);
 }
 
-TEST(SandThermal, NoNaNAfter1e5StepsAtTheLargestRate) {
+TEST(StressSand, ThermalNoNaNAfter1e5StepsAtTheLargestRate) {
   // c = 1 (the largest accepted rate) on extreme noise, kicked again every 25000 steps: heights
   // stay finite and inside the initial range (the step obeys a maximum principle).
   auto chart = flatChart(5);
@@ -184,7 +185,7 @@ TEST(SandThermal, NoNaNAfter1e5StepsAtTheLargestRate) {
   mat.erosionRate = 1.0;
   mat.talusDeg = 45.0;
   f.markAll();
-  for (int i = 0; i < 100000; ++i) {
+  for (int i = 0; i < 100000 * testkit::stressScale(); ++i) {
     if (i % 25000 == 24999) {  // a spike somewhere (within the initial range)
       f.writeBack(1e30);
       const int u = int(rng() % 33), v = int(rng() % 33);

@@ -10,7 +10,6 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
-#include <cstdlib>
 #include <random>
 #include <set>
 #include <string>
@@ -23,6 +22,7 @@
 #include "mesh_checks.hpp"
 #include "sand/displacement.hpp"
 #include "sand/settler.hpp"
+#include "stress_scale.hpp"
 #include "terrain/tessellator.hpp"
 #include "test_edit_util.hpp"
 #include "test_terrains.hpp"
@@ -32,12 +32,6 @@ using namespace ps;
 namespace {
 
 constexpr int kStressActions = 10000;
-
-int stressScale() {
-  const char* s = std::getenv("PS_STRESS_SCALE");
-  const int k = s ? std::atoi(s) : 1;
-  return k >= 1 ? k : 1;
-}
 
 double logUniform(std::mt19937& rng, double lo, double hi) {
   std::uniform_real_distribution<double> e(std::log(lo), std::log(hi));
@@ -277,7 +271,7 @@ std::set<std::tuple<std::uint64_t, std::uint64_t, std::uint64_t>> triangleSet(
 }  // namespace
 
 TEST(StressEdits, RandomActionsOfEveryToolKeepEveryInvariant) {
-  const int actions = kStressActions * stressScale();
+  const int actions = kStressActions * testkit::stressScale();
   StressRig rig(20261122);
   terrain::Tessellator tess;
   std::mt19937 viewRng(7);
