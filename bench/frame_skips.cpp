@@ -5,6 +5,7 @@
 #include <limits>
 
 #include "bench/bench_util.hpp"
+#include "edit/brush.hpp"
 #include "edit/edit_pipeline.hpp"
 #include "sand/displacement.hpp"
 #include "sand/settler.hpp"
@@ -88,23 +89,53 @@ nlohmann::json reuse(const terrain::Terrain& planet, const SkipInputs& in) {
   return saving(withMs, withoutMs);
 }
 
+// Uploads, three ways on the same views: the mesh unchanged (nothing sent), after a local edit
+// under the held view (only its changed chunks sent), and the same edit sent whole.
 nlohmann::json uploads(render::PlanetRenderer& renderer, const terrain::Terrain& planet,
                        const SkipInputs& in) {
   const auto& cam = in.views.back();
   terrain::Tessellator tess;
-  terrain::Mesh mesh = tess.tessellate(planet, cam, in.settings);
+  const terrain::Mesh mesh = tess.tessellate(planet, cam, in.settings);
   renderer.renderAR(in.background, planet, mesh, cam, {});
   const int n = 4 * in.repeats;
-  const double withMs =
+  const double unchangedMs =
       medianMs(n, [&] { renderer.renderAR(in.background, planet, mesh, cam, {}); });
-  const double withoutMs = medianMs(n, [&] {
-    ++mesh.generation;  // the same mesh announced as new: uploaded again
-    renderer.renderAR(in.background, planet, mesh, cam, {});
-  });
-  auto j = saving(withMs, withoutMs);
-  j["bytes_per_upload"] = renderer.stats().uploadedBytes;
-  j["triangles"] = mesh.triangleCount();
-  return j;
+
+  // A 50 km bump where the view looks (the vertex nearest the middle of the mesh).
+  terrain::Terrain edited(planet.chartPtr(), {planet.heights().begin(), planet.heights().end()});
+  const std::uint64_t middle = mesh.gridIndex[mesh.gridIndex.size() / 2];
+  const int side = planet.grid().side();
+  edit::EditPipeline pipe(edited);
+  pipe.setUndoEnabled(false);
+  edit::BrushSettings b;
+  b.radius = 50e3;
+  b.strength = 2000;
+  const core::GridPoint c{int(middle % std::uint64_t(side)), int(middle / std::uint64_t(side))};
+  pipe.apply(edit::GaussianBrush(b), {edited.chart().position(c.u, c.v, 0.0), 0.0});
+  terrain::Tessellator tessEdited;
+  const terrain::Mesh after = tessEdited.tessellate(edited, cam, in.settings);
+
+  std::size_t partialBytes = 0, fullBytes = 0;
+  auto alternate = [&](bool partial, std::size_t& bytes) {
+    renderer.setPartialUploads(partial);
+    std::vector<double> t;
+    for (int i = 0; i < n; ++i) {
+      renderer.renderAR(in.background, planet, mesh, cam, {});  // back to the old mesh
+      const auto t0 = std::chrono::steady_clock::now();
+      renderer.renderAR(in.background, edited, after, cam, {});
+      t.push_back(msSince(t0));
+      bytes = renderer.stats().uploadedBytes;
+    }
+    return median(t);
+  };
+  const double partialMs = alternate(true, partialBytes);
+  const double fullMs = alternate(false, fullBytes);
+  renderer.setPartialUploads(true);
+  return {{"unchanged_mesh", saving(unchangedMs, fullMs)},
+          {"changed_chunks_after_edit", saving(partialMs, fullMs)},
+          {"bytes_sent_after_edit", partialBytes},
+          {"bytes_of_mesh", fullBytes},
+          {"triangles", after.triangleCount()}};
 }
 
 // A crater pressed into a copy of the planet, then one settling step over the cells the crater

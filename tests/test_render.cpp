@@ -11,6 +11,9 @@
 #include <opencv2/imgproc.hpp>
 #include <random>
 
+#include "edit/brush.hpp"
+#include "edit/edit_pipeline.hpp"
+#include "render/changed_ranges.hpp"
 #include "render/egl_context.hpp"
 #include "render/planet_renderer.hpp"
 #include "render/projection.hpp"
@@ -387,5 +390,84 @@ TEST(Skips, OverviewEveryFourthFrameIsWhatEveryFrameWouldDraw) {
     if (frame % 4 != 0) continue;
     const cv::Mat fourth = sometimes.renderOverview(planet, mesh, cam, 120, 120);
     EXPECT_EQ(cv::norm(every, fourth, cv::NORM_INF), 0.0) << "frame " << frame;
+  }
+}
+
+TEST(Skips, ChangedChunksDrawWhatAWholeUploadDraws) {
+  // A local edit under a held view: the renderer sends only the mesh's changed chunks, fewer
+  // bytes than the mesh, and draws what a renderer sent the whole mesh draws.
+  SKIP_WITHOUT_GL();
+  auto planet = testkit::bumpyTerrain(9, 14, 8000.0);
+  const double R = planet.chart().radius();
+  render::EglContext gl;
+  render::PlanetRenderer partial, whole;
+  whole.setPartialUploads(false);
+  const auto cam = orbitCamera(1.8 * R, 480, 360);
+  terrain::TessellationSettings ts;
+  ts.distMaxPx = 0.25;
+  terrain::Tessellator tess;
+  partial.renderAR({}, planet, tess.tessellate(planet, cam, ts), cam, {});
+  whole.renderAR({}, planet, tess.mesh(), cam, {});
+  // Bumps 2 % of the radius across beside the visible disc's centre: a 5 m one changes
+  // heights but no split (only the chunks holding its vertices are sent), a 20 km one changes
+  // the tessellation (its triangles shift everything after them in the bintree's order).
+  const Eigen::Vector3d towardCamera = cam.eye.normalized();
+  const Eigen::Vector3d spot =
+      R * (towardCamera + 0.4 * towardCamera.unitOrthogonal()).normalized();
+  edit::EditPipeline pipe(planet);
+  for (double strength : {5.0, 20000.0}) {
+    edit::BrushSettings b;
+    b.radius = 0.02 * R;
+    b.strength = strength;
+    pipe.apply(edit::GaussianBrush(b), {spot, 0.0});
+    const auto& mesh = tess.tessellate(planet, cam, ts);
+    const cv::Mat a = partial.renderAR({}, planet, mesh, cam, {});
+    const cv::Mat c = whole.renderAR({}, planet, mesh, cam, {});
+    EXPECT_EQ(cv::norm(a, c, cv::NORM_INF), 0.0) << strength;
+    EXPECT_EQ(whole.stats().uploadedBytes, whole.stats().meshBytes);
+    EXPECT_GT(partial.stats().uploadedBytes, 0u) << strength;
+    EXPECT_LE(partial.stats().uploadedBytes, partial.stats().meshBytes) << strength;
+    if (strength < 10) {
+      EXPECT_LT(partial.stats().uploadedBytes, partial.stats().meshBytes / 4)
+          << partial.stats().uploadedBytes << " of " << partial.stats().meshBytes << " bytes";
+    }
+    std::printf("[ info ] %g m bump: %zu of %zu bytes sent (%zu triangles)\n", strength,
+                partial.stats().uploadedBytes, partial.stats().meshBytes, mesh.triangleCount());
+  }
+}
+
+TEST(RenderUploads, ChangedRangesCoverEveryChangedByteAndNothingElseOfWholeChunks) {
+  std::mt19937 rng(3);
+  for (int trial = 0; trial < 200; ++trial) {
+    const std::size_t chunk = 1 + rng() % 64;
+    std::vector<std::uint8_t> a(rng() % 600), b;
+    for (auto& x : a) x = std::uint8_t(rng());
+    b = a;
+    b.resize(rng() % 600, 7);
+    for (int k = int(rng() % 5); k > 0 && !b.empty(); --k) b[rng() % b.size()] ^= 0x5a;
+    const auto ranges = render::changedRanges(a, b, chunk);
+    std::vector<std::uint8_t> covered(b.size(), 0);
+    std::size_t end = 0;
+    for (const auto& r : ranges) {
+      ASSERT_GE(r.offset, end) << "ranges overlap or are out of order";
+      ASSERT_EQ(r.offset % chunk, 0u);
+      ASSERT_LE(r.offset + r.size, b.size());
+      ASSERT_TRUE(r.offset > end || end == 0 || r.offset == 0) << "adjacent ranges not merged";
+      for (std::size_t i = r.offset; i < r.offset + r.size; ++i) covered[i] = 1;
+      end = r.offset + r.size;
+    }
+    // Applying the ranges to a copy of `a` gives `b`; every uncovered chunk was unchanged.
+    std::vector<std::uint8_t> c = a;
+    c.resize(b.size());
+    for (const auto& r : ranges)
+      std::copy_n(b.begin() + long(r.offset), r.size, c.begin() + long(r.offset));
+    ASSERT_EQ(c, b) << "trial " << trial;
+    for (std::size_t at = 0; at < b.size(); at += chunk) {
+      if (covered[at]) continue;
+      ASSERT_LE(at + std::min(chunk, b.size() - at), a.size());
+      ASSERT_TRUE(std::equal(b.begin() + long(at), b.begin() + long(std::min(b.size(), at + chunk)),
+                             a.begin() + long(at)))
+          << "an unchanged chunk was sent";
+    }
   }
 }

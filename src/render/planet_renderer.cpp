@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "io/heightmap_export.hpp"
+#include "render/changed_ranges.hpp"
 #include "render/projection.hpp"
 
 namespace ps::render {
@@ -138,6 +139,7 @@ constexpr float kRampLow = -9000, kRampHigh = 9000;
 struct PlanetRenderer::Gl {
   GLuint meshProgram = 0, lineProgram = 0, backgroundProgram = 0;
   GLuint meshVao = 0, positionBuffer = 0, heightBuffer = 0, indexBuffer = 0;
+  ShadowedBuffer positions, heights, indices;  // what the three mesh buffers hold
   GLuint lineVao = 0, lineBuffer = 0, emptyVao = 0;
   GLuint rampTexture = 0, imageTexture = 0;
   GLuint framebuffer = 0, colourBuffer = 0, depthBuffer = 0;
@@ -243,23 +245,35 @@ void PlanetRenderer::upload(const terrain::Terrain& planet, const terrain::Mesh&
     const auto gi = mesh.gridIndex[i];
     heights[i] = planet.height(int(gi % std::uint64_t(side)), int(gi / std::uint64_t(side)));
   }
-  glBindBuffer(GL_ARRAY_BUFFER, g.positionBuffer);
-  glBufferData(GL_ARRAY_BUFFER, GLsizeiptr(mesh.positions.size() * sizeof(Eigen::Vector3f)),
-               mesh.positions.data(), GL_DYNAMIC_DRAW);
-  glBindBuffer(GL_ARRAY_BUFFER, g.heightBuffer);
-  glBufferData(GL_ARRAY_BUFFER, GLsizeiptr(heights.size() * sizeof(float)), heights.data(),
-               GL_DYNAMIC_DRAW);
+  // Only the byte ranges that changed since the last upload are sent (render/changed_ranges).
+  auto send = [this](ShadowedBuffer& shadow, GLenum target, GLuint buffer, const void* data,
+                     std::size_t bytes) {
+    glBindBuffer(target, buffer);
+    return shadow.update(
+        {static_cast<const std::uint8_t*>(data), bytes}, !partialUploads_,
+        [&](std::size_t capacity, const void* d, std::size_t n) {
+          glBufferData(target, GLsizeiptr(capacity), nullptr, GL_DYNAMIC_DRAW);
+          glBufferSubData(target, 0, GLsizeiptr(n), d);
+        },
+        [&](std::size_t offset, std::size_t n, const void* d) {
+          glBufferSubData(target, GLintptr(offset), GLsizeiptr(n), d);
+        });
+  };
+  std::size_t sent = send(g.positions, GL_ARRAY_BUFFER, g.positionBuffer, mesh.positions.data(),
+                          mesh.positions.size() * sizeof(Eigen::Vector3f));
+  sent += send(g.heights, GL_ARRAY_BUFFER, g.heightBuffer, heights.data(),
+               heights.size() * sizeof(float));
   glBindVertexArray(g.meshVao);
-  glBufferData(GL_ELEMENT_ARRAY_BUFFER, GLsizeiptr(mesh.indices.size() * sizeof(std::uint32_t)),
-               mesh.indices.data(), GL_DYNAMIC_DRAW);
+  sent += send(g.indices, GL_ELEMENT_ARRAY_BUFFER, g.indexBuffer, mesh.indices.data(),
+               mesh.indices.size() * sizeof(std::uint32_t));
   glBindVertexArray(0);
   uploadedMesh_ = &mesh;
   uploadedGeneration_ = mesh.generation;
   uploadedIndices_ = mesh.indices.size();
   ++stats_.uploads;
-  stats_.uploadedBytes = mesh.positions.size() * sizeof(Eigen::Vector3f) +
-                         heights.size() * sizeof(float) +
-                         mesh.indices.size() * sizeof(std::uint32_t);
+  stats_.uploadedBytes = sent;
+  stats_.meshBytes = mesh.positions.size() * sizeof(Eigen::Vector3f) +
+                     heights.size() * sizeof(float) + mesh.indices.size() * sizeof(std::uint32_t);
   stats_.uploadedThisFrame = true;
 }
 

@@ -9,7 +9,7 @@
 // Vertices are uploaded relative to the mesh's eye (terrain::Mesh), so float keeps full
 // precision near the camera: no jitter 1 m above a 6,372 km planet. A mesh is uploaded again
 // only when it changed (the tessellator returns the same mesh for an unchanged view and
-// terrain).
+// terrain), and then only its changed 4 KiB chunks (render/changed_ranges.hpp).
 #include <Eigen/Core>
 #include <cstdint>
 #include <opencv2/core.hpp>
@@ -41,7 +41,8 @@ struct Cursor {
 
 struct RenderStats {
   std::size_t uploads = 0;        // mesh uploads so far
-  std::size_t uploadedBytes = 0;  // bytes sent by the last upload
+  std::size_t uploadedBytes = 0;  // bytes sent by the last upload (only its changed ranges)
+  std::size_t meshBytes = 0;      // bytes of the last uploaded mesh (what a full upload sends)
   bool uploadedThisFrame = false;
 };
 
@@ -74,6 +75,9 @@ class PlanetRenderer {
   void present(int x, int y, int width, int height) const;
 
   const RenderStats& stats() const { return stats_; }
+  // On (the default), a changed mesh sends only its changed byte ranges; off sends it whole
+  // (the baseline the frame benchmark and the tests compare with).
+  void setPartialUploads(bool on) { partialUploads_ = on; }
 
  private:
   struct Gl;
@@ -91,6 +95,7 @@ class PlanetRenderer {
   const terrain::Mesh* uploadedMesh_ = nullptr;  // identity of what the buffers hold
   std::uint64_t uploadedGeneration_ = 0;
   std::size_t uploadedIndices_ = 0;
+  bool partialUploads_ = true;
 };
 
 }  // namespace ps::render
