@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # README command 2: install what is missing, build, and run every test twice: an optimised
-# build with warnings as errors, then the ASan+UBSan build. `--quick` skips the sanitizer pass.
+# build with warnings as errors, then the ASan+UBSan build; then each parser's libFuzzer target
+# for 20 s (fuzz/run.sh, clang). `--quick` skips the sanitizer and fuzz passes.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 scripts/setup.sh
@@ -16,5 +17,7 @@ run_preset() {
 run_preset release
 if [ "${1:-}" != "--quick" ]; then
   run_preset asan
+  echo "== fuzz: every parser, 20 s each" >&2
+  fuzz/run.sh 20
 fi
 echo "== all tests passed" >&2
