@@ -403,6 +403,30 @@ TEST(StressTracking, AprilTagSurvivesTinyImagesAtAnyDecimate) {
   }
 }
 
+// The aruco back end with each of its corner refinements on tiny images and on every degenerate
+// frame: no crash and no stray exception (OpenCV 4.6's AprilTag refinement threw an assertion,
+// resize with an empty size, for images with a 1-pixel side), nothing outside the wanted ids,
+// finite corners, wrong types refused with InputError.
+TEST(StressTracking, ArucoSurvivesTinyAndDegenerateImagesWithEveryRefinement) {
+  cv::RNG rng(6);
+  for (auto refinement :
+       {tracking::ArucoRefinement::kNone, tracking::ArucoRefinement::kSubpix,
+        tracking::ArucoRefinement::kContour, tracking::ArucoRefinement::kAprilTag}) {
+    tracking::DetectorConfig c = detectorConfig(tracking::Backend::kAruco, false);
+    c.arucoRefinement = refinement;
+    auto det = tracking::makeDetector(c);
+    const std::string who = "aruco " + tracking::toString(refinement);
+    for (int w = 1; w <= 26; w += (w < 10 ? 1 : 4)) {
+      for (int h = 1; h <= 26; h += (h < 10 ? 1 : 4)) {
+        cv::Mat m(h, w, CV_8U);
+        rng.fill(m, cv::RNG::UNIFORM, 0, 256);
+        EXPECT_TRUE(det->detect(m).empty()) << who << ", " << w << "x" << h;
+      }
+    }
+    for (const Case& k : cases()) detectCase(*det, k, who + ", " + k.name);
+  }
+}
+
 // Degenerate frames, each several times in a row, interleaved with good frames through the
 // scene tracker (fed by each back end): no non-finite pose or tip is ever reported, poses that
 // are held stay the last good ones, and after the hold time a frame with no marker reports lost.
