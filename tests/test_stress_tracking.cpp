@@ -437,7 +437,8 @@ TEST(StressTracking, SceneTrackerNeverReportsANonFinitePoseOrTip) {
   for (const BackEnd& be : kBackEnds) {
     auto det = tracking::makeDetector(detectorConfig(be.backend, true));
     tracking::SceneTracker scene(opts.scene);
-    int frame = 0, lostAfterHold = 0, tracked = 0;
+    int frame = 0, lostAfterHold = 0, tracked = 0, held = 0;
+    tracking::Pose lastPlanet, lastTool;
     auto step = [&](const Case& c, const std::string& where) {
       std::vector<tracking::Detection> found;
       try {
@@ -447,6 +448,14 @@ TEST(StressTracking, SceneTrackerNeverReportsANonFinitePoseOrTip) {
       const double time = frame / 30.0;
       const auto f = scene.update(found, calib, frame++, time);
       expectSaneScene(f, where);
+      // A held pose is the last tracked one, exactly.
+      for (auto [m, last] : {std::pair{&f.planet, &lastPlanet}, std::pair{&f.tool, &lastTool}}) {
+        if (m->state == tracking::TrackState::kTracked) *last = m->pose;
+        if (m->state == tracking::TrackState::kHeld) {
+          EXPECT_TRUE(m->pose.R == last->R && m->pose.t == last->t) << where;
+          ++held;
+        }
+      }
       tracked += f.planet.state == tracking::TrackState::kTracked;
       return f;
     };
@@ -464,6 +473,7 @@ TEST(StressTracking, SceneTrackerNeverReportsANonFinitePoseOrTip) {
       }
     }
     EXPECT_GT(lostAfterHold, 0);
+    EXPECT_GT(held, 0);
     EXPECT_GT(tracked, int(all.size()) * 4);  // the good frames between were tracked
   }
 }
