@@ -11,33 +11,17 @@
 #include "core/input_error.hpp"
 #include "haptics/force_model.hpp"
 #include "haptics/settings.hpp"
+#include "test_haptics_util.hpp"
 
 using namespace ps;
 using namespace ps::haptics;
 
 namespace {
 
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-constexpr double kInf = std::numeric_limits<double>::infinity();
-
-// A flat sand surface z = 0 (device space), normal +z: depth = -z.
-TickInput flatInput(double t, const Eigen::Vector3d& p) {
-  TickInput in;
-  in.time = t;
-  in.position = p;
-  in.contact.valid = true;
-  in.contact.depth = -p.z();
-  in.contact.normal = Eigen::Vector3d::UnitZ();
-  return in;
-}
-
-// Settings whose exponential law is felt: slope k_s k_c = 200 N/m at the surface, reaching the
-// 2000 N/m stiffness limit at d* = ln(10) / 100 = 23 mm.
-HapticSettings softSand() {
-  HapticSettings s;
-  s.constants = {2.0, 100.0, 1.0};
-  return s;
-}
+using haptictest::flatInput;
+using haptictest::kInf;
+using haptictest::kNaN;
+using haptictest::softSand;
 
 // Expects an InputError whose message names `name`.
 template <class F>

@@ -19,6 +19,7 @@
 #include "haptics/terrain_patch.hpp"
 #include "haptics/triple_buffer.hpp"
 #include "terrain/terrain.hpp"
+#include "test_haptics_util.hpp"
 #include "test_sand_util.hpp"
 
 using namespace ps;
@@ -26,25 +27,10 @@ using namespace ps::haptics;
 
 namespace {
 
-constexpr double kR = 6372790.0;
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-
-// A lat-long planet with smooth relief (a few km), seam and poles consistent.
-terrain::Terrain reliefPlanet(int n) {
-  auto chart = sandtest::sphereChart(n, kR);
-  const double m = chart->grid().m();
-  auto h = sandtest::heightsFrom(*chart, [&](int u, int v) {
-    const double lon = 2 * std::numbers::pi * u / m, lat = std::numbers::pi * v / m;
-    return 3000.0 * std::sin(3 * lon) * std::sin(lat) * std::sin(lat) + 500.0 * std::cos(2 * lat);
-  });
-  return terrain::Terrain(chart, std::move(h));
-}
-
-Eigen::Vector3d latLon(double latDeg, double lonDeg, double r) {
-  const double la = latDeg * std::numbers::pi / 180, lo = lonDeg * std::numbers::pi / 180;
-  return r *
-         Eigen::Vector3d(std::cos(lo) * std::cos(la), std::sin(lo) * std::cos(la), std::sin(la));
-}
+using haptictest::kNaN;
+using haptictest::kR;
+using haptictest::latLon;
+using haptictest::reliefPlanet;
 
 }  // namespace
 

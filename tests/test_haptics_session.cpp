@@ -12,6 +12,7 @@
 #include "haptics/session.hpp"
 #include "sand/sand_grid.hpp"
 #include "terrain/terrain.hpp"
+#include "test_haptics_util.hpp"
 #include "test_sand_util.hpp"
 
 using namespace ps;
@@ -19,17 +20,12 @@ using namespace ps::haptics;
 
 namespace {
 
-constexpr double kR = 6372790.0;
-constexpr double kGlobe = 0.06;  // m: the displayed planet (tracking's default)
-
-terrain::Terrain flatPlanet(int n, float h = 2000.0f) {
-  auto chart = sandtest::sphereChart(n, kR);
-  return terrain::Terrain(chart, std::vector<float>(chart->grid().count(), h));
-}
+using haptictest::flatPlanet;
+using haptictest::kGlobe;
+using haptictest::kR;
 
 Eigen::Vector3d dirAt(double latDeg, double lonDeg) {
-  const double la = latDeg * std::numbers::pi / 180, lo = lonDeg * std::numbers::pi / 180;
-  return {std::cos(lo) * std::cos(la), std::sin(lo) * std::cos(la), std::sin(la)};
+  return haptictest::latLon(latDeg, lonDeg);
 }
 
 SessionConfig globeConfig() {

@@ -1,4 +1,6 @@
 // The AprilTag C library back end (3.3; Debian splits it into apriltag and apriltag-utils).
+#include <algorithm>
+#include <cmath>
 #include <stdexcept>
 
 #include "core/input_error.hpp"
@@ -39,6 +41,12 @@ class AprilTagDetector final : public Detector {
 
   std::vector<Detection> detect(const cv::Mat& image) override {
     const cv::Mat grey = toGrey(image);
+    // The AprilTag library (3.3) crashes (SIGSEGV, or SIGFPE at decimate 1.5) when the image it
+    // searches for quads - decimated by quad_decimate - is under 3 pixels on a side (a 1x1
+    // frame, a 320x2 sliver, 8x8 at decimate 4). 3 x ceil(decimate) pixels is safe for every size
+    // and decimate tried (StressTracking.AprilTagSurvivesTinyImagesAtAnyDecimate); no marker fits
+    // in an image that small anyway.
+    if (std::min(grey.cols, grey.rows) < 3 * int(std::ceil(config_.decimate))) return {};
     image_u8_t im{grey.cols, grey.rows, int(grey.step[0]), grey.data};
     zarray_t* found = apriltag_detector_detect(td_, &im);
     std::vector<Detection> out;

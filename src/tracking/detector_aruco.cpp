@@ -1,4 +1,6 @@
 // The OpenCV aruco back end (contrib 4.6 API: aruco::detectMarkers + DetectorParameters).
+#include <algorithm>
+#include <cmath>
 #include <opencv2/aruco.hpp>
 
 #include "tracking/detector.hpp"
@@ -37,6 +39,12 @@ class ArucoDetector final : public Detector {
 
   std::vector<Detection> detect(const cv::Mat& image) override {
     const cv::Mat grey = toGrey(image);
+    // OpenCV 4.6's AprilTag refinement first decimates by aprilTagQuadDecimate and throws an
+    // assertion (resize to an empty size) for an image with a 1-pixel side; as in the AprilTag
+    // back end, images under 3 x ceil(decimate) pixels on a side (no marker fits) are not searched.
+    if (config_.arucoRefinement == ArucoRefinement::kAprilTag &&
+        std::min(grey.cols, grey.rows) < 3 * int(std::ceil(config_.decimate)))
+      return {};
     std::vector<std::vector<cv::Point2f>> corners;
     std::vector<int> ids;
     cv::aruco::detectMarkers(grey, dictionary_, corners, ids, params_);
