@@ -7,7 +7,7 @@
 #include "core/input_error.hpp"
 #include "sand/kernels.hpp"
 #include "sand/sand_field.hpp"
-#include "stress_scale.hpp"
+#include "stress_util.hpp"
 #include "test_sand_util.hpp"
 
 using namespace ps;

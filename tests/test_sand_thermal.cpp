@@ -9,7 +9,7 @@
 #include "core/input_error.hpp"
 #include "sand/sand_field.hpp"
 #include "sand/sand_grid.hpp"
-#include "stress_scale.hpp"
+#include "stress_util.hpp"
 #include "test_sand_util.hpp"
 
 using namespace ps;

@@ -22,7 +22,7 @@
 #include "mesh_checks.hpp"
 #include "sand/displacement.hpp"
 #include "sand/settler.hpp"
-#include "stress_scale.hpp"
+#include "stress_util.hpp"
 #include "terrain/tessellator.hpp"
 #include "test_edit_util.hpp"
 #include "test_terrains.hpp"
