@@ -55,9 +55,8 @@ Recovery Recovery::inspect(const SessionFiles& files) {
   const std::uint32_t crc = io::heightsChecksum(planet.heights);
   if (side == j.base.side && crc == j.base.heightsCrc) {
     r.state_ = State::kRecoverable;
-    r.message_ = holds + " newer than " + pname + " (the session's save " +
-                 std::to_string(j.base.generation) + "): not saved when the last session ended" +
-                 torn;
+    r.message_ = holds + " newer than " + pname + " (save " + std::to_string(j.base.generation) +
+                 " of that session): the last session did not end normally" + torn;
     return r;
   }
   if (side == j.base.side && io::journalAlreadyIn(j, planet.heights)) {
