@@ -157,7 +157,9 @@ RecoveryAnswer drawRecoveryModal(const std::string& message) {
   ImGui::SetNextWindowPos(ImVec2(display.x * 0.5f, display.y * 0.5f), ImGuiCond_Always,
                           ImVec2(0.5f, 0.5f));
   if (ImGui::BeginPopupModal(title, nullptr, ImGuiWindowFlags_AlwaysAutoResize)) {
+    ImGui::PushTextWrapPos(ImGui::GetFontSize() * 40);
     ImGui::TextUnformatted(message.c_str());
+    ImGui::PopTextWrapPos();
     ImGui::Separator();
     if (ImGui::Button("Recover")) answer = RecoveryAnswer::kRecover;
     ImGui::SameLine();
