@@ -14,7 +14,9 @@
 #include "edit/edit_pipeline.hpp"
 #include "io/planet_file.hpp"
 #include "io/stroke_journal.hpp"
+#include "replay/replay.hpp"
 #include "session/session_store.hpp"
+#include "short_scene.hpp"
 #include "test_edit_util.hpp"
 #include "test_terrains.hpp"
 
@@ -319,4 +321,77 @@ TEST(Recovery, AnotherPlanetsJournalIsRefusedNamingTheFile) {
   // No journal: nothing.
   fs::remove(files.journal);
   EXPECT_EQ(Recovery::inspect(files).state(), Recovery::State::kNone);
+}
+
+// The live app's wiring on the synthetic short scene: the sand displacement tool through the
+// frame stepper (strokes in the undo journal, settling outside it, reported as
+// StepResult::settled), an undo, autosaves on a frame clock; a crash after the last frame
+// recovers the stepper's planet bit for bit.
+TEST(SessionStore, DisplacedAndSettledSandThroughTheStepperRecoversBitForBit) {
+  // Without autosave every record since the start is applied (settling interleaved with the
+  // stroke's stamps); with it, the scene crosses an autosave at the stroke's end.
+  for (const double autosave : {0.0, 4.0}) {
+    const fs::path dir = freshDir("stepper" + std::to_string(int(autosave)));
+    // Cells of about 20 km and a deep press: steep enough for the sand to slide.
+    auto t = testkit::bumpyTerrain(10, 4, 3000.0);
+    replay::ReplayOptions o = testkit::shortSceneOptions();
+    o.tool = replay::ReplayTool::kDisplace;
+    o.pressDepth = 40000;
+    o.settling.maxStepsPerFrame = 1;  // settling goes on for frames after the stroke
+    o.undo = true;
+    tracking::FrameSource src(testkit::shortSceneVideo());
+    replay::FrameStepper stepper(testkit::shortSceneCamera().forImageSize(src.size()), t, o);
+    SessionStore store(t, SessionFiles::in(dir), {autosave, true}, 0.0);
+    stepper.pipeline().journal().setListener(&store);
+    cv::Mat image;
+    int settledFrames = 0, saves = 0;
+    while (src.read(image)) {
+      const auto r = stepper.step(image, src.index(), src.index() / src.fps());
+      if (!r.settled.empty()) {
+        store.recordRegion(r.settled);
+        ++settledFrames;
+      }
+      saves += store.tick(double(src.index()), stepper.pipeline().inStroke());
+    }
+    stepper.endStroke();
+    // Frames with no marker: the sand goes on settling after the stroke.
+    const cv::Mat blank(image.size(), image.type(), cv::Scalar::all(128));
+    int settledAfter = 0;
+    for (int f = 0; f < 4; ++f) {
+      const auto r = stepper.step(blank, 50 + f, (50 + f) / src.fps());
+      if (!r.settled.empty()) {
+        store.recordRegion(r.settled);
+        ++settledAfter;
+      }
+    }
+    EXPECT_GT(settledAfter, 0);
+    // A crash now: the stroke's vertices as they are (settled between its stamps).
+    if (store.recordsSinceSave() > 0) {
+      const Recovery rec = Recovery::inspect(SessionFiles::in(dir));
+      ASSERT_EQ(rec.state(), Recovery::State::kRecoverable) << rec.message();
+      EXPECT_TRUE(sameHeights(rec.recover()->heights(), t.heights()))
+          << "after the stroke, autosave " << autosave;
+    }
+    // Undo, redo, undo, and sand settling after each (a record after the last autosave).
+    for (int k = 0; k < 3; ++k) {
+      if (k == 1)
+        stepper.pipeline().redo();
+      else
+        stepper.pipeline().undo();
+      for (int f = 0; f < 2; ++f) {
+        const auto r = stepper.step(image, 100 + 2 * k + f, (100 + 2 * k + f) / src.fps());
+        if (!r.settled.empty()) store.recordRegion(r.settled);
+      }
+    }
+    ASSERT_TRUE(store.error().empty()) << store.error();
+    EXPECT_GT(settledFrames, 3) << "the scene should settle sand";
+    EXPECT_GE(stepper.summary().strokes, 1);
+    EXPECT_EQ(saves, autosave > 0 ? 1 : 0);
+    ASSERT_GT(store.recordsSinceSave(), 0u);
+    // The crash: the files as they are now.
+    const Recovery rec = Recovery::inspect(SessionFiles::in(dir));
+    ASSERT_EQ(rec.state(), Recovery::State::kRecoverable) << rec.message();
+    EXPECT_TRUE(sameHeights(rec.recover()->heights(), t.heights())) << "autosave " << autosave;
+    stepper.pipeline().journal().setListener(nullptr);
+  }
 }

@@ -443,6 +443,7 @@ LiveResult runLive(FrameInput& input, const tracking::CameraCalibration& calibra
         char ms[32];
         std::snprintf(ms, sizeof ms, " (%.0f ms)", store.lastSaveMs());
         note = "autosaved " + savePath.string() + ms;
+        std::cerr << "live: " << note << "\n";
       }
       if (!store.error().empty()) note = store.error();
       status.autosaveInS =
@@ -585,6 +586,15 @@ LiveResult runLive(FrameInput& input, const tracking::CameraCalibration& calibra
     stopRecording();  // cmd_live prints the recordings
     if (gInterrupted) std::cerr << "live: interrupted; saving the planet\n";
     store.save(now());  // throws (naming the file) if the disk refuses
+    if (store.recordsWritten() > 0) {
+      char line[160];
+      std::snprintf(line, sizeof line,
+                    "live: journal: %zu records written and flushed, %.1f ms on average, %.1f ms "
+                    "at most; last save %.0f ms\n",
+                    store.recordsWritten(), store.recordTotalMs() / double(store.recordsWritten()),
+                    store.recordMaxMs(), store.lastSaveMs());
+      std::cerr << line;
+    }
     result.saved = savePath;
     result.strokes = stepper.summary().strokes;
   }

@@ -1,5 +1,6 @@
 #include "session/session_store.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <exception>
 #include <system_error>
@@ -130,7 +131,13 @@ void SessionStore::append(io::JournalRecordKind kind, bool sync) noexcept {
   dirty_ = true;
   if (!writer_) return;  // journaling stopped after a disk error, until the next save
   try {
+    const auto t0 = std::chrono::steady_clock::now();
     writer_->append(kind, scratch_, sync);
+    const double ms =
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    ++recordsWritten_;
+    recordTotalMs_ += ms;
+    recordMaxMs_ = std::max(recordMaxMs_, ms);
   } catch (const std::exception& e) {
     // A missing record would make the later ones wrong: stop journaling until the next save
     // (the records before it still recover a consistent earlier state).
@@ -150,9 +157,12 @@ void SessionStore::onCommitted(edit::JournalEvent event,
     dirty_ = true;
     return;
   }
+  // The heights the terrain holds now, not the journal's before/after: sand settles between a
+  // stroke's stamps, outside the undo journal, so a stamped vertex may have moved since its
+  // last stamp (its settling records came earlier in the file and would be overwritten).
+  const auto h = planet_.heights();
+  for (const edit::HeightChange& c : changes) scratch_.push_back({c.index, h[c.index]});
   const bool before = event == edit::JournalEvent::kUndo;
-  for (const edit::HeightChange& c : changes)
-    scratch_.push_back({c.index, before ? c.before : c.after});
   const io::JournalRecordKind kind = event == edit::JournalEvent::kStroke
                                          ? io::JournalRecordKind::kStroke
                                      : before ? io::JournalRecordKind::kUndo

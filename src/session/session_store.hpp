@@ -90,6 +90,11 @@ class SessionStore final : public edit::JournalListener {
   bool dirty() const { return dirty_; }
   double lastSaveMs() const { return lastSaveMs_; }
   double lastSaveTime() const { return lastSave_; }
+  // Records written this session (all saves) and the time they took (write + flush), for the
+  // log line at the end.
+  std::size_t recordsWritten() const { return recordsWritten_; }
+  double recordMaxMs() const { return recordMaxMs_; }
+  double recordTotalMs() const { return recordTotalMs_; }
   // The last disk error while journaling ("" when none); journaling goes on with the next
   // record (the planet is still saved at the next autosave).
   const std::string& error() const { return error_; }
@@ -107,6 +112,8 @@ class SessionStore final : public edit::JournalListener {
   double lastSaveMs_ = 0;
   bool dirty_ = false;
   std::string error_;
+  std::size_t recordsWritten_ = 0;
+  double recordMaxMs_ = 0, recordTotalMs_ = 0;
 };
 
 }  // namespace ps::session
