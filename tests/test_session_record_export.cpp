@@ -9,6 +9,7 @@
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 
+#include "core/input_error.hpp"
 #include "session/frame_recorder.hpp"
 #include "session/planet_export.hpp"
 #include "test_terrains.hpp"
@@ -141,4 +142,40 @@ TEST(PlanetExport, WritesHeightmapSidecarAndMeshUnderTheNextFreeName) {
   // A name taken by any one of the three files is skipped.
   std::ofstream(dir / "planet-003.glb") << "x";
   EXPECT_EQ(session::nextExportStem(dir), "planet-004");
+}
+
+TEST(PlanetExport, InTheBackgroundFromACopyOfThePlanet) {
+  const fs::path dir = freshDir("export_bg") / "exports";
+  auto planet = testkit::bumpyTerrain(7, 3, 4000.0);
+  const auto reference = session::exportPlanet(planet, dir / "ref");
+  session::BackgroundExport job;
+  EXPECT_FALSE(job.running());
+  EXPECT_FALSE(job.poll().has_value());
+  job.start(planet, dir);
+  EXPECT_TRUE(job.running());
+  EXPECT_THROW(job.start(planet, dir), core::InputError);  // one at a time
+  // The live planet changes while the copy is exported.
+  planet.mutableHeights()[planet.grid().index(5, 60)] += 1000.f;
+  planet.commitEdit(terrain::GridRegion::point({5, 60}));
+  const auto outcome = job.wait();
+  ASSERT_TRUE(outcome.has_value());
+  ASSERT_TRUE(outcome->result.has_value()) << outcome->error;
+  EXPECT_FALSE(job.running());
+  EXPECT_FALSE(job.poll().has_value());  // reported once
+  // The same bytes as an export of the planet as it was when the export started.
+  for (const auto& [a, b] : {std::pair{outcome->result->heightmap, reference.heightmap},
+                             std::pair{outcome->result->mesh, reference.mesh}}) {
+    std::ifstream fa(a, std::ios::binary), fb(b, std::ios::binary);
+    const std::string sa((std::istreambuf_iterator<char>(fa)), {}),
+        sb((std::istreambuf_iterator<char>(fb)), {});
+    EXPECT_FALSE(sa.empty());
+    EXPECT_TRUE(sa == sb) << a << " differs from " << b;
+  }
+  // A failure is an outcome with the error, not an exception in the app's loop.
+  std::ofstream(dir.parent_path() / "file") << "x";
+  job.start(planet, dir.parent_path() / "file" / "exports");
+  const auto failed = job.wait();
+  ASSERT_TRUE(failed.has_value());
+  EXPECT_FALSE(failed->result.has_value());
+  EXPECT_FALSE(failed->error.empty());
 }

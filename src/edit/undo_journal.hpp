@@ -27,7 +27,8 @@ enum class JournalEvent {
 // Told about every stroke, undo and redo once its heights are written (the live app's on-disk
 // stroke journal, session/session_store.hpp). `changes` holds the stroke's vertices, sorted by
 // index; the heights the terrain now holds are `after` for kStroke and kRedo, `before` for
-// kUndo. Must not throw (the journal's state has already changed).
+// kUndo, unless something outside the journal (sand settling between a stroke's stamps) moved
+// them since. Must not throw (the journal's state has already changed).
 class JournalListener {
  public:
   virtual ~JournalListener() = default;

@@ -360,6 +360,21 @@ LiveResult runLive(FrameInput& input, const tracking::CameraCalibration& calibra
     PanelStatus status;
     status.savePath = savePath.string();
     std::string note;  // last action's message (saved, undo refused, ...)
+    // Exports from the panel run in a thread of their own, on a copy of the planet; the
+    // destructor waits for one still running when the session ends.
+    session::BackgroundExport exporter;
+    auto reportExport = [&](const session::BackgroundExport::Outcome& x) {
+      if (x.result) {
+        char ms[32];
+        std::snprintf(ms, sizeof ms, " in %.1f s", x.ms / 1000);
+        note = x.result->describe() + ms;
+        status.exportPath =
+            x.result->heightmap.string() + ", " + x.result->mesh.filename().string();
+      } else {
+        note = "not exported: " + x.error;
+      }
+      std::cerr << "live: " << note << "\n";
+    };
     std::optional<tracking::Pose> pose;
     std::optional<core::GridPoint> control;
     double smoothedMs = 0;
@@ -437,6 +452,7 @@ LiveResult runLive(FrameInput& input, const tracking::CameraCalibration& calibra
         const double elapsed = haptic.loop()->now();
         status.hapticHz = elapsed > 0 ? double(haptic.loop()->stats().ticks) / elapsed : 0.0;
       }
+      if (const auto x = exporter.poll()) reportExport(*x);
       // Autosave between strokes.
       if (store.tick(now(), stepper.pipeline().inStroke())) {
         ++result.autosaves;
@@ -555,10 +571,9 @@ LiveResult runLive(FrameInput& input, const tracking::CameraCalibration& calibra
       }
       if (actions.exportPlanet) {
         try {
-          const auto x = session::exportPlanet(planet, settings.out / "exports");
-          note = x.describe();
-          status.exportPath = x.heightmap.string() + ", " + x.mesh.filename().string();
-          std::cerr << "live: " << note << "\n";
+          exporter.start(planet, settings.out / "exports");  // a copy, written by a thread
+          note = "exporting to " + (settings.out / "exports").string() + " ...";
+          status.exportPath = "exporting ...";
         } catch (const std::exception& e) {
           note = std::string("not exported: ") + e.what();
         }
@@ -584,6 +599,7 @@ LiveResult runLive(FrameInput& input, const tracking::CameraCalibration& calibra
     }
     stepper.endStroke();
     stopRecording();  // cmd_live prints the recordings
+    if (const auto x = exporter.wait()) reportExport(*x);
     if (gInterrupted) std::cerr << "live: interrupted; saving the planet\n";
     store.save(now());  // throws (naming the file) if the disk refuses
     if (store.recordsWritten() > 0) {

@@ -1,7 +1,9 @@
 #include "session/planet_export.hpp"
 
 #include <algorithm>
+#include <chrono>
 #include <cstdio>
+#include <exception>
 
 #include "core/input_error.hpp"
 #include "io/export.hpp"
@@ -57,6 +59,38 @@ std::string PlanetExportResult::describe() const {
   std::string s = "exported " + heightmap.string() + b + mesh.string();
   std::snprintf(b, sizeof b, " (%zu triangles, max error %.0f m)", triangles, meshErrorM);
   return s + b;
+}
+
+BackgroundExport::~BackgroundExport() {
+  if (future_.valid()) future_.wait();
+}
+
+void BackgroundExport::start(const terrain::Terrain& planet, const std::filesystem::path& dir,
+                             const PlanetExportOptions& options) {
+  if (running()) throw core::InputError("an export is still running");
+  auto copy = std::make_shared<const terrain::Terrain>(planet);
+  future_ = std::async(std::launch::async, [copy, dir, options] {
+    Outcome o;
+    const auto t0 = std::chrono::steady_clock::now();
+    try {
+      o.result = exportPlanet(*copy, dir, options);
+    } catch (const std::exception& e) {
+      o.error = e.what();
+    }
+    o.ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    return o;
+  });
+}
+
+std::optional<BackgroundExport::Outcome> BackgroundExport::poll() {
+  if (!future_.valid() || future_.wait_for(std::chrono::seconds(0)) != std::future_status::ready)
+    return std::nullopt;
+  return future_.get();
+}
+
+std::optional<BackgroundExport::Outcome> BackgroundExport::wait() {
+  if (!future_.valid()) return std::nullopt;
+  return future_.get();
 }
 
 }  // namespace ps::session

@@ -5,6 +5,9 @@
 // atomically by the io export functions (`planetsculpt export` writes the same files).
 #include <cstddef>
 #include <filesystem>
+#include <future>
+#include <memory>
+#include <optional>
 #include <string>
 
 #include "terrain/terrain.hpp"
@@ -31,5 +34,28 @@ PlanetExportResult exportPlanet(const terrain::Terrain& planet,
 
 // The first NNN (001, 002, ...) for which no exportsDir/planet-NNN.* file exists.
 std::string nextExportStem(const std::filesystem::path& exportsDir);
+
+// exportPlanet on a copy of the planet in a thread of its own, so the live view goes on while
+// a large planet is written (seconds at 4097²). One export at a time.
+class BackgroundExport {
+ public:
+  ~BackgroundExport();  // waits for a running export (its files are completed, not cut)
+  // Copies `planet` and starts; throws core::InputError while an export is running.
+  void start(const terrain::Terrain& planet, const std::filesystem::path& exportsDir,
+             const PlanetExportOptions& options = {});
+  bool running() const { return future_.valid(); }
+  struct Outcome {
+    std::optional<PlanetExportResult> result;
+    std::string error;  // when it failed
+    double ms = 0;      // copy excluded
+  };
+  // The outcome once the export has finished (once), else nothing; never blocks.
+  std::optional<Outcome> poll();
+  // Blocks until the running export ends (tests, the end of a session).
+  std::optional<Outcome> wait();
+
+ private:
+  std::future<Outcome> future_;
+};
 
 }  // namespace ps::session
