@@ -306,6 +306,9 @@ LiveResult runLive(FrameInput& input, const tracking::CameraCalibration& calibra
         ImGui_ImplGlfw_NewFrame();
         ImGui::NewFrame();
         const RecoveryAnswer answer = drawRecoveryModal(recovery.message() + recoveryNote);
+        // Esc closes the window unanswered, like the window's close button.
+        if (ImGui::IsKeyPressed(GLFW_KEY_ESCAPE, false))
+          glfwSetWindowShouldClose(window, GLFW_TRUE);
         finishFrame(fbW, fbH);
         ++result.frames;
         try {

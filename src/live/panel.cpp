@@ -166,7 +166,7 @@ RecoveryAnswer drawRecoveryModal(const std::string& message) {
     if (ImGui::Button("Discard")) answer = RecoveryAnswer::kDiscard;
     ImGui::TextDisabled(
         "Discard keeps the journal as planet.journal.discarded.\n"
-        "Closing the window leaves both files as they are.");
+        "Closing the window (or Esc) leaves both files as they are.");
     if (answer != RecoveryAnswer::kNone) ImGui::CloseCurrentPopup();
     ImGui::EndPopup();
   }
