@@ -2,7 +2,9 @@
 # ctest live_smoke: `planetsculpt live` on 30 frames of the demo video in a window under Xvfb
 # must exit 0, say it drew 30 frames, show the camera image in the window (a marker is found in
 # its screenshot) and save a planet file that `live --planet` loads again; Ctrl-C (SIGINT) in
-# the window's loop saves the planet too, and so does a run that outlasts the video.
+# the window's loop saves the planet too, and so does a run that outlasts the video (recorded
+# with --record; the recording replays to the same planet); a killed session's stroke journal
+# is left alone, recovered or discarded as asked, and refused by another planet.
 # Exit 77 (ctest SKIP_RETURN_CODE) when xvfb-run is not installed.
 # Usage: live_smoke.sh EXE SOURCE_DIR OUT_DIR
 set -u
@@ -38,12 +40,22 @@ run "$out/live2.txt" --frames 3 --planet "$out/a/planet.planet" --out "$out/b"
 rc=$?
 [ $rc -eq 0 ] || { cat "$out/live2.txt"; fail "live --planet exited with $rc"; }
 cmp -s "$out/a/planet.planet" "$out/b/planet.planet" || fail "the reloaded planet changed"
-# Past the video's end (341 frames): the window stays, the planet is kept and saved.
-run "$out/live4.txt" --frames 350 --out "$out/d"
+# Past the video's end (341 frames): the window stays, the planet is kept and saved. The run
+# records the frames it processed (--record); replaying that recording sculpts the same planet,
+# byte for byte.
+run "$out/live4.txt" --frames 350 --out "$out/d" --record "$out/d/session.mkv"
 rc=$?
 [ $rc -eq 0 ] || { cat "$out/live4.txt"; fail "live past the video's end exited with $rc"; }
 grep -q "live: 350 frames" "$out/live4.txt" || { cat "$out/live4.txt"; fail "no 'live: 350 frames'"; }
 [ -s "$out/d/planet.planet" ] || fail "no $out/d/planet.planet after the video ended"
+grep -q "recorded 341 frames to $out/d/session.mkv" "$out/live4.txt" ||
+  { cat "$out/live4.txt"; fail "no 'recorded 341 frames' line"; }
+[ "$(stat -c %s "$out/d/planet.journal")" -eq 64 ] || fail "the journal was not restarted at the end"
+"$exe" replay "$out/d/session.mkv" --calib "$src/calib/synthetic-640x480.yml" --grid 1025 \
+  --out "$out/d/replay" >"$out/replay.txt" 2>&1 || { cat "$out/replay.txt"; fail "replay of the recording failed"; }
+grep -q '"frames": *341' "$out/d/replay/summary.json" || fail "the recording did not replay 341 frames"
+cmp -s "$out/d/planet.planet" "$out/d/replay/planet.planet" ||
+  fail "replaying the recording sculpted another planet than the live session"
 # Ctrl-C (SIGINT) while the window is open: exits 0 and saves the planet.
 xvfb-run -a -s "-screen 0 1280x1024x24" "$exe" live --video "$src/data/demo.mkv" \
   --calib "$src/calib/synthetic-640x480.yml" --grid 1025 --out "$out/c" >"$out/live3.txt" 2>&1 &
@@ -63,4 +75,53 @@ rc=$?
 [ $rc -eq 0 ] || { cat "$out/live3.txt"; fail "live after SIGINT exited with $rc"; }
 grep -q "interrupted; saving" "$out/live3.txt" || fail "no 'interrupted; saving' line"
 [ -s "$out/c/planet.planet" ] || fail "SIGINT did not save $out/c/planet.planet"
+# A crash (SIGKILL) once the stroke journal holds a stroke: the next start neither recovers nor
+# discards on its own (both files untouched, a line naming the journal), --recover applies it,
+# --discard-journal sets it aside, and the journal is refused by another planet's directory.
+xvfb-run -a -s "-screen 0 1280x1024x24" "$exe" live --video "$src/data/demo.mkv" \
+  --calib "$src/calib/synthetic-640x480.yml" --grid 1025 --out "$out/e" --autosave-s 0 \
+  >"$out/live5.txt" 2>&1 &
+wrapper=$!
+pid=""
+for i in $(seq 1 1200); do
+  pid=$(pgrep -P "$wrapper" -x planetsculpt || true)
+  size=$(stat -c %s "$out/e/planet.journal" 2>/dev/null || echo 0)
+  [ -n "$pid" ] && [ "$size" -gt 64 ] && break
+  sleep 0.1
+done
+[ -n "$pid" ] && [ "$size" -gt 64 ] || { kill "$wrapper"; cat "$out/live5.txt"; fail "no stroke reached the journal"; }
+kill -KILL "$pid"
+wait "$wrapper"
+cp "$out/e/planet.journal" "$out/journal.crash"
+cp "$out/e/planet.planet" "$out/planet.crash"
+mkdir -p "$out/f" && cp "$out/e/planet.journal" "$out/e/planet.planet" "$out/f/"
+run "$out/live6.txt" --frames 3 --out "$out/e"
+rc=$?
+[ $rc -eq 0 ] || { cat "$out/live6.txt"; fail "live with a journal left exited with $rc"; }
+grep -q "was left untouched" "$out/live6.txt" || { cat "$out/live6.txt"; fail "no 'left untouched' line"; }
+grep -q "$out/e/planet.journal" "$out/live6.txt" || fail "the message does not name the journal"
+cmp -s "$out/e/planet.journal" "$out/journal.crash" || fail "the journal changed without an answer"
+cmp -s "$out/e/planet.planet" "$out/planet.crash" || fail "the planet changed without an answer"
+run "$out/live7.txt" --frames 3 --out "$out/e" --recover
+rc=$?
+[ $rc -eq 0 ] || { cat "$out/live7.txt"; fail "live --recover exited with $rc"; }
+grep -q "live: recovered [1-9][0-9]* records* of $out/e/planet.journal" "$out/live7.txt" ||
+  { cat "$out/live7.txt"; fail "no 'recovered' line"; }
+cmp -s "$out/e/planet.planet" "$out/planet.crash" && fail "the recovered planet was not saved"
+[ "$(stat -c %s "$out/e/planet.journal")" -eq 64 ] || fail "the journal was not restarted after recovery"
+run "$out/live8.txt" --frames 3 --out "$out/f" --discard-journal
+rc=$?
+[ $rc -eq 0 ] || { cat "$out/live8.txt"; fail "live --discard-journal exited with $rc"; }
+cmp -s "$out/f/planet.journal.discarded" "$out/journal.crash" || fail "the discarded journal was not kept"
+# Another planet (a 513² grid) in the directory the journal is copied to.
+xvfb-run -a -s "-screen 0 1280x1024x24" "$exe" live --video "$src/data/demo.mkv" \
+  --calib "$src/calib/synthetic-640x480.yml" --grid 513 --frames 2 --out "$out/g" >"$out/live9.txt" 2>&1 ||
+  { cat "$out/live9.txt"; fail "live --grid 513 failed"; }
+cp "$out/journal.crash" "$out/g/planet.journal"
+xvfb-run -a -s "-screen 0 1280x1024x24" "$exe" live --video "$src/data/demo.mkv" \
+  --calib "$src/calib/synthetic-640x480.yml" --grid 513 --frames 2 --out "$out/g" >"$out/live10.txt" 2>&1 ||
+  { cat "$out/live10.txt"; fail "live with another planet's journal failed"; }
+grep -q "$out/g/planet.journal was written for another planet" "$out/live10.txt" ||
+  { cat "$out/live10.txt"; fail "another planet's journal was not refused by name"; }
+cmp -s "$out/g/planet.journal.refused" "$out/journal.crash" || fail "the refused journal was not kept"
 echo "PASS"

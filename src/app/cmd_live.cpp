@@ -1,7 +1,10 @@
 // `planetsculpt live --camera N | --video FILE --calib FILE [--planet FILE] [--out DIR]
-// [--frames N]`: the interactive app (live/live_app.hpp): a window with the AR view, the
-// overview inset and a panel; the planet follows the planet marker and the tool marker sculpts
-// while it touches. Built only when GLFW 3.3 and Dear ImGui were found (CMakeLists.txt).
+// [--frames N] [--autosave-s S] [--recover | --discard-journal] [--record FILE]`: the interactive
+// app (live/live_app.hpp): a window with the AR view, the overview inset and a panel; the planet
+// follows the planet marker and the tool marker sculpts while it touches. Built only when GLFW 3.3
+// and Dear ImGui were found (CMakeLists.txt).
+#include <cmath>
+#include <filesystem>
 #include <iostream>
 #include <memory>
 
@@ -21,6 +24,7 @@ struct LiveArgs {
   int camera = -1;
   std::string video;
   live::LiveSettings settings;
+  bool recover = false, discard = false;
 };
 
 const CommandRegistration kLive([](CLI::App& root, CLI::App*& sub) -> CommandAction {
@@ -47,6 +51,19 @@ const CommandRegistration kLive([](CLI::App& root, CLI::App*& sub) -> CommandAct
       ->capture_default_str();
   sub->add_option("--screenshot", a->settings.screenshot,
                   "With --frames: the window's last frame as a PNG");
+  sub->add_option("--autosave-s", a->settings.autosaveSeconds,
+                  "Save the planet every S seconds between strokes (0: only on Ctrl+S and at the "
+                  "end); the stroke journal OUT/planet.journal keeps every stroke in between")
+      ->capture_default_str();
+  auto* recover = sub->add_flag("--recover", a->recover,
+                                "Apply the stroke journal a crashed session left in OUT to "
+                                "OUT/planet.planet and go on from there");
+  auto* discard = sub->add_flag("--discard-journal", a->discard,
+                                "Set such a journal aside (OUT/planet.journal.discarded)");
+  recover->excludes(discard);
+  sub->add_option("--record", a->settings.record,
+                  "Record the frames the app processes to FILE (FFV1 .mkv: `planetsculpt replay "
+                  "FILE` replays the session)");
   a->cli.addOptions(sub);
   return [a] {
     if ((a->camera < 0) == a->video.empty())
@@ -63,9 +80,23 @@ const CommandRegistration kLive([](CLI::App& root, CLI::App*& sub) -> CommandAct
                                                    : io::loadPlanet(job.planetFile);
     a->settings.options = job.options;
     a->settings.out = job.out;
-    const auto r = live::runLive(input, calib, *planet, a->settings);
+    a->settings.journal = a->recover   ? live::JournalChoice::kRecover
+                          : a->discard ? live::JournalChoice::kDiscard
+                                       : live::JournalChoice::kAsk;
+    if (a->settings.autosaveSeconds < 0 || !std::isfinite(a->settings.autosaveSeconds))
+      throw core::InputError("--autosave-s must be >= 0 (0: no autosave)");
+    const auto r = live::runLive(input, calib, planet, a->settings);
+    for (std::size_t i = 0; i < r.recordings.size(); ++i)
+      std::cout << "live: recorded " << r.recordedFrames[i] << " frames to "
+                << r.recordings[i].string() << "\n";
+    if (r.journalKept) {
+      std::cout << "live: " << r.frames << " frames; nothing sculpted or saved: "
+                << (std::filesystem::path(job.out) / "planet.journal").string()
+                << " was left untouched (run with --recover or --discard-journal)\n";
+      return 0;
+    }
     std::cout << "live: " << r.frames << " frames, " << r.strokes << " strokes; saved "
-              << r.saved.string() << "\n";
+              << r.saved.string() << " (" << r.autosaves << " autosaves)\n";
     return 0;
   };
 });

@@ -70,6 +70,7 @@ std::size_t UndoJournal::endStroke(const core::GridSize& grid) {
   s.changes.shrink_to_fit();
   bytes_ += s.bytes();
   done_.push_back(std::move(s));
+  if (listener_) listener_->onCommitted(JournalEvent::kStroke, done_.back().changes);
   trim();
   return n;
 }
@@ -102,6 +103,7 @@ void UndoJournal::undo(terrain::Terrain& terrain) {
   apply(terrain, done_.back(), false);
   undone_.push_back(std::move(done_.back()));
   done_.pop_back();
+  if (listener_) listener_->onCommitted(JournalEvent::kUndo, undone_.back().changes);
 }
 
 void UndoJournal::redo(terrain::Terrain& terrain) {
@@ -110,6 +112,7 @@ void UndoJournal::redo(terrain::Terrain& terrain) {
   apply(terrain, undone_.back(), true);
   done_.push_back(std::move(undone_.back()));
   undone_.pop_back();
+  if (listener_) listener_->onCommitted(JournalEvent::kRedo, done_.back().changes);
 }
 
 void UndoJournal::clear() {

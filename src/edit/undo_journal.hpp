@@ -17,6 +17,24 @@ struct HeightChange {
   float before = 0, after = 0;
 };
 
+// What made a change to the heights final, as a JournalListener hears it.
+enum class JournalEvent {
+  kStroke,  // a stroke ended: its vertices now hold their "after" heights
+  kUndo,    // a stroke was undone: its vertices hold their "before" heights again
+  kRedo,    // a stroke was redone: "after" again
+};
+
+// Told about every stroke, undo and redo once its heights are written (the live app's on-disk
+// stroke journal, session/session_store.hpp). `changes` holds the stroke's vertices, sorted by
+// index; the heights the terrain now holds are `after` for kStroke and kRedo, `before` for
+// kUndo, unless something outside the journal (sand settling between a stroke's stamps) moved
+// them since. Must not throw (the journal's state has already changed).
+class JournalListener {
+ public:
+  virtual ~JournalListener() = default;
+  virtual void onCommitted(JournalEvent event, std::span<const HeightChange> changes) noexcept = 0;
+};
+
 // Undo and redo of whole strokes. A stroke stores only the vertices whose height it changed
 // (bitwise), each once with its height before the stroke's first stamp and after its last:
 // 12 bytes per changed vertex, plus the stroke's dirty rectangle. Undo writes the "before"
@@ -49,6 +67,10 @@ class UndoJournal {
   void redo(terrain::Terrain& terrain);
   void clear();
 
+  // One listener (or none); it must outlive the journal or be reset first.
+  void setListener(JournalListener* listener) { listener_ = listener; }
+  JournalListener* listener() const { return listener_; }
+
   std::size_t bytes() const { return bytes_; }
   std::size_t maxBytes() const { return maxBytes_; }
   // Lowering the cap forgets the oldest strokes until the journal fits (always keeping one).
@@ -75,6 +97,7 @@ class UndoJournal {
   terrain::GridRegion pendingDirty_;
   std::deque<Stroke> done_;
   std::vector<Stroke> undone_;
+  JournalListener* listener_ = nullptr;
 };
 
 }  // namespace ps::edit

@@ -26,6 +26,8 @@ class FrameInput {
   cv::Size size() const { return size_; }
   // Seconds of the frame last read: the video's frame time, or the wall clock for a camera.
   double time() const { return time_; }
+  // Frames per second: the video's, or 30 for a camera (nominal: cameras vary).
+  double fps() const { return fps_; }
   int index() const { return index_; }
   bool isCamera() const { return cameraIndex_ >= 0; }
   bool ended() const { return ended_; }  // video: no more frames

@@ -31,6 +31,9 @@
 #include "live/panel.hpp"
 #include "render/planet_renderer.hpp"
 #include "render/projection.hpp"
+#include "session/frame_recorder.hpp"
+#include "session/planet_export.hpp"
+#include "session/session_store.hpp"
 #include "terrain/tessellator.hpp"
 
 namespace ps::live {
@@ -128,6 +131,10 @@ cv::Mat windowPixels(int width, int height) {
   return flipped;
 }
 
+std::string records(std::size_t n) {
+  return std::to_string(n) + (n == 1 ? " record" : " records");
+}
+
 PanelSettings panelFrom(const LiveSettings& s) {
   PanelSettings p;
   const auto& o = s.options;
@@ -172,14 +179,52 @@ void applyPanel(const PanelSettings& p, PanelSettings& applied, replay::FrameSte
 }  // namespace
 
 LiveResult runLive(FrameInput& input, const tracking::CameraCalibration& calibration,
-                   terrain::Terrain& planet, const LiveSettings& settings) {
+                   std::unique_ptr<terrain::Terrain>& planetPtr, const LiveSettings& settings) {
   if (settings.overviewEvery < 1) throw core::InputError("overview every N frames: N must be >= 1");
+  if (!planetPtr) throw core::InputError("live: no planet");
   replay::ReplayOptions options = settings.options;
   options.undo = true;
+  options.validate();
   const tracking::CameraCalibration calib = calibration.forImageSize(input.size());
-  replay::FrameStepper stepper(calib, planet, options);
-  const std::filesystem::path savePath = settings.out / "planet.planet";
   std::filesystem::create_directories(settings.out);
+  const session::SessionFiles files = session::SessionFiles::in(settings.out);
+  const std::filesystem::path savePath = files.planet;
+
+  // A journal left by a session that did not end (docs/LIVE.md): recover, discard, or ask.
+  const session::Recovery recovery = session::Recovery::inspect(files);
+  bool ask = false;
+  auto recover = [&] {
+    planetPtr = recovery.recover();
+    std::cerr << "live: recovered " << records(recovery.records()) << " of "
+              << files.journal.string() << " into the planet of " << files.planet.string() << "\n";
+  };
+  auto discard = [&] {
+    const auto to = recovery.setAside();
+    std::cerr << "live: discarded the journal's records (kept as " << to.string() << ")\n";
+  };
+  switch (recovery.state()) {
+    case session::Recovery::State::kNone:
+      if (!recovery.message().empty()) std::cerr << "live: " << recovery.message() << "\n";
+      break;
+    case session::Recovery::State::kAlreadySaved:
+      std::cerr << "live: " << recovery.message() << "\n";
+      break;
+    case session::Recovery::State::kRefused: {
+      std::cerr << "live: " << recovery.message() << "\n";
+      const auto to = recovery.setAside();
+      std::cerr << "live: kept it as " << to.string() << "\n";
+      break;
+    }
+    case session::Recovery::State::kRecoverable:
+      std::cerr << "live: " << recovery.message() << "\n";
+      if (settings.journal == JournalChoice::kRecover)
+        recover();
+      else if (settings.journal == JournalChoice::kDiscard)
+        discard();
+      else
+        ask = true;
+      break;
+  }
 
   GlfwLibrary glfw;
   glfwWindowHint(GLFW_CONTEXT_VERSION_MAJOR, 3);
@@ -202,14 +247,115 @@ LiveResult runLive(FrameInput& input, const tracking::CameraCalibration& calibra
   LiveResult result;
   {
     render::PlanetRenderer renderer;
-    terrain::Tessellator tessellator;
     ImGuiLayer imgui(window);
-    Texture overview;
     gInterrupted = false;
     const auto previousHandler = std::signal(SIGINT, onInterrupt);
-
+    struct SignalGuard {
+      void (*previous)(int);
+      ~SignalGuard() { std::signal(SIGINT, previous); }
+    } signalGuard{previousHandler};
     const Eigen::Matrix3d K = eigenK(calib.K);
     const terrain::Mesh empty;
+    cv::Mat image = cv::Mat::zeros(H, W, CV_8UC3), frame;
+    auto running = [&] {
+      return !glfwWindowShouldClose(window) && !gInterrupted &&
+             (settings.frames == 0 || result.frames < settings.frames);
+    };
+    // Draws the camera image (and the planet's mesh, when there is one) into the window.
+    auto presentView = [&](const terrain::Terrain& planet, const terrain::Mesh& mesh,
+                           const terrain::Camera& cam, const render::RenderStyle& style,
+                           const std::optional<render::Cursor>& cursor, int& fbW, int& fbH) {
+      renderer.renderAR(image, planet, mesh, cam, style, cursor);
+      glfwGetFramebufferSize(window, &fbW, &fbH);
+      glBindFramebuffer(GL_FRAMEBUFFER, 0);
+      glViewport(0, 0, fbW, fbH);
+      glClearColor(0.02f, 0.02f, 0.03f, 1);
+      glClear(GL_COLOR_BUFFER_BIT);
+      // Fit the camera's aspect into the window, centred.
+      const double fit = std::min(double(fbW) / W, double(fbH) / H);
+      const int vw = int(W * fit), vh = int(H * fit);
+      renderer.present((fbW - vw) / 2, (fbH - vh) / 2, vw, vh);
+    };
+    auto finishFrame = [&](int fbW, int fbH) {
+      ImGui::Render();
+      glBindFramebuffer(GL_FRAMEBUFFER, 0);  // the window, whatever the renderer left bound
+      glViewport(0, 0, fbW, fbH);
+      ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
+      if (!settings.screenshot.empty() && settings.frames > 0 &&
+          result.frames + 1 == settings.frames)
+        io::writePngAtomically(windowPixels(fbW, fbH), settings.screenshot);
+      glfwSwapBuffers(window);
+    };
+
+    // The recovery question: the camera image and a modal; nothing is sculpted, saved or
+    // journaled until it is answered.
+    std::string recoveryNote;
+    if (ask) {
+      std::cerr << "live: choose Recover or Discard in the window (or run again with --recover "
+                   "or --discard-journal)"
+                << std::endl;
+      const terrain::Camera placeholder =
+          render::arCamera(Eigen::Matrix3d::Identity(), Eigen::Vector3d(0, 0, 1), 1.0, K, W, H);
+      while (ask && running()) {
+        glfwPollEvents();
+        // A camera's picture goes on; a video waits for the answer (its frames are the session's).
+        if (input.isCamera() && input.read(frame)) image = frame;
+        int fbW = 0, fbH = 0;
+        presentView(*planetPtr, empty, placeholder, {}, std::nullopt, fbW, fbH);
+        ImGui_ImplOpenGL3_NewFrame();
+        ImGui_ImplGlfw_NewFrame();
+        ImGui::NewFrame();
+        const RecoveryAnswer answer = drawRecoveryModal(recovery.message() + recoveryNote);
+        // Esc closes the window unanswered, like the window's close button.
+        if (ImGui::IsKeyPressed(GLFW_KEY_ESCAPE, false))
+          glfwSetWindowShouldClose(window, GLFW_TRUE);
+        finishFrame(fbW, fbH);
+        ++result.frames;
+        try {
+          if (answer == RecoveryAnswer::kRecover) recover();
+          if (answer == RecoveryAnswer::kDiscard) discard();
+          if (answer != RecoveryAnswer::kNone) ask = false;
+        } catch (const std::exception& e) {
+          recoveryNote = std::string("\n\nnot recovered: ") + e.what();
+          std::cerr << "live: not recovered: " << e.what() << "\n";
+        }
+      }
+      if (ask) {
+        result.journalKept = true;
+        std::cerr << "live: the window closed before the recovery question was answered: "
+                  << files.journal.string() << " (" << records(recovery.records()) << ") and "
+                  << files.planet.string()
+                  << " are left as they were; run again with --recover or --discard-journal\n";
+        return result;
+      }
+    }
+
+    terrain::Terrain& planet = *planetPtr;
+    replay::FrameStepper stepper(calib, planet, options);
+    terrain::Tessellator tessellator;
+    Texture overview;
+    // The planet on disk: saved now, then autosaved; every stroke, undo and redo journaled.
+    const auto start = std::chrono::steady_clock::now();
+    auto now = [&] {
+      return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    };
+    session::SessionStore store(planet, files, {settings.autosaveSeconds, true}, now());
+    stepper.pipeline().journal().setListener(&store);
+    struct ListenerGuard {
+      edit::UndoJournal& journal;
+      ~ListenerGuard() { journal.setListener(nullptr); }
+    } listenerGuard{stepper.pipeline().journal()};
+    session::FrameRecorder recorder;
+    auto stopRecording = [&] {
+      const std::filesystem::path p = recorder.path();
+      const int n = recorder.stop();
+      if (p.empty()) return std::string();
+      result.recordings.push_back(p);
+      result.recordedFrames.push_back(n);
+      return "recorded " + std::to_string(n) + " frames to " + p.string();
+    };
+    if (!settings.record.empty()) recorder.start(settings.record, input.fps());
+
     // With no planet pose yet: the camera image alone (an empty mesh, any valid camera).
     const terrain::Camera placeholder = render::arCamera(
         Eigen::Matrix3d::Identity(), Eigen::Vector3d(0, 0, 1), stepper.scale(), K, W, H);
@@ -217,13 +363,27 @@ LiveResult runLive(FrameInput& input, const tracking::CameraCalibration& calibra
     PanelStatus status;
     status.savePath = savePath.string();
     std::string note;  // last action's message (saved, undo refused, ...)
-    cv::Mat image = cv::Mat::zeros(H, W, CV_8UC3), frame;
+    // Exports from the panel run in a thread of their own, on a copy of the planet; the
+    // destructor waits for one still running when the session ends.
+    session::BackgroundExport exporter;
+    auto reportExport = [&](const session::BackgroundExport::Outcome& x) {
+      if (x.result) {
+        char ms[32];
+        std::snprintf(ms, sizeof ms, " in %.1f s", x.ms / 1000);
+        note = x.result->describe() + ms;
+        status.exportPath =
+            x.result->heightmap.string() + ", " + x.result->mesh.filename().string();
+      } else {
+        note = "not exported: " + x.error;
+      }
+      std::cerr << "live: " << note << "\n";
+    };
     std::optional<tracking::Pose> pose;
     std::optional<core::GridPoint> control;
     double smoothedMs = 0;
     auto save = [&] {
-      io::savePlanet(planet, savePath);
-      note = "saved " + savePath.string();
+      stepper.endStroke();
+      store.save(now());
     };
 
     // Whatever goes wrong inside the loop, the planet is saved before the error goes on.
@@ -237,8 +397,8 @@ LiveResult runLive(FrameInput& input, const tracking::CameraCalibration& calibra
           }
       }
     } saveOnError{[&] {
-      stepper.endStroke();
-      io::savePlanet(planet, savePath);
+      recorder.stop();
+      save();
     }};
     // The haptic force path beside the frame loop (docs/HAPTICS.md): a 1 kHz thread reads the
     // tracked tool tip (a position-only device) and the terrain near it; forces are computed,
@@ -256,24 +416,29 @@ LiveResult runLive(FrameInput& input, const tracking::CameraCalibration& calibra
     std::optional<haptics::ForceRecord> lastForce;
     std::cerr << "live: window open (" << reinterpret_cast<const char*>(glGetString(GL_RENDERER))
               << "); close it, press Esc or Ctrl-C to save and quit" << std::endl;
-    while (!glfwWindowShouldClose(window) && !gInterrupted &&
-           (settings.frames == 0 || result.frames < settings.frames)) {
+    while (running()) {
       const auto t0 = std::chrono::steady_clock::now();
       glfwPollEvents();
       status.trackMs = status.editMs = 0;
       if (input.read(frame)) {
         image = frame;
+        if (recorder.recording()) try {
+            recorder.write(frame);
+          } catch (const std::exception& e) {
+            note = std::string("recording stopped: ") + e.what();
+          }
         const auto r = stepper.step(frame, input.index(), input.time());
+        if (!r.settled.empty()) store.recordRegion(r.settled);
         status.trackMs = r.times.detectMs + r.times.trackMs;
         status.editMs = r.times.editMs;
         pose = r.planetInCamera;
         control = r.control;
         status.touching = r.touching;
-        const double now = haptic.loop()->now();
+        const double t = haptic.loop()->now();
         if (r.scene.tipValid)
-          hapticDevice.push(r.scene.tipPlanet, now);
+          hapticDevice.push(r.scene.tipPlanet, t);
         else
-          hapticDevice.push(Eigen::Vector3d::Constant(std::nan("")), now);
+          hapticDevice.push(Eigen::Vector3d::Constant(std::nan("")), t);
         status.planetState = tracking::toString(r.scene.planet.state);
         status.toolState = tracking::toString(r.scene.tool.state);
       } else {
@@ -290,6 +455,23 @@ LiveResult runLive(FrameInput& input, const tracking::CameraCalibration& calibra
         const double elapsed = haptic.loop()->now();
         status.hapticHz = elapsed > 0 ? double(haptic.loop()->stats().ticks) / elapsed : 0.0;
       }
+      if (const auto x = exporter.poll()) reportExport(*x);
+      // Autosave between strokes.
+      if (store.tick(now(), stepper.pipeline().inStroke())) {
+        ++result.autosaves;
+        char ms[32];
+        std::snprintf(ms, sizeof ms, " (%.0f ms)", store.lastSaveMs());
+        note = "autosaved " + savePath.string() + ms;
+        std::cerr << "live: " << note << "\n";
+      }
+      if (!store.error().empty()) note = store.error();
+      status.autosaveInS =
+          settings.autosaveSeconds > 0
+              ? std::max(0.0, store.lastSaveTime() + settings.autosaveSeconds - now())
+              : -1.0;
+      status.journalRecords = store.recordsSinceSave();
+      status.recordPath = recorder.recording() ? recorder.path().string() : "";
+      status.recordedFrames = recorder.frames();
       status.message = input.status();
       if (!note.empty()) status.message += (status.message.empty() ? "" : "\n") + note;
 
@@ -327,17 +509,8 @@ LiveResult runLive(FrameInput& input, const tracking::CameraCalibration& calibra
           cursor->arrow = lastForce->force * (0.25 * planet.chart().radius() / 8.0);
         }
       }
-      renderer.renderAR(image, planet, *mesh, cam ? *cam : placeholder, style, cursor);
       int fbW = 0, fbH = 0;
-      glfwGetFramebufferSize(window, &fbW, &fbH);
-      glBindFramebuffer(GL_FRAMEBUFFER, 0);
-      glViewport(0, 0, fbW, fbH);
-      glClearColor(0.02f, 0.02f, 0.03f, 1);
-      glClear(GL_COLOR_BUFFER_BIT);
-      // Fit the camera's aspect into the window, centred.
-      const double fit = std::min(double(fbW) / W, double(fbH) / H);
-      const int vw = int(W * fit), vh = int(H * fit);
-      renderer.present((fbW - vw) / 2, (fbH - vh) / 2, vw, vh);
+      presentView(planet, *mesh, cam ? *cam : placeholder, style, cursor, fbW, fbH);
       status.renderMs = msSince(t1);
 
       // The panel.
@@ -365,14 +538,7 @@ LiveResult runLive(FrameInput& input, const tracking::CameraCalibration& calibra
         draw->AddText(nullptr, 22, ImVec2(16, display.y * 0.5f), IM_COL32(255, 90, 60, 255),
                       input.status().c_str());
       }
-      ImGui::Render();
-      glBindFramebuffer(GL_FRAMEBUFFER, 0);  // the window, whatever the renderer left bound
-      glViewport(0, 0, fbW, fbH);
-      ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
-      if (!settings.screenshot.empty() && settings.frames > 0 &&
-          result.frames + 1 == settings.frames)
-        io::writePngAtomically(windowPixels(fbW, fbH), settings.screenshot);
-      glfwSwapBuffers(window);
+      finishFrame(fbW, fbH);
 
       // What the user asked for.
       if (panel.spinDeg != applied.spinDeg || panel.tiltDeg != applied.tiltDeg) {
@@ -401,8 +567,30 @@ LiveResult runLive(FrameInput& input, const tracking::CameraCalibration& calibra
       if (actions.save) {
         try {
           save();
+          note = "saved " + savePath.string();
         } catch (const std::exception& e) {
           note = std::string("not saved: ") + e.what();
+        }
+      }
+      if (actions.exportPlanet) {
+        try {
+          exporter.start(planet, settings.out / "exports");  // a copy, written by a thread
+          note = "exporting to " + (settings.out / "exports").string() + " ...";
+          status.exportPath = "exporting ...";
+        } catch (const std::exception& e) {
+          note = std::string("not exported: ") + e.what();
+        }
+      }
+      if (actions.record) {
+        try {
+          if (recorder.recording()) {
+            note = stopRecording();
+          } else {
+            recorder.start(session::nextRecordingPath(settings.out), input.fps());
+            note = "recording to " + recorder.path().string();
+          }
+        } catch (const std::exception& e) {
+          note = std::string("recording: ") + e.what();
         }
       }
       if (actions.quit) glfwSetWindowShouldClose(window, GLFW_TRUE);
@@ -412,10 +600,20 @@ LiveResult runLive(FrameInput& input, const tracking::CameraCalibration& calibra
       status.fps = smoothedMs > 0 ? 1000 / smoothedMs : 0;
       ++result.frames;
     }
-    std::signal(SIGINT, previousHandler);
     stepper.endStroke();
+    stopRecording();  // cmd_live prints the recordings
+    if (const auto x = exporter.wait()) reportExport(*x);
     if (gInterrupted) std::cerr << "live: interrupted; saving the planet\n";
-    io::savePlanet(planet, savePath);  // throws (naming the file) if the disk refuses
+    store.save(now());  // throws (naming the file) if the disk refuses
+    if (store.recordsWritten() > 0) {
+      char line[160];
+      std::snprintf(line, sizeof line,
+                    "live: journal: %zu records written and flushed, %.1f ms on average, %.1f ms "
+                    "at most; last save %.0f ms\n",
+                    store.recordsWritten(), store.recordTotalMs() / double(store.recordsWritten()),
+                    store.recordMaxMs(), store.lastSaveMs());
+      std::cerr << line;
+    }
     result.saved = savePath;
     result.strokes = stepper.summary().strokes;
   }

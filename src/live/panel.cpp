@@ -24,7 +24,9 @@ const char* shortcutHelp() {
          "Home         planet back as the marker holds it\n"
          "Ctrl+Z       undo the last stroke\n"
          "Ctrl+Y, Ctrl+Shift+Z   redo\n"
-         "Ctrl+S       save the planet (OUT/planet.planet)\n"
+         "Ctrl+S       save the planet (OUT/planet.planet; also autosaved every minute)\n"
+         "Ctrl+E       export heightmap (16-bit PNG + .json) and mesh (.glb) to OUT/exports/\n"
+         "Ctrl+R       start / stop recording the camera frames (OUT/recording-NNN.mkv)\n"
          "Esc          save and quit (also: close the window, Ctrl-C)\n";
 }
 
@@ -37,6 +39,8 @@ void applyShortcuts(PanelSettings& s, PanelActions& a) {
     if (pressed(GLFW_KEY_Z)) (io.KeyShift ? a.redo : a.undo) = true;
     if (pressed(GLFW_KEY_Y)) a.redo = true;
     if (pressed(GLFW_KEY_S)) a.save = true;
+    if (pressed(GLFW_KEY_E)) a.exportPlanet = true;
+    if (pressed(GLFW_KEY_R)) a.record = true;
     return;
   }
   if (pressed(GLFW_KEY_B)) s.displace = false;
@@ -119,6 +123,23 @@ void drawPanel(PanelSettings& s, PanelActions& a, const PanelStatus& st) {
   if (ImGui::Button("save (Ctrl+S)")) a.save = true;
   ImGui::SameLine();
   ImGui::TextDisabled("%s", st.savePath.c_str());
+  if (st.autosaveInS >= 0)
+    ImGui::TextDisabled("autosave in %.0f s; journal: %zu records since the last save",
+                        st.autosaveInS, st.journalRecords);
+  else
+    ImGui::TextDisabled("autosave off; journal: %zu records since the last save",
+                        st.journalRecords);
+  if (ImGui::Button("export (Ctrl+E)")) a.exportPlanet = true;
+  ImGui::SameLine();
+  ImGui::TextDisabled(
+      "%s", st.exportPath.empty() ? "heightmap + mesh to OUT/exports/" : st.exportPath.c_str());
+  if (ImGui::Button(st.recordPath.empty() ? "record (Ctrl+R)" : "stop recording (Ctrl+R)"))
+    a.record = true;
+  if (!st.recordPath.empty()) {
+    ImGui::SameLine();
+    ImGui::TextColored(ImVec4(1, 0.3f, 0.3f, 1), "REC %d frames -> %s", st.recordedFrames,
+                       st.recordPath.c_str());
+  }
   if (ImGui::Button("shortcuts (?)")) s.showHelp = !s.showHelp;
   ImGui::End();
   if (s.showHelp) {
@@ -126,6 +147,30 @@ void drawPanel(PanelSettings& s, PanelActions& a, const PanelStatus& st) {
     ImGui::TextUnformatted(shortcutHelp());
     ImGui::End();
   }
+}
+
+RecoveryAnswer drawRecoveryModal(const std::string& message) {
+  const char* title = "Recover the last session's strokes?";
+  if (!ImGui::IsPopupOpen(title)) ImGui::OpenPopup(title);
+  RecoveryAnswer answer = RecoveryAnswer::kNone;
+  const ImVec2 display = ImGui::GetIO().DisplaySize;
+  ImGui::SetNextWindowPos(ImVec2(display.x * 0.5f, display.y * 0.5f), ImGuiCond_Always,
+                          ImVec2(0.5f, 0.5f));
+  if (ImGui::BeginPopupModal(title, nullptr, ImGuiWindowFlags_AlwaysAutoResize)) {
+    ImGui::PushTextWrapPos(ImGui::GetFontSize() * 40);
+    ImGui::TextUnformatted(message.c_str());
+    ImGui::PopTextWrapPos();
+    ImGui::Separator();
+    if (ImGui::Button("Recover")) answer = RecoveryAnswer::kRecover;
+    ImGui::SameLine();
+    if (ImGui::Button("Discard")) answer = RecoveryAnswer::kDiscard;
+    ImGui::TextDisabled(
+        "Discard keeps the journal as planet.journal.discarded.\n"
+        "Closing the window (or Esc) leaves both files as they are.");
+    if (answer != RecoveryAnswer::kNone) ImGui::CloseCurrentPopup();
+    ImGui::EndPopup();
+  }
+  return answer;
 }
 
 }  // namespace ps::live

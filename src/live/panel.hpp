@@ -1,7 +1,8 @@
 #pragma once
 // The live app's on-screen panel (Dear ImGui) and its keyboard shortcuts: what the user can
 // change (tool, r_d, strength, raise/lower, dist_max, triangle budget, wireframe) and ask for
-// (undo, redo, save), and what the app shows (frame rate, triangles, tracking state, messages).
+// (undo, redo, save, export, record), and what the app shows (frame rate, triangles, tracking
+// state, autosave and journal, recording, messages), and the recovery question at start.
 // Drawing only: the app (live/live_app.cpp) applies the settings and runs the actions.
 #include <cstddef>
 #include <string>
@@ -23,6 +24,8 @@ struct PanelSettings {
 
 struct PanelActions {
   bool undo = false, redo = false, save = false, quit = false;
+  bool exportPlanet = false;  // heightmap + mesh into OUT/exports/
+  bool record = false;        // start or stop recording the camera frames
 };
 
 struct PanelStatus {
@@ -35,7 +38,16 @@ struct PanelStatus {
   std::size_t undoCount = 0, redoCount = 0;
   std::string message;  // camera lost, video ended, saved, errors
   std::string savePath;
+  double autosaveInS = -1;         // seconds to the next autosave (< 0: off)
+  std::size_t journalRecords = 0;  // records in OUT/planet.journal since the last save
+  std::string recordPath;          // "" when not recording
+  int recordedFrames = 0;
+  std::string exportPath;  // the last export ("" before the first)
 };
+
+// The recovery question (a modal) while a crashed session's journal waits for an answer.
+enum class RecoveryAnswer { kNone, kRecover, kDiscard };
+RecoveryAnswer drawRecoveryModal(const std::string& message);
 
 // The shortcuts, as listed by `?` (and by `planetsculpt live --help`).
 const char* shortcutHelp();

@@ -268,6 +268,7 @@ StepResult FrameStepper::step(const cv::Mat& image, int frame, double time) {
     s.settleCellSteps += r.cellSteps;
     s.settleFramesAtRest += r.atRest;
     if (r.steps > 0) j["settle_steps"] = r.steps;
+    out.settled = r.dirty;
   }
   out.times.editMs = msSince(t2);
   lastTime_ = time;

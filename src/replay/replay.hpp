@@ -104,7 +104,10 @@ struct StepResult {
   bool touching = false;
   std::optional<core::GridPoint> control;
   std::string stroke = "none";  // none, begin, move, end
-  std::string logLine;          // the replay log's JSON line for this frame (no newline)
+  // Heights sand settling changed this frame, outside the undo journal (displace tool); the
+  // live app journals them (session/session_store.hpp).
+  terrain::GridRegion settled;
+  std::string logLine;  // the replay log's JSON line for this frame (no newline)
   StepTimes times;
 };
 
