@@ -313,9 +313,9 @@ CycleEnergy pushPull(const HapticSettings& s, const terrain::Terrain& planet, do
 // 2000 N/m. For the paper's sand and the soft test sand, without drag (a conservative law) and
 // with it: the net work done on the hand may not exceed what sampling and holding the law
 // itself injects (heldExcess, from the geometry and the law alone) plus what the ramp may give
-// back (the energy
-// stored when it completes: HapticsEnergy's argument). With the paper's drag and a real push
-// (>= 2 mm, several newtons), the net work must be negative: the sand takes energy out.
+// back (the energy stored when it completes: HapticsEnergy's argument; each cycle starts a fresh
+// core, so the ramp runs in every one). With the paper's drag, at most the ramp's store comes
+// back, and a real push (>= 2 mm, several newtons) of 0.3 s or more takes energy out of the hand.
 TEST(StressHaptics, RandomClosedPushPullCyclesInjectNoEnergy) {
   const terrain::Terrain planet = haptictest::flatPlanet(8);
   const double rs = (kR + 2000.0) / (kR / kGlobe);
@@ -355,8 +355,14 @@ TEST(StressHaptics, RandomClosedPushPullCyclesInjectNoEnergy) {
       EXPECT_LT(e.maxDepthError, 1e-7) << what;  // the core's depth is the sphere's
       EXPECT_LE(e.work, tolerance) << what << ": work " << e.work << " J, tolerance " << tolerance
                                    << " J, peak " << e.peak << " J";
-      if (drag && variant == 1 && depth >= 0.002) {
-        EXPECT_LT(e.work, 0.0) << what;
+      if (drag && variant == 1) {
+        // The paper's drag takes out at least what sampling puts in: only the ramp's store can
+        // come back. In a real push (>= 2 mm, several newtons) slow enough that the 50 ms ramp
+        // is a small part of it, the hand loses energy.
+        EXPECT_LE(e.work, e.rampStore) << what << ", sampled law " << e.sampled << " J";
+        if (depth >= 0.002 && period >= 0.3) {
+          EXPECT_LT(e.work, 0.0) << what << ", ramp " << e.rampStore << " J";
+        }
       }
       (drag ? worstDrag : worst) = std::max(drag ? worstDrag : worst, e.work - tolerance);
       ++checked;
