@@ -608,10 +608,11 @@ LiveResult runLive(FrameInput& input, const tracking::CameraCalibration& calibra
     if (store.recordsWritten() > 0) {
       char line[160];
       std::snprintf(line, sizeof line,
-                    "live: journal: %zu records written and flushed, %.1f ms on average, %.1f ms "
-                    "at most; last save %.0f ms\n",
-                    store.recordsWritten(), store.recordTotalMs() / double(store.recordsWritten()),
-                    store.recordMaxMs(), store.lastSaveMs());
+                    "live: journal: %zu record%s written and flushed, %.1f ms on average, %.1f "
+                    "ms at most; last save %.0f ms\n",
+                    store.recordsWritten(), store.recordsWritten() == 1 ? "" : "s",
+                    store.recordTotalMs() / double(store.recordsWritten()), store.recordMaxMs(),
+                    store.lastSaveMs());
       std::cerr << line;
     }
     result.saved = savePath;

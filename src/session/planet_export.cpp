@@ -45,7 +45,7 @@ PlanetExportResult exportPlanet(const terrain::Terrain& planet, const std::files
   double error = o.meshMaxErrorM;
   if (error <= 0) {
     const double rounding = io::coordinateRoundingBound(planet, io::MeshFormat::kGlb);
-    error = std::max(4 * rounding, 0.01 * (double(planet.maxHeight()) - planet.minHeight()));
+    error = std::max(4 * rounding, 0.05 * (double(planet.maxHeight()) - planet.minHeight()));
   }
   const io::MeshExportReport m = io::exportMesh(planet, error, io::MeshFormat::kGlb, r.mesh);
   r.meshErrorM = m.requestedErrorM;

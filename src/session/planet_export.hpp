@@ -16,7 +16,7 @@ namespace ps::session {
 
 struct PlanetExportOptions {
   int heightmapHeight = 0;   // pixels (width 2x); 0: min(m, 2048)
-  double meshMaxErrorM = 0;  // 0: 1 % of the height range, at least 4x the GLB's rounding
+  double meshMaxErrorM = 0;  // 0: 5 % of the height range, at least 4x the GLB's rounding
 };
 
 struct PlanetExportResult {
