@@ -4,7 +4,10 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
+#include <cmath>
+#include <cstring>
 #include <filesystem>
+#include <limits>
 #include <sstream>
 
 #include "core/input_error.hpp"
@@ -106,4 +109,42 @@ TEST(ReplayStepper, ToolAndBrushChangeBetweenFramesAndBadValuesAreRefused) {
   cv::Mat image;
   while (src.read(image)) stepper.step(image, src.index(), src.index() / src.fps());
   EXPECT_EQ(stepper.summary().frames, 12);
+}
+
+TEST(ReplayStepper, PlanetScaledByHandIsThePlanetConfiguredAtThatSize) {
+  // A stepper whose planet is scaled by hand before the first frame replays exactly as one
+  // configured with that size; bad sizes are refused and change nothing.
+  const auto sized = [] {
+    auto o = shortSceneOptions();
+    o.scene.planetRadius *= 1.5;
+    return o;
+  }();
+  auto a = testkit::bumpyTerrain(7, 4, 3000.0);
+  auto b = testkit::bumpyTerrain(7, 4, 3000.0);
+  tracking::FrameSource srcA(shortSceneVideo()), srcB(shortSceneVideo());
+  const auto camera = shortSceneCamera().forImageSize(srcA.size());
+  replay::FrameStepper configured(camera, a, sized);
+  replay::FrameStepper scaled(camera, b, shortSceneOptions());
+  const double before = scaled.scale();
+  for (double bad : {0.0, -0.1, std::nan(""), std::numeric_limits<double>::infinity()}) {
+    EXPECT_THROW(scaled.setPlanetSize(bad), core::InputError) << bad;
+    EXPECT_EQ(scaled.scale(), before);
+  }
+  scaled.setPlanetSize(sized.scene.planetRadius);
+  EXPECT_DOUBLE_EQ(scaled.scale(), configured.scale());
+  EXPECT_NEAR(scaled.scale(), before / 1.5, 1e-9 * before);
+  cv::Mat image;
+  int touching = 0;
+  while (srcA.read(image)) {
+    const auto ra = configured.step(image, srcA.index(), srcA.index() / srcA.fps());
+    ASSERT_TRUE(srcB.read(image));
+    const auto rb = scaled.step(image, srcB.index(), srcB.index() / srcB.fps());
+    EXPECT_EQ(ra.logLine, rb.logLine);
+    touching += ra.touching;
+  }
+  configured.endStroke();
+  scaled.endStroke();
+  EXPECT_GT(touching, 0);
+  EXPECT_TRUE(
+      std::memcmp(a.heights().data(), b.heights().data(), a.heights().size() * sizeof(float)) == 0);
 }

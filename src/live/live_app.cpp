@@ -18,6 +18,7 @@
 #include <exception>
 #include <functional>
 #include <iostream>
+#include <memory>
 #include <numbers>
 #include <opencv2/imgproc.hpp>
 #include <optional>
@@ -147,6 +148,7 @@ PanelSettings panelFrom(const LiveSettings& s) {
   p.pressM = float(o.pressDepth);
   p.distMaxPx = float(s.distMaxPx);
   p.triangleBudget = int(s.triangleBudget);
+  p.planetSizeCm = float(o.scene.planetRadius * 100);
   return p;
 }
 
@@ -404,14 +406,25 @@ LiveResult runLive(FrameInput& input, const tracking::CameraCalibration& calibra
     // tracked tool tip (a position-only device) and the terrain near it; forces are computed,
     // drawn as an arrow and shown in the panel. Forces only: the tool's edits stay the
     // stepper's.
+    // The device's metres map to planet metres by the stepper's scale, so scaling the planet
+    // by hand restarts the force path at the new scale (with a fresh device and clock).
     haptics::SessionConfig hapticConfig;
-    hapticConfig.map.scale = stepper.scale();
-    haptics::HapticSession haptic(planet, nullptr, hapticConfig);
-    haptics::TrackedMarkerDevice hapticDevice;
-    haptic.startLoop(hapticDevice);
+    std::unique_ptr<haptics::TrackedMarkerDevice> hapticDevice;
+    std::unique_ptr<haptics::HapticSession> haptic;
+    auto startHaptics = [&] {
+      if (haptic) haptic->stopLoop();
+      haptic.reset();
+      hapticConfig.map.scale = stepper.scale();
+      hapticDevice = std::make_unique<haptics::TrackedMarkerDevice>();
+      haptic = std::make_unique<haptics::HapticSession>(planet, nullptr, hapticConfig);
+      haptic->startLoop(*hapticDevice);
+    };
+    startHaptics();
     struct LoopGuard {
-      haptics::HapticSession& h;
-      ~LoopGuard() { h.stopLoop(); }
+      std::unique_ptr<haptics::HapticSession>& h;
+      ~LoopGuard() {
+        if (h) h->stopLoop();
+      }
     } loopGuard{haptic};
     std::optional<haptics::ForceRecord> lastForce;
     std::cerr << "live: window open (" << reinterpret_cast<const char*>(glGetString(GL_RENDERER))
@@ -434,11 +447,11 @@ LiveResult runLive(FrameInput& input, const tracking::CameraCalibration& calibra
         pose = r.planetInCamera;
         control = r.control;
         status.touching = r.touching;
-        const double t = haptic.loop()->now();
+        const double t = haptic->loop()->now();
         if (r.scene.tipValid)
-          hapticDevice.push(r.scene.tipPlanet, t);
+          hapticDevice->push(r.scene.tipPlanet, t);
         else
-          hapticDevice.push(Eigen::Vector3d::Constant(std::nan("")), t);
+          hapticDevice->push(Eigen::Vector3d::Constant(std::nan("")), t);
         status.planetState = tracking::toString(r.scene.planet.state);
         status.toolState = tracking::toString(r.scene.tool.state);
       } else {
@@ -449,11 +462,11 @@ LiveResult runLive(FrameInput& input, const tracking::CameraCalibration& calibra
         control.reset();
       }
       {
-        const auto forces = haptic.editorFrame();
+        const auto forces = haptic->editorFrame();
         if (forces.last) lastForce = forces.last;
         status.forceN = lastForce && lastForce->touching ? lastForce->force.norm() : 0.0;
-        const double elapsed = haptic.loop()->now();
-        status.hapticHz = elapsed > 0 ? double(haptic.loop()->stats().ticks) / elapsed : 0.0;
+        const double elapsed = haptic->loop()->now();
+        status.hapticHz = elapsed > 0 ? double(haptic->loop()->stats().ticks) / elapsed : 0.0;
       }
       if (const auto x = exporter.poll()) reportExport(*x);
       // Autosave between strokes.
@@ -548,6 +561,11 @@ LiveResult runLive(FrameInput& input, const tracking::CameraCalibration& calibra
                                     .toRotationMatrix());
         applied.spinDeg = panel.spinDeg;
         applied.tiltDeg = panel.tiltDeg;
+      }
+      if (panel.planetSizeCm != applied.planetSizeCm) {
+        stepper.setPlanetSize(double(panel.planetSizeCm) / 100);
+        applied.planetSizeCm = panel.planetSizeCm;
+        startHaptics();
       }
       applyPanel(panel, applied, stepper, note);
       try {

@@ -21,6 +21,7 @@ const char* shortcutHelp() {
          "O            overview inset\n"
          "Left/Right   turn the planet about its axis (5 degrees; or drag, right button)\n"
          "Up/Down      tilt the planet (5 degrees)\n"
+         "PgUp/PgDn    planet larger / smaller on its marker (x 1.25; or the mouse wheel)\n"
          "Home         planet back as the marker holds it\n"
          "Ctrl+Z       undo the last stroke\n"
          "Ctrl+Y, Ctrl+Shift+Z   redo\n"
@@ -60,6 +61,12 @@ void applyShortcuts(PanelSettings& s, PanelActions& a) {
   if (ImGui::IsKeyPressed(GLFW_KEY_UP)) s.tiltDeg = std::min(90.f, s.tiltDeg + 5);
   if (ImGui::IsKeyPressed(GLFW_KEY_DOWN)) s.tiltDeg = std::max(-90.f, s.tiltDeg - 5);
   if (pressed(GLFW_KEY_HOME)) s.spinDeg = s.tiltDeg = 0;
+  auto resize = [&](float factor) {
+    s.planetSizeCm = std::clamp(s.planetSizeCm * factor, kPlanetSizeMinCm, kPlanetSizeMaxCm);
+  };
+  if (ImGui::IsKeyPressed(GLFW_KEY_PAGE_UP)) resize(1.25f);
+  if (ImGui::IsKeyPressed(GLFW_KEY_PAGE_DOWN)) resize(0.8f);
+  if (!io.WantCaptureMouse && io.MouseWheel != 0) resize(std::pow(1.1f, io.MouseWheel));
   if (!io.WantCaptureMouse && ImGui::IsMouseDragging(ImGuiMouseButton_Right)) {
     s.spinDeg = wrap(s.spinDeg + 0.3f * io.MouseDelta.x);
     s.tiltDeg = std::clamp(s.tiltDeg + 0.3f * io.MouseDelta.y, -90.f, 90.f);
@@ -114,6 +121,10 @@ void drawPanel(PanelSettings& s, PanelActions& a, const PanelStatus& st) {
   ImGui::SliderFloat("tilt (Up/Down)", &s.tiltDeg, -90, 90, "%.0f deg");
   ImGui::SameLine();
   if (ImGui::Button("reset")) s.spinDeg = s.tiltDeg = 0;
+  // The planet's size on its marker shares the tilt row (PgUp/PgDn or the wheel change it): a
+  // row more would push the panel over the planet marker in a 960x720 window.
+  ImGui::SameLine();
+  ImGui::Text("radius %.1f cm", double(s.planetSizeCm));
   ImGui::Separator();
   if (ImGui::Button("undo (Ctrl+Z)")) a.undo = true;
   ImGui::SameLine();

@@ -9,6 +9,9 @@
 
 namespace ps::live {
 
+// The planet's radius on its marker (scaled by hand), in cm: from a marble to a beach ball.
+inline constexpr float kPlanetSizeMinCm = 1.0f, kPlanetSizeMaxCm = 50.0f;
+
 struct PanelSettings {
   bool displace = false;  // tool: brush (false) or sand displacement (true)
   float brushRadiusKm = 250, strengthM = 600, sigma = 0.17f;
@@ -19,6 +22,7 @@ struct PanelSettings {
   bool wireframe = false, contours = false;
   bool showHelp = false, showOverview = true;
   float spinDeg = 0, tiltDeg = 0;  // the planet turned by hand on its marker
+  float planetSizeCm = 6;          // the planet's radius on its marker, scaled by hand
   bool operator==(const PanelSettings&) const = default;
 };
 

@@ -155,6 +155,13 @@ void FrameStepper::setTool(ReplayTool tool) {
   rebuildTools();
 }
 
+void FrameStepper::setPlanetSize(double planetRadiusM) {
+  p_->scene.setPlanetRadius(planetRadiusM);  // validates first
+  endStroke();
+  o_.scene.planetRadius = planetRadiusM;
+  scale_ = planet_.chart().radius() / planetRadiusM;
+}
+
 void FrameStepper::setBrush(const edit::BrushSettings& brush) {
   brush.validate();
   o_.brush = brush;

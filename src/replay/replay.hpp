@@ -135,6 +135,11 @@ class FrameStepper {
   // pose, the tip and the surface under it all follow, so the tool sculpts where the turned
   // planet is drawn. Identity (the default) leaves everything bit-identical to a replay.
   void setUserRotation(const Eigen::Matrix3d& rotation);
+  // The planet scaled by hand on its marker: its displayed radius in marker-world metres (the
+  // scene's planetRadius). The planet's own metres do not change; scale() does, so the same
+  // tool motion covers more or less of the planet. Ends an open stroke; InputError unless the
+  // radius is finite and > 0 (nothing changed then).
+  void setPlanetSize(double planetRadiusM);
   const Eigen::Matrix3d& userRotation() const { return userRotation_; }
 
   const ReplayOptions& options() const { return o_; }

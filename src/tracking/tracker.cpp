@@ -162,6 +162,13 @@ void SceneTracker::reset() {
   tipHave_ = false;
 }
 
+void SceneTracker::setPlanetRadius(double metres) {
+  SceneConfig c = config_;
+  c.planetRadius = metres;
+  c.validate();
+  config_ = c;
+}
+
 Pose SceneTracker::planetFromMarker(const Pose& marker) const {
   Pose offset;
   offset.t = Eigen::Vector3d(0, 0, config_.planetRadius);

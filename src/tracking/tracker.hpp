@@ -111,6 +111,9 @@ class SceneTracker {
   explicit SceneTracker(SceneConfig config);
   const SceneConfig& config() const { return config_; }
   void setSurface(SurfaceFn f) { surface_ = std::move(f); }
+  // The displayed planet's radius (m) changed by hand: the planet frame moves along the marker's
+  // normal with it; the filters keep their state. Throws core::InputError unless finite, > 0.
+  void setPlanetRadius(double metres);
   SceneFrame update(const std::vector<Detection>& detections, const CameraCalibration& calib,
                     int frame, double time);
   // Camera-from-planet pose for a planet-marker pose.
