@@ -25,6 +25,7 @@ struct LiveArgs {
   std::string video;
   live::LiveSettings settings;
   bool recover = false, discard = false;
+  std::vector<std::string> script;  // --at FRAME:ACTION
 };
 
 const CommandRegistration kLive([](CLI::App& root, CLI::App*& sub) -> CommandAction {
@@ -64,8 +65,13 @@ const CommandRegistration kLive([](CLI::App& root, CLI::App*& sub) -> CommandAct
   sub->add_option("--record", a->settings.record,
                   "Record the frames the app processes to FILE (FFV1 .mkv: `planetsculpt replay "
                   "FILE` replays the session)");
+  sub->add_option("--at", a->script,
+                  "FRAME:ACTION, repeatable: a panel action at a window frame as if its key were "
+                  "pressed (export, record, save, undo, redo, quit; crash ends the process with "
+                  "SIGKILL): scripted sessions for tests and demos");
   a->cli.addOptions(sub);
   return [a] {
+    for (const auto& s : a->script) a->settings.script.push_back(live::parseScriptedAction(s));
     if ((a->camera < 0) == a->video.empty())
       throw core::InputError("live needs --camera N or --video FILE");
     a->cli.apply();

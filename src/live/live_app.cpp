@@ -535,6 +535,8 @@ LiveResult runLive(FrameInput& input, const tracking::CameraCalibration& calibra
       status.undoCount = stepper.pipeline().journal().undoCount();
       status.redoCount = stepper.pipeline().journal().redoCount();
       drawPanel(panel, actions, status);
+      applyScript(settings.script, result.frames, actions);
+      if (actions.crash) std::raise(SIGKILL);  // a scripted crash: nothing saved, nothing flushed
       if (panel.showOverview && overview.valid()) {
         const ImVec2 display = ImGui::GetIO().DisplaySize;
         ImGui::SetNextWindowPos(ImVec2(display.x - 8, display.y - 8), ImGuiCond_Always,

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "live/frame_input.hpp"
+#include "live/panel.hpp"
 #include "replay/replay.hpp"
 #include "terrain/terrain.hpp"
 #include "tracking/calibration.hpp"
@@ -40,6 +41,8 @@ struct LiveSettings {
   // Record the frames the app processes to this video (FFV1 .mkv) from the start ("": only
   // when the panel's record toggle says so, to OUT/recording-NNN.mkv).
   std::filesystem::path record;
+  // Panel actions at given window frames (`--at FRAME:ACTION`, live/panel.hpp).
+  std::vector<ScriptedAction> script;
 };
 
 struct LiveResult {

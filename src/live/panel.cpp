@@ -6,8 +6,47 @@
 
 #include <algorithm>
 #include <cmath>
+#include <exception>
+#include <iterator>
+
+#include "core/input_error.hpp"
 
 namespace ps::live {
+
+ScriptedAction parseScriptedAction(const std::string& text) {
+  static const char* const kActions[] = {"export", "record", "save", "undo",
+                                         "redo",   "quit",   "crash"};
+  const auto colon = text.find(':');
+  ScriptedAction a;
+  std::size_t used = 0;
+  try {
+    if (colon != std::string::npos) a.frame = std::stoi(text.substr(0, colon), &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  a.action = colon == std::string::npos ? "" : text.substr(colon + 1);
+  const bool known =
+      std::find(std::begin(kActions), std::end(kActions), a.action) != std::end(kActions);
+  if (colon == std::string::npos || used != colon || a.frame < 0 || !known) {
+    throw core::InputError("--at " + text +
+                           ": expected FRAME:ACTION with FRAME >= 0 and ACTION one of export, "
+                           "record, save, undo, redo, quit, crash");
+  }
+  return a;
+}
+
+void applyScript(const std::vector<ScriptedAction>& script, int frame, PanelActions& a) {
+  for (const ScriptedAction& s : script) {
+    if (s.frame != frame) continue;
+    a.exportPlanet |= s.action == "export";
+    a.record |= s.action == "record";
+    a.save |= s.action == "save";
+    a.undo |= s.action == "undo";
+    a.redo |= s.action == "redo";
+    a.quit |= s.action == "quit";
+    a.crash |= s.action == "crash";
+  }
+}
 
 const char* shortcutHelp() {
   return "?  or F1     this help\n"

@@ -6,6 +6,7 @@
 // Drawing only: the app (live/live_app.cpp) applies the settings and runs the actions.
 #include <cstddef>
 #include <string>
+#include <vector>
 
 namespace ps::live {
 
@@ -30,7 +31,19 @@ struct PanelActions {
   bool undo = false, redo = false, save = false, quit = false;
   bool exportPlanet = false;  // heightmap + mesh into OUT/exports/
   bool record = false;        // start or stop recording the camera frames
+  bool crash = false;         // scripted only: end the process as a crash would (SIGKILL)
 };
+
+// An action taken at a window frame as if its key were pressed then (`live --at FRAME:ACTION`):
+// scripted sessions for tests and demos, independent of how fast the frames come.
+struct ScriptedAction {
+  int frame = 0;
+  std::string action;  // export, record, save, undo, redo, quit, crash
+};
+// Parses "FRAME:ACTION"; throws core::InputError naming the text otherwise.
+ScriptedAction parseScriptedAction(const std::string& text);
+// Adds the actions scripted for `frame` to `actions`.
+void applyScript(const std::vector<ScriptedAction>& script, int frame, PanelActions& actions);
 
 struct PanelStatus {
   double fps = 0, frameMs = 0, trackMs = 0, editMs = 0, tessellateMs = 0, renderMs = 0;
