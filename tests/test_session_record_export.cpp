@@ -10,6 +10,7 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "core/input_error.hpp"
+#include "fresh_dir.hpp"
 #include "session/frame_recorder.hpp"
 #include "session/planet_export.hpp"
 #include "test_terrains.hpp"
@@ -21,11 +22,7 @@ namespace fs = std::filesystem;
 namespace {
 
 fs::path freshDir(const std::string& name) {
-  const fs::path d =
-      fs::temp_directory_path() / ("ps_test_session_" + name + "_" + std::to_string(::getpid()));
-  fs::remove_all(d);
-  fs::create_directories(d);
-  return d;
+  return testkit::freshDir("session_" + name);
 }
 
 // Frames a codec cannot cheat on: noise, a moving gradient, a flat field, saturated pixels.

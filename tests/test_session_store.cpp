@@ -12,6 +12,7 @@
 #include "core/input_error.hpp"
 #include "edit/brush.hpp"
 #include "edit/edit_pipeline.hpp"
+#include "fresh_dir.hpp"
 #include "io/planet_file.hpp"
 #include "io/stroke_journal.hpp"
 #include "replay/replay.hpp"
@@ -29,11 +30,7 @@ using session::SessionStore;
 namespace {
 
 fs::path freshDir(const std::string& name) {
-  const fs::path d =
-      fs::temp_directory_path() / ("ps_test_session_" + name + "_" + std::to_string(::getpid()));
-  fs::remove_all(d);
-  fs::create_directories(d);
-  return d;
+  return testkit::freshDir("session_" + name);
 }
 
 std::vector<unsigned char> fileBytes(const fs::path& p) {
