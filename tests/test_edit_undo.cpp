@@ -33,33 +33,6 @@ State capture(const terrain::Terrain& t) {
   return ::testing::AssertionSuccess();
 }
 
-// A random stroke: a single stamp or a few samples, anywhere (poles and seam included).
-void randomStroke(edit::EditPipeline& pipe, std::mt19937& rng, GaussianBrush& brush) {
-  const auto& t = pipe.terrain();
-  const int m = t.grid().m();
-  BrushSettings s;
-  s.radius = 150e3 + 100e3 * double(rng() % 20);
-  s.sigma = (rng() & 1) ? 0.17 : 0.75;
-  s.mode = BrushMode(rng() % 3);
-  s.strength = 100.0 + double(rng() % 3000);
-  s.target = 500;
-  brush.setSettings(s);
-  const core::GridPoint c = edittest::randomCentre(rng, m);
-  const Eigen::Vector3d p = t.chart().position(c.u, c.v, 0.0);
-  if (rng() % 3 == 0) {
-    pipe.apply(brush, {p, 0});
-    return;
-  }
-  pipe.beginStroke(brush, {p, 0});
-  Eigen::Vector3d q = p;
-  for (int k = 0; k < 3; ++k) {
-    q = (q + t.chart().radius() * 0.2 * Eigen::Vector3d::Random()).normalized() *
-        t.chart().radius();
-    pipe.moveTo({q, 0.05});
-  }
-  pipe.endStroke();
-}
-
 }  // namespace
 
 TEST(EditUndo, UndoAndRedoRestoreHeightsAndBoundsBitForBit) {
@@ -69,7 +42,7 @@ TEST(EditUndo, UndoAndRedoRestoreHeightsAndBoundsBitForBit) {
   GaussianBrush brush;
   std::vector<State> states{capture(t)};
   for (int i = 0; i < 8; ++i) {
-    randomStroke(pipe, rng, brush);
+    edittest::randomStroke(pipe, rng, brush);
     states.push_back(capture(t));
   }
   ASSERT_EQ(pipe.journal().undoCount(), 8u);
@@ -88,7 +61,7 @@ TEST(EditUndo, UndoAndRedoRestoreHeightsAndBoundsBitForBit) {
   pipe.undo();
   ASSERT_TRUE(same(t, states[6]));
   EXPECT_EQ(pipe.journal().redoCount(), 2u);
-  randomStroke(pipe, rng, brush);
+  edittest::randomStroke(pipe, rng, brush);
   EXPECT_EQ(pipe.journal().redoCount(), 0u);
   pipe.undo();
   EXPECT_TRUE(same(t, states[6]));
@@ -125,7 +98,7 @@ TEST(EditUndo, OldStrokesAreForgottenBeyondTheCap) {
   pipe.journal().setMaxBytes(1);  // keeps only the newest stroke
   std::mt19937 rng(2);
   GaussianBrush brush;
-  for (int i = 0; i < 4; ++i) randomStroke(pipe, rng, brush);
+  for (int i = 0; i < 4; ++i) edittest::randomStroke(pipe, rng, brush);
   EXPECT_EQ(pipe.journal().undoCount(), 1u);
   const State before = capture(t);
   pipe.undo();

@@ -12,7 +12,9 @@
 #include <vector>
 
 #include "core/latlong_chart.hpp"
+#include "edit/brush.hpp"
 #include "edit/distance_field.hpp"
+#include "edit/edit_pipeline.hpp"
 #include "edit/region_growing.hpp"
 #include "terrain/terrain.hpp"
 #include "test_terrains.hpp"
@@ -139,6 +141,33 @@ inline Eigen::Vector3d latLon(double latDeg, double lonDeg, double R, double k =
   const double la = latDeg * std::numbers::pi / 180, lo = lonDeg * std::numbers::pi / 180;
   return k * R *
          Eigen::Vector3d(std::cos(lo) * std::cos(la), std::sin(lo) * std::cos(la), std::sin(la));
+}
+
+// A random stroke: a single stamp or a few samples, anywhere (poles and seam included).
+inline void randomStroke(edit::EditPipeline& pipe, std::mt19937& rng, edit::GaussianBrush& brush) {
+  const auto& t = pipe.terrain();
+  const int m = t.grid().m();
+  edit::BrushSettings s;
+  s.radius = 150e3 + 100e3 * double(rng() % 20);
+  s.sigma = (rng() & 1) ? 0.17 : 0.75;
+  s.mode = edit::BrushMode(rng() % 3);
+  s.strength = 100.0 + double(rng() % 3000);
+  s.target = 500;
+  brush.setSettings(s);
+  const core::GridPoint c = randomCentre(rng, m);
+  const Eigen::Vector3d p = t.chart().position(c.u, c.v, 0.0);
+  if (rng() % 3 == 0) {
+    pipe.apply(brush, {p, 0});
+    return;
+  }
+  pipe.beginStroke(brush, {p, 0});
+  Eigen::Vector3d q = p;
+  for (int k = 0; k < 3; ++k) {
+    q = (q + t.chart().radius() * 0.2 * Eigen::Vector3d::Random()).normalized() *
+        t.chart().radius();
+    pipe.moveTo({q, 0.05});
+  }
+  pipe.endStroke();
 }
 
 }  // namespace ps::edittest

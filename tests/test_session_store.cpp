@@ -42,32 +42,6 @@ void writeBytes(const fs::path& p, std::span<const unsigned char> b) {
   f.write(reinterpret_cast<const char*>(b.data()), std::streamsize(b.size()));
 }
 
-// A random stroke (a stamp or a few samples), anywhere, poles and seam included.
-void randomStroke(edit::EditPipeline& pipe, std::mt19937& rng, edit::GaussianBrush& brush) {
-  const auto& t = pipe.terrain();
-  edit::BrushSettings s;
-  s.radius = 150e3 + 100e3 * double(rng() % 20);
-  s.sigma = (rng() & 1) ? 0.17 : 0.75;
-  s.mode = edit::BrushMode(rng() % 3);
-  s.strength = 100.0 + double(rng() % 3000);
-  s.target = 500;
-  brush.setSettings(s);
-  const core::GridPoint c = edittest::randomCentre(rng, t.grid().m());
-  const Eigen::Vector3d p = t.chart().position(c.u, c.v, 0.0);
-  if (rng() % 3 == 0) {
-    pipe.apply(brush, {p, 0});
-    return;
-  }
-  pipe.beginStroke(brush, {p, 0});
-  Eigen::Vector3d q = p;
-  for (int k = 0; k < 3; ++k) {
-    q = (q + t.chart().radius() * 0.2 * Eigen::Vector3d::Random()).normalized() *
-        t.chart().radius();
-    pipe.moveTo({q, 0.05});
-  }
-  pipe.endStroke();
-}
-
 // Heights changed behind the undo journal's back, as sand settling does: a rectangle away from
 // the seam and the poles, journaled by recordRegion.
 void settleSomething(terrain::Terrain& t, SessionStore& store, std::mt19937& rng) {
@@ -114,7 +88,7 @@ TEST(SessionStore, CrashAfterRandomStrokesRecoversTheLiveHeightsBitForBit) {
         settleSomething(t, *store, rng);
         ++settles;
       } else {
-        randomStroke(pipe, rng, brush);
+        edittest::randomStroke(pipe, rng, brush);
       }
       now += 1 + double(rng() % 4);
       if (i + 4 < actions) store->tick(now, pipe.inStroke());  // no save for the last few
@@ -147,8 +121,8 @@ TEST(SessionStore, UndoIsJournaledAsTheHeightsBefore) {
   std::mt19937 rng(5);
   SessionStore store(t, SessionFiles::in(dir), {}, 0.0);
   pipe.journal().setListener(&store);
-  randomStroke(pipe, rng, brush);
-  randomStroke(pipe, rng, brush);
+  edittest::randomStroke(pipe, rng, brush);
+  edittest::randomStroke(pipe, rng, brush);
   pipe.undo();
   pipe.undo();
   ASSERT_TRUE(sameHeights(t.heights(), start));
@@ -202,7 +176,7 @@ TEST(StrokeJournal, TornLastRecordAtEveryByteRecoversTheCompleteStrokes) {
   pipe.journal().setListener(store.get());
   std::vector<std::vector<float>> states;
   for (int i = 0; i < 4; ++i) {
-    randomStroke(pipe, rng, brush);
+    edittest::randomStroke(pipe, rng, brush);
     states.emplace_back(t.heights().begin(), t.heights().end());
   }
   pipe.journal().setListener(nullptr);
@@ -271,8 +245,8 @@ TEST(Recovery, AnotherPlanetsJournalIsRefusedNamingTheFile) {
   {
     SessionStore store(t, files, {0, true}, 0.0);
     pipe.journal().setListener(&store);
-    randomStroke(pipe, rng, brush);
-    randomStroke(pipe, rng, brush);
+    edittest::randomStroke(pipe, rng, brush);
+    edittest::randomStroke(pipe, rng, brush);
     pipe.journal().setListener(nullptr);
   }
   const auto journalBytes = fileBytes(files.journal);
