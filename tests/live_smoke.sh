@@ -57,21 +57,9 @@ grep -q "recorded 341 frames to $out/d/session.mkv" "$out/live4.txt" ||
 grep -q '"frames": *341' "$out/d/replay/summary.json" || fail "the recording did not replay 341 frames"
 cmp -s "$out/d/planet.planet" "$out/d/replay/planet.planet" ||
   fail "replaying the recording sculpted another planet than the live session"
-# Ctrl-C (SIGINT) while the window is open: exits 0 and saves the planet.
-xvfb-run -a -s "-screen 0 1280x1024x24" "$exe" live --video "$src/data/demo.mkv" \
-  --calib "$src/calib/synthetic-640x480.yml" --grid 1025 --out "$out/c" >"$out/live3.txt" 2>&1 &
-wrapper=$!
-pid=""
-for i in $(seq 1 600); do
-  if grep -q "live: window open" "$out/live3.txt" 2>/dev/null; then
-    pid=$(pgrep -P "$wrapper" -x planetsculpt || true)
-    [ -n "$pid" ] && break
-  fi
-  sleep 0.1
-done
-[ -n "$pid" ] || { kill "$wrapper"; cat "$out/live3.txt"; fail "the window never opened"; }
-kill -INT "$pid"
-wait "$wrapper"
+# Ctrl-C (SIGINT) while the window is open (sent by the app to itself at window frame 20): exits 0
+# and saves the planet.
+run "$out/live3.txt" --out "$out/c" --at 20:interrupt
 rc=$?
 [ $rc -eq 0 ] || { cat "$out/live3.txt"; fail "live after SIGINT exited with $rc"; }
 grep -q "interrupted; saving" "$out/live3.txt" || fail "no 'interrupted; saving' line"

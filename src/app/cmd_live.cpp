@@ -67,8 +67,8 @@ const CommandRegistration kLive([](CLI::App& root, CLI::App*& sub) -> CommandAct
                   "FILE` replays the session)");
   sub->add_option("--at", a->script,
                   "FRAME:ACTION, repeatable: a panel action at a window frame as if its key were "
-                  "pressed (export, record, save, undo, redo, quit; crash ends the process with "
-                  "SIGKILL): scripted sessions for tests and demos");
+                  "pressed (export, record, save, undo, redo, quit; interrupt sends SIGINT to "
+                  "the process, crash SIGKILL): scripted sessions for tests and demos");
   a->cli.addOptions(sub);
   return [a] {
     for (const auto& s : a->script) a->settings.script.push_back(live::parseScriptedAction(s));

@@ -537,6 +537,7 @@ LiveResult runLive(FrameInput& input, const tracking::CameraCalibration& calibra
       drawPanel(panel, actions, status);
       applyScript(settings.script, result.frames, actions);
       if (actions.crash) std::raise(SIGKILL);  // a scripted crash: nothing saved, nothing flushed
+      if (actions.interrupt) std::raise(SIGINT);  // handled as a Ctrl-C from outside is
       if (panel.showOverview && overview.valid()) {
         const ImVec2 display = ImGui::GetIO().DisplaySize;
         ImGui::SetNextWindowPos(ImVec2(display.x - 8, display.y - 8), ImGuiCond_Always,

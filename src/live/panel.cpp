@@ -14,8 +14,8 @@
 namespace ps::live {
 
 ScriptedAction parseScriptedAction(const std::string& text) {
-  static const char* const kActions[] = {"export", "record", "save", "undo",
-                                         "redo",   "quit",   "crash"};
+  static const char* const kActions[] = {"export", "record", "save",      "undo",
+                                         "redo",   "quit",   "interrupt", "crash"};
   const auto colon = text.find(':');
   ScriptedAction a;
   std::size_t used = 0;
@@ -30,7 +30,7 @@ ScriptedAction parseScriptedAction(const std::string& text) {
   if (colon == std::string::npos || used != colon || a.frame < 0 || !known) {
     throw core::InputError("--at " + text +
                            ": expected FRAME:ACTION with FRAME >= 0 and ACTION one of export, "
-                           "record, save, undo, redo, quit, crash");
+                           "record, save, undo, redo, quit, interrupt, crash");
   }
   return a;
 }
@@ -45,6 +45,7 @@ void applyScript(const std::vector<ScriptedAction>& script, int frame, PanelActi
     a.redo |= s.action == "redo";
     a.quit |= s.action == "quit";
     a.crash |= s.action == "crash";
+    a.interrupt |= s.action == "interrupt";
   }
 }
 

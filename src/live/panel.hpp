@@ -32,13 +32,14 @@ struct PanelActions {
   bool exportPlanet = false;  // heightmap + mesh into OUT/exports/
   bool record = false;        // start or stop recording the camera frames
   bool crash = false;         // scripted only: end the process as a crash would (SIGKILL)
+  bool interrupt = false;     // scripted only: Ctrl-C (SIGINT) to this process
 };
 
 // An action taken at a window frame as if its key were pressed then (`live --at FRAME:ACTION`):
 // scripted sessions for tests and demos, independent of how fast the frames come.
 struct ScriptedAction {
   int frame = 0;
-  std::string action;  // export, record, save, undo, redo, quit, crash
+  std::string action;  // export, record, save, undo, redo, quit, interrupt, crash
 };
 // Parses "FRAME:ACTION"; throws core::InputError naming the text otherwise.
 ScriptedAction parseScriptedAction(const std::string& text);
