@@ -1,5 +1,6 @@
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <random>
 
 #include "terrain/bound_code.hpp"
@@ -21,6 +22,23 @@ TEST(BoundCode, DecodesToABoundWithinAFractionOfAPermille) {
   }
   EXPECT_EQ(BoundCode::encodeUp(0.0), 0);
   EXPECT_EQ(BoundCode::decode(0), 0.0f);
+}
+
+// Every table value, and the doubles just beside it, encode to the code that bounds them: the
+// exact boundaries, where a guessed starting code is most likely to be one off.
+TEST(BoundCode, TableValuesAndTheirNeighboursEncodeExactly) {
+  for (int k = 2; k < 65536; ++k) {
+    const double x = BoundCode::decode(std::uint16_t(k));
+    const auto c = BoundCode::encodeUp(x);
+    ASSERT_GE(double(BoundCode::decode(c)), x) << k;
+    ASSERT_LT(double(BoundCode::decode(std::uint16_t(c - 1))), x) << k;
+    const double above = std::nextafter(x, 1e300);
+    const auto ca = BoundCode::encodeUp(above);
+    if (ca < 65535) {
+      ASSERT_GE(double(BoundCode::decode(ca)), above) << k;
+      ASSERT_LT(double(BoundCode::decode(std::uint16_t(ca - 1))), above) << k;
+    }
+  }
 }
 
 TEST(BoundCode, EncodingIsMonotone) {

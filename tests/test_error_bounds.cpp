@@ -3,9 +3,11 @@
 #include <algorithm>
 #include <random>
 
+#include "core/flat_chart.hpp"
 #include "core/input_error.hpp"
 #include "terrain/diamond.hpp"
 #include "terrain/terrain.hpp"
+#include "terrain/tessellator.hpp"
 #include "test_terrains.hpp"
 
 using namespace ps;
@@ -33,6 +35,7 @@ Exact exactDiamond(const terrain::Terrain& t, GridPoint p) {
   auto half = [&](GridPoint a, GridPoint b0, GridPoint b1) {
     if (a.v < 0 || a.v > m) return;
     int shift = 0;
+    if ((a.u < 0 || a.u > m) && !chart.wrapsU()) return;  // a flat chart's edge: no such half
     if (a.u < 0) shift = m;
     if (a.u > m) shift = -m;
     a.u += shift, b0.u += shift, b1.u += shift;
@@ -179,6 +182,68 @@ INSTANTIATE_TEST_SUITE_P(Rules, BoundsRule,
                          [](const auto& p) {
                            return p.param == ErrorRule::kWedgie ? "Wedgie" : "HybridExact";
                          });
+
+// The flat chart takes its own path (the deviation is the height's alone): still a bound, on
+// rough terrain where the exact levels matter.
+TEST(ErrorBounds, FlatChartErrorIsGuaranteedAndNested) {
+  auto chart = std::make_shared<core::FlatChart>(core::GridSize(6), 25.0, 25.0);
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<float> noise(-300.0f, 300.0f);
+  std::vector<float> h(chart->grid().count());
+  for (auto& x : h) x = noise(rng);
+  const terrain::Terrain t(chart, h);
+  const auto g = t.grid();
+  double worstRatio = 0;
+  for (int v = 0; v <= g.m(); ++v) {
+    for (int u = 0; u <= g.m(); ++u) {
+      if (isCorner(g, {u, v})) continue;
+      const Exact e = exactDiamond(t, {u, v});
+      const float bound = t.bounds().error(g.index(u, v));
+      ASSERT_GE(double(bound), e.deviation) << "flat error bound broken at " << u << "," << v;
+      ASSERT_GE(double(t.bounds().radius(g.index(u, v))), e.reach) << u << "," << v;
+      if (e.deviation > 0) worstRatio = std::max(worstRatio, e.deviation / bound);
+    }
+  }
+  EXPECT_GT(worstRatio, 0.99) << "the exact levels should be tight on a flat chart";
+}
+
+// An export-only build skips the radii: the errors must be the ones a full build gives, bit for
+// bit (through local updates too), and a view-dependent tessellation must refuse the terrain
+// instead of projecting every triangle as a point.
+TEST(ErrorBounds, ErrorsOnlyBuildHasTheFullBuildsErrors) {
+  auto flat = std::make_shared<core::FlatChart>(core::GridSize(6), 10.0, 10.0);
+  std::vector<float> fh(flat->grid().count());
+  std::mt19937 rng(9);
+  std::uniform_real_distribution<float> noise(-50.0f, 50.0f);
+  for (auto& x : fh) x = noise(rng);
+  std::vector<terrain::Terrain> pairs;
+  pairs.push_back(testkit::bumpyTerrain(6, 3, 9000.0, ErrorRule::kHybridExact));
+  pairs.push_back(terrain::Terrain(flat, fh));
+  for (auto& full : pairs) {
+    terrain::Terrain lean(full.chartPtr(),
+                          std::vector<float>(full.heights().begin(), full.heights().end()),
+                          ErrorRule::kHybridExact, terrain::BoundsContent::kErrorsOnly);
+    EXPECT_FALSE(lean.bounds().hasRadii());
+    EXPECT_TRUE(full.bounds().hasRadii());
+    ASSERT_EQ(lean.bounds().errorCodes(), full.bounds().errorCodes());
+    const auto radii = lean.bounds().radiusCodes();
+    EXPECT_TRUE(std::all_of(radii.begin(), radii.end(), [](auto c) { return c == 0; }));
+    // The same local edit on both: errors still equal, the lean one still without radii.
+    const auto g = full.grid();
+    for (auto* t : {&full, &lean}) {
+      auto h = t->mutableHeights();
+      for (int v = 10; v <= 14; ++v)
+        for (int u = 20; u <= 23; ++u) h[g.index(u, v)] += 7.0f;
+      t->commitEdit(GridRegion{20, 23, 10, 14});
+    }
+    ASSERT_EQ(lean.bounds().errorCodes(), full.bounds().errorCodes());
+    EXPECT_FALSE(lean.bounds().hasRadii());
+    const auto cam = terrain::Camera::lookAt({0, 0, 3 * testkit::kEarthRadius}, {0, 0, 0},
+                                             {1, 0, 0}, 640, 480, 1.0);
+    terrain::Tessellator tess;
+    EXPECT_THROW(tess.tessellate(lean, cam, {}), std::logic_error);
+  }
+}
 
 TEST(Terrain, RejectsBadHeightsNamingTheVertex) {
   auto chart = testkit::earthChart(5);

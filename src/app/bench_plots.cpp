@@ -112,7 +112,11 @@ std::vector<std::filesystem::path> writeBenchPlots(const std::vector<nlohmann::j
   }
 
   const auto exp = groups(
-      records, "export", [](const auto& r) { return str(r, "tool") + " " + str(r, "heightmap"); },
+      records, "export",
+      [](const auto& r) {
+        const double threads = num(r, "threads");
+        return str(r, "tool") + (threads > 1 ? " 2 threads " : " ") + str(r, "heightmap");
+      },
       [](const auto& r) {
         return str(r, "tool") == "planetsculpt" || str(r, "tool") == "martini";
       });

@@ -137,8 +137,10 @@ ExportInput loadExportInput(const std::filesystem::path& path,
   in.notes = std::move(r.notes);
   in.kind = "heightmap";
   try {
-    in.terrain = std::make_unique<terrain::Terrain>(r.planet.chart, std::move(r.planet.heights),
-                                                    r.planet.rule);
+    // A heightmap is only exported here, never viewed: its radii would double the build.
+    in.terrain =
+        std::make_unique<terrain::Terrain>(r.planet.chart, std::move(r.planet.heights),
+                                           r.planet.rule, terrain::BoundsContent::kErrorsOnly);
   } catch (const core::InputError& e) {
     throw core::InputError(path.string() + ": " + e.what());
   }

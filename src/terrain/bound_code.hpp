@@ -1,5 +1,6 @@
 #pragma once
 #include <array>
+#include <bit>
 #include <cmath>
 #include <cstdint>
 
@@ -23,11 +24,15 @@ class BoundCode {
   static std::uint16_t encodeUp(double value) {
     if (!(value > 0.0)) return 0;  // also maps NaN to 0; callers validate heights first
     if (value <= kMin) return 1;
-    double k = std::ceil(std::log2(value / kMin) * kStepsPerOctave) + 1.0;
+    // A guess from the exponent and the top 12 mantissa bits (a bound build encodes two values
+    // per vertex; std::log2 was a fifth of it), never above the answer and at most three steps
+    // below it; the steps below make the result exact whatever the guess.
+    const auto bits = std::bit_cast<std::uint64_t>(value / kMin);  // kMin is a power of two
+    const int exponent = int((bits >> 52) & 0x7ff) - 1023;
+    const double k = double(exponent) * kStepsPerOctave +
+                     double(table().octaveSteps[(bits >> 40) & 0xfff]) + 1.0;
     if (k > 65535.0) return 65535;
     auto code = static_cast<std::uint32_t>(k);
-    // log2 may round either way: step until the decoded value is a bound and the previous
-    // code is not.
     while (code < 65535 && double(decode(std::uint16_t(code))) < value) ++code;
     while (code > 1 && double(decode(std::uint16_t(code - 1))) >= value) --code;
     return std::uint16_t(code);
@@ -36,7 +41,13 @@ class BoundCode {
  private:
   struct Table {
     std::array<float, 65536> values;
+    // floor(kStepsPerOctave * log2(1 + j / 4096)), less one for safety against log2's rounding.
+    std::array<std::uint16_t, 4096> octaveSteps;
     Table() {
+      for (int j = 0; j < 4096; ++j) {
+        const double steps = std::floor(kStepsPerOctave * std::log2(1.0 + j / 4096.0));
+        octaveSteps[std::size_t(j)] = std::uint16_t(steps > 0 ? steps - 1 : 0);
+      }
       values[0] = 0.0f;
       for (int k = 1; k < 65536; ++k) {
         const double x = kMin * std::exp2(double(k - 1) / kStepsPerOctave);

@@ -22,6 +22,11 @@ enum class ErrorRule {
   kHybridExact,
 };
 
+// What a build computes. A whole-planet export at a fixed error reads only the errors; the
+// radii (view-dependent projection and culling) cost as much again to build, so an export of a
+// heightmap file skips them. A terrain built without radii cannot be tessellated for a view.
+enum class BoundsContent { kErrorsAndRadii, kErrorsOnly };
+
 std::string toString(ErrorRule rule);
 ErrorRule errorRuleFromString(const std::string& s);  // throws core::InputError
 
@@ -48,12 +53,14 @@ class ErrorBounds {
 
   ErrorBounds() = default;
 
-  void build(const core::Chart& chart, std::span<const float> heights, ErrorRule rule);
+  void build(const core::Chart& chart, std::span<const float> heights, ErrorRule rule,
+             BoundsContent content = BoundsContent::kErrorsAndRadii);
   // Recomputes only the vertices whose bounds can depend on heights inside `dirty`, level by
   // level up to the root. Bit-for-bit equal to build() on the same heights.
   void update(const core::Chart& chart, std::span<const float> heights, const GridRegion& dirty);
 
   ErrorRule rule() const { return rule_; }
+  bool hasRadii() const { return content_ == BoundsContent::kErrorsAndRadii; }
   float error(std::size_t index) const { return BoundCode::decode(codes_[index].error); }
   float radius(std::size_t index) const { return BoundCode::decode(codes_[index].radius); }
   const CodeArray& codes() const { return codes_; }
@@ -71,6 +78,7 @@ class ErrorBounds {
                     const GridRegion& region);
 
   ErrorRule rule_ = ErrorRule::kHybridExact;
+  BoundsContent content_ = BoundsContent::kErrorsAndRadii;
   CodeArray codes_;
   std::size_t lastUpdateCount_ = 0;
 };

@@ -1,32 +1,72 @@
 #include "terrain/error_mesher.hpp"
 
+#include <algorithm>
 #include <cmath>
-#include <unordered_map>
+#include <memory>
+#include <vector>
 
+#include "core/flat_chart.hpp"
 #include "core/input_error.hpp"
+#include "core/latlong_chart.hpp"
 #include "terrain/diamond.hpp"
 
 namespace ps::terrain {
 
-Mesh meshToError(const Terrain& terrain, double maxErrorMetres) {
-  if (!std::isfinite(maxErrorMetres) || maxErrorMetres < 0) {
-    throw core::InputError("maximum error " + std::to_string(maxErrorMetres) +
-                           " m must be finite and >= 0");
+namespace {
+
+// Grid index -> mesh vertex, in pages of 64 Ki entries made when first touched: as fast as a
+// flat array (a hash map cost half the mesher's time) without a 1 GB table for a 16385² grid
+// when the mesh is coarse.
+class VertexIndex {
+ public:
+  static constexpr std::uint32_t kNone = 0xffffffffu;
+  explicit VertexIndex(std::uint64_t count) : pages_((count >> kPageBits) + 1) {}
+  std::uint32_t& operator[](std::uint64_t gi) {
+    auto& page = pages_[gi >> kPageBits];
+    if (!page) {
+      page = std::make_unique_for_overwrite<std::uint32_t[]>(kPageSize);
+      std::fill_n(page.get(), kPageSize, kNone);
+    }
+    return page[gi & (kPageSize - 1)];
   }
+
+ private:
+  static constexpr int kPageBits = 16;
+  static constexpr std::size_t kPageSize = std::size_t(1) << kPageBits;
+  std::vector<std::unique_ptr<std::uint32_t[]>> pages_;
+};
+
+// The largest code whose bound is within maxErrorMetres: decode is monotone, so "splits while
+// decode(code) > maxErrorMetres" is "splits while code > this", an integer compare per triangle.
+std::uint16_t largestCodeWithin(double maxErrorMetres) {
+  std::uint16_t code = 0;
+  for (int step = 1 << 15; step > 0; step >>= 1) {
+    const int next = code + step;
+    if (next <= 65535 && double(BoundCode::decode(std::uint16_t(next))) <= maxErrorMetres)
+      code = std::uint16_t(next);
+  }
+  return code;
+}
+
+template <class ChartT>
+Mesh meshWith(const ChartT& chart, const Terrain& terrain, double maxErrorMetres) {
   const core::GridSize g = terrain.grid();
   const int m = g.m();
-  const auto& codes = terrain.bounds().codes();
+  const BoundCodes* codes = terrain.bounds().codes().data();
+  const float* heights = terrain.heights().data();
+  const std::uint16_t within = largestCodeWithin(maxErrorMetres);
   Mesh mesh;
-  std::unordered_map<std::uint64_t, std::uint32_t> vertexOf;
+  VertexIndex vertexOf(g.count());
   auto vertex = [&](GridPoint p) {
     const std::uint64_t gi = g.index(p.u, p.v);
-    auto [it, fresh] = vertexOf.try_emplace(gi, std::uint32_t(mesh.gridIndex.size()));
-    if (fresh) {
+    std::uint32_t& slot = vertexOf[gi];
+    if (slot == VertexIndex::kNone) {
+      slot = std::uint32_t(mesh.gridIndex.size());
       mesh.gridIndex.push_back(gi);
       mesh.positions.push_back(
-          terrain.chart().position(p.u, p.v, terrain.height(p.u, p.v)).cast<float>());
+          chart.position(p.u, p.v, double(heights[gi])).template cast<float>());
     }
-    return it->second;
+    return slot;
   };
   struct Tri {
     GridPoint a, b0, b1;
@@ -38,7 +78,7 @@ Mesh meshToError(const Terrain& terrain, double maxErrorMetres) {
     const int su = t.b0.u + t.b1.u, sv = t.b0.v + t.b1.v;
     if (((su | sv) & 1) == 0) {
       const GridPoint c{su / 2, sv / 2};
-      if (double(BoundCode::decode(codes[g.index(c.u, c.v)].error)) > maxErrorMetres) {
+      if (codes[g.index(c.u, c.v)].error > within) {
         stack.push_back({c, t.b1, t.a});
         stack.push_back({c, t.a, t.b0});
         continue;
@@ -49,6 +89,22 @@ Mesh meshToError(const Terrain& terrain, double maxErrorMetres) {
     mesh.indices.push_back(vertex(t.b1));
   }
   return mesh;
+}
+
+}  // namespace
+
+Mesh meshToError(const Terrain& terrain, double maxErrorMetres) {
+  if (!std::isfinite(maxErrorMetres) || maxErrorMetres < 0) {
+    throw core::InputError("maximum error " + std::to_string(maxErrorMetres) +
+                           " m must be finite and >= 0");
+  }
+  // One dispatch to the concrete chart, so positions inline (a virtual call per vertex else).
+  const core::Chart& chart = terrain.chart();
+  if (auto* flat = dynamic_cast<const core::FlatChart*>(&chart))
+    return meshWith(*flat, terrain, maxErrorMetres);
+  if (auto* ll = dynamic_cast<const core::LatLongChart*>(&chart))
+    return meshWith(*ll, terrain, maxErrorMetres);
+  return meshWith(chart, terrain, maxErrorMetres);
 }
 
 }  // namespace ps::terrain

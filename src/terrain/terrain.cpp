@@ -66,13 +66,13 @@ void Terrain::validateHeights(const core::Chart& chart, std::span<const float> h
 }
 
 Terrain::Terrain(std::shared_ptr<const core::Chart> chart, std::vector<float> heights,
-                 ErrorRule rule)
+                 ErrorRule rule, BoundsContent content)
     : chart_(std::move(chart)) {
   if (!chart_) throw core::InputError("terrain needs a chart");
   validateHeights(*chart_, heights);
   heights_.assign(heights.begin(), heights.end());
   heights = {};
-  bounds_.build(*chart_, heights_, rule);
+  bounds_.build(*chart_, heights_, rule, content);
   refreshHeightRange();
   revision_ = nextRevision();
 }
@@ -100,8 +100,8 @@ void Terrain::commitEdit(const GridRegion& changed) {
   revision_ = nextRevision();
 }
 
-void Terrain::rebuildBounds(ErrorRule rule) {
-  bounds_.build(*chart_, heights_, rule);
+void Terrain::rebuildBounds(ErrorRule rule, BoundsContent content) {
+  bounds_.build(*chart_, heights_, rule, content);
   refreshHeightRange();
   revision_ = nextRevision();
 }

@@ -19,7 +19,8 @@ class Terrain {
   // Heights must be finite, within +-heightLimit(), equal on seam twins and along each pole
   // row; otherwise core::InputError names the first offending vertex.
   Terrain(std::shared_ptr<const core::Chart> chart, std::vector<float> heights,
-          ErrorRule rule = ErrorRule::kHybridExact);
+          ErrorRule rule = ErrorRule::kHybridExact,
+          BoundsContent content = BoundsContent::kErrorsAndRadii);
 
   const core::Chart& chart() const { return *chart_; }
   std::shared_ptr<const core::Chart> chartPtr() const { return chart_; }
@@ -36,7 +37,7 @@ class Terrain {
   // Editors keep seam twins and pole rows consistent (see edit::applyToVertex).
   std::span<float> mutableHeights() { return heights_; }
   void commitEdit(const GridRegion& changed);
-  void rebuildBounds(ErrorRule rule);
+  void rebuildBounds(ErrorRule rule, BoundsContent content = BoundsContent::kErrorsAndRadii);
 
   // Unique across all terrains of the process and renewed whenever heights or bounds change:
   // a tessellation cached for one revision is valid as long as the revision is the same.

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <bit>
 #include <cmath>
+#include <stdexcept>
 
 #include "core/input_error.hpp"
 #include "core/latlong_chart.hpp"
@@ -207,6 +208,12 @@ bool Tessellator::pass(const ChartT& chart, const Terrain& terrain, const Camera
 const Mesh& Tessellator::tessellate(const Terrain& terrain, const Camera& camera,
                                     const TessellationSettings& settings) {
   camera.validate();
+  if (!terrain.bounds().hasRadii()) {
+    // Without radii every triangle would project as a point: a silently wrong mesh.
+    throw std::logic_error(
+        "tessellate: the terrain's bounds were built without radii "
+        "(BoundsContent::kErrorsOnly, for exports)");
+  }
   if (!std::isfinite(settings.distMaxPx) || settings.distMaxPx <= 0) {
     throw core::InputError("dist_max " + std::to_string(settings.distMaxPx) +
                            " px must be positive and finite");
