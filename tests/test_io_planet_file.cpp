@@ -2,16 +2,15 @@
 // survive being killed at random moments.
 #include <gtest/gtest.h>
 #include <signal.h>
+#include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
-#include <chrono>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <random>
-#include <thread>
 
 #include "core/flat_chart.hpp"
 #include "core/input_error.hpp"
@@ -269,10 +268,13 @@ TEST(IoPlanetFile, MissingFileAndDirectoryAreNamed) {
   fs::remove_all(dir);
 }
 
-// A child process saves new versions of a planet in a loop and is killed (SIGKILL) after a
-// random delay. After each kill the file must be, bit for bit, either the last version the
-// child reported as saved or the one it was saving; it must load; and no kill may leave a
-// partial file under the real name.
+// A child process saves new versions of a planet in a loop and is killed, at points chosen
+// without any clock: in half the trials a file-size limit (RLIMIT_FSIZE) set before its next
+// save makes the kernel kill it (SIGXFSZ) at a random byte of that save; in the others it is
+// sent SIGKILL as soon as it reports a save, landing wherever the next one has got to. After
+// each kill the file must be, bit for bit, either the last version the child reported as saved
+// or the one it was saving; it must load; and no kill may leave a partial file under the real
+// name.
 TEST(IoPlanetFile, KilledSavesLeaveTheLastGoodFileIntact) {
   const fs::path dir = freshDir("kill");
   const fs::path path = dir / "world.planet";
@@ -287,6 +289,7 @@ TEST(IoPlanetFile, KilledSavesLeaveTheLastGoodFileIntact) {
     return io::encodePlanet(*chart, version(k), terrain::ErrorRule::kHybridExact);
   };
   io::savePlanet(*chart, version(0), terrain::ErrorRule::kHybridExact, path);
+  const auto fileSize = bytesOf(0).size();
   int lastGood = 0;
   std::mt19937 rng(42);
   int interrupted = 0, completedSaves = 0;
@@ -295,12 +298,21 @@ TEST(IoPlanetFile, KilledSavesLeaveTheLastGoodFileIntact) {
     int fds[2];
     ASSERT_EQ(::pipe(fds), 0);
     const int first = (trial + 1) * 1000;
+    const int savesBefore = trial % 4;  // whole saves the child makes before the cut
+    const bool byteLimit = trial % 2 == 0;
+    const auto limit = rlim_t(std::uniform_int_distribution<std::size_t>(0, fileSize - 1)(rng));
     const pid_t pid = ::fork();
     ASSERT_GE(pid, 0);
     if (pid == 0) {
       ::close(fds[0]);
+      const rlimit noCore{0, 0};
+      ::setrlimit(RLIMIT_CORE, &noCore);
       try {
         for (int k = first;; ++k) {
+          if (byteLimit && k == first + savesBefore) {
+            const rlimit size{limit, limit};
+            if (::setrlimit(RLIMIT_FSIZE, &size) != 0) ::_exit(5);
+          }
           io::savePlanet(*chart, version(k), terrain::ErrorRule::kHybridExact, path);
           if (::write(fds[1], &k, sizeof k) != sizeof k) ::_exit(4);
         }
@@ -309,14 +321,17 @@ TEST(IoPlanetFile, KilledSavesLeaveTheLastGoodFileIntact) {
       }
     }
     ::close(fds[1]);
-    std::this_thread::sleep_for(
-        std::chrono::microseconds(std::uniform_int_distribution<int>(100, 12000)(rng)));
-    ::kill(pid, SIGKILL);
+    int k = 0, reported = -1;
+    if (!byteLimit) {
+      // Blocking reads: the child's own pace decides where the kill lands.
+      for (int i = 0; i <= savesBefore && ::read(fds[0], &k, sizeof k) == sizeof k; ++i)
+        reported = k;
+      ::kill(pid, SIGKILL);
+    }
     int status = 0;
     ::waitpid(pid, &status, 0);
     ASSERT_TRUE(WIFSIGNALED(status))
         << "the saving child failed on its own (status " << status << ")";
-    int k = 0, reported = -1;
     while (::read(fds[0], &k, sizeof k) == sizeof k) reported = k;
     ::close(fds[0]);
     // Candidates: the last version reported saved (or the previous trial's), and the next one
