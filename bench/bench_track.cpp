@@ -98,6 +98,7 @@ void evaluate(const Recording& rec, const Config& c, const core::LatLongChart& c
   dc.ids = {sc.planet.id, sc.tool.id};
   if (const char* e = std::getenv("PS_TRACK_SEARCH_EVERY")) dc.searchEvery = std::atoi(e);
   if (const char* e = std::getenv("PS_TRACK_MARGIN")) dc.regionMargin = std::atof(e);
+  if (const char* e = std::getenv("PS_TRACK_MIN_CONTRAST")) dc.minContrast = std::atoi(e);
   auto detector = tracking::makeDetector(dc);
   auto rawDetector = tracking::makeDetector(dc);
   tracking::SceneTracker tracker(sc);

@@ -2,6 +2,8 @@
 // both back ends on rendered markers with exactly known corners, family names.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -23,8 +25,8 @@ const std::filesystem::path kRealMarkers =
 
 // A marker drawn on a grey background with its edge corners (TL, TR, BR, BL of the canonical
 // image) at exactly `corners` (pixels, OpenCV convention).
-cv::Mat renderMarker(const std::string& family, int id, const std::array<cv::Point2d, 4>& corners,
-                     cv::Size size = {320, 240}) {
+void drawMarker(cv::Mat& image, const std::string& family, int id,
+                const std::array<cv::Point2d, 4>& corners) {
   const auto info = tracking::familyInfo(family);
   // On a paper card with a margin of three cells (aruco's own pipeline takes a one-cell white
   // ring on a grey background for the marker's edge).
@@ -37,8 +39,13 @@ cv::Mat renderMarker(const std::string& family, int id, const std::array<cv::Poi
   std::vector<cv::Point2f> dst;
   for (const auto& c : corners) dst.emplace_back(float(c.x), float(c.y));
   const cv::Matx33d H = cv::getPerspectiveTransform(src, dst);
-  cv::Mat image(size, CV_8U, cv::Scalar(128));
   tracking::drawTexturedQuad(image, cells, H, 8);
+}
+
+cv::Mat renderMarker(const std::string& family, int id, const std::array<cv::Point2d, 4>& corners,
+                     cv::Size size = {320, 240}) {
+  cv::Mat image(size, CV_8U, cv::Scalar(128));
+  drawMarker(image, family, id, corners);
   return image;
 }
 
@@ -108,6 +115,59 @@ TEST(TrackingDetect, BothBackEndsReportTheCanonicalCornersInOpenCVPixels) {
   }
 }
 
+// Region tracking over a short noisy video: a near marker (about 180 px) and a far one (about
+// 36 px), both moving, a cut at frame 6 where they jump (a whole-frame search), bright and dim
+// (black and white 50 grey levels apart). With the default minimum contrast (20) and with the
+// library's own (5), every frame must give both ids with the drawn corners.
+TEST(TrackingDetect, RegionTrackingFindsNoisyNearAndFarMarkersWithTheirCorners) {
+  auto quad = [](cv::Point2d c, double half, double turn, double squash) {
+    std::array<cv::Point2d, 4> q;
+    const cv::Point2d u(std::cos(turn), std::sin(turn)), v(-u.y, u.x);
+    const double s[4][2] = {{-1, -1}, {1, -1}, {1, 1}, {-1, 1}};
+    for (std::size_t k = 0; k < 4; ++k)
+      q[k] = c + half * (s[k][0] * squash * u + s[k][1] * v) + cv::Point2d(0.013 * double(k), 0);
+    return q;
+  };
+  for (int minContrast : {tracking::DetectorConfig{}.minContrast, 5}) {
+    for (double gain : {1.0, 0.2}) {
+      tracking::DetectorConfig config;
+      config.ids = {3, 7};
+      config.minContrast = minContrast;
+      auto det = tracking::makeDetector(config);
+      cv::RNG rng(17);
+      double worst = 0;
+      for (int f = 0; f < 12; ++f) {
+        const double jump = f < 6 ? 0.0 : 1.0;
+        const auto nearCorners = quad({250.3 + 2.7 * f + 60 * jump, 230.6 - 1.9 * f},
+                                      90.2 - 0.8 * f, 0.15 + 0.01 * f - 0.3 * jump, 0.8);
+        const auto farCorners =
+            quad({540.4 - 1.3 * f, 90.2 + 280 * jump + 0.9 * f}, 18.3, -0.4, 0.7);
+        cv::Mat image(480, 640, CV_8U, cv::Scalar(128));
+        drawMarker(image, "tag36h11", 3, nearCorners);
+        drawMarker(image, "tag36h11", 7, farCorners);
+        cv::GaussianBlur(image, image, {0, 0}, 0.6);
+        cv::Mat noisy(image.size(), CV_32F);
+        rng.fill(noisy, cv::RNG::NORMAL, 0.0, 1.5);
+        cv::Mat level;
+        image.convertTo(level, CV_32F, gain, 128 * (1 - gain));
+        cv::Mat(level + noisy).convertTo(image, CV_8U);
+        const auto found = det->detect(image);
+        const std::string what = "min contrast " + std::to_string(minContrast) + " gain " +
+                                 std::to_string(gain) + " frame " + std::to_string(f);
+        ASSERT_EQ(found.size(), 2u) << what;
+        EXPECT_EQ(found[0].id, 3) << what;
+        EXPECT_EQ(found[1].id, 7) << what;
+        worst = std::max(
+            {worst, maxCornerError(found[0], nearCorners), maxCornerError(found[1], farCorners)});
+      }
+      EXPECT_LT(worst, 0.3) << "min contrast " << minContrast << " gain " << gain;
+      RecordProperty("worst_corner_px_contrast" + std::to_string(minContrast) + "_gain" +
+                         std::to_string(int(gain * 10)),
+                     std::to_string(worst));
+    }
+  }
+}
+
 TEST(TrackingDetect, ArucoDictionariesAndIdFilter) {
   const std::array<cv::Point2d, 4> truth = {cv::Point2d(60.5, 50.25), cv::Point2d(170.0, 40.0),
                                             cv::Point2d(180.0, 160.0), cv::Point2d(55.0, 150.0)};
@@ -158,5 +218,8 @@ TEST(TrackingDetect, FamiliesAndBadConfigurations) {
   c = {};
   c.decimate = 0.5;
   EXPECT_NE(message([&] { tracking::makeDetector(c); }).find("decimate"), std::string::npos);
+  c = {};
+  c.minContrast = 300;
+  EXPECT_NE(message([&] { tracking::makeDetector(c); }).find("min contrast"), std::string::npos);
   EXPECT_NE(message([] { tracking::toGrey(cv::Mat()); }).find("empty image"), std::string::npos);
 }

@@ -47,6 +47,9 @@ void DetectorConfig::validate() const {
                            " is not in [0, 10]");
   if (maxHamming < 0 || maxHamming > 3)
     throw core::InputError("max hamming = " + std::to_string(maxHamming) + " is not in 0..3");
+  if (minContrast < 0 || minContrast > 255)
+    throw core::InputError("AprilTag min contrast = " + std::to_string(minContrast) +
+                           " is not in 0..255");
   if (searchEvery < 1 || searchEvery > 1000)
     throw core::InputError("search every = " + std::to_string(searchEvery) + " is not in 1..1000");
   if (!std::isfinite(regionMargin) || regionMargin < 0.1 || regionMargin > 5)

@@ -38,7 +38,13 @@ struct DetectorConfig {
   bool refineEdges = true;   // refine_edges
   double sharpening = 0.25;  // decode_sharpening
   int maxHamming = 2;        // bits corrected when decoding (<= 2 for tag36h11; memory grows fast)
-  int threads = 1;           // nthreads (1: deterministic and on one core)
+  // min_white_black_diff: quads are only looked for where the grey range over a small
+  // neighbourhood (about 12 x 12 pixels of the decimated image) reaches this. The library's 5 lets
+  // a flat area's noise (sigma 1.5 already spans about 9 levels there) through to segmentation,
+  // whose clusters then cost most of a search. A marker's black and white differ by far more
+  // (the synthetic scenes' dimmest, the real photographs); 0-255.
+  int minContrast = 20;
+  int threads = 1;  // nthreads (1: deterministic and on one core)
 
   // aruco back end.
   ArucoRefinement arucoRefinement = ArucoRefinement::kContour;  // passes the real photographs

@@ -24,6 +24,7 @@ class AprilTagDetector final : public Detector {
     td_->refine_edges = c.refineEdges;
     td_->decode_sharpening = c.sharpening;
     td_->nthreads = c.threads;
+    td_->qtp.min_white_black_diff = c.minContrast;
   }
   ~AprilTagDetector() override {
     apriltag_detector_remove_family(td_, family_.get());
