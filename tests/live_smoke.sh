@@ -5,7 +5,8 @@
 # the window's loop saves the planet too, and so does a run that outlasts the video (recorded
 # with --record; the recording replays to the same planet); a killed session's stroke journal
 # is left alone, recovered or discarded as asked, and refused by another planet; the panel's
-# actions (scripted with --at) export, record and quit.
+# actions (scripted with --at) export, record and quit; a session with settings changed while
+# recording replays with its sidecar to the same planet, and without it to another.
 # Exit 77 (ctest SKIP_RETURN_CODE) when xvfb-run is not installed.
 # Usage: live_smoke.sh EXE SOURCE_DIR OUT_DIR
 set -u
@@ -42,21 +43,52 @@ rc=$?
 [ $rc -eq 0 ] || { cat "$out/live2.txt"; fail "live --planet exited with $rc"; }
 cmp -s "$out/a/planet.planet" "$out/b/planet.planet" || fail "the reloaded planet changed"
 # Past the video's end (341 frames): the window stays, the planet is kept and saved. The run
-# records the frames it processed (--record); replaying that recording sculpts the same planet,
-# byte for byte.
-run "$out/live4.txt" --frames 350 --out "$out/d" --record "$out/d/session.mkv"
+# records the frames it processed (--record into a folder: the next recording-NNN.mkv there);
+# replaying that recording sculpts the same planet, byte for byte.
+run "$out/live4.txt" --frames 350 --out "$out/d" --record "$out/d/recs/"
 rc=$?
 [ $rc -eq 0 ] || { cat "$out/live4.txt"; fail "live past the video's end exited with $rc"; }
 grep -q "live: 350 frames" "$out/live4.txt" || { cat "$out/live4.txt"; fail "no 'live: 350 frames'"; }
 [ -s "$out/d/planet.planet" ] || fail "no $out/d/planet.planet after the video ended"
-grep -q "recorded 341 frames to $out/d/session.mkv" "$out/live4.txt" ||
+grep -q "recorded 341 frames to $out/d/recs/recording-001.mkv" "$out/live4.txt" ||
   { cat "$out/live4.txt"; fail "no 'recorded 341 frames' line"; }
 [ "$(stat -c %s "$out/d/planet.journal")" -eq 64 ] || fail "the journal was not restarted at the end"
-"$exe" replay "$out/d/session.mkv" --calib "$src/calib/synthetic-640x480.yml" --grid 1025 \
+"$exe" replay "$out/d/recs/recording-001.mkv" --calib "$src/calib/synthetic-640x480.yml" --grid 1025 \
   --out "$out/d/replay" >"$out/replay.txt" 2>&1 || { cat "$out/replay.txt"; fail "replay of the recording failed"; }
 grep -q '"frames": *341' "$out/d/replay/summary.json" || fail "the recording did not replay 341 frames"
 cmp -s "$out/d/planet.planet" "$out/d/replay/planet.planet" ||
   fail "replaying the recording sculpted another planet than the live session"
+# A session whose settings change while it records (--at FRAME:SETTING=VALUE, as if set in the
+# panel; undo and redo, the last two after the video's end): the recording's sidecar
+# (session.mkv.session.jsonl) makes the replay sculpt the same planet, byte for byte; without it
+# (--no-session) the replay sculpts another; a damaged sidecar is refused naming its line.
+run "$out/live12.txt" --frames 350 --out "$out/i" --record "$out/i/session.mkv" \
+  --at 50:radius_km=400 --at 80:strength_m=1500 --at 100:size_cm=6.5 --at 130:undo \
+  --at 140:redo --at 170:mode=lower --at 200:tool=displace --at 230:tool=brush \
+  --at 290:spin_deg=15 --at 343:undo --at 345:redo --at 346:undo ||
+  { cat "$out/live12.txt"; fail "live with scripted settings failed"; }
+side="$out/i/session.mkv.session.jsonl"
+[ "$(wc -l <"$side")" -ge 11 ] || { cat "$side"; fail "the sidecar lacks the session's changes"; }
+grep -q '"frame":51,.*"brush_radius_m":400000' "$side" || { cat "$side"; fail "no r_d change at frame 51"; }
+grep -q '"frame":341,"event":"redo"' "$side" ||
+  { cat "$side"; fail "no redo after the video's end"; }
+"$exe" replay "$out/i/session.mkv" --calib "$src/calib/synthetic-640x480.yml" \
+  --out "$out/i/replay" >"$out/replay3.txt" 2>&1 || { cat "$out/replay3.txt"; fail "replay with the sidecar failed"; }
+grep -q "settings from the session sidecar $side" "$out/replay3.txt" || { cat "$out/replay3.txt"; fail "the sidecar was not used"; }
+grep -q '"session_changes": *1[0-9]' "$out/i/replay/summary.json" || fail "the sidecar's changes were not applied"
+grep -q '"warnings": *\[\]' "$out/i/replay/summary.json" || { cat "$out/i/replay/summary.json"; fail "the replay warned"; }
+cmp -s "$out/i/planet.planet" "$out/i/replay/planet.planet" ||
+  fail "replaying the recording with its sidecar sculpted another planet than the live session"
+"$exe" replay "$out/i/session.mkv" --calib "$src/calib/synthetic-640x480.yml" --grid 1025 --no-session \
+  --out "$out/i/plain" >"$out/replay4.txt" 2>&1 || { cat "$out/replay4.txt"; fail "replay --no-session failed"; }
+cmp -s "$out/i/planet.planet" "$out/i/plain/planet.planet" &&
+  fail "the replay without the sidecar sculpted the same planet: the changes did nothing"
+sed '3s/.*/{"frame": 99, "sigma": "wide"}/' "$side" >"$out/i/bad.jsonl"
+"$exe" replay "$out/i/session.mkv" --calib "$src/calib/synthetic-640x480.yml" --session "$out/i/bad.jsonl" \
+  --out "$out/i/bad" >"$out/replay5.txt" 2>&1 && fail "a damaged sidecar was accepted"
+grep -q "$out/i/bad.jsonl:3: \"sigma\" is not a number" "$out/replay5.txt" ||
+  { cat "$out/replay5.txt"; fail "the damaged sidecar's message does not name file and line"; }
+[ -e "$out/i/bad/planet.planet" ] && fail "a planet was written despite the damaged sidecar"
 # Ctrl-C (SIGINT) while the window is open (sent by the app to itself at window frame 20): exits 0
 # and saves the planet.
 run "$out/live3.txt" --out "$out/c" --at 20:interrupt

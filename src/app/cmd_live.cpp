@@ -15,6 +15,7 @@
 #include "io/planet_file.hpp"
 #include "live/live_app.hpp"
 #include "live/panel.hpp"
+#include "session/frame_recorder.hpp"
 
 namespace ps::app {
 namespace {
@@ -64,11 +65,15 @@ const CommandRegistration kLive([](CLI::App& root, CLI::App*& sub) -> CommandAct
   recover->excludes(discard);
   sub->add_option("--record", a->settings.record,
                   "Record the frames the app processes to FILE (FFV1 .mkv: `planetsculpt replay "
-                  "FILE` replays the session)");
+                  "FILE` replays the session; the settings changed while recording go to "
+                  "FILE.session.jsonl beside it); a folder gets the next recording-NNN.mkv");
   sub->add_option("--at", a->script,
                   "FRAME:ACTION, repeatable: a panel action at a window frame as if its key were "
                   "pressed (export, record, save, undo, redo, quit; interrupt sends SIGINT to "
-                  "the process, crash SIGKILL): scripted sessions for tests and demos");
+                  "the process, crash SIGKILL), or FRAME:SETTING=VALUE as if the panel were set "
+                  "so (tool=brush|displace, mode=raise|lower, radius_km, strength_m, sigma, "
+                  "displace_radius_km, press_m, size_cm, spin_deg, tilt_deg): scripted sessions "
+                  "for tests and demos");
   a->cli.addOptions(sub);
   return [a] {
     for (const auto& s : a->script) a->settings.script.push_back(live::parseScriptedAction(s));
@@ -85,12 +90,22 @@ const CommandRegistration kLive([](CLI::App& root, CLI::App*& sub) -> CommandAct
                                                    ? makeDefaultPlanet(job.gridLevel, job.seed)
                                                    : io::loadPlanet(job.planetFile);
     a->settings.options = job.options;
+    a->settings.start = {job.planetFile.string(), job.seed, job.calibration.string()};
     a->settings.out = job.out;
     a->settings.journal = a->recover   ? live::JournalChoice::kRecover
                           : a->discard ? live::JournalChoice::kDiscard
                                        : live::JournalChoice::kAsk;
     if (a->settings.autosaveSeconds < 0 || !std::isfinite(a->settings.autosaveSeconds))
       throw core::InputError("--autosave-s must be >= 0 (0: no autosave)");
+    // `--record DIR` (an existing folder, or a path ending in a separator): the next free
+    // DIR/recording-NNN.mkv, as the panel's record toggle names them in OUT.
+    if (!a->settings.record.empty()) {
+      const std::filesystem::path rec = a->settings.record;
+      if (std::filesystem::is_directory(rec) || !rec.has_filename()) {
+        std::filesystem::create_directories(rec);
+        a->settings.record = session::nextRecordingPath(rec);
+      }
+    }
     const auto r = live::runLive(input, calib, planet, a->settings);
     for (std::size_t i = 0; i < r.recordings.size(); ++i)
       std::cout << "live: recorded " << r.recordedFrames[i] << " frames to "

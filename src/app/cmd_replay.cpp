@@ -24,6 +24,13 @@ const CommandRegistration kReplay([](CLI::App& root, CLI::App*& sub) -> CommandA
   sub->add_flag("--render", a->job.render, "Write the AR frames and overviews to OUT/ar/");
   sub->add_option("--render-every", a->job.renderEvery, "Render every Nth frame")
       ->capture_default_str();
+  auto* session = sub->add_option("--session", a->job.session,
+                                  "A live session's settings sidecar (default: "
+                                  "VIDEO.session.jsonl when it exists): its settings, changes, "
+                                  "undos and redos are applied at their frames and win over the "
+                                  "tool and marker options");
+  sub->add_flag("--no-session", a->job.noSession, "Ignore a session sidecar beside the video")
+      ->excludes(session);
   a->addOptions(sub);
   return [a] {
     a->apply();

@@ -6,6 +6,7 @@
 namespace ps::app {
 
 void ReplayCli::addOptions(CLI::App* sub) {
+  sub_ = sub;
   auto& o = job.options;
   sub->add_option("--planet", job.planetFile, "Sculpt this planet file instead of the default");
   sub->add_option("--grid", grid, "Default planet's grid side (2^n+1)")->capture_default_str();
@@ -57,6 +58,13 @@ void ReplayCli::apply() {
   if (noFilter) o.scene.planet.filter = o.scene.tool.filter = o.scene.filterTip = false;
   job.gridLevel = core::GridSize::fromSide(grid).n();
   o.validate();
+  // What a session sidecar replaces (app/replay_job.hpp), when typed.
+  for (const char* name :
+       {"--grid", "--seed", "--family", "--decimate", "--planet-id", "--planet-marker-size",
+        "--planet-radius", "--tool-id", "--tool-marker-size", "--tip", "--touch", "--tool",
+        "--brush-radius-km", "--strength-m", "--mode", "--displace-radius-km", "--press-m",
+        "--no-settle", "--no-filter"})
+    if (sub_ && sub_->get_option(name)->count() > 0) job.givenOptions.push_back(name);
 }
 
 }  // namespace ps::app

@@ -20,6 +20,9 @@ struct ReplayCli {
   void addOptions(CLI::App* sub);
   // Copies the parsed options into job.options and validates them (core::InputError).
   void apply();
+
+ private:
+  CLI::App* sub_ = nullptr;
 };
 
 }  // namespace ps::app

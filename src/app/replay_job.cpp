@@ -7,16 +7,19 @@
 #include <memory>
 #include <numbers>
 #include <opencv2/imgproc.hpp>
+#include <optional>
 
 #include "app/ar_recorder.hpp"
 #include "app/default_planet.hpp"
 #include "app/plot.hpp"
 #include "app/progress.hpp"
 #include "app/snapshot.hpp"
+#include "core/grid.hpp"
 #include "core/input_error.hpp"
 #include "haptics/session.hpp"
 #include "io/heightmap_export.hpp"
 #include "io/planet_file.hpp"
+#include "replay/session_timeline.hpp"
 #include "terrain/screen_error.hpp"
 #include "terrain/tessellator.hpp"
 
@@ -99,13 +102,58 @@ cv::Mat closeup(const cv::Mat& before, const cv::Mat& after, cv::Rect box) {
 
 nlohmann::json runReplayJob(const ReplayJob& job) {
   job.options.validate();
-  // Inputs first: a bad video or calibration costs nothing.
+  // Inputs first: a bad video, calibration or sidecar costs nothing.
   tracking::FrameSource source(job.video.string());
   const auto calib = tracking::loadCalibration(job.calibration);
   calib.forImageSize(source.size());  // refuses another aspect ratio, naming the file
-  std::unique_ptr<terrain::Terrain> planet = job.planetFile.empty()
-                                                 ? makeDefaultPlanet(job.gridLevel, job.seed)
-                                                 : io::loadPlanet(job.planetFile);
+  std::optional<replay::SessionTimeline> timeline;
+  const std::filesystem::path sidecar =
+      job.session.empty() ? replay::sessionSidecarPath(job.video) : job.session;
+  if (!job.noSession && (!job.session.empty() || std::filesystem::exists(sidecar)))
+    timeline = replay::readSessionTimeline(sidecar);
+  replay::ReplayOptions options = job.options;
+  std::filesystem::path planetFile = job.planetFile;
+  int gridLevel = job.gridLevel;
+  std::uint64_t seed = job.seed;
+  if (timeline) {
+    // The sidecar wins: it holds what the live session ran with.
+    const replay::SessionStart& st = timeline->start;
+    st.applyTo(options);
+    const replay::SessionSettings& ss = timeline->settings;
+    options.tool = ss.tool;
+    options.brush = ss.brush;
+    options.displace = ss.displace;
+    options.pressDepth = ss.pressDepth;
+    options.scene.planetRadius = ss.planetRadius;
+    options.validate();
+    if (planetFile.empty() && !st.planetFile.empty()) {
+      planetFile = st.planetFile;
+      // Written relative to where `live` ran; a start planet lies beside the sidecar.
+      const auto beside = sidecar.parent_path() / planetFile.filename();
+      if (!std::filesystem::exists(planetFile) && std::filesystem::exists(beside))
+        planetFile = beside;
+      if (!std::filesystem::exists(planetFile))
+        throw core::InputError(sidecar.string() + ":1: the session started from the planet file " +
+                               st.planetFile + ", which is not there (nor beside the sidecar); " +
+                               "give it with --planet, or --no-session");
+    } else if (planetFile.empty()) {
+      gridLevel = core::GridSize::fromSide(st.gridSide).n();
+      seed = st.seed;
+    }
+    std::cerr << "replay: settings from the session sidecar " << sidecar.string() << " ("
+              << timeline->entries.size() << " changes, undos and redos)\n";
+    if (!job.givenOptions.empty()) {
+      std::string given;
+      for (const auto& o : job.givenOptions) given += (given.empty() ? "" : ", ") + o;
+      std::cerr << "replay: warning: " << given
+                << " ignored: the session sidecar records what the session ran with "
+                   "(--no-session to replay with the options instead)\n";
+    }
+  }
+  std::unique_ptr<terrain::Terrain> planet =
+      planetFile.empty() ? makeDefaultPlanet(gridLevel, seed) : io::loadPlanet(planetFile);
+  // Another start planet or calibration would sculpt another planet: refused before any edit.
+  if (timeline) replay::checkSessionStart(*timeline, *planet, calib.forImageSize(source.size()));
   const std::vector<float> before(planet->heights().begin(), planet->heights().end());
   // The pictures' "before" raster, resampled now rather than from a rebuilt terrain afterwards.
   constexpr int kPictureW = 2048, kPictureH = 1024;
@@ -142,7 +190,7 @@ nlohmann::json runReplayJob(const ReplayJob& job) {
   PlotSeries forceSeries;  // per frame: time, the largest force of its ticks
   if (job.forces) {
     haptics::SessionConfig hc;
-    hc.map.scale = planet->chart().radius() / job.options.scene.planetRadius;
+    hc.map.scale = planet->chart().radius() / options.scene.planetRadius;
     forces.open(out / "forces.csv.part");
     if (!forces) throw std::runtime_error("cannot write in " + out.string());
     haptic = std::make_unique<haptics::HapticSession>(*planet, nullptr, hc);
@@ -169,11 +217,12 @@ nlohmann::json runReplayJob(const ReplayJob& job) {
       if (recorder) recorder->onFrame(f, force, forceTip);
     };
     s = replay::runReplay(
-        source, calib, *planet, job.options, log, &timings,
+        source, calib, *planet, options, log, &timings,
         [&](int f, int total) {
           p.update(total > 0 ? double(f) / total : 0.0, std::to_string(f) + " frames");
         },
-        hook);
+        hook, timeline ? &*timeline : nullptr);
+    if (timeline && !timeline->warning.empty()) s.warnings.push_back(timeline->warning);
     p.done(std::to_string(s.frames) + " frames, " + std::to_string(s.strokes) + " strokes, " +
            std::to_string(s.stamps) + " stamps");
   }
@@ -204,7 +253,9 @@ nlohmann::json runReplayJob(const ReplayJob& job) {
   }
   nlohmann::json summary = {{"video", job.video.string()},
                             {"calibration", job.calibration.string()},
-                            {"tool", replay::toString(job.options.tool)},
+                            {"tool", replay::toString(options.tool)},
+                            {"session", timeline ? sidecar.string() : ""},
+                            {"session_changes", s.sessionChanges},
                             {"frames", s.frames},
                             {"announced_frames", s.announcedFrames},
                             {"truncated", s.truncated},

@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <vector>
 
 #include "replay/replay.hpp"
 
@@ -31,6 +32,13 @@ struct ReplayJob {
   bool forces = true;
   double distMaxPx = 4.0;
   std::size_t triangleBudget = 70000;
+  // A live session's settings timeline (replay/session_timeline.hpp): `session`, else
+  // VIDEO.session.jsonl when it exists; none with noSession. The sidecar's settings win over
+  // `options` and the default planet's grid and seed; `givenOptions` (those typed on the
+  // command line) are named in a warning then.
+  std::filesystem::path session;
+  bool noSession = false;
+  std::vector<std::string> givenOptions;
 };
 
 // Runs the job; returns the summary it also writes to out/summary.json. Throws

@@ -29,9 +29,11 @@
 #include "haptics/session.hpp"
 #include "io/heightmap_export.hpp"
 #include "io/planet_file.hpp"
+#include "io/stroke_journal.hpp"
 #include "live/panel.hpp"
 #include "render/planet_renderer.hpp"
 #include "render/projection.hpp"
+#include "replay/session_timeline.hpp"
 #include "session/frame_recorder.hpp"
 #include "session/planet_export.hpp"
 #include "session/session_store.hpp"
@@ -152,30 +154,31 @@ PanelSettings panelFrom(const LiveSettings& s) {
   return p;
 }
 
-// Hands changed panel settings to the stepper; a refused value is reported and the previous
-// one kept.
-void applyPanel(const PanelSettings& p, PanelSettings& applied, replay::FrameStepper& stepper,
-                std::string& message) {
-  if (p.displace == applied.displace && p.brushRadiusKm == applied.brushRadiusKm &&
-      p.strengthM == applied.strengthM && p.sigma == applied.sigma && p.lower == applied.lower &&
-      p.displaceRadiusKm == applied.displaceRadiusKm && p.pressM == applied.pressM)
-    return;
-  try {
-    edit::BrushSettings b = stepper.options().brush;
-    b.radius = p.brushRadiusKm * 1e3;
-    b.strength = p.strengthM;
-    b.sigma = p.sigma;
-    b.mode = p.lower ? edit::BrushMode::kLower : edit::BrushMode::kRaise;
-    if (!(b == stepper.options().brush)) stepper.setBrush(b);
-    sand::DisplacementSettings d = stepper.options().displace;
-    d.radius = p.displaceRadiusKm * 1e3;
-    if (!(d == stepper.options().displace) || p.pressM != float(stepper.options().pressDepth))
-      stepper.setDisplacement(d, p.pressM);
-    stepper.setTool(p.displace ? replay::ReplayTool::kDisplace : replay::ReplayTool::kBrush);
-    applied = p;
-  } catch (const core::InputError& e) {
-    message = e.what();
-  }
+// Whether the panel's fields that change what the tool does (replay::SessionSettings) differ.
+bool sculptingChanged(const PanelSettings& a, const PanelSettings& b) {
+  return a.displace != b.displace || a.brushRadiusKm != b.brushRadiusKm ||
+         a.strengthM != b.strengthM || a.sigma != b.sigma || a.lower != b.lower ||
+         a.displaceRadiusKm != b.displaceRadiusKm || a.pressM != b.pressM ||
+         a.spinDeg != b.spinDeg || a.tiltDeg != b.tiltDeg || a.planetSizeCm != b.planetSizeCm;
+}
+
+// The settings the panel asks for, from those in effect (fields the panel does not show, and
+// the brush mode unless raise/lower was toggled, so a `--mode set` session stays in set mode).
+replay::SessionSettings panelTarget(const PanelSettings& p, const PanelSettings& applied,
+                                    const replay::SessionSettings& now) {
+  replay::SessionSettings t = now;
+  t.tool = p.displace ? replay::ReplayTool::kDisplace : replay::ReplayTool::kBrush;
+  t.brush.radius = p.brushRadiusKm * 1e3;
+  t.brush.strength = p.strengthM;
+  t.brush.sigma = p.sigma;
+  if (p.lower != applied.lower)
+    t.brush.mode = p.lower ? edit::BrushMode::kLower : edit::BrushMode::kRaise;
+  t.displace.radius = p.displaceRadiusKm * 1e3;
+  t.pressDepth = p.pressM;
+  t.spinDeg = p.spinDeg;
+  t.tiltDeg = p.tiltDeg;
+  t.planetRadius = double(p.planetSizeCm) / 100;
+  return t;
 }
 
 }  // namespace
@@ -184,6 +187,7 @@ LiveResult runLive(FrameInput& input, const tracking::CameraCalibration& calibra
                    std::unique_ptr<terrain::Terrain>& planetPtr, const LiveSettings& settings) {
   if (settings.overviewEvery < 1) throw core::InputError("overview every N frames: N must be >= 1");
   if (!planetPtr) throw core::InputError("live: no planet");
+  const terrain::Terrain* const startPlanet = planetPtr.get();  // a recovered one replaces it
   replay::ReplayOptions options = settings.options;
   options.undo = true;
   options.validate();
@@ -347,8 +351,18 @@ LiveResult runLive(FrameInput& input, const tracking::CameraCalibration& calibra
       edit::UndoJournal& journal;
       ~ListenerGuard() { journal.setListener(nullptr); }
     } listenerGuard{stepper.pipeline().journal()};
+    // Every settings change, undo and redo goes through `sessionControl`, which also writes it
+    // to the recording's sidecar (replay/session_timeline.hpp): a replay applies them the same
+    // way.
+    replay::SessionControl sessionControl(stepper);
+    replay::TimelineWriter timeline;
+    const std::uint32_t startCrc = io::heightsChecksum(planet.heights());
+    const bool recovered = planetPtr.get() != startPlanet;
+    std::string note;  // last action's message (saved, undo refused, ...)
     session::FrameRecorder recorder;
     auto stopRecording = [&] {
+      sessionControl.setWriter(nullptr);
+      timeline.close();
       const std::filesystem::path p = recorder.path();
       const int n = recorder.stop();
       if (p.empty()) return std::string();
@@ -356,7 +370,32 @@ LiveResult runLive(FrameInput& input, const tracking::CameraCalibration& calibra
       result.recordedFrames.push_back(n);
       return "recorded " + std::to_string(n) + " frames to " + p.string();
     };
-    if (!settings.record.empty()) recorder.start(settings.record, input.fps());
+    // The sidecar is opened with the recording's first frame, so that its header holds the
+    // planet and the settings that frame meets (a camera may be lost when recording starts).
+    bool sidecarPending = false;
+    auto startRecording = [&](const std::filesystem::path& video) {
+      recorder.start(video, input.fps());
+      sidecarPending = true;
+    };
+    auto openSidecar = [&] {
+      sidecarPending = false;
+      const std::filesystem::path video = recorder.path();
+      stepper.endStroke();  // a replay begins with no stroke open
+      // The start: the planet as given, or (recovered, or sculpted before this recording) a
+      // copy of it beside the video, so that the replay starts from it.
+      std::string planetFile = settings.start.planetFile;
+      if (recovered || io::heightsChecksum(planet.heights()) != startCrc) {
+        planetFile = video.string() + ".start.planet";
+        io::savePlanet(planet, planetFile);
+      }
+      const auto origin =
+          replay::SessionStart::of(planet, planetFile, planet.grid().side(), settings.start.seed,
+                                   calib, settings.start.calibrationFile, stepper.options(),
+                                   input.fps(), stepper.pipeline().journal().undoCount());
+      timeline.open(replay::sessionSidecarPath(video), origin, sessionControl.settings());
+      sessionControl.setWriter(&timeline);
+    };
+    if (!settings.record.empty()) startRecording(settings.record);
 
     // With no planet pose yet: the camera image alone (an empty mesh, any valid camera).
     const terrain::Camera placeholder = render::arCamera(
@@ -364,7 +403,6 @@ LiveResult runLive(FrameInput& input, const tracking::CameraCalibration& calibra
     PanelSettings panel = panelFrom(settings), applied = panel;
     PanelStatus status;
     status.savePath = savePath.string();
-    std::string note;  // last action's message (saved, undo refused, ...)
     // Exports from the panel run in a thread of their own, on a copy of the planet; the
     // destructor waits for one still running when the session ends.
     session::BackgroundExport exporter;
@@ -436,9 +474,12 @@ LiveResult runLive(FrameInput& input, const tracking::CameraCalibration& calibra
       if (input.read(frame)) {
         image = frame;
         if (recorder.recording()) try {
+            if (sidecarPending) openSidecar();  // no recording without its sidecar
             recorder.write(frame);
+            timeline.frameRecorded(input.time());
           } catch (const std::exception& e) {
             note = std::string("recording stopped: ") + e.what();
+            stopRecording();
           }
         const auto r = stepper.step(frame, input.index(), input.time());
         if (!r.settled.empty()) store.recordRegion(r.settled);
@@ -478,6 +519,7 @@ LiveResult runLive(FrameInput& input, const tracking::CameraCalibration& calibra
         std::cerr << "live: " << note << "\n";
       }
       if (!store.error().empty()) note = store.error();
+      if (!timeline.error().empty()) note = timeline.error();
       status.autosaveInS =
           settings.autosaveSeconds > 0
               ? std::max(0.0, store.lastSaveTime() + settings.autosaveSeconds - now())
@@ -535,7 +577,7 @@ LiveResult runLive(FrameInput& input, const tracking::CameraCalibration& calibra
       status.undoCount = stepper.pipeline().journal().undoCount();
       status.redoCount = stepper.pipeline().journal().redoCount();
       drawPanel(panel, actions, status);
-      applyScript(settings.script, result.frames, actions);
+      applyScript(settings.script, result.frames, actions, panel);
       if (actions.crash) std::raise(SIGKILL);  // a scripted crash: nothing saved, nothing flushed
       if (actions.interrupt) std::raise(SIGINT);  // handled as a Ctrl-C from outside is
       if (panel.showOverview && overview.valid()) {
@@ -557,29 +599,23 @@ LiveResult runLive(FrameInput& input, const tracking::CameraCalibration& calibra
       finishFrame(fbW, fbH);
 
       // What the user asked for.
-      if (panel.spinDeg != applied.spinDeg || panel.tiltDeg != applied.tiltDeg) {
-        const double deg = std::numbers::pi / 180;
-        stepper.setUserRotation((Eigen::AngleAxisd(panel.tiltDeg * deg, Eigen::Vector3d::UnitX()) *
-                                 Eigen::AngleAxisd(panel.spinDeg * deg, Eigen::Vector3d::UnitZ()))
-                                    .toRotationMatrix());
-        applied.spinDeg = panel.spinDeg;
-        applied.tiltDeg = panel.tiltDeg;
+      if (sculptingChanged(panel, applied)) {
+        const double scale = stepper.scale();
+        try {
+          sessionControl.apply(panelTarget(panel, applied, sessionControl.settings()));
+          applied = panel;
+        } catch (const core::InputError& e) {
+          note = e.what();  // the refused value is kept out; the rest applies
+        }
+        if (stepper.scale() != scale) startHaptics();
       }
-      if (panel.planetSizeCm != applied.planetSizeCm) {
-        stepper.setPlanetSize(double(panel.planetSizeCm) / 100);
-        applied.planetSizeCm = panel.planetSizeCm;
-        startHaptics();
-      }
-      applyPanel(panel, applied, stepper, note);
       try {
         if (actions.undo) {
-          stepper.endStroke();
-          stepper.pipeline().undo();
+          sessionControl.undo();
           note = "undone";
         }
         if (actions.redo) {
-          stepper.endStroke();
-          stepper.pipeline().redo();
+          sessionControl.redo();
           note = "redone";
         }
       } catch (const core::InputError& e) {
@@ -607,7 +643,7 @@ LiveResult runLive(FrameInput& input, const tracking::CameraCalibration& calibra
           if (recorder.recording()) {
             note = stopRecording();
           } else {
-            recorder.start(session::nextRecordingPath(settings.out), input.fps());
+            startRecording(session::nextRecordingPath(settings.out));
             note = "recording to " + recorder.path().string();
           }
         } catch (const std::exception& e) {

@@ -8,8 +8,10 @@
 // every finished stroke, undo and redo goes to OUT/planet.journal (session/session_store.hpp),
 // and a journal left by a crashed session is offered for recovery at the start. A lost camera
 // or an ended video shows a message and keeps the planet. docs/LIVE.md.
+#include <cstdint>
 #include <filesystem>
 #include <memory>
+#include <string>
 #include <vector>
 
 #include "live/frame_input.hpp"
@@ -41,8 +43,15 @@ struct LiveSettings {
   // Record the frames the app processes to this video (FFV1 .mkv) from the start ("": only
   // when the panel's record toggle says so, to OUT/recording-NNN.mkv).
   std::filesystem::path record;
-  // Panel actions at given window frames (`--at FRAME:ACTION`, live/panel.hpp).
+  // Panel actions and settings at given window frames (`--at FRAME:ACTION`, live/panel.hpp).
   std::vector<ScriptedAction> script;
+  // Where the planet came from, for a recording's sidecar (replay/session_timeline.hpp): the
+  // --planet file ("" : the default planet of `seed`) and the calibration file.
+  struct Start {
+    std::string planetFile;
+    std::uint64_t seed = 1;
+    std::string calibrationFile;
+  } start;
 };
 
 struct LiveResult {

@@ -13,6 +13,23 @@
 
 namespace ps::live {
 
+namespace {
+
+// The panel fields a script may set, by name.
+float* scriptedNumber(PanelSettings& s, const std::string& name) {
+  if (name == "radius_km") return &s.brushRadiusKm;
+  if (name == "strength_m") return &s.strengthM;
+  if (name == "sigma") return &s.sigma;
+  if (name == "displace_radius_km") return &s.displaceRadiusKm;
+  if (name == "press_m") return &s.pressM;
+  if (name == "size_cm") return &s.planetSizeCm;
+  if (name == "spin_deg") return &s.spinDeg;
+  if (name == "tilt_deg") return &s.tiltDeg;
+  return nullptr;
+}
+
+}  // namespace
+
 ScriptedAction parseScriptedAction(const std::string& text) {
   static const char* const kActions[] = {"export", "record", "save",      "undo",
                                          "redo",   "quit",   "interrupt", "crash"};
@@ -25,17 +42,40 @@ ScriptedAction parseScriptedAction(const std::string& text) {
     used = 0;
   }
   a.action = colon == std::string::npos ? "" : text.substr(colon + 1);
-  const bool known =
-      std::find(std::begin(kActions), std::end(kActions), a.action) != std::end(kActions);
+  bool known = std::find(std::begin(kActions), std::end(kActions), a.action) != std::end(kActions);
+  const auto eq = a.action.find('=');
+  if (!known && eq != std::string::npos) {
+    a.setting = a.action.substr(0, eq);
+    const std::string value = a.action.substr(eq + 1);
+    a.action.clear();
+    if (a.setting == "tool")
+      known = value == "brush" || value == "displace";
+    else if (a.setting == "mode")
+      known = value == "raise" || value == "lower";
+    else if (PanelSettings probe; scriptedNumber(probe, a.setting)) {
+      std::size_t n = 0;
+      try {
+        a.number = std::stof(value, &n);
+      } catch (const std::exception&) {
+        n = 0;
+      }
+      known = n > 0 && n == value.size() && std::isfinite(a.number);
+    }
+    a.word = value;
+  }
   if (colon == std::string::npos || used != colon || a.frame < 0 || !known) {
     throw core::InputError("--at " + text +
                            ": expected FRAME:ACTION with FRAME >= 0 and ACTION one of export, "
-                           "record, save, undo, redo, quit, interrupt, crash");
+                           "record, save, undo, redo, quit, interrupt, crash, or FRAME:SETTING="
+                           "VALUE with tool=brush|displace, mode=raise|lower or a number for "
+                           "radius_km, strength_m, sigma, displace_radius_km, press_m, size_cm, "
+                           "spin_deg, tilt_deg");
   }
   return a;
 }
 
-void applyScript(const std::vector<ScriptedAction>& script, int frame, PanelActions& a) {
+void applyScript(const std::vector<ScriptedAction>& script, int frame, PanelActions& a,
+                 PanelSettings& settings) {
   for (const ScriptedAction& s : script) {
     if (s.frame != frame) continue;
     a.exportPlanet |= s.action == "export";
@@ -46,6 +86,9 @@ void applyScript(const std::vector<ScriptedAction>& script, int frame, PanelActi
     a.quit |= s.action == "quit";
     a.crash |= s.action == "crash";
     a.interrupt |= s.action == "interrupt";
+    if (s.setting == "tool") settings.displace = s.word == "displace";
+    if (s.setting == "mode") settings.lower = s.word == "lower";
+    if (float* f = scriptedNumber(settings, s.setting)) *f = s.number;
   }
 }
 

@@ -35,16 +35,24 @@ struct PanelActions {
   bool interrupt = false;     // scripted only: Ctrl-C (SIGINT) to this process
 };
 
-// An action taken at a window frame as if its key were pressed then (`live --at FRAME:ACTION`):
-// scripted sessions for tests and demos, independent of how fast the frames come.
+// An action taken at a window frame as if its key were pressed then (`live --at FRAME:ACTION`),
+// or a panel setting changed then (`--at FRAME:SETTING=VALUE`): scripted sessions for tests and
+// demos, independent of how fast the frames come.
 struct ScriptedAction {
   int frame = 0;
-  std::string action;  // export, record, save, undo, redo, quit, interrupt, crash
+  std::string action;  // export, record, save, undo, redo, quit, interrupt, crash; "" : a setting
+  // tool (brush, displace), mode (raise, lower), radius_km, strength_m, sigma,
+  // displace_radius_km, press_m, size_cm, spin_deg, tilt_deg
+  std::string setting;
+  std::string word;  // tool, mode
+  float number = 0;  // the others
 };
-// Parses "FRAME:ACTION"; throws core::InputError naming the text otherwise.
+// Parses "FRAME:ACTION" or "FRAME:SETTING=VALUE"; throws core::InputError naming the text
+// otherwise. (Values out of the panel's range are refused when applied, as a typed one is.)
 ScriptedAction parseScriptedAction(const std::string& text);
-// Adds the actions scripted for `frame` to `actions`.
-void applyScript(const std::vector<ScriptedAction>& script, int frame, PanelActions& actions);
+// Adds the actions scripted for `frame` to `actions` and sets its settings in `settings`.
+void applyScript(const std::vector<ScriptedAction>& script, int frame, PanelActions& actions,
+                 PanelSettings& settings);
 
 struct PanelStatus {
   double fps = 0, frameMs = 0, trackMs = 0, editMs = 0, tessellateMs = 0, renderMs = 0;

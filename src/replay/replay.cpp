@@ -7,6 +7,7 @@
 #include "core/input_error.hpp"
 #include "edit/control_vertex.hpp"
 #include "edit/edit_pipeline.hpp"
+#include "replay/session_timeline.hpp"
 
 namespace ps::replay {
 
@@ -292,17 +293,33 @@ StepResult FrameStepper::step(const cv::Mat& image, int frame, double time) {
 }
 
 ReplaySummary runReplay(tracking::FrameSource& source, const tracking::CameraCalibration& calibIn,
-                        terrain::Terrain& planet, const ReplayOptions& o, std::ostream& log,
-                        std::ostream* timings, const ProgressFn& progress, const FrameHook& hook) {
+                        terrain::Terrain& planet, const ReplayOptions& options, std::ostream& log,
+                        std::ostream* timings, const ProgressFn& progress, const FrameHook& hook,
+                        const SessionTimeline* timeline) {
+  ReplayOptions o = options;
+  // The live session kept an undo journal; its undo lines need one here.
+  if (timeline) o.undo = o.undo || timeline->hasUndoRedo();
   o.validate();
   const tracking::CameraCalibration calib = calibIn.forImageSize(source.size());
   FrameStepper stepper(calib, planet, o);
+  std::optional<SessionControl> control;
+  std::optional<TimelinePlayer> player;
+  if (timeline) {
+    control.emplace(stepper);
+    player.emplace(*timeline, *control);
+  }
   const double fps = source.fps() > 0 ? source.fps() : o.fallbackFps;
 
   cv::Mat image;
-  while ((o.maxFrames == 0 || stepper.summary().frames < o.maxFrames) && source.read(image)) {
+  bool limited = false;
+  while (true) {
+    limited = o.maxFrames > 0 && stepper.summary().frames >= o.maxFrames;
+    if (limited || !source.read(image)) break;
+    // The sidecar counts recorded frames, as the live app wrote them.
+    if (player) player->before(stepper.summary().frames);
     const int frame = source.index();
-    const double time = frame / fps;
+    // A live session's times (a camera's clock) when its sidecar has them.
+    const double time = timeline ? timeline->timeOf(stepper.summary().frames) : frame / fps;
     const StepResult r = stepper.step(image, frame, time);
     if (hook) {
       const FrameContext ctx{frame,
@@ -328,8 +345,13 @@ ReplaySummary runReplay(tracking::FrameSource& source, const tracking::CameraCal
                << "\n";
     if (progress) progress(stepper.summary().frames, source.announcedFrames());
   }
+  if (player && !limited) player->finish(stepper.summary().frames);
   stepper.endStroke();
   ReplaySummary s = stepper.summary();
+  if (player) {
+    s.sessionChanges = player->applied();
+    s.warnings.insert(s.warnings.end(), player->warnings().begin(), player->warnings().end());
+  }
   s.announcedFrames = source.announcedFrames();
   const bool anyMarker = stepper.anyMarker();
   s.truncated = source.truncated();

@@ -66,6 +66,7 @@ struct ReplaySummary {
   int settleFramesAtRest = 0;
   bool truncated = false;  // the video ended before its announced length
   int announcedFrames = -1;
+  int sessionChanges = 0;             // sidecar lines applied (changes, undos, redos)
   std::vector<std::string> warnings;  // no marker ever seen, truncated video, ...
 };
 
@@ -168,12 +169,16 @@ class FrameStepper {
   bool rotated_ = false;
 };
 
+struct SessionTimeline;  // replay/session_timeline.hpp
+
 // Replays `source` onto `planet`. Writes one JSON line per frame to `log` and, if given, one
-// line of times per frame to `timings`. Throws core::InputError for unusable settings or a
-// calibration for another aspect ratio; problems within frames are logged and skipped.
+// line of times per frame to `timings`. With a live session's `timeline` (its sidecar), its
+// settings and each change, undo and redo are applied at their recorded frames (the options'
+// tool settings are replaced by the timeline's). Throws core::InputError for unusable settings
+// or a calibration for another aspect ratio; problems within frames are logged and skipped.
 ReplaySummary runReplay(tracking::FrameSource& source, const tracking::CameraCalibration& calib,
                         terrain::Terrain& planet, const ReplayOptions& options, std::ostream& log,
                         std::ostream* timings = nullptr, const ProgressFn& progress = {},
-                        const FrameHook& hook = {});
+                        const FrameHook& hook = {}, const SessionTimeline* timeline = nullptr);
 
 }  // namespace ps::replay
