@@ -66,6 +66,30 @@ TEST(TrackingSynth, RenderingIsDeterministicAndFfv1IsLossless) {
   EXPECT_FALSE(a.truth(5).planetVisible);
 }
 
+// The `near` scene exists to measure tracking with the camera 0.30-0.33 m from the planet: it
+// is only useful if both markers are in full view there, touching, in enough frames.
+TEST(TrackingSynth, NearSceneHasBothMarkersInViewAtAThirdOfAMetre) {
+  const tracking::SynthRenderer r(tracking::builtinScene("near"));
+  int both = 0, bothTouching = 0;
+  double nearest = 1e9, farthest = 0;
+  for (int f = 0; f < r.frames(); ++f) {
+    const tracking::FrameTruth t = r.truth(f);
+    if (!t.planetVisible || !t.toolVisible) continue;
+    ++both;
+    bothTouching += t.tipHeight <= 0.004 ? 1 : 0;  // the default touch distance
+    // The camera's distance from the planet's centre (6 cm above the marker's origin).
+    const double d = (t.camera.inverse().apply(Eigen::Vector3d::Zero()) -
+                      Eigen::Vector3d(0, 0, r.script().planetRadius))
+                         .norm();
+    nearest = std::min(nearest, d);
+    farthest = std::max(farthest, d);
+  }
+  EXPECT_GE(both, 80);
+  EXPECT_GE(bothTouching, 75);
+  EXPECT_NEAR(nearest, 0.30, 1e-6);
+  EXPECT_LE(farthest, 0.33 + 1e-6);
+}
+
 TEST(TrackingReplay, TwoReplaysAreBitIdenticalAndSculpt) {
   std::string logs[2];
   std::vector<float> heights[2];

@@ -135,6 +135,35 @@ SynthScript tilt() {
   return s;
 }
 
+// The near end of the range: the camera 0.30-0.33 m from the planet's centre, where the
+// sweep's shots lose the tool (a 640x480 view is about 32 x 24 cm there and the tool marker sits
+// 8 cm up its stick): the tool leans toward the camera (tilt 35-55 degrees) and touches the
+// planet's flank, so that both markers stay in view.
+SynthScript near() {
+  SynthScript s;
+  s.seed = 13;
+  KeyBuilder b;
+  b.look(0.5, 1.5, 1.0);
+  int f = 0;
+  for (int i = 0; i < 16; ++i) {
+    const double d = (i % 4 == 3) ? 0.33 : 0.30;
+    const double elevation = 58 + 12 * (0.5 + 0.5 * std::sin(0.8 * i));
+    const double az = -90 + 30 * std::sin(0.7 * i + 0.3);
+    // The tip on the planet's left or right flank as the camera sees it, so that the stick runs
+    // sideways, clear of the planet marker below the planet.
+    const double lon = az + 45 + 8 * std::sin(1.3 * i);
+    const double lat = 12 + 6 * std::sin(0.9 * i + 1);
+    const double tilt = 57 + 4 * std::sin(1.7 * i);
+    const double turn = (i % 3 == 0) ? 0 : (i % 3 == 1 ? 25 : -30);
+    b.at(f).cam(d, elevation, az).tip(lat, lon, (i % 4 == 1) ? 12 : -1).tool(tilt, turn).key();
+    b.at(f + 14).tip(lat + 6, lon + 10, (i % 4 == 1) ? 12 : -1).key();
+    b.at(f + 19).key();
+    f += 20;
+  }
+  s.keys = b.keys;
+  return s;
+}
+
 SynthScript still() {
   SynthScript s;
   s.seed = 3;
@@ -164,7 +193,7 @@ SynthScript shortScene() {
 }  // namespace
 
 std::vector<std::string> builtinSceneNames() {
-  return {"demo", "sweep", "tilt", "still", "short"};
+  return {"demo", "sweep", "tilt", "near", "still", "short"};
 }
 
 SynthScript builtinScene(const std::string& name) {
@@ -175,13 +204,16 @@ SynthScript builtinScene(const std::string& name) {
     s = sweep();
   else if (name == "tilt")
     s = tilt();
+  else if (name == "near")
+    s = near();
   else if (name == "still")
     s = still();
   else if (name == "short")
     s = shortScene();
   else
-    throw core::InputError("unknown synthetic scene '" + name +
-                           "' (built in: demo, sweep, tilt, still, short; or a JSON script file)");
+    throw core::InputError(
+        "unknown synthetic scene '" + name +
+        "' (built in: demo, sweep, tilt, near, still, short; or a JSON script file)");
   s.validate();
   return s;
 }
