@@ -39,6 +39,8 @@ struct Sampler {
 };
 
 // Largest |P(q) - L_T(q)| over grid points q of triangle (a, b0, b1) (right angle at a).
+// L_T is affine in (u, v), so along a row it advances by a constant step; the barycentric
+// tests are advanced the same way.
 template <class ChartT>
 double exactTriangleDeviation(const Sampler<ChartT>& s, GridPoint a, GridPoint b0, GridPoint b1) {
   if constexpr (std::is_same_v<ChartT, core::FlatChart>) {
@@ -51,14 +53,25 @@ double exactTriangleDeviation(const Sampler<ChartT>& s, GridPoint a, GridPoint b
       worst = std::max(worst, std::abs(double(s.h[s.g.index(u, v)]) - (ha + w0 * d0 + w1 * d1)));
     });
     return worst;
+  } else {
+    const long long e0u = b0.u - a.u, e0v = b0.v - a.v, e1u = b1.u - a.u, e1v = b1.v - a.v;
+    const long long len2 = e0u * e0u + e0v * e0v;  // legs are equal
+    const double inv = 1.0 / double(len2);
+    const int u0 = std::min({a.u, b0.u, b1.u}), u1 = std::max({a.u, b0.u, b1.u});
+    const int v0 = std::min({a.v, b0.v, b1.v}), v1 = std::max({a.v, b0.v, b1.v});
+    const Eigen::Vector3d pa = s.pos(a), d0 = s.pos(b0) - pa, d1 = s.pos(b1) - pa;
+    double worst2 = 0.0;
+    for (int v = v0; v <= v1; ++v) {
+      long long da = (u0 - a.u) * e0u + (v - a.v) * e0v;
+      long long db = (u0 - a.u) * e1u + (v - a.v) * e1v;
+      for (int u = u0; u <= u1; ++u, da += e0u, db += e1u) {
+        if (da < 0 || db < 0 || da + db > len2) continue;
+        const Eigen::Vector3d lin = pa + (double(da) * inv) * d0 + (double(db) * inv) * d1;
+        worst2 = std::max(worst2, (s.pos({u, v}) - lin).squaredNorm());
+      }
+    }
+    return std::sqrt(worst2);
   }
-  const Eigen::Vector3d pa = s.pos(a), d0 = s.pos(b0) - pa, d1 = s.pos(b1) - pa;
-  double worst2 = 0.0;
-  forEachGridPointInTriangle(a, b0, b1, [&](int u, int v, double w0, double w1) {
-    const Eigen::Vector3d lin = pa + w0 * d0 + w1 * d1;
-    worst2 = std::max(worst2, (s.pos({u, v}) - lin).squaredNorm());
-  });
-  return std::sqrt(worst2);
 }
 
 }  // namespace
@@ -78,18 +91,15 @@ void ErrorBounds::computeLevel(const ChartT& chart, std::span<const float> heigh
   auto computeVertex = [&](GridPoint p) {
     const Diamond d = Diamond::of(p);
     const Eigen::Vector3d P = sampler.pos(p);
-    double radius = 0.0;
-    if (withRadii) {
-      for (GridPoint c : {d.base0, d.base1, d.apex0, d.apex1}) {
-        if (inGrid(g, c)) radius = std::max(radius, (sampler.pos(c) - P).norm());
-      }
-    }
     // Codes are monotone: the largest child code is the largest child bound, one table lookup
     // instead of four (the 256 KB table does not fit the L1 cache).
     std::uint16_t childCode = 0;
+    double radius = 0.0;
+    int childrenInGrid = 0;
     for (int i = 0; i < d.childCount; ++i) {
       const GridPoint c = d.children[std::size_t(i)];
       if (!inGrid(g, c)) continue;
+      ++childrenInGrid;
       const std::size_t ci = g.index(c.u, c.v);
       childCode = std::max(childCode, codes[ci].error);
       if (withRadii) {
@@ -97,6 +107,17 @@ void ErrorBounds::computeLevel(const ChartT& chart, std::span<const float> heigh
             radius, (double(BoundCode::decode(codes[ci].radius)) + (sampler.pos(c) - P).norm()) *
                         kRadiusMargin);
       }
+    }
+    // Every corner of the diamond is a corner of one of the four children's diamonds, which
+    // their radii cover: |P(corner) - P| <= radius(child) + |P(child) - P|, and the margin puts
+    // that term far above the rounding of the direct distance. So the corners only matter where
+    // a child falls outside the grid.
+    if (withRadii && childrenInGrid < 4) {
+      double corner2 = 0.0;
+      for (GridPoint c : {d.base0, d.base1, d.apex0, d.apex1}) {
+        if (inGrid(g, c)) corner2 = std::max(corner2, (sampler.pos(c) - P).squaredNorm());
+      }
+      radius = std::max(radius, std::sqrt(corner2));
     }
     const double childEps = BoundCode::decode(childCode);
     double e;
@@ -135,16 +156,20 @@ void ErrorBounds::computeLevel(const ChartT& chart, std::span<const float> heigh
     const GridPoint b0 = horizontal ? GridPoint{p.u - 1, p.v} : GridPoint{p.u, p.v - 1};
     const GridPoint b1 = horizontal ? GridPoint{p.u + 1, p.v} : GridPoint{p.u, p.v + 1};
     const Eigen::Vector3d P = sampler.pos(p);
+    const Eigen::Vector3d B0 = sampler.pos(b0), B1 = sampler.pos(b1);
     double radius = 0.0;
     if (withRadii) {
+      // sqrt is monotone and correctly rounded: one sqrt of the largest square is the largest
+      // of the four distances, bit for bit.
+      double r2 = std::max((B0 - P).squaredNorm(), (B1 - P).squaredNorm());
       const GridPoint a0 = horizontal ? GridPoint{p.u, p.v - 1} : GridPoint{p.u - 1, p.v};
       const GridPoint a1 = horizontal ? GridPoint{p.u, p.v + 1} : GridPoint{p.u + 1, p.v};
-      for (GridPoint c : {b0, b1, a0, a1}) {
-        if (inGrid(g, c)) radius = std::max(radius, (sampler.pos(c) - P).norm());
-      }
+      if (inGrid(g, a0)) r2 = std::max(r2, (sampler.pos(a0) - P).squaredNorm());
+      if (inGrid(g, a1)) r2 = std::max(r2, (sampler.pos(a1) - P).squaredNorm());
+      radius = std::sqrt(r2);
     }
-    const Eigen::Vector3d mid = 0.5 * (sampler.pos(b0) + sampler.pos(b1));
-    const double e = 0.0 + (P - mid).norm();
+    const Eigen::Vector3d mid = 0.5 * (B0 + B1);
+    const double e = (P - mid).norm();
     codes[g.index(p.u, p.v)] = {BoundCode::encodeUp(e),
                                 withRadii ? BoundCode::encodeUp(radius) : std::uint16_t(0)};
   };
