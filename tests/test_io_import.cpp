@@ -282,6 +282,61 @@ TEST(IoImport, HugeDimensionsAreRefusedBeforeDecoding) {
   fs::remove_all(dir);
 }
 
+// The refusals that keep a small corrupt file from costing gigabytes (the fuzzer found one):
+// TIFF tiles larger than the image, uncompressed TIFF samples that cannot fit in the file, and
+// PNG rows that deflate (at most 1032:1) cannot have squeezed into the file.
+TEST(IoImport, FilesThatWouldAllocateForPixelsThatDoNotExistAreRefused) {
+  const fs::path dir = freshDir("allocguard");
+  writeAll(dir / "claims.png", pngHeaderOnly(4096, 4096));
+  expectImportError(dir / "claims.png",
+                    "truncated PNG: 45 bytes cannot hold the 4096x4096 pixels its header declares");
+  {
+    TIFF* t = TIFFOpen((dir / "bigtile.tif").c_str(), "w");
+    ASSERT_NE(t, nullptr);
+    TIFFSetField(t, TIFFTAG_IMAGEWIDTH, std::uint32_t(16));
+    TIFFSetField(t, TIFFTAG_IMAGELENGTH, std::uint32_t(16));
+    TIFFSetField(t, TIFFTAG_SAMPLESPERPIXEL, std::uint16_t(1));
+    TIFFSetField(t, TIFFTAG_BITSPERSAMPLE, std::uint16_t(32));
+    TIFFSetField(t, TIFFTAG_SAMPLEFORMAT, std::uint16_t(SAMPLEFORMAT_IEEEFP));
+    TIFFSetField(t, TIFFTAG_PHOTOMETRIC, std::uint16_t(PHOTOMETRIC_MINISBLACK));
+    TIFFSetField(t, TIFFTAG_COMPRESSION, std::uint16_t(COMPRESSION_ADOBE_DEFLATE));
+    TIFFSetField(t, TIFFTAG_TILEWIDTH, std::uint32_t(1024));
+    TIFFSetField(t, TIFFTAG_TILELENGTH, std::uint32_t(512));
+    std::vector<float> tile(1024 * 512, 7.0f);
+    ASSERT_GE(TIFFWriteEncodedTile(t, 0, tile.data(), tmsize_t(tile.size() * sizeof(float))), 0);
+    TIFFClose(t);
+  }
+  expectImportError(dir / "bigtile.tif", "TIFF tile is 1024x512 pixels, larger than the 16x16");
+
+  std::vector<float> v(64 * 64, 1.0f);
+  {
+    TIFF* t = TIFFOpen((dir / "plain.tif").c_str(), "w");
+    ASSERT_NE(t, nullptr);
+    TIFFSetField(t, TIFFTAG_IMAGEWIDTH, std::uint32_t(64));
+    TIFFSetField(t, TIFFTAG_IMAGELENGTH, std::uint32_t(64));
+    TIFFSetField(t, TIFFTAG_SAMPLESPERPIXEL, std::uint16_t(1));
+    TIFFSetField(t, TIFFTAG_BITSPERSAMPLE, std::uint16_t(32));
+    TIFFSetField(t, TIFFTAG_SAMPLEFORMAT, std::uint16_t(SAMPLEFORMAT_IEEEFP));
+    TIFFSetField(t, TIFFTAG_PHOTOMETRIC, std::uint16_t(PHOTOMETRIC_MINISBLACK));
+    TIFFSetField(t, TIFFTAG_COMPRESSION, std::uint16_t(COMPRESSION_NONE));
+    TIFFSetField(t, TIFFTAG_ROWSPERSTRIP, std::uint32_t(64));
+    ASSERT_GE(TIFFWriteEncodedStrip(t, 0, v.data(), tmsize_t(v.size() * sizeof(float))), 0);
+    TIFFClose(t);
+  }
+  const auto plain = readAll(dir / "plain.tif");
+  EXPECT_EQ(io::readHeightImage(dir / "plain.tif").values, v);  // the writer itself is sound
+  // The IFD sits after the samples; keep the header, the IFD and a tenth of the samples.
+  std::vector<unsigned char> cut(plain.begin(), plain.begin() + 8 + 1600);
+  cut.insert(cut.end(), plain.begin() + 8 + 64 * 64 * 4, plain.end());
+  // Point the header at the IFD's new offset.
+  const std::uint32_t ifd = std::uint32_t(8 + 1600);
+  for (int k = 0; k < 4; ++k) cut[std::size_t(4 + k)] = static_cast<unsigned char>(ifd >> (8 * k));
+  writeAll(dir / "short.tif", cut);
+  expectImportError(dir / "short.tif",
+                    "truncated TIFF: 64x64 uncompressed float32 samples need 16384 bytes");
+  fs::remove_all(dir);
+}
+
 TEST(IoImport, RawSidecarsAreCheckedFieldByField) {
   const fs::path dir = freshDir("raw");
   std::vector<unsigned char> data(8 * 4 * 4, 0);

@@ -27,13 +27,13 @@ std::string dims(std::uint64_t w, std::uint64_t h) {
   return std::to_string(w) + "x" + std::to_string(h);
 }
 
-void checkDims(std::uint64_t w, std::uint64_t h, const std::string& name) {
+void checkDims(std::uint64_t w, std::uint64_t h, const std::string& name,
+               std::uint64_t maxPixels = kMaxImagePixels) {
   if (w == 0 || h == 0) fail(name, "image is " + dims(w, h) + " pixels: it is empty");
-  if (w > kMaxImageSide || h > kMaxImageSide || w * h > kMaxImagePixels) {
+  if (w > kMaxImageSide || h > kMaxImageSide || w * h > maxPixels) {
     fail(name, "image is " + dims(w, h) + " pixels (" + std::to_string(w * h) +
-                   "), more than this build accepts (" + std::to_string(kMaxImagePixels) +
-                   " pixels, " + std::to_string(kMaxImageSide) +
-                   " per side): crop or downsample it first");
+                   "), more than this build accepts (" + std::to_string(maxPixels) + " pixels, " +
+                   std::to_string(kMaxImageSide) + " per side): crop or downsample it first");
   }
 }
 
@@ -66,7 +66,8 @@ double parseNumberText(const std::string& s, bool& ok) {
 
 // ---------------------------------------------------------------------------------------- PNG
 
-HeightImage decodePng(std::span<const unsigned char> b, const std::string& name) {
+HeightImage decodePng(std::span<const unsigned char> b, const std::string& name,
+                      std::uint64_t maxPixels) {
   // Signature (8) + IHDR length (4) + "IHDR" (4) + 13 data bytes + CRC (4).
   if (b.size() < 33)
     fail(name, "truncated PNG: " + std::to_string(b.size()) + " bytes, no complete header");
@@ -75,7 +76,7 @@ HeightImage decodePng(std::span<const unsigned char> b, const std::string& name)
   }
   const std::uint32_t w = be32(b.data() + 16), h = be32(b.data() + 20);
   const int depth = b[24], colour = b[25];
-  checkDims(w, h, name);
+  checkDims(w, h, name, maxPixels);
   if (colour != 0) {
     static const char* kinds[] = {"grey", "?", "RGB", "palette", "grey+alpha", "?", "RGBA"};
     fail(name, std::string("PNG colour type ") + std::to_string(colour) + " (" +
@@ -84,6 +85,13 @@ HeightImage decodePng(std::span<const unsigned char> b, const std::string& name)
   }
   if (depth != 8 && depth != 16) {
     fail(name, "grey PNG with " + std::to_string(depth) + "-bit samples: 8 and 16 are supported");
+  }
+  // Deflate expands at most 1032:1 (two bits per 258-byte match), so a file too small to hold
+  // its filtered rows is refused before the decoder allocates for them.
+  const std::uint64_t rowBytes = 1 + std::uint64_t(w) * std::uint64_t(depth / 8);
+  if (std::uint64_t(h) * rowBytes > 1032 * std::uint64_t(b.size())) {
+    fail(name, "truncated PNG: " + std::to_string(b.size()) + " bytes cannot hold the " +
+                   dims(w, h) + " pixels its header declares");
   }
   HeightImage img;
   img.kind = std::to_string(depth) + "-bit grey PNG";
@@ -290,7 +298,8 @@ std::optional<GeoReference> readGeoReference(TIFF* t) {
   return g;
 }
 
-HeightImage decodeTiff(std::span<const unsigned char> b, const std::string& name) {
+HeightImage decodeTiff(std::span<const unsigned char> b, const std::string& name,
+                       std::uint64_t maxPixels) {
   MemStream stream{b.data(), b.size()};
   std::string error;
   TIFFOpenOptions* opts = TIFFOpenOptionsAlloc();
@@ -308,7 +317,7 @@ HeightImage decodeTiff(std::span<const unsigned char> b, const std::string& name
   if (!TIFFGetField(t, TIFFTAG_IMAGEWIDTH, &w) || !TIFFGetField(t, TIFFTAG_IMAGELENGTH, &h)) {
     fail(name, "TIFF has no image width or length tag");
   }
-  checkDims(w, h, name);
+  checkDims(w, h, name, maxPixels);
   TIFFGetFieldDefaulted(t, TIFFTAG_BITSPERSAMPLE, &bits);
   TIFFGetFieldDefaulted(t, TIFFTAG_SAMPLESPERPIXEL, &spp);
   TIFFGetFieldDefaulted(t, TIFFTAG_SAMPLEFORMAT, &format);
@@ -341,6 +350,14 @@ HeightImage decodeTiff(std::span<const unsigned char> b, const std::string& name
   img.width = int(w);
   img.height = int(h);
   const std::size_t bytesPer = bits / 8;
+  std::uint16_t compression = COMPRESSION_NONE;
+  TIFFGetFieldDefaulted(t, TIFFTAG_COMPRESSION, &compression);
+  // Uncompressed samples cannot be fewer bytes than the file: say so before allocating for them.
+  if (compression == COMPRESSION_NONE && std::uint64_t(w) * h * bytesPer > b.size()) {
+    fail(name, "truncated TIFF: " + dims(w, h) + " uncompressed " + type + " samples need " +
+                   std::to_string(std::uint64_t(w) * h * bytesPer) + " bytes, the file has " +
+                   std::to_string(b.size()));
+  }
 
   if (const std::optional<std::string> nodata = gdalNoData(t)) {
     bool ok = false;
@@ -361,6 +378,12 @@ HeightImage decodeTiff(std::span<const unsigned char> b, const std::string& name
     TIFFGetField(t, TIFFTAG_TILEWIDTH, &tw);
     TIFFGetField(t, TIFFTAG_TILELENGTH, &th);
     if (tw == 0 || th == 0) bad("TIFF tile size is 0");
+    // Tiles are multiples of 16 pixels; one larger than the image rounded up to that is corrupt
+    // (and would make us allocate for pixels that do not exist).
+    const auto roundUp16 = [](std::uint64_t x) { return (x + 15) / 16 * 16; };
+    if (tw > roundUp16(w) || th > roundUp16(h)) {
+      bad("TIFF tile is " + dims(tw, th) + " pixels, larger than the " + dims(w, h) + " image");
+    }
     const tmsize_t tileBytes = TIFFTileSize(t);
     if (tileBytes <= 0 || std::uint64_t(tileBytes) < std::uint64_t(tw) * th * bytesPer) {
       bad("TIFF tile size is inconsistent");
@@ -428,13 +451,15 @@ ImageFormat sniffFormat(std::span<const unsigned char> b) {
   return ImageFormat::kUnknown;
 }
 
-HeightImage decodeHeightImage(std::span<const unsigned char> bytes, const std::string& name) {
+HeightImage decodeHeightImage(std::span<const unsigned char> bytes, const std::string& name,
+                              std::uint64_t maxPixels) {
   if (bytes.empty()) fail(name, "empty file (0 bytes)");
+  maxPixels = std::min(maxPixels, kMaxImagePixels);
   switch (sniffFormat(bytes)) {
     case ImageFormat::kPng:
-      return decodePng(bytes, name);
+      return decodePng(bytes, name, maxPixels);
     case ImageFormat::kTiff:
-      return decodeTiff(bytes, name);
+      return decodeTiff(bytes, name, maxPixels);
     case ImageFormat::kPlanet:
       fail(name, "this is a planet file, not a heightmap image");
     default:

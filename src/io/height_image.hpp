@@ -55,8 +55,10 @@ ImageFormat sniffFormat(std::span<const unsigned char> firstBytes);
 
 // PNG (8/16-bit grey) or TIFF (one sample per pixel: 8/16/32-bit integers, 32/64-bit floats,
 // strips or tiles, any compression libtiff reads; GDAL_NODATA tag 42113 and the GeoTIFF pixel
-// scale/tie point are read), chosen by the magic bytes.
-HeightImage decodeHeightImage(std::span<const unsigned char> bytes, const std::string& name);
+// scale/tie point are read), chosen by the magic bytes. Images of more than maxPixels (at most
+// kMaxImagePixels) are refused before any buffer is allocated for them.
+HeightImage decodeHeightImage(std::span<const unsigned char> bytes, const std::string& name,
+                              std::uint64_t maxPixels = kMaxImagePixels);
 
 // Raw little-endian float32 samples described by a sidecar JSON (what `export --format raw`
 // writes next to the data as `<file>.json`).
