@@ -55,7 +55,36 @@ Mesh meshWith(const ChartT& chart, const Terrain& terrain, double maxErrorMetres
   const BoundCodes* codes = terrain.bounds().codes().data();
   const float* heights = terrain.heights().data();
   const std::uint16_t within = largestCodeWithin(maxErrorMetres);
+  struct Tri {
+    GridPoint a, b0, b1;
+  };
+  // Visits the leaf triangles of the bintree cut at `within`, depth first.
+  auto forEachLeaf = [&](auto&& leaf) {
+    std::vector<Tri> stack = {{{0, m}, {0, 0}, {m, m}}, {{m, 0}, {m, m}, {0, 0}}};
+    while (!stack.empty()) {
+      const Tri t = stack.back();
+      stack.pop_back();
+      const int su = t.b0.u + t.b1.u, sv = t.b0.v + t.b1.v;
+      if (((su | sv) & 1) == 0) {
+        const GridPoint c{su / 2, sv / 2};
+        if (codes[g.index(c.u, c.v)].error > within) {
+          stack.push_back({c, t.b1, t.a});
+          stack.push_back({c, t.a, t.b0});
+          continue;
+        }
+      }
+      leaf(t);
+    }
+  };
+  // Counting first costs one more walk of the codes (about 1 % of an export) and saves the
+  // vectors' doublings: on this project's VM, page faults and copies of the growing arrays
+  // were two thirds of the mesher's time. Euler on the square: V = (T + B + 2) / 2, B <= 4m.
+  std::size_t triangles = 0;
+  forEachLeaf([&](const Tri&) { ++triangles; });
   Mesh mesh;
+  mesh.indices.reserve(3 * triangles);
+  mesh.gridIndex.reserve((triangles + 4 * std::size_t(m) + 2) / 2);
+  mesh.positions.reserve((triangles + 4 * std::size_t(m) + 2) / 2);
   VertexIndex vertexOf(g.count());
   auto vertex = [&](GridPoint p) {
     const std::uint64_t gi = g.index(p.u, p.v);
@@ -68,26 +97,11 @@ Mesh meshWith(const ChartT& chart, const Terrain& terrain, double maxErrorMetres
     }
     return slot;
   };
-  struct Tri {
-    GridPoint a, b0, b1;
-  };
-  std::vector<Tri> stack = {{{0, m}, {0, 0}, {m, m}}, {{m, 0}, {m, m}, {0, 0}}};
-  while (!stack.empty()) {
-    const Tri t = stack.back();
-    stack.pop_back();
-    const int su = t.b0.u + t.b1.u, sv = t.b0.v + t.b1.v;
-    if (((su | sv) & 1) == 0) {
-      const GridPoint c{su / 2, sv / 2};
-      if (codes[g.index(c.u, c.v)].error > within) {
-        stack.push_back({c, t.b1, t.a});
-        stack.push_back({c, t.a, t.b0});
-        continue;
-      }
-    }
+  forEachLeaf([&](const Tri& t) {
     mesh.indices.push_back(vertex(t.a));
     mesh.indices.push_back(vertex(t.b0));
     mesh.indices.push_back(vertex(t.b1));
-  }
+  });
   return mesh;
 }
 
