@@ -1,7 +1,10 @@
 #include "terrain/error_mesher.hpp"
 
+#include <sys/mman.h>
+
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <memory>
 #include <vector>
 
@@ -35,6 +38,22 @@ class VertexIndex {
   static constexpr std::size_t kPageSize = std::size_t(1) << kPageBits;
   std::vector<std::unique_ptr<std::uint32_t[]>> pages_;
 };
+
+// Asks the kernel for transparent huge pages on the 2 MiB-aligned interior of a freshly
+// reserved (untouched) array: one fault per 2 MiB instead of one per 4 KiB. Only a hint; on this
+// project's VM a 4 KiB fault costs about 10 us and the faults were most of an export's mesh pass.
+template <class T>
+void adviseHugePages(const std::vector<T>& v) {
+#ifdef MADV_HUGEPAGE
+  constexpr std::uintptr_t kHuge = std::uintptr_t(2) << 20;
+  const auto begin = reinterpret_cast<std::uintptr_t>(v.data());
+  const std::uintptr_t end = begin + v.capacity() * sizeof(T);
+  const std::uintptr_t a = (begin + kHuge - 1) & ~(kHuge - 1), b = end & ~(kHuge - 1);
+  if (b > a) (void)madvise(reinterpret_cast<void*>(a), b - a, MADV_HUGEPAGE);
+#else
+  (void)v;
+#endif
+}
 
 // The largest code whose bound is within maxErrorMetres: decode is monotone, so "splits while
 // decode(code) > maxErrorMetres" is "splits while code > this", an integer compare per triangle.
@@ -85,6 +104,9 @@ Mesh meshWith(const ChartT& chart, const Terrain& terrain, double maxErrorMetres
   mesh.indices.reserve(3 * triangles);
   mesh.gridIndex.reserve((triangles + 4 * std::size_t(m) + 2) / 2);
   mesh.positions.reserve((triangles + 4 * std::size_t(m) + 2) / 2);
+  adviseHugePages(mesh.indices);
+  adviseHugePages(mesh.gridIndex);
+  adviseHugePages(mesh.positions);
   VertexIndex vertexOf(g.count());
   auto vertex = [&](GridPoint p) {
     const std::uint64_t gi = g.index(p.u, p.v);
