@@ -61,11 +61,11 @@ void expectImportError(const fs::path& file, const std::string& what, io::Import
 }
 
 // One-band TIFF written with libtiff: T = int16_t or float.
+// A one-band grey TIFF opened for writing with its image tags set (nullptr if it cannot be).
 template <class T>
-void writeTiff(const fs::path& p, int w, int h, const std::vector<T>& v,
-               const char* nodata = nullptr) {
+TIFF* openOneBandTiff(const fs::path& p, int w, int h, std::uint16_t compression) {
   TIFF* t = TIFFOpen(p.c_str(), "w");
-  ASSERT_NE(t, nullptr);
+  if (!t) return nullptr;
   TIFFSetField(t, TIFFTAG_IMAGEWIDTH, std::uint32_t(w));
   TIFFSetField(t, TIFFTAG_IMAGELENGTH, std::uint32_t(h));
   TIFFSetField(t, TIFFTAG_SAMPLESPERPIXEL, std::uint16_t(1));
@@ -73,7 +73,15 @@ void writeTiff(const fs::path& p, int w, int h, const std::vector<T>& v,
   TIFFSetField(t, TIFFTAG_SAMPLEFORMAT,
                std::uint16_t(std::is_floating_point_v<T> ? SAMPLEFORMAT_IEEEFP : SAMPLEFORMAT_INT));
   TIFFSetField(t, TIFFTAG_PHOTOMETRIC, std::uint16_t(PHOTOMETRIC_MINISBLACK));
-  TIFFSetField(t, TIFFTAG_COMPRESSION, std::uint16_t(COMPRESSION_ADOBE_DEFLATE));
+  TIFFSetField(t, TIFFTAG_COMPRESSION, compression);
+  return t;
+}
+
+template <class T>
+void writeTiff(const fs::path& p, int w, int h, const std::vector<T>& v,
+               const char* nodata = nullptr) {
+  TIFF* t = openOneBandTiff<T>(p, w, h, COMPRESSION_ADOBE_DEFLATE);
+  ASSERT_NE(t, nullptr);
   TIFFSetField(t, TIFFTAG_ROWSPERSTRIP, std::uint32_t(8));
   if (nodata) {
     // libtiff names the tag but does not register it: do what GDAL does.
@@ -291,15 +299,8 @@ TEST(IoImport, FilesThatWouldAllocateForPixelsThatDoNotExistAreRefused) {
   expectImportError(dir / "claims.png",
                     "truncated PNG: 45 bytes cannot hold the 4096x4096 pixels its header declares");
   {
-    TIFF* t = TIFFOpen((dir / "bigtile.tif").c_str(), "w");
+    TIFF* t = openOneBandTiff<float>(dir / "bigtile.tif", 16, 16, COMPRESSION_ADOBE_DEFLATE);
     ASSERT_NE(t, nullptr);
-    TIFFSetField(t, TIFFTAG_IMAGEWIDTH, std::uint32_t(16));
-    TIFFSetField(t, TIFFTAG_IMAGELENGTH, std::uint32_t(16));
-    TIFFSetField(t, TIFFTAG_SAMPLESPERPIXEL, std::uint16_t(1));
-    TIFFSetField(t, TIFFTAG_BITSPERSAMPLE, std::uint16_t(32));
-    TIFFSetField(t, TIFFTAG_SAMPLEFORMAT, std::uint16_t(SAMPLEFORMAT_IEEEFP));
-    TIFFSetField(t, TIFFTAG_PHOTOMETRIC, std::uint16_t(PHOTOMETRIC_MINISBLACK));
-    TIFFSetField(t, TIFFTAG_COMPRESSION, std::uint16_t(COMPRESSION_ADOBE_DEFLATE));
     TIFFSetField(t, TIFFTAG_TILEWIDTH, std::uint32_t(1024));
     TIFFSetField(t, TIFFTAG_TILELENGTH, std::uint32_t(512));
     std::vector<float> tile(1024 * 512, 7.0f);
@@ -310,15 +311,8 @@ TEST(IoImport, FilesThatWouldAllocateForPixelsThatDoNotExistAreRefused) {
 
   std::vector<float> v(64 * 64, 1.0f);
   {
-    TIFF* t = TIFFOpen((dir / "plain.tif").c_str(), "w");
+    TIFF* t = openOneBandTiff<float>(dir / "plain.tif", 64, 64, COMPRESSION_NONE);
     ASSERT_NE(t, nullptr);
-    TIFFSetField(t, TIFFTAG_IMAGEWIDTH, std::uint32_t(64));
-    TIFFSetField(t, TIFFTAG_IMAGELENGTH, std::uint32_t(64));
-    TIFFSetField(t, TIFFTAG_SAMPLESPERPIXEL, std::uint16_t(1));
-    TIFFSetField(t, TIFFTAG_BITSPERSAMPLE, std::uint16_t(32));
-    TIFFSetField(t, TIFFTAG_SAMPLEFORMAT, std::uint16_t(SAMPLEFORMAT_IEEEFP));
-    TIFFSetField(t, TIFFTAG_PHOTOMETRIC, std::uint16_t(PHOTOMETRIC_MINISBLACK));
-    TIFFSetField(t, TIFFTAG_COMPRESSION, std::uint16_t(COMPRESSION_NONE));
     TIFFSetField(t, TIFFTAG_ROWSPERSTRIP, std::uint32_t(64));
     ASSERT_GE(TIFFWriteEncodedStrip(t, 0, v.data(), tmsize_t(v.size() * sizeof(float))), 0);
     TIFFClose(t);
