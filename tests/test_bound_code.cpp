@@ -50,3 +50,28 @@ TEST(BoundCode, EncodingIsMonotone) {
     prev = x, prevCode = c;
   }
 }
+
+// encodeUp starts from a per-bucket table of the mantissa's top 12 bits and corrects by at most
+// one code: the starts and ends of buckets in every octave are where that would go wrong.
+TEST(BoundCode, BucketBoundariesInEveryOctaveEncodeToTheSmallestBoundingCode) {
+  auto smallestBound = [](double x) {
+    int lo = 1, hi = 65535;  // first code whose value is >= x (saturating at 65535)
+    while (lo < hi) {
+      const int mid = (lo + hi) / 2;
+      if (double(BoundCode::decode(std::uint16_t(mid))) >= x)
+        hi = mid;
+      else
+        lo = mid + 1;
+    }
+    return std::uint16_t(lo);
+  };
+  for (int e = 0; e < 64; ++e) {
+    for (int j = 0; j < 4096; ++j) {
+      const double start = BoundCode::kMin * std::exp2(e) * (1.0 + j / 4096.0);
+      for (const double x : {start, std::nextafter(start, 0.0), std::nextafter(start, 1e300)}) {
+        if (x <= BoundCode::kMin) continue;
+        ASSERT_EQ(BoundCode::encodeUp(x), smallestBound(x)) << "octave " << e << " bucket " << j;
+      }
+    }
+  }
+}

@@ -88,23 +88,52 @@ inline bool levelIsCentre(int level) {
   return (level & 1) != 0;
 }
 
+// The grid points of the right isosceles triangle (a, b0, b1), right angle at a, row by row:
+// f(v, uFirst, uLast, da, db, stepA, stepB) for each row v that holds any, where da and db are
+// the integer barycentric numerators of b0 and b1 at uFirst (the weights are da / len2 and
+// db / len2, len2 = |b0 - a|^2) and advance by stepA and stepB per column. The span is solved
+// from the three edge inequalities, so no point outside the triangle is visited (the bounding
+// box holds twice as many, and testing each was a branch the scans mispredicted).
+template <class F>
+void forEachRowSpanInTriangle(GridPoint a, GridPoint b0, GridPoint b1, F&& f) {
+  const long long e0u = b0.u - a.u, e0v = b0.v - a.v, e1u = b1.u - a.u, e1v = b1.v - a.v;
+  const long long len2 = e0u * e0u + e0v * e0v;  // legs are equal
+  const int u0 = std::min({a.u, b0.u, b1.u}), u1 = std::max({a.u, b0.u, b1.u});
+  const int v0 = std::min({a.v, b0.v, b1.v}), v1 = std::max({a.v, b0.v, b1.v});
+  // Narrows [lo, hi] (offsets from u0) to where c + k * offset >= 0.
+  auto clip = [](long long c, long long k, long long& lo, long long& hi) {
+    if (k == 0) {
+      if (c < 0) hi = -1;
+    } else if (k > 0) {
+      lo = std::max(lo, c >= 0 ? 0 : (-c + k - 1) / k);
+    } else {
+      hi = c < 0 ? -1 : std::min(hi, c / -k);
+    }
+  };
+  for (int v = v0; v <= v1; ++v) {
+    const long long da = (u0 - a.u) * e0u + (v - a.v) * e0v;
+    const long long db = (u0 - a.u) * e1u + (v - a.v) * e1v;
+    long long lo = 0, hi = u1 - u0;
+    clip(da, e0u, lo, hi);
+    clip(db, e1u, lo, hi);
+    clip(len2 - da - db, -(e0u + e1u), lo, hi);
+    if (lo > hi) continue;
+    f(v, int(u0 + lo), int(u0 + hi), da + lo * e0u, db + lo * e1u, e0u, e1u);
+  }
+}
+
 // Calls f(u, v, wb0, wb1) for every grid point of the right isosceles triangle (a, b0, b1), right
 // angle at a, where wb0, wb1 are the point's barycentric weights of b0 and b1 (a's is the rest).
 template <class F>
 void forEachGridPointInTriangle(GridPoint a, GridPoint b0, GridPoint b1, F&& f) {
-  const long long e0u = b0.u - a.u, e0v = b0.v - a.v, e1u = b1.u - a.u, e1v = b1.v - a.v;
-  const long long len2 = e0u * e0u + e0v * e0v;  // legs are equal
-  const double inv = 1.0 / double(len2);
-  const int u0 = std::min({a.u, b0.u, b1.u}), u1 = std::max({a.u, b0.u, b1.u});
-  const int v0 = std::min({a.v, b0.v, b1.v}), v1 = std::max({a.v, b0.v, b1.v});
-  for (int v = v0; v <= v1; ++v) {
-    for (int u = u0; u <= u1; ++u) {
-      const long long da = (u - a.u) * e0u + (v - a.v) * e0v;
-      const long long db = (u - a.u) * e1u + (v - a.v) * e1v;
-      if (da < 0 || db < 0 || da + db > len2) continue;
-      f(u, v, double(da) * inv, double(db) * inv);
-    }
-  }
+  const long long e0u = b0.u - a.u, e0v = b0.v - a.v;
+  const double inv = 1.0 / double(e0u * e0u + e0v * e0v);
+  forEachRowSpanInTriangle(a, b0, b1,
+                           [&](int v, int uFirst, int uLast, long long da, long long db,
+                               long long stepA, long long stepB) {
+                             for (int u = uFirst; u <= uLast; ++u, da += stepA, db += stepB)
+                               f(u, v, double(da) * inv, double(db) * inv);
+                           });
 }
 
 inline bool inGrid(const core::GridSize& g, GridPoint p) {

@@ -54,22 +54,19 @@ double exactTriangleDeviation(const Sampler<ChartT>& s, GridPoint a, GridPoint b
     });
     return worst;
   } else {
-    const long long e0u = b0.u - a.u, e0v = b0.v - a.v, e1u = b1.u - a.u, e1v = b1.v - a.v;
-    const long long len2 = e0u * e0u + e0v * e0v;  // legs are equal
-    const double inv = 1.0 / double(len2);
-    const int u0 = std::min({a.u, b0.u, b1.u}), u1 = std::max({a.u, b0.u, b1.u});
-    const int v0 = std::min({a.v, b0.v, b1.v}), v1 = std::max({a.v, b0.v, b1.v});
+    const long long e0u = b0.u - a.u, e0v = b0.v - a.v;
+    const double inv = 1.0 / double(e0u * e0u + e0v * e0v);
     const Eigen::Vector3d pa = s.pos(a), d0 = s.pos(b0) - pa, d1 = s.pos(b1) - pa;
     double worst2 = 0.0;
-    for (int v = v0; v <= v1; ++v) {
-      long long da = (u0 - a.u) * e0u + (v - a.v) * e0v;
-      long long db = (u0 - a.u) * e1u + (v - a.v) * e1v;
-      for (int u = u0; u <= u1; ++u, da += e0u, db += e1u) {
-        if (da < 0 || db < 0 || da + db > len2) continue;
-        const Eigen::Vector3d lin = pa + (double(da) * inv) * d0 + (double(db) * inv) * d1;
-        worst2 = std::max(worst2, (s.pos({u, v}) - lin).squaredNorm());
-      }
-    }
+    forEachRowSpanInTriangle(a, b0, b1,
+                             [&](int v, int uFirst, int uLast, long long da, long long db,
+                                 long long stepA, long long stepB) {
+                               for (int u = uFirst; u <= uLast; ++u, da += stepA, db += stepB) {
+                                 const Eigen::Vector3d lin =
+                                     pa + (double(da) * inv) * d0 + (double(db) * inv) * d1;
+                                 worst2 = std::max(worst2, (s.pos({u, v}) - lin).squaredNorm());
+                               }
+                             });
     return std::sqrt(worst2);
   }
 }

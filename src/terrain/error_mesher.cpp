@@ -17,28 +17,6 @@ namespace ps::terrain {
 
 namespace {
 
-// Grid index -> mesh vertex, in pages of 64 Ki entries made when first touched: as fast as a
-// flat array (a hash map cost half the mesher's time) without a 1 GB table for a 16385² grid
-// when the mesh is coarse.
-class VertexIndex {
- public:
-  static constexpr std::uint32_t kNone = 0xffffffffu;
-  explicit VertexIndex(std::uint64_t count) : pages_((count >> kPageBits) + 1) {}
-  std::uint32_t& operator[](std::uint64_t gi) {
-    auto& page = pages_[gi >> kPageBits];
-    if (!page) {
-      page = std::make_unique_for_overwrite<std::uint32_t[]>(kPageSize);
-      std::fill_n(page.get(), kPageSize, kNone);
-    }
-    return page[gi & (kPageSize - 1)];
-  }
-
- private:
-  static constexpr int kPageBits = 16;
-  static constexpr std::size_t kPageSize = std::size_t(1) << kPageBits;
-  std::vector<std::unique_ptr<std::uint32_t[]>> pages_;
-};
-
 // Asks the kernel for transparent huge pages on the 2 MiB-aligned interior of a freshly
 // reserved (untouched) array: one fault per 2 MiB instead of one per 4 KiB. Only a hint; on this
 // project's VM a 4 KiB fault costs about 10 us and the faults were most of an export's mesh pass.
@@ -68,7 +46,8 @@ std::uint16_t largestCodeWithin(double maxErrorMetres) {
 }
 
 template <class ChartT>
-Mesh meshWith(const ChartT& chart, const Terrain& terrain, double maxErrorMetres) {
+void meshWith(const ChartT& chart, const Terrain& terrain, double maxErrorMetres,
+              ErrorMesher::VertexIndex& vertexOf, Mesh& mesh) {
   const core::GridSize g = terrain.grid();
   const int m = g.m();
   const BoundCodes* codes = terrain.bounds().codes().data();
@@ -100,18 +79,20 @@ Mesh meshWith(const ChartT& chart, const Terrain& terrain, double maxErrorMetres
   // were two thirds of the mesher's time. Euler on the square: V = (T + B + 2) / 2, B <= 4m.
   std::size_t triangles = 0;
   forEachLeaf([&](const Tri&) { ++triangles; });
-  Mesh mesh;
+  mesh.clear();
+  mesh.eye = Eigen::Vector3d::Zero();
+  ++mesh.generation;
   mesh.indices.reserve(3 * triangles);
   mesh.gridIndex.reserve((triangles + 4 * std::size_t(m) + 2) / 2);
   mesh.positions.reserve((triangles + 4 * std::size_t(m) + 2) / 2);
   adviseHugePages(mesh.indices);
   adviseHugePages(mesh.gridIndex);
   adviseHugePages(mesh.positions);
-  VertexIndex vertexOf(g.count());
+  vertexOf.prepare(g.count());
   auto vertex = [&](GridPoint p) {
     const std::uint64_t gi = g.index(p.u, p.v);
     std::uint32_t& slot = vertexOf[gi];
-    if (slot == VertexIndex::kNone) {
+    if (slot == ErrorMesher::VertexIndex::kNone) {
       slot = std::uint32_t(mesh.gridIndex.size());
       mesh.gridIndex.push_back(gi);
       mesh.positions.push_back(
@@ -124,23 +105,52 @@ Mesh meshWith(const ChartT& chart, const Terrain& terrain, double maxErrorMetres
     mesh.indices.push_back(vertex(t.b0));
     mesh.indices.push_back(vertex(t.b1));
   });
-  return mesh;
+  vertexOf.reset(mesh.gridIndex);
 }
 
 }  // namespace
 
-Mesh meshToError(const Terrain& terrain, double maxErrorMetres) {
+void ErrorMesher::VertexIndex::prepare(std::uint64_t gridCount) {
+  if (gridCount == gridCount_) return;
+  pages_.clear();
+  pages_.resize((gridCount >> kPageBits) + 1);
+  gridCount_ = gridCount;
+}
+
+std::unique_ptr<std::uint32_t[]> ErrorMesher::VertexIndex::freshPage() {
+  auto page = std::make_unique_for_overwrite<std::uint32_t[]>(kPageSize);
+  std::fill_n(page.get(), kPageSize, kNone);
+  return page;
+}
+
+void ErrorMesher::VertexIndex::reset(const std::vector<std::uint64_t>& used) {
+  for (const std::uint64_t gi : used) pages_[gi >> kPageBits][gi & (kPageSize - 1)] = kNone;
+}
+
+void ErrorMesher::mesh(const Terrain& terrain, double maxErrorMetres, Mesh& out) {
   if (!std::isfinite(maxErrorMetres) || maxErrorMetres < 0) {
     throw core::InputError("maximum error " + std::to_string(maxErrorMetres) +
                            " m must be finite and >= 0");
   }
   // One dispatch to the concrete chart, so positions inline (a virtual call per vertex else).
   const core::Chart& chart = terrain.chart();
-  if (auto* flat = dynamic_cast<const core::FlatChart*>(&chart))
-    return meshWith(*flat, terrain, maxErrorMetres);
-  if (auto* ll = dynamic_cast<const core::LatLongChart*>(&chart))
-    return meshWith(*ll, terrain, maxErrorMetres);
-  return meshWith(chart, terrain, maxErrorMetres);
+  // A throw part-way (bad_alloc) would leave slots set: start from an empty table then.
+  try {
+    if (auto* flat = dynamic_cast<const core::FlatChart*>(&chart))
+      return meshWith(*flat, terrain, maxErrorMetres, vertexOf_, out);
+    if (auto* ll = dynamic_cast<const core::LatLongChart*>(&chart))
+      return meshWith(*ll, terrain, maxErrorMetres, vertexOf_, out);
+    meshWith(chart, terrain, maxErrorMetres, vertexOf_, out);
+  } catch (...) {
+    vertexOf_ = VertexIndex{};
+    throw;
+  }
+}
+
+Mesh meshToError(const Terrain& terrain, double maxErrorMetres) {
+  Mesh mesh;
+  ErrorMesher().mesh(terrain, maxErrorMetres, mesh);
+  return mesh;
 }
 
 }  // namespace ps::terrain

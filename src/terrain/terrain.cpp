@@ -1,6 +1,7 @@
 #include "terrain/terrain.hpp"
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <cmath>
 #include <sstream>
@@ -78,9 +79,26 @@ Terrain::Terrain(std::shared_ptr<const core::Chart> chart, std::vector<float> he
 }
 
 void Terrain::refreshHeightRange() {
-  const auto [lo, hi] = std::minmax_element(heights_.begin(), heights_.end());
-  minHeight_ = *lo;
-  maxHeight_ = *hi;
+  // Eight independent lanes the compiler turns into vector min/max (heights are finite, so the
+  // order of comparisons cannot change the result); std::minmax_element compares one element at
+  // a time and was 5 % of an export's bounds build.
+  constexpr std::size_t kLanes = 8;
+  std::array<float, kLanes> lo, hi;
+  lo.fill(heights_.front());
+  hi.fill(heights_.front());
+  const std::size_t n = heights_.size(), body = n - n % kLanes;
+  for (std::size_t i = 0; i < body; i += kLanes) {
+    for (std::size_t k = 0; k < kLanes; ++k) {
+      lo[k] = std::min(lo[k], heights_[i + k]);
+      hi[k] = std::max(hi[k], heights_[i + k]);
+    }
+  }
+  for (std::size_t i = body; i < n; ++i) {
+    lo[0] = std::min(lo[0], heights_[i]);
+    hi[0] = std::max(hi[0], heights_[i]);
+  }
+  minHeight_ = *std::min_element(lo.begin(), lo.end());
+  maxHeight_ = *std::max_element(hi.begin(), hi.end());
 }
 
 void Terrain::commitEdit(const GridRegion& changed) {
