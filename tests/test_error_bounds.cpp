@@ -174,6 +174,22 @@ TEST_P(BoundsRule, LocalUpdateEqualsFullRebuildBitForBit) {
     ASSERT_EQ(full.errorCodes(), t.bounds().errorCodes())
         << "trial " << trial << " " << region.describe();
     ASSERT_EQ(full.radiusCodes(), t.bounds().radiusCodes()) << "trial " << trial;
+    ASSERT_TRUE(full.lattice() == t.bounds().lattice()) << "trial " << trial;
+    // The packed lattice the tessellator reads holds what the full arrays hold.
+    const int side = t.bounds().latticeSide();
+    ASSERT_EQ(side, (m >> terrain::ErrorBounds::kLatticeShift) + 1);
+    for (int lv = 0; lv < side; ++lv) {
+      for (int lu = 0; lu < side; ++lu) {
+        const int u = lu << terrain::ErrorBounds::kLatticeShift;
+        const int v = lv << terrain::ErrorBounds::kLatticeShift;
+        if ((u == 0 || u == m) && (v == 0 || v == m)) continue;  // corners split nothing
+        const std::size_t i = g.index(u, v);
+        const terrain::LatticeEntry expected{t.heights()[i], t.bounds().codes()[i]};
+        ASSERT_TRUE(t.bounds().lattice()[std::size_t(lv) * std::size_t(side) + std::size_t(lu)] ==
+                    expected)
+            << "trial " << trial << " lattice vertex (" << u << ", " << v << ")";
+      }
+    }
   }
 }
 

@@ -84,6 +84,13 @@ void ErrorBounds::computeLevel(const ChartT& chart, std::span<const float> heigh
   const ErrorRule rule = rule_;
   const bool withRadii = hasRadii();
   BoundCodes* codes = codes_.data();
+  const bool onLattice = !lattice_.empty() && s >= (1 << kLatticeShift);
+  auto copyToLattice = [&, lattice = lattice_.data(), side = std::size_t(latticeSide_)](int u,
+                                                                                        int v) {
+    const std::size_t i = g.index(u, v);
+    lattice[std::size_t(v >> kLatticeShift) * side + std::size_t(u >> kLatticeShift)] = {heights[i],
+                                                                                         codes[i]};
+  };
 
   auto computeVertex = [&](GridPoint p) {
     const Diamond d = Diamond::of(p);
@@ -199,6 +206,7 @@ void ErrorBounds::computeLevel(const ChartT& chart, std::span<const float> heigh
           computeLeaf({u, v});
         else
           computeVertex({u, v});
+        if (onLattice) copyToLattice(u, v);
         ++count;
       }
     }
@@ -220,6 +228,10 @@ void ErrorBounds::computeLevel(const ChartT& chart, std::span<const float> heigh
         const BoundCodes both{std::max(codes[a].error, codes[b].error),
                               std::max(codes[a].radius, codes[b].radius)};
         codes[a] = codes[b] = both;
+        if (onLattice) {
+          copyToLattice(0, v);
+          copyToLattice(m, v);
+        }
       }
     }
   }
@@ -258,6 +270,13 @@ void ErrorBounds::build(const core::Chart& chart, std::span<const float> heights
   rule_ = rule;
   content_ = content;
   codes_.assign(g.count(), BoundCodes{});
+  if (hasRadii()) {
+    latticeSide_ = (g.m() >> kLatticeShift) + 1;
+    lattice_.assign(std::size_t(latticeSide_) * std::size_t(latticeSide_), LatticeEntry{});
+  } else {
+    latticeSide_ = 0;
+    lattice_ = Lattice{};
+  }
   lastUpdateCount_ = 0;
   dispatchChart(chart, [&](const auto& c) {
     for (int level = 0; level < levelCount(g); ++level)

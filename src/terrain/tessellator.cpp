@@ -105,6 +105,16 @@ bool Tessellator::pass(const ChartT& chart, const Terrain& terrain, const Camera
   const int m = g.m();
   const float* h = terrain.heights().data();
   const BoundCodes* codes = terrain.bounds().codes().data();
+  const LatticeEntry* lattice = terrain.bounds().lattice().data();
+  const std::size_t latticeSide = std::size_t(terrain.bounds().latticeSide());
+  constexpr int kShift = ErrorBounds::kLatticeShift;
+  constexpr int kLatticeMask = (1 << kShift) - 1;
+  // The height and bounds of split vertex c: from the packed lattice when c is on it.
+  auto splitVertex = [&](GridPoint c, std::size_t ci) {
+    if (((c.u | c.v) & kLatticeMask) == 0)
+      return lattice[std::size_t(c.v >> kShift) * latticeSide + std::size_t(c.u >> kShift)];
+    return LatticeEntry{h[ci], codes[ci]};
+  };
   const ViewGeometry view = makeView(camera, chart.radius() + terrain.minHeight(), distMax);
   const Eigen::Matrix3d& R = camera.rotation;
   const Eigen::Vector3d forward = R.row(2).transpose();
@@ -133,9 +143,15 @@ bool Tessellator::pass(const ChartT& chart, const Terrain& terrain, const Camera
   auto prefetchSplitVertex = [&](GridPoint p, GridPoint q) {
     const int su = p.u + q.u, sv = p.v + q.v;
     if (((su | sv) & 1) == 0) {
-      const std::size_t k = g.index(su / 2, sv / 2);
-      __builtin_prefetch(h + k);
-      __builtin_prefetch(codes + k);
+      const int u = su / 2, v = sv / 2;
+      if (((u | v) & kLatticeMask) == 0) {
+        __builtin_prefetch(lattice + std::size_t(v >> kShift) * latticeSide +
+                           std::size_t(u >> kShift));
+      } else {
+        const std::size_t k = g.index(u, v);
+        __builtin_prefetch(h + k);
+        __builtin_prefetch(codes + k);
+      }
     }
   };
 
@@ -147,10 +163,10 @@ bool Tessellator::pass(const ChartT& chart, const Terrain& terrain, const Camera
     if (((su | sv) & 1) == 0) {  // the hypotenuse has a midpoint on the grid
       const GridPoint c{su / 2, sv / 2};
       const std::size_t ci = g.index(c.u, c.v);
-      const BoundCodes bc = codes[ci];
-      const double eps = BoundCode::decode(bc.error);
-      const double r = double(BoundCode::decode(bc.radius)) + eps;
-      const Eigen::Vector3d w = chart.position(c.u, c.v, double(h[ci])) - eye;
+      const LatticeEntry split = splitVertex(c, ci);
+      const double eps = BoundCode::decode(split.codes.error);
+      const double r = double(BoundCode::decode(split.codes.radius)) + eps;
+      const Eigen::Vector3d w = chart.position(c.u, c.v, double(split.height)) - eye;
       std::uint8_t inside = n.inside;
       if (inside != (kAllPlanes | kHorizonClear)) {
         const Eigen::Vector3d cam = R * w;
@@ -193,6 +209,9 @@ bool Tessellator::pass(const ChartT& chart, const Terrain& terrain, const Camera
           // their height and bounds now so the loads overlap with the work in between.
           prefetchSplitVertex(n.a, n.b0);
           prefetchSplitVertex(n.b1, n.a);
+          prefetchSplitVertex(c, n.a);
+          prefetchSplitVertex(c, n.b0);
+          prefetchSplitVertex(c, n.b1);
           continue;
         }
       }
