@@ -129,6 +129,9 @@ inline ::testing::AssertionResult boundsEqualFullRebuild(const terrain::Terrain&
   if (full.radiusCodes() != t.bounds().radiusCodes()) {
     return ::testing::AssertionFailure() << "radius codes differ from a full rebuild";
   }
+  if (!(full.lattice() == t.bounds().lattice())) {
+    return ::testing::AssertionFailure() << "the tessellator's lattice differs from a full rebuild";
+  }
   return ::testing::AssertionSuccess();
 }
 
