@@ -16,7 +16,7 @@ namespace ps::terrain {
 // An ErrorMesher keeps its grid-to-vertex table between calls, and mesh() refills the caller's
 // Mesh in place: re-meshing (an export sweep, a live preview) then touches no fresh memory. On
 // this project's VM a fresh 4 KiB page costs about 10 us to fault in, which was most of a
-// one-shot mesh pass.
+// one-shot mesh pass. One mesher per thread: mesh() writes its table.
 class ErrorMesher {
  public:
   // Throws core::InputError for a negative or non-finite maxErrorMetres (`out` is then untouched).
