@@ -110,6 +110,45 @@ TEST(Tessellator, BudgetCoarsensTheWholeViewAndStaysBounded) {
       << "coarsened evenly: one raised threshold holds everywhere";
 }
 
+// Frame coherence: a budget that bound on the last call starts the next one at the threshold it
+// settled on (one pass for the same view), and a view that no longer needs the raise gets the
+// requested threshold back, exactly as a fresh tessellator would mesh it.
+TEST(Tessellator, BoundBudgetStartsTheNextCallWhereItSettled) {
+  const auto t = testkit::bumpyTerrain(10, 2, 30000.0);
+  const Camera near = Camera::lookAt({0, -2.0 * testkit::kEarthRadius, 0.2 * testkit::kEarthRadius},
+                                     {0, 0, 0}, {0, 0, 1}, 1280, 720, 1.0);
+  TessellationSettings s;
+  s.distMaxPx = 0.5;
+  s.triangleBudget = 0;
+  const std::size_t unlimited = Tessellator().tessellate(t, near, s).triangleCount();
+  s.triangleBudget = unlimited / 4;
+
+  Tessellator tess;
+  const std::vector<std::uint32_t> first = tess.tessellate(t, near, s).indices;
+  const double settled = tess.stats().effectiveDistMaxPx;
+  ASSERT_GE(tess.stats().passes, 2) << "the budget must bind for this test";
+  EXPECT_FALSE(tess.stats().coherentStart);
+
+  tess.invalidate();
+  EXPECT_EQ(tess.tessellate(t, near, s).indices, first);
+  EXPECT_TRUE(tess.stats().coherentStart);
+  EXPECT_EQ(tess.stats().passes, 1);
+  EXPECT_EQ(tess.stats().effectiveDistMaxPx, settled);
+
+  // From far away the request fits the budget: the raised start is dropped.
+  const Camera far =
+      Camera::lookAt({0, -80.0 * testkit::kEarthRadius, 0}, {0, 0, 0}, {0, 0, 1}, 1280, 720, 1.0);
+  const auto& mesh = tess.tessellate(t, far, s);
+  EXPECT_TRUE(tess.stats().coherentStart);
+  EXPECT_EQ(tess.stats().effectiveDistMaxPx, s.distMaxPx);
+  EXPECT_EQ(mesh.indices, Tessellator().tessellate(t, far, s).indices);
+  // And the next call starts from the request again.
+  tess.invalidate();
+  tess.tessellate(t, far, s);
+  EXPECT_FALSE(tess.stats().coherentStart);
+  EXPECT_EQ(tess.stats().passes, 1);
+}
+
 TEST(Tessellator, CullingSkipsWorkAndUnchangedViewsAreReused) {
   const auto t = testkit::bumpyTerrain(8, 2, 8000.0);
   const Camera cam = Camera::lookAt({0, 0, testkit::kEarthRadius + 500000},

@@ -255,6 +255,13 @@ const Mesh& Tessellator::tessellate(const Terrain& terrain, const Camera& camera
   stats_.reused = false;
   double distMax = settings.distMaxPx;
   const std::size_t budget = settings.triangleBudget;
+  // Successive views are close, so when the budget bound last time with these settings, start
+  // from the threshold it settled on. A start that leaves the mesh well under the budget (the
+  // view got simpler) falls back to the requested threshold, so the view is never left much
+  // coarser than the budget requires.
+  constexpr double kCoherentFill = 0.8;
+  stats_.coherentStart = budget && budgetStart_ > distMax && budgetSettings_ == settings;
+  if (stats_.coherentStart) distMax = budgetStart_;
   // When the budget binds, the whole view coarsens: raise the threshold (triangle counts
   // scale roughly with 1/distMax) and tessellate again.
   constexpr int kMaxPasses = 16;
@@ -269,9 +276,16 @@ const Mesh& Tessellator::tessellate(const Terrain& terrain, const Camera& camera
       complete = pass(terrain.chart(), terrain, camera, distMax, settings.cull, abortAbove);
     }
     const std::size_t tris = mesh_.triangleCount();
+    if (complete && stats_.passes == 1 && stats_.coherentStart &&
+        double(tris) < kCoherentFill * double(budget)) {
+      distMax = settings.distMaxPx;  // the view got simpler: search from the request again
+      continue;
+    }
     if (budget == 0 || (complete && tris <= budget) || stats_.passes >= kMaxPasses) break;
     distMax *= complete ? std::max(1.02, 1.03 * double(tris) / double(budget)) : 4.0;
   }
+  budgetStart_ = distMax > settings.distMaxPx ? distMax : 0.0;
+  budgetSettings_ = settings;
   stats_.effectiveDistMaxPx = distMax;
   stats_.triangles = mesh_.triangleCount();
   stats_.vertices = mesh_.gridIndex.size();

@@ -21,6 +21,7 @@ struct TessellationStats {
   std::size_t vertices = 0;
   double effectiveDistMaxPx = 0;  // > distMaxPx when the budget bound and the view coarsened
   int passes = 0;                 // tessellation passes (more than one when the budget bound)
+  bool coherentStart = false;     // began at the previous call's raised threshold
   bool reused = false;            // nothing changed: the previous mesh was returned untouched
   std::size_t visited = 0;        // bintree triangles examined in the last pass
   std::size_t culledFrustum = 0, culledHorizon = 0;
@@ -68,6 +69,12 @@ class Tessellator {
   std::vector<Node> stack_;
   std::vector<std::uint64_t> hashKeys_;
   std::vector<std::uint32_t> hashValues_;
+
+  // Frame coherence for the budget: the raised threshold the last call with the same settings
+  // settled on (0: the budget did not bind). The next call starts there, so a budget that binds
+  // frame after frame costs one pass instead of two or more.
+  double budgetStart_ = 0;
+  TessellationSettings budgetSettings_;
 
   bool cacheValid_ = false;
   std::uint64_t cachedRevision_ = 0;
