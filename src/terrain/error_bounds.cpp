@@ -1,8 +1,10 @@
 #include "terrain/error_bounds.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <type_traits>
+#include <utility>
 
 #include "core/flat_chart.hpp"
 #include "core/input_error.hpp"
@@ -186,31 +188,39 @@ void ErrorBounds::computeLevel(const ChartT& chart, std::span<const float> heigh
     if (centre && !vOdd) continue;  // centre vertices sit on odd rows only
     rows.push_back(v);
   }
-  std::size_t count = 0;
+  // A region across the seam is two column ranges; one loop over (row, range) items keeps both
+  // cores on one team instead of two fork-joins per level, each with half the work.
+  std::array<std::pair<int, int>, 2> ranges;
+  std::size_t rangeCount = 0;
+  double work = 0;
   region.forEachColumnRange(g, [&](int uA, int uB) {
-    // Small regions (a typical edit near the fine levels) stay on this thread: waking the team
-    // costs more than the work, and much more when the machine is busy.
-    const bool parallel = double(rows.size()) * double(uB - uA + 1) / double(2 * s) > 20000.0;
-#pragma omp parallel for schedule(dynamic, 4) reduction(+ : count) if (parallel)
-    for (std::size_t r = 0; r < rows.size(); ++r) {
-      const int v = rows[r];
-      const bool vOdd = ((v / s) & 1) != 0;
-      // Columns: on an odd row, edge vertices have u/s even and centres u/s odd; on an even row
-      // only edge vertices, u/s odd.
-      const bool wantUOdd = centre || !vOdd;
-      int u = ((uA + s - 1) / s) * s;
-      if ((((u / s) & 1) != 0) != wantUOdd) u += s;
-      for (; u <= uB; u += 2 * s) {
-        if ((u == 0 || u == m) && (v == 0 || v == m)) continue;  // grid corners split nothing
-        if (level == 0)
-          computeLeaf({u, v});
-        else
-          computeVertex({u, v});
-        if (onLattice) copyToLattice(u, v);
-        ++count;
-      }
-    }
+    ranges[rangeCount++] = {uA, uB};
+    work += double(rows.size()) * double(uB - uA + 1) / double(2 * s);
   });
+  // Small regions (a typical edit near the fine levels) stay on this thread: waking the team
+  // costs more than the work, and much more when the machine is busy.
+  const bool parallel = work > 20000.0;
+  std::size_t count = 0;
+#pragma omp parallel for schedule(dynamic, 4) reduction(+ : count) if (parallel)
+  for (std::size_t item = 0; item < rows.size() * rangeCount; ++item) {
+    const int v = rows[item / rangeCount];
+    const auto [uA, uB] = ranges[item % rangeCount];
+    const bool vOdd = ((v / s) & 1) != 0;
+    // Columns: on an odd row, edge vertices have u/s even and centres u/s odd; on an even row
+    // only edge vertices, u/s odd.
+    const bool wantUOdd = centre || !vOdd;
+    int u = ((uA + s - 1) / s) * s;
+    if ((((u / s) & 1) != 0) != wantUOdd) u += s;
+    for (; u <= uB; u += 2 * s) {
+      if ((u == 0 || u == m) && (v == 0 || v == m)) continue;  // grid corners split nothing
+      if (level == 0)
+        computeLeaf({u, v});
+      else
+        computeVertex({u, v});
+      if (onLattice) copyToLattice(u, v);
+      ++count;
+    }
+  }
   lastUpdateCount_ += count;
 
   // Seam twins hold the combined values of both halves of their diamond.
