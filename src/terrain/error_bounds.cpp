@@ -40,9 +40,8 @@ struct Sampler {
   }
 };
 
-// Largest |P(q) - L_T(q)| over grid points q of triangle (a, b0, b1) (right angle at a).
-// L_T is affine in (u, v), so along a row it advances by a constant step; the barycentric
-// tests are advanced the same way.
+// Largest |P(q) - L_T(q)| over grid points q of triangle (a, b0, b1) (right angle at a), visited
+// row span by row span (forEachGridPointInTriangle), L_T from q's barycentric weights.
 template <class ChartT>
 double exactTriangleDeviation(const Sampler<ChartT>& s, GridPoint a, GridPoint b0, GridPoint b1) {
   if constexpr (std::is_same_v<ChartT, core::FlatChart>) {
@@ -56,19 +55,11 @@ double exactTriangleDeviation(const Sampler<ChartT>& s, GridPoint a, GridPoint b
     });
     return worst;
   } else {
-    const long long e0u = b0.u - a.u, e0v = b0.v - a.v;
-    const double inv = 1.0 / double(e0u * e0u + e0v * e0v);
     const Eigen::Vector3d pa = s.pos(a), d0 = s.pos(b0) - pa, d1 = s.pos(b1) - pa;
     double worst2 = 0.0;
-    forEachRowSpanInTriangle(a, b0, b1,
-                             [&](int v, int uFirst, int uLast, long long da, long long db,
-                                 long long stepA, long long stepB) {
-                               for (int u = uFirst; u <= uLast; ++u, da += stepA, db += stepB) {
-                                 const Eigen::Vector3d lin =
-                                     pa + (double(da) * inv) * d0 + (double(db) * inv) * d1;
-                                 worst2 = std::max(worst2, (s.pos({u, v}) - lin).squaredNorm());
-                               }
-                             });
+    forEachGridPointInTriangle(a, b0, b1, [&](int u, int v, double w0, double w1) {
+      worst2 = std::max(worst2, (s.pos({u, v}) - (pa + w0 * d0 + w1 * d1)).squaredNorm());
+    });
     return std::sqrt(worst2);
   }
 }
@@ -86,12 +77,10 @@ void ErrorBounds::computeLevel(const ChartT& chart, std::span<const float> heigh
   const ErrorRule rule = rule_;
   const bool withRadii = hasRadii();
   BoundCodes* codes = codes_.data();
-  const bool onLattice = !lattice_.empty() && s >= (1 << kLatticeShift);
-  auto copyToLattice = [&, lattice = lattice_.data(), side = std::size_t(latticeSide_)](int u,
-                                                                                        int v) {
+  const bool levelOnLattice = !lattice_.empty() && s >= (1 << kLatticeShift);
+  auto copyToLattice = [&](int u, int v) {
     const std::size_t i = g.index(u, v);
-    lattice[std::size_t(v >> kLatticeShift) * side + std::size_t(u >> kLatticeShift)] = {heights[i],
-                                                                                         codes[i]};
+    lattice_[latticeIndex(u, v)] = {heights[i], codes[i]};
   };
 
   auto computeVertex = [&](GridPoint p) {
@@ -217,7 +206,7 @@ void ErrorBounds::computeLevel(const ChartT& chart, std::span<const float> heigh
         computeLeaf({u, v});
       else
         computeVertex({u, v});
-      if (onLattice) copyToLattice(u, v);
+      if (levelOnLattice) copyToLattice(u, v);
       ++count;
     }
   }
@@ -238,7 +227,7 @@ void ErrorBounds::computeLevel(const ChartT& chart, std::span<const float> heigh
         const BoundCodes both{std::max(codes[a].error, codes[b].error),
                               std::max(codes[a].radius, codes[b].radius)};
         codes[a] = codes[b] = both;
-        if (onLattice) {
+        if (levelOnLattice) {
           copyToLattice(0, v);
           copyToLattice(m, v);
         }

@@ -77,12 +77,18 @@ class ErrorBounds {
   // column. The tessellator visits those (most of a view's mesh) in a scattered order, where in
   // the full arrays each visit was two cache misses pages apart (heights and codes, 512 MiB at
   // 8193²). Packed here with their heights, 1/64 of the grid (8 MiB at 8193²), they stay in the
-  // last-level cache and neighbours share lines. Entry (u >> kLatticeShift, v >> kLatticeShift)
-  // at index row * latticeSide() + column; equal to heights[i] and codes()[i] for every lattice
-  // vertex but the four grid corners (which split nothing). Empty without radii (exports).
+  // last-level cache and neighbours share lines. Grid vertex (u, v) on the lattice is entry
+  // latticeIndex(u, v); it equals heights[i] and codes()[i] for every lattice vertex but the four
+  // grid corners (which split nothing). Empty without radii (exports).
   static constexpr int kLatticeShift = 3;
+  static constexpr int kLatticeMask = (1 << kLatticeShift) - 1;
+  static bool onLattice(int u, int v) { return ((u | v) & kLatticeMask) == 0; }
   const Lattice& lattice() const { return lattice_; }
   int latticeSide() const { return latticeSide_; }
+  std::size_t latticeIndex(int u, int v) const {
+    return std::size_t(v >> kLatticeShift) * std::size_t(latticeSide_) +
+           std::size_t(u >> kLatticeShift);
+  }
   // Copies of one half of the codes, for comparisons in tests and tools.
   std::vector<std::uint16_t> errorCodes() const;
   std::vector<std::uint16_t> radiusCodes() const;

@@ -105,14 +105,11 @@ bool Tessellator::pass(const ChartT& chart, const Terrain& terrain, const Camera
   const int m = g.m();
   const float* h = terrain.heights().data();
   const BoundCodes* codes = terrain.bounds().codes().data();
-  const LatticeEntry* lattice = terrain.bounds().lattice().data();
-  const std::size_t latticeSide = std::size_t(terrain.bounds().latticeSide());
-  constexpr int kShift = ErrorBounds::kLatticeShift;
-  constexpr int kLatticeMask = (1 << kShift) - 1;
+  const ErrorBounds& bounds = terrain.bounds();
+  const LatticeEntry* lattice = bounds.lattice().data();
   // The height and bounds of split vertex c: from the packed lattice when c is on it.
   auto splitVertex = [&](GridPoint c, std::size_t ci) {
-    if (((c.u | c.v) & kLatticeMask) == 0)
-      return lattice[std::size_t(c.v >> kShift) * latticeSide + std::size_t(c.u >> kShift)];
+    if (ErrorBounds::onLattice(c.u, c.v)) return lattice[bounds.latticeIndex(c.u, c.v)];
     return LatticeEntry{h[ci], codes[ci]};
   };
   const ViewGeometry view = makeView(camera, chart.radius() + terrain.minHeight(), distMax);
@@ -144,9 +141,8 @@ bool Tessellator::pass(const ChartT& chart, const Terrain& terrain, const Camera
     const int su = p.u + q.u, sv = p.v + q.v;
     if (((su | sv) & 1) == 0) {
       const int u = su / 2, v = sv / 2;
-      if (((u | v) & kLatticeMask) == 0) {
-        __builtin_prefetch(lattice + std::size_t(v >> kShift) * latticeSide +
-                           std::size_t(u >> kShift));
+      if (ErrorBounds::onLattice(u, v)) {
+        __builtin_prefetch(lattice + bounds.latticeIndex(u, v));
       } else {
         const std::size_t k = g.index(u, v);
         __builtin_prefetch(h + k);
@@ -260,7 +256,7 @@ const Mesh& Tessellator::tessellate(const Terrain& terrain, const Camera& camera
   // view got simpler) falls back to the requested threshold, so the view is never left much
   // coarser than the budget requires.
   constexpr double kCoherentFill = 0.8;
-  stats_.coherentStart = budget && budgetStart_ > distMax && budgetSettings_ == settings;
+  stats_.coherentStart = budget && budgetStart_ > distMax && cachedSettings_ == settings;
   if (stats_.coherentStart) distMax = budgetStart_;
   // When the budget binds, the whole view coarsens: raise the threshold (triangle counts
   // scale roughly with 1/distMax) and tessellate again.
@@ -285,7 +281,6 @@ const Mesh& Tessellator::tessellate(const Terrain& terrain, const Camera& camera
     distMax *= complete ? std::max(1.02, 1.03 * double(tris) / double(budget)) : 4.0;
   }
   budgetStart_ = distMax > settings.distMaxPx ? distMax : 0.0;
-  budgetSettings_ = settings;
   stats_.effectiveDistMaxPx = distMax;
   stats_.triangles = mesh_.triangleCount();
   stats_.vertices = mesh_.gridIndex.size();

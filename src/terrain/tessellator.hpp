@@ -70,11 +70,10 @@ class Tessellator {
   std::vector<std::uint64_t> hashKeys_;
   std::vector<std::uint32_t> hashValues_;
 
-  // Frame coherence for the budget: the raised threshold the last call with the same settings
-  // settled on (0: the budget did not bind). The next call starts there, so a budget that binds
-  // frame after frame costs one pass instead of two or more.
+  // Frame coherence for the budget: the raised threshold the last call (with cachedSettings_)
+  // settled on (0: the budget did not bind). The next call with the same settings starts there,
+  // so a budget that binds frame after frame costs one pass instead of two or more.
   double budgetStart_ = 0;
-  TessellationSettings budgetSettings_;
 
   bool cacheValid_ = false;
   std::uint64_t cachedRevision_ = 0;
