@@ -285,7 +285,8 @@ TEST(EditPipeline, NothingChangesOnRejectedInput) {
   EXPECT_EQ(pipe.journal().undoCount(), 0u);
 }
 
-TEST(EditPipeline, ReportCountsTheRegionAndTimesTheSteps) {
+// The report's step times are measurements: `bench deform` prints them; a test asserts counts.
+TEST(EditPipeline, ReportCountsTheRegionOfAPolarCap) {
   auto t = testkit::bumpyTerrain(8, 4, 3000.0);
   edit::EditPipeline pipe(t);
   const int m = t.grid().m();
@@ -299,9 +300,5 @@ TEST(EditPipeline, ReportCountsTheRegionAndTimesTheSteps) {
   EXPECT_TRUE(rep.dirty.coversAllColumns(t.grid()));
   EXPECT_EQ(rep.dirty.vBegin, 0);
   EXPECT_GT(rep.boundsVertices, rep.modifiedPoints / 2);
-  for (double x : {rep.growMs, rep.heightsMs, rep.errorsMs, rep.journalMs}) {
-    EXPECT_GE(x, 0.0);
-    EXPECT_LE(x, rep.totalMs + 1e-9);
-  }
   EXPECT_TRUE(edittest::consistentHeights(t));
 }
