@@ -19,6 +19,20 @@ class Chart {
 
   // Position in the planet frame of grid vertex (u, v) displaced by height h along up().
   virtual Eigen::Vector3d position(int u, int v, double h) const = 0;
+  // position() of the grid vertices (u, v), u = uFirst .. uLast, with heights hRow[u] (hRow is
+  // the row's first height): out.x[k], y[k], z[k] for u = uFirst + k. Bit-identical to
+  // position(); charts override it with a loop the compiler vectorises (the error bounds fill
+  // whole rows of positions).
+  struct RowOut {
+    double *x, *y, *z;
+  };
+  virtual void rowPositions(int v, int uFirst, int uLast, const float* hRow, RowOut out) const {
+    for (int u = uFirst; u <= uLast; ++u) {
+      const Eigen::Vector3d p = position(u, v, double(hRow[u]));
+      const int k = u - uFirst;
+      out.x[k] = p.x(), out.y[k] = p.y(), out.z[k] = p.z();
+    }
+  }
   // The direction heights displace along at (u, v) (unit length).
   virtual Eigen::Vector3d up(int u, int v) const = 0;
   // Continuous version of position() for parameter coordinates in grid units.

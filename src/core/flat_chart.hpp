@@ -18,6 +18,16 @@ class FlatChart final : public Chart {
   Eigen::Vector3d position(int u, int v, double h) const override {
     return {double(u) * dx_, double(v) * dy_, h};
   }
+  void rowPositions(int v, int uFirst, int uLast, const float* hRow, RowOut out) const override {
+    double* __restrict x = out.x;
+    double* __restrict y = out.y;
+    double* __restrict z = out.z;
+    const double yv = double(v) * dy_;
+    for (int u = uFirst; u <= uLast; ++u) {
+      const int k = u - uFirst;
+      x[k] = double(u) * dx_, y[k] = yv, z[k] = double(hRow[u]);
+    }
+  }
   Eigen::Vector3d up(int, int) const override { return Eigen::Vector3d::UnitZ(); }
   Eigen::Vector3d positionAt(double u, double v, double h) const override {
     return {u * dx_, v * dy_, h};

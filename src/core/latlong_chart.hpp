@@ -20,6 +20,22 @@ class LatLongChart final : public Chart {
   Eigen::Vector3d position(int u, int v, double h) const override {
     return (radius_ + h) * direction(u, v);
   }
+  void rowPositions(int v, int uFirst, int uLast, const float* hRow, RowOut out) const override {
+    const double cl = cosLat_[std::size_t(v)], sl = sinLat_[std::size_t(v)], r0 = radius_;
+    const double* cosLon = cosLon_.data() + uFirst;
+    const double* sinLon = sinLon_.data() + uFirst;
+    const float* h = hRow + uFirst;
+    double* __restrict x = out.x;
+    double* __restrict y = out.y;
+    double* __restrict z = out.z;
+    const int n = uLast - uFirst + 1;
+    for (int k = 0; k < n; ++k) {  // position()'s arithmetic, in its order
+      const double r = r0 + double(h[k]);
+      x[k] = r * (cosLon[k] * cl);
+      y[k] = r * (sinLon[k] * cl);
+      z[k] = r * sl;
+    }
+  }
   Eigen::Vector3d up(int u, int v) const override { return direction(u, v); }
   Eigen::Vector3d positionAt(double u, double v, double h) const override;
   std::optional<Eigen::Vector2d> inverse(const Eigen::Vector3d& p) const override;

@@ -93,15 +93,20 @@ inline bool levelIsCentre(int level) {
 // the integer barycentric numerators of b0 and b1 at uFirst (the weights are da / len2 and
 // db / len2, len2 = |b0 - a|^2) and advance by stepA and stepB per column. The span is solved
 // from the three edge inequalities, so no point outside the triangle is visited (the bounding
-// box holds twice as many, and testing each was a branch the scans mispredicted).
+// box holds twice as many, and testing each was a branch the scans mispredicted). With
+// kOpen, only the points strictly inside the triangle (none on its edges).
+enum class TriangleSet { kClosed, kOpen };
 template <class F>
-void forEachRowSpanInTriangle(GridPoint a, GridPoint b0, GridPoint b1, F&& f) {
+void forEachRowSpanInTriangle(GridPoint a, GridPoint b0, GridPoint b1, F&& f,
+                              TriangleSet set = TriangleSet::kClosed) {
+  const long long inset = set == TriangleSet::kOpen ? 1 : 0;
   const long long e0u = b0.u - a.u, e0v = b0.v - a.v, e1u = b1.u - a.u, e1v = b1.v - a.v;
   const long long len2 = e0u * e0u + e0v * e0v;  // legs are equal
   const int u0 = std::min({a.u, b0.u, b1.u}), u1 = std::max({a.u, b0.u, b1.u});
   const int v0 = std::min({a.v, b0.v, b1.v}), v1 = std::max({a.v, b0.v, b1.v});
-  // Narrows [lo, hi] (offsets from u0) to where c + k * offset >= 0.
-  auto clip = [](long long c, long long k, long long& lo, long long& hi) {
+  // Narrows [lo, hi] (offsets from u0) to where c + k * offset >= inset.
+  auto clip = [inset](long long c, long long k, long long& lo, long long& hi) {
+    c -= inset;
     if (k == 0) {
       if (c < 0) hi = -1;
     } else if (k > 0) {
@@ -125,15 +130,18 @@ void forEachRowSpanInTriangle(GridPoint a, GridPoint b0, GridPoint b1, F&& f) {
 // Calls f(u, v, wb0, wb1) for every grid point of the right isosceles triangle (a, b0, b1), right
 // angle at a, where wb0, wb1 are the point's barycentric weights of b0 and b1 (a's is the rest).
 template <class F>
-void forEachGridPointInTriangle(GridPoint a, GridPoint b0, GridPoint b1, F&& f) {
+void forEachGridPointInTriangle(GridPoint a, GridPoint b0, GridPoint b1, F&& f,
+                                TriangleSet set = TriangleSet::kClosed) {
   const long long e0u = b0.u - a.u, e0v = b0.v - a.v;
   const double inv = 1.0 / double(e0u * e0u + e0v * e0v);
-  forEachRowSpanInTriangle(a, b0, b1,
-                           [&](int v, int uFirst, int uLast, long long da, long long db,
-                               long long stepA, long long stepB) {
-                             for (int u = uFirst; u <= uLast; ++u, da += stepA, db += stepB)
-                               f(u, v, double(da) * inv, double(db) * inv);
-                           });
+  forEachRowSpanInTriangle(
+      a, b0, b1,
+      [&](int v, int uFirst, int uLast, long long da, long long db, long long stepA,
+          long long stepB) {
+        for (int u = uFirst; u <= uLast; ++u, da += stepA, db += stepB)
+          f(u, v, double(da) * inv, double(db) * inv);
+      },
+      set);
 }
 
 inline bool inGrid(const core::GridSize& g, GridPoint p) {
