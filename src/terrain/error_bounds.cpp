@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <array>
-#include <bit>
 #include <cmath>
 #include <cstdlib>
 #include <type_traits>
@@ -11,6 +10,7 @@
 #include "core/flat_chart.hpp"
 #include "core/input_error.hpp"
 #include "core/latlong_chart.hpp"
+#include "terrain/bound_kernels.hpp"
 #include "terrain/diamond.hpp"
 
 namespace ps::terrain {
@@ -27,10 +27,7 @@ ErrorRule errorRuleFromString(const std::string& s) {
 
 namespace {
 
-// A nested radius must exceed its child's by a margin, so that the view-dependent test, which
-// is evaluated in floating point, stays monotone from child to parent even when a child's ball
-// touches its parent's from inside.
-constexpr double kRadiusMargin = 1.0 + 1e-7;
+using detail::kRadiusMargin;
 
 template <class ChartT>
 struct Sampler {
@@ -209,270 +206,7 @@ void ErrorBounds::computeLevel(const ChartT& chart, std::span<const float> heigh
                                 withRadii ? BoundCode::encodeUp(radius) : std::uint16_t(0)};
   };
 
-  // Levels 0 and 1 are three quarters of all vertices, and away from the grid's edges every one
-  // of them has all four neighbours in the grid: row kernels over one row's positions, computed
-  // once per row (a vertex's five positions were computed afresh for every vertex that reads
-  // them), with the square roots of a row in one loop. Same formulas as computeLeaf and
-  // computeVertex, so the same codes.
-  struct RowStrip {
-    std::vector<double> x, y, z;
-  };
-  auto fillStrip = [&](RowStrip& strip, int v, int uLo, int uHi) {
-    const std::size_t n = std::size_t(uHi - uLo + 1);
-    strip.x.resize(n), strip.y.resize(n), strip.z.resize(n);
-    chart.rowPositions(v, uLo, uHi, heights.data() + g.index(0, v),
-                       {strip.x.data(), strip.y.data(), strip.z.data()});
-  };
-  // Encodes a run's bounds (errors e, radii r) and stores them at first[stride * k]. Encoding
-  // a run in one loop lets the table look-ups of neighbouring vertices overlap.
-  auto storeCodes = [&](BoundCodes* first, std::size_t stride, std::size_t n, const double* e,
-                        const double* r) {
-    thread_local std::vector<std::uint16_t> errorCodes, radiusCodes;
-    errorCodes.resize(n), radiusCodes.assign(n, 0);
-    BoundCode::encodeUp(e, n, errorCodes.data());
-    if (withRadii) BoundCode::encodeUp(r, n, radiusCodes.data());
-    for (std::size_t k = 0; k < n; ++k) first[stride * k] = {errorCodes[k], radiusCodes[k]};
-  };
-  // Vertices uFirst, uFirst + 2, ..., uLast of row v (1 <= v < m, 1 <= uFirst, uLast < m).
-  auto fineRow = [&](int v, int uFirst, int uLast) {
-    thread_local RowStrip below, row, above;
-    thread_local std::vector<double> radius2, error2;
-    thread_local std::vector<std::uint16_t> childCodes;
-    fillStrip(below, v - 1, uFirst - 1, uLast + 1);
-    fillStrip(row, v, uFirst - 1, uLast + 1);
-    fillStrip(above, v + 1, uFirst - 1, uLast + 1);
-    const std::size_t n = std::size_t((uLast - uFirst) / 2 + 1);
-    radius2.resize(n), error2.resize(n);
-    const double *bx = below.x.data(), *by = below.y.data(), *bz = below.z.data();
-    const double *rx = row.x.data(), *ry = row.y.data(), *rz = row.z.data();
-    const double *ax = above.x.data(), *ay = above.y.data(), *az = above.z.data();
-    double* r2 = radius2.data();
-    double* e2 = error2.data();
-    auto dist2 = [](double x0, double y0, double z0, double x1, double y1, double z1) {
-      const double dx = x0 - x1, dy = y0 - y1, dz = z0 - z1;
-      return dx * dx + dy * dy + dz * dz;
-    };
-    if (level == 0) {
-      // Horizontal leaves (even rows) split between their left and right neighbours, vertical
-      // ones (odd rows) between those below and above; the radius reaches all four.
-      const bool horizontal = (v & 1) == 0;
-      const double* b0x = horizontal ? rx - 1 : bx;
-      const double* b0y = horizontal ? ry - 1 : by;
-      const double* b0z = horizontal ? rz - 1 : bz;
-      const double* b1x = horizontal ? rx + 1 : ax;
-      const double* b1y = horizontal ? ry + 1 : ay;
-      const double* b1z = horizontal ? rz + 1 : az;
-#pragma omp simd
-      for (std::size_t k = 0; k < n; ++k) {
-        const std::size_t i = 2 * k + 1;
-        const double px = rx[i], py = ry[i], pz = rz[i];
-        const double left = dist2(rx[i - 1], ry[i - 1], rz[i - 1], px, py, pz);
-        const double right = dist2(rx[i + 1], ry[i + 1], rz[i + 1], px, py, pz);
-        const double down = dist2(bx[i], by[i], bz[i], px, py, pz);
-        const double up = dist2(ax[i], ay[i], az[i], px, py, pz);
-        const double lr = left > right ? left : right, du = down > up ? down : up;
-        r2[k] = lr > du ? lr : du;
-        e2[k] = dist2(px, py, pz, 0.5 * (b0x[i] + b1x[i]), 0.5 * (b0y[i] + b1y[i]),
-                      0.5 * (b0z[i] + b1z[i]));
-      }
-#pragma omp simd
-      for (std::size_t k = 0; k < n; ++k) {
-        r2[k] = std::sqrt(r2[k]);
-        e2[k] = std::sqrt(e2[k]);
-      }
-      storeCodes(codes + g.index(uFirst, v), 2, n, e2, r2);
-      return;
-    }
-    // Level 1: centre vertices of the cells, with their children left, right, below and above
-    // (their squared distances in r2 and the three arrays below); the hypotenuse is the cell's
-    // main diagonal or the other one, alternating along the row.
-    thread_local std::vector<double> right2, below2, above2;
-    right2.resize(n), below2.resize(n), above2.resize(n);
-    double* rr2 = right2.data();
-    double* br2 = below2.data();
-    double* ar2 = above2.data();
-    const std::size_t diagonalParity = std::size_t((uFirst - 1) / 2 + (v - 1) / 2);
-#pragma omp simd
-    for (std::size_t k = 0; k < n; ++k) {
-      const std::size_t i = 2 * k + 1;
-      const double px = rx[i], py = ry[i], pz = rz[i];
-      r2[k] = dist2(rx[i - 1], ry[i - 1], rz[i - 1], px, py, pz);
-      rr2[k] = dist2(rx[i + 1], ry[i + 1], rz[i + 1], px, py, pz);
-      br2[k] = dist2(bx[i], by[i], bz[i], px, py, pz);
-      ar2[k] = dist2(ax[i], ay[i], az[i], px, py, pz);
-      const double main = dist2(px, py, pz, 0.5 * (bx[i - 1] + ax[i + 1]),
-                                0.5 * (by[i - 1] + ay[i + 1]), 0.5 * (bz[i - 1] + az[i + 1]));
-      const double anti = dist2(px, py, pz, 0.5 * (bx[i + 1] + ax[i - 1]),
-                                0.5 * (by[i + 1] + ay[i - 1]), 0.5 * (bz[i + 1] + az[i - 1]));
-      // A bitwise select: a conditional here kept the compiler from vectorising the loop.
-      const std::uint64_t takeAnti = 0 - std::uint64_t((diagonalParity + k) & 1);
-      e2[k] = std::bit_cast<double>((std::bit_cast<std::uint64_t>(main) & ~takeAnti) |
-                                    (std::bit_cast<std::uint64_t>(anti) & takeAnti));
-    }
-#pragma omp simd
-    for (std::size_t k = 0; k < n; ++k) {
-      r2[k] = std::sqrt(r2[k]);
-      rr2[k] = std::sqrt(rr2[k]);
-      br2[k] = std::sqrt(br2[k]);
-      ar2[k] = std::sqrt(ar2[k]);
-      e2[k] = std::sqrt(e2[k]);
-    }
-    const BoundCodes* codesBelow = codes + g.index(0, v - 1);
-    const BoundCodes* codesAbove = codes + g.index(0, v + 1);
-    BoundCodes* codesRow = codes + g.index(0, v);
-    for (std::size_t k = 0; k < n; ++k) {
-      const int u = uFirst + 2 * int(k);
-      const BoundCodes left = codesRow[u - 1], right = codesRow[u + 1], down = codesBelow[u],
-                       up = codesAbove[u];
-      const std::uint16_t childCode =
-          std::max(std::max(left.error, right.error), std::max(down.error, up.error));
-      double radius = 0.0;
-      if (withRadii) {
-        auto reach = [](std::uint16_t code, double d) {
-          return (double(BoundCode::decode(code)) + d) * kRadiusMargin;
-        };
-        radius = std::max(std::max(reach(left.radius, r2[k]), reach(right.radius, rr2[k])),
-                          std::max(reach(down.radius, br2[k]), reach(up.radius, ar2[k])));
-      }
-      const double childEps = BoundCode::decode(childCode);
-      e2[k] = rule == ErrorRule::kHybridExact ? std::max(childEps, e2[k]) : childEps + e2[k];
-      r2[k] = radius;
-    }
-    storeCodes(codesRow + uFirst, 2, n, e2, r2);
-  };
-
-  // Levels 2 .. 5: every vertex of one row with the same orientation (edge levels: the whole
-  // row; centre levels: every other vertex, the diagonals alternate) reads its children, corners
-  // and scanned points at the same offsets, so the arithmetic of computeVertex runs as stencil
-  // loops over strips of the rows v - s .. v + s, vertex by vertex in the inner loop. The same
-  // formulas in the same order as computeVertex and the scans, so the same codes.
-  // The stencil kernel for the vertices uFirst, uFirst + 2s, ... (count of them) of row v.
-  auto stencilRow = [&](int v, int uFirst, std::size_t count) {
-    thread_local std::array<RowStrip, 2 * kExactMaxHalfSize + 1> strips;
-    const int uLo = uFirst - s, uHi = uFirst + 2 * s * int(count - 1) + s;
-    for (int dv = -s; dv <= s; ++dv) fillStrip(strips[std::size_t(dv + s)], v + dv, uLo, uHi);
-    auto run = [&](int runFirst, int step, std::size_t n) {
-      const Diamond d = Diamond::of({runFirst, v});  // the offsets of every vertex of this run
-      struct Point {
-        const double *x, *y, *z;  // the run's first vertex's point; vertex k at [step * k]
-      };
-      auto at = [&](GridPoint q) {
-        const RowStrip& strip = strips[std::size_t(q.v - v + s)];
-        const std::size_t k = std::size_t(q.u - uLo);
-        return Point{strip.x.data() + k, strip.y.data() + k, strip.z.data() + k};
-      };
-      const std::size_t st = std::size_t(step);
-      const Point P = at(d.centre);
-      thread_local std::array<std::vector<double>, 4> childDistance;
-      thread_local std::vector<double> worst2;
-      for (int c = 0; c < 4; ++c) {
-        std::vector<double>& out = childDistance[std::size_t(c)];
-        out.resize(n);
-        double* o = out.data();
-        const Point C = at(d.children[std::size_t(c)]);
-#pragma omp simd
-        for (std::size_t k = 0; k < n; ++k) {
-          const double dx = C.x[st * k] - P.x[st * k], dy = C.y[st * k] - P.y[st * k],
-                       dz = C.z[st * k] - P.z[st * k];
-          o[k] = std::sqrt(dx * dx + dy * dy + dz * dz);
-        }
-      }
-      worst2.assign(n, 0.0);
-      double* w2 = worst2.data();
-      const Point B0 = at(d.base0), B1 = at(d.base1);
-      // Largest squared distance of q from the point (a + w0 d0) + w1 d1 (d0 = b0 - a, d1 = b1 -
-      // a).
-      auto accumulate = [&](const Point& Q, const Point& A, const Point& E0, const Point& E1,
-                            double w0, double w1) {
-#pragma omp simd
-        for (std::size_t k = 0; k < n; ++k) {
-          const std::size_t j = st * k;
-          const double ax = A.x[j], ay = A.y[j], az = A.z[j];
-          const double dx = Q.x[j] - ((ax + w0 * (E0.x[j] - ax)) + w1 * (E1.x[j] - ax));
-          const double dy = Q.y[j] - ((ay + w0 * (E0.y[j] - ay)) + w1 * (E1.y[j] - ay));
-          const double dz = Q.z[j] - ((az + w0 * (E0.z[j] - az)) + w1 * (E1.z[j] - az));
-          const double e = dx * dx + dy * dy + dz * dz;
-          w2[k] = w2[k] > e ? w2[k] : e;
-        }
-      };
-      if (rule == ErrorRule::kHybridExact) {
-        // The shared hypotenuse (v among its points): hypotenuseDeviation's p0 + t (p1 - p0).
-        const int steps =
-            std::max(std::abs(d.base1.u - d.base0.u), std::abs(d.base1.v - d.base0.v));
-        const int du = (d.base1.u - d.base0.u) / steps, dv = (d.base1.v - d.base0.v) / steps;
-        const double inv = 1.0 / steps;
-        for (int j = 1; j < steps; ++j) {
-          const Point Q = at({d.base0.u + j * du, d.base0.v + j * dv});
-          const double t = double(j) * inv;
-#pragma omp simd
-          for (std::size_t k = 0; k < n; ++k) {
-            const std::size_t i = st * k;
-            const double dx = Q.x[i] - (B0.x[i] + t * (B1.x[i] - B0.x[i]));
-            const double dy = Q.y[i] - (B0.y[i] + t * (B1.y[i] - B0.y[i]));
-            const double dz = Q.z[i] - (B0.z[i] + t * (B1.z[i] - B0.z[i]));
-            const double e = dx * dx + dy * dy + dz * dz;
-            w2[k] = w2[k] > e ? w2[k] : e;
-          }
-        }
-        // The two interiors (interiorDeviation's weights).
-        for (auto [a, b0, b1] :
-             {std::array{d.apex0, d.base0, d.base1}, std::array{d.apex1, d.base1, d.base0}}) {
-          const Point A = at(a), E0 = at(b0), E1 = at(b1);
-          forEachGridPointInTriangle(
-              a, b0, b1,
-              [&](int qu, int qv, double w0, double w1) {
-                accumulate(at({qu, qv}), A, E0, E1, w0, w1);
-              },
-              TriangleSet::kOpen);
-        }
-      } else {
-        // Wedgie: the midpoint error, to be added to the children's bound.
-#pragma omp simd
-        for (std::size_t k = 0; k < n; ++k) {
-          const std::size_t i = st * k;
-          const double dx = P.x[i] - 0.5 * (B0.x[i] + B1.x[i]);
-          const double dy = P.y[i] - 0.5 * (B0.y[i] + B1.y[i]);
-          const double dz = P.z[i] - 0.5 * (B0.z[i] + B1.z[i]);
-          w2[k] = dx * dx + dy * dy + dz * dz;
-        }
-      }
-#pragma omp simd
-      for (std::size_t k = 0; k < n; ++k) w2[k] = std::sqrt(w2[k]);
-      std::array<std::ptrdiff_t, 4> childOffset;
-      for (std::size_t c = 0; c < 4; ++c)
-        childOffset[c] = std::ptrdiff_t(g.index(d.children[c].u, d.children[c].v)) -
-                         std::ptrdiff_t(g.index(runFirst, v));
-      BoundCodes* first = codes + g.index(runFirst, v);
-      thread_local std::vector<double> radii;
-      radii.resize(n);
-      double* r = radii.data();
-      for (std::size_t k = 0; k < n; ++k) {
-        const BoundCodes* out = first + st * k;
-        std::uint16_t childCode = 0;
-        double radius = 0.0;
-        for (std::size_t c = 0; c < 4; ++c) {
-          const BoundCodes child = out[childOffset[c]];
-          childCode = std::max(childCode, child.error);
-          if (withRadii) {
-            radius =
-                std::max(radius, (double(BoundCode::decode(child.radius)) + childDistance[c][k]) *
-                                     kRadiusMargin);
-          }
-        }
-        const double childEps = BoundCode::decode(childCode);
-        w2[k] = rule == ErrorRule::kHybridExact ? std::max(childEps, w2[k]) : childEps + w2[k];
-        r[k] = radius;
-      }
-      storeCodes(first, st, n, w2, r);
-    };
-    if (!centre) {
-      run(uFirst, 2 * s, count);
-    } else {
-      // Centre levels: the diagonal alternates, so two runs of every other vertex.
-      run(uFirst, 4 * s, (count + 1) / 2);
-      if (count > 1) run(uFirst + 2 * s, 4 * s, count / 2);
-    }
-  };
+  const detail::BoundKernels<ChartT> kernels(chart, heights.data(), codes, level, rule, withRadii);
 
   // Rows of this level inside the region.
   const int vFirst = ((region.vBegin + s - 1) / s) * s;
@@ -520,9 +254,9 @@ void ErrorBounds::computeLevel(const ChartT& chart, std::span<const float> heigh
         const int chunkLast = std::min(last, chunkFirst + (kChunk - 1) * step);
         const std::size_t n = std::size_t((chunkLast - chunkFirst) / step + 1);
         if (level <= 1)
-          fineRow(v, chunkFirst, chunkLast);
+          kernels.fineRow(v, chunkFirst, chunkLast);
         else
-          stencilRow(v, chunkFirst, n);
+          kernels.stencilRow(v, chunkFirst, n);
         count += n;
       }
       for (int seam : {0, m}) {

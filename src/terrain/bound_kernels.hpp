@@ -1,0 +1,341 @@
+#pragma once
+// The row kernels of ErrorBounds (error_bounds.cpp includes this; nothing else should).
+//
+// Levels 0 .. 5 are 63/64 of all vertices, and every vertex whose diamond lies inside the grid
+// reads its children, corners and scanned points at the same offsets as its neighbours on the
+// row: the per-vertex arithmetic of ErrorBounds::computeLevel runs here as loops over a run of
+// a row's vertices, on positions computed once per row (Chart::rowPositions) instead of afresh
+// for every vertex that reads them, with the square roots and encodings of a run in loops of
+// their own. The formulas and their order are computeLevel's, so the codes are the same
+// (bit for bit: tests compare a local update with a full rebuild; the scalar path stays for
+// the vertices on the grid's edges and the seam).
+#include <algorithm>
+#include <array>
+#include <bit>
+#include <cmath>
+#include <cstdint>
+#include <type_traits>
+#include <vector>
+
+#include "core/flat_chart.hpp"
+#include "core/grid.hpp"
+#include "terrain/bound_code.hpp"
+#include "terrain/diamond.hpp"
+#include "terrain/error_bounds.hpp"
+
+namespace ps::terrain::detail {
+
+// A nested radius must exceed its child's by a margin, so that the view-dependent test, which
+// is evaluated in floating point, stays monotone from child to parent even when a child's ball
+// touches its parent's from inside.
+constexpr double kRadiusMargin = 1.0 + 1e-7;
+
+template <class ChartT>
+class BoundKernels {
+  // On a flat chart x and y are linear in (u, v), so a scanned deviation is the height's alone
+  // (interiorDeviation's), without the planar components' rounding noise.
+  static constexpr bool kFlat = std::is_same_v<ChartT, core::FlatChart>;
+
+ public:
+  BoundKernels(const ChartT& chart, const float* heights, BoundCodes* codes, int level,
+               ErrorRule rule, bool withRadii)
+      : chart_(chart),
+        g_(chart.grid()),
+        heights_(heights),
+        codes_(codes),
+        level_(level),
+        s_(levelHalfSize(level)),
+        centre_(levelIsCentre(level)),
+        rule_(rule),
+        withRadii_(withRadii) {}
+
+  // Level 0 or 1: the vertices uFirst, uFirst + 2, ..., uLast of row v, 1 <= v < m,
+  // 1 <= uFirst <= uLast < m (all four neighbours in the grid).
+  void fineRow(int v, int uFirst, int uLast) const;
+  // Levels 2 .. 5: `count` vertices from uFirst on, 2s apart, on row v; their diamonds inside the
+  // grid (s <= v <= m - s, s <= u <= m - s).
+  void stencilRow(int v, int uFirst, std::size_t count) const;
+
+ private:
+  struct Strip {  // positions of one row's columns uLo .. uHi
+    std::vector<double> x, y, z;
+  };
+  struct Point {  // a run's first vertex's point of one offset; vertex k's is at [step * k]
+    const double *x, *y, *z;
+  };
+  struct Scratch {  // per thread, reused from run to run
+    std::array<Strip, 2 * ErrorBounds::kExactMaxHalfSize + 1> strips;
+    std::array<std::vector<double>, 5> distances;  // children, then the error
+    std::array<std::vector<double>, 9> frame;      // a triangle's corner and edge vectors
+    std::vector<double> radii;
+    std::vector<std::uint16_t> errorCodes, radiusCodes;
+  };
+  static Scratch& scratch() {
+    thread_local Scratch s;
+    return s;
+  }
+
+  void fill(Strip& strip, int v, int uLo, int uHi) const {
+    const std::size_t n = std::size_t(uHi - uLo + 1);
+    strip.x.resize(n), strip.y.resize(n), strip.z.resize(n);
+    chart_.rowPositions(v, uLo, uHi, heights_ + g_.index(0, v),
+                        {strip.x.data(), strip.y.data(), strip.z.data()});
+  }
+  static double dist2(double x0, double y0, double z0, double x1, double y1, double z1) {
+    const double dx = x0 - x1, dy = y0 - y1, dz = z0 - z1;
+    return dx * dx + dy * dy + dz * dz;
+  }
+  static void sqrtAll(std::vector<double>& values, std::size_t n) {
+    double* p = values.data();
+#pragma omp simd
+    for (std::size_t k = 0; k < n; ++k) p[k] = std::sqrt(p[k]);
+  }
+  // Encodes a run's errors e and radii r into first[stride * k]; encoding a run in one loop
+  // lets the table look-ups of neighbouring vertices overlap.
+  void store(BoundCodes* first, std::size_t stride, std::size_t n, const double* e,
+             const double* r) const;
+  // The error bound from the children's code and this vertex's own term (hybrid: the exact
+  // deviation, maxed; wedgie: the midpoint error, added).
+  double combine(std::uint16_t childCode, double own) const {
+    const double childEps = BoundCode::decode(childCode);
+    return rule_ == ErrorRule::kHybridExact ? std::max(childEps, own) : childEps + own;
+  }
+  static double reach(std::uint16_t radiusCode, double distance) {
+    return (double(BoundCode::decode(radiusCode)) + distance) * kRadiusMargin;
+  }
+  void stencilRun(int v, int runFirst, std::size_t step, std::size_t n, int uLo) const;
+
+  const ChartT& chart_;
+  core::GridSize g_;
+  const float* heights_;
+  BoundCodes* codes_;
+  int level_, s_;
+  bool centre_;
+  ErrorRule rule_;
+  bool withRadii_;
+};
+
+template <class ChartT>
+void BoundKernels<ChartT>::store(BoundCodes* first, std::size_t stride, std::size_t n,
+                                 const double* e, const double* r) const {
+  Scratch& w = scratch();
+  w.errorCodes.resize(n), w.radiusCodes.assign(n, 0);
+  BoundCode::encodeUp(e, n, w.errorCodes.data());
+  if (withRadii_) BoundCode::encodeUp(r, n, w.radiusCodes.data());
+  for (std::size_t k = 0; k < n; ++k) first[stride * k] = {w.errorCodes[k], w.radiusCodes[k]};
+}
+
+template <class ChartT>
+void BoundKernels<ChartT>::fineRow(int v, int uFirst, int uLast) const {
+  Scratch& w = scratch();
+  Strip &below = w.strips[0], &row = w.strips[1], &above = w.strips[2];
+  fill(below, v - 1, uFirst - 1, uLast + 1);
+  fill(row, v, uFirst - 1, uLast + 1);
+  fill(above, v + 1, uFirst - 1, uLast + 1);
+  const std::size_t n = std::size_t((uLast - uFirst) / 2 + 1);
+  for (auto& d : w.distances) d.resize(n);
+  const double *bx = below.x.data(), *by = below.y.data(), *bz = below.z.data();
+  const double *rx = row.x.data(), *ry = row.y.data(), *rz = row.z.data();
+  const double *ax = above.x.data(), *ay = above.y.data(), *az = above.z.data();
+  // Vertex k sits at strip index 2k + 1; its neighbours left, right, below and above.
+  double* left = w.distances[0].data();
+  double* right = w.distances[1].data();
+  double* down = w.distances[2].data();
+  double* up = w.distances[3].data();
+  double* e = w.distances[4].data();
+  if (level_ == 0) {
+    // computeLeaf: horizontal leaves (even rows) split between their left and right
+    // neighbours, vertical ones (odd rows) between those below and above; the radius reaches
+    // all four (one square root of the largest square: the same as the largest root).
+    const bool horizontal = (v & 1) == 0;
+    const double* b0x = horizontal ? rx - 1 : bx;
+    const double* b0y = horizontal ? ry - 1 : by;
+    const double* b0z = horizontal ? rz - 1 : bz;
+    const double* b1x = horizontal ? rx + 1 : ax;
+    const double* b1y = horizontal ? ry + 1 : ay;
+    const double* b1z = horizontal ? rz + 1 : az;
+#pragma omp simd
+    for (std::size_t k = 0; k < n; ++k) {
+      const std::size_t i = 2 * k + 1;
+      const double px = rx[i], py = ry[i], pz = rz[i];
+      const double l = dist2(rx[i - 1], ry[i - 1], rz[i - 1], px, py, pz);
+      const double r = dist2(rx[i + 1], ry[i + 1], rz[i + 1], px, py, pz);
+      const double d = dist2(bx[i], by[i], bz[i], px, py, pz);
+      const double u = dist2(ax[i], ay[i], az[i], px, py, pz);
+      const double lr = l > r ? l : r, du = d > u ? d : u;
+      left[k] = lr > du ? lr : du;
+      e[k] = dist2(px, py, pz, 0.5 * (b0x[i] + b1x[i]), 0.5 * (b0y[i] + b1y[i]),
+                   0.5 * (b0z[i] + b1z[i]));
+    }
+    sqrtAll(w.distances[0], n);
+    sqrtAll(w.distances[4], n);
+    store(codes_ + g_.index(uFirst, v), 2, n, e, left);
+    return;
+  }
+  // Level 1 (computeVertex): centre vertices of the cells, children left, right, below and
+  // above; the hypotenuse is the cell's main diagonal or the other one, alternating along the
+  // row.
+  const std::size_t diagonalParity = std::size_t((uFirst - 1) / 2 + (v - 1) / 2);
+#pragma omp simd
+  for (std::size_t k = 0; k < n; ++k) {
+    const std::size_t i = 2 * k + 1;
+    const double px = rx[i], py = ry[i], pz = rz[i];
+    left[k] = dist2(rx[i - 1], ry[i - 1], rz[i - 1], px, py, pz);
+    right[k] = dist2(rx[i + 1], ry[i + 1], rz[i + 1], px, py, pz);
+    down[k] = dist2(bx[i], by[i], bz[i], px, py, pz);
+    up[k] = dist2(ax[i], ay[i], az[i], px, py, pz);
+    const double main = dist2(px, py, pz, 0.5 * (bx[i - 1] + ax[i + 1]),
+                              0.5 * (by[i - 1] + ay[i + 1]), 0.5 * (bz[i - 1] + az[i + 1]));
+    const double anti = dist2(px, py, pz, 0.5 * (bx[i + 1] + ax[i - 1]),
+                              0.5 * (by[i + 1] + ay[i - 1]), 0.5 * (bz[i + 1] + az[i - 1]));
+    // A bitwise select: a conditional here kept the compiler from vectorising the loop.
+    const std::uint64_t takeAnti = 0 - std::uint64_t((diagonalParity + k) & 1);
+    e[k] = std::bit_cast<double>((std::bit_cast<std::uint64_t>(main) & ~takeAnti) |
+                                 (std::bit_cast<std::uint64_t>(anti) & takeAnti));
+  }
+  for (auto& d : w.distances) sqrtAll(d, n);
+  const BoundCodes* codesBelow = codes_ + g_.index(0, v - 1);
+  const BoundCodes* codesAbove = codes_ + g_.index(0, v + 1);
+  BoundCodes* codesRow = codes_ + g_.index(0, v);
+  for (std::size_t k = 0; k < n; ++k) {
+    const int u = uFirst + 2 * int(k);
+    const BoundCodes l = codesRow[u - 1], r = codesRow[u + 1], d = codesBelow[u], a = codesAbove[u];
+    const std::uint16_t childCode =
+        std::max(std::max(l.error, r.error), std::max(d.error, a.error));
+    const double radius =
+        withRadii_ ? std::max(std::max(reach(l.radius, left[k]), reach(r.radius, right[k])),
+                              std::max(reach(d.radius, down[k]), reach(a.radius, up[k])))
+                   : 0.0;
+    e[k] = combine(childCode, e[k]);
+    left[k] = radius;
+  }
+  store(codesRow + uFirst, 2, n, e, left);
+}
+
+template <class ChartT>
+void BoundKernels<ChartT>::stencilRow(int v, int uFirst, std::size_t count) const {
+  const int s = s_;
+  const int uLo = uFirst - s, uHi = uFirst + 2 * s * int(count - 1) + s;
+  Scratch& w = scratch();
+  for (int dv = -s; dv <= s; ++dv) fill(w.strips[std::size_t(dv + s)], v + dv, uLo, uHi);
+  if (!centre_) {
+    stencilRun(v, uFirst, std::size_t(2 * s), count, uLo);
+  } else {
+    // Centre levels: the diagonal alternates, so two runs of every other vertex.
+    stencilRun(v, uFirst, std::size_t(4 * s), (count + 1) / 2, uLo);
+    if (count > 1) stencilRun(v, uFirst + 2 * s, std::size_t(4 * s), count / 2, uLo);
+  }
+}
+
+template <class ChartT>
+void BoundKernels<ChartT>::stencilRun(int v, int runFirst, std::size_t st, std::size_t n,
+                                      int uLo) const {
+  Scratch& w = scratch();
+  const int s = s_;
+  const Diamond d = Diamond::of({runFirst, v});  // the offsets of every vertex of this run
+  auto at = [&](GridPoint q) {
+    const Strip& strip = w.strips[std::size_t(q.v - v + s)];
+    const std::size_t k = std::size_t(q.u - uLo);
+    return Point{strip.x.data() + k, strip.y.data() + k, strip.z.data() + k};
+  };
+  const Point P = at(d.centre);
+  // Distances to the four children.
+  for (std::size_t c = 0; c < 4; ++c) {
+    w.distances[c].resize(n);
+    double* o = w.distances[c].data();
+    const Point C = at(d.children[c]);
+#pragma omp simd
+    for (std::size_t k = 0; k < n; ++k) {
+      const std::size_t j = st * k;
+      o[k] = std::sqrt(dist2(C.x[j], C.y[j], C.z[j], P.x[j], P.y[j], P.z[j]));
+    }
+  }
+  w.distances[4].assign(n, 0.0);
+  double* worst = w.distances[4].data();  // largest squared deviation so far
+  const Point B0 = at(d.base0), B1 = at(d.base1);
+  if (rule_ == ErrorRule::kHybridExact) {
+    // The corner a and edge vectors d0 = b0 - a, d1 = b1 - a of a triangle, vertex by vertex
+    // (contiguous: every scanned point reads them).
+    auto setFrame = [&](const Point& A, const Point& E0, const Point& E1) {
+      for (auto& f : w.frame) f.resize(n);
+      double *ax = w.frame[0].data(), *ay = w.frame[1].data(), *az = w.frame[2].data();
+      double *d0x = w.frame[3].data(), *d0y = w.frame[4].data(), *d0z = w.frame[5].data();
+      double *d1x = w.frame[6].data(), *d1y = w.frame[7].data(), *d1z = w.frame[8].data();
+#pragma omp simd
+      for (std::size_t k = 0; k < n; ++k) {
+        const std::size_t j = st * k;
+        ax[k] = A.x[j], ay[k] = A.y[j], az[k] = A.z[j];
+        d0x[k] = E0.x[j] - A.x[j], d0y[k] = E0.y[j] - A.y[j], d0z[k] = E0.z[j] - A.z[j];
+        d1x[k] = E1.x[j] - A.x[j], d1y[k] = E1.y[j] - A.y[j], d1z[k] = E1.z[j] - A.z[j];
+      }
+    };
+    // The squared distance of q from (a + w0 d0) + w1 d1, maxed into worst.
+    auto accumulate = [&](const Point& Q, double w0, double w1) {
+      const double *ax = w.frame[0].data(), *ay = w.frame[1].data(), *az = w.frame[2].data();
+      const double *d0x = w.frame[3].data(), *d0y = w.frame[4].data(), *d0z = w.frame[5].data();
+      const double *d1x = w.frame[6].data(), *d1y = w.frame[7].data(), *d1z = w.frame[8].data();
+#pragma omp simd
+      for (std::size_t k = 0; k < n; ++k) {
+        const std::size_t j = st * k;
+        const double dz = Q.z[j] - ((az[k] + w0 * d0z[k]) + w1 * d1z[k]);
+        double e = dz * dz;
+        if constexpr (!kFlat) {
+          const double dx = Q.x[j] - ((ax[k] + w0 * d0x[k]) + w1 * d1x[k]);
+          const double dy = Q.y[j] - ((ay[k] + w0 * d0y[k]) + w1 * d1y[k]);
+          e = dx * dx + dy * dy + dz * dz;
+        }
+        worst[k] = worst[k] > e ? worst[k] : e;
+      }
+    };
+    // The shared hypotenuse (v among its points): hypotenuseDeviation's b0 + t (b1 - b0), as
+    // the frame (b0, b1, b0) with weights (t, 0) (adding 0 * 0 changes no bit).
+    setFrame(B0, B1, B0);
+    const int steps = std::max(std::abs(d.base1.u - d.base0.u), std::abs(d.base1.v - d.base0.v));
+    const int du = (d.base1.u - d.base0.u) / steps, dv = (d.base1.v - d.base0.v) / steps;
+    const double inv = 1.0 / steps;
+    for (int j = 1; j < steps; ++j)
+      accumulate(at({d.base0.u + j * du, d.base0.v + j * dv}), double(j) * inv, 0.0);
+    // The two interiors (interiorDeviation's weights); the legs are the children's.
+    for (auto [a, b0, b1] :
+         {std::array{d.apex0, d.base0, d.base1}, std::array{d.apex1, d.base1, d.base0}}) {
+      setFrame(at(a), at(b0), at(b1));
+      forEachGridPointInTriangle(
+          a, b0, b1,
+          [&](int qu, int qv, double w0, double w1) {
+            accumulate(at({qu, qv}), w0, w1);
+          },
+          TriangleSet::kOpen);
+    }
+  } else {
+    // Wedgie: the midpoint error, added to the children's bound.
+#pragma omp simd
+    for (std::size_t k = 0; k < n; ++k) {
+      const std::size_t j = st * k;
+      worst[k] = dist2(P.x[j], P.y[j], P.z[j], 0.5 * (B0.x[j] + B1.x[j]), 0.5 * (B0.y[j] + B1.y[j]),
+                       0.5 * (B0.z[j] + B1.z[j]));
+    }
+  }
+  sqrtAll(w.distances[4], n);
+  std::array<std::ptrdiff_t, 4> childOffset;
+  for (std::size_t c = 0; c < 4; ++c) {
+    childOffset[c] = std::ptrdiff_t(g_.index(d.children[c].u, d.children[c].v)) -
+                     std::ptrdiff_t(g_.index(runFirst, v));
+  }
+  BoundCodes* first = codes_ + g_.index(runFirst, v);
+  w.radii.resize(n);
+  for (std::size_t k = 0; k < n; ++k) {
+    const BoundCodes* vertex = first + st * k;
+    std::uint16_t childCode = 0;
+    double radius = 0.0;
+    for (std::size_t c = 0; c < 4; ++c) {
+      const BoundCodes child = vertex[childOffset[c]];
+      childCode = std::max(childCode, child.error);
+      if (withRadii_) radius = std::max(radius, reach(child.radius, w.distances[c][k]));
+    }
+    worst[k] = combine(childCode, worst[k]);
+    w.radii[k] = radius;
+  }
+  store(first, st, n, worst, w.radii.data());
+}
+
+}  // namespace ps::terrain::detail
