@@ -26,15 +26,41 @@ class BoundCode {
 
   static std::uint16_t encodeUp(double value) { return encodeUp(table(), value); }
 
-  // encodeUp of values[0 .. n): one loop without calls, so the table look-ups of different
-  // values overlap (the bounds' row kernels encode a run of vertices at once).
+  // The smallest code whose value squared is at least `square`: the code of a distance from its
+  // square, without the square root (a decoded value is a float, so its square is exact in
+  // double). The same as encodeUp(std::sqrt(square)) except where the rounded root lands
+  // exactly on a code's value while the exact root lies above it; there this one is the bound.
+  static std::uint16_t encodeUpFromSquare(double square) {
+    return encodeUpFromSquare(table(), square);
+  }
+
+  // encodeUp / encodeUpFromSquare of values[0 .. n): one loop without calls, so the table
+  // look-ups of different values overlap (the bounds' row kernels encode a run of vertices).
   static void encodeUp(const double* values, std::size_t n, std::uint16_t* codes) {
     const Table& t = table();
     for (std::size_t k = 0; k < n; ++k) codes[k] = encodeUp(t, values[k]);
   }
+  static void encodeUpFromSquare(const double* squares, std::size_t n, std::uint16_t* codes) {
+    const Table& t = table();
+    for (std::size_t k = 0; k < n; ++k) codes[k] = encodeUpFromSquare(t, squares[k]);
+  }
 
  private:
   struct Table;
+  static std::uint16_t encodeUpFromSquare(const Table& t, double square) {
+    if (!(square > 0.0)) return 0;
+    if (square <= kMin * kMin) return 1;
+    // square = kMin^2 * 2^e * (1 + f): the root is kMin * 2^(e/2) * sqrt(1 + f) for even e and
+    // kMin * 2^((e-1)/2) * sqrt(2 (1 + f)) for odd e; one bucket table per parity. A bucket spans
+    // under a quarter of a code step in the root, so one comparison finishes it.
+    const auto bits = std::bit_cast<std::uint64_t>(square / (kMin * kMin));
+    const int exponent = int((bits >> 52) & 0x7ff) - 1023;  // >= 0 here
+    const int first = (exponent >> 1) * kStepsPerOctave +
+                      t.firstCodeOfRoot[std::size_t(exponent & 1)][(bits >> 40) & 0xfff];
+    if (first >= 65535) return 65535;
+    const double value = decode(t, std::uint16_t(first));
+    return std::uint16_t(first + (value * value < square ? 1 : 0));
+  }
   static std::uint16_t encodeUp(const Table& t, double value) {
     if (!(value > 0.0)) return 0;  // also maps NaN to 0; callers validate heights first
     if (value <= kMin) return 1;
@@ -61,6 +87,9 @@ class BoundCode {
     std::array<float, kStepsPerOctave> octave;
     // Smallest code k in octave 0 with values[k] >= kMin * (1 + j / 4096).
     std::array<std::uint16_t, 4096> firstCode;
+    // Smallest code k in octave 0 (or 1025, octave 1's first) with values[k]^2 >=
+    // kMin^2 * 2^p * (1 + j / 4096), for p = 0, 1.
+    std::array<std::array<std::uint16_t, 4096>, 2> firstCodeOfRoot;
     Table() {
       for (int k = 1; k <= kStepsPerOctave; ++k) {
         const double x = kMin * std::exp2(double(k - 1) / kStepsPerOctave);
@@ -76,6 +105,19 @@ class BoundCode {
         const double start = kMin * (1.0 + j / 4096.0);
         while (k < kStepsPerOctave && double(octave[std::size_t(k)]) < start) ++k;
         firstCode[std::size_t(j)] = std::uint16_t(k + 1);
+      }
+      // In units of kMin (a power of two): the values are floats, so their squares are exact.
+      for (int p = 0; p < 2; ++p) {
+        k = 0;
+        for (int j = 0; j < 4096; ++j) {
+          const double start = (1.0 + j / 4096.0) * (p ? 2.0 : 1.0);
+          auto unitSquare = [&](int i) {
+            const double x = double(octave[std::size_t(i)]) / kMin;
+            return x * x;
+          };
+          while (k < kStepsPerOctave && unitSquare(k) < start) ++k;
+          firstCodeOfRoot[std::size_t(p)][std::size_t(j)] = std::uint16_t(k + 1);
+        }
       }
     }
   };

@@ -68,7 +68,7 @@ class BoundKernels {
     std::array<std::vector<double>, 5> distances;  // children, then the error
     std::array<std::vector<double>, 9> frame;      // a triangle's corner and edge vectors
     std::vector<double> radii;
-    std::vector<std::uint16_t> errorCodes, radiusCodes;
+    std::vector<std::uint16_t> childCodes, errorCodes, radiusCodes;
   };
   static Scratch& scratch() {
     thread_local Scratch s;
@@ -90,15 +90,29 @@ class BoundKernels {
 #pragma omp simd
     for (std::size_t k = 0; k < n; ++k) p[k] = std::sqrt(p[k]);
   }
-  // Encodes a run's errors e and radii r into first[stride * k]; encoding a run in one loop
+  // A run's bounds, encoded into first[stride * k]: errors and radii from their values, or from
+  // their squares where the flag says so (no square root: BoundCode::encodeUpFromSquare), the
+  // error code raised to atLeast[k] where atLeast is given (the hybrid rule's max with the
+  // children: encoding is monotone and encodeUp(decode(c)) == c). Encoding a run in one loop
   // lets the table look-ups of neighbouring vertices overlap.
-  void store(BoundCodes* first, std::size_t stride, std::size_t n, const double* e,
-             const double* r) const;
-  // The error bound from the children's code and this vertex's own term (hybrid: the exact
-  // deviation, maxed; wedgie: the midpoint error, added).
-  double combine(std::uint16_t childCode, double own) const {
-    const double childEps = BoundCode::decode(childCode);
-    return rule_ == ErrorRule::kHybridExact ? std::max(childEps, own) : childEps + own;
+  struct Values {
+    const double* values;
+    bool squared;
+  };
+  void store(BoundCodes* first, std::size_t stride, std::size_t n, Values errors,
+             const std::uint16_t* atLeast, Values radii) const;
+  // Errors from the largest squared deviations `own` and the children's codes: under the hybrid
+  // rule max(children, sqrt(own)), as codes; under the wedgie rule children + sqrt(own).
+  void storeWithChildren(BoundCodes* first, std::size_t stride, std::size_t n,
+                         std::vector<double>& own, const std::uint16_t* childCodes,
+                         const double* radii) const {
+    if (rule_ == ErrorRule::kHybridExact) {
+      store(first, stride, n, {own.data(), true}, childCodes, {radii, false});
+      return;
+    }
+    sqrtAll(own, n);
+    for (std::size_t k = 0; k < n; ++k) own[k] += double(BoundCode::decode(childCodes[k]));
+    store(first, stride, n, {own.data(), false}, nullptr, {radii, false});
   }
   static double reach(std::uint16_t radiusCode, double distance) {
     return (double(BoundCode::decode(radiusCode)) + distance) * kRadiusMargin;
@@ -117,11 +131,20 @@ class BoundKernels {
 
 template <class ChartT>
 void BoundKernels<ChartT>::store(BoundCodes* first, std::size_t stride, std::size_t n,
-                                 const double* e, const double* r) const {
+                                 Values errors, const std::uint16_t* atLeast, Values radii) const {
   Scratch& w = scratch();
   w.errorCodes.resize(n), w.radiusCodes.assign(n, 0);
-  BoundCode::encodeUp(e, n, w.errorCodes.data());
-  if (withRadii_) BoundCode::encodeUp(r, n, w.radiusCodes.data());
+  auto encode = [n](Values in, std::uint16_t* out) {
+    if (in.squared)
+      BoundCode::encodeUpFromSquare(in.values, n, out);
+    else
+      BoundCode::encodeUp(in.values, n, out);
+  };
+  encode(errors, w.errorCodes.data());
+  if (withRadii_) encode(radii, w.radiusCodes.data());
+  if (atLeast) {
+    for (std::size_t k = 0; k < n; ++k) w.errorCodes[k] = std::max(w.errorCodes[k], atLeast[k]);
+  }
   for (std::size_t k = 0; k < n; ++k) first[stride * k] = {w.errorCodes[k], w.radiusCodes[k]};
 }
 
@@ -146,7 +169,7 @@ void BoundKernels<ChartT>::fineRow(int v, int uFirst, int uLast) const {
   if (level_ == 0) {
     // computeLeaf: horizontal leaves (even rows) split between their left and right
     // neighbours, vertical ones (odd rows) between those below and above; the radius reaches
-    // all four (one square root of the largest square: the same as the largest root).
+    // all four. Both are encoded from their squares.
     const bool horizontal = (v & 1) == 0;
     const double* b0x = horizontal ? rx - 1 : bx;
     const double* b0y = horizontal ? ry - 1 : by;
@@ -167,9 +190,7 @@ void BoundKernels<ChartT>::fineRow(int v, int uFirst, int uLast) const {
       e[k] = dist2(px, py, pz, 0.5 * (b0x[i] + b1x[i]), 0.5 * (b0y[i] + b1y[i]),
                    0.5 * (b0z[i] + b1z[i]));
     }
-    sqrtAll(w.distances[0], n);
-    sqrtAll(w.distances[4], n);
-    store(codes_ + g_.index(uFirst, v), 2, n, e, left);
+    store(codes_ + g_.index(uFirst, v), 2, n, {e, true}, nullptr, {left, true});
     return;
   }
   // Level 1 (computeVertex): centre vertices of the cells, children left, right, below and
@@ -193,23 +214,22 @@ void BoundKernels<ChartT>::fineRow(int v, int uFirst, int uLast) const {
     e[k] = std::bit_cast<double>((std::bit_cast<std::uint64_t>(main) & ~takeAnti) |
                                  (std::bit_cast<std::uint64_t>(anti) & takeAnti));
   }
-  for (auto& d : w.distances) sqrtAll(d, n);
+  for (std::size_t c = 0; c < 4; ++c) sqrtAll(w.distances[c], n);
+  w.childCodes.resize(n);
   const BoundCodes* codesBelow = codes_ + g_.index(0, v - 1);
   const BoundCodes* codesAbove = codes_ + g_.index(0, v + 1);
   BoundCodes* codesRow = codes_ + g_.index(0, v);
   for (std::size_t k = 0; k < n; ++k) {
     const int u = uFirst + 2 * int(k);
     const BoundCodes l = codesRow[u - 1], r = codesRow[u + 1], d = codesBelow[u], a = codesAbove[u];
-    const std::uint16_t childCode =
-        std::max(std::max(l.error, r.error), std::max(d.error, a.error));
+    w.childCodes[k] = std::max(std::max(l.error, r.error), std::max(d.error, a.error));
     const double radius =
         withRadii_ ? std::max(std::max(reach(l.radius, left[k]), reach(r.radius, right[k])),
                               std::max(reach(d.radius, down[k]), reach(a.radius, up[k])))
                    : 0.0;
-    e[k] = combine(childCode, e[k]);
     left[k] = radius;
   }
-  store(codesRow + uFirst, 2, n, e, left);
+  storeWithChildren(codesRow + uFirst, 2, n, w.distances[4], w.childCodes.data(), left);
 }
 
 template <class ChartT>
@@ -315,14 +335,13 @@ void BoundKernels<ChartT>::stencilRun(int v, int runFirst, std::size_t st, std::
                        0.5 * (B0.z[j] + B1.z[j]));
     }
   }
-  sqrtAll(w.distances[4], n);
   std::array<std::ptrdiff_t, 4> childOffset;
   for (std::size_t c = 0; c < 4; ++c) {
     childOffset[c] = std::ptrdiff_t(g_.index(d.children[c].u, d.children[c].v)) -
                      std::ptrdiff_t(g_.index(runFirst, v));
   }
   BoundCodes* first = codes_ + g_.index(runFirst, v);
-  w.radii.resize(n);
+  w.radii.resize(n), w.childCodes.resize(n);
   for (std::size_t k = 0; k < n; ++k) {
     const BoundCodes* vertex = first + st * k;
     std::uint16_t childCode = 0;
@@ -332,10 +351,10 @@ void BoundKernels<ChartT>::stencilRun(int v, int runFirst, std::size_t st, std::
       childCode = std::max(childCode, child.error);
       if (withRadii_) radius = std::max(radius, reach(child.radius, w.distances[c][k]));
     }
-    worst[k] = combine(childCode, worst[k]);
+    w.childCodes[k] = childCode;
     w.radii[k] = radius;
   }
-  store(first, st, n, worst, w.radii.data());
+  storeWithChildren(first, st, n, w.distances[4], w.childCodes.data(), w.radii.data());
 }
 
 }  // namespace ps::terrain::detail
