@@ -49,6 +49,12 @@ class BoundKernels {
         rule_(rule),
         withRadii_(withRadii) {}
 
+  // Rows of positions are kept per thread for the next rows to share (a band of rows of one
+  // level reads rows v - s .. v + s each). Call at the start of each work item: the heights may
+  // have changed since the rows were read.
+  void forgetRows() const {
+    for (Strip& strip : scratch().rows) strip.v = -1;
+  }
   // Level 0 or 1: the vertices uFirst, uFirst + 2, ..., uLast of row v, 1 <= v < m,
   // 1 <= uFirst <= uLast < m (all four neighbours in the grid).
   void fineRow(int v, int uFirst, int uLast) const;
@@ -57,14 +63,19 @@ class BoundKernels {
   void stencilRow(int v, int uFirst, std::size_t count) const;
 
  private:
-  struct Strip {  // positions of one row's columns uLo .. uHi
+  struct Strip {  // positions of row v's columns uLo .. uHi
+    int v = -1, uLo = 0, uHi = -1;
     std::vector<double> x, y, z;
+  };
+  struct Row {  // a row's positions, column u at [u - the uLo asked for]
+    const double *x, *y, *z;
   };
   struct Point {  // a run's first vertex's point of one offset; vertex k's is at [step * k]
     const double *x, *y, *z;
   };
-  struct Scratch {  // per thread, reused from run to run
-    std::array<Strip, 2 * ErrorBounds::kExactMaxHalfSize + 1> strips;
+  struct Scratch {               // per thread, reused from run to run
+    std::array<Strip, 16> rows;  // row v in rows[v % 16]: the 2s + 1 <= 9 rows a run reads
+                                 // and the next run's are distinct
     std::array<std::vector<double>, 5> distances;  // children, then the error
     std::array<std::vector<double>, 9> frame;      // a triangle's corner and edge vectors
     std::vector<double> radii;
@@ -75,11 +86,20 @@ class BoundKernels {
     return s;
   }
 
-  void fill(Strip& strip, int v, int uLo, int uHi) const {
-    const std::size_t n = std::size_t(uHi - uLo + 1);
-    strip.x.resize(n), strip.y.resize(n), strip.z.resize(n);
-    chart_.rowPositions(v, uLo, uHi, heights_ + g_.index(0, v),
-                        {strip.x.data(), strip.y.data(), strip.z.data()});
+  // Row v's positions over columns uLo .. uHi (within the grid), computed unless kept.
+  Row row(int v, int uLo, int uHi) const {
+    Strip& strip = scratch().rows[std::size_t(v) & 15];
+    if (strip.v != v || strip.uLo > uLo || strip.uHi < uHi) {
+      // One column more on each side: level 0's rows of the other parity ask one column
+      // further along.
+      strip.v = v, strip.uLo = std::max(0, uLo - 1), strip.uHi = std::min(g_.m(), uHi + 1);
+      const std::size_t n = std::size_t(strip.uHi - strip.uLo + 1);
+      strip.x.resize(n), strip.y.resize(n), strip.z.resize(n);
+      chart_.rowPositions(v, strip.uLo, strip.uHi, heights_ + g_.index(0, v),
+                          {strip.x.data(), strip.y.data(), strip.z.data()});
+    }
+    const std::size_t shift = std::size_t(uLo - strip.uLo);
+    return {strip.x.data() + shift, strip.y.data() + shift, strip.z.data() + shift};
   }
   static double dist2(double x0, double y0, double z0, double x1, double y1, double z1) {
     const double dx = x0 - x1, dy = y0 - y1, dz = z0 - z1;
@@ -117,7 +137,9 @@ class BoundKernels {
   static double reach(std::uint16_t radiusCode, double distance) {
     return (double(BoundCode::decode(radiusCode)) + distance) * kRadiusMargin;
   }
-  void stencilRun(int v, int runFirst, std::size_t step, std::size_t n, int uLo) const;
+  using Rows = std::array<Row, 2 * ErrorBounds::kExactMaxHalfSize + 1>;
+  void stencilRun(const Rows& rows, int v, int runFirst, std::size_t step, std::size_t n,
+                  int uLo) const;
 
   const ChartT& chart_;
   core::GridSize g_;
@@ -151,15 +173,13 @@ void BoundKernels<ChartT>::store(BoundCodes* first, std::size_t stride, std::siz
 template <class ChartT>
 void BoundKernels<ChartT>::fineRow(int v, int uFirst, int uLast) const {
   Scratch& w = scratch();
-  Strip &below = w.strips[0], &row = w.strips[1], &above = w.strips[2];
-  fill(below, v - 1, uFirst - 1, uLast + 1);
-  fill(row, v, uFirst - 1, uLast + 1);
-  fill(above, v + 1, uFirst - 1, uLast + 1);
+  const Row below = row(v - 1, uFirst - 1, uLast + 1), here = row(v, uFirst - 1, uLast + 1),
+            above = row(v + 1, uFirst - 1, uLast + 1);
   const std::size_t n = std::size_t((uLast - uFirst) / 2 + 1);
   for (auto& d : w.distances) d.resize(n);
-  const double *bx = below.x.data(), *by = below.y.data(), *bz = below.z.data();
-  const double *rx = row.x.data(), *ry = row.y.data(), *rz = row.z.data();
-  const double *ax = above.x.data(), *ay = above.y.data(), *az = above.z.data();
+  const double *bx = below.x, *by = below.y, *bz = below.z;
+  const double *rx = here.x, *ry = here.y, *rz = here.z;
+  const double *ax = above.x, *ay = above.y, *az = above.z;
   // Vertex k sits at strip index 2k + 1; its neighbours left, right, below and above.
   double* left = w.distances[0].data();
   double* right = w.distances[1].data();
@@ -236,27 +256,27 @@ template <class ChartT>
 void BoundKernels<ChartT>::stencilRow(int v, int uFirst, std::size_t count) const {
   const int s = s_;
   const int uLo = uFirst - s, uHi = uFirst + 2 * s * int(count - 1) + s;
-  Scratch& w = scratch();
-  for (int dv = -s; dv <= s; ++dv) fill(w.strips[std::size_t(dv + s)], v + dv, uLo, uHi);
+  Rows rows;  // rows v - s .. v + s
+  for (int dv = -s; dv <= s; ++dv) rows[std::size_t(dv + s)] = row(v + dv, uLo, uHi);
   if (!centre_) {
-    stencilRun(v, uFirst, std::size_t(2 * s), count, uLo);
+    stencilRun(rows, v, uFirst, std::size_t(2 * s), count, uLo);
   } else {
     // Centre levels: the diagonal alternates, so two runs of every other vertex.
-    stencilRun(v, uFirst, std::size_t(4 * s), (count + 1) / 2, uLo);
-    if (count > 1) stencilRun(v, uFirst + 2 * s, std::size_t(4 * s), count / 2, uLo);
+    stencilRun(rows, v, uFirst, std::size_t(4 * s), (count + 1) / 2, uLo);
+    if (count > 1) stencilRun(rows, v, uFirst + 2 * s, std::size_t(4 * s), count / 2, uLo);
   }
 }
 
 template <class ChartT>
-void BoundKernels<ChartT>::stencilRun(int v, int runFirst, std::size_t st, std::size_t n,
-                                      int uLo) const {
+void BoundKernels<ChartT>::stencilRun(const Rows& rows, int v, int runFirst, std::size_t st,
+                                      std::size_t n, int uLo) const {
   Scratch& w = scratch();
   const int s = s_;
   const Diamond d = Diamond::of({runFirst, v});  // the offsets of every vertex of this run
   auto at = [&](GridPoint q) {
-    const Strip& strip = w.strips[std::size_t(q.v - v + s)];
+    const Row& r = rows[std::size_t(q.v - v + s)];
     const std::size_t k = std::size_t(q.u - uLo);
-    return Point{strip.x.data() + k, strip.y.data() + k, strip.z.data() + k};
+    return Point{r.x + k, r.y + k, r.z + k};
   };
   const Point P = at(d.centre);
   // Distances to the four children.
@@ -274,9 +294,15 @@ void BoundKernels<ChartT>::stencilRun(int v, int runFirst, std::size_t st, std::
   double* worst = w.distances[4].data();  // largest squared deviation so far
   const Point B0 = at(d.base0), B1 = at(d.base1);
   if (rule_ == ErrorRule::kHybridExact) {
-    // The corner a and edge vectors d0 = b0 - a, d1 = b1 - a of a triangle, vertex by vertex
-    // (contiguous: every scanned point reads them).
-    auto setFrame = [&](const Point& A, const Point& E0, const Point& E1) {
+    // The triangle being scanned: corner a, edge vectors d0 = b0 - a and d1 = b1 - a. With s = 4
+    // (9-21 points per triangle) they are written once per triangle, vertex by vertex
+    // (contiguous: every scanned point reads them); with s = 2 (1-3 points) that costs more
+    // than it saves and the points read the corners from the strips. The same arithmetic.
+    const bool framed = s >= 4;
+    Point A{}, E0{}, E1{};
+    auto setFrame = [&](const Point& a, const Point& e0, const Point& e1) {
+      A = a, E0 = e0, E1 = e1;
+      if (!framed) return;
       for (auto& f : w.frame) f.resize(n);
       double *ax = w.frame[0].data(), *ay = w.frame[1].data(), *az = w.frame[2].data();
       double *d0x = w.frame[3].data(), *d0y = w.frame[4].data(), *d0z = w.frame[5].data();
@@ -284,26 +310,42 @@ void BoundKernels<ChartT>::stencilRun(int v, int runFirst, std::size_t st, std::
 #pragma omp simd
       for (std::size_t k = 0; k < n; ++k) {
         const std::size_t j = st * k;
-        ax[k] = A.x[j], ay[k] = A.y[j], az[k] = A.z[j];
-        d0x[k] = E0.x[j] - A.x[j], d0y[k] = E0.y[j] - A.y[j], d0z[k] = E0.z[j] - A.z[j];
-        d1x[k] = E1.x[j] - A.x[j], d1y[k] = E1.y[j] - A.y[j], d1z[k] = E1.z[j] - A.z[j];
+        ax[k] = a.x[j], ay[k] = a.y[j], az[k] = a.z[j];
+        d0x[k] = e0.x[j] - a.x[j], d0y[k] = e0.y[j] - a.y[j], d0z[k] = e0.z[j] - a.z[j];
+        d1x[k] = e1.x[j] - a.x[j], d1y[k] = e1.y[j] - a.y[j], d1z[k] = e1.z[j] - a.z[j];
       }
     };
-    // The squared distance of q from (a + w0 d0) + w1 d1, maxed into worst.
+    // The squared distance of q from (a + w0 d0) + w1 d1, maxed into worst (on a flat chart the
+    // height's alone).
+    auto deviation2 = [](double qx, double qy, double qz, double ax, double ay, double az,
+                         double d0x, double d0y, double d0z, double d1x, double d1y, double d1z,
+                         double w0, double w1) {
+      const double dz = qz - ((az + w0 * d0z) + w1 * d1z);
+      if constexpr (kFlat) return dz * dz;
+      const double dx = qx - ((ax + w0 * d0x) + w1 * d1x);
+      const double dy = qy - ((ay + w0 * d0y) + w1 * d1y);
+      return dx * dx + dy * dy + dz * dz;
+    };
     auto accumulate = [&](const Point& Q, double w0, double w1) {
-      const double *ax = w.frame[0].data(), *ay = w.frame[1].data(), *az = w.frame[2].data();
-      const double *d0x = w.frame[3].data(), *d0y = w.frame[4].data(), *d0z = w.frame[5].data();
-      const double *d1x = w.frame[6].data(), *d1y = w.frame[7].data(), *d1z = w.frame[8].data();
+      if (framed) {
+        const double *ax = w.frame[0].data(), *ay = w.frame[1].data(), *az = w.frame[2].data();
+        const double *d0x = w.frame[3].data(), *d0y = w.frame[4].data(), *d0z = w.frame[5].data();
+        const double *d1x = w.frame[6].data(), *d1y = w.frame[7].data(), *d1z = w.frame[8].data();
+#pragma omp simd
+        for (std::size_t k = 0; k < n; ++k) {
+          const std::size_t j = st * k;
+          const double e = deviation2(Q.x[j], Q.y[j], Q.z[j], ax[k], ay[k], az[k], d0x[k], d0y[k],
+                                      d0z[k], d1x[k], d1y[k], d1z[k], w0, w1);
+          worst[k] = worst[k] > e ? worst[k] : e;
+        }
+        return;
+      }
 #pragma omp simd
       for (std::size_t k = 0; k < n; ++k) {
         const std::size_t j = st * k;
-        const double dz = Q.z[j] - ((az[k] + w0 * d0z[k]) + w1 * d1z[k]);
-        double e = dz * dz;
-        if constexpr (!kFlat) {
-          const double dx = Q.x[j] - ((ax[k] + w0 * d0x[k]) + w1 * d1x[k]);
-          const double dy = Q.y[j] - ((ay[k] + w0 * d0y[k]) + w1 * d1y[k]);
-          e = dx * dx + dy * dy + dz * dz;
-        }
+        const double e = deviation2(Q.x[j], Q.y[j], Q.z[j], A.x[j], A.y[j], A.z[j],
+                                    E0.x[j] - A.x[j], E0.y[j] - A.y[j], E0.z[j] - A.z[j],
+                                    E1.x[j] - A.x[j], E1.y[j] - A.y[j], E1.z[j] - A.z[j], w0, w1);
         worst[k] = worst[k] > e ? worst[k] : e;
       }
     };

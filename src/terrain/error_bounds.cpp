@@ -228,53 +228,80 @@ void ErrorBounds::computeLevel(const ChartT& chart, std::span<const float> heigh
   // Small regions (a typical edit near the fine levels) stay on this thread: waking the team
   // costs more than the work, and much more when the machine is busy.
   const bool parallel = work > 20000.0;
-  std::size_t count = 0;
-#pragma omp parallel for schedule(dynamic, 4) reduction(+ : count) if (parallel)
-  for (std::size_t item = 0; item < rows.size() * rangeCount; ++item) {
-    const int v = rows[item / rangeCount];
-    const auto [uA, uB] = ranges[item % rangeCount];
-    const bool vOdd = ((v / s) & 1) != 0;
-    // Columns: on an odd row, edge vertices have u/s even and centres u/s odd; on an even row
+  // Levels 0-5 go to the row kernels in bands of kBand rows, chunk by chunk across the band, so
+  // that neighbouring rows share the rows of positions they read (BoundKernels::forgetRows at
+  // the start of an item: nothing is shared across items, whose order is the scheduler's).
+  const bool kernelLevel = s <= kExactMaxHalfSize;
+  constexpr std::size_t kBand = 8;
+  const std::size_t band = kernelLevel ? kBand : 1;
+  const std::size_t bandCount = (rows.size() + band - 1) / band;
+  // The first column of the level on row v at or after uA.
+  auto firstColumn = [&](int v, int uA) {
+    // On an odd row (v/s odd), edge vertices have u/s even and centres u/s odd; on an even row
     // only edge vertices, u/s odd.
-    const bool wantUOdd = centre || !vOdd;
+    const bool wantUOdd = centre || ((v / s) & 1) == 0;
     int u = ((uA + s - 1) / s) * s;
     if ((((u / s) & 1) != 0) != wantUOdd) u += s;
-    if (s <= kExactMaxHalfSize && v >= s && v <= m - s && u <= uB) {
-      // The row kernels take the vertices whose diamonds lie inside the grid; the seam columns
-      // (u = 0 and u = m) take the general path.
-      const int step = 2 * s;
-      const int first = u == 0 ? step : u;
-      int last = u + ((uB - u) / step) * step;
-      const bool lastIsSeam = last == m;
-      if (lastIsSeam) last -= step;
-      // In chunks whose rows of positions stay in the L1/L2 caches (a whole row of level 5's
-      // nine rows was 1.8 MB and every stencil loop streamed it from L3).
-      constexpr int kChunk = 64;
-      for (int chunkFirst = first; chunkFirst <= last; chunkFirst += kChunk * step) {
+    return u;
+  };
+  std::size_t count = 0;
+#pragma omp parallel for schedule(dynamic, kernelLevel ? 1 : 4) reduction(+ : count) if (parallel)
+  for (std::size_t item = 0; item < bandCount * rangeCount; ++item) {
+    const std::size_t rowBegin = (item / rangeCount) * band;
+    const std::size_t rowEnd = std::min(rows.size(), rowBegin + band);
+    const auto [uA, uB] = ranges[item % rangeCount];
+    const int step = 2 * s;
+    // Kernel rows: their vertices strictly between the seam columns, first .. last.
+    std::array<std::pair<int, int>, kBand> spans{};
+    std::size_t longest = 0;
+    if (kernelLevel) kernels.forgetRows();
+    for (std::size_t r = rowBegin; r < rowEnd; ++r) {
+      const int v = rows[r];
+      int u = firstColumn(v, uA);
+      if (kernelLevel && v >= s && v <= m - s) {
+        // The row kernels take the vertices whose diamonds lie inside the grid; the seam
+        // columns (u = 0 and u = m) take the general path.
+        const int first = u == 0 ? step : u;
+        int last = u > uB ? u - step : u + ((uB - u) / step) * step;
+        const bool lastIsSeam = last == m;
+        if (lastIsSeam) last -= step;
+        spans[r - rowBegin] = {first, last};
+        if (first <= last) longest = std::max(longest, std::size_t((last - first) / step + 1));
+        for (int seam : {0, m}) {
+          if (u <= uB && ((seam == 0 && u == 0) || (seam == m && lastIsSeam))) {
+            level == 0 ? computeLeaf({seam, v}) : computeVertex({seam, v});
+            ++count;
+          }
+        }
+        continue;
+      }
+      spans[r - rowBegin] = {1, 0};  // none
+      for (; u <= uB; u += step) {
+        if ((u == 0 || u == m) && (v == 0 || v == m)) continue;  // grid corners split nothing
+        if (level == 0)
+          computeLeaf({u, v});
+        else
+          computeVertex({u, v});
+        if (levelOnLattice) copyToLattice(u, v);
+        ++count;
+      }
+    }
+    // In chunks whose rows of positions stay in the L1/L2 caches (a whole row of level 5's
+    // nine rows was 1.8 MB and every stencil loop streamed it from L3).
+    constexpr int kChunk = 64;
+    for (std::size_t chunk = 0; chunk * kChunk < longest; ++chunk) {
+      for (std::size_t r = rowBegin; r < rowEnd; ++r) {
+        const auto [first, last] = spans[r - rowBegin];
+        const int chunkFirst = first + int(chunk) * kChunk * step;
+        if (chunkFirst > last) continue;
         const int chunkLast = std::min(last, chunkFirst + (kChunk - 1) * step);
         const std::size_t n = std::size_t((chunkLast - chunkFirst) / step + 1);
         if (level <= 1)
-          kernels.fineRow(v, chunkFirst, chunkLast);
+          kernels.fineRow(rows[r], chunkFirst, chunkLast);
         else
-          kernels.stencilRow(v, chunkFirst, n);
+          kernels.stencilRow(rows[r], chunkFirst, n);
         count += n;
       }
-      for (int seam : {0, m}) {
-        if ((seam == 0 && u == 0) || (seam == m && lastIsSeam)) {
-          level == 0 ? computeLeaf({seam, v}) : computeVertex({seam, v});
-          ++count;
-        }
-      }
-      continue;
-    }
-    for (; u <= uB; u += 2 * s) {
-      if ((u == 0 || u == m) && (v == 0 || v == m)) continue;  // grid corners split nothing
-      if (level == 0)
-        computeLeaf({u, v});
-      else
-        computeVertex({u, v});
-      if (levelOnLattice) copyToLattice(u, v);
-      ++count;
     }
   }
   lastUpdateCount_ += count;
