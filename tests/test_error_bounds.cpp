@@ -8,6 +8,7 @@
 #include "terrain/diamond.hpp"
 #include "terrain/terrain.hpp"
 #include "terrain/tessellator.hpp"
+#include "test_edit_util.hpp"
 #include "test_terrains.hpp"
 
 using namespace ps;
@@ -189,6 +190,54 @@ TEST_P(BoundsRule, LocalUpdateEqualsFullRebuildBitForBit) {
                     expected)
             << "trial " << trial << " lattice vertex (" << u << ", " << v << ")";
       }
+    }
+  }
+}
+
+// The bounds of levels 0-5 come from row kernels that work in runs of up to 64 vertices and in
+// bands of 8 rows sharing rows of positions; a 513² grid has rows of 256 leaves, so wide edits
+// cross run boundaries, and rows of either parity start their runs one column apart. Wide and
+// narrow edits at random offsets (across the seam, at a pole, at a flat chart's edges), then the
+// bounds equal a full rebuild, bit for bit.
+TEST_P(BoundsRule, WideLocalUpdatesEqualAFullRebuildAcrossKernelRuns) {
+  std::vector<terrain::Terrain> planets;
+  planets.push_back(testkit::bumpyTerrain(9, 8, 6000.0, GetParam()));
+  auto flat = std::make_shared<core::FlatChart>(core::GridSize(9), 30.0, 20.0);
+  std::mt19937 heightsRng(4);
+  std::uniform_real_distribution<float> noise(-200.0f, 200.0f);
+  std::vector<float> fh(flat->grid().count());
+  for (auto& x : fh) x = noise(heightsRng);
+  planets.push_back(terrain::Terrain(flat, fh, GetParam()));
+  for (auto& t : planets) {
+    const auto g = t.grid();
+    const int m = g.m();
+    const bool sphere = t.chart().wrapsU();
+    std::mt19937 rng(23);
+    for (int trial = 0; trial < 6; ++trial) {
+      const int w = trial % 2 == 0 ? 150 + int(rng() % 300) : 1 + int(rng() % 9);
+      const int hgt = 1 + int(rng() % 40);
+      int u0 = int(rng() % std::uint32_t(m - w)), v0 = int(rng() % std::uint32_t(m - hgt));
+      if (trial == 2) u0 = sphere ? m - w / 2 : 0;  // across the seam / at the flat chart's edge
+      if (trial == 3) v0 = m - hgt;                 // a pole row / the flat chart's top edge
+      const int v1 = v0 + hgt;
+      auto h = t.mutableHeights();
+      GridRegion region{u0, u0 + w, v0, v1};
+      for (int v = v0; v <= v1; ++v) {
+        const bool pole = sphere && (v == 0 || v == m);
+        for (int du = 0; du <= (pole ? m : w); ++du) {
+          const int u = pole ? du : (sphere ? (u0 + du) % m : std::min(m, u0 + du));
+          h[g.index(u, v)] += 50.0f + float(du % 7);
+        }
+        if (pole) {
+          for (int u = 0; u <= m; ++u) h[g.index(u, v)] = h[g.index(0, v)];
+          region = region.unite(GridRegion{0, m, v, v}, g, sphere);
+        }
+        if (sphere) h[g.index(m, v)] = h[g.index(0, v)];
+      }
+      if (sphere) region = region.unite(GridRegion{0, 0, v0, v1}, g, true);
+      t.commitEdit(region);
+      ASSERT_TRUE(edittest::boundsEqualFullRebuild(t))
+          << t.chart().name() << " trial " << trial << " " << region.describe();
     }
   }
 }
