@@ -226,8 +226,11 @@ void ErrorBounds::computeLevel(const ChartT& chart, std::span<const float> heigh
     work += double(rows.size()) * double(uB - uA + 1) / double(2 * s);
   });
   // Small regions (a typical edit near the fine levels) stay on this thread: waking the team
-  // costs more than the work, and much more when the machine is busy.
-  const bool parallel = work > 20000.0;
+  // costs more than the work, and much more when the machine is busy. About 2,000 vertices
+  // (0.1-0.2 ms of work) pays: at 20,000 the pole's level 6 (17,000 vertices, 1.7 ms) and most
+  // levels of a 600 km edit elsewhere ran on one thread (bench deform: 300 km polar cap
+  // 19.5-21.5 -> 17.5-20.2 ms, latitude 30 / 600 km 6.6-7.7 -> 5.2-6.0 ms).
+  const bool parallel = work > 2000.0;
   // Levels 0-5 go to the row kernels in bands of kBand rows, chunk by chunk across the band, so
   // that neighbouring rows share the rows of positions they read (BoundKernels::forgetRows at
   // the start of an item: nothing is shared across items, whose order is the scheduler's).
