@@ -6,9 +6,11 @@
 // row: the per-vertex arithmetic of ErrorBounds::computeLevel runs here as loops over a run of
 // a row's vertices, on positions computed once per row (Chart::rowPositions) instead of afresh
 // for every vertex that reads them, with the square roots and encodings of a run in loops of
-// their own. The formulas and their order are computeLevel's, so the codes are the same
-// (bit for bit: tests compare a local update with a full rebuild; the scalar path stays for
-// the vertices on the grid's edges and the seam).
+// their own. The formulas and their order are computeLevel's, so the codes are the ones the
+// scalar path gave (the checksums of whole planets did not move; a code from a squared distance
+// differs from the code of its rounded root only where that root is exactly a code's value).
+// The scalar path stays for the vertices on the grid's edges and the seam; which path a vertex
+// takes depends on its position alone, so a local update equals a full rebuild bit for bit.
 #include <algorithm>
 #include <array>
 #include <bit>
