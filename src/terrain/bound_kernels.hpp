@@ -69,10 +69,9 @@ class BoundKernels {
     int v = -1, uLo = 0, uHi = -1;
     std::vector<double> x, y, z;
   };
-  struct Row {  // a row's positions, column u at [u - the uLo asked for]
-    const double *x, *y, *z;
-  };
-  struct Point {  // a run's first vertex's point of one offset; vertex k's is at [step * k]
+  // Positions in three arrays: a row's (column u at [u - the uLo asked for]), or one offset's of
+  // a run (the first vertex's point at [0], vertex k's at [step * k]).
+  struct Positions {
     const double *x, *y, *z;
   };
   struct Scratch {               // per thread, reused from run to run
@@ -89,7 +88,7 @@ class BoundKernels {
   }
 
   // Row v's positions over columns uLo .. uHi (within the grid), computed unless kept.
-  Row row(int v, int uLo, int uHi) const {
+  Positions row(int v, int uLo, int uHi) const {
     Strip& strip = scratch().rows[std::size_t(v) & 15];
     if (strip.v != v || strip.uLo > uLo || strip.uHi < uHi) {
       // One column more on each side: level 0's rows of the other parity ask one column
@@ -139,7 +138,7 @@ class BoundKernels {
   static double reach(std::uint16_t radiusCode, double distance) {
     return (double(BoundCode::decode(radiusCode)) + distance) * kRadiusMargin;
   }
-  using Rows = std::array<Row, 2 * ErrorBounds::kExactMaxHalfSize + 1>;
+  using Rows = std::array<Positions, 2 * ErrorBounds::kExactMaxHalfSize + 1>;
   void stencilRun(const Rows& rows, int v, int runFirst, std::size_t step, std::size_t n,
                   int uLo) const;
 
@@ -175,8 +174,8 @@ void BoundKernels<ChartT>::store(BoundCodes* first, std::size_t stride, std::siz
 template <class ChartT>
 void BoundKernels<ChartT>::fineRow(int v, int uFirst, int uLast) const {
   Scratch& w = scratch();
-  const Row below = row(v - 1, uFirst - 1, uLast + 1), here = row(v, uFirst - 1, uLast + 1),
-            above = row(v + 1, uFirst - 1, uLast + 1);
+  const Positions below = row(v - 1, uFirst - 1, uLast + 1), here = row(v, uFirst - 1, uLast + 1),
+                  above = row(v + 1, uFirst - 1, uLast + 1);
   const std::size_t n = std::size_t((uLast - uFirst) / 2 + 1);
   for (auto& d : w.distances) d.resize(n);
   const double *bx = below.x, *by = below.y, *bz = below.z;
@@ -276,16 +275,16 @@ void BoundKernels<ChartT>::stencilRun(const Rows& rows, int v, int runFirst, std
   const int s = s_;
   const Diamond d = Diamond::of({runFirst, v});  // the offsets of every vertex of this run
   auto at = [&](GridPoint q) {
-    const Row& r = rows[std::size_t(q.v - v + s)];
+    const Positions& r = rows[std::size_t(q.v - v + s)];
     const std::size_t k = std::size_t(q.u - uLo);
-    return Point{r.x + k, r.y + k, r.z + k};
+    return Positions{r.x + k, r.y + k, r.z + k};
   };
-  const Point P = at(d.centre);
+  const Positions P = at(d.centre);
   // Distances to the four children.
   for (std::size_t c = 0; c < 4; ++c) {
     w.distances[c].resize(n);
     double* o = w.distances[c].data();
-    const Point C = at(d.children[c]);
+    const Positions C = at(d.children[c]);
 #pragma omp simd
     for (std::size_t k = 0; k < n; ++k) {
       const std::size_t j = st * k;
@@ -294,15 +293,15 @@ void BoundKernels<ChartT>::stencilRun(const Rows& rows, int v, int runFirst, std
   }
   w.distances[4].assign(n, 0.0);
   double* worst = w.distances[4].data();  // largest squared deviation so far
-  const Point B0 = at(d.base0), B1 = at(d.base1);
+  const Positions B0 = at(d.base0), B1 = at(d.base1);
   if (rule_ == ErrorRule::kHybridExact) {
     // The triangle being scanned: corner a, edge vectors d0 = b0 - a and d1 = b1 - a. With s = 4
     // (9-21 points per triangle) they are written once per triangle, vertex by vertex
     // (contiguous: every scanned point reads them); with s = 2 (1-3 points) that costs more
     // than it saves and the points read the corners from the strips. The same arithmetic.
     const bool framed = s >= 4;
-    Point A{}, E0{}, E1{};
-    auto setFrame = [&](const Point& a, const Point& e0, const Point& e1) {
+    Positions A{}, E0{}, E1{};
+    auto setFrame = [&](const Positions& a, const Positions& e0, const Positions& e1) {
       A = a, E0 = e0, E1 = e1;
       if (!framed) return;
       for (auto& f : w.frame) f.resize(n);
@@ -328,7 +327,7 @@ void BoundKernels<ChartT>::stencilRun(const Rows& rows, int v, int runFirst, std
       const double dy = qy - ((ay + w0 * d0y) + w1 * d1y);
       return dx * dx + dy * dy + dz * dz;
     };
-    auto accumulate = [&](const Point& Q, double w0, double w1) {
+    auto accumulate = [&](const Positions& Q, double w0, double w1) {
       if (framed) {
         const double *ax = w.frame[0].data(), *ay = w.frame[1].data(), *az = w.frame[2].data();
         const double *d0x = w.frame[3].data(), *d0y = w.frame[4].data(), *d0z = w.frame[5].data();

@@ -235,6 +235,8 @@ void ErrorBounds::computeLevel(const ChartT& chart, std::span<const float> heigh
   // that neighbouring rows share the rows of positions they read (BoundKernels::forgetRows at
   // the start of an item: nothing is shared across items, whose order is the scheduler's).
   const bool kernelLevel = s <= kExactMaxHalfSize;
+  static_assert(kExactMaxHalfSize < (1 << kLatticeShift),
+                "the row kernels' levels hold no lattice vertex: they do not copy to it");
   constexpr std::size_t kBand = 8;
   const std::size_t band = kernelLevel ? kBand : 1;
   const std::size_t bandCount = (rows.size() + band - 1) / band;
