@@ -28,7 +28,7 @@ struct ViewGeometry {
   bool horizonCull;
   Eigen::Vector3d towardCentre;  // unit, from eye
   double horizonPlaneDist;       // along towardCentre
-  double cosCone;                // cos of the occluder cone's half angle
+  double sinCone, cosCone;       // of the occluder cone's half angle
 };
 
 ViewGeometry makeView(const Camera& c, double occluderRadius, double distMax) {
@@ -51,23 +51,21 @@ ViewGeometry makeView(const Camera& c, double occluderRadius, double distMax) {
   if (g.horizonCull) {
     g.towardCentre = -c.eye / d;
     g.horizonPlaneDist = (d * d - occluderRadius * occluderRadius) / d;
-    const double sinCone = occluderRadius / d;
-    g.cosCone = std::sqrt(std::max(0.0, 1 - sinCone * sinCone));
+    g.sinCone = occluderRadius / d;
+    g.cosCone = std::sqrt(std::max(0.0, 1 - g.sinCone * g.sinCone));
   }
   return g;
 }
 
 // True when every point of the ball (w = centre - eye, radius r) is hidden behind the occluder:
-// it lies beyond the horizon plane and inside the cone of rays that hit the sphere.
-bool behindHorizon(const ViewGeometry& g, const Eigen::Vector3d& w, double r) {
-  const double along = w.dot(g.towardCentre);
+// it lies beyond the horizon plane and inside the cone of rays that hit the sphere. Inside the
+// cone means the ball's centre is at least r from the cone's surface: with `along` the centre's
+// distance along the axis and `across` its distance from it, along sin(alpha) - across
+// cos(alpha) >= r (the angle form theta + beta <= alpha, with one root and no division).
+inline bool behindHorizon(const ViewGeometry& g, const Eigen::Vector3d& w, double along, double r) {
   if (along - r < g.horizonPlaneDist) return false;
-  const double dist = w.norm();
-  if (dist <= r) return false;
-  // theta + beta <= alpha, with cos(theta) = along/dist, sin(beta) = r/dist, sin(alpha) = sinCone.
-  const double cosT = along / dist, sinT = std::sqrt(std::max(0.0, 1 - cosT * cosT));
-  const double sinB = r / dist, cosB = std::sqrt(std::max(0.0, 1 - sinB * sinB));
-  return cosT * cosB - sinT * sinB >= g.cosCone;  // cos(theta + beta) >= cos(alpha)
+  const double across = std::sqrt(std::max(0.0, w.squaredNorm() - along * along));
+  return along * g.sinCone - across * g.cosCone >= r;
 }
 
 }  // namespace
@@ -108,8 +106,9 @@ bool Tessellator::pass(const ChartT& chart, const Terrain& terrain, const Camera
   const ErrorBounds& bounds = terrain.bounds();
   const LatticeEntry* lattice = bounds.lattice().data();
   // The height and bounds of split vertex c: from the packed lattice when c is on it.
-  auto splitVertex = [&](GridPoint c, std::size_t ci) {
+  auto splitVertex = [&](GridPoint c) {
     if (ErrorBounds::onLattice(c.u, c.v)) return lattice[bounds.latticeIndex(c.u, c.v)];
+    const std::size_t ci = g.index(c.u, c.v);
     return LatticeEntry{h[ci], codes[ci]};
   };
   const ViewGeometry view = makeView(camera, chart.radius() + terrain.minHeight(), distMax);
@@ -130,101 +129,91 @@ bool Tessellator::pass(const ChartT& chart, const Terrain& terrain, const Camera
   const std::uint32_t c00 = corner({0, 0}), cmm = corner({m, m}), c0m = corner({0, m}),
                       cm0 = corner({m, 0});
 
-  std::vector<Node>& stack = stack_;
-  stack.clear();
+  // Breadth first, one level of the bintree at a time: every split vertex of a level is known
+  // before any is tested, so their heights and bounds are loaded in one tight loop whose loads
+  // overlap, instead of one at a time as a depth-first walk reaches them (each a likely cache
+  // miss on an 8193^2 planet). The split decisions depend on the vertex alone, so the mesh is
+  // the same whatever the order.
+  std::vector<Node>& level = levelNodes_;
+  std::vector<Node>& next = nextNodes_;
+  level.clear();
   const std::uint8_t startInside = cull ? 0 : std::uint8_t(kAllPlanes | kHorizonClear);
   // Two root triangles over the main diagonal, CCW in (u, v) = CCW seen from outside.
-  stack.push_back({{0, m}, {0, 0}, {m, m}, c0m, c00, cmm, startInside});
-  stack.push_back({{m, 0}, {m, m}, {0, 0}, cm0, cmm, c00, startInside});
+  level.push_back({{0, m}, {0, 0}, {m, m}, c0m, c00, cmm, startInside});
+  level.push_back({{m, 0}, {m, m}, {0, 0}, cm0, cmm, c00, startInside});
 
-  auto prefetchSplitVertex = [&](GridPoint p, GridPoint q) {
-    const int su = p.u + q.u, sv = p.v + q.v;
-    if (((su | sv) & 1) == 0) {
-      const int u = su / 2, v = sv / 2;
-      if (ErrorBounds::onLattice(u, v)) {
-        __builtin_prefetch(lattice + bounds.latticeIndex(u, v));
-      } else {
-        const std::size_t k = g.index(u, v);
-        __builtin_prefetch(h + k);
-        __builtin_prefetch(codes + k);
-      }
+  while (!level.empty()) {
+    const std::size_t count = level.size();
+    splitEntries_.resize(count);
+    LatticeEntry* entries = splitEntries_.data();
+    for (std::size_t i = 0; i < count; ++i) {
+      const Node& n = level[i];
+      const int su = n.b0.u + n.b1.u, sv = n.b0.v + n.b1.v;
+      if (((su | sv) & 1) == 0) entries[i] = splitVertex({su / 2, sv / 2});
     }
-  };
-
-  // A split pushes its second child and goes on with its first directly: a push and an
-  // immediate pop of the same 40 bytes stalled every visit on store forwarding.
-  Node n;
-  bool descend = false;
-  for (;;) {
-    if (!descend) {
-      if (stack.empty()) break;
-      n = stack.back();
-      stack.pop_back();
-    }
-    descend = false;
-    ++stats_.visited;
-    const int su = n.b0.u + n.b1.u, sv = n.b0.v + n.b1.v;
-    if (((su | sv) & 1) == 0) {  // the hypotenuse has a midpoint on the grid
-      const GridPoint c{su / 2, sv / 2};
-      const std::size_t ci = g.index(c.u, c.v);
-      const LatticeEntry split = splitVertex(c, ci);
-      const double eps = BoundCode::decode(split.codes.error);
-      const double r = double(BoundCode::decode(split.codes.radius)) + eps;
-      const Eigen::Vector3d w = chart.position(c.u, c.v, double(split.height)) - eye;
-      std::uint8_t inside = n.inside;
-      if (inside != (kAllPlanes | kHorizonClear)) {
-        const Eigen::Vector3d cam = R * w;
-        bool outside = false;
-        for (int i = 0; i < 5 && !outside; ++i) {
-          if (inside & (1u << i)) continue;
-          const double d = view.planes[i].dot(cam) - (i == 4 ? kNear : 0.0);
-          if (d < -r) {
-            outside = true;
-          } else if (d >= r) {
-            inside |= std::uint8_t(1u << i);
+    next.clear();
+    stats_.visited += count;
+    for (std::size_t i = 0; i < count; ++i) {
+      const Node& n = level[i];
+      const int su = n.b0.u + n.b1.u, sv = n.b0.v + n.b1.v;
+      if (((su | sv) & 1) == 0) {  // the hypotenuse has a midpoint on the grid
+        const GridPoint c{su / 2, sv / 2};
+        const LatticeEntry split = entries[i];
+        const double eps = BoundCode::decode(split.codes.error);
+        const double r = double(BoundCode::decode(split.codes.radius)) + eps;
+        const Eigen::Vector3d w = chart.position(c.u, c.v, double(split.height)) - eye;
+        std::uint8_t inside = n.inside;
+        if (inside != (kAllPlanes | kHorizonClear)) {
+          const Eigen::Vector3d cam = R * w;
+          bool outside = false;
+          for (int p = 0; p < 5 && !outside; ++p) {
+            if (inside & (1u << p)) continue;
+            const double d = view.planes[p].dot(cam) - (p == 4 ? kNear : 0.0);
+            if (d < -r) {
+              outside = true;
+            } else if (d >= r) {
+              inside |= std::uint8_t(1u << p);
+            }
+          }
+          if (outside) {
+            ++stats_.culledFrustum;
+            continue;
+          }
+          if (!(inside & kHorizonClear)) {
+            const double along = view.horizonCull ? w.dot(view.towardCentre) : 0.0;
+            if (!view.horizonCull || along + r < view.horizonPlaneDist) {
+              inside |= kHorizonClear;  // wholly in front of the horizon plane: children too
+            } else if (behindHorizon(view, w, along, r)) {
+              ++stats_.culledHorizon;
+              continue;
+            }
           }
         }
-        if (outside) {
-          ++stats_.culledFrustum;
-          continue;
-        }
-        if (!(inside & kHorizonClear)) {
-          if (!view.horizonCull || w.dot(view.towardCentre) + r < view.horizonPlaneDist) {
-            inside |= kHorizonClear;  // wholly in front of the horizon plane: children too
-          } else if (behindHorizon(view, w, r)) {
-            ++stats_.culledHorizon;
+        const double zc = forward.dot(w);
+        // A ball wholly behind the near plane shows nothing (the culling pass drops it too): its
+        // error cannot reach the screen, so it never needs to split.
+        if (eps > 0 && zc + r >= kNear) {
+          const double zr = zc - r;
+          // Two valid bounds on the screen error; the smaller decides (both are nested, so their
+          // minimum is too). The cheap one first: if it allows no split, the other cannot either.
+          if (zr <= kNear || (view.focalKappa * eps > distMax * zr &&
+                              view.focal * eps * (w.norm() + r) > distMax * zr * zr)) {
+            const std::uint32_t ic = vertexFor(g.index(c.u, c.v), w);
+            next.push_back({c, n.a, n.b0, ic, n.ia, n.ib0, inside});
+            next.push_back({c, n.b1, n.a, ic, n.ib1, n.ia, inside});
             continue;
           }
         }
       }
-      const double zc = forward.dot(w);
-      // A ball wholly behind the near plane shows nothing (the culling pass drops it too): its
-      // error cannot reach the screen, so it never needs to split.
-      if (eps > 0 && zc + r >= kNear) {
-        const double zr = zc - r;
-        // Two valid bounds on the screen error; the smaller decides (both are nested, so their
-        // minimum is too). The cheap one first: if it allows no split, the other cannot either.
-        if (zr <= kNear || (view.focalKappa * eps > distMax * zr &&
-                            view.focal * eps * (w.norm() + r) > distMax * zr * zr)) {
-          const std::uint32_t ic = vertexFor(ci, w);
-          stack.push_back({c, n.b1, n.a, ic, n.ib1, n.ia, inside});
-          // Split vertices one and two levels down are far away in memory at coarse levels: ask
-          // for their height and bounds now so the loads overlap with the work in between.
-          prefetchSplitVertex(n.a, n.b0);
-          prefetchSplitVertex(n.b1, n.a);
-          prefetchSplitVertex(c, n.a);
-          prefetchSplitVertex(c, n.b0);
-          prefetchSplitVertex(c, n.b1);
-          n = Node{c, n.a, n.b0, ic, n.ia, n.ib0, inside};
-          descend = true;
-          continue;
-        }
-      }
+      mesh_.indices.push_back(n.ia);
+      mesh_.indices.push_back(n.ib0);
+      mesh_.indices.push_back(n.ib1);
     }
-    mesh_.indices.push_back(n.ia);
-    mesh_.indices.push_back(n.ib0);
-    mesh_.indices.push_back(n.ib1);
-    if (abortAbove && mesh_.indices.size() > 3 * abortAbove) return false;
+    // A pending triangle that is not culled ends as one triangle or more, and culling takes few
+    // of a level's (those at the frustum's and the horizon's edges). Stopping early only costs a
+    // retry at a coarser threshold, never a wrong mesh.
+    if (abortAbove && mesh_.triangleCount() + next.size() / 2 > abortAbove) return false;
+    std::swap(level, next);
   }
   return true;
 }

@@ -66,7 +66,8 @@ class Tessellator {
     std::uint8_t
         inside;  // bit i: ball inside frustum plane i; bit 5: in front of the horizon plane
   };
-  std::vector<Node> stack_;
+  std::vector<Node> levelNodes_, nextNodes_;  // one level of the bintree, and the next
+  std::vector<LatticeEntry> splitEntries_;    // the split vertices of levelNodes_
   std::vector<std::uint64_t> hashKeys_;
   std::vector<std::uint32_t> hashValues_;
 
