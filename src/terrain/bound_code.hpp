@@ -15,6 +15,8 @@ namespace ps::terrain {
 // With 1024 steps per octave a code is at most 0.068 % above its value; the range runs from
 // 1 micrometre to ~1.7e13 m.
 class BoundCode {
+  struct Table;  // below: the first octave's values and the encoding's bucket tables
+
  public:
   static constexpr double kMin = 1.0 / (1 << 20);
   static constexpr int kStepsPerOctave = 1024;
@@ -25,6 +27,19 @@ class BoundCode {
   static float decode(std::uint16_t code) { return decode(table(), code); }
 
   static std::uint16_t encodeUp(double value) { return encodeUp(table(), value); }
+
+  // decode() with the table fetched once, for loops over many codes (each decode() call checks
+  // that the function-local table has been built, a load and a branch per code).
+  class Decoder {
+   public:
+    float operator()(std::uint16_t code) const { return BoundCode::decode(*table_, code); }
+
+   private:
+    friend class BoundCode;
+    explicit Decoder(const Table& t) : table_(&t) {}
+    const Table* table_;
+  };
+  static Decoder decoder() { return Decoder(table()); }
 
   // The smallest code whose value squared is at least `square`: the code of a distance from its
   // square, without the square root (a decoded value is a float, so its square is exact in
@@ -46,7 +61,6 @@ class BoundCode {
   }
 
  private:
-  struct Table;
   static std::uint16_t encodeUpFromSquare(const Table& t, double square) {
     if (!(square > 0.0)) return 0;
     if (square <= kMin * kMin) return 1;

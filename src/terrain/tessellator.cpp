@@ -70,27 +70,29 @@ inline bool behindHorizon(const ViewGeometry& g, const Eigen::Vector3d& w, doubl
 
 }  // namespace
 
+// Grid coordinates fit 16 bits (Tessellator::Corner) and grid indices 32 (the vertex hash).
+static_assert(core::GridSize::kMaxLevel <= 15);
+
 std::uint32_t Tessellator::vertexFor(std::uint64_t gridIndex,
                                      const Eigen::Vector3d& relativeToEye) {
-  if (2 * (mesh_.gridIndex.size() + 1) > hashKeys_.size()) {
+  if (2 * (mesh_.gridIndex.size() + 1) > hash_.size()) {
     // Grow the open-addressing table and reinsert.
-    const std::size_t cap = std::max<std::size_t>(4096, 2 * hashKeys_.size());
-    hashKeys_.assign(cap, kEmpty);
-    hashValues_.resize(cap);
+    const std::size_t cap = std::max<std::size_t>(4096, 2 * hash_.size());
+    hash_.assign(cap, HashSlot{kEmpty, 0});
     for (std::uint32_t i = 0; i < mesh_.gridIndex.size(); ++i) {
-      std::size_t slot = hashSlot(mesh_.gridIndex[i]);
-      while (hashKeys_[slot] != kEmpty) slot = (slot + 1) & (hashKeys_.size() - 1);
-      hashKeys_[slot] = mesh_.gridIndex[i];
-      hashValues_[slot] = i;
+      const auto key = std::uint32_t(mesh_.gridIndex[i]);
+      std::size_t slot = hashSlot(key);
+      while (hash_[slot].key != kEmpty) slot = (slot + 1) & (hash_.size() - 1);
+      hash_[slot] = {key, i};
     }
   }
-  std::size_t slot = hashSlot(gridIndex);
-  while (hashKeys_[slot] != gridIndex && hashKeys_[slot] != kEmpty)
-    slot = (slot + 1) & (hashKeys_.size() - 1);
-  if (hashKeys_[slot] == gridIndex) return hashValues_[slot];
-  hashKeys_[slot] = gridIndex;
+  const auto key = std::uint32_t(gridIndex);
+  std::size_t slot = hashSlot(key);
+  while (hash_[slot].key != key && hash_[slot].key != kEmpty)
+    slot = (slot + 1) & (hash_.size() - 1);
+  if (hash_[slot].key == key) return hash_[slot].value;
   const auto index = std::uint32_t(mesh_.gridIndex.size());
-  hashValues_[slot] = index;
+  hash_[slot] = {key, index};
   mesh_.gridIndex.push_back(gridIndex);
   mesh_.positions.push_back(relativeToEye.cast<float>());
   return index;
@@ -105,6 +107,7 @@ bool Tessellator::pass(const ChartT& chart, const Terrain& terrain, const Camera
   const BoundCodes* codes = terrain.bounds().codes().data();
   const ErrorBounds& bounds = terrain.bounds();
   const LatticeEntry* lattice = bounds.lattice().data();
+  const BoundCode::Decoder decode = BoundCode::decoder();
   // The height and bounds of split vertex c: from the packed lattice when c is on it.
   auto splitVertex = [&](GridPoint c) {
     if (ErrorBounds::onLattice(c.u, c.v)) return lattice[bounds.latticeIndex(c.u, c.v)];
@@ -119,7 +122,7 @@ bool Tessellator::pass(const ChartT& chart, const Terrain& terrain, const Camera
   mesh_.clear();
   mesh_.eye = eye;
   ++mesh_.generation;
-  std::fill(hashKeys_.begin(), hashKeys_.end(), kEmpty);
+  std::fill(hash_.begin(), hash_.end(), HashSlot{kEmpty, 0});
   stats_.visited = stats_.culledFrustum = stats_.culledHorizon = 0;
 
   auto corner = [&](GridPoint p) {
@@ -139,12 +142,13 @@ bool Tessellator::pass(const ChartT& chart, const Terrain& terrain, const Camera
   level.clear();
   const std::uint8_t startInside = cull ? 0 : std::uint8_t(kAllPlanes | kHorizonClear);
   // Two root triangles over the main diagonal, CCW in (u, v) = CCW seen from outside.
-  level.push_back({{0, m}, {0, 0}, {m, m}, c0m, c00, cmm, startInside});
-  level.push_back({{m, 0}, {m, m}, {0, 0}, cm0, cmm, c00, startInside});
+  const auto mm = std::uint16_t(m);
+  level.push_back({{0, mm}, {0, 0}, {mm, mm}, c0m, c00, cmm, startInside});
+  level.push_back({{mm, 0}, {mm, mm}, {0, 0}, cm0, cmm, c00, startInside});
 
   while (!level.empty()) {
     const std::size_t count = level.size();
-    splitEntries_.resize(count);
+    if (splitEntries_.size() < count) splitEntries_.resize(count);  // grows only: no refills
     LatticeEntry* entries = splitEntries_.data();
     for (std::size_t i = 0; i < count; ++i) {
       const Node& n = level[i];
@@ -159,8 +163,8 @@ bool Tessellator::pass(const ChartT& chart, const Terrain& terrain, const Camera
       if (((su | sv) & 1) == 0) {  // the hypotenuse has a midpoint on the grid
         const GridPoint c{su / 2, sv / 2};
         const LatticeEntry split = entries[i];
-        const double eps = BoundCode::decode(split.codes.error);
-        const double r = double(BoundCode::decode(split.codes.radius)) + eps;
+        const double eps = decode(split.codes.error);
+        const double r = double(decode(split.codes.radius)) + eps;
         const Eigen::Vector3d w = chart.position(c.u, c.v, double(split.height)) - eye;
         std::uint8_t inside = n.inside;
         if (inside != (kAllPlanes | kHorizonClear)) {
@@ -199,8 +203,9 @@ bool Tessellator::pass(const ChartT& chart, const Terrain& terrain, const Camera
           if (zr <= kNear || (view.focalKappa * eps > distMax * zr &&
                               view.focal * eps * (w.norm() + r) > distMax * zr * zr)) {
             const std::uint32_t ic = vertexFor(g.index(c.u, c.v), w);
-            next.push_back({c, n.a, n.b0, ic, n.ia, n.ib0, inside});
-            next.push_back({c, n.b1, n.a, ic, n.ib1, n.ia, inside});
+            const Corner split16{std::uint16_t(c.u), std::uint16_t(c.v)};
+            next.push_back({split16, n.a, n.b0, ic, n.ia, n.ib0, inside});
+            next.push_back({split16, n.b1, n.a, ic, n.ib1, n.ia, inside});
             continue;
           }
         }

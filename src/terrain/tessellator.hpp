@@ -53,23 +53,31 @@ class Tessellator {
             bool cull, std::size_t abortAbove);
   // Mesh vertex of a grid vertex, added with its eye-relative position on first use.
   std::uint32_t vertexFor(std::uint64_t gridIndex, const Eigen::Vector3d& relativeToEye);
-  std::size_t hashSlot(std::uint64_t key) const {
-    return std::size_t((key * 0x9E3779B97F4A7C15ull) >> 20) & (hashKeys_.size() - 1);
+  std::size_t hashSlot(std::uint32_t key) const {
+    return std::size_t((key * 0x9E3779B97F4A7C15ull) >> 20) & (hash_.size() - 1);
   }
-  static constexpr std::uint64_t kEmpty = ~std::uint64_t(0);
 
   Mesh mesh_;
   TessellationStats stats_;
+  // Grid coordinates fit 16 bits (m <= 2^15): a node takes 28 bytes instead of 40, and every
+  // level's nodes are written once and read twice.
+  struct Corner {
+    std::uint16_t u, v;
+  };
   struct Node {
-    core::GridPoint a, b0, b1;
+    Corner a, b0, b1;
     std::uint32_t ia, ib0, ib1;  // mesh vertex indices of the corners
     std::uint8_t
         inside;  // bit i: ball inside frustum plane i; bit 5: in front of the horizon plane
   };
   std::vector<Node> levelNodes_, nextNodes_;  // one level of the bintree, and the next
   std::vector<LatticeEntry> splitEntries_;    // the split vertices of levelNodes_
-  std::vector<std::uint64_t> hashKeys_;
-  std::vector<std::uint32_t> hashValues_;
+  // Grid index -> mesh vertex, open addressing; a key and its value share a cache line.
+  struct HashSlot {
+    std::uint32_t key, value;
+  };
+  static constexpr std::uint32_t kEmpty = ~std::uint32_t(0);
+  std::vector<HashSlot> hash_;
 
   // Frame coherence for the budget: the raised threshold the last call (with cachedSettings_)
   // settled on (0: the budget did not bind). The next call with the same settings starts there,
