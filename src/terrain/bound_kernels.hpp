@@ -132,11 +132,11 @@ class BoundKernels {
       return;
     }
     sqrtAll(own, n);
-    for (std::size_t k = 0; k < n; ++k) own[k] += double(BoundCode::decode(childCodes[k]));
+    for (std::size_t k = 0; k < n; ++k) own[k] += double(decode_(childCodes[k]));
     store(first, stride, n, {own.data(), false}, nullptr, {radii, false});
   }
-  static double reach(std::uint16_t radiusCode, double distance) {
-    return (double(BoundCode::decode(radiusCode)) + distance) * kRadiusMargin;
+  double reach(std::uint16_t radiusCode, double distance) const {
+    return (double(decode_(radiusCode)) + distance) * kRadiusMargin;
   }
   using Rows = std::array<Positions, 2 * ErrorBounds::kExactMaxHalfSize + 1>;
   void stencilRun(const Rows& rows, int v, int runFirst, std::size_t step, std::size_t n,
@@ -150,6 +150,7 @@ class BoundKernels {
   bool centre_;
   ErrorRule rule_;
   bool withRadii_;
+  BoundCode::Decoder decode_ = BoundCode::decoder();
 };
 
 template <class ChartT>
