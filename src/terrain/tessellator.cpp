@@ -135,8 +135,8 @@ bool Tessellator::pass(const ChartT& chart, const Terrain& terrain, const Camera
   // Breadth first, one level of the bintree at a time: every split vertex of a level is known
   // before any is tested, so their heights and bounds are loaded in one tight loop whose loads
   // overlap, instead of one at a time as a depth-first walk reaches them (each a likely cache
-  // miss on an 8193^2 planet). The split decisions depend on the vertex alone, so the mesh is
-  // the same whatever the order.
+  // miss on an 8193^2 planet). The split decisions depend on the vertex alone, so the mesh
+  // holds the same triangles whatever the order.
   std::vector<Node>& level = levelNodes_;
   std::vector<Node>& next = nextNodes_;
   level.clear();
@@ -215,8 +215,9 @@ bool Tessellator::pass(const ChartT& chart, const Terrain& terrain, const Camera
       mesh_.indices.push_back(n.ib1);
     }
     // A pending triangle that is not culled ends as one triangle or more, and culling takes few
-    // of a level's (those at the frustum's and the horizon's edges). Stopping early only costs a
-    // retry at a coarser threshold, never a wrong mesh.
+    // of a level's (those at the frustum's and the horizon's edges): half the pending count
+    // towards the limit. Stopping early only costs a retry at a coarser threshold, never a
+    // wrong mesh.
     if (abortAbove && mesh_.triangleCount() + next.size() / 2 > abortAbove) return false;
     std::swap(level, next);
   }
