@@ -1,6 +1,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 #include <random>
 
 #include "terrain/bound_code.hpp"
@@ -15,7 +16,7 @@ TEST(BoundCode, DecodesToABoundWithinAFractionOfAPermille) {
     const auto code = BoundCode::encodeUp(x);
     const double back = BoundCode::decode(code);
     ASSERT_GE(back, x) << x;
-    ASSERT_LE(back, x * 1.0007) << x;
+    ASSERT_LE(back, x * (1.0 + 1.0 / BoundCode::kStepsPerOctave)) << x;
     if (code > 1) {
       ASSERT_LT(double(BoundCode::decode(std::uint16_t(code - 1))), x) << "smallest bounding code";
     }
@@ -24,9 +25,9 @@ TEST(BoundCode, DecodesToABoundWithinAFractionOfAPermille) {
   EXPECT_EQ(BoundCode::decode(0), 0.0f);
 }
 
-// Every table value, and the doubles just beside it, encode to the code that bounds them: the
-// exact boundaries, where a guessed starting code is most likely to be one off.
-TEST(BoundCode, TableValuesAndTheirNeighboursEncodeExactly) {
+// Every code's value, and the doubles just beside it, encode to the code that bounds them: the
+// exact boundaries, where rounding up by bit arithmetic is most likely to be one off.
+TEST(BoundCode, CodeValuesAndTheirNeighboursEncodeExactly) {
   for (int k = 2; k < 65536; ++k) {
     const double x = BoundCode::decode(std::uint16_t(k));
     const auto c = BoundCode::encodeUp(x);
@@ -51,9 +52,9 @@ TEST(BoundCode, EncodingIsMonotone) {
   }
 }
 
-// encodeUp starts from a per-bucket table of the mantissa's top 12 bits and corrects by at most
-// one code: the starts and ends of buckets in every octave are where that would go wrong.
-TEST(BoundCode, BucketBoundariesInEveryOctaveEncodeToTheSmallestBoundingCode) {
+// Against a binary search over the decoded values: random values in every octave, the octave
+// boundaries (where rounding up carries into the exponent) and the doubles beside them.
+TEST(BoundCode, EveryOctaveEncodesToTheSmallestBoundingCode) {
   auto smallestBound = [](double x) {
     int lo = 1, hi = 65535;  // first code whose value is >= x (saturating at 65535)
     while (lo < hi) {
@@ -65,21 +66,34 @@ TEST(BoundCode, BucketBoundariesInEveryOctaveEncodeToTheSmallestBoundingCode) {
     }
     return std::uint16_t(lo);
   };
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> fraction(1.0, 2.0);
   for (int e = 0; e < 64; ++e) {
-    for (int j = 0; j < 4096; ++j) {
-      const double start = BoundCode::kMin * std::exp2(e) * (1.0 + j / 4096.0);
-      for (const double x : {start, std::nextafter(start, 0.0), std::nextafter(start, 1e300)}) {
-        if (x <= BoundCode::kMin) continue;
-        ASSERT_EQ(BoundCode::encodeUp(x), smallestBound(x)) << "octave " << e << " bucket " << j;
-      }
+    const double start = BoundCode::kMin * std::exp2(e);
+    for (const double x : {start, std::nextafter(start, 0.0), std::nextafter(start, 1e300)}) {
+      if (x <= BoundCode::kMin) continue;
+      ASSERT_EQ(BoundCode::encodeUp(x), smallestBound(x)) << "octave " << e;
+    }
+    for (int i = 0; i < 2000; ++i) {
+      const double x = start * fraction(rng);
+      ASSERT_EQ(BoundCode::encodeUp(x), smallestBound(x)) << "octave " << e << " value " << x;
     }
   }
+  // Codes an octave apart are exactly twice the value, steps within an octave are even.
+  for (int k = 1; k + BoundCode::kStepsPerOctave < 65536; ++k) {
+    const double v = BoundCode::decode(std::uint16_t(k));
+    ASSERT_EQ(double(BoundCode::decode(std::uint16_t(k + BoundCode::kStepsPerOctave))), 2 * v) << k;
+  }
+  EXPECT_EQ(BoundCode::encodeUp(std::numeric_limits<double>::infinity()), 65535);
+  EXPECT_EQ(BoundCode::encodeUp(std::numeric_limits<double>::quiet_NaN()), 0);
+  EXPECT_EQ(BoundCode::encodeUp(-3.0), 0);
+  EXPECT_EQ(BoundCode::encodeUp(BoundCode::kMin / 4), 1);
 }
 
 // encodeUpFromSquare gives the smallest code whose value squared bounds the square: at random
 // squares over the whole range, at the squares of every code's value and the doubles beside
-// them (the boundaries), and at both parities' bucket starts. Away from those boundaries it is
-// encodeUp of the root.
+// them (the boundaries), and at the starts of mantissa steps of both exponent parities. Away
+// from those boundaries it is encodeUp of the root.
 TEST(BoundCode, FromSquareIsTheSmallestCodeWhoseSquareBounds) {
   auto check = [](double square) {
     const auto c = BoundCode::encodeUpFromSquare(square);

@@ -112,10 +112,9 @@ class BoundKernels {
     for (std::size_t k = 0; k < n; ++k) p[k] = std::sqrt(p[k]);
   }
   // A run's bounds, encoded into first[stride * k]: errors and radii from their values, or from
-  // their squares where the flag says so (no square root: BoundCode::encodeUpFromSquare), the
-  // error code raised to atLeast[k] where atLeast is given (the hybrid rule's max with the
-  // children: encoding is monotone and encodeUp(decode(c)) == c). Encoding a run in one loop
-  // lets the table look-ups of neighbouring vertices overlap.
+  // their squares where the flag says so (BoundCode::encodeUpFromSquare), the error code raised
+  // to atLeast[k] where atLeast is given (the hybrid rule's max with the children: encoding is
+  // monotone and encodeUp(decode(c)) == c). Encoding a run in one loop lets it vectorise.
   struct Values {
     const double* values;
     bool squared;
@@ -132,11 +131,11 @@ class BoundKernels {
       return;
     }
     sqrtAll(own, n);
-    for (std::size_t k = 0; k < n; ++k) own[k] += double(decode_(childCodes[k]));
+    for (std::size_t k = 0; k < n; ++k) own[k] += double(BoundCode::decode(childCodes[k]));
     store(first, stride, n, {own.data(), false}, nullptr, {radii, false});
   }
-  double reach(std::uint16_t radiusCode, double distance) const {
-    return (double(decode_(radiusCode)) + distance) * kRadiusMargin;
+  static double reach(std::uint16_t radiusCode, double distance) {
+    return (double(BoundCode::decode(radiusCode)) + distance) * kRadiusMargin;
   }
   using Rows = std::array<Positions, 2 * ErrorBounds::kExactMaxHalfSize + 1>;
   void stencilRun(const Rows& rows, int v, int runFirst, std::size_t step, std::size_t n,
@@ -150,7 +149,6 @@ class BoundKernels {
   bool centre_;
   ErrorRule rule_;
   bool withRadii_;
-  BoundCode::Decoder decode_ = BoundCode::decoder();
 };
 
 template <class ChartT>

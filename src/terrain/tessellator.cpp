@@ -107,7 +107,6 @@ bool Tessellator::pass(const ChartT& chart, const Terrain& terrain, const Camera
   const BoundCodes* codes = terrain.bounds().codes().data();
   const ErrorBounds& bounds = terrain.bounds();
   const LatticeEntry* lattice = bounds.lattice().data();
-  const BoundCode::Decoder decode = BoundCode::decoder();
   // The height and bounds of split vertex c: from the packed lattice when c is on it.
   auto splitVertex = [&](GridPoint c) {
     if (ErrorBounds::onLattice(c.u, c.v)) return lattice[bounds.latticeIndex(c.u, c.v)];
@@ -163,8 +162,8 @@ bool Tessellator::pass(const ChartT& chart, const Terrain& terrain, const Camera
       if (((su | sv) & 1) == 0) {  // the hypotenuse has a midpoint on the grid
         const GridPoint c{su / 2, sv / 2};
         const LatticeEntry split = entries[i];
-        const double eps = decode(split.codes.error);
-        const double r = double(decode(split.codes.radius)) + eps;
+        const double eps = BoundCode::decode(split.codes.error);
+        const double r = double(BoundCode::decode(split.codes.radius)) + eps;
         const Eigen::Vector3d w = chart.position(c.u, c.v, double(split.height)) - eye;
         std::uint8_t inside = n.inside;
         if (inside != (kAllPlanes | kHorizonClear)) {
