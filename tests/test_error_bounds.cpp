@@ -1,7 +1,9 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <bit>
 #include <random>
+#include <vector>
 
 #include "core/flat_chart.hpp"
 #include "core/input_error.hpp"
@@ -176,18 +178,23 @@ TEST_P(BoundsRule, LocalUpdateEqualsFullRebuildBitForBit) {
         << "trial " << trial << " " << region.describe();
     ASSERT_EQ(full.radiusCodes(), t.bounds().radiusCodes()) << "trial " << trial;
     ASSERT_TRUE(full.lattice() == t.bounds().lattice()) << "trial " << trial;
-    // The packed lattice the tessellator reads holds what the full arrays hold.
-    const int side = t.bounds().latticeSide();
-    ASSERT_EQ(side, (m >> terrain::ErrorBounds::kLatticeShift) + 1);
-    for (int lv = 0; lv < side; ++lv) {
-      for (int lu = 0; lu < side; ++lu) {
-        const int u = lu << terrain::ErrorBounds::kLatticeShift;
-        const int v = lv << terrain::ErrorBounds::kLatticeShift;
+    // The packed lattice the tessellator reads holds what the full arrays hold, each vertex at
+    // its own entry, and a level's view addresses the same entries.
+    const auto& bounds = t.bounds();
+    std::vector<int> owner(bounds.lattice().size(), 0);
+    constexpr int kStep = 1 << terrain::ErrorBounds::kLatticeShift;
+    for (int v = 0; v <= m; v += kStep) {
+      for (int u = 0; u <= m; u += kStep) {
         if ((u == 0 || u == m) && (v == 0 || v == m)) continue;  // corners split nothing
         const std::size_t i = g.index(u, v);
-        const terrain::LatticeEntry expected{t.heights()[i], t.bounds().codes()[i]};
-        ASSERT_TRUE(t.bounds().lattice()[std::size_t(lv) * std::size_t(side) + std::size_t(lu)] ==
-                    expected)
+        const std::size_t at = bounds.latticeIndex(u, v);
+        ASSERT_LT(at, owner.size()) << "lattice vertex (" << u << ", " << v << ")";
+        ASSERT_EQ(owner[at]++, 0) << "two lattice vertices share entry " << at;
+        const int b = std::countr_zero(unsigned(u | v));
+        const auto level = bounds.latticeLevel(1 << b, ((u >> b) & (v >> b) & 1) != 0);
+        ASSERT_EQ(&level.at(u, v), &bounds.lattice()[at]) << "(" << u << ", " << v << ")";
+        const terrain::LatticeEntry expected{t.heights()[i], bounds.codes()[i]};
+        ASSERT_TRUE(bounds.lattice()[at] == expected)
             << "trial " << trial << " lattice vertex (" << u << ", " << v << ")";
       }
     }

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <cmath>
 #include <cstdlib>
 #include <type_traits>
@@ -346,6 +347,21 @@ void dispatchChart(const core::Chart& chart, F&& f) {
 }
 }  // namespace
 
+ErrorBounds::LatticeLevel ErrorBounds::latticeLevel(int halfSize, bool centre) const {
+  const int b = std::countr_zero(unsigned(halfSize));
+  const std::size_t half = std::size_t(gridM_ >> (b + 1));
+  return {lattice_.data() + latticeOffsets_[std::size_t(b)][centre ? 1 : 0],
+          centre ? half : half + 1, centre ? b + 1 : b, b + 1};
+}
+
+std::size_t ErrorBounds::latticeIndex(int u, int v) const {
+  // The level is the lowest set bit of u | v: a centre where both u/s and v/s are odd.
+  const int b = std::countr_zero(unsigned(u | v));
+  const bool centre = ((u >> b) & (v >> b) & 1) != 0;
+  const LatticeLevel level = latticeLevel(1 << b, centre);
+  return std::size_t(&level.at(u, v) - lattice_.data());
+}
+
 std::vector<std::uint16_t> ErrorBounds::errorCodes() const {
   std::vector<std::uint16_t> out(codes_.size());
   for (std::size_t i = 0; i < codes_.size(); ++i) out[i] = codes_[i].error;
@@ -369,10 +385,22 @@ void ErrorBounds::build(const core::Chart& chart, std::span<const float> heights
   content_ = content;
   codes_.assign(g.count(), BoundCodes{});
   if (hasRadii()) {
-    latticeSide_ = (g.m() >> kLatticeShift) + 1;
-    lattice_.assign(std::size_t(latticeSide_) * std::size_t(latticeSide_), LatticeEntry{});
+    // Level by level: centres of half-size s at (s (2i + 1), s (2j + 1)), m/2s by m/2s; edges at
+    // (u, v) with u/s + v/s odd, m/s + 1 rows of m/2s + 1 (the even rows leave their last
+    // entry unused).
+    gridM_ = g.m();
+    latticeOffsets_.assign(std::size_t(g.n()), {0, 0});
+    std::size_t size = 0;
+    for (int b = kLatticeShift; b < g.n(); ++b) {
+      const std::size_t half = std::size_t(g.m() >> (b + 1));  // m / 2s
+      latticeOffsets_[std::size_t(b)][0] = size;
+      size += (2 * half + 1) * (half + 1);
+      latticeOffsets_[std::size_t(b)][1] = size;
+      size += half * half;
+    }
+    lattice_.assign(size, LatticeEntry{});
   } else {
-    latticeSide_ = 0;
+    latticeOffsets_.clear();
     lattice_ = Lattice{};
   }
   lastUpdateCount_ = 0;

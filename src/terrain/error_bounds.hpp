@@ -1,4 +1,5 @@
 #pragma once
+#include <array>
 #include <cstdint>
 #include <span>
 #include <string>
@@ -77,18 +78,28 @@ class ErrorBounds {
   // column. The tessellator visits those (most of a view's mesh) in a scattered order, where in
   // the full arrays each visit was two cache misses pages apart (heights and codes, 512 MiB at
   // 8193²). Packed here with their heights, 1/64 of the grid (8 MiB at 8193²), they stay in the
-  // last-level cache and neighbours share lines. Grid vertex (u, v) on the lattice is entry
-  // latticeIndex(u, v); it equals heights[i] and codes()[i] for every lattice vertex but the four
-  // grid corners (which split nothing). Empty without radii (exports).
+  // last-level cache. The lattice is stored level by level, each level's vertices in a dense
+  // array of their own (a pyramid): the tessellator reads one level at a time, and a level of
+  // half-size s holds 1/s² of the grid, so its vertices share cache lines with their neighbours
+  // on the level (in one row-major lattice, a level of half-size 16 used a quarter of each line
+  // it touched, 32 an eighth). Empty without radii (exports).
   static constexpr int kLatticeShift = 3;
   static constexpr int kLatticeMask = (1 << kLatticeShift) - 1;
   static bool onLattice(int u, int v) { return ((u | v) & kLatticeMask) == 0; }
   const Lattice& lattice() const { return lattice_; }
-  int latticeSide() const { return latticeSide_; }
-  std::size_t latticeIndex(int u, int v) const {
-    return std::size_t(v >> kLatticeShift) * std::size_t(latticeSide_) +
-           std::size_t(u >> kLatticeShift);
-  }
+  // One level's packed vertices: vertex (u, v) of the level is at(u, v).
+  struct LatticeLevel {
+    const LatticeEntry* entries = nullptr;
+    std::size_t width = 0;
+    int rowShift = 0, columnShift = 0;
+    const LatticeEntry& at(int u, int v) const {
+      return entries[std::size_t(v >> rowShift) * width + std::size_t(u >> columnShift)];
+    }
+  };
+  // The level of half-size s (a power of two, 2^kLatticeShift <= s < m), centres or edges.
+  LatticeLevel latticeLevel(int halfSize, bool centre) const;
+  // Entry of lattice vertex (u, v), any level; not a grid corner (corners split nothing).
+  std::size_t latticeIndex(int u, int v) const;
   // Copies of one half of the codes, for comparisons in tests and tools.
   std::vector<std::uint16_t> errorCodes() const;
   std::vector<std::uint16_t> radiusCodes() const;
@@ -108,7 +119,9 @@ class ErrorBounds {
   BoundsContent content_ = BoundsContent::kErrorsAndRadii;
   CodeArray codes_;
   Lattice lattice_;
-  int latticeSide_ = 0;
+  // Where each lattice level starts in lattice_, by log2(half-size) and kind (centre = 1).
+  std::vector<std::array<std::size_t, 2>> latticeOffsets_;
+  int gridM_ = 0;
   std::size_t lastUpdateCount_ = 0;
 };
 

@@ -73,28 +73,30 @@ inline bool behindHorizon(const ViewGeometry& g, const Eigen::Vector3d& w, doubl
 // Grid coordinates fit 16 bits (Tessellator::Corner) and grid indices 32 (the vertex hash).
 static_assert(core::GridSize::kMaxLevel <= 15);
 
-std::uint32_t Tessellator::vertexFor(std::uint64_t gridIndex,
+std::uint32_t Tessellator::addVertex(std::uint64_t gridIndex,
                                      const Eigen::Vector3d& relativeToEye) {
-  if (2 * (mesh_.gridIndex.size() + 1) > hash_.size()) {
-    // Grow the open-addressing table and reinsert.
-    const std::size_t cap = std::max<std::size_t>(4096, 2 * hash_.size());
-    hash_.assign(cap, HashSlot{kEmpty, 0});
-    for (std::uint32_t i = 0; i < mesh_.gridIndex.size(); ++i) {
-      const auto key = std::uint32_t(mesh_.gridIndex[i]);
-      std::size_t slot = hashSlot(key);
-      while (hash_[slot].key != kEmpty) slot = (slot + 1) & (hash_.size() - 1);
-      hash_[slot] = {key, i};
-    }
-  }
-  const auto key = std::uint32_t(gridIndex);
-  std::size_t slot = hashSlot(key);
-  while (hash_[slot].key != key && hash_[slot].key != kEmpty)
-    slot = (slot + 1) & (hash_.size() - 1);
-  if (hash_[slot].key == key) return hash_[slot].value;
   const auto index = std::uint32_t(mesh_.gridIndex.size());
-  hash_[slot] = {key, index};
   mesh_.gridIndex.push_back(gridIndex);
   mesh_.positions.push_back(relativeToEye.cast<float>());
+  return index;
+}
+
+void Tessellator::startLevelHash(std::size_t nodes) {
+  std::size_t slots = 1024;
+  while (slots <= nodes) slots *= 2;  // an empty slot always remains: probing ends
+  if (hash_.size() < slots) hash_.resize(slots);
+  hashMask_ = slots - 1;
+  std::fill_n(hash_.begin(), slots, HashSlot{kEmpty, 0});
+}
+
+std::uint32_t Tessellator::vertexFor(std::uint64_t gridIndex,
+                                     const Eigen::Vector3d& relativeToEye) {
+  const auto key = std::uint32_t(gridIndex);
+  std::size_t slot = hashSlot(key);
+  while (hash_[slot].key != key && hash_[slot].key != kEmpty) slot = (slot + 1) & hashMask_;
+  if (hash_[slot].key == key) return hash_[slot].value;
+  const std::uint32_t index = addVertex(gridIndex, relativeToEye);
+  hash_[slot] = {key, index};
   return index;
 }
 
@@ -106,13 +108,6 @@ bool Tessellator::pass(const ChartT& chart, const Terrain& terrain, const Camera
   const float* h = terrain.heights().data();
   const BoundCodes* codes = terrain.bounds().codes().data();
   const ErrorBounds& bounds = terrain.bounds();
-  const LatticeEntry* lattice = bounds.lattice().data();
-  // The height and bounds of split vertex c: from the packed lattice when c is on it.
-  auto splitVertex = [&](GridPoint c) {
-    if (ErrorBounds::onLattice(c.u, c.v)) return lattice[bounds.latticeIndex(c.u, c.v)];
-    const std::size_t ci = g.index(c.u, c.v);
-    return LatticeEntry{h[ci], codes[ci]};
-  };
   const ViewGeometry view = makeView(camera, chart.radius() + terrain.minHeight(), distMax);
   const Eigen::Matrix3d& R = camera.rotation;
   const Eigen::Vector3d forward = R.row(2).transpose();
@@ -121,12 +116,11 @@ bool Tessellator::pass(const ChartT& chart, const Terrain& terrain, const Camera
   mesh_.clear();
   mesh_.eye = eye;
   ++mesh_.generation;
-  std::fill(hash_.begin(), hash_.end(), HashSlot{kEmpty, 0});
   stats_.visited = stats_.culledFrustum = stats_.culledHorizon = 0;
 
   auto corner = [&](GridPoint p) {
     const std::size_t k = g.index(p.u, p.v);
-    return vertexFor(k, chart.position(p.u, p.v, double(h[k])) - eye);
+    return addVertex(k, chart.position(p.u, p.v, double(h[k])) - eye);
   };
   const std::uint32_t c00 = corner({0, 0}), cmm = corner({m, m}), c0m = corner({0, m}),
                       cm0 = corner({m, 0});
@@ -145,16 +139,31 @@ bool Tessellator::pass(const ChartT& chart, const Terrain& terrain, const Camera
   level.push_back({{0, mm}, {0, 0}, {mm, mm}, c0m, c00, cmm, startInside});
   level.push_back({{mm, 0}, {mm, mm}, {0, 0}, cm0, cmm, c00, startInside});
 
-  while (!level.empty()) {
+  // Level 2k of the bintree splits at the centres of half-size m / 2^(k+1), level 2k + 1 at the
+  // edges of that half-size.
+  for (int depth = 0; !level.empty(); ++depth) {
     const std::size_t count = level.size();
     if (splitEntries_.size() < count) splitEntries_.resize(count);  // grows only: no refills
     LatticeEntry* entries = splitEntries_.data();
-    for (std::size_t i = 0; i < count; ++i) {
-      const Node& n = level[i];
-      const int su = n.b0.u + n.b1.u, sv = n.b0.v + n.b1.v;
-      if (((su | sv) & 1) == 0) entries[i] = splitVertex({su / 2, sv / 2});
+    const int halfSize = m >> (depth / 2 + 1);
+    if (halfSize >= (1 << ErrorBounds::kLatticeShift)) {
+      const ErrorBounds::LatticeLevel lattice = bounds.latticeLevel(halfSize, depth % 2 == 0);
+      for (std::size_t i = 0; i < count; ++i) {
+        const Node& n = level[i];
+        entries[i] = lattice.at((n.b0.u + n.b1.u) / 2, (n.b0.v + n.b1.v) / 2);
+      }
+    } else {
+      for (std::size_t i = 0; i < count; ++i) {
+        const Node& n = level[i];
+        const int su = n.b0.u + n.b1.u, sv = n.b0.v + n.b1.v;
+        if (((su | sv) & 1) == 0) {
+          const std::size_t ci = g.index(su / 2, sv / 2);
+          entries[i] = {h[ci], codes[ci]};
+        }
+      }
     }
     next.clear();
+    startLevelHash(count);
     stats_.visited += count;
     for (std::size_t i = 0; i < count; ++i) {
       const Node& n = level[i];

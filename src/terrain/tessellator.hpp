@@ -51,10 +51,13 @@ class Tessellator {
   template <class ChartT>
   bool pass(const ChartT& chart, const Terrain& terrain, const Camera& camera, double distMax,
             bool cull, std::size_t abortAbove);
-  // Mesh vertex of a grid vertex, added with its eye-relative position on first use.
+  std::uint32_t addVertex(std::uint64_t gridIndex, const Eigen::Vector3d& relativeToEye);
+  // Mesh vertex of a split vertex of the current level, added on first use.
   std::uint32_t vertexFor(std::uint64_t gridIndex, const Eigen::Vector3d& relativeToEye);
+  // Empties the vertex hash for a level of `nodes` triangles (each adds one vertex at most).
+  void startLevelHash(std::size_t nodes);
   std::size_t hashSlot(std::uint32_t key) const {
-    return std::size_t((key * 0x9E3779B97F4A7C15ull) >> 20) & (hash_.size() - 1);
+    return std::size_t((key * 0x9E3779B97F4A7C15ull) >> 20) & hashMask_;
   }
 
   Mesh mesh_;
@@ -72,12 +75,16 @@ class Tessellator {
   };
   std::vector<Node> levelNodes_, nextNodes_;  // one level of the bintree, and the next
   std::vector<LatticeEntry> splitEntries_;    // the split vertices of levelNodes_
-  // Grid index -> mesh vertex, open addressing; a key and its value share a cache line.
+  // Grid index -> mesh vertex, open addressing; a key and its value share a cache line. A split
+  // vertex is asked for only by the two triangles of its diamond, which lie on the same level
+  // of the bintree, so the table holds one level's vertices: sized to the level, it stays in
+  // the L2 cache where one for the whole mesh did not.
   struct HashSlot {
     std::uint32_t key, value;
   };
   static constexpr std::uint32_t kEmpty = ~std::uint32_t(0);
-  std::vector<HashSlot> hash_;
+  std::vector<HashSlot> hash_;  // the first hashMask_ + 1 slots are the current level's
+  std::size_t hashMask_ = 0;
 
   // Frame coherence for the budget: the raised threshold the last call (with cachedSettings_)
   // settled on (0: the budget did not bind). The next call with the same settings starts there,
