@@ -1,17 +1,42 @@
 #pragma once
-// An empty scratch folder per test process: TMP/ps_test_<name>_<pid>, emptied first.
+// Scratch folders for tests: TMP/ps_test_<name>_<pid>, emptied first and removed when the test
+// process ends (named per process, they would otherwise pile up in TMP run after run). A process
+// with a failed test keeps them, as evidence.
+#include <gtest/gtest.h>
 #include <unistd.h>
 
 #include <filesystem>
 #include <string>
+#include <system_error>
+#include <vector>
 
 namespace ps::testkit {
+
+class ScratchFolders {
+ public:
+  static void add(const std::filesystem::path& dir) { instance().dirs_.push_back(dir); }
+  ~ScratchFolders() {
+    if (::testing::UnitTest::GetInstance()->Failed()) return;
+    for (const auto& d : dirs_) {
+      std::error_code ignored;  // a folder already gone is fine
+      std::filesystem::remove_all(d, ignored);
+    }
+  }
+
+ private:
+  static ScratchFolders& instance() {
+    static ScratchFolders folders;
+    return folders;
+  }
+  std::vector<std::filesystem::path> dirs_;
+};
 
 inline std::filesystem::path freshDir(const std::string& name) {
   const auto d = std::filesystem::temp_directory_path() /
                  ("ps_test_" + name + "_" + std::to_string(::getpid()));
   std::filesystem::remove_all(d);
   std::filesystem::create_directories(d);
+  ScratchFolders::add(d);
   return d;
 }
 

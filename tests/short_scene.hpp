@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <string>
 
+#include "fresh_dir.hpp"
 #include "replay/replay.hpp"
 #include "tracking/synth.hpp"
 #include "tracking/video.hpp"
@@ -14,9 +15,7 @@
 namespace ps::testkit {
 
 inline std::filesystem::path shortSceneDir() {
-  auto d =
-      std::filesystem::temp_directory_path() / ("ps_short_scene_" + std::to_string(::getpid()));
-  std::filesystem::create_directories(d);
+  static const std::filesystem::path d = freshDir("short_scene");
   return d;
 }
 

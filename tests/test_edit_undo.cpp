@@ -112,7 +112,8 @@ TEST(EditUndo, DisabledJournalRecordsNothing) {
   pipe.setUndoEnabled(false);
   const GaussianBrush brush;
   const auto rep = pipe.apply(brush, {t.chart().position(5, 5, 0.0), 0});
-  EXPECT_EQ(rep.journalMs, 0.0);
+  EXPECT_GT(rep.modifiedVertices, 0u);  // the edit happened
   EXPECT_EQ(pipe.journal().undoCount(), 0u);
+  EXPECT_EQ(pipe.journal().bytes(), 0u);
   EXPECT_THROW(pipe.undo(), core::InputError);
 }
