@@ -84,8 +84,6 @@ class ErrorBounds {
   // on the level (in one row-major lattice, a level of half-size 16 used a quarter of each line
   // it touched, 32 an eighth). Empty without radii (exports).
   static constexpr int kLatticeShift = 3;
-  static constexpr int kLatticeMask = (1 << kLatticeShift) - 1;
-  static bool onLattice(int u, int v) { return ((u | v) & kLatticeMask) == 0; }
   const Lattice& lattice() const { return lattice_; }
   // One level's packed vertices: vertex (u, v) of the level is at(u, v).
   struct LatticeLevel {
