@@ -79,7 +79,7 @@ TEST(BoundCode, EveryOctaveEncodesToTheSmallestBoundingCode) {
       ASSERT_EQ(BoundCode::encodeUp(x), smallestBound(x)) << "octave " << e << " value " << x;
     }
   }
-  // Codes an octave apart are exactly twice the value, steps within an octave are even.
+  // Codes an octave apart are exactly twice the value.
   for (int k = 1; k + BoundCode::kStepsPerOctave < 65536; ++k) {
     const double v = BoundCode::decode(std::uint16_t(k));
     ASSERT_EQ(double(BoundCode::decode(std::uint16_t(k + BoundCode::kStepsPerOctave))), 2 * v) << k;
