@@ -179,7 +179,8 @@ TEST_P(BoundsRule, LocalUpdateEqualsFullRebuildBitForBit) {
     ASSERT_EQ(full.radiusCodes(), t.bounds().radiusCodes()) << "trial " << trial;
     ASSERT_TRUE(full.lattice() == t.bounds().lattice()) << "trial " << trial;
     // The packed lattice the tessellator reads holds what the full arrays hold, each vertex at
-    // its own entry, and a level's view addresses the same entries.
+    // its own entry, and a level's view addresses the same entries; the children's largest
+    // error is that of the midpoints of the diamond's four legs (apex to base) in the grid.
     const auto& bounds = t.bounds();
     std::vector<int> owner(bounds.lattice().size(), 0);
     constexpr int kStep = 1 << terrain::ErrorBounds::kLatticeShift;
@@ -193,7 +194,16 @@ TEST_P(BoundsRule, LocalUpdateEqualsFullRebuildBitForBit) {
         const int b = std::countr_zero(unsigned(u | v));
         const auto level = bounds.latticeLevel(1 << b, ((u >> b) & (v >> b) & 1) != 0);
         ASSERT_EQ(&level.at(u, v), &bounds.lattice()[at]) << "(" << u << ", " << v << ")";
-        const terrain::LatticeEntry expected{t.heights()[i], bounds.codes()[i]};
+        const terrain::Diamond d = terrain::Diamond::of({u, v});
+        std::uint16_t childError = 0;
+        for (const auto apex : {d.apex0, d.apex1}) {
+          for (const auto base : {d.base0, d.base1}) {
+            const core::GridPoint mid{(apex.u + base.u) / 2, (apex.v + base.v) / 2};
+            if (mid.u >= 0 && mid.u <= m && mid.v >= 0 && mid.v <= m)
+              childError = std::max(childError, bounds.codes()[g.index(mid.u, mid.v)].error);
+          }
+        }
+        const terrain::LatticeEntry expected{t.heights()[i], bounds.codes()[i], childError};
         ASSERT_TRUE(bounds.lattice()[at] == expected)
             << "trial " << trial << " lattice vertex (" << u << ", " << v << ")";
       }

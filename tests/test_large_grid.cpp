@@ -38,9 +38,11 @@ TEST(LargeGrid, Grid8193ViewsAreCrackFreeAndWithinDistMax) {
   const auto t = largeTerrain(13);
   ASSERT_EQ(t.grid().side(), 8193);
   // Heights + bounds, 8 bytes per vertex, and the tessellator's packed copy of every 8th row and
-  // column (8 bytes per lattice vertex, level by level: the four grid corners are not stored and
-  // each even row of an edge level leaves one entry unused, 1,033 in all): within 600 MB.
-  EXPECT_EQ(t.bytes(), std::size_t(8193) * 8193 * 8 + (std::size_t(1025) * 1025 + 1029) * 8);
+  // column (12 bytes per lattice vertex: height, codes and the children's largest error; level
+  // by level: the four grid corners are not stored and each even row of an edge level leaves one
+  // entry unused, 1,033 in all): within 600 MB.
+  static_assert(sizeof(terrain::LatticeEntry) == 12);
+  EXPECT_EQ(t.bytes(), std::size_t(8193) * 8193 * 8 + (std::size_t(1025) * 1025 + 1029) * 12);
   EXPECT_LE(t.bytes(), 600'000'000u);
   const int m = t.grid().m();
   const double R = testkit::kEarthRadius;

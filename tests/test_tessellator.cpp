@@ -1,7 +1,11 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <array>
+#include <cmath>
 #include <numbers>
 #include <random>
+#include <vector>
 
 #include "core/input_error.hpp"
 #include "mesh_checks.hpp"
@@ -88,6 +92,93 @@ TEST(Tessellator, MeasuredScreenErrorNeverExceedsDistMax) {
     if (rep.verticesChecked > 100 && rep.maxPx > 0.2 * s.distMaxPx) ++meaningful;
   }
   EXPECT_GE(meaningful, 5) << "too few views where the bound was actually approached";
+}
+
+namespace {
+
+// The split rule of tessellator.hpp, depth first, one triangle at a time, without culling: the
+// set of triangles (grid indices, rotated to start at the smallest) the tessellator must emit.
+std::vector<std::array<std::uint64_t, 3>> referenceMesh(const terrain::Terrain& t,
+                                                        const Camera& cam, double distMax) {
+  constexpr double kNear = 0.01;
+  const double grow = distMax + 1;
+  const double tx =
+      std::max(std::abs(-grow - cam.cx), std::abs(cam.width + grow - cam.cx)) / cam.fx;
+  const double ty =
+      std::max(std::abs(-grow - cam.cy), std::abs(cam.height + grow - cam.cy)) / cam.fy;
+  const double focal = std::max(cam.fx, cam.fy);
+  const double focalKappa = focal * std::sqrt(1 + tx * tx + ty * ty);
+  const Eigen::Vector3d forward = cam.rotation.row(2).transpose();
+  const auto g = t.grid();
+  std::vector<std::array<std::uint64_t, 3>> out;
+  auto emit = [&](core::GridPoint a, core::GridPoint b0, core::GridPoint b1) {
+    std::array<std::uint64_t, 3> tri{g.index(a.u, a.v), g.index(b0.u, b0.v), g.index(b1.u, b1.v)};
+    std::rotate(tri.begin(), std::min_element(tri.begin(), tri.end()), tri.end());
+    out.push_back(tri);
+  };
+  auto splits = [&](core::GridPoint c) {
+    const std::size_t i = g.index(c.u, c.v);
+    const double eps = t.bounds().error(i);
+    const double r = double(t.bounds().radius(i)) + eps;
+    const Eigen::Vector3d w = t.chart().position(c.u, c.v, double(t.heights()[i])) - cam.eye;
+    const double zc = forward.dot(w);
+    if (!(eps > 0 && zc + r >= kNear)) return false;
+    const double zr = zc - r;
+    return zr <= kNear ||
+           (focalKappa * eps > distMax * zr && focal * eps * (w.norm() + r) > distMax * zr * zr);
+  };
+  auto visit = [&](auto&& self, core::GridPoint a, core::GridPoint b0, core::GridPoint b1) -> void {
+    const int su = b0.u + b1.u, sv = b0.v + b1.v;
+    if (((su | sv) & 1) == 0 && splits({su / 2, sv / 2})) {
+      const core::GridPoint c{su / 2, sv / 2};
+      self(self, c, a, b0);
+      self(self, c, b1, a);
+      return;
+    }
+    emit(a, b0, b1);
+  };
+  const int m = g.m();
+  visit(visit, {0, m}, {0, 0}, {m, m});
+  visit(visit, {m, 0}, {m, m}, {0, 0});
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+std::vector<std::array<std::uint64_t, 3>> triangleSet(const terrain::Mesh& mesh) {
+  std::vector<std::array<std::uint64_t, 3>> out;
+  for (std::size_t k = 0; k < mesh.triangleCount(); ++k) {
+    std::array<std::uint64_t, 3> tri{mesh.gridIndex[mesh.indices[3 * k]],
+                                     mesh.gridIndex[mesh.indices[3 * k + 1]],
+                                     mesh.gridIndex[mesh.indices[3 * k + 2]]};
+    std::rotate(tri.begin(), std::min_element(tri.begin(), tri.end()), tri.end());
+    out.push_back(tri);
+  }
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+}  // namespace
+
+// The breadth-first tessellator, with its shortcuts (children proven leaves from their parent's
+// ball are emitted without a visit), emits exactly the triangles the split rule gives when it is
+// applied to every triangle, depth first.
+TEST(Tessellator, EmitsExactlyTheSplitRulesTriangles) {
+  const auto t = testkit::bumpyTerrain(9, 5, 30000.0);
+  std::mt19937 rng(9);
+  Tessellator tess;
+  std::size_t unvisited = 0;
+  for (int i = 0; i < 12; ++i) {
+    const Camera cam = randomCamera(rng, testkit::kEarthRadius);
+    TessellationSettings s;
+    s.cull = false;
+    s.triangleBudget = 0;
+    s.distMaxPx = std::pow(2.0, -1 + int(rng() % 5));  // 0.5 .. 8 px
+    const auto& mesh = tess.tessellate(t, cam, s);
+    ASSERT_EQ(triangleSet(mesh), referenceMesh(t, cam, s.distMaxPx))
+        << "view " << i << ", " << mesh.triangleCount() << " triangles";
+    unvisited += tess.stats().leafPairsUnvisited;
+  }
+  EXPECT_GT(unvisited, 1000u) << "the shortcut must have been taken";
 }
 
 TEST(Tessellator, BudgetCoarsensTheWholeViewAndStaysBounded) {

@@ -116,7 +116,11 @@ void ErrorBounds::computeLevel(const ChartT& chart, std::span<const float> heigh
   const bool levelOnLattice = !lattice_.empty() && s >= (1 << kLatticeShift);
   auto copyToLattice = [&](int u, int v) {
     const std::size_t i = g.index(u, v);
-    lattice_[latticeIndex(u, v)] = {heights[i], codes[i]};
+    std::uint16_t childError = 0;
+    for (const GridPoint c : Diamond::of({u, v}).children) {
+      if (inGrid(g, c)) childError = std::max(childError, codes[g.index(c.u, c.v)].error);
+    }
+    lattice_[latticeIndex(u, v)] = {heights[i], codes[i], childError};
   };
 
   auto computeVertex = [&](GridPoint p) {

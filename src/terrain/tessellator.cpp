@@ -116,7 +116,7 @@ bool Tessellator::pass(const ChartT& chart, const Terrain& terrain, const Camera
   mesh_.clear();
   mesh_.eye = eye;
   ++mesh_.generation;
-  stats_.visited = stats_.culledFrustum = stats_.culledHorizon = 0;
+  stats_.visited = stats_.culledFrustum = stats_.culledHorizon = stats_.leafPairsUnvisited = 0;
 
   auto corner = [&](GridPoint p) {
     const std::size_t k = g.index(p.u, p.v);
@@ -146,7 +146,9 @@ bool Tessellator::pass(const ChartT& chart, const Terrain& terrain, const Camera
     if (splitEntries_.size() < count) splitEntries_.resize(count);  // grows only: no refills
     LatticeEntry* entries = splitEntries_.data();
     const int halfSize = m >> (depth / 2 + 1);
-    if (halfSize >= (1 << ErrorBounds::kLatticeShift)) {
+    // Lattice entries know their children's largest error; the full arrays do not.
+    const bool childrenKnown = halfSize >= (1 << ErrorBounds::kLatticeShift);
+    if (childrenKnown) {
       const ErrorBounds::LatticeLevel lattice = bounds.latticeLevel(halfSize, depth % 2 == 0);
       for (std::size_t i = 0; i < count; ++i) {
         const Node& n = level[i];
@@ -211,6 +213,20 @@ bool Tessellator::pass(const ChartT& chart, const Terrain& terrain, const Camera
           if (zr <= kNear || (view.focalKappa * eps > distMax * zr &&
                               view.focal * eps * (w.norm() + r) > distMax * zr * zr)) {
             const std::uint32_t ic = vertexFor(g.index(c.u, c.v), w);
+            // The children's split vertices carry at most childError, and their balls lie
+            // inside this one (nesting, with the radius margin that keeps the tests monotone
+            // in floating point), so the same tests with childError bound theirs. Where those
+            // allow no split and no culling can apply, the children are leaves: emit them
+            // without visiting them (a third of the leaves of a budget-bound orbit view).
+            if (childrenKnown && inside == (kAllPlanes | kHorizonClear) && zr > kNear) {
+              const double childEps = BoundCode::decode(split.childError);
+              if (!(view.focalKappa * childEps > distMax * zr) ||
+                  !(view.focal * childEps * (w.norm() + r) > distMax * zr * zr)) {
+                mesh_.indices.insert(mesh_.indices.end(), {ic, n.ia, n.ib0, ic, n.ib1, n.ia});
+                ++stats_.leafPairsUnvisited;
+                continue;
+              }
+            }
             const Corner split16{std::uint16_t(c.u), std::uint16_t(c.v)};
             next.push_back({split16, n.a, n.b0, ic, n.ia, n.ib0, inside});
             next.push_back({split16, n.b1, n.a, ic, n.ib1, n.ia, inside});

@@ -24,6 +24,9 @@ struct TessellationStats {
   bool coherentStart = false;     // began at the previous call's raised threshold
   bool reused = false;            // nothing changed: the previous mesh was returned untouched
   std::size_t visited = 0;        // bintree triangles examined in the last pass
+  // Pairs of children emitted as leaves without a visit: their parent's ball and the largest
+  // error among their split vertices proved that they do not split (last pass).
+  std::size_t leafPairsUnvisited = 0;
   std::size_t culledFrustum = 0, culledHorizon = 0;
 };
 
