@@ -114,16 +114,14 @@ void ErrorBounds::computeLevel(const ChartT& chart, std::span<const float> heigh
   const bool withRadii = hasRadii();
   BoundCodes* codes = codes_.data();
   const bool levelOnLattice = !lattice_.empty() && s >= (1 << kLatticeShift);
-  auto copyToLattice = [&](int u, int v) {
+  // childError: the largest error code among (u, v)'s children in the grid (computeVertex's).
+  auto copyToLattice = [&](int u, int v, std::uint16_t childError) {
     const std::size_t i = g.index(u, v);
-    std::uint16_t childError = 0;
-    for (const GridPoint c : Diamond::of({u, v}).children) {
-      if (inGrid(g, c)) childError = std::max(childError, codes[g.index(c.u, c.v)].error);
-    }
     lattice_[latticeIndex(u, v)] = {heights[i], codes[i], childError};
   };
 
-  auto computeVertex = [&](GridPoint p) {
+  // Returns the largest error code among p's children in the grid.
+  auto computeVertex = [&](GridPoint p) -> std::uint16_t {
     const Diamond d = Diamond::of(p);
     const Eigen::Vector3d P = sampler.pos(p);
     // Codes are monotone: the largest child code is the largest child bound, one table lookup
@@ -183,6 +181,7 @@ void ErrorBounds::computeLevel(const ChartT& chart, std::span<const float> heigh
     const std::uint16_t errorCode = e == childEps ? childCode : BoundCode::encodeUp(e);
     const std::size_t i = g.index(p.u, p.v);
     codes[i] = {errorCode, withRadii ? BoundCode::encodeUp(radius) : std::uint16_t(0)};
+    return childCode;
   };
 
   // Level 0 is half of all vertices: edge vertices of half-size 1, no children, no grid vertex
@@ -279,7 +278,10 @@ void ErrorBounds::computeLevel(const ChartT& chart, std::span<const float> heigh
         if (first <= last) longest = std::max(longest, std::size_t((last - first) / step + 1));
         for (int seam : {0, m}) {
           if (u <= uB && ((seam == 0 && u == 0) || (seam == m && lastIsSeam))) {
-            level == 0 ? computeLeaf({seam, v}) : computeVertex({seam, v});
+            if (level == 0)
+              computeLeaf({seam, v});
+            else
+              computeVertex({seam, v});
             ++count;
           }
         }
@@ -288,11 +290,12 @@ void ErrorBounds::computeLevel(const ChartT& chart, std::span<const float> heigh
       spans[r - rowBegin] = {1, 0};  // none
       for (; u <= uB; u += step) {
         if ((u == 0 || u == m) && (v == 0 || v == m)) continue;  // grid corners split nothing
-        if (level == 0)
+        if (level == 0) {
           computeLeaf({u, v});
-        else
-          computeVertex({u, v});
-        if (levelOnLattice) copyToLattice(u, v);
+        } else {
+          const std::uint16_t childError = computeVertex({u, v});
+          if (levelOnLattice) copyToLattice(u, v, childError);
+        }
         ++count;
       }
     }
@@ -326,14 +329,14 @@ void ErrorBounds::computeLevel(const ChartT& chart, std::span<const float> heigh
           continue;  // seam vertices: u = 0 is even, so v/s odd
         const std::size_t a = g.index(0, v), b = g.index(m, v);
         // Recompute both halves in case the region only reached one of them.
-        computeVertex({0, v});
-        computeVertex({m, v});
+        const std::uint16_t childError0 = computeVertex({0, v});
+        const std::uint16_t childErrorM = computeVertex({m, v});
         const BoundCodes both{std::max(codes[a].error, codes[b].error),
                               std::max(codes[a].radius, codes[b].radius)};
         codes[a] = codes[b] = both;
         if (levelOnLattice) {
-          copyToLattice(0, v);
-          copyToLattice(m, v);
+          copyToLattice(0, v, childError0);
+          copyToLattice(m, v, childErrorM);
         }
       }
     }
