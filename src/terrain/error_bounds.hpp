@@ -50,10 +50,10 @@ struct BoundCodes {
 struct LatticeEntry {
   float height = 0;
   BoundCodes codes;
-  // The largest error code among the vertex's children in the grid: the split vertices of the
-  // two triangles a triangle split at this vertex becomes. Their balls lie inside this
-  // vertex's ball (nesting), so when this error would not split them seen from this ball, the
-  // tessellator emits them without visiting them.
+  // The largest error code among the vertex's children in the grid, which are the split
+  // vertices of the triangles its diamond's two triangles split into. Their balls lie inside
+  // this vertex's ball (nesting), so when this error would not split them seen from this ball,
+  // the tessellator emits them without visiting them.
   std::uint16_t childError = 0;
   bool operator==(const LatticeEntry&) const = default;
 };
