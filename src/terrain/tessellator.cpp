@@ -208,24 +208,25 @@ bool Tessellator::pass(const ChartT& chart, const Terrain& terrain, const Camera
         // error cannot reach the screen, so it never needs to split.
         if (eps > 0 && zc + r >= kNear) {
           const double zr = zc - r;
-          // Two valid bounds on the screen error; the smaller decides (both are nested, so their
-          // minimum is too). The cheap one first: if it allows no split, the other cannot either.
-          if (zr <= kNear || (view.focalKappa * eps > distMax * zr &&
-                              view.focal * eps * (w.norm() + r) > distMax * zr * zr)) {
+          // Whether an error e on this ball can reach distMax on screen: two valid bounds, the
+          // smaller decides (both are nested, so their minimum is too). The cheap one first: if
+          // it allows no split, the other cannot either.
+          auto errorSplits = [&](double e) {
+            return view.focalKappa * e > distMax * zr &&
+                   view.focal * e * (w.norm() + r) > distMax * zr * zr;
+          };
+          if (zr <= kNear || errorSplits(eps)) {
             const std::uint32_t ic = vertexFor(g.index(c.u, c.v), w);
             // The children's split vertices carry at most childError, and their balls lie
             // inside this one (nesting, with the radius margin that keeps the tests monotone
             // in floating point), so the same tests with childError bound theirs. Where those
             // allow no split and no culling can apply, the children are leaves: emit them
             // without visiting them (55 % of the leaves of the budget-bound orbit view).
-            if (childrenKnown && inside == (kAllPlanes | kHorizonClear) && zr > kNear) {
-              const double childEps = BoundCode::decode(split.childError);
-              if (!(view.focalKappa * childEps > distMax * zr) ||
-                  !(view.focal * childEps * (w.norm() + r) > distMax * zr * zr)) {
-                mesh_.indices.insert(mesh_.indices.end(), {ic, n.ia, n.ib0, ic, n.ib1, n.ia});
-                ++stats_.leafPairsUnvisited;
-                continue;
-              }
+            if (childrenKnown && inside == (kAllPlanes | kHorizonClear) && zr > kNear &&
+                !errorSplits(BoundCode::decode(split.childError))) {
+              mesh_.indices.insert(mesh_.indices.end(), {ic, n.ia, n.ib0, ic, n.ib1, n.ia});
+              ++stats_.leafPairsUnvisited;
+              continue;
             }
             const Corner split16{std::uint16_t(c.u), std::uint16_t(c.v)};
             next.push_back({split16, n.a, n.b0, ic, n.ia, n.ib0, inside});
