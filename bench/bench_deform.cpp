@@ -96,11 +96,16 @@ double brushOnlyMs(const edit::GaussianProfile& profile, double amount,
                    const std::vector<double>& d2, std::vector<float>& h, double limit) {
   const std::size_t n = d2.size();
   const bool parallel = n > 8192;
+  auto apply = [&](std::size_t i) {
+    const double w = amount * profile.fromDistance2(d2[i]);
+    h[i] = static_cast<float>(std::clamp(double(h[i]) + w, -limit, limit));
+  };
   return timeMs([&] {
-#pragma omp parallel for schedule(static) if (parallel)
-    for (std::size_t i = 0; i < n; ++i) {
-      const double w = amount * profile.fromDistance2(d2[i]);
-      h[i] = static_cast<float>(std::clamp(double(h[i]) + w, -limit, limit));
+    if (parallel) {
+#pragma omp parallel for schedule(static)
+      for (std::size_t i = 0; i < n; ++i) apply(i);
+    } else {  // like the brush: small runs do not enter the OpenMP runtime
+      for (std::size_t i = 0; i < n; ++i) apply(i);
     }
   });
 }

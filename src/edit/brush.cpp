@@ -157,45 +157,52 @@ terrain::GridRegion applyRows(const ToolContext& ctx, const GaussianProfile& pro
   // 0 when anything changed (other regions); -1 when nothing did.
   std::vector<int> reach(std::size_t(v1 - v0 + 1), -1);
 
+  // Small regions stay on this thread without entering the OpenMP runtime: a region with
+  // if (false) still sets up a team of one and wakes the pool's sleeping threads.
   if (field.latLong() && region.symmetric()) {
-#pragma omp parallel if (parallel)
-    {
-      std::vector<double> weight;  // per folded column distance k
-#pragma omp for schedule(dynamic, 2)
-      for (int v = v0; v <= v1; ++v) {
-        const auto spans = region.row(v);
-        if (spans.empty()) continue;
-        float* row = h + std::size_t(v) * side;
-        const DistanceField::Row terms = field.row(v);
-        int kChanged = -1;
-        if (terms.f == 0.0) {  // every vertex of the row at one distance (pole rows, polar centre)
-          const double w = amount * profile.fromDistance2(field.distance2(terms, 0));
-          for (const Span& s : spans) {
-            for (int u = s.uBegin; u <= s.uEnd; ++u) {
-              if (store(row[u], op(row[u], w))) kChanged = std::max(kChanged, field.fold(u));
-            }
-          }
-        } else {
-          const int kMax = region.halfWidth(v);
-          weight.resize(std::size_t(kMax) + 1);
-          for (int k = 0; k <= kMax; ++k) {
-            weight[std::size_t(k)] = amount * profile.fromDistance2(field.distance2(terms, k));
-          }
-          for (const Span& s : spans) {
-            for (int u = s.uBegin; u <= s.uEnd; ++u) {
-              const int k = field.fold(u);
-              if (store(row[u], op(row[u], weight[std::size_t(k)])))
-                kChanged = std::max(kChanged, k);
-            }
+    // weight: per folded column distance k, reused from row to row by one thread.
+    auto applyRow = [&](int v, std::vector<double>& weight) {
+      const auto spans = region.row(v);
+      if (spans.empty()) return;
+      float* row = h + std::size_t(v) * side;
+      const DistanceField::Row terms = field.row(v);
+      int kChanged = -1;
+      if (terms.f == 0.0) {  // every vertex of the row at one distance (pole rows, polar centre)
+        const double w = amount * profile.fromDistance2(field.distance2(terms, 0));
+        for (const Span& s : spans) {
+          for (int u = s.uBegin; u <= s.uEnd; ++u) {
+            if (store(row[u], op(row[u], w))) kChanged = std::max(kChanged, field.fold(u));
           }
         }
-        reach[std::size_t(v - v0)] = kChanged;
+      } else {
+        const int kMax = region.halfWidth(v);
+        weight.resize(std::size_t(kMax) + 1);
+        for (int k = 0; k <= kMax; ++k) {
+          weight[std::size_t(k)] = amount * profile.fromDistance2(field.distance2(terms, k));
+        }
+        for (const Span& s : spans) {
+          for (int u = s.uBegin; u <= s.uEnd; ++u) {
+            const int k = field.fold(u);
+            if (store(row[u], op(row[u], weight[std::size_t(k)]))) kChanged = std::max(kChanged, k);
+          }
+        }
       }
+      reach[std::size_t(v - v0)] = kChanged;
+    };
+    if (parallel) {
+#pragma omp parallel
+      {
+        std::vector<double> weight;
+#pragma omp for schedule(dynamic, 2)
+        for (int v = v0; v <= v1; ++v) applyRow(v, weight);
+      }
+    } else {
+      std::vector<double> weight;
+      for (int v = v0; v <= v1; ++v) applyRow(v, weight);
     }
   } else {
     // Any chart: one distance per vertex.
-#pragma omp parallel for schedule(dynamic, 2) if (parallel)
-    for (int v = v0; v <= v1; ++v) {
+    auto applyRow = [&](int v) {
       float* row = h + std::size_t(v) * side;
       bool changed = false;
       for (const Span& s : region.row(v)) {
@@ -205,6 +212,12 @@ terrain::GridRegion applyRows(const ToolContext& ctx, const GaussianProfile& pro
         }
       }
       reach[std::size_t(v - v0)] = changed ? 0 : -1;
+    };
+    if (parallel) {
+#pragma omp parallel for schedule(dynamic, 2)
+      for (int v = v0; v <= v1; ++v) applyRow(v);
+    } else {
+      for (int v = v0; v <= v1; ++v) applyRow(v);
     }
   }
   int first = -1, last = -1, kMax = -1;

@@ -253,9 +253,9 @@ void ErrorBounds::computeLevel(const ChartT& chart, std::span<const float> heigh
     if ((((u / s) & 1) != 0) != wantUOdd) u += s;
     return u;
   };
-  std::size_t count = 0;
-#pragma omp parallel for schedule(dynamic, kernelLevel ? 1 : 4) reduction(+ : count) if (parallel)
-  for (std::size_t item = 0; item < bandCount * rangeCount; ++item) {
+  // One work item: a band of rows within one column range. Returns the vertices it computed.
+  auto computeItem = [&](std::size_t item) {
+    std::size_t count = 0;
     const std::size_t rowBegin = (item / rangeCount) * band;
     const std::size_t rowEnd = std::min(rows.size(), rowBegin + band);
     const auto [uA, uB] = ranges[item % rangeCount];
@@ -316,6 +316,18 @@ void ErrorBounds::computeLevel(const ChartT& chart, std::span<const float> heigh
         count += n;
       }
     }
+    return count;
+  };
+  const std::size_t items = bandCount * rangeCount;
+  std::size_t count = 0;
+  if (parallel) {
+#pragma omp parallel for schedule(dynamic, kernelLevel ? 1 : 4) reduction(+ : count)
+    for (std::size_t item = 0; item < items; ++item) count += computeItem(item);
+  } else {
+    // Not through the OpenMP runtime: a region with if (false) still sets up a team of one
+    // and wakes the pool's sleeping threads (futex calls, about a tenth of a small edit's
+    // update, whose levels all stay on this thread).
+    for (std::size_t item = 0; item < items; ++item) count += computeItem(item);
   }
   lastUpdateCount_ += count;
 
