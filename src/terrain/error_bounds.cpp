@@ -253,6 +253,10 @@ void ErrorBounds::computeLevel(const ChartT& chart, std::span<const float> heigh
     if ((((u / s) & 1) != 0) != wantUOdd) u += s;
     return u;
   };
+  // On a wrapping chart the seam twins are computed after the rows, both halves and then
+  // combined (below), whatever this loop stores for them: it leaves them out (on an edit across
+  // the seam they were computed twice, with the scalar path's scans at levels 2-5).
+  const bool seamTwinsLater = chart.wrapsU() && !centre;
   // One work item: a band of rows within one column range. Returns the vertices it computed.
   auto computeItem = [&](std::size_t item) {
     std::size_t count = 0;
@@ -277,7 +281,7 @@ void ErrorBounds::computeLevel(const ChartT& chart, std::span<const float> heigh
         spans[r - rowBegin] = {first, last};
         if (first <= last) longest = std::max(longest, std::size_t((last - first) / step + 1));
         for (int seam : {0, m}) {
-          if (u <= uB && ((seam == 0 && u == 0) || (seam == m && lastIsSeam))) {
+          if (!seamTwinsLater && u <= uB && ((seam == 0 && u == 0) || (seam == m && lastIsSeam))) {
             if (level == 0)
               computeLeaf({seam, v});
             else
@@ -290,6 +294,7 @@ void ErrorBounds::computeLevel(const ChartT& chart, std::span<const float> heigh
       spans[r - rowBegin] = {1, 0};  // none
       for (; u <= uB; u += step) {
         if ((u == 0 || u == m) && (v == 0 || v == m)) continue;  // grid corners split nothing
+        if (seamTwinsLater && (u == 0 || u == m)) continue;
         if (level == 0) {
           computeLeaf({u, v});
         } else {
@@ -343,6 +348,7 @@ void ErrorBounds::computeLevel(const ChartT& chart, std::span<const float> heigh
         // Recompute both halves in case the region only reached one of them.
         const std::uint16_t childError0 = computeVertex({0, v});
         const std::uint16_t childErrorM = computeVertex({m, v});
+        lastUpdateCount_ += 2;
         const BoundCodes both{std::max(codes[a].error, codes[b].error),
                               std::max(codes[a].radius, codes[b].radius)};
         codes[a] = codes[b] = both;
