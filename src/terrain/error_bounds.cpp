@@ -273,7 +273,8 @@ void ErrorBounds::computeLevel(const ChartT& chart, std::span<const float> heigh
       int u = firstColumn(v, uA);
       if (kernelLevel && v >= s && v <= m - s) {
         // The row kernels take the vertices whose diamonds lie inside the grid; the seam
-        // columns (u = 0 and u = m) take the general path.
+        // columns (u = 0 and u = m) take the general path (on a wrapping chart in the twin
+        // pass below).
         const int first = u == 0 ? step : u;
         int last = u > uB ? u - step : u + ((uB - u) / step) * step;
         const bool lastIsSeam = last == m;
@@ -330,8 +331,8 @@ void ErrorBounds::computeLevel(const ChartT& chart, std::span<const float> heigh
     for (std::size_t item = 0; item < items; ++item) count += computeItem(item);
   } else {
     // Not through the OpenMP runtime: a region with if (false) still sets up a team of one
-    // and wakes the pool's sleeping threads (futex calls, about a tenth of a small edit's
-    // update, whose levels all stay on this thread).
+    // and wakes the pool's sleeping threads (futex calls, about 2 us a level: a 150 km edit at
+    // 2049^2, whose levels all stay on this thread, took 0.138 ms with it, 0.098 without).
     for (std::size_t item = 0; item < items; ++item) count += computeItem(item);
   }
   lastUpdateCount_ += count;
