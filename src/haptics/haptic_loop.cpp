@@ -45,6 +45,8 @@ HapticLoop::~HapticLoop() {
 }
 
 double HapticLoop::now() const {
+  if (options_.tickClock)
+    return double(ticks_.load(std::memory_order_acquire)) * core_.model().settings().period();
   return std::chrono::duration<double>(Clock::now() - epoch_).count();
 }
 
@@ -112,7 +114,9 @@ void HapticLoop::run(std::stop_token stop) {
     const auto wake = Clock::now();
     patches_.update();
     const TerrainPatch& patch = patches_.front();
-    const double t = std::chrono::duration<double>(wake - epoch_).count();
+    const double t = options_.tickClock ? double(ticks_.load(std::memory_order_relaxed) + 1) *
+                                              core_.model().settings().period()
+                                        : std::chrono::duration<double>(wake - epoch_).count();
     Eigen::Vector3d pos = Eigen::Vector3d::Zero();
     const bool ok = device_.read(t, pos);
     const ForceRecord r = core_.tick(t, ok, pos, patch.valid() ? &patch : nullptr);

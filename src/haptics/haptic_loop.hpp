@@ -32,6 +32,11 @@ struct LoopOptions {
   bool realtimePriority = true;       // try SCHED_FIFO (needs CAP_SYS_NICE; failure is reported)
   std::size_t recordCapacity = 8192;  // ticks the editor may fall behind before records drop
   std::size_t timingCapacity = 0;     // ticks whose period and compute time are kept (bench)
+  // The time the device and the force model see: the wall clock since construction (false), or
+  // ticks x period (true), so that a loaded machine delays ticks but never skips any of a
+  // scripted device's time: what the loop computes then depends on the tick count alone
+  // (tests of the live thread).
+  bool tickClock = false;
   void validate(double period) const;
 };
 
@@ -62,7 +67,8 @@ class HapticLoop {
   void start();
   void stop();  // joins; the device is left commanding zero force
   bool running() const { return thread_.joinable(); }
-  // Seconds on the loop's clock (0 at construction); devices are read with this time.
+  // Seconds on the loop's clock (0 at construction; LoopOptions::tickClock: the last tick's
+  // time); devices are read with this time.
   double now() const;
 
   // Editor thread (one thread): snapshot of the heights within halfSize cells of `centre`
