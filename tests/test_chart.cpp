@@ -2,7 +2,10 @@
 
 #include <cmath>
 #include <numbers>
+#include <random>
+#include <vector>
 
+#include "core/flat_chart.hpp"
 #include "core/input_error.hpp"
 #include "core/latlong_chart.hpp"
 
@@ -74,4 +77,35 @@ TEST(LatLongChart, InverseRecoversGridCoordinates) {
   }
   EXPECT_FALSE(c.inverse(Eigen::Vector3d::Zero()).has_value());
   EXPECT_FALSE(c.inverse(Eigen::Vector3d(NAN, 0, 0)).has_value());
+}
+
+// The tessellator computes a level's positions with scatteredPositions (vectorised, and cloned
+// for AVX2 / AVX-512): they must be position()'s, bit for bit, or the mesh's vertices and its
+// split decisions would depend on the machine. Random vertices, the seam and the poles included,
+// and a count that leaves a remainder after any vector width.
+TEST(Chart, ScatteredPositionsAreBitwisePositions) {
+  const LatLongChart latlong(GridSize(10), 6372790.0);
+  const ps::core::FlatChart flat(GridSize(10), 250.0, 125.0);
+  const int m = latlong.grid().m();
+  std::mt19937 rng(7);
+  std::uniform_int_distribution<int> coord(0, m);
+  std::uniform_real_distribution<float> height(-8000.0f, 8000.0f);
+  std::vector<std::int32_t> u, v;
+  std::vector<float> h;
+  for (int k = 0; k < 1001; ++k) {
+    u.push_back(k % 7 == 0 ? (k % 2) * m : coord(rng));
+    v.push_back(k % 11 == 0 ? (k % 2) * m : coord(rng));
+    h.push_back(height(rng));
+  }
+  for (const ps::core::Chart* chart : {static_cast<const ps::core::Chart*>(&latlong),
+                                       static_cast<const ps::core::Chart*>(&flat)}) {
+    std::vector<double> x(u.size()), y(u.size()), z(u.size());
+    chart->scatteredPositions(u.data(), v.data(), h.data(), u.size(),
+                              {x.data(), y.data(), z.data()});
+    for (std::size_t k = 0; k < u.size(); ++k) {
+      const Eigen::Vector3d p = chart->position(u[k], v[k], double(h[k]));
+      ASSERT_EQ(Eigen::Vector3d(x[k], y[k], z[k]), p)
+          << chart->name() << " vertex (" << u[k] << ", " << v[k] << ")";
+    }
+  }
 }

@@ -1,5 +1,7 @@
 #pragma once
 #include <Eigen/Core>
+#include <cstddef>
+#include <cstdint>
 #include <optional>
 #include <string>
 
@@ -30,6 +32,16 @@ class Chart {
     for (int u = uFirst; u <= uLast; ++u) {
       const Eigen::Vector3d p = position(u, v, double(hRow[u]));
       const int k = u - uFirst;
+      out.x[k] = p.x(), out.y[k] = p.y(), out.z[k] = p.z();
+    }
+  }
+  // position() of scattered grid vertices (u[k], v[k]) with heights h[k], k < n: out.x[k],
+  // y[k], z[k]. Bit-identical to position(); the tessellator asks for one level of the bintree's
+  // split vertices at a time, and charts override it with a loop the compiler vectorises.
+  virtual void scatteredPositions(const std::int32_t* u, const std::int32_t* v, const float* h,
+                                  std::size_t n, RowOut out) const {
+    for (std::size_t k = 0; k < n; ++k) {
+      const Eigen::Vector3d p = position(u[k], v[k], double(h[k]));
       out.x[k] = p.x(), out.y[k] = p.y(), out.z[k] = p.z();
     }
   }

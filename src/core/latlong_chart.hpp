@@ -36,6 +36,8 @@ class LatLongChart final : public Chart {
       z[k] = r * sl;
     }
   }
+  void scatteredPositions(const std::int32_t* u, const std::int32_t* v, const float* h,
+                          std::size_t n, RowOut out) const override;
   Eigen::Vector3d up(int u, int v) const override { return direction(u, v); }
   Eigen::Vector3d positionAt(double u, double v, double h) const override;
   std::optional<Eigen::Vector2d> inverse(const Eigen::Vector3d& p) const override;

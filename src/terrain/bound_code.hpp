@@ -24,8 +24,10 @@ class BoundCode {
   static constexpr int kStepsPerOctave = 1024;
 
   static float decode(std::uint16_t code) {
-    const float value = std::bit_cast<float>(kMinFloatBits + ((std::uint32_t(code) - 1u) << 13));
-    return code == 0 ? 0.0f : value;
+    // Code 0's bits are masked to 0.0f rather than chosen by a branch: loops that decode stay
+    // free of control flow, which they must be to vectorise.
+    const std::uint32_t bits = kMinFloatBits + ((std::uint32_t(code) - 1u) << 13);
+    return std::bit_cast<float>(bits & (0u - std::uint32_t(code != 0)));
   }
 
   static std::uint16_t encodeUp(double value) {

@@ -68,7 +68,76 @@ inline bool behindHorizon(const ViewGeometry& g, const Eigen::Vector3d& w, doubl
   return along * g.sinCone - across * g.cosCone >= r;
 }
 
+// What the split test decides for a triangle seen wholly in view. Culling, for the few
+// triangles at the view's edges, comes after and can only turn kSplitLeafChildren into kSplit.
+enum SplitDecision : std::uint8_t {
+  kNoSplit = 0,
+  kSplit = 1,
+  kSplitLeafChildren = 2,  // splits, and its children's errors cannot split them: emit them
+};
+
+struct SplitTest {
+  double forward[3];  // the camera's viewing direction, planet frame
+  double focalKappa, focal, distMax;
+  bool childrenKnown;  // childError holds the children's largest error code
+};
+
+// The split test of a whole level (one triangle per split vertex) at once: a loop over arrays
+// that the compiler vectorises, where one triangle at a time spent most of its instructions
+// moving scalars in and out of vector registers. x, y, z hold the split vertices' positions and
+// leave relative to the eye. Every clone performs the same IEEE operations in the same order
+// (no fused multiply-adds: -ffp-contract=off), so the decisions, and the mesh, do not depend on
+// the machine. Returns how many triangles split.
+__attribute__((target_clones("avx512f", "avx2", "default"))) std::size_t decideSplits(
+    const SplitTest& t, const Eigen::Vector3d& eye, std::size_t count, double* __restrict x,
+    double* __restrict y, double* __restrict z, const std::uint16_t* __restrict errorCode,
+    const std::uint16_t* __restrict radiusCode, const std::uint16_t* __restrict childCode,
+    std::uint8_t* __restrict decision) {
+  const double f0 = t.forward[0], f1 = t.forward[1], f2 = t.forward[2];
+  const double ex = eye.x(), ey = eye.y(), ez = eye.z();
+  const double fk = t.focalKappa, fo = t.focal, dm = t.distMax;
+  const int childrenKnown = t.childrenKnown ? 1 : 0;
+  std::size_t splitting = 0;
+  // Integer logic instead of && and ?: keeps the loop free of branches, which it must be to
+  // vectorise.
+  for (std::size_t i = 0; i < count; ++i) {
+    const double wx = x[i] - ex, wy = y[i] - ey, wz = z[i] - ez;
+    x[i] = wx, y[i] = wy, z[i] = wz;
+    const double eps = BoundCode::decode(errorCode[i]);
+    const double r = double(BoundCode::decode(radiusCode[i])) + eps;
+    const double zc = (f0 * wx + f1 * wy) + f2 * wz;
+    const double zr = zc - r;
+    const double reach = std::sqrt((wx * wx + wy * wy) + wz * wz) + r;  // >= |X| on the ball
+    const double limit = dm * zr, limit2 = limit * zr;
+    // Whether an error e on this ball can reach distMax on screen: two valid bounds, the smaller
+    // decides (both are nested, so their minimum is too); see the class comment.
+    const int errorSplits = int(fk * eps > limit) & int(fo * eps * reach > limit2);
+    // A ball wholly behind the near plane shows nothing (culling drops it too): its error
+    // cannot reach the screen, so it never needs to split. One reaching closer to the eye
+    // plane than kNear always splits.
+    const int splits = int(eps > 0) & int(zc + r >= kNear) & (int(zr <= kNear) | errorSplits);
+    // The children's split vertices carry at most childError, and their balls lie inside this
+    // one (nesting, with the radius margin that keeps the tests monotone in floating point), so
+    // the same test with childError bounds theirs.
+    const double child = BoundCode::decode(childCode[i]);
+    const int childSplits = int(fk * child > limit) & int(fo * child * reach > limit2);
+    const int leafChildren = childrenKnown & int(zr > kNear) & (childSplits ^ 1);
+    decision[i] = std::uint8_t(splits * (1 + leafChildren));
+    splitting += std::size_t(splits);
+  }
+  return splitting;
+}
+
 }  // namespace
+
+void Tessellator::SplitVertices::growTo(std::size_t n) {
+  if (u.size() >= n) return;
+  for (auto* a : {&u, &v}) a->resize(n);
+  height.resize(n);
+  for (auto* a : {&error, &radius, &childError}) a->resize(n);
+  for (auto* a : {&x, &y, &z}) a->resize(n);
+  decision.resize(n);
+}
 
 // Grid coordinates fit 16 bits (Tessellator::Corner) and grid indices 32 (the vertex hash).
 static_assert(core::GridSize::kMaxLevel <= 15);
@@ -143,101 +212,112 @@ bool Tessellator::pass(const ChartT& chart, const Terrain& terrain, const Camera
   // edges of that half-size.
   for (int depth = 0; !level.empty(); ++depth) {
     const std::size_t count = level.size();
-    if (splitEntries_.size() < count) splitEntries_.resize(count);  // grows only: no refills
-    LatticeEntry* entries = splitEntries_.data();
+    split_.growTo(count);
+    std::int32_t* su = split_.u.data();
+    std::int32_t* sv = split_.v.data();
+    float* height = split_.height.data();
+    std::uint16_t* errorCode = split_.error.data();
+    std::uint16_t* radiusCode = split_.radius.data();
+    std::uint16_t* childCode = split_.childError.data();
     const int halfSize = m >> (depth / 2 + 1);
     // Lattice entries know their children's largest error; the full arrays do not.
     const bool childrenKnown = halfSize >= (1 << ErrorBounds::kLatticeShift);
+    // Every triangle's split vertex, in one tight loop of independent loads.
     if (childrenKnown) {
       const ErrorBounds::LatticeLevel lattice = bounds.latticeLevel(halfSize, depth % 2 == 0);
       for (std::size_t i = 0; i < count; ++i) {
         const Node& n = level[i];
-        entries[i] = lattice.at((n.b0.u + n.b1.u) / 2, (n.b0.v + n.b1.v) / 2);
+        const int cu = (n.b0.u + n.b1.u) / 2, cv = (n.b0.v + n.b1.v) / 2;
+        const LatticeEntry& e = lattice.at(cu, cv);
+        su[i] = cu, sv[i] = cv;
+        height[i] = e.height;
+        errorCode[i] = e.codes.error, radiusCode[i] = e.codes.radius;
+        childCode[i] = e.childError;
       }
     } else {
       for (std::size_t i = 0; i < count; ++i) {
         const Node& n = level[i];
-        const int su = n.b0.u + n.b1.u, sv = n.b0.v + n.b1.v;
-        if (((su | sv) & 1) == 0) {
-          const std::size_t ci = g.index(su / 2, sv / 2);
-          entries[i] = {h[ci], codes[ci]};
-        }
+        const int uu = n.b0.u + n.b1.u, vv = n.b0.v + n.b1.v;
+        const bool onGrid = ((uu | vv) & 1) == 0;  // the hypotenuse has a midpoint on the grid
+        const std::size_t ci = onGrid ? g.index(uu / 2, vv / 2) : 0;
+        su[i] = uu / 2, sv[i] = vv / 2;
+        height[i] = h[ci];
+        // Off the grid, a zero error: the triangle cannot split.
+        errorCode[i] = onGrid ? codes[ci].error : 0;
+        radiusCode[i] = codes[ci].radius;
+        childCode[i] = 0;
       }
     }
+    double* x = split_.x.data();
+    double* y = split_.y.data();
+    double* z = split_.z.data();
+    chart.scatteredPositions(su, sv, height, count, {x, y, z});
+    const SplitTest test{{forward.x(), forward.y(), forward.z()},
+                         view.focalKappa,
+                         view.focal,
+                         distMax,
+                         childrenKnown};
+    std::uint8_t* decision = split_.decision.data();
+    const std::size_t splitting =
+        decideSplits(test, eye, count, x, y, z, errorCode, radiusCode, childCode, decision);
+
     next.clear();
-    startLevelHash(count);
+    startLevelHash(splitting);
     stats_.visited += count;
     for (std::size_t i = 0; i < count; ++i) {
       const Node& n = level[i];
-      const int su = n.b0.u + n.b1.u, sv = n.b0.v + n.b1.v;
-      if (((su | sv) & 1) == 0) {  // the hypotenuse has a midpoint on the grid
-        const GridPoint c{su / 2, sv / 2};
-        const LatticeEntry split = entries[i];
-        const double eps = BoundCode::decode(split.codes.error);
-        const double r = double(BoundCode::decode(split.codes.radius)) + eps;
-        const Eigen::Vector3d w = chart.position(c.u, c.v, double(split.height)) - eye;
-        std::uint8_t inside = n.inside;
-        if (inside != (kAllPlanes | kHorizonClear)) {
-          const Eigen::Vector3d cam = R * w;
-          bool outside = false;
-          for (int p = 0; p < 5 && !outside; ++p) {
-            if (inside & (1u << p)) continue;
-            const double d = view.planes[p].dot(cam) - (p == 4 ? kNear : 0.0);
-            if (d < -r) {
-              outside = true;
-            } else if (d >= r) {
-              inside |= std::uint8_t(1u << p);
-            }
-          }
-          if (outside) {
-            ++stats_.culledFrustum;
-            continue;
-          }
-          if (!(inside & kHorizonClear)) {
-            const double along = view.horizonCull ? w.dot(view.towardCentre) : 0.0;
-            if (!view.horizonCull || along + r < view.horizonPlaneDist) {
-              inside |= kHorizonClear;  // wholly in front of the horizon plane: children too
-            } else if (behindHorizon(view, w, along, r)) {
-              ++stats_.culledHorizon;
-              continue;
-            }
+      std::uint8_t split = decision[i];
+      std::uint8_t inside = n.inside;
+      const bool onGrid = (((n.b0.u + n.b1.u) | (n.b0.v + n.b1.v)) & 1) == 0;
+      if (inside != (kAllPlanes | kHorizonClear) && onGrid) {
+        // At the view's edges: cull the ball (w = centre - eye, radius r) or learn which
+        // planes it lies wholly inside, which its children inherit.
+        const Eigen::Vector3d w(x[i], y[i], z[i]);
+        const double r =
+            double(BoundCode::decode(radiusCode[i])) + double(BoundCode::decode(errorCode[i]));
+        const Eigen::Vector3d cam = R * w;
+        bool outside = false;
+        for (int p = 0; p < 5 && !outside; ++p) {
+          if (inside & (1u << p)) continue;
+          const double d = view.planes[p].dot(cam) - (p == 4 ? kNear : 0.0);
+          if (d < -r) {
+            outside = true;
+          } else if (d >= r) {
+            inside |= std::uint8_t(1u << p);
           }
         }
-        const double zc = forward.dot(w);
-        // A ball wholly behind the near plane shows nothing (the culling pass drops it too): its
-        // error cannot reach the screen, so it never needs to split.
-        if (eps > 0 && zc + r >= kNear) {
-          const double zr = zc - r;
-          // Whether an error e on this ball can reach distMax on screen: two valid bounds, the
-          // smaller decides (both are nested, so their minimum is too). The cheap one first: if
-          // it allows no split, the other cannot either.
-          auto errorSplits = [&](double e) {
-            return view.focalKappa * e > distMax * zr &&
-                   view.focal * e * (w.norm() + r) > distMax * zr * zr;
-          };
-          if (zr <= kNear || errorSplits(eps)) {
-            const std::uint32_t ic = vertexFor(g.index(c.u, c.v), w);
-            // The children's split vertices carry at most childError, and their balls lie
-            // inside this one (nesting, with the radius margin that keeps the tests monotone
-            // in floating point), so the same tests with childError bound theirs. Where those
-            // allow no split and no culling can apply, the children are leaves: emit them
-            // without visiting them (55 % of the leaves of the budget-bound orbit view).
-            if (childrenKnown && inside == (kAllPlanes | kHorizonClear) && zr > kNear &&
-                !errorSplits(BoundCode::decode(split.childError))) {
-              mesh_.indices.insert(mesh_.indices.end(), {ic, n.ia, n.ib0, ic, n.ib1, n.ia});
-              ++stats_.leafPairsUnvisited;
-              continue;
-            }
-            const Corner split16{std::uint16_t(c.u), std::uint16_t(c.v)};
-            next.push_back({split16, n.a, n.b0, ic, n.ia, n.ib0, inside});
-            next.push_back({split16, n.b1, n.a, ic, n.ib1, n.ia, inside});
+        if (outside) {
+          ++stats_.culledFrustum;
+          continue;
+        }
+        if (!(inside & kHorizonClear)) {
+          const double along = view.horizonCull ? w.dot(view.towardCentre) : 0.0;
+          if (!view.horizonCull || along + r < view.horizonPlaneDist) {
+            inside |= kHorizonClear;  // wholly in front of the horizon plane: children too
+          } else if (behindHorizon(view, w, along, r)) {
+            ++stats_.culledHorizon;
             continue;
           }
         }
+        // Children emitted without a visit skip their own culling: only where none is left.
+        if (split == kSplitLeafChildren && inside != (kAllPlanes | kHorizonClear)) split = kSplit;
       }
-      mesh_.indices.push_back(n.ia);
-      mesh_.indices.push_back(n.ib0);
-      mesh_.indices.push_back(n.ib1);
+      if (split == kNoSplit) {
+        mesh_.indices.push_back(n.ia);
+        mesh_.indices.push_back(n.ib0);
+        mesh_.indices.push_back(n.ib1);
+        continue;
+      }
+      const std::uint32_t ic = vertexFor(g.index(su[i], sv[i]), Eigen::Vector3d(x[i], y[i], z[i]));
+      if (split == kSplitLeafChildren) {
+        // Both children are leaves (55 % of the leaves of the budget-bound orbit view).
+        mesh_.indices.insert(mesh_.indices.end(), {ic, n.ia, n.ib0, ic, n.ib1, n.ia});
+        ++stats_.leafPairsUnvisited;
+        continue;
+      }
+      const Corner split16{std::uint16_t(su[i]), std::uint16_t(sv[i])};
+      next.push_back({split16, n.a, n.b0, ic, n.ia, n.ib0, inside});
+      next.push_back({split16, n.b1, n.a, ic, n.ib1, n.ia, inside});
     }
     // A pending triangle that is not culled ends as one triangle or more, and culling takes few
     // of a level's (those at the frustum's and the horizon's edges): half the pending count

@@ -57,7 +57,8 @@ class Tessellator {
   std::uint32_t addVertex(std::uint64_t gridIndex, const Eigen::Vector3d& relativeToEye);
   // Mesh vertex of a split vertex of the current level, added on first use.
   std::uint32_t vertexFor(std::uint64_t gridIndex, const Eigen::Vector3d& relativeToEye);
-  // Empties the vertex hash for a level of `nodes` triangles (each adds one vertex at most).
+  // Empties the vertex hash for a level where `nodes` triangles split (each adds one vertex at
+  // most).
   void startLevelHash(std::size_t nodes);
   std::size_t hashSlot(std::uint32_t key) const {
     return std::size_t((key * 0x9E3779B97F4A7C15ull) >> 20) & hashMask_;
@@ -77,7 +78,17 @@ class Tessellator {
         inside;  // bit i: ball inside frustum plane i; bit 5: in front of the horizon plane
   };
   std::vector<Node> levelNodes_, nextNodes_;  // one level of the bintree, and the next
-  std::vector<LatticeEntry> splitEntries_;    // the split vertices of levelNodes_
+  // The split vertices of levelNodes_, a quantity per array, so that their positions and split
+  // decisions are computed for a whole level in loops the compiler vectorises.
+  struct SplitVertices {
+    std::vector<std::int32_t> u, v;
+    std::vector<float> height;
+    std::vector<std::uint16_t> error, radius, childError;  // bound codes (BoundCode)
+    std::vector<double> x, y, z;         // the position, then the position relative to the eye
+    std::vector<std::uint8_t> decision;  // SplitDecision
+    void growTo(std::size_t n);          // grows only: no refills
+  };
+  SplitVertices split_;
   // Grid index -> mesh vertex, open addressing; a key and its value share a cache line. A split
   // vertex is asked for only by the two triangles of its diamond, which lie on the same level
   // of the bintree, so the table holds one level's vertices: sized to the level, it stays in
