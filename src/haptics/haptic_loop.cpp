@@ -45,8 +45,7 @@ HapticLoop::~HapticLoop() {
 }
 
 double HapticLoop::now() const {
-  if (options_.tickClock)
-    return double(ticks_.load(std::memory_order_acquire)) * core_.model().settings().period();
+  if (options_.tickClock) return tickSeconds(ticks_.load(std::memory_order_acquire));
   return std::chrono::duration<double>(Clock::now() - epoch_).count();
 }
 
@@ -114,8 +113,7 @@ void HapticLoop::run(std::stop_token stop) {
     const auto wake = Clock::now();
     patches_.update();
     const TerrainPatch& patch = patches_.front();
-    const double t = options_.tickClock ? double(ticks_.load(std::memory_order_relaxed) + 1) *
-                                              core_.model().settings().period()
+    const double t = options_.tickClock ? tickSeconds(ticks_.load(std::memory_order_relaxed) + 1)
                                         : std::chrono::duration<double>(wake - epoch_).count();
     Eigen::Vector3d pos = Eigen::Vector3d::Zero();
     const bool ok = device_.read(t, pos);

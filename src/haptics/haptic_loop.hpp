@@ -88,6 +88,10 @@ class HapticLoop {
 
  private:
   void run(std::stop_token stop);
+  // LoopOptions::tickClock's time of tick number `ticks` (counted from 1).
+  double tickSeconds(std::uint64_t ticks) const {
+    return double(ticks) * core_.model().settings().period();
+  }
 
   HapticDevice& device_;
   HapticCore core_;
