@@ -2,7 +2,8 @@
 // error, on the default planet, from orbit, 1,000 km and 1 km up, at 1280x720. `ms` is the median
 // of repeated full tessellations of the same view by one tessellator (as frame after frame: a
 // bound budget starts where the last call settled); `first_ms` / `first_passes` are the first,
-// from a fresh tessellator.
+// from a fresh tessellator. `host_memory_probe_ms` is a fixed memory workload timed just before
+// the row (bench/host_probe.hpp): the host's slow phases show in it as well as in `ms`.
 #include <cmath>
 #include <iostream>
 #include <nlohmann/json.hpp>
@@ -11,6 +12,7 @@
 #include "app/default_planet.hpp"
 #include "bench/bench.hpp"
 #include "bench/bench_util.hpp"
+#include "bench/host_probe.hpp"
 #include "terrain/screen_error.hpp"
 #include "terrain/tessellator.hpp"
 
@@ -75,6 +77,7 @@ void benchTessellate(const BenchOptions& options, std::ostream& out) {
   const std::vector<double> sweep = options.quick
                                         ? std::vector<double>{1, 4, 16}
                                         : std::vector<double>{0.1, 0.25, 0.5, 1, 2, 4, 8, 16};
+  HostMemoryProbe probe;
   for (const View& view : standardViews(*planet)) {
     for (const double distMax : sweep) {
       for (const std::size_t budget : {std::size_t(70000), std::size_t(0)}) {
@@ -89,6 +92,7 @@ void benchTessellate(const BenchOptions& options, std::ostream& out) {
         terrain::Tessellator tess;
         std::vector<double> full, cached;
         int firstPasses = 0;
+        const double probeMs = probe.medianMs();
         for (int r = 0; r < options.repeats; ++r) {
           tess.invalidate();
           full.push_back(timeMs([&] { tess.tessellate(*planet, view.camera, s); }));
@@ -113,6 +117,8 @@ void benchTessellate(const BenchOptions& options, std::ostream& out) {
                               {"triangles", st.triangles},
                               {"ms", fullMs},
                               {"ms_p90", percentile(full, 0.9)},
+                              {"host_memory_probe_ms", probeMs},
+                              {"ms_over_probe", fullMs / probeMs},
                               {"unchanged_view_ms", cachedMs},
                               {"unchanged_over_full", cachedMs / fullMs},
                               {"max_screen_error_px", err.maxPx},
