@@ -2,7 +2,7 @@
 // A fixed workload with no project code in it, timed beside a benchmark so that each row says
 // what state the shared host was in. On the 2-core VM these benchmarks run on, other tenants
 // slow the memory system for minutes at a time: a random read from a 4 MiB table takes 1.4x its
-// usual time then, while register-bound arithmetic slows 1.05x. The tessellation pass moves
+// usual time then, while register-bound arithmetic slows 1.06x. The tessellation pass moves
 // with the memory system (docs/BENCHMARKS.md), so its milliseconds are read against this probe.
 #include <cstdint>
 #include <vector>
