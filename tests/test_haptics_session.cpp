@@ -5,7 +5,6 @@
 #include <cmath>
 #include <numbers>
 #include <sstream>
-#include <thread>
 
 #include "core/input_error.hpp"
 #include "edit/edit_pipeline.hpp"
@@ -220,7 +219,7 @@ TEST(HapticsLoop, LiveThreadFeedsTheEditorWithoutEditingItself) {
   constexpr std::uint64_t kTicks = 1000;
   std::uint64_t seen = 0;
   while (seen < kTicks) {
-    while (s.loop()->stats().ticks < seen + 10) std::this_thread::yield();
+    s.loop()->waitForTicks(seen + 10);
     seen = s.loop()->stats().ticks;
     // Between editor frames the terrain does not change: the loop never edits.
     EXPECT_EQ(t.revision(), rev);

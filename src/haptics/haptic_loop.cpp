@@ -75,6 +75,13 @@ std::optional<ForceRecord> HapticLoop::latest() {
   return latest_.front();
 }
 
+void HapticLoop::waitForTicks(std::uint64_t ticks) const {
+  for (std::uint64_t seen = ticks_.load(std::memory_order_acquire); seen < ticks;
+       seen = ticks_.load(std::memory_order_acquire)) {
+    ticks_.wait(seen, std::memory_order_acquire);
+  }
+}
+
 LoopStats HapticLoop::stats() const {
   LoopStats s;
   s.ticks = ticks_.load(std::memory_order_relaxed);
@@ -137,6 +144,7 @@ void HapticLoop::run(std::stop_token stop) {
     }
     lastWake = wake;
     ticks_.fetch_add(1, std::memory_order_release);
+    ticks_.notify_all();  // no system call unless a thread waits in waitForTicks
     next += period;
     if (done > next + period) {  // more than a period behind: skip, keep the phase
       const auto behind = (done - next) / period;

@@ -80,6 +80,9 @@ class HapticLoop {
   std::optional<ForceRecord> latest();
 
   LoopStats stats() const;
+  // Another thread: blocks (no spinning) until the loop has run `ticks` ticks. The loop must be
+  // running, or keep running until then.
+  void waitForTicks(std::uint64_t ticks) const;
   // After stop(): the kept tick timings (LoopOptions::timingCapacity).
   std::vector<TickTiming> timings() const;
 
