@@ -22,6 +22,7 @@
 #include <nlohmann/json.hpp>
 #include <random>
 
+#include "app/build_paths.hpp"
 #include "bench/bench.hpp"
 #include "bench/bench_util.hpp"
 #include "core/flat_chart.hpp"
@@ -88,7 +89,7 @@ Heightmap fractal(int side, std::uint32_t seed) {
 // The top-left side x side window of the SRTM tile (Mount Rainier is in it), holes filled.
 std::optional<Heightmap> srtm(int side) {
   const fs::path file =
-      fs::path(PS_SOURCE_DIR) / ".." / "shared" / "data" / "dem" / "srtm_mt_rainier_90m.tif";
+      ps::app::sourceDir() / ".." / "shared" / "data" / "dem" / "srtm_mt_rainier_90m.tif";
   if (!fs::exists(file)) {
     std::cerr << "bench export: " << file.string() << " is absent; the real heightmap is skipped\n";
     return std::nullopt;
@@ -121,7 +122,7 @@ std::optional<Heightmap> srtm(int side) {
 // Runs scripts/martini/mesh.mjs; "" and a reason on stderr when it cannot.
 std::string runMartini(const Heightmap& h, const std::vector<double>& thresholds, int repeats,
                        const fs::path& work) {
-  const fs::path dir = fs::path(PS_SOURCE_DIR) / "scripts" / "martini";
+  const fs::path dir = ps::app::sourceDir() / "scripts" / "martini";
   if (std::system("command -v node >/dev/null 2>&1") != 0) {
     std::cerr << "bench export: node is not installed; Martini is skipped\n";
     return "";

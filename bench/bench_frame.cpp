@@ -22,6 +22,7 @@
 #include <nlohmann/json.hpp>
 #include <thread>
 
+#include "app/build_paths.hpp"
 #include "app/default_planet.hpp"
 #include "bench/bench.hpp"
 #include "bench/bench_util.hpp"
@@ -82,8 +83,8 @@ void benchFrame(const BenchOptions& options, std::ostream& out) {
   namespace fs = std::filesystem;
   nlohmann::json machine = {{"nproc", std::thread::hardware_concurrency()},
                             {"load_avg_before", loadAverage()}};
-  const fs::path video = fs::path(PS_SOURCE_DIR) / "data" / "demo.mkv";
-  const fs::path calibPath = fs::path(PS_SOURCE_DIR) / "calib" / "synthetic-640x480.yml";
+  const fs::path video = ps::app::sourceDir() / "data" / "demo.mkv";
+  const fs::path calibPath = ps::app::sourceDir() / "calib" / "synthetic-640x480.yml";
   std::unique_ptr<render::EglContext> context;
   try {
     context = std::make_unique<render::EglContext>();
@@ -118,8 +119,8 @@ void benchCase(const BenchOptions& options, std::ostream& out, nlohmann::json ma
                render::EglContext& context, int gridLevel, const std::string& name,
                double kDistMaxPx) {
   namespace fs = std::filesystem;
-  const fs::path video = fs::path(PS_SOURCE_DIR) / "data" / "demo.mkv";
-  const fs::path calibPath = fs::path(PS_SOURCE_DIR) / "calib" / "synthetic-640x480.yml";
+  const fs::path video = ps::app::sourceDir() / "data" / "demo.mkv";
+  const fs::path calibPath = ps::app::sourceDir() / "calib" / "synthetic-640x480.yml";
   context.makeCurrent();
   render::PlanetRenderer renderer;
   terrain::Tessellator tessellator;

@@ -26,6 +26,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "app/build_paths.hpp"
 #include "app/default_planet.hpp"
 #include "bench/bench.hpp"
 #include "bench/bench_util.hpp"
@@ -230,8 +231,8 @@ void plotForces(const std::vector<haptics::ForceRecord>& rs, const std::string& 
 // the haptic session hooked in through replay's frame hook: forces only, offline ticks at 1 kHz
 // between frames, the force log kept. Reports the per-frame cost of onFrame.
 void demoReplay(const BenchOptions& options, std::ostream& out) {
-  const std::string video = std::string(PS_SOURCE_DIR) + "/data/demo.mkv";
-  const std::string calibPath = std::string(PS_SOURCE_DIR) + "/calib/synthetic-640x480.yml";
+  const std::string video = (ps::app::sourceDir() / "data/demo.mkv").string();
+  const std::string calibPath = (ps::app::sourceDir() / "calib/synthetic-640x480.yml").string();
   if (!std::ifstream(video)) {
     std::cerr << "haptics demo-replay: " << video << " missing, skipped\n";
     return;

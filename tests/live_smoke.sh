@@ -21,6 +21,9 @@ rm -rf "$out" && mkdir -p "$out" || exit 1
 # our code's leaks.
 ASAN_OPTIONS="${ASAN_OPTIONS:-}${ASAN_OPTIONS:+:}detect_leaks=0"
 export ASAN_OPTIONS
+# The test-only --at actions `interrupt` (SIGINT) and `crash` (SIGKILL) exist only with this set.
+PS_TEST_ACTIONS=1
+export PS_TEST_ACTIONS
 fail() { echo "FAIL: $*"; cat "$out/live.txt" 2>/dev/null; exit 1; }
 run() {  # run LOG ARGS...: the live command in a fresh virtual screen
   log=$1
@@ -91,6 +94,11 @@ grep -q "$out/i/bad.jsonl:3: \"sigma\" is not a number" "$out/replay5.txt" ||
 [ -e "$out/i/bad/planet.planet" ] && fail "a planet was written despite the damaged sidecar"
 # Ctrl-C (SIGINT) while the window is open (sent by the app to itself at window frame 20): exits 0
 # and saves the planet.
+# Without PS_TEST_ACTIONS the test actions are not part of the command surface: refused.
+env -u PS_TEST_ACTIONS "$exe" live --video "$src/data/demo.mkv" --calib "$src/calib/synthetic-640x480.yml" \
+  --out "$out/x" --at 5:crash \
+  >"$out/refused.txt" 2>&1 && fail "--at 5:crash was accepted without PS_TEST_ACTIONS"
+grep -q "expected FRAME:ACTION" "$out/refused.txt" || { cat "$out/refused.txt"; fail "no refusal for --at 5:crash"; }
 run "$out/live3.txt" --out "$out/c" --at 20:interrupt
 rc=$?
 [ $rc -eq 0 ] || { cat "$out/live3.txt"; fail "live after SIGINT exited with $rc"; }

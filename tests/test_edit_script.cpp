@@ -2,6 +2,7 @@
 
 #include <random>
 
+#include "app/build_paths.hpp"
 #include "core/input_error.hpp"
 #include "edit/brush.hpp"
 #include "edit/control_vertex.hpp"
@@ -25,7 +26,7 @@ std::string errorOf(const std::string& text, edit::EditPipeline& pipe) {
 }  // namespace
 
 TEST(EditScript, DemoFileRunsOnAPlanet) {
-  const auto script = edit::loadStrokeScript(std::string(PS_SOURCE_DIR) + "/data/demo-strokes.txt");
+  const auto script = edit::loadStrokeScript(ps::app::sourceDir() / "data/demo-strokes.txt");
   ASSERT_GT(script.commands.size(), 10u);
   auto t = testkit::bumpyTerrain(7, 6, 5000.0);
   const std::vector<float> start(t.heights().begin(), t.heights().end());

@@ -12,6 +12,7 @@
 
 #include "core/flat_chart.hpp"
 #include "core/input_error.hpp"
+#include "fresh_dir.hpp"
 #include "io/export.hpp"
 #include "io/heightmap_export.hpp"
 #include "io/heightmap_import.hpp"
@@ -27,11 +28,7 @@ namespace fs = std::filesystem;
 namespace {
 
 fs::path freshDir(const std::string& name) {
-  const fs::path d =
-      fs::temp_directory_path() / ("ps_test_io_" + name + "_" + std::to_string(::getpid()));
-  fs::remove_all(d);
-  fs::create_directories(d);
-  return d;
+  return testkit::freshDir("io_" + name);
 }
 
 std::vector<unsigned char> readAll(const fs::path& p) {

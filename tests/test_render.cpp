@@ -11,6 +11,7 @@
 #include <opencv2/imgproc.hpp>
 #include <random>
 
+#include "app/build_paths.hpp"
 #include "edit/brush.hpp"
 #include "edit/edit_pipeline.hpp"
 #include "render/changed_ranges.hpp"
@@ -204,7 +205,7 @@ TEST(RenderGl, DeterministicAndUploadsOnlyWhatChanged) {
   EXPECT_GT(cv::norm(a, c, cv::NORM_L1), 0.0);
 
   // Golden image (llvmpipe): regenerate with PS_UPDATE_GOLDEN=1 after an intended change.
-  const auto golden = std::filesystem::path(PS_SOURCE_DIR) / "tests/golden/render_bumpy.png";
+  const auto golden = ps::app::sourceDir() / "tests/golden/render_bumpy.png";
   if (std::getenv("PS_UPDATE_GOLDEN")) cv::imwrite(golden.string(), a);
   const cv::Mat g = cv::imread(golden.string(), cv::IMREAD_COLOR);
   ASSERT_FALSE(g.empty()) << golden;

@@ -10,6 +10,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "app/build_paths.hpp"
 #include "core/input_error.hpp"
 #include "tracking/detector.hpp"
 #include "tracking/marker_family.hpp"
@@ -20,8 +21,7 @@ using tracking::Backend;
 
 namespace {
 
-const std::filesystem::path kRealMarkers =
-    std::filesystem::path(PS_SHARED_DIR) / "data/real-markers";
+const std::filesystem::path kRealMarkers = ps::app::sharedDir() / "data/real-markers";
 
 // A marker drawn on a grey background with its edge corners (TL, TR, BR, BL of the canonical
 // image) at exactly `corners` (pixels, OpenCV convention).

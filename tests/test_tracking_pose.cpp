@@ -9,6 +9,7 @@
 #include <numbers>
 #include <random>
 
+#include "app/build_paths.hpp"
 #include "core/input_error.hpp"
 #include "tracking/calibration.hpp"
 #include "tracking/filter.hpp"
@@ -131,11 +132,10 @@ TEST(TrackingCalibration, BadFilesNameTheFile) {
 
 TEST(TrackingCalibration, ShippedFilesLoad) {
   for (const char* f : {"calib/webcam-640x480.yml", "calib/synthetic-640x480.yml"}) {
-    const auto c = tracking::loadCalibration(std::filesystem::path(PS_SOURCE_DIR) / f);
+    const auto c = tracking::loadCalibration(ps::app::sourceDir() / f);
     EXPECT_EQ(c.imageSize, cv::Size(640, 480)) << f;
   }
-  const auto shared =
-      std::filesystem::path(PS_SHARED_DIR) / "data/real-markers/tutorial_camera_charuco.yml";
+  const auto shared = ps::app::sharedDir() / "data/real-markers/tutorial_camera_charuco.yml";
   if (std::filesystem::exists(shared)) {
     EXPECT_NEAR(tracking::loadCalibration(shared).K(0, 0), 452.5, 0.1);
   }

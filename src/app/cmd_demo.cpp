@@ -5,6 +5,7 @@
 #include <iostream>
 #include <memory>
 
+#include "app/build_paths.hpp"
 #include "app/command_registry.hpp"
 #include "app/replay_cli.hpp"
 
@@ -14,7 +15,7 @@ namespace {
 // The bundled file, found from the working directory or the source tree.
 std::filesystem::path bundled(const std::filesystem::path& relative) {
   if (std::filesystem::exists(relative)) return relative;
-  return std::filesystem::path(PS_SOURCE_DIR) / relative;
+  return ps::app::sourceDir() / relative;
 }
 
 const CommandRegistration kDemo([](CLI::App& root, CLI::App*& sub) -> CommandAction {

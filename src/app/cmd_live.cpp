@@ -69,8 +69,8 @@ const CommandRegistration kLive([](CLI::App& root, CLI::App*& sub) -> CommandAct
                   "FILE.session.jsonl beside it); a folder gets the next recording-NNN.mkv");
   sub->add_option("--at", a->script,
                   "FRAME:ACTION, repeatable: a panel action at a window frame as if its key were "
-                  "pressed (export, record, save, undo, redo, quit; interrupt sends SIGINT to "
-                  "the process, crash SIGKILL), or FRAME:SETTING=VALUE as if the panel were set "
+                  "pressed (export, record, save, undo, redo, quit), or FRAME:SETTING=VALUE as "
+                  "if the panel were set "
                   "so (tool=brush|displace, mode=raise|lower, radius_km, strength_m, sigma, "
                   "displace_radius_km, press_m, size_cm, spin_deg, tilt_deg): scripted sessions "
                   "for tests and demos");

@@ -1,29 +1,16 @@
 #include "io/png_text.hpp"
 
-#include <array>
 #include <cstdint>
 #include <cstring>
 #include <stdexcept>
+
+#include <zlib.h>
 
 namespace ps::io {
 
 namespace {
 
 constexpr unsigned char kSignature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
-
-std::uint32_t crc32(const unsigned char* data, std::size_t n, std::uint32_t crc = 0xffffffffu) {
-  static const auto table = [] {
-    std::array<std::uint32_t, 256> t{};
-    for (std::uint32_t i = 0; i < 256; ++i) {
-      std::uint32_t c = i;
-      for (int k = 0; k < 8; ++k) c = (c & 1) ? 0xedb88320u ^ (c >> 1) : c >> 1;
-      t[i] = c;
-    }
-    return t;
-  }();
-  for (std::size_t i = 0; i < n; ++i) crc = table[(crc ^ data[i]) & 0xffu] ^ (crc >> 8);
-  return crc;
-}
 
 std::uint32_t readBe32(const unsigned char* p) {
   return (std::uint32_t(p[0]) << 24) | (std::uint32_t(p[1]) << 16) | (std::uint32_t(p[2]) << 8) |
@@ -51,7 +38,7 @@ std::vector<unsigned char> addPngTextChunks(
     chunk.insert(chunk.end(), value.begin(), value.end());
     appendBe32(out, std::uint32_t(chunk.size() - 4));
     out.insert(out.end(), chunk.begin(), chunk.end());
-    appendBe32(out, crc32(chunk.data(), chunk.size()) ^ 0xffffffffu);
+    appendBe32(out, std::uint32_t(::crc32(0, chunk.data(), uInt(chunk.size()))));
   }
   out.insert(out.end(), png.begin() + std::ptrdiff_t(ihdrEnd), png.end());
   return out;

@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <exception>
 #include <iterator>
 
@@ -31,8 +32,12 @@ float* scriptedNumber(PanelSettings& s, const std::string& name) {
 }  // namespace
 
 ScriptedAction parseScriptedAction(const std::string& text) {
-  static const char* const kActions[] = {"export", "record", "save",      "undo",
-                                         "redo",   "quit",   "interrupt", "crash"};
+  static const char* const kActions[] = {"export", "record", "save", "undo", "redo", "quit"};
+  // Test-only actions, outside the user's command surface: the live smoke test sets
+  // PS_TEST_ACTIONS=1 to script a Ctrl-C (interrupt) or a crash (SIGKILL) at a frame.
+  static const char* const kTestActions[] = {"interrupt", "crash"};
+  const char* testEnv = std::getenv("PS_TEST_ACTIONS");
+  const bool testActions = testEnv && std::string(testEnv) == "1";
   const auto colon = text.find(':');
   ScriptedAction a;
   std::size_t used = 0;
@@ -42,7 +47,10 @@ ScriptedAction parseScriptedAction(const std::string& text) {
     used = 0;
   }
   a.action = colon == std::string::npos ? "" : text.substr(colon + 1);
-  bool known = std::find(std::begin(kActions), std::end(kActions), a.action) != std::end(kActions);
+  bool known =
+      std::find(std::begin(kActions), std::end(kActions), a.action) != std::end(kActions) ||
+      (testActions && std::find(std::begin(kTestActions), std::end(kTestActions), a.action) !=
+                          std::end(kTestActions));
   const auto eq = a.action.find('=');
   if (!known && eq != std::string::npos) {
     a.setting = a.action.substr(0, eq);
@@ -66,7 +74,7 @@ ScriptedAction parseScriptedAction(const std::string& text) {
   if (colon == std::string::npos || used != colon || a.frame < 0 || !known) {
     throw core::InputError("--at " + text +
                            ": expected FRAME:ACTION with FRAME >= 0 and ACTION one of export, "
-                           "record, save, undo, redo, quit, interrupt, crash, or FRAME:SETTING="
+                           "record, save, undo, redo, quit, or FRAME:SETTING="
                            "VALUE with tool=brush|displace, mode=raise|lower or a number for "
                            "radius_km, strength_m, sigma, displace_radius_km, press_m, size_cm, "
                            "spin_deg, tilt_deg");
