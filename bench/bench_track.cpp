@@ -15,8 +15,10 @@
 #include <opencv2/core/utility.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "app/build_paths.hpp"
 #include "app/progress.hpp"
 #include "bench/bench.hpp"
+#include "bench/bench_track_board.hpp"
 #include "bench/bench_util.hpp"
 #include "core/latlong_chart.hpp"
 #include "edit/control_vertex.hpp"
@@ -48,7 +50,7 @@ struct Recording {
 Recording record(const std::string& scene, cv::Size size, int shotStride) {
   Recording r;
   r.scene = scene;
-  r.script = tracking::builtinScene(scene);
+  r.script = tracking::builtinScene(scene, ps::app::sourceDir());
   if (size != r.script.size) {
     r.script.size = size;
     r.script.camera = tracking::SynthScript::syntheticCamera(size);
@@ -74,8 +76,9 @@ struct Config {
   bool filter = true;
 };
 
-void evaluate(const Recording& rec, const Config& c, const core::LatLongChart& chart, double touch,
-              std::ostream& out) {
+// Returns the median time per frame (ms).
+double evaluate(const Recording& rec, const Config& c, const core::LatLongChart& chart,
+                double touch, std::ostream& out) {
   tracking::SceneConfig sc;
   sc.planet.id = rec.script.planetId;
   sc.planet.size = rec.script.planetMarkerSize;
@@ -230,6 +233,7 @@ void evaluate(const Recording& rec, const Config& c, const core::LatLongChart& c
     j["tip_error_by_tool_tilt_deg"][k] = {
         {"median_mm", r3(median(v))}, {"p95_mm", r3(percentile(v, 0.95))}, {"n", v.size()}};
   out << j.dump() << std::endl;
+  return median(ms);
 }
 
 void benchTrack(const BenchOptions& o, std::ostream& out) {
@@ -264,11 +268,15 @@ void benchTrack(const BenchOptions& o, std::ostream& out) {
   const std::string onlyScene = sceneEnv ? sceneEnv : "";
   auto wanted = [&](const std::string& scene) { return onlyScene.empty() || onlyScene == scene; };
   if (!wanted("sweep")) sizes.clear();
+  double defaultMs = 0;  // the single-marker default on the 640x480 sweep
   for (const auto& size : sizes) {
     const Recording rec = record("sweep", size, stride);
     const char* only = std::getenv("PS_TRACK_ONLY");
     for (const auto& c : configs)
-      if (!only || c.label == only) evaluate(rec, c, chart, 0.004, out);
+      if (!only || c.label == only) {
+        const double m = evaluate(rec, c, chart, 0.004, out);
+        if (size.width == 640 && &c == &configs[0]) defaultMs = m;
+      }
     if (size.width == 640 && !only) {
       Config raw = configs[0];
       raw.filter = false;
@@ -286,6 +294,9 @@ void benchTrack(const BenchOptions& o, std::ostream& out) {
       evaluate(rec, configs[3], chart, 0.004, out);
     }
   }
+  // The planet board and the tool cube (PS_TRACK_SCENE=board runs only these).
+  if (!std::getenv("PS_TRACK_ONLY") && (onlyScene.empty() || onlyScene == "board"))
+    benchTrackBoards(o, defaultMs, out);
   cv::setNumThreads(threads);
 }
 

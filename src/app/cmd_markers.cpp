@@ -1,5 +1,6 @@
-// `planetsculpt markers --out DIR`: print-ready sheets of the planet marker, the tool marker and
-// the ChArUco calibration board, for A4 and US Letter, as 1-bit 300-dpi PNG and one-page PDF
+// `planetsculpt markers --out DIR`: print-ready sheets of the planet board and the tool cube's net
+// (from their layouts, markers/*.json), the single planet and tool markers and the ChArUco
+// calibration board, for A4 and US Letter, as 1-bit 300-dpi PNG and one-page PDF
 // (tracking/marker_sheet.hpp). Defaults are the tracker's (tracking::SceneConfig): tag36h11,
 // planet id 0 of 80 mm, tool id 1 of 50 mm with its tip 80 mm below the marker centre.
 #include <filesystem>
@@ -7,9 +8,11 @@
 #include <iostream>
 #include <memory>
 
+#include "app/build_paths.hpp"
 #include "app/command_registry.hpp"
 #include "core/input_error.hpp"
 #include "tracking/detector.hpp"
+#include "tracking/marker_layout.hpp"
 #include "tracking/marker_sheet.hpp"
 #include "tracking/tracker.hpp"
 
@@ -31,6 +34,8 @@ struct MarkersArgs {
   double squareMm = 30, markerMm = 22;
   std::string dictionary = "DICT_5X5_100";
   double dpi = 300;
+  std::string board = (sourceDir() / "markers" / "planet-board.json").string();
+  std::string toolLayout = (sourceDir() / "markers" / "tool-cube.json").string();
 };
 
 // Written next to the target and renamed: a crash never leaves half a sheet under its name.
@@ -71,6 +76,8 @@ int runMarkers(const MarkersArgs& a) {
     throw core::InputError("the planet and tool markers need different ids (both are " +
                            std::to_string(a.planetId) + ")");
   const auto board = boardFrom(a);
+  const tracking::MarkerLayout planetBoard = tracking::loadMarkerLayout(a.board);
+  const tracking::MarkerLayout toolCube = tracking::loadMarkerLayout(a.toolLayout);
   tracking::MarkerSheetSpec planet;
   planet.family = a.family;
   planet.id = a.planetId;
@@ -85,7 +92,9 @@ int runMarkers(const MarkersArgs& a) {
   std::filesystem::create_directories(dir);
   long long total = 0;
   for (const auto& paper : papers) {
-    const std::pair<std::string, tracking::Sheet> sheets[3] = {
+    const std::pair<std::string, tracking::Sheet> sheets[5] = {
+        {"planet-board", tracking::renderBoardSheet(planetBoard, paper, a.dpi)},
+        {"tool-cube", tracking::renderCubeNetSheet(toolCube, paper, a.dpi)},
         {"planet-marker", tracking::renderMarkerSheet(planet, paper, a.dpi)},
         {"tool-marker", tracking::renderMarkerSheet(tool, paper, a.dpi)},
         {"charuco-board", tracking::renderCharucoSheet(board, paper, a.dpi)}};
@@ -116,14 +125,16 @@ const CommandRegistration kMarkers([](CLI::App& root, CLI::App*& sub) -> Command
   auto a = std::make_shared<MarkersArgs>();
   sub = root.add_subcommand(
       "markers",
-      "Write print-ready sheets (planet marker, tool marker, ChArUco board; A4 and US Letter; "
-      "300-dpi PNG and PDF)");
+      "Write print-ready sheets (planet board, tool cube net, single planet and tool markers, "
+      "ChArUco board; A4 and US Letter; 300-dpi PNG and PDF)");
   sub->add_option("--out", a->out, "Folder to write the sheets to")->capture_default_str();
   sub->add_option("--paper", a->paper, "a4, letter or both")->capture_default_str();
   sub->add_option("--format", a->format, "png, pdf or both")->capture_default_str();
   sub->add_option("--dpi", a->dpi, "Resolution")->capture_default_str();
   sub->add_option("--family", a->family, "Marker family (tag36h11, DICT_6X6_250, ...)")
       ->capture_default_str();
+  sub->add_option("--board", a->board, "Planet board layout (JSON)")->capture_default_str();
+  sub->add_option("--tool-layout", a->toolLayout, "Tool cube layout (JSON)")->capture_default_str();
   sub->add_option("--planet-id", a->planetId, "Planet marker id")->capture_default_str();
   sub->add_option("--planet-mm", a->planetMm, "Planet marker edge (mm)")->capture_default_str();
   sub->add_option("--planet-radius-mm", a->planetRadiusMm, "Planet radius (mm; printed only)")

@@ -9,6 +9,7 @@
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 
+#include "app/build_paths.hpp"
 #include "app/command_registry.hpp"
 #include "app/progress.hpp"
 #include "core/input_error.hpp"
@@ -40,7 +41,7 @@ std::filesystem::path truthPathFor(const std::filesystem::path& video) {
 int runSynth(const SynthArgs& a) {
   tracking::SynthScript script = std::filesystem::exists(a.scene) || a.scene.ends_with(".json")
                                      ? tracking::loadSynthScript(a.scene)
-                                     : tracking::builtinScene(a.scene);
+                                     : tracking::builtinScene(a.scene, ps::app::sourceDir());
   if (a.grey) script.colour = false;
   if (!(a.noiseScale >= 0)) throw core::InputError("--noise-scale must be >= 0");
   for (auto& k : script.keys) k.noise *= a.noiseScale;

@@ -1,9 +1,30 @@
 #include "app/replay_cli.hpp"
+#include "app/build_paths.hpp"
+
+#include <filesystem>
+#include <memory>
 
 #include "core/grid.hpp"
 #include "core/input_error.hpp"
+#include "tracking/marker_layout.hpp"
 
 namespace ps::app {
+
+namespace {
+
+// A layout option's value: a keyword for the committed file, or a path (relative paths that do
+// not exist from here are looked for in the source tree, as the bundled files are).
+std::shared_ptr<const tracking::MarkerLayout> layoutFrom(const std::string& value,
+                                                         const std::string& keyword,
+                                                         const std::filesystem::path& committed) {
+  std::filesystem::path p = value == keyword ? committed : std::filesystem::path(value);
+  if (!std::filesystem::exists(p) && p.is_relative() &&
+      std::filesystem::exists(ps::app::sourceDir() / p))
+    p = ps::app::sourceDir() / p;
+  return std::make_shared<const tracking::MarkerLayout>(tracking::loadMarkerLayout(p));
+}
+
+}  // namespace
 
 void ReplayCli::addOptions(CLI::App* sub) {
   sub_ = sub;
@@ -18,6 +39,14 @@ void ReplayCli::addOptions(CLI::App* sub) {
   sub->add_option("--planet-marker-size", o.scene.planet.size, "Planet marker edge (m)")
       ->capture_default_str();
   sub->add_option("--planet-radius", o.scene.planetRadius, "Displayed planet radius (m)")
+      ->capture_default_str();
+  sub->add_option("--board", board,
+                  "Planet markers: single (one marker: --planet-id, --planet-marker-size), board "
+                  "(markers/planet-board.json) or a board layout file")
+      ->capture_default_str();
+  sub->add_option("--tool-layout", toolLayout,
+                  "Tool markers: flat (one marker on a stick: --tool-id, --tool-marker-size, "
+                  "--tip), cube (markers/tool-cube.json) or a tool layout file")
       ->capture_default_str();
   sub->add_option("--tool-id", o.scene.tool.id, "Tool marker id")->capture_default_str();
   sub->add_option("--tool-marker-size", o.scene.tool.size, "Tool marker edge (m)")
@@ -56,6 +85,10 @@ void ReplayCli::apply() {
   o.pressDepth = pressM;
   o.settle = !noSettle;
   if (noFilter) o.scene.planet.filter = o.scene.tool.filter = o.scene.filterTip = false;
+  o.scene.useBoard(board == "single" ? nullptr
+                                     : layoutFrom(board, "board", "markers/planet-board.json"));
+  o.scene.useToolLayout(
+      toolLayout == "flat" ? nullptr : layoutFrom(toolLayout, "cube", "markers/tool-cube.json"));
   job.gridLevel = core::GridSize::fromSide(grid).n();
   o.validate();
   // What a session sidecar replaces (app/replay_job.hpp), when typed.

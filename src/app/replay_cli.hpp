@@ -15,6 +15,10 @@ struct ReplayCli {
   std::vector<double> tip = {0.0, -0.08, 0.0};
   double brushRadiusKm = 250, strengthM = 600, displaceRadiusKm = 400, pressM = 8000;
   bool noFilter = false, noSettle = false;
+  // The planet's markers: "single" (one marker, --planet-id/--planet-marker-size), "board" (the
+  // committed markers/planet-board.json) or a layout file; the tool's: "flat" (one marker on a
+  // stick, --tool-id/--tool-marker-size/--tip), "cube" (markers/tool-cube.json) or a file.
+  std::string board = "single", toolLayout = "flat";
 
   // Adds the shared options to `sub` (they write into this object, which must outlive it).
   void addOptions(CLI::App* sub);

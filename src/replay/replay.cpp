@@ -1,5 +1,6 @@
 #include "replay/replay.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <nlohmann/json.hpp>
@@ -8,6 +9,7 @@
 #include "edit/control_vertex.hpp"
 #include "edit/edit_pipeline.hpp"
 #include "replay/session_timeline.hpp"
+#include "tracking/camera_motion.hpp"
 
 namespace ps::replay {
 
@@ -26,6 +28,8 @@ nlohmann::json markerJson(const tracking::MarkerEstimate& m) {
     j["rvec"] = vec(m.pose.rvec());
     j["tvec"] = vec(m.pose.t);
   }
+  if (m.measured && m.ids.size() > 1) j["ids"] = m.ids;
+  if (m.heldStill) j["held_still"] = true;
   if (m.measured) {
     j["reprojection_px"] = std::round(m.rms * 1000) / 1000;
     if (std::isfinite(m.ratio)) j["ambiguity_ratio"] = std::round(m.ratio * 100) / 100;
@@ -86,6 +90,8 @@ struct FrameStepper::Parts {
   std::optional<edit::GaussianBrush> brush;
   std::optional<sand::Settler> settler;
   std::optional<sand::DisplacementTool> displacer;
+  // Boards: whether the camera stood still while the board is hidden (tracker.hpp).
+  std::optional<tracking::CameraMotionJudge> motion;
   Parts(std::unique_ptr<tracking::Detector> d, const tracking::SceneConfig& sc,
         terrain::Terrain& planet)
       : detector(std::move(d)), scene(sc), pipeline(planet) {}
@@ -99,13 +105,24 @@ FrameStepper::FrameStepper(const tracking::CameraCalibration& calib, terrain::Te
     : o_(options), calib_(calib), planet_(planet) {
   o_.validate();
   tracking::DetectorConfig dc = o_.detector;
-  dc.ids = {o_.scene.planet.id, o_.scene.tool.id};
+  dc.ids.clear();
+  for (const auto* m : {&o_.scene.planet, &o_.scene.tool}) {
+    if (!m->layout) {
+      dc.ids.push_back(m->id);
+      continue;
+    }
+    if (m->layout->family != dc.family)
+      throw core::InputError(m->layout->source + ": its markers are " + m->layout->family +
+                             ", the detector reads " + dc.family);
+    for (int id : m->layout->ids()) dc.ids.push_back(id);
+  }
   family_ = dc.family;
   const core::Chart& chart = planet_.chart();
   const double R = chart.radius();
   if (!(R > 0)) throw core::InputError("replay needs a spherical planet (its chart has no radius)");
   scale_ = R / o_.scene.planetRadius;
   p_ = std::make_unique<Parts>(tracking::makeDetector(dc), o_.scene, planet_);
+  if (o_.scene.planet.holdWhileStill) p_->motion.emplace();
   p_->scene.setSurface([this](const Eigen::Vector3d& tracked) {
     if (!(tracked.norm() > 0)) return o_.scene.planetRadius;
     const Eigen::Vector3d p =
@@ -212,7 +229,25 @@ StepResult FrameStepper::step(const cv::Mat& image, int frame, double time) {
   }
   out.times.detectMs = msSince(t0);
   const auto t1 = std::chrono::steady_clock::now();
-  out.scene = p_->scene.update(found, calib_, frame, time);
+  bool cameraStill = false;
+  if (p_->motion) {
+    const bool boardSeen = std::any_of(found.begin(), found.end(),
+                                       [&](const auto& d) { return o_.scene.planet.owns(d.id); });
+    if (!boardSeen && p_->motion->hasReference()) {
+      const tracking::CameraMotion m = p_->motion->judge(image);
+      cameraStill = m.still;
+      if (m.judged)
+        j["camera_shift_px"] = std::isfinite(m.medianShiftPx)
+                                   ? nlohmann::json(std::round(m.medianShiftPx * 100) / 100)
+                                   : nlohmann::json("lost");
+    }
+  }
+  out.scene = p_->scene.update(found, calib_, frame, time, cameraStill);
+  if (p_->motion && out.scene.planet.measured) {
+    std::vector<std::array<cv::Point2d, 4>> quads;
+    for (const auto& d : found) quads.push_back(d.corners);
+    p_->motion->setReference(image, quads);
+  }
   if (rotated_) out.scene.tipPlanet = userRotation_.transpose() * out.scene.tipPlanet;
   const tracking::SceneFrame& f = out.scene;
   out.times.trackMs = msSince(t1);
@@ -221,6 +256,7 @@ StepResult FrameStepper::step(const cv::Mat& image, int frame, double time) {
   s.framesWithTool += f.tool.usable();
   j["markers"] = found.size();
   j["planet"] = markerJson(f.planet);
+  if (f.planetCentreValid) j["planet"]["centre_camera_m"] = vec(f.planetCentreCamera);
   j["tool"] = markerJson(f.tool);
   for (const auto& n : f.notes) j["notes"].push_back(n);
 

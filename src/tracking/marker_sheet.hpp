@@ -1,8 +1,9 @@
 #pragma once
-// Print-ready sheets (what `planetsculpt markers` writes): the planet marker, the tool marker and
-// the ChArUco calibration board, each on an A4 or US Letter page at a given resolution (300 dpi
-// by default), black and white only, with the physical size, family and id printed on the sheet
-// and a 100 mm scale bar to check that it was printed at 100 %.
+// Print-ready sheets (what `planetsculpt markers` writes): the planet marker, the tool marker, the
+// planet board, the tool cube's net and the ChArUco calibration board, each on an A4 or US
+// Letter page at a given resolution (300 dpi by default), black and white only, with the
+// physical size, family and ids printed on the sheet and a 100 mm scale bar to check that it
+// was printed at 100 %.
 //
 // Files: a 1-bit PNG with its resolution in a pHYs chunk, and a one-page PDF that embeds the same
 // compressed pixels (PNG's zlib stream with PNG predictors is a valid PDF FlateDecode stream), so
@@ -15,6 +16,7 @@
 #include <vector>
 
 #include "tracking/charuco_calibration.hpp"
+#include "tracking/marker_layout.hpp"
 
 namespace ps::tracking {
 
@@ -44,11 +46,24 @@ struct Sheet {
   // Where the marker's edge corners (TL, TR, BR, BL of the canonical image) are, in OpenCV's
   // pixel convention (marker sheets; for the board, its outer corners TL, TR, BR, BL).
   std::array<cv::Point2d, 4> corners{};
+  // Layout sheets (the planet board, the tool cube's net): every marker's edge corners, TL, TR,
+  // BR, BL of its canonical image, by id.
+  std::vector<std::pair<int, std::array<cv::Point2d, 4>>> markers;
 };
 
 // Throws core::InputError for a bad family, id or size, or a marker that does not fit the page.
 Sheet renderMarkerSheet(const MarkerSheetSpec& spec, const Paper& paper, double dpi = 300);
 Sheet renderCharucoSheet(const CharucoBoardSpec& board, const Paper& paper, double dpi = 300);
+
+// The planet board (marker_layout.hpp) at its exact size with the planet's place marked. Throws
+// core::InputError naming the layout when its markers are not upright in its z = 0 plane (what a
+// flat sheet can hold) or the board does not fit the page.
+Sheet renderBoardSheet(const MarkerLayout& board, const Paper& paper, double dpi = 300);
+// The tool cube's net (a cross of six faces: the layout's markers on their faces, the stick's
+// face marked) so that, cut out and folded with the printed side out, each marker sits where
+// the layout says. InputError naming the layout when it is not a cube of that convention
+// (markers/tool-cube.json: face frames as docs/TRACKING.md shows) or does not fit the page.
+Sheet renderCubeNetSheet(const MarkerLayout& cube, const Paper& paper, double dpi = 300);
 
 // A bilevel image (0 or 255) as a 1-bit PNG with a pHYs chunk saying `dpi`.
 std::vector<std::uint8_t> encodeSheetPng(const cv::Mat& image, double dpi);

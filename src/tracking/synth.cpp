@@ -2,19 +2,20 @@
 
 #include <algorithm>
 #include <cmath>
-#include <fstream>
 #include <numbers>
 #include <opencv2/imgproc.hpp>
 
 #include "core/input_error.hpp"
 #include "tracking/marker_family.hpp"
 #include "tracking/render.hpp"
+#include "tracking/synth_internal.hpp"
 
 namespace ps::tracking {
 
+using namespace synth_detail;
+
 namespace {
 
-constexpr double kDeg = std::numbers::pi / 180.0;
 constexpr double kTableMetres = 1.2;
 constexpr int kTablePixels = 1200;  // 1 mm per texel
 
@@ -39,38 +40,6 @@ Eigen::Vector3d perpendicular(const Eigen::Vector3d& n) {
 Eigen::Vector3d orthogonalPart(const Eigen::Vector3d& v, const Eigen::Vector3d& axis) {
   const Eigen::Vector3d w = v - v.dot(axis) * axis;
   return w.norm() > 1e-9 ? Eigen::Vector3d(w.normalized()) : perpendicular(axis);
-}
-
-cv::Matx33d toCv(const Eigen::Matrix3d& m) {
-  cv::Matx33d r;
-  for (int i = 0; i < 3; ++i)
-    for (int j = 0; j < 3; ++j) r(i, j) = m(i, j);
-  return r;
-}
-
-// Homography from the marker plane (z = 0, metres) to pixels.
-cv::Matx33d planeHomography(const CameraCalibration& cam, const Pose& pose) {
-  Eigen::Matrix3d M;
-  M.col(0) = pose.R.col(0);
-  M.col(1) = pose.R.col(1);
-  M.col(2) = pose.t;
-  return cam.K * toCv(M);
-}
-
-// The card texture (marker cells plus `margin` white cells) in cells -> marker plane metres.
-cv::Matx33d cardToPlane(const FamilyInfo& info, int margin, double size) {
-  const double c = size / info.edgeCells;
-  const double mid = margin + info.edgeOffset + 0.5 * info.edgeCells;
-  return {c, 0, -mid * c, 0, -c, mid * c, 0, 0, 1};
-}
-
-cv::Mat makeCard(const std::string& family, int id, int margin) {
-  cv::Mat card;
-  cv::copyMakeBorder(markerCells(family, id), card, margin, margin, margin, margin,
-                     cv::BORDER_CONSTANT, cv::Scalar(255));
-  // Paper is not perfectly white, ink not perfectly black.
-  card.convertTo(card, CV_8U, (235.0 - 25.0) / 255.0, 25.0);
-  return card;
 }
 
 cv::Mat makeTable(std::uint64_t seed) {
@@ -110,189 +79,7 @@ cv::Mat makeTable(std::uint64_t seed) {
   return table;
 }
 
-double get(const nlohmann::json& j, const char* key, double fallback, const std::string& where) {
-  if (!j.contains(key)) return fallback;
-  if (!j[key].is_number()) throw core::InputError(where + "." + key + " is not a number");
-  const double v = j[key].get<double>();
-  if (!std::isfinite(v)) throw core::InputError(where + "." + key + " is not finite");
-  return v;
-}
-
 }  // namespace
-
-CameraCalibration SynthScript::syntheticCamera(cv::Size size) {
-  const double f = 0.9375 * size.width;
-  auto c = CameraCalibration::pinhole(f, f, 0.5 * size.width - 0.5, 0.5 * size.height - 0.5, size);
-  c.source = "synthetic camera";
-  return c;
-}
-
-void SynthScript::validate() const {
-  auto fail = [](const std::string& m) { throw core::InputError("synthetic scene: " + m); };
-  if (size.width < 32 || size.height < 32 || size.width > 8192 || size.height > 8192)
-    fail("size " + std::to_string(size.width) + "x" + std::to_string(size.height) +
-         " is not in 32..8192");
-  if (!(fps > 0 && fps <= 1000)) fail("fps " + std::to_string(fps) + " is not in (0, 1000]");
-  familyInfo(family);
-  if (!(planetMarkerSize > 0) || !(toolMarkerSize > 0) || !(planetRadius > 0))
-    fail("marker sizes and the planet radius must be > 0");
-  if (planetId == toolId) fail("planet and tool markers have the same id");
-  if (!tipOffset.allFinite() || tipOffset.norm() < 1e-3) fail("tool tip offset must be >= 1 mm");
-  if (!(exposure >= 0 && exposure <= 1)) fail("exposure must be in [0, 1]");
-  if (motionSamples < 1 || motionSamples > 32) fail("motion_samples must be in 1..32");
-  if (keys.empty()) fail("no keys");
-  for (std::size_t i = 0; i < keys.size(); ++i) {
-    const auto& k = keys[i];
-    const std::string at =
-        "key " + std::to_string(i) + " (frame " + std::to_string(int(k.frame)) + "): ";
-    if (k.frame < 0 || k.frame != std::floor(k.frame))
-      fail(at + "frame must be a whole number >= 0");
-    if (i > 0 && !(k.frame > keys[i - 1].frame)) fail(at + "key frames must increase");
-    if (!(k.camDistance > 0.05)) fail(at + "camera distance must be > 0.05 m");
-    if (!(k.camElevationDeg > 0 && k.camElevationDeg < 90))
-      fail(at + "camera elevation must be in (0, 90)");
-    if (!(k.tipLatDeg >= -90 && k.tipLatDeg <= 90)) fail(at + "tip latitude must be in [-90, 90]");
-    if (!(k.toolTiltDeg >= -80 && k.toolTiltDeg <= 80)) fail(at + "tool tilt must be in [-80, 80]");
-    if (!(k.blur >= 0 && k.blur < 20)) fail(at + "blur must be in [0, 20)");
-    if (!(k.noise >= 0 && k.noise < 64)) fail(at + "noise must be in [0, 64)");
-    if (!(k.gain > 0 && k.gain < 4)) fail(at + "gain must be in (0, 4)");
-    if (!(k.occlusion >= 0 && k.occlusion <= 2)) fail(at + "occlusion must be in [0, 2]");
-  }
-}
-
-SynthScript parseSynthScript(const nlohmann::json& j, const std::string& source) {
-  SynthScript s;
-  try {
-    if (!j.is_object()) throw core::InputError("not a JSON object");
-    if (j.contains("size")) {
-      const auto& z = j["size"];
-      if (!z.is_array() || z.size() != 2 || !z[0].is_number_integer() || !z[1].is_number_integer())
-        throw core::InputError("size must be [width, height]");
-      s.size = {z[0].get<int>(), z[1].get<int>()};
-    }
-    s.camera = SynthScript::syntheticCamera(s.size);
-    s.fps = get(j, "fps", s.fps, "");
-    if (j.contains("seed")) s.seed = j["seed"].get<std::uint64_t>();
-    if (j.contains("family")) s.family = j["family"].get<std::string>();
-    if (j.contains("colour")) s.colour = j["colour"].get<bool>();
-    if (j.contains("camera")) {
-      const auto& c = j["camera"];
-      s.camera = CameraCalibration::pinhole(get(c, "fx", s.camera.K(0, 0), "camera"),
-                                            get(c, "fy", s.camera.K(1, 1), "camera"),
-                                            get(c, "cx", s.camera.K(0, 2), "camera"),
-                                            get(c, "cy", s.camera.K(1, 2), "camera"), s.size);
-      s.camera.source = "synthetic camera";
-    }
-    if (j.contains("planet")) {
-      const auto& p = j["planet"];
-      s.planetId = int(get(p, "id", s.planetId, "planet"));
-      s.planetMarkerSize = get(p, "size", s.planetMarkerSize, "planet");
-      s.planetRadius = get(p, "radius", s.planetRadius, "planet");
-    }
-    if (j.contains("tool")) {
-      const auto& t = j["tool"];
-      s.toolId = int(get(t, "id", s.toolId, "tool"));
-      s.toolMarkerSize = get(t, "size", s.toolMarkerSize, "tool");
-      if (t.contains("tip")) {
-        const auto& tip = t["tip"];
-        if (!tip.is_array() || tip.size() != 3)
-          throw core::InputError("tool.tip must be [x, y, z]");
-        s.tipOffset = {tip[0].get<double>(), tip[1].get<double>(), tip[2].get<double>()};
-      }
-    }
-    s.exposure = get(j, "exposure", s.exposure, "");
-    s.motionSamples = int(get(j, "motion_samples", s.motionSamples, ""));
-    if (!j.contains("keys") || !j["keys"].is_array()) throw core::InputError("no keys array");
-    SynthKey prev;
-    for (std::size_t i = 0; i < j["keys"].size(); ++i) {
-      const auto& k = j["keys"][i];
-      const std::string at = "keys[" + std::to_string(i) + "]";
-      SynthKey key = prev;
-      if (!k.contains("frame")) throw core::InputError(at + " has no frame");
-      key.frame = get(k, "frame", 0, at);
-      if (k.contains("camera")) {
-        const auto& c = k["camera"];
-        key.camDistance = get(c, "distance", key.camDistance, at + ".camera");
-        key.camElevationDeg = get(c, "elevation", key.camElevationDeg, at + ".camera");
-        key.camAzimuthDeg = get(c, "azimuth", key.camAzimuthDeg, at + ".camera");
-        key.camRollDeg = get(c, "roll", key.camRollDeg, at + ".camera");
-      }
-      if (k.contains("tip")) {
-        const auto& t = k["tip"];
-        key.tipLatDeg = get(t, "lat", key.tipLatDeg, at + ".tip");
-        key.tipLonDeg = get(t, "lon", key.tipLonDeg, at + ".tip");
-        key.tipHeightMm = get(t, "height_mm", key.tipHeightMm, at + ".tip");
-      }
-      if (k.contains("tool")) {
-        const auto& t = k["tool"];
-        key.toolTiltDeg = get(t, "tilt", key.toolTiltDeg, at + ".tool");
-        key.toolTurnDeg = get(t, "turn", key.toolTurnDeg, at + ".tool");
-      }
-      key.blur = get(k, "blur", key.blur, at);
-      key.noise = get(k, "noise", key.noise, at);
-      key.gain = get(k, "gain", key.gain, at);
-      key.occlusion = get(k, "occlusion", key.occlusion, at);
-      s.keys.push_back(key);
-      prev = key;
-    }
-    s.validate();
-  } catch (const nlohmann::json::exception& e) {
-    throw core::InputError(source + ": " + e.what());
-  } catch (const core::InputError& e) {
-    throw core::InputError(source + ": " + e.what());
-  }
-  return s;
-}
-
-SynthScript loadSynthScript(const std::filesystem::path& path) {
-  std::ifstream f(path);
-  if (!f) throw core::InputError(path.string() + ": cannot open the scene script");
-  nlohmann::json j;
-  try {
-    j = nlohmann::json::parse(f);
-  } catch (const nlohmann::json::exception& e) {
-    throw core::InputError(path.string() + ": " + e.what());
-  }
-  return parseSynthScript(j, path.string());
-}
-
-nlohmann::json toJson(const SynthScript& s) {
-  nlohmann::json j = {
-      {"size", {s.size.width, s.size.height}},
-      {"fps", s.fps},
-      {"seed", s.seed},
-      {"family", s.family},
-      {"colour", s.colour},
-      {"camera",
-       {{"fx", s.camera.K(0, 0)},
-        {"fy", s.camera.K(1, 1)},
-        {"cx", s.camera.K(0, 2)},
-        {"cy", s.camera.K(1, 2)}}},
-      {"planet", {{"id", s.planetId}, {"size", s.planetMarkerSize}, {"radius", s.planetRadius}}},
-      {"tool",
-       {{"id", s.toolId},
-        {"size", s.toolMarkerSize},
-        {"tip", {s.tipOffset.x(), s.tipOffset.y(), s.tipOffset.z()}}}},
-      {"exposure", s.exposure},
-      {"motion_samples", s.motionSamples}};
-  nlohmann::json keys = nlohmann::json::array();
-  for (const auto& k : s.keys)
-    keys.push_back(
-        {{"frame", int(k.frame)},
-         {"camera",
-          {{"distance", k.camDistance},
-           {"elevation", k.camElevationDeg},
-           {"azimuth", k.camAzimuthDeg},
-           {"roll", k.camRollDeg}}},
-         {"tip", {{"lat", k.tipLatDeg}, {"lon", k.tipLonDeg}, {"height_mm", k.tipHeightMm}}},
-         {"tool", {{"tilt", k.toolTiltDeg}, {"turn", k.toolTurnDeg}}},
-         {"blur", k.blur},
-         {"noise", k.noise},
-         {"gain", k.gain},
-         {"occlusion", k.occlusion}});
-  j["keys"] = keys;
-  return j;
-}
 
 nlohmann::json FrameTruth::toJson() const {
   auto v3 = [](const Eigen::Vector3d& v) { return nlohmann::json{v.x(), v.y(), v.z()}; };
@@ -306,14 +93,24 @@ nlohmann::json FrameTruth::toJson() const {
   to["visible"] = toolVisible;
   to["occluded"] = toolOccluded;
   to["tilt_deg"] = toolTiltDeg;
-  return {{"frame", frame},
-          {"time", time},
-          {"camera", pose(camera)},
-          {"planet", pl},
-          {"tool", to},
-          {"tip_camera", v3(tipCamera)},
-          {"tip_planet", v3(tipPlanet)},
-          {"tip_height_m", tipHeight}};
+  if (!boardVisible.empty()) {
+    // Scenes with rigid marker sets: what each marker shows, for the tracking benchmarks.
+    nlohmann::json markers = nlohmann::json::array();
+    for (const auto& [id, seen] : boardVisible) markers.push_back({{"id", id}, {"visible", seen}});
+    pl["markers"] = markers;
+    pl["half_visible"] = boardHalfVisible;
+    pl["centre_camera_m"] = v3(planetCentreCamera);
+  }
+  nlohmann::json j = {{"frame", frame},
+                      {"time", time},
+                      {"camera", pose(camera)},
+                      {"planet", pl},
+                      {"tool", to},
+                      {"tip_camera", v3(tipCamera)},
+                      {"tip_planet", v3(tipPlanet)},
+                      {"tip_height_m", tipHeight}};
+  if (!boardVisible.empty()) j["camera_still"] = cameraStill;
+  return j;
 }
 
 SynthRenderer::SynthRenderer(SynthScript script) : script_(std::move(script)) {
@@ -321,6 +118,12 @@ SynthRenderer::SynthRenderer(SynthScript script) : script_(std::move(script)) {
   table_ = makeTable(script_.seed);
   planetCard_ = makeCard(script_.family, script_.planetId, planetMargin_);
   toolCard_ = makeCard(script_.family, script_.toolId, toolMargin_);
+  if (script_.board)
+    for (const auto& m : script_.board->markers)
+      boardCards_.push_back(makeCard(script_.family, m.id, 0));
+  if (script_.toolLayout)
+    for (const auto& m : script_.toolLayout->markers)
+      toolFaceCards_.push_back(makeCard(script_.family, m.id, 0));
 }
 
 SynthKey SynthRenderer::keyAt(double f) const {
@@ -347,12 +150,16 @@ SynthKey SynthRenderer::keyAt(double f) const {
   k.noise = mix(a.noise, b.noise);
   k.gain = mix(a.gain, b.gain);
   k.occlusion = mix(a.occlusion, b.occlusion);
+  k.handX = mix(a.handX, b.handX);
+  k.handY = mix(a.handY, b.handY);
+  k.handHeight = mix(a.handHeight, b.handHeight);
+  k.handRadius = mix(a.handRadius, b.handRadius);
   return k;
 }
 
 void SynthRenderer::poses(const SynthKey& k, Pose& camera, Pose& tool) const {
   const double r = script_.planetRadius;
-  const Eigen::Vector3d centre(0, 0, r);
+  const Eigen::Vector3d centre = script_.planetCentre();
   const Eigen::Vector3d C =
       centre + k.camDistance * unitDirection(k.camElevationDeg, k.camAzimuthDeg);
   const Eigen::Vector3d z = (centre - C).normalized();
@@ -391,6 +198,21 @@ void SynthRenderer::poses(const SynthKey& k, Pose& camera, Pose& tool) const {
   tool.t = camera.R * mc + camera.t;
 }
 
+bool SynthRenderer::markerInView(const Pose& p, double size, double& tiltDeg) const {
+  const Eigen::Vector3d normal = p.R.col(2);
+  const Eigen::Vector3d toCam = -p.t.normalized();
+  tiltDeg = std::acos(std::clamp(normal.dot(toCam), -1.0, 1.0)) / kDeg;
+  if (normal.dot(toCam) <= 0) return false;
+  for (const auto& c : markerObjectPoints(size)) {
+    const Eigen::Vector3d x = p.apply(c);
+    if (x.z() <= 0) return false;
+    const double u = script_.camera.K(0, 0) * x.x() / x.z() + script_.camera.K(0, 2);
+    const double v = script_.camera.K(1, 1) * x.y() / x.z() + script_.camera.K(1, 2);
+    if (u < 2 || v < 2 || u > script_.size.width - 3 || v > script_.size.height - 3) return false;
+  }
+  return true;
+}
+
 FrameTruth SynthRenderer::truth(double frame) const {
   const SynthKey k = keyAt(frame);
   FrameTruth t;
@@ -399,26 +221,22 @@ FrameTruth SynthRenderer::truth(double frame) const {
   poses(k, t.camera, t.tool);
   t.planet = t.camera;  // the planet marker's frame is the world
   t.tipCamera = t.tool.apply(script_.tipOffset);
-  const Pose planetFrame =
-      t.planet * Pose{Eigen::Matrix3d::Identity(), {0, 0, script_.planetRadius}};
+  const Pose planetFrame = t.planet * Pose{Eigen::Matrix3d::Identity(), script_.planetCentre()};
+  t.planetCentreCamera = planetFrame.t;
+  if (frame >= 1) {
+    Pose before, unused;
+    poses(keyAt(frame - 1), before, unused);
+    t.cameraStill =
+        rotationAngle(before.R, t.camera.R) < 1e-9 && (before.t - t.camera.t).norm() < 1e-9;
+  }
   t.tipPlanet = planetFrame.inverse().apply(t.tipCamera);
   t.tipHeight = t.tipPlanet.norm() - script_.planetRadius;
-  auto visible = [&](const Pose& p, double size, double& tiltDeg) {
-    const Eigen::Vector3d normal = p.R.col(2);
-    const Eigen::Vector3d toCam = -p.t.normalized();
-    tiltDeg = std::acos(std::clamp(normal.dot(toCam), -1.0, 1.0)) / kDeg;
-    if (normal.dot(toCam) <= 0) return false;
-    for (const auto& c : markerObjectPoints(size)) {
-      const Eigen::Vector3d x = p.apply(c);
-      if (x.z() <= 0) return false;
-      const double u = script_.camera.K(0, 0) * x.x() / x.z() + script_.camera.K(0, 2);
-      const double v = script_.camera.K(1, 1) * x.y() / x.z() + script_.camera.K(1, 2);
-      if (u < 2 || v < 2 || u > script_.size.width - 3 || v > script_.size.height - 3) return false;
-    }
-    return true;
-  };
-  t.planetVisible = visible(t.planet, script_.planetMarkerSize, t.planetTiltDeg);
-  t.toolVisible = visible(t.tool, script_.toolMarkerSize, t.toolTiltDeg);
+  if (script_.board || script_.toolLayout) {
+    boardTruth(k, t);
+    return t;
+  }
+  t.planetVisible = markerInView(t.planet, script_.planetMarkerSize, t.planetTiltDeg);
+  t.toolVisible = markerInView(t.tool, script_.toolMarkerSize, t.toolTiltDeg);
   const Overlays o = overlays(k, t.camera, t.tool);
   // The marker with its quiet zone (one cell of white around the black border): covering the
   // quiet zone is enough to spoil a detection.
@@ -484,8 +302,8 @@ SynthRenderer::Overlays SynthRenderer::overlays(const SynthKey& k, const Pose& c
   };
   // The tool's card.
   const double cell = script_.toolMarkerSize / info.edgeCells;
-  const double half = 0.5 * script_.toolMarkerSize + (info.edgeOffset + toolMargin_) * cell;
-  bool ok = true;
+  double half = 0.5 * script_.toolMarkerSize + (info.edgeOffset + toolMargin_) * cell;
+  bool ok = !script_.toolLayout;  // a tool solid is drawn face by face (synth_bodies.cpp)
   for (const auto& c : {Eigen::Vector3d(-half, half, 0), Eigen::Vector3d(half, half, 0),
                         Eigen::Vector3d(half, -half, 0), Eigen::Vector3d(-half, -half, 0)}) {
     cv::Point2d px;
@@ -493,8 +311,15 @@ SynthRenderer::Overlays SynthRenderer::overlays(const SynthKey& k, const Pose& c
     o.toolCard.push_back(px);
   }
   if (!ok) o.toolCard.clear();
-  // The stick, from the card's edge to the tip.
+  // The stick, from the card's edge (or the solid's face) to the tip.
   const Eigen::Vector3d d = script_.tipOffset.normalized();
+  if (script_.toolLayout) {
+    const double grow = double(info.totalCells) / info.edgeCells;
+    half = 0;
+    for (const auto& m : script_.toolLayout->markers)
+      for (const auto& c : m.corners)
+        half = std::max(half, (m.inBody().t + grow * (c - m.inBody().t)).dot(d));
+  }
   const Eigen::Vector3d side = Eigen::Vector3d::UnitZ().cross(d).normalized();
   const double w0 = 0.005, w1 = 0.002;
   o.stickOk = true;
@@ -541,7 +366,10 @@ cv::Mat SynthRenderer::render(int frame) const {
     ht.push_back(planeHomography(script_.camera, tools[std::size_t(i)]) *
                  cardToPlane(info, toolMargin_, script_.toolMarkerSize));
   }
-  drawTexturedQuadBlurred(img, planetCard_, hp, 8);
+  if (script_.board)
+    drawBoard(img, cams);
+  else
+    drawTexturedQuadBlurred(img, planetCard_, hp, 8);
 
   const Overlays o = overlays(k, camera, tool);
   if (o.stickOk) {
@@ -550,7 +378,18 @@ cv::Mat SynthRenderer::render(int frame) const {
       poly.emplace_back(int(std::lround(q.x * 16)), int(std::lround(q.y * 16)));
     cv::fillConvexPoly(img, poly, cv::Scalar(40, 60, 90), cv::LINE_AA, 4);
   }
-  drawTexturedQuadBlurred(img, toolCard_, ht, 8);
+  if (script_.toolLayout)
+    drawToolSolid(img, tools);
+  else
+    drawTexturedQuadBlurred(img, toolCard_, ht, 8);
+  const auto hand = handPolygon(k, camera);
+  if (!hand.empty()) {
+    std::vector<cv::Point> poly;
+    for (const auto& q : hand)
+      poly.emplace_back(int(std::lround(q.x * 16)), int(std::lround(q.y * 16)));
+    cv::fillPoly(img, std::vector<std::vector<cv::Point>>{poly}, cv::Scalar(110, 140, 190),
+                 cv::LINE_AA, 4);
+  }
 
   if (o.discRadius > 0.5)  // a hand over the planet marker's top-right corner
     cv::circle(img, cv::Point(int(std::lround(o.disc.x * 16)), int(std::lround(o.disc.y * 16))),

@@ -28,16 +28,26 @@
 //   blur:   Gaussian defocus sigma (px); noise: Gaussian sensor noise sigma (grey levels);
 //   gain:   light level (1 = nominal); occlusion: radius of a hand-coloured disc over the planet
 //           marker's TR corner, as a fraction of the marker's image size (0 = none).
+//   hand:   {"x", "y", "height", "radius"} (m, world frame): a hand-coloured disc of that radius
+//           held flat `height` above the table at (x, y), drawn over everything (radius 0: none).
+// Rigid marker sets (marker_layout.hpp) instead of the single markers:
+//   "board": a layout file name (relative to the script's folder) or the layout itself: its
+//            markers lie on a white sheet on the table, the planet at its planet_centre (moved
+//            along z to rest on the sheet at `planet.radius`);
+//   "tool_layout": likewise, a tool solid (a cube: faces without markers drawn grey) on a stick
+//            that runs from its lowest face to the layout's tip (tool.tip is then the layout's).
 // Frames: world = planet marker frame (table plane z = 0, z up); camera frame as OpenCV's.
 #include <Eigen/Core>
 #include <cstdint>
 #include <filesystem>
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <opencv2/core.hpp>
 #include <string>
 #include <vector>
 
 #include "tracking/calibration.hpp"
+#include "tracking/marker_layout.hpp"
 #include "tracking/pose.hpp"
 
 namespace ps::tracking {
@@ -48,6 +58,7 @@ struct SynthKey {
   double tipLatDeg = 40, tipLonDeg = -90, tipHeightMm = 20;
   double toolTiltDeg = 20, toolTurnDeg = 0;
   double blur = 0.4, noise = 1.0, gain = 1.0, occlusion = 0.0;
+  double handX = 0, handY = 0, handHeight = 0.08, handRadius = 0;
 };
 
 struct SynthScript {
@@ -59,28 +70,37 @@ struct SynthScript {
   int planetId = 0, toolId = 1;
   double planetMarkerSize = 0.08, planetRadius = 0.06, toolMarkerSize = 0.05;
   Eigen::Vector3d tipOffset{0.0, -0.08, 0.0};
+  std::shared_ptr<const MarkerLayout> board, toolLayout;  // null: the single markers
   double exposure = 0.0;  // shutter open for this fraction of a frame period (motion blur)
   int motionSamples = 1;
   bool colour = true;
   std::vector<SynthKey> keys;
 
   int frames() const { return keys.empty() ? 0 : int(keys.back().frame) + 1; }
+  // Where the planet's centre is in the world (the planet marker's or the board's frame).
+  Eigen::Vector3d planetCentre() const;
   // The exact camera of synthetic videos: fx = fy = 0.9375 * width (about 56 degrees across),
   // principal point at the image centre, no distortion.
   static CameraCalibration syntheticCamera(cv::Size size);
   void validate() const;  // InputError naming the field (and key)
 };
 
-// Throws core::InputError "SOURCE: ..." for malformed scripts.
-SynthScript parseSynthScript(const nlohmann::json& j, const std::string& source = "<script>");
+// Throws core::InputError "SOURCE: ..." for malformed scripts. Layout file names are relative
+// to `folder` (a script file's folder).
+SynthScript parseSynthScript(const nlohmann::json& j, const std::string& source = "<script>",
+                             const std::filesystem::path& folder = {});
 SynthScript loadSynthScript(const std::filesystem::path& path);
 nlohmann::json toJson(const SynthScript& s);
 
 // Built-in scenes: "demo" (about 10 s: the tool sculpts a few strokes while the camera moves,
 // with a lighting change, an occlusion and the tool leaving the frame), "sweep" (the benchmark:
 // distances 0.3-0.9 m and tilts up to 60 degrees), "still" (both markers at rest), "short"
-// (a few frames, for tests).
-SynthScript builtinScene(const std::string& name);
+// (a few frames, for tests); on the planet board with the tool cube (their layouts read from
+// `root`/markers/): "board-demo" (the demo's story with hands over the board), "board-sweep"
+// (the tool sweeping over the board), "board-hand" (a hand covering half of it, then all of it
+// with the camera still), "board-hidden" (the board fully hidden while the camera stands, then
+// moves), "cube-spin" (the tool cube turned through 360 degrees, edge-on views included).
+SynthScript builtinScene(const std::string& name, const std::filesystem::path& root = {});
 std::vector<std::string> builtinSceneNames();
 
 struct FrameTruth {
@@ -93,6 +113,11 @@ struct FrameTruth {
   bool planetVisible = false, toolVisible = false;
   bool planetOccluded = false, toolOccluded = false;  // something drawn over the marker
   double planetTiltDeg = 0, toolTiltDeg = 0;  // angle between marker normal and line of sight
+  // Boards: each marker's visible fraction (in the image, facing the camera, not covered).
+  std::vector<std::pair<int, double>> boardVisible;
+  int boardHalfVisible = 0;  // markers at least half visible
+  bool cameraStill = false;  // the camera has the previous frame's pose
+  Eigen::Vector3d planetCentreCamera = Eigen::Vector3d::Zero();
   Eigen::Vector3d tipCamera = Eigen::Vector3d::Zero();
   Eigen::Vector3d tipPlanet = Eigen::Vector3d::Zero();  // planet frame (m)
   double tipHeight = 0;                                 // above the planet's reference sphere (m)
@@ -119,10 +144,19 @@ class SynthRenderer {
     double discRadius = 0;
   };
   Overlays overlays(const SynthKey& k, const Pose& camera, const Pose& tool) const;
+  bool markerInView(const Pose& marker, double size, double& tiltDeg) const;
+  void boardTruth(const SynthKey& k, FrameTruth& t) const;
+  // The silhouette polygons of what covers the table's markers (tool, stick, hand).
+  std::vector<std::vector<cv::Point2d>> occluders(const SynthKey& k, const Pose& camera,
+                                                  const Pose& tool) const;
+  std::vector<cv::Point2d> handPolygon(const SynthKey& k, const Pose& camera) const;
+  void drawBoard(cv::Mat& img, const std::vector<Pose>& cams) const;
+  void drawToolSolid(cv::Mat& img, const std::vector<Pose>& tools) const;
 
   SynthScript script_;
   cv::Mat table_;  // texture of the table (1.2 m square)
   cv::Mat planetCard_, toolCard_;
+  std::vector<cv::Mat> boardCards_, toolFaceCards_;
   int planetMargin_ = 2, toolMargin_ = 2;
 };
 

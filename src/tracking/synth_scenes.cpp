@@ -1,5 +1,6 @@
 // The built-in synthetic scenes (synth.hpp).
 #include <cmath>
+#include <memory>
 
 #include "core/input_error.hpp"
 #include "tracking/synth.hpp"
@@ -38,6 +39,13 @@ struct KeyBuilder {
     cur.noise = noise;
     cur.gain = gain;
     cur.occlusion = occlusion;
+    return *this;
+  }
+  KeyBuilder& hand(double x, double y, double radius, double height = 0.1) {
+    cur.handX = x;
+    cur.handY = y;
+    cur.handRadius = radius;
+    cur.handHeight = height;
     return *this;
   }
   KeyBuilder& key() {
@@ -190,13 +198,138 @@ SynthScript shortScene() {
   return s;
 }
 
+// The planet board and the tool cube (markers/*.json under `root`).
+SynthScript onBoard(SynthScript s, const std::filesystem::path& root) {
+  s.board = std::make_shared<const MarkerLayout>(loadMarkerLayout(defaultBoardPath(root)));
+  s.toolLayout =
+      std::make_shared<const MarkerLayout>(loadMarkerLayout(defaultToolLayoutPath(root)));
+  s.tipOffset = *s.toolLayout->tip;
+  return s;
+}
+
+// The demo's story on the board: strokes while the camera drifts, the tool over the board, a
+// hand passing over half the board, then over all of it while the camera stands still.
+SynthScript boardDemo(const std::filesystem::path& root) {
+  SynthScript s = onBoard(SynthScript{}, root);
+  s.seed = 17;
+  s.exposure = 0.3;
+  s.motionSamples = 3;
+  KeyBuilder b;
+  b.look(0.4, 0.8, 1.0);
+  b.at(0).cam(0.6, 52, -95).tip(30, -100, 40).tool(15, 0).key();
+  b.at(25).tip(32, -98, 0).key();
+  b.at(30).tip(32, -98, -1).key();
+  b.at(110).cam(0.65, 55, -75).tip(48, -55, -1).tool(20, 30).key();
+  b.at(125).tip(50, -50, 30).key();
+  // The light drops; a second stroke, a hand coming over the board's left half.
+  b.at(150).cam(0.66, 50, -80).tip(15, -115, 25).look(0.5, 0.8, 0.65).key();
+  b.at(160).tip(15, -115, -1).hand(-0.3, 0.0, 0.07).key();
+  b.at(180).hand(-0.08, 0.0, 0.07).key();
+  b.at(200).tip(10, -130, -1).hand(-0.08, 0.02, 0.07).key();
+  b.at(215).hand(-0.3, 0.02, 0.07).look(0.5, 0.8, 0.7).key();
+  b.at(225).tip(5, -140, -1).tool(25, -40).look(0.4, 0.8, 1.0).hand(-0.3, 0.02, 0).key();
+  // Lift; both hands over the whole board while the camera stands; a dab on the top after.
+  b.at(240).tip(10, -135, 40).key();
+  b.at(250).hand(0.0, -0.35, 0.16).key();
+  b.at(265).hand(0.0, 0.0, 0.16).key();
+  b.at(290).key();
+  b.at(305).tip(70, -90, 20).tool(20, 0).hand(0.0, -0.4, 0.16).key();
+  b.at(315).tip(72, -90, -1).hand(0.0, -0.4, 0).key();
+  b.at(330).tip(80, -60, -1).key();
+  b.at(345).cam(0.62, 56, -88).tip(80, -60, 40).key();
+  s.keys = b.keys;
+  return s;
+}
+
+// The tool sweeping over the board from 20 camera placements (0.3-0.9 m, the planet board
+// tilted 20-58 degrees to the camera): in each shot the tip draws across the planet's face
+// toward the camera, so the stick and cube cross the board's markers.
+SynthScript boardSweep(const std::filesystem::path& root) {
+  SynthScript s = onBoard(SynthScript{}, root);
+  s.seed = 19;
+  KeyBuilder b;
+  b.look(0.5, 1.5, 1.0);
+  const double dists[] = {0.3, 0.45, 0.6, 0.75, 0.9};
+  const double elev[] = {70, 55, 42, 32};
+  int f = 0, i = 0;
+  for (double d : dists)
+    for (double e : elev) {
+      const double az = -90 + 25 * std::sin(0.7 * i);
+      const double turn = 40 * std::sin(1.1 * i);
+      b.at(f).cam(d, e, az).tip(60, az - 40, -1).tool(15 + 10 * (i % 2), turn).key();
+      b.at(f + 16).tip(10, az + 40, -1).tool(15 + 10 * (i % 2), -turn).key();
+      b.at(f + 19).key();
+      f += 20;
+      ++i;
+    }
+  s.keys = b.keys;
+  return s;
+}
+
+// A hand over half of the board (the camera moving), then over all of it while the camera
+// stands still for three seconds, then away.
+SynthScript boardHand(const std::filesystem::path& root) {
+  SynthScript s = onBoard(SynthScript{}, root);
+  s.seed = 23;
+  KeyBuilder b;
+  b.look(0.4, 1.5, 1.0);
+  b.at(0).cam(0.6, 55, -90).tip(40, -90, 10).tool(15, 0).hand(-0.3, 0, 0.08).key();
+  b.at(30).hand(-0.09, 0, 0.08).key();
+  b.at(90).cam(0.65, 50, -70).hand(-0.09, 0.03, 0.08).key();
+  b.at(120).hand(0, 0.09, 0.08).key();
+  b.at(150).cam(0.6, 55, -90).hand(0, 0, 0.18).key();
+  b.at(240).key();
+  b.at(270).hand(0.4, 0, 0.18).key();
+  b.at(299).key();
+  s.keys = b.keys;
+  return s;
+}
+
+// The board fully hidden while the camera stands still (2 s), then moving while still hidden
+// (1.5 s), then uncovered.
+SynthScript boardHidden(const std::filesystem::path& root) {
+  SynthScript s = onBoard(SynthScript{}, root);
+  s.seed = 29;
+  KeyBuilder b;
+  b.look(0.4, 1.5, 1.0);
+  b.at(0).cam(0.62, 50, -90).tip(40, -90, 30).tool(15, 0).hand(0, -0.45, 0.2).key();
+  b.at(20).hand(0, 0, 0.2).key();
+  b.at(80).key();
+  b.at(125).cam(0.55, 60, -55).key();
+  b.at(140).key();
+  b.at(160).hand(0, 0.45, 0.2).key();
+  b.at(179).key();
+  s.keys = b.keys;
+  return s;
+}
+
+// The tool cube turned through 360 degrees about its stick at three tilts, edge-on views
+// included, the tip touching the planet.
+SynthScript cubeSpin(const std::filesystem::path& root) {
+  SynthScript s = onBoard(SynthScript{}, root);
+  s.seed = 31;
+  KeyBuilder b;
+  b.look(0.4, 1.5, 1.0);
+  int f = 0;
+  for (double tilt : {0.0, 25.0, 45.0}) {
+    for (int q = 0; q <= 8; ++q) {
+      b.at(f + 10 * q).cam(0.55, 48, -90).tip(35, -90 + 5 * std::sin(q), -1).tool(tilt, 45.0 * q);
+      b.key();
+    }
+    f += 90;
+  }
+  s.keys = b.keys;
+  return s;
+}
+
 }  // namespace
 
 std::vector<std::string> builtinSceneNames() {
-  return {"demo", "sweep", "tilt", "near", "still", "short"};
+  return {"demo",       "sweep",       "tilt",       "near",         "still",    "short",
+          "board-demo", "board-sweep", "board-hand", "board-hidden", "cube-spin"};
 }
 
-SynthScript builtinScene(const std::string& name) {
+SynthScript builtinScene(const std::string& name, const std::filesystem::path& root) {
   SynthScript s;
   if (name == "demo")
     s = demo();
@@ -210,10 +343,22 @@ SynthScript builtinScene(const std::string& name) {
     s = still();
   else if (name == "short")
     s = shortScene();
-  else
-    throw core::InputError(
-        "unknown synthetic scene '" + name +
-        "' (built in: demo, sweep, tilt, near, still, short; or a JSON script file)");
+  else if (name == "board-demo")
+    s = boardDemo(root);
+  else if (name == "board-sweep")
+    s = boardSweep(root);
+  else if (name == "board-hand")
+    s = boardHand(root);
+  else if (name == "board-hidden")
+    s = boardHidden(root);
+  else if (name == "cube-spin")
+    s = cubeSpin(root);
+  else {
+    std::string names;
+    for (const auto& n : builtinSceneNames()) names += (names.empty() ? "" : ", ") + n;
+    throw core::InputError("unknown synthetic scene '" + name + "' (built in: " + names +
+                           "; or a JSON script file)");
+  }
   s.validate();
   return s;
 }

@@ -1,10 +1,12 @@
 #include "tracking/tracker.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <sstream>
 
 #include "core/input_error.hpp"
+#include "tracking/body_pose.hpp"
 
 namespace ps::tracking {
 
@@ -50,6 +52,26 @@ void MarkerTrackerConfig::validate() const {
   if (!(ambiguityRatio >= 1))
     throw core::InputError("ambiguity ratio = " + num(ambiguityRatio) + " is not >= 1");
   checkPositive(maxReprojectionPx, "max reprojection error (px)");
+  if (layout && layout->markers.empty())
+    throw core::InputError(layout->source + ": the layout has no markers");
+}
+
+bool MarkerTrackerConfig::owns(int markerId) const {
+  return layout ? layout->find(markerId) != nullptr : markerId == id;
+}
+
+std::string MarkerTrackerConfig::name() const {
+  return layout ? "layout " + layout->source : "marker " + std::to_string(id);
+}
+
+void SceneConfig::useBoard(std::shared_ptr<const MarkerLayout> board) {
+  planet.layout = std::move(board);
+  planet.holdWhileStill = planet.layout != nullptr;
+}
+
+void SceneConfig::useToolLayout(std::shared_ptr<const MarkerLayout> layout) {
+  tool.layout = std::move(layout);
+  if (tool.layout && tool.layout->tip) tipOffset = *tool.layout->tip;
 }
 
 MarkerTracker::MarkerTracker(MarkerTrackerConfig config)
@@ -63,12 +85,8 @@ void MarkerTracker::reset() {
   have_ = false;
 }
 
-MarkerEstimate MarkerTracker::update(std::span<const Detection> detections,
-                                     const CameraCalibration& calib, double time) {
-  MarkerEstimate e;
-  e.id = config_.id;
-  const double dt = have_ ? time - lastTime_ : 0.0;
-  lastTime_ = time;
+bool MarkerTracker::measure(std::span<const Detection> detections, const CameraCalibration& calib,
+                            MarkerEstimate& e) const {
   const Detection* use = nullptr;
   if (detections.size() == 1) {
     use = &detections[0];
@@ -88,25 +106,56 @@ MarkerEstimate MarkerTracker::update(std::span<const Detection> detections,
                " times and no last pose to tell them apart; none used";
     }
   }
-  if (use) {
-    const auto cands = solveMarkerPose(use->corners, config_.size, calib);
-    const auto choice = choosePose(cands, have_ ? &last_ : nullptr, config_.ambiguityRatio);
-    if (!choice.valid) {
-      e.note = "id " + std::to_string(config_.id) + ": the pose solver gave no finite pose";
-    } else if (cands.rms[std::size_t(choice.candidate)] > config_.maxReprojectionPx) {
-      e.note = "id " + std::to_string(config_.id) + ": reprojection error " +
-               num(cands.rms[std::size_t(choice.candidate)]) + " px > " +
-               num(config_.maxReprojectionPx) + " px; not used";
-    } else {
-      e.measured = true;
-      e.raw = choice.pose;
-      e.corners = use->corners;
-      e.rms = cands.rms[std::size_t(choice.candidate)];
-      e.ratio = choice.ratio;
-      e.candidate = choice.candidate;
-      e.byContinuity = choice.byContinuity;
-    }
+  if (!use) return false;
+  const auto cands = solveMarkerPose(use->corners, config_.size, calib);
+  const auto choice = choosePose(cands, have_ ? &last_ : nullptr, config_.ambiguityRatio);
+  if (!choice.valid) {
+    e.note = "id " + std::to_string(config_.id) + ": the pose solver gave no finite pose";
+    return false;
   }
+  if (cands.rms[std::size_t(choice.candidate)] > config_.maxReprojectionPx) {
+    e.note = "id " + std::to_string(config_.id) + ": reprojection error " +
+             num(cands.rms[std::size_t(choice.candidate)]) + " px > " +
+             num(config_.maxReprojectionPx) + " px; not used";
+    return false;
+  }
+  e.raw = choice.pose;
+  e.corners = use->corners;
+  e.rms = cands.rms[std::size_t(choice.candidate)];
+  e.ratio = choice.ratio;
+  e.candidate = choice.candidate;
+  e.byContinuity = choice.byContinuity;
+  e.ids = {config_.id};
+  return true;
+}
+
+bool MarkerTracker::measureBody(std::span<const Detection> detections,
+                                const CameraCalibration& calib, MarkerEstimate& e) const {
+  const BodyPoseResult r = solveBodyPose(*config_.layout, detections, calib,
+                                         have_ ? &last_ : nullptr, config_.ambiguityRatio);
+  e.note = r.note;
+  if (!r.valid) return false;
+  if (r.rms > config_.maxReprojectionPx) {
+    e.note += (e.note.empty() ? "" : "; ") + config_.name() + ": reprojection error " + num(r.rms) +
+              " px > " + num(config_.maxReprojectionPx) + " px; not used";
+    return false;
+  }
+  e.raw = r.pose;
+  e.rms = r.rms;
+  e.ratio = r.ratio;
+  e.byContinuity = r.byContinuity;
+  e.ids = r.ids;
+  return true;
+}
+
+MarkerEstimate MarkerTracker::update(std::span<const Detection> detections,
+                                     const CameraCalibration& calib, double time,
+                                     bool cameraStill) {
+  MarkerEstimate e;
+  e.id = config_.id;
+  const double dt = have_ ? time - lastTime_ : 0.0;
+  lastTime_ = time;
+  e.measured = config_.layout ? measureBody(detections, calib, e) : measure(detections, calib, e);
   if (e.measured) {
     // Filters restart after a loss (a held pose is no base to filter from).
     const double fdt = have_ ? dt : 0.0;
@@ -123,10 +172,16 @@ MarkerEstimate MarkerTracker::update(std::span<const Detection> detections,
     e.state = TrackState::kTracked;
     last_ = p;
     have_ = true;
-    lastSeen_ = time;
+    lastSeen_ = lastStill_ = time;
     return e;
   }
-  if (have_ && time - lastSeen_ <= config_.holdSeconds + 1e-9) {
+  if (have_ && config_.holdWhileStill && cameraStill) {
+    lastStill_ = time;
+    e.heldStill = true;
+  }
+  // The short hold counts from the last frame seen, or judged still.
+  if (have_ &&
+      (e.heldStill || time - std::max(lastSeen_, lastStill_) <= config_.holdSeconds + 1e-9)) {
     e.state = TrackState::kHeld;
     e.pose = last_;
     e.sinceSeen = time - lastSeen_;
@@ -140,9 +195,18 @@ MarkerEstimate MarkerTracker::update(std::span<const Detection> detections,
 void SceneConfig::validate() const {
   planet.validate();
   tool.validate();
-  if (planet.id == tool.id)
+  if (!planet.layout && !tool.layout && planet.id == tool.id)
     throw core::InputError("the planet and tool markers have the same id " +
                            std::to_string(planet.id));
+  const std::vector<int> toolIds = tool.layout ? tool.layout->ids() : std::vector<int>{tool.id};
+  for (int id : toolIds)
+    if (planet.layout && planet.owns(id))
+      throw core::InputError(planet.name() + " and " + tool.name() + " both hold id " +
+                             std::to_string(id));
+  if (planet.layout && !planet.layout->planetCentre)
+    throw core::InputError(planet.layout->source + ": a planet board needs \"planet_centre\"");
+  if (tool.layout && !tool.layout->tip)
+    throw core::InputError(tool.layout->source + ": a tool layout needs \"tip\"");
   checkPositive(planetRadius, "planet radius (m)");
   checkParams(tipFilter, "tip filter");
   if (!tipOffset.allFinite()) throw core::InputError("tool tip offset is not finite");
@@ -171,26 +235,33 @@ void SceneTracker::setPlanetRadius(double metres) {
 
 Pose SceneTracker::planetFromMarker(const Pose& marker) const {
   Pose offset;
-  offset.t = Eigen::Vector3d(0, 0, config_.planetRadius);
+  if (config_.planet.layout) {
+    // The planet rests on the board: its centre moves along the board's normal with its radius.
+    const Eigen::Vector3d c = *config_.planet.layout->planetCentre;
+    offset.t = c + Eigen::Vector3d(0, 0, config_.planetRadius - c.z());
+  } else {
+    offset.t = Eigen::Vector3d(0, 0, config_.planetRadius);
+  }
   return marker * offset;
 }
 
 SceneFrame SceneTracker::update(const std::vector<Detection>& detections,
-                                const CameraCalibration& calib, int frame, double time) {
+                                const CameraCalibration& calib, int frame, double time,
+                                bool cameraStill) {
   SceneFrame f;
   f.frame = frame;
   f.time = time;
   std::vector<Detection> p, t;
   std::vector<int> others;
   for (const auto& d : detections) {
-    if (d.id == config_.planet.id)
+    if (config_.planet.owns(d.id))
       p.push_back(d);
-    else if (d.id == config_.tool.id)
+    else if (config_.tool.owns(d.id))
       t.push_back(d);
     else if (std::find(others.begin(), others.end(), d.id) == others.end())
       others.push_back(d.id);
   }
-  f.planet = planet_.update(p, calib, time);
+  f.planet = planet_.update(p, calib, time, cameraStill);
   f.tool = tool_.update(t, calib, time);
   if (!f.planet.note.empty()) f.notes.push_back(f.planet.note);
   if (!f.tool.note.empty()) f.notes.push_back(f.tool.note);
@@ -204,6 +275,10 @@ SceneFrame SceneTracker::update(const std::vector<Detection>& detections,
   } else if (!f.tool.usable()) {
     tipFilter_.reset();
     tipHave_ = false;
+  }
+  if (f.planet.usable()) {
+    f.planetCentreValid = true;
+    f.planetCentreCamera = planetFromMarker(f.planet.pose).t;
   }
   if (f.planet.usable() && f.tool.usable()) {
     f.tipValid = true;

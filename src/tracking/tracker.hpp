@@ -7,6 +7,11 @@
 // filters on translation and rotation. A marker not seen holds its last pose for holdSeconds,
 // then reports lost (and its filters start afresh when it comes back).
 //
+// A tracker may follow a rigid set of markers instead (marker_layout.hpp: the planet board, a
+// tool solid): every visible marker of the set gives one joint pose (body_pose.hpp), filtered
+// and held the same way; a board's pose is also held for as long as the camera is judged still
+// (camera_motion.hpp), so a hand over the whole board does not make the planet vanish.
+//
 // The scene (SceneTracker): the planet sits on the planet marker, its centre planetRadius above
 // the marker's centre along the marker's normal; the planet frame has the marker's axes (north
 // pole along the normal). The tool tip is tipOffset in the tool marker's frame. The tip counts
@@ -14,6 +19,7 @@
 // touchDistance (inside the planet counts as touching too).
 #include <Eigen/Core>
 #include <functional>
+#include <memory>
 #include <span>
 #include <string>
 #include <vector>
@@ -21,6 +27,7 @@
 #include "tracking/calibration.hpp"
 #include "tracking/detector.hpp"
 #include "tracking/filter.hpp"
+#include "tracking/marker_layout.hpp"
 #include "tracking/pose.hpp"
 
 namespace ps::tracking {
@@ -37,7 +44,21 @@ struct MarkerTrackerConfig {
   double holdSeconds = 0.25;
   double ambiguityRatio = 4.0;     // below it, continuity decides between the two candidates
   double maxReprojectionPx = 4.0;  // a detection whose best candidate is worse is not used
-  void validate() const;           // InputError
+  // A rigid set of markers tracked as one body (id and size are then unused); null: the single
+  // marker `id` of edge `size`, on the classic path, unchanged bit for bit.
+  std::shared_ptr<const MarkerLayout> layout;
+  // While nothing is seen and the camera is judged still, hold the pose (boards); once the
+  // camera moves, the usual hold of holdSeconds, then lost.
+  bool holdWhileStill = false;
+  static MarkerTrackerConfig single(int id, double size) {
+    MarkerTrackerConfig c;
+    c.id = id;
+    c.size = size;
+    return c;
+  }
+  bool owns(int markerId) const;  // the id belongs to this tracker
+  std::string name() const;       // "marker 0", "board markers/planet-board.json"
+  void validate() const;          // InputError
 };
 
 struct MarkerEstimate {
@@ -51,8 +72,10 @@ struct MarkerEstimate {
   double ratio = 0;  // second candidate's RMS / first's
   int candidate = 0;
   bool byContinuity = false;
-  double sinceSeen = 0;  // seconds since the last measurement
-  std::string note;      // why a detection was not used, if one was not
+  double sinceSeen = 0;    // seconds since the last measurement
+  bool heldStill = false;  // held because the camera was judged still
+  std::vector<int> ids;    // markers whose corners gave this frame's measurement
+  std::string note;        // why a detection was not used, if one was not
   bool usable() const { return state != TrackState::kLost; }
 };
 
@@ -60,25 +83,36 @@ class MarkerTracker {
  public:
   explicit MarkerTracker(MarkerTrackerConfig config);
   const MarkerTrackerConfig& config() const { return config_; }
-  // `detections` are this frame's detections of the tracker's id (usually 0 or 1; with two,
-  // the one nearest the last pose is used, or none without a last pose). `time` in seconds,
-  // increasing.
+  // `detections` are this frame's detections of the tracker's ids (a single marker: usually 0
+  // or 1; with two, the one nearest the last pose is used, or none without a last pose).
+  // `time` in seconds, increasing. `cameraStill`: the camera has not moved since the last
+  // measurement (only read with holdWhileStill).
   MarkerEstimate update(std::span<const Detection> detections, const CameraCalibration& calib,
-                        double time);
+                        double time, bool cameraStill = false);
   void reset();
 
  private:
+  bool measure(std::span<const Detection> detections, const CameraCalibration& calib,
+               MarkerEstimate& e) const;
+  bool measureBody(std::span<const Detection> detections, const CameraCalibration& calib,
+                   MarkerEstimate& e) const;
   MarkerTrackerConfig config_;
   OneEuroVector tFilter_;
   OneEuroRotation rFilter_;
   bool have_ = false;  // a pose to hold or continue from
   Pose last_;
-  double lastSeen_ = 0, lastTime_ = 0;
+  double lastSeen_ = 0, lastTime_ = 0, lastStill_ = 0;
 };
 
 struct SceneConfig {
-  MarkerTrackerConfig planet{0, 0.08};
-  MarkerTrackerConfig tool{1, 0.05};
+  MarkerTrackerConfig planet = MarkerTrackerConfig::single(0, 0.08);
+  MarkerTrackerConfig tool = MarkerTrackerConfig::single(1, 0.05);
+  // The planet on a board: its markers tracked jointly and held while the camera is still; the
+  // planet's centre at the board's planet_centre, moved along the board's normal when the
+  // planet's radius differs from that height.
+  void useBoard(std::shared_ptr<const MarkerLayout> board);
+  // A tool solid: its markers tracked jointly, the tip at the layout's tip.
+  void useToolLayout(std::shared_ptr<const MarkerLayout> tool);
   double planetRadius = 0.06;                  // m, the displayed planet
   Eigen::Vector3d tipOffset{0.0, -0.08, 0.0};  // tool tip in the tool marker's frame (m)
   double touchDistance = 0.004;                // m above the surface
@@ -97,8 +131,10 @@ struct SceneFrame {
   int frame = 0;
   double time = 0;
   MarkerEstimate planet, tool;
-  bool tipValid = false;  // both poses usable
-  bool tipHeld = false;   // the tool marker is held, not seen this frame
+  bool tipValid = false;           // both poses usable
+  bool tipHeld = false;            // the tool marker is held, not seen this frame
+  bool planetCentreValid = false;  // the planet has a pose
+  Eigen::Vector3d planetCentreCamera = Eigen::Vector3d::Zero();  // camera frame (m)
   Eigen::Vector3d tipCamera = Eigen::Vector3d::Zero();
   Eigen::Vector3d tipPlanet = Eigen::Vector3d::Zero();  // planet frame (m)
   double tipHeight = 0;                                 // above the surface (m); negative inside
@@ -114,8 +150,10 @@ class SceneTracker {
   // The displayed planet's radius (m) changed by hand: the planet frame moves along the marker's
   // normal with it; the filters keep their state. Throws core::InputError unless finite, > 0.
   void setPlanetRadius(double metres);
+  // `cameraStill`: the camera has not moved since the planet was last measured (boards hold
+  // their pose while it holds).
   SceneFrame update(const std::vector<Detection>& detections, const CameraCalibration& calib,
-                    int frame, double time);
+                    int frame, double time, bool cameraStill = false);
   // Camera-from-planet pose for a planet-marker pose.
   Pose planetFromMarker(const Pose& marker) const;
   // Tip in the camera frame for a tool-marker pose.

@@ -1,0 +1,159 @@
+#include "tracking/body_pose.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <opencv2/calib3d.hpp>
+
+namespace ps::tracking {
+
+namespace {
+
+// Seeds nearer than this in rotation (and 1 % of the distance in position) are one seed.
+constexpr double kSameSeedAngle = 2.0 * M_PI / 180.0;
+// An alternative must be turned at least this far from the best to count as its flip.
+constexpr double kFlipAngle = 10.0 * M_PI / 180.0;
+
+struct Correspondences {
+  std::vector<cv::Point3d> object;  // body frame
+  std::vector<cv::Point2d> image;
+};
+
+cv::Vec3d rvecOf(const Pose& p) {
+  const Eigen::Vector3d r = p.rvec();
+  return {r.x(), r.y(), r.z()};
+}
+
+// Polishes `seed` over every correspondence; returns the RMS (inf when the solver fails or the
+// body ends up behind the camera).
+double polish(const Correspondences& c, const CameraCalibration& calib, Pose& pose) {
+  cv::Mat rv(rvecOf(pose)), tv(cv::Vec3d(pose.t.x(), pose.t.y(), pose.t.z()));
+  rv = rv.clone();
+  tv = tv.clone();
+  try {
+    cv::solvePnPRefineLM(c.object, c.image, cv::Mat(calib.K), calib.distortion, rv, tv);
+  } catch (const cv::Exception&) {
+    return std::numeric_limits<double>::infinity();
+  }
+  std::vector<cv::Point2d> projected;
+  cv::projectPoints(c.object, rv, tv, cv::Mat(calib.K), calib.distortion, projected);
+  double sum = 0;
+  for (std::size_t k = 0; k < projected.size(); ++k) {
+    const cv::Point2d d = projected[k] - c.image[k];
+    sum += d.dot(d);
+  }
+  pose = Pose::fromRvecTvec({rv.at<double>(0), rv.at<double>(1), rv.at<double>(2)},
+                            {tv.at<double>(0), tv.at<double>(1), tv.at<double>(2)});
+  const double e = std::sqrt(sum / double(projected.size()));
+  if (!pose.finite() || !std::isfinite(e) || pose.t.z() <= 0)
+    return std::numeric_limits<double>::infinity();
+  return e;
+}
+
+}  // namespace
+
+BodyPoseResult solveBodyPose(const MarkerLayout& layout, std::span<const Detection> detections,
+                             const CameraCalibration& calibration, const Pose* previous,
+                             double ambiguityRatio) {
+  BodyPoseResult out;
+  std::vector<const Detection*> used;
+  std::vector<int> doubled;
+  for (const auto& d : detections) {
+    if (!layout.find(d.id)) continue;
+    const auto same = std::count_if(detections.begin(), detections.end(),
+                                    [&](const Detection& o) { return o.id == d.id; });
+    if (same > 1) {
+      if (std::find(doubled.begin(), doubled.end(), d.id) == doubled.end()) doubled.push_back(d.id);
+      continue;
+    }
+    used.push_back(&d);
+  }
+  std::sort(used.begin(), used.end(),
+            [](const Detection* a, const Detection* b) { return a->id < b->id; });
+  for (int id : doubled)
+    out.note += (out.note.empty() ? "" : "; ") + std::string("id ") + std::to_string(id) +
+                " seen more than once; not used";
+  if (used.empty()) return out;
+
+  Correspondences all;
+  for (const Detection* d : used) {
+    const LayoutMarker& m = *layout.find(d->id);
+    for (std::size_t k = 0; k < 4; ++k) {
+      all.object.emplace_back(m.corners[k].x(), m.corners[k].y(), m.corners[k].z());
+      all.image.push_back(d->corners[k]);
+    }
+  }
+
+  // Seeds from every marker's own candidates, carried to the body frame, without repeats.
+  std::vector<Pose> seeds;
+  for (const Detection* d : used) {
+    const LayoutMarker& m = *layout.find(d->id);
+    const PoseCandidates c = solveMarkerPose(d->corners, m.edge(), calibration);
+    const Pose bodyInMarker = m.inBody().inverse();
+    for (int i = 0; i < c.count; ++i) {
+      const Pose s = c.poses[std::size_t(i)] * bodyInMarker;
+      const bool repeat = std::any_of(seeds.begin(), seeds.end(), [&](const Pose& o) {
+        return rotationAngle(o.R, s.R) < kSameSeedAngle && (o.t - s.t).norm() < 0.01 * s.t.norm();
+      });
+      if (!repeat) seeds.push_back(s);
+    }
+  }
+  std::vector<std::pair<double, Pose>> scored;
+  for (Pose s : seeds) {
+    const double e = used.size() == 1 ? 0.0 : polish(all, calibration, s);
+    if (std::isfinite(e)) scored.emplace_back(e, s);
+  }
+  if (used.size() == 1) {
+    // One marker: its own polished candidates and their errors are the answer.
+    const LayoutMarker& m = *layout.find(used[0]->id);
+    const PoseCandidates c = solveMarkerPose(used[0]->corners, m.edge(), calibration);
+    scored.clear();
+    const Pose bodyInMarker = m.inBody().inverse();
+    for (int i = 0; i < c.count; ++i)
+      scored.emplace_back(c.rms[std::size_t(i)], c.poses[std::size_t(i)] * bodyInMarker);
+  }
+  if (scored.empty()) {
+    out.note += (out.note.empty() ? "" : "; ") + std::string("the pose solver gave no finite pose");
+    return out;
+  }
+  std::stable_sort(scored.begin(), scored.end(),
+                   [](const auto& a, const auto& b) { return a.first < b.first; });
+  std::size_t pick = 0, alt = scored.size();
+  for (std::size_t i = 1; i < scored.size(); ++i)
+    if (rotationAngle(scored[i].second.R, scored[0].second.R) > kFlipAngle) {
+      alt = i;
+      break;
+    }
+  out.ratio = alt < scored.size() ? scored[alt].first / std::max(scored[0].first, 1e-12)
+                                  : std::numeric_limits<double>::infinity();
+  if (out.ratio < ambiguityRatio && previous) {
+    out.byContinuity = true;
+    if (rotationAngle(scored[alt].second.R, previous->R) <
+        rotationAngle(scored[0].second.R, previous->R))
+      pick = alt;
+  }
+  out.valid = true;
+  out.pose = scored[pick].second;
+  out.rms = scored[pick].first;
+  for (const Detection* d : used) out.ids.push_back(d->id);
+  return out;
+}
+
+std::vector<std::array<cv::Point2d, 4>> projectLayout(const MarkerLayout& layout, const Pose& body,
+                                                      const CameraCalibration& calibration) {
+  std::vector<cv::Point3d> cam;
+  for (const auto& m : layout.markers)
+    for (const auto& c : m.corners) {
+      const Eigen::Vector3d x = body.apply(c);
+      cam.emplace_back(x.x(), x.y(), x.z());
+    }
+  std::vector<cv::Point2d> px;
+  cv::projectPoints(cam, cv::Vec3d(0, 0, 0), cv::Vec3d(0, 0, 0), cv::Mat(calibration.K),
+                    calibration.distortion, px);
+  std::vector<std::array<cv::Point2d, 4>> out(layout.markers.size());
+  for (std::size_t i = 0; i < out.size(); ++i)
+    for (std::size_t k = 0; k < 4; ++k) out[i][k] = px[4 * i + k];
+  return out;
+}
+
+}  // namespace ps::tracking

@@ -1,0 +1,108 @@
+#include "tracking/camera_motion.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <opencv2/imgproc.hpp>
+#include <opencv2/video/tracking.hpp>
+#include <string>
+
+#include "core/input_error.hpp"
+
+namespace ps::tracking {
+
+void CameraMotionConfig::validate() const {
+  auto bad = [](const std::string& what) { throw core::InputError("camera motion: " + what); };
+  if (!(maxShiftPx > 0) || !std::isfinite(maxShiftPx)) bad("max shift (px) is not > 0");
+  if (maxFeatures < 1) bad("max features is not >= 1");
+  if (minTracked < 1) bad("min tracked is not >= 1");
+  if (!(minTrackedFraction >= 0 && minTrackedFraction <= 1))
+    bad("min tracked fraction not in [0, 1]");
+  if (!(maskMargin >= 0) || !std::isfinite(maskMargin)) bad("mask margin is not >= 0");
+  if (downscale < 1 || downscale > 8) bad("downscale is not in 1..8");
+}
+
+CameraMotionJudge::CameraMotionJudge(CameraMotionConfig config) : config_(config) {
+  config_.validate();
+}
+
+void CameraMotionJudge::reset() {
+  reference_.release();
+  mask_.release();
+  features_.clear();
+  featuresPicked_ = false;
+}
+
+cv::Mat CameraMotionJudge::toWorkingGrey(const cv::Mat& image) const {
+  cv::Mat grey;
+  if (image.channels() == 3)
+    cv::cvtColor(image, grey, cv::COLOR_BGR2GRAY);
+  else if (image.channels() == 4)
+    cv::cvtColor(image, grey, cv::COLOR_BGRA2GRAY);
+  else
+    grey = image;
+  if (config_.downscale == 1) return grey.clone();
+  cv::Mat small;
+  cv::resize(grey, small, cv::Size(), 1.0 / config_.downscale, 1.0 / config_.downscale,
+             cv::INTER_AREA);
+  return small;
+}
+
+void CameraMotionJudge::setReference(const cv::Mat& image,
+                                     const std::vector<std::array<cv::Point2d, 4>>& exclude) {
+  reference_ = toWorkingGrey(image);
+  mask_ = cv::Mat(reference_.size(), CV_8U, cv::Scalar(255));
+  const double s = 1.0 / config_.downscale;
+  for (const auto& q : exclude) {
+    cv::Point2d c(0, 0);
+    for (const auto& p : q) c += 0.25 * p;
+    std::vector<cv::Point> poly;
+    for (const auto& p : q) {
+      const cv::Point2d grown = c + (1 + 2 * config_.maskMargin) * (p - c);
+      poly.emplace_back(int(std::lround(grown.x * s)), int(std::lround(grown.y * s)));
+    }
+    cv::fillConvexPoly(mask_, poly, cv::Scalar(0));
+  }
+  features_.clear();
+  featuresPicked_ = false;
+}
+
+CameraMotion CameraMotionJudge::judge(const cv::Mat& image) {
+  CameraMotion m;
+  if (reference_.empty()) return m;
+  if (!featuresPicked_) {
+    // Picked once per reference, on the first frame that needs them: frames with the board in
+    // view pay nothing.
+    cv::goodFeaturesToTrack(reference_, features_, config_.maxFeatures, 0.01, 6.0, mask_, 5);
+    featuresPicked_ = true;
+  }
+  m.features = int(features_.size());
+  if (features_.size() < std::size_t(config_.minTracked)) return m;
+  const cv::Mat now = toWorkingGrey(image);
+  if (now.size() != reference_.size()) return m;
+  std::vector<cv::Point2f> found, back;
+  std::vector<unsigned char> status, backStatus;
+  std::vector<float> err;
+  cv::calcOpticalFlowPyrLK(reference_, now, features_, found, status, err, cv::Size(15, 15), 3);
+  // Forward-backward check: a corner under a hand or the tool now does not track back to where
+  // it was, and is left out (what is left is the background that can still be seen).
+  cv::calcOpticalFlowPyrLK(now, reference_, found, back, backStatus, err, cv::Size(15, 15), 3);
+  std::vector<double> shifts;
+  for (std::size_t i = 0; i < features_.size(); ++i)
+    if (status[i] && backStatus[i] && cv::norm(back[i] - features_[i]) < 0.5)
+      shifts.push_back(cv::norm(found[i] - features_[i]) * config_.downscale);
+  m.tracked = int(shifts.size());
+  m.judged = true;
+  if (m.tracked < config_.minTracked ||
+      double(m.tracked) < config_.minTrackedFraction * double(m.features)) {
+    m.medianShiftPx = std::numeric_limits<double>::infinity();
+    return m;
+  }
+  std::nth_element(shifts.begin(), shifts.begin() + std::ptrdiff_t(shifts.size() / 2),
+                   shifts.end());
+  m.medianShiftPx = shifts[shifts.size() / 2];
+  m.still = m.medianShiftPx <= config_.maxShiftPx;
+  return m;
+}
+
+}  // namespace ps::tracking

@@ -1,0 +1,332 @@
+// Rigid marker sets: the committed planet board and tool cube layouts, the layout file's errors,
+// and the joint pose from every visible marker against exact synthetic corners.
+#include <gtest/gtest.h>
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <numbers>
+#include <opencv2/imgproc.hpp>
+#include <random>
+
+#include "app/build_paths.hpp"
+#include "core/input_error.hpp"
+#include "fresh_dir.hpp"
+#include "tracking/body_pose.hpp"
+#include "tracking/detector.hpp"
+#include "tracking/marker_layout.hpp"
+#include "tracking/marker_sheet.hpp"
+#include "tracking/synth.hpp"
+
+using namespace ps;
+using tracking::MarkerLayout;
+using tracking::Pose;
+
+namespace {
+
+const std::filesystem::path kRoot = ps::app::sourceDir();
+// AprilTag's corners on sharp synthetic markers are within 0.07-0.10 px (field notes); twice
+// that here.
+constexpr double kCornerNoisePx = 0.2;
+
+std::string errorOf(const std::function<void()>& f) {
+  try {
+    f();
+  } catch (const core::InputError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+std::string parseError(const std::string& text) {
+  return errorOf(
+      [&] { tracking::parseMarkerLayout(nlohmann::json::parse(text), "bad-board.json"); });
+}
+
+// A camera looking at the body's origin from `distance`, with the body's normal (z) tilted by
+// `tiltDeg` from the line of sight and turned `spinDeg` about it.
+Pose viewOf(double distance, double tiltDeg, double spinDeg, double headingDeg) {
+  using Eigen::AngleAxisd;
+  using Eigen::Vector3d;
+  const double d2r = std::numbers::pi / 180;
+  // Camera looks along +z; a body facing it has its z toward -z_cam.
+  const Eigen::Matrix3d faceCamera =
+      AngleAxisd(std::numbers::pi, Vector3d::UnitX()).toRotationMatrix();
+  Pose p;
+  p.R = AngleAxisd(headingDeg * d2r, Vector3d::UnitZ()).toRotationMatrix() *
+        AngleAxisd(tiltDeg * d2r, Vector3d::UnitX()).toRotationMatrix() * faceCamera *
+        AngleAxisd(spinDeg * d2r, Vector3d::UnitZ()).toRotationMatrix();
+  p.t = {0, 0, distance};
+  return p;
+}
+
+// The detections a perfect detector with corner noise `sigmaPx` gives of the layout's markers
+// `ids` whose faces are toward the camera and whose corners are all in the image.
+std::vector<tracking::Detection> detect(const MarkerLayout& l, const Pose& body,
+                                        const tracking::CameraCalibration& c,
+                                        const std::vector<int>& ids, double sigmaPx,
+                                        std::mt19937& rng) {
+  std::normal_distribution<double> noise(0, sigmaPx);
+  const auto px = tracking::projectLayout(l, body, c);
+  std::vector<tracking::Detection> out;
+  for (std::size_t i = 0; i < l.markers.size(); ++i) {
+    const auto& m = l.markers[i];
+    if (std::find(ids.begin(), ids.end(), m.id) == ids.end()) continue;
+    const Pose inCam = body * m.inBody();
+    const Eigen::Vector3d toCamera = -inCam.t.normalized();
+    if (inCam.R.col(2).dot(toCamera) < std::cos(75 * std::numbers::pi / 180)) continue;
+    tracking::Detection d;
+    d.id = m.id;
+    bool inside = true;
+    for (std::size_t k = 0; k < 4; ++k) {
+      d.corners[k] = px[i][k] + cv::Point2d(noise(rng), noise(rng));
+      inside &= d.corners[k].x >= 0 && d.corners[k].y >= 0 && d.corners[k].x <= 639 &&
+                d.corners[k].y <= 479;
+    }
+    if (inside) out.push_back(d);
+  }
+  return out;
+}
+
+}  // namespace
+
+TEST(TrackingBoard, CommittedLayoutsAreValid) {
+  const MarkerLayout board = tracking::loadMarkerLayout(tracking::defaultBoardPath(kRoot));
+  EXPECT_EQ(board.family, "tag36h11");
+  EXPECT_GE(board.markers.size(), 4u);
+  EXPECT_TRUE(board.planar());
+  ASSERT_TRUE(board.planetCentre.has_value());
+  EXPECT_GT(board.planetCentre->z(), 0.0);  // above the printed face
+  const MarkerLayout tool = tracking::loadMarkerLayout(tracking::defaultToolLayoutPath(kRoot));
+  EXPECT_FALSE(tool.planar());
+  ASSERT_TRUE(tool.tip.has_value());
+  // No id in both: the tracker tells board from tool by id alone.
+  for (int id : tool.ids()) EXPECT_EQ(board.find(id), nullptr) << id;
+  // Every marker's frame is right-handed, with z out of the printed face.
+  for (const auto* l : {&board, &tool})
+    for (const auto& m : l->markers) {
+      const Pose p = m.inBody();
+      EXPECT_NEAR(p.R.determinant(), 1.0, 1e-12);
+      EXPECT_NEAR((p.R.transpose() * p.R - Eigen::Matrix3d::Identity()).norm(), 0.0, 1e-12);
+    }
+  // The cube's faces point away from its centre.
+  for (const auto& m : tool.markers) EXPECT_GT(m.inBody().R.col(2).dot(m.inBody().t), 0.0);
+}
+
+TEST(TrackingBoard, LayoutRoundTripsThroughJson) {
+  const MarkerLayout a = tracking::loadMarkerLayout(tracking::defaultToolLayoutPath(kRoot));
+  const MarkerLayout b = tracking::parseMarkerLayout(tracking::toJson(a), "again");
+  ASSERT_EQ(a.markers.size(), b.markers.size());
+  for (std::size_t i = 0; i < a.markers.size(); ++i) {
+    EXPECT_EQ(a.markers[i].id, b.markers[i].id);
+    for (std::size_t k = 0; k < 4; ++k) EXPECT_EQ(a.markers[i].corners[k], b.markers[i].corners[k]);
+  }
+  EXPECT_EQ(*a.tip, *b.tip);
+  // Millimetres read as metres.
+  const MarkerLayout mm = tracking::parseMarkerLayout(
+      nlohmann::json::parse(R"({"family": "tag36h11", "units": "mm", "markers": [{"id": 3,
+        "corners": [[-20, 20, 0], [20, 20, 0], [20, -20, 0], [-20, -20, 0]]}]})"),
+      "mm.json");
+  EXPECT_DOUBLE_EQ(mm.markers[0].edge(), 0.04);
+}
+
+TEST(TrackingBoard, MalformedLayoutsAreRefusedNamingFileAndEntry) {
+  const std::string square =
+      R"([[-0.02, 0.02, 0], [0.02, 0.02, 0], [0.02, -0.02, 0], [-0.02, -0.02, 0]])";
+  auto one = [&](const std::string& extra, const std::string& corners, int id = 3) {
+    return R"({"family": "tag36h11", "units": "m", )" + extra + R"("markers": [{"id": )" +
+           std::to_string(id) + R"(, "corners": )" + corners + "}]}";
+  };
+  EXPECT_EQ(parseError(one("", square)), "");
+  auto expectError = [](const std::string& msg, const std::string& part) {
+    EXPECT_EQ(msg.rfind("bad-board.json: ", 0), 0u) << msg;
+    EXPECT_NE(msg.find(part), std::string::npos) << msg << "\nexpected: " << part;
+  };
+  expectError(parseError(R"({"family": "tag36h11", "markers": [{"id": 3, "corners": )" + square +
+                         R"(}, {"id": 3, "corners": )" + square + "}]}"),
+              "markers[1] (id 3): id 3 appears twice");
+  expectError(
+      parseError(
+          one("", R"([[-0.02, 0.02, 0], [0.03, 0.02, 0], [0.02, -0.02, 0], [-0.02, -0.02, 0]])")),
+      "markers[0] (id 3): not a square");
+  expectError(
+      parseError(one(
+          "", R"([[-0.02, 0.02, 0], [0.02, 0.02, 0], [0.02, -0.02, 0.01], [-0.02, -0.02, 0]])")),
+      "markers[0] (id 3)");
+  expectError(parseError(one("", R"([[0, 0, 0], [0, 0, 0], [0, 0, 0], [0, 0, 0]])")),
+              "markers[0] (id 3): edge 0 m is not > 0.1 mm");
+  expectError(parseError(one("", square, 587)), "id outside tag36h11 (0..586)");
+  expectError(parseError(one(R"("units": "inch", )", square)), "units \"inch\"");
+  expectError(parseError(R"({"family": "tag99h1", "markers": []})"), "family: ");
+  expectError(parseError(R"({"family": "tag36h11", "markers": []})"), "no \"markers\" array");
+  expectError(parseError(one("", R"([[0, 0, 0], [1, 0]])")), "\"corners\" is not four");
+  expectError(parseError(one(R"("planet_centre": [0, 0], )", square)), "planet_centre is not");
+  const auto dir = testkit::freshDir("board_layout");
+  std::ofstream(dir / "broken.json") << "{\"family\": ";
+  const std::string msg = errorOf([&] { tracking::loadMarkerLayout(dir / "broken.json"); });
+  EXPECT_NE(msg.find((dir / "broken.json").string() + ": not JSON"), std::string::npos) << msg;
+  const std::string missing = errorOf([&] { tracking::loadMarkerLayout(dir / "absent.json"); });
+  EXPECT_NE(missing.find("absent.json: cannot open"), std::string::npos) << missing;
+}
+
+// One marker's layout gives exactly the single-marker solver's choice.
+TEST(TrackingBoard, SingleMarkerLayoutMatchesTheMarkerSolver) {
+  const auto cam = tracking::SynthScript::syntheticCamera({640, 480});
+  const MarkerLayout single = MarkerLayout::singleMarker(0, 0.08);
+  std::mt19937 rng(5);
+  for (int i = 0; i < 50; ++i) {
+    const Pose truth = viewOf(0.4 + 0.01 * i, i % 50, 7.0 * i, 3.0 * i);
+    const auto d = detect(single, truth, cam, {0}, 0.3, rng);
+    if (d.empty()) continue;
+    const auto body = tracking::solveBodyPose(single, d, cam, nullptr, 4.0);
+    const auto choice =
+        tracking::choosePose(tracking::solveMarkerPose(d[0].corners, 0.08, cam), nullptr, 4.0);
+    ASSERT_TRUE(body.valid && choice.valid);
+    EXPECT_EQ(body.pose.R, choice.pose.R);
+    EXPECT_EQ(body.pose.t, choice.pose.t);
+  }
+}
+
+// The property the board exists for: any subset of its markers gives the planet's centre, and
+// more markers give it better. Random views (0.3-0.9 m, tilts up to 60 degrees), corner noise
+// kCornerNoisePx, random subsets of 1..all markers.
+TEST(TrackingBoard, AnyVisibleSubsetGivesThePlanetCentre) {
+  const auto cam = tracking::SynthScript::syntheticCamera({640, 480});
+  const MarkerLayout board = tracking::loadMarkerLayout(tracking::defaultBoardPath(kRoot));
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(0, 1);
+  std::vector<double> errOne, errMany;
+  int flipsMany = 0, solved = 0, tried = 0;
+  for (int i = 0; i < 400; ++i) {
+    const Pose truth = viewOf(0.3 + 0.6 * u(rng), 60 * u(rng), 360 * u(rng), 360 * u(rng));
+    std::vector<int> ids = board.ids();
+    std::shuffle(ids.begin(), ids.end(), rng);
+    ids.resize(1 + std::size_t(u(rng) * double(ids.size())) % ids.size());
+    const auto d = detect(board, truth, cam, ids, kCornerNoisePx, rng);
+    if (d.empty()) continue;
+    ++tried;
+    const auto r = tracking::solveBodyPose(board, d, cam, nullptr, 4.0);
+    if (!r.valid) continue;
+    ++solved;
+    EXPECT_EQ(r.ids.size(), d.size());
+    const double e = (r.pose.apply(*board.planetCentre) - truth.apply(*board.planetCentre)).norm();
+    const double angle = tracking::rotationAngle(r.pose.R, truth.R) * 180 / std::numbers::pi;
+    if (d.size() >= 3) {
+      errMany.push_back(e);
+      flipsMany += angle > 15 ? 1 : 0;
+    } else if (d.size() == 1) {
+      errOne.push_back(e);
+    }
+  }
+  EXPECT_EQ(solved, tried);
+  ASSERT_GT(errMany.size(), 50u);
+  ASSERT_GT(errOne.size(), 20u);
+  auto median = [](std::vector<double> v) {
+    std::nth_element(v.begin(), v.begin() + std::ptrdiff_t(v.size() / 2), v.end());
+    return v[v.size() / 2];
+  };
+  auto p95 = [](std::vector<double> v) {
+    std::sort(v.begin(), v.end());
+    return v[v.size() * 95 / 100];
+  };
+  EXPECT_EQ(flipsMany, 0) << "three or more markers decide the flip";
+  EXPECT_LT(median(errMany), 1e-3) << "median planet-centre error, >= 3 markers";
+  EXPECT_LT(p95(errMany), 3e-3) << "p95 planet-centre error, >= 3 markers";
+  EXPECT_LT(median(errMany), median(errOne)) << "more markers, better pose";
+}
+
+// The cube is seen from every side: random rotations show one to three faces; the tip stays.
+TEST(TrackingBoard, ToolCubeTipFromAnySide) {
+  const auto cam = tracking::SynthScript::syntheticCamera({640, 480});
+  const MarkerLayout cube = tracking::loadMarkerLayout(tracking::defaultToolLayoutPath(kRoot));
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> u(0, 1);
+  std::vector<double> err;
+  int flips = 0, seen = 0;
+  for (int i = 0; i < 300; ++i) {
+    Pose truth;
+    Eigen::Quaterniond q(
+        Eigen::Vector4d(u(rng) - 0.5, u(rng) - 0.5, u(rng) - 0.5, u(rng) - 0.5).normalized());
+    truth.R = q.toRotationMatrix();
+    truth.t = {0.1 * (u(rng) - 0.5), 0.1 * (u(rng) - 0.5), 0.3 + 0.5 * u(rng)};
+    const auto d = detect(cube, truth, cam, cube.ids(), kCornerNoisePx, rng);
+    if (d.empty()) continue;
+    ++seen;
+    const auto r = tracking::solveBodyPose(cube, d, cam, nullptr, 4.0);
+    ASSERT_TRUE(r.valid);
+    if (d.size() >= 2) {
+      err.push_back((r.pose.apply(*cube.tip) - truth.apply(*cube.tip)).norm());
+      flips += tracking::rotationAngle(r.pose.R, truth.R) > 15 * std::numbers::pi / 180 ? 1 : 0;
+    }
+  }
+  EXPECT_GT(seen, 250);
+  ASSERT_GT(err.size(), 100u);
+  std::sort(err.begin(), err.end());
+  EXPECT_EQ(flips, 0) << "two faces decide the flip";
+  EXPECT_LT(err[err.size() / 2], 1e-3) << "tip median";
+  EXPECT_LT(err[err.size() * 95 / 100], 3e-3) << "tip p95";
+}
+
+namespace {
+
+// The sheet at 75 dpi with a camera's slight blur, through the AprilTag detector at full size.
+std::vector<tracking::Detection> readSheet(const tracking::Sheet& sheet, double scale) {
+  cv::Mat small;
+  cv::resize(sheet.image, small, {}, scale, scale, cv::INTER_AREA);
+  cv::GaussianBlur(small, small, {0, 0}, 0.6);
+  tracking::DetectorConfig dc;
+  dc.regions = false;
+  dc.decimate = 1;
+  return tracking::makeDetector(dc)->detect(small);
+}
+
+}  // namespace
+
+// The printed board reads back with every id at its place: marker centres as far apart on the
+// paper (px / dpi) as in the layout, corners where the sheet says.
+TEST(TrackingBoard, BoardAndCubeSheetsReadBackAsTheirLayouts) {
+  const MarkerLayout board = tracking::loadMarkerLayout(tracking::defaultBoardPath(kRoot));
+  const MarkerLayout cube = tracking::loadMarkerLayout(tracking::defaultToolLayoutPath(kRoot));
+  const double scale = 0.25;  // 75 dpi
+  for (const auto& paper : {tracking::paperA4(), tracking::paperLetter()}) {
+    SCOPED_TRACE(paper.name);
+    for (const auto* layout : {&board, &cube}) {
+      const auto sheet = layout == &board ? tracking::renderBoardSheet(*layout, paper, 300)
+                                          : tracking::renderCubeNetSheet(*layout, paper, 300);
+      const auto found = readSheet(sheet, scale);
+      ASSERT_EQ(found.size(), layout->markers.size()) << sheet.title;
+      ASSERT_EQ(sheet.markers.size(), layout->markers.size());
+      for (const auto& [id, corners] : sheet.markers) {
+        const auto it = std::find_if(found.begin(), found.end(),
+                                     [id = id](const auto& d) { return d.id == id; });
+        ASSERT_NE(it, found.end()) << "id " << id << " not read back";
+        for (std::size_t k = 0; k < 4; ++k) {
+          const cv::Point2d expected =
+              (corners[k] + cv::Point2d(0.5, 0.5)) * scale - cv::Point2d(0.5, 0.5);
+          EXPECT_LT(cv::norm(it->corners[k] - expected), 0.35) << "id " << id << " corner " << k;
+        }
+      }
+    }
+    // On the board, the distance between any two markers' centres is the layout's.
+    const auto sheet = tracking::renderBoardSheet(board, paper, 300);
+    auto centreOf = [](const std::array<cv::Point2d, 4>& c) {
+      return 0.25 * (c[0] + c[1] + c[2] + c[3]);
+    };
+    for (std::size_t a = 0; a < board.markers.size(); ++a)
+      for (std::size_t b = a + 1; b < board.markers.size(); ++b) {
+        const double paperMm =
+            cv::norm(centreOf(sheet.markers[a].second) - centreOf(sheet.markers[b].second)) * 25.4 /
+            300;
+        const double layoutMm =
+            1e3 * (board.markers[a].inBody().t - board.markers[b].inBody().t).norm();
+        EXPECT_NEAR(paperMm, layoutMm, 25.4 / 300)
+            << board.markers[a].id << "-" << board.markers[b].id;
+      }
+  }
+  // A layout a flat sheet cannot hold is refused, naming it.
+  const std::string msg =
+      errorOf([&] { tracking::renderBoardSheet(cube, tracking::paperA4(), 300); });
+  EXPECT_NE(msg.find("tool-cube.json: cannot print as a board"), std::string::npos) << msg;
+}
