@@ -54,7 +54,7 @@ void evaluateScene(const std::string& scene, bool quick, double singleMarkerMs, 
   int halfVisible = 0, halfVisibleWithPose = 0, hiddenStill = 0, hiddenStillWithPose = 0;
   int hiddenMoved = 0, falseHolds = 0, heldMoved = 0, toolVisible = 0, toolWithTip = 0, flips = 0;
   int touching = 0, sculpted = 0, cvWithin = 0;
-  std::vector<double> centreErr, tipErr, ms;
+  std::vector<double> centreErr, tipErr, ms, detectMs, trackMs;
   tracking::Pose lastSeenCamera;
   bool seen = false;
   const int frames = quick ? std::min(renderer.frames(), 120) : renderer.frames();
@@ -63,6 +63,8 @@ void evaluateScene(const std::string& scene, bool quick, double singleMarkerMs, 
     const auto truth = renderer.truth(f);
     const auto step = stepper.step(renderer.render(f), f, truth.time);
     ms.push_back(step.times.detectMs + step.times.trackMs);
+    detectMs.push_back(step.times.detectMs);
+    trackMs.push_back(step.times.trackMs);
     const auto& sf = step.scene;
     const double err = sf.planetCentreValid
                            ? (sf.planetCentreCamera - truth.planetCentreCamera).norm()
@@ -118,6 +120,8 @@ void evaluateScene(const std::string& scene, bool quick, double singleMarkerMs, 
       {"frames", frames},
       {"ms", r3(median(ms))},
       {"ms_p95", r3(percentile(ms, 0.95))},
+      {"detect_ms", r3(median(detectMs))},
+      {"track_ms", r3(median(trackMs))},
       {"half_visible_frames", halfVisible},
       {"pose_when_half_visible", r3(fraction(halfVisibleWithPose, halfVisible))},
       {"hidden_still_frames", hiddenStill},

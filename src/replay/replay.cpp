@@ -115,6 +115,7 @@ FrameStepper::FrameStepper(const tracking::CameraCalibration& calib, terrain::Te
       throw core::InputError(m->layout->source + ": its markers are " + m->layout->family +
                              ", the detector reads " + dc.family);
     for (int id : m->layout->ids()) dc.ids.push_back(id);
+    dc.sets.push_back(m->layout->ids());
   }
   family_ = dc.family;
   const core::Chart& chart = planet_.chart();

@@ -13,6 +13,8 @@ namespace {
 constexpr double kSameSeedAngle = 2.0 * M_PI / 180.0;
 // An alternative must be turned at least this far from the best to count as its flip.
 constexpr double kFlipAngle = 10.0 * M_PI / 180.0;
+// Seeds come from this many of the largest markers in the image.
+constexpr std::size_t kSeedMarkers = 3;
 
 struct Correspondences {
   std::vector<cv::Point3d> object;  // body frame
@@ -50,6 +52,25 @@ double polish(const Correspondences& c, const CameraCalibration& calib, Pose& po
   return e;
 }
 
+double imageArea(const Detection& d) {
+  double a = 0;
+  for (std::size_t k = 0; k < 4; ++k) a += d.corners[k].cross(d.corners[(k + 1) % 4]);
+  return 0.5 * std::abs(a);
+}
+
+double reprojectionRms(const Correspondences& c, const CameraCalibration& calib, const Pose& p) {
+  if (!p.finite() || p.t.z() <= 0) return std::numeric_limits<double>::infinity();
+  std::vector<cv::Point2d> projected;
+  cv::projectPoints(c.object, rvecOf(p), cv::Vec3d(p.t.x(), p.t.y(), p.t.z()), cv::Mat(calib.K),
+                    calib.distortion, projected);
+  double sum = 0;
+  for (std::size_t k = 0; k < projected.size(); ++k) {
+    const cv::Point2d d = projected[k] - c.image[k];
+    sum += d.dot(d);
+  }
+  return std::sqrt(sum / double(projected.size()));
+}
+
 }  // namespace
 
 BodyPoseResult solveBodyPose(const MarkerLayout& layout, std::span<const Detection> detections,
@@ -84,9 +105,15 @@ BodyPoseResult solveBodyPose(const MarkerLayout& layout, std::span<const Detecti
     }
   }
 
-  // Seeds from every marker's own candidates, carried to the body frame, without repeats.
+  // Seeds from the largest markers' own candidates (the best measured), carried to the body
+  // frame, without repeats.
+  std::vector<const Detection*> bySize = used;
+  std::stable_sort(bySize.begin(), bySize.end(), [](const Detection* a, const Detection* b) {
+    return imageArea(*a) > imageArea(*b);
+  });
+  bySize.resize(std::min<std::size_t>(bySize.size(), kSeedMarkers));
   std::vector<Pose> seeds;
-  for (const Detection* d : used) {
+  for (const Detection* d : bySize) {
     const LayoutMarker& m = *layout.find(d->id);
     const PoseCandidates c = solveMarkerPose(d->corners, m.edge(), calibration);
     const Pose bodyInMarker = m.inBody().inverse();
@@ -99,9 +126,23 @@ BodyPoseResult solveBodyPose(const MarkerLayout& layout, std::span<const Detecti
     }
   }
   std::vector<std::pair<double, Pose>> scored;
-  for (Pose s : seeds) {
-    const double e = used.size() == 1 ? 0.0 : polish(all, calibration, s);
-    if (std::isfinite(e)) scored.emplace_back(e, s);
+  if (used.size() > 1) {
+    // Every seed scored as it is over all corners; the best and its best turned-away rival
+    // polished (the other seeds are near one of the two, or worse than both).
+    std::vector<std::pair<double, Pose>> raw;
+    for (const Pose& p : seeds) {
+      const double e = reprojectionRms(all, calibration, p);
+      if (std::isfinite(e)) raw.emplace_back(e, p);
+    }
+    std::stable_sort(raw.begin(), raw.end(),
+                     [](const auto& a, const auto& b) { return a.first < b.first; });
+    for (std::size_t i = 0; i < raw.size(); ++i) {
+      if (i > 0 && rotationAngle(raw[i].second.R, raw[0].second.R) <= kFlipAngle) continue;
+      Pose p = raw[i].second;
+      const double e = polish(all, calibration, p);
+      if (std::isfinite(e)) scored.emplace_back(e, p);
+      if (i > 0) break;
+    }
   }
   if (used.size() == 1) {
     // One marker: its own polished candidates and their errors are the answer.

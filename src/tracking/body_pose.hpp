@@ -2,13 +2,14 @@
 // The pose of a rigid set of markers (marker_layout.hpp: the planet board, a tool solid) from
 // every visible marker's corners together.
 //
-// Seeds: each visible marker's planar candidates (solveMarkerPose: IPPE_SQUARE + SQPNP),
-// carried to the body's frame through the marker's place in the layout. Each distinct seed is
-// polished by Levenberg-Marquardt over all visible corners and scored by the reprojection RMS of
-// all of them. With several markers seen at different places the wrong planar candidate of one
-// marker reprojects the others badly, so the flip is decided by the whole board; when the best
-// seed and the best seed turned more than kFlipAngle away from it score within `ambiguityRatio`,
-// the one nearer the previous pose wins (continuity), as for a single marker (pose.hpp).
+// Seeds: the planar candidates (solveMarkerPose: IPPE_SQUARE + SQPNP) of the three largest
+// markers in the image, carried to the body's frame through each marker's place in the layout,
+// scored by the reprojection RMS of every visible corner. The best seed, and the best one turned
+// more than 10 degrees away from it (its flip), are polished by Levenberg-Marquardt over all
+// corners. With several markers seen at different places the wrong planar candidate of one
+// marker reprojects the others badly, so the flip is decided by the whole board; when the two
+// polished poses score within `ambiguityRatio`, the one nearer the previous pose wins
+// (continuity), as for a single marker (pose.hpp).
 #include <span>
 #include <string>
 #include <vector>

@@ -52,6 +52,9 @@ void DetectorConfig::validate() const {
                            " is not in 0..255");
   if (searchEvery < 1 || searchEvery > 1000)
     throw core::InputError("search every = " + std::to_string(searchEvery) + " is not in 1..1000");
+  if (setSearchEvery < 1 || setSearchEvery > 1000)
+    throw core::InputError("set search every = " + std::to_string(setSearchEvery) +
+                           " is not in 1..1000");
   if (!std::isfinite(regionMargin) || regionMargin < 0.1 || regionMargin > 5)
     throw core::InputError("region margin = " + std::to_string(regionMargin) +
                            " is not in [0.1, 5]");

@@ -56,6 +56,12 @@ struct DetectorConfig {
   // search finds is refined at full resolution in its box. Off: every frame is searched whole.
   bool regions = true;
   int searchEvery = 2;
+  // Rigid sets of ids (a planet board, a tool cube): one of them counts as missing only when
+  // none of its ids is found; while some are, the rest are searched for every setSearchEvery
+  // frames (markers of a set that never face the camera together would otherwise keep the
+  // whole-frame search running every searchEvery frames).
+  std::vector<std::vector<int>> sets;
+  int setSearchEvery = 8;
   double regionMargin = 0.3;  // box margin, as a fraction of the marker's size in the image
 
   // Throws core::InputError naming the bad field.

@@ -53,12 +53,29 @@ class RegionDetector final : public Detector {
       boxes.back() |= box(d, frame);
     }
     for (const auto& b : mergeBoxes(boxes)) addFrom(grey, b, found);
-    // 2. The whole frame when something expected is missing.
-    bool missing = config_.ids.empty() ? true : false;
-    for (int id : config_.ids)
-      if (std::none_of(found.begin(), found.end(), [&](const Detection& d) { return d.id == id; }))
-        missing = true;
-    if (missing && frameNo_ - lastSearch_ >= config_.searchEvery) {
+    // 2. The whole frame when something expected is missing: an id outside the rigid sets, or
+    // a whole set (every `searchEvery` frames); a set with some markers in view is searched for
+    // the rest only every `setSearchEvery` frames (a face turning into view, a hand lifting).
+    auto seen = [&](int id) {
+      return std::any_of(found.begin(), found.end(),
+                         [&](const Detection& d) { return d.id == id; });
+    };
+    bool missing = config_.ids.empty(), partial = false;
+    for (int id : config_.ids) {
+      const auto set = std::find_if(config_.sets.begin(), config_.sets.end(), [&](const auto& g) {
+        return std::find(g.begin(), g.end(), id) != g.end();
+      });
+      if (set == config_.sets.end()) {
+        missing |= !seen(id);
+      } else if (!seen(id)) {
+        if (std::any_of(set->begin(), set->end(), seen))
+          partial = true;
+        else
+          missing = true;
+      }
+    }
+    const int since = frameNo_ - lastSearch_;
+    if ((missing && since >= config_.searchEvery) || (partial && since >= config_.setSearchEvery)) {
       lastSearch_ = frameNo_;
       std::vector<cv::Rect> fresh;
       for (const auto& d : finder_->detect(grey)) {
