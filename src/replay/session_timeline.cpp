@@ -9,6 +9,7 @@
 #include <functional>
 #include <iterator>
 #include <map>
+#include <memory>
 #include <numbers>
 #include <stdexcept>
 #include <type_traits>
@@ -17,6 +18,7 @@
 #include "core/grid.hpp"
 #include "core/input_error.hpp"
 #include "io/stroke_journal.hpp"
+#include "tracking/marker_layout.hpp"
 
 namespace ps::replay {
 
@@ -152,6 +154,15 @@ SessionStart parseStart(const nlohmann::json& j, const std::filesystem::path& pa
   s.tipOffset = {tip[0], tip[1], tip[2]};
   s.touchDistance = read<double>(m, "touch_m", path, line);
   s.filter = read<bool>(m, "filter", path, line);
+  for (const auto& [key, layout] : {std::pair{"board", &s.board}, {"tool_layout", &s.toolLayout}})
+    if (m.contains(key)) {
+      try {
+        *layout = std::make_shared<const tracking::MarkerLayout>(
+            tracking::parseMarkerLayout(m[key], std::string("markers.") + key));
+      } catch (const core::InputError& e) {
+        fail(path, line, e.what());
+      }
+    }
   s.settle = read<bool>(j, "settle", path, line);
   s.undoSteps = read<std::size_t>(j, "undo_steps", path, line);
   if (!(s.fps > 0 && s.fps <= 1000))
@@ -167,31 +178,34 @@ SessionStart parseStart(const nlohmann::json& j, const std::filesystem::path& pa
 }
 
 nlohmann::json toJson(const SessionStart& s) {
-  return {{"planet",
-           {{"file", s.planetFile},
-            {"grid", s.gridSide},
-            {"seed", s.seed},
-            {"radius_m", s.radius},
-            {"heights_crc32", s.heightsCrc}}},
-          {"calibration",
-           {{"file", s.calibrationFile},
-            {"width", s.imageSize.width},
-            {"height", s.imageSize.height},
-            {"K", s.K},
-            {"distortion", s.distortion}}},
-          {"fps", s.fps},
-          {"markers",
-           {{"family", s.family},
-            {"decimate", s.decimate},
-            {"planet_id", s.planetId},
-            {"planet_marker_m", s.planetMarkerSize},
-            {"tool_id", s.toolId},
-            {"tool_marker_m", s.toolMarkerSize},
-            {"tip_m", {s.tipOffset.x(), s.tipOffset.y(), s.tipOffset.z()}},
-            {"touch_m", s.touchDistance},
-            {"filter", s.filter}}},
-          {"settle", s.settle},
-          {"undo_steps", s.undoSteps}};
+  nlohmann::json j = {{"planet",
+                       {{"file", s.planetFile},
+                        {"grid", s.gridSide},
+                        {"seed", s.seed},
+                        {"radius_m", s.radius},
+                        {"heights_crc32", s.heightsCrc}}},
+                      {"calibration",
+                       {{"file", s.calibrationFile},
+                        {"width", s.imageSize.width},
+                        {"height", s.imageSize.height},
+                        {"K", s.K},
+                        {"distortion", s.distortion}}},
+                      {"fps", s.fps},
+                      {"markers",
+                       {{"family", s.family},
+                        {"decimate", s.decimate},
+                        {"planet_id", s.planetId},
+                        {"planet_marker_m", s.planetMarkerSize},
+                        {"tool_id", s.toolId},
+                        {"tool_marker_m", s.toolMarkerSize},
+                        {"tip_m", {s.tipOffset.x(), s.tipOffset.y(), s.tipOffset.z()}},
+                        {"touch_m", s.touchDistance},
+                        {"filter", s.filter}}},
+                      {"settle", s.settle},
+                      {"undo_steps", s.undoSteps}};
+  if (s.board) j["markers"]["board"] = tracking::toJson(*s.board);
+  if (s.toolLayout) j["markers"]["tool_layout"] = tracking::toJson(*s.toolLayout);
+  return j;
 }
 
 }  // namespace
@@ -276,6 +290,8 @@ SessionStart SessionStart::of(const terrain::Terrain& planet, const std::string&
   s.toolId = o.scene.tool.id;
   s.toolMarkerSize = o.scene.tool.size;
   s.tipOffset = o.scene.tipOffset;
+  s.board = o.scene.planet.layout;
+  s.toolLayout = o.scene.tool.layout;
   s.touchDistance = o.scene.touchDistance;
   s.filter = o.scene.planet.filter && o.scene.tool.filter && o.scene.filterTip;
   s.settle = o.settle;
@@ -290,6 +306,8 @@ void SessionStart::applyTo(ReplayOptions& o) const {
   o.scene.planet.size = planetMarkerSize;
   o.scene.tool.id = toolId;
   o.scene.tool.size = toolMarkerSize;
+  o.scene.useBoard(board);
+  o.scene.useToolLayout(toolLayout);
   o.scene.tipOffset = tipOffset;
   o.scene.touchDistance = touchDistance;
   o.scene.planet.filter = o.scene.tool.filter = o.scene.filterTip = filter;

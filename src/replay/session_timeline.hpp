@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <filesystem>
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
@@ -60,6 +61,9 @@ struct SessionStart {
   double planetMarkerSize = 0.08, toolMarkerSize = 0.05, touchDistance = 0.004;
   Eigen::Vector3d tipOffset = Eigen::Vector3d::Zero();
   bool filter = true, settle = true;
+  // The planet board and the tool solid the session tracked (null: the single markers), kept
+  // whole in the sidecar so that the recording replays with them.
+  std::shared_ptr<const tracking::MarkerLayout> board, toolLayout;
   std::size_t undoSteps = 0;  // strokes undoable at the start (made before the recording)
 
   // `calib` must be the one the stepper uses (scaled to the frames).

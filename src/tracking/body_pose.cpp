@@ -71,6 +71,30 @@ double reprojectionRms(const Correspondences& c, const CameraCalibration& calib,
   return std::sqrt(sum / double(projected.size()));
 }
 
+// How many of the layout's markers a body pose says the camera should have read (facing it
+// within 60 degrees, every corner 4 px inside the image) that were not found. A planar flip
+// turns the body's other faces toward or away from the camera, so this tells the two apart
+// where their corners cannot; 0 without the image's size.
+int unreadButVisible(const MarkerLayout& layout, const Pose& body,
+                     const std::vector<const Detection*>& used, const CameraCalibration& calib) {
+  if (calib.imageSize.width <= 0 || calib.imageSize.height <= 0) return 0;
+  int missed = 0;
+  const auto px = projectLayout(layout, body, calib);
+  for (std::size_t i = 0; i < layout.markers.size(); ++i) {
+    const LayoutMarker& m = layout.markers[i];
+    if (std::any_of(used.begin(), used.end(), [&](const Detection* d) { return d->id == m.id; }))
+      continue;
+    const Pose inCamera = body * m.inBody();
+    if (inCamera.R.col(2).dot(-inCamera.t.normalized()) < std::cos(60.0 * M_PI / 180.0)) continue;
+    bool inside = true;
+    for (const auto& p : px[i])
+      inside &= p.x >= 4 && p.y >= 4 && p.x <= calib.imageSize.width - 5 &&
+                p.y <= calib.imageSize.height - 5;
+    missed += inside ? 1 : 0;
+  }
+  return missed;
+}
+
 }  // namespace
 
 BodyPoseResult solveBodyPose(const MarkerLayout& layout, std::span<const Detection> detections,
@@ -167,11 +191,20 @@ BodyPoseResult solveBodyPose(const MarkerLayout& layout, std::span<const Detecti
     }
   out.ratio = alt < scored.size() ? scored[alt].first / std::max(scored[0].first, 1e-12)
                                   : std::numeric_limits<double>::infinity();
-  if (out.ratio < ambiguityRatio && previous) {
-    out.byContinuity = true;
-    if (rotationAngle(scored[alt].second.R, previous->R) <
-        rotationAngle(scored[0].second.R, previous->R))
-      pick = alt;
+  if (out.ratio < ambiguityRatio) {
+    // Ambiguous: the candidate that explains which other markers were not read, else the one
+    // nearer the previous pose.
+    const int missedBest = unreadButVisible(layout, scored[0].second, used, calibration);
+    const int missedAlt = unreadButVisible(layout, scored[alt].second, used, calibration);
+    if (missedBest != missedAlt) {
+      out.byVisibility = true;
+      if (missedAlt < missedBest) pick = alt;
+    } else if (previous) {
+      out.byContinuity = true;
+      if (rotationAngle(scored[alt].second.R, previous->R) <
+          rotationAngle(scored[0].second.R, previous->R))
+        pick = alt;
+    }
   }
   out.valid = true;
   out.pose = scored[pick].second;

@@ -7,9 +7,11 @@
 // scored by the reprojection RMS of every visible corner. The best seed, and the best one turned
 // more than 10 degrees away from it (its flip), are polished by Levenberg-Marquardt over all
 // corners. With several markers seen at different places the wrong planar candidate of one
-// marker reprojects the others badly, so the flip is decided by the whole board; when the two
-// polished poses score within `ambiguityRatio`, the one nearer the previous pose wins
-// (continuity), as for a single marker (pose.hpp).
+// marker reprojects the others badly, so the flip is decided by the whole board. When the two
+// polished poses score within `ambiguityRatio` (one face of a solid seen alone), the one that
+// leaves fewer of the layout's markers unread though they would face the camera in the image
+// wins; if that ties, the one nearer the previous pose (continuity), as for a single marker
+// (pose.hpp).
 #include <span>
 #include <string>
 #include <vector>
@@ -27,8 +29,9 @@ struct BodyPoseResult {
   double rms = 0;    // reprojection RMS over every used corner (px)
   double ratio = 0;  // the best turned-away alternative's RMS / rms (inf: none)
   bool byContinuity = false;
-  std::vector<int> ids;  // markers whose corners gave the pose, ascending
-  std::string note;      // why some detections were not used
+  bool byVisibility = false;  // decided by which other markers each candidate says were in view
+  std::vector<int> ids;       // markers whose corners gave the pose, ascending
+  std::string note;           // why some detections were not used
 };
 
 // `detections` may hold ids outside the layout (ignored). An id seen more than once is not used
