@@ -13,6 +13,7 @@
 
 #include "app/build_paths.hpp"
 #include "core/input_error.hpp"
+#include "error_of.hpp"
 #include "fresh_dir.hpp"
 #include "replay/session_timeline.hpp"
 #include "tracking/body_pose.hpp"
@@ -22,6 +23,7 @@
 #include "tracking/synth.hpp"
 
 using namespace ps;
+using testkit::errorOf;
 using tracking::MarkerLayout;
 using tracking::Pose;
 
@@ -31,15 +33,6 @@ const std::filesystem::path kRoot = ps::app::sourceDir();
 // AprilTag's corners on sharp synthetic markers are within 0.07-0.10 px (field notes); twice
 // that here.
 constexpr double kCornerNoisePx = 0.2;
-
-std::string errorOf(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const core::InputError& e) {
-    return e.what();
-  }
-  return "";
-}
 
 std::string parseError(const std::string& text) {
   return errorOf(

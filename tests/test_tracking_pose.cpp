@@ -11,35 +11,22 @@
 
 #include "app/build_paths.hpp"
 #include "core/input_error.hpp"
+#include "error_of.hpp"
+#include "fresh_dir.hpp"
 #include "tracking/calibration.hpp"
 #include "tracking/filter.hpp"
 #include "tracking/pose.hpp"
 #include "tracking/tracker.hpp"
 
 using namespace ps;
+using testkit::errorOf;
 using tracking::CameraCalibration;
 using tracking::Pose;
 
 namespace {
 
-std::filesystem::path tempDir() {
-  auto d =
-      std::filesystem::temp_directory_path() / ("ps_tracking_pose_" + std::to_string(::getpid()));
-  std::filesystem::create_directories(d);
-  return d;
-}
-
 void writeText(const std::filesystem::path& p, const std::string& text) {
   std::ofstream(p) << text;
-}
-
-std::string errorOf(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const core::InputError& e) {
-    return e.what();
-  }
-  return "";
 }
 
 const std::string kK =
@@ -60,7 +47,7 @@ tracking::Detection detectionOf(const Pose& p, double size, const CameraCalibrat
 }  // namespace
 
 TEST(TrackingCalibration, ReadsBothDistortionShapesAndMissingSizes) {
-  const auto dir = tempDir();
+  const auto dir = testkit::freshDir("tracking_pose");
   writeText(dir / "a.yml", "%YAML:1.0\n---\nimage_width: 640\nimage_height: 480\n" + kK +
                                "distortion_coefficients: !!opencv-matrix\n   rows: 1\n   cols: 5\n"
                                "   dt: d\n   data: [ 0.1, -0.2, 0.001, 0.002, 0.05 ]\n");
@@ -97,7 +84,7 @@ TEST(TrackingCalibration, ReadsBothDistortionShapesAndMissingSizes) {
 }
 
 TEST(TrackingCalibration, BadFilesNameTheFile) {
-  const auto dir = tempDir();
+  const auto dir = testkit::freshDir("tracking_pose");
   const std::string d5 =
       "distortion_coefficients: !!opencv-matrix\n   rows: 1\n   cols: 5\n   dt: d\n"
       "   data: [ 0., 0., 0., 0., 0. ]\n";

@@ -9,6 +9,8 @@
 #include <sstream>
 
 #include "core/input_error.hpp"
+#include "error_of.hpp"
+#include "fresh_dir.hpp"
 #include "replay/replay.hpp"
 #include "short_scene.hpp"
 #include "test_terrains.hpp"
@@ -16,26 +18,7 @@
 #include "tracking/video.hpp"
 
 using namespace ps;
-
-namespace {
-
-std::filesystem::path tempDir() {
-  auto d =
-      std::filesystem::temp_directory_path() / ("ps_tracking_replay_" + std::to_string(::getpid()));
-  std::filesystem::create_directories(d);
-  return d;
-}
-
-std::string errorOf(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const core::InputError& e) {
-    return e.what();
-  }
-  return "";
-}
-
-}  // namespace
+using testkit::errorOf;
 
 TEST(TrackingSynth, RenderingIsDeterministicAndFfv1IsLossless) {
   auto script = tracking::builtinScene("short");
@@ -116,7 +99,7 @@ TEST(TrackingReplay, TwoReplaysAreBitIdenticalAndSculpt) {
 }
 
 TEST(TrackingReplay, BadInputIsNamedAndPartialVideosReplayWhatTheyHold) {
-  const auto dir = tempDir();
+  const auto dir = testkit::freshDir("tracking_replay");
   EXPECT_NE(
       errorOf([&] { tracking::FrameSource s(dir / "nope.mkv"); }).find("nope.mkv: no such file"),
       std::string::npos);

@@ -105,8 +105,9 @@ const CommandRegistration kSynth([](CLI::App& root, CLI::App*& sub) -> CommandAc
   auto a = std::make_shared<SynthArgs>();
   sub = root.add_subcommand("synth",
                             "Render a synthetic marker video (lossless FFV1) with ground truth");
-  sub->add_option("scene", a->scene,
-                  "Built-in scene (demo, sweep, still, short, tilt) or JSON script")
+  std::string names;
+  for (const auto& n : tracking::builtinSceneNames()) names += (names.empty() ? "" : ", ") + n;
+  sub->add_option("scene", a->scene, "Built-in scene (" + names + ") or JSON script")
       ->capture_default_str();
   sub->add_option("--out", a->out, "Output video (.mkv)")->required();
   sub->add_option("--truth", a->truth, "Ground-truth JSON lines (default: VIDEO.truth.jsonl)");

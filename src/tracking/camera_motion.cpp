@@ -8,6 +8,7 @@
 #include <string>
 
 #include "core/input_error.hpp"
+#include "tracking/detector.hpp"
 
 namespace ps::tracking {
 
@@ -34,13 +35,7 @@ void CameraMotionJudge::reset() {
 }
 
 cv::Mat CameraMotionJudge::toWorkingGrey(const cv::Mat& image) const {
-  cv::Mat grey;
-  if (image.channels() == 3)
-    cv::cvtColor(image, grey, cv::COLOR_BGR2GRAY);
-  else if (image.channels() == 4)
-    cv::cvtColor(image, grey, cv::COLOR_BGRA2GRAY);
-  else
-    grey = image;
+  const cv::Mat grey = toGrey(image);  // the detector's conversion (and its refusals)
   if (config_.downscale == 1) return grey.clone();
   cv::Mat small;
   cv::resize(grey, small, cv::Size(), 1.0 / config_.downscale, 1.0 / config_.downscale,

@@ -324,43 +324,45 @@ SynthScript cubeSpin(const std::filesystem::path& root) {
 
 }  // namespace
 
+namespace {
+
+// Every built-in scene by name, in the order `synth --help` lists them.
+using SceneFactory = SynthScript (*)(const std::filesystem::path& root);
+const std::vector<std::pair<std::string, SceneFactory>>& scenes() {
+  static const std::vector<std::pair<std::string, SceneFactory>> all = {
+      {"demo", [](const std::filesystem::path&) { return demo(); }},
+      {"sweep", [](const std::filesystem::path&) { return sweep(); }},
+      {"tilt", [](const std::filesystem::path&) { return tilt(); }},
+      {"near", [](const std::filesystem::path&) { return near(); }},
+      {"still", [](const std::filesystem::path&) { return still(); }},
+      {"short", [](const std::filesystem::path&) { return shortScene(); }},
+      {"board-demo", boardDemo},
+      {"board-sweep", boardSweep},
+      {"board-hand", boardHand},
+      {"board-hidden", boardHidden},
+      {"cube-spin", cubeSpin}};
+  return all;
+}
+
+}  // namespace
+
 std::vector<std::string> builtinSceneNames() {
-  return {"demo",       "sweep",       "tilt",       "near",         "still",    "short",
-          "board-demo", "board-sweep", "board-hand", "board-hidden", "cube-spin"};
+  std::vector<std::string> names;
+  for (const auto& [name, make] : scenes()) names.push_back(name);
+  return names;
 }
 
 SynthScript builtinScene(const std::string& name, const std::filesystem::path& root) {
-  SynthScript s;
-  if (name == "demo")
-    s = demo();
-  else if (name == "sweep")
-    s = sweep();
-  else if (name == "tilt")
-    s = tilt();
-  else if (name == "near")
-    s = near();
-  else if (name == "still")
-    s = still();
-  else if (name == "short")
-    s = shortScene();
-  else if (name == "board-demo")
-    s = boardDemo(root);
-  else if (name == "board-sweep")
-    s = boardSweep(root);
-  else if (name == "board-hand")
-    s = boardHand(root);
-  else if (name == "board-hidden")
-    s = boardHidden(root);
-  else if (name == "cube-spin")
-    s = cubeSpin(root);
-  else {
-    std::string names;
-    for (const auto& n : builtinSceneNames()) names += (names.empty() ? "" : ", ") + n;
-    throw core::InputError("unknown synthetic scene '" + name + "' (built in: " + names +
-                           "; or a JSON script file)");
-  }
-  s.validate();
-  return s;
+  for (const auto& [known, make] : scenes())
+    if (known == name) {
+      SynthScript s = make(root);
+      s.validate();
+      return s;
+    }
+  std::string names;
+  for (const auto& n : builtinSceneNames()) names += (names.empty() ? "" : ", ") + n;
+  throw core::InputError("unknown synthetic scene '" + name + "' (built in: " + names +
+                         "; or a JSON script file)");
 }
 
 }  // namespace ps::tracking

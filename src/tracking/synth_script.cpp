@@ -31,6 +31,31 @@ std::shared_ptr<const MarkerLayout> layoutOf(const nlohmann::json& j, const std:
   throw core::InputError(field + " is neither a layout file name nor a layout object");
 }
 
+// The keys' fields as the script names them ("group" "" : at the key's top level), in one list
+// for reading and writing.
+struct KeyField {
+  const char* group;
+  const char* name;
+  double SynthKey::*member;
+};
+constexpr KeyField kKeyFields[] = {{"camera", "distance", &SynthKey::camDistance},
+                                   {"camera", "elevation", &SynthKey::camElevationDeg},
+                                   {"camera", "azimuth", &SynthKey::camAzimuthDeg},
+                                   {"camera", "roll", &SynthKey::camRollDeg},
+                                   {"tip", "lat", &SynthKey::tipLatDeg},
+                                   {"tip", "lon", &SynthKey::tipLonDeg},
+                                   {"tip", "height_mm", &SynthKey::tipHeightMm},
+                                   {"tool", "tilt", &SynthKey::toolTiltDeg},
+                                   {"tool", "turn", &SynthKey::toolTurnDeg},
+                                   {"", "blur", &SynthKey::blur},
+                                   {"", "noise", &SynthKey::noise},
+                                   {"", "gain", &SynthKey::gain},
+                                   {"", "occlusion", &SynthKey::occlusion},
+                                   {"hand", "x", &SynthKey::handX},
+                                   {"hand", "y", &SynthKey::handY},
+                                   {"hand", "height", &SynthKey::handHeight},
+                                   {"hand", "radius", &SynthKey::handRadius}};
+
 }  // namespace
 
 Eigen::Vector3d SynthScript::planetCentre() const {
@@ -147,34 +172,11 @@ SynthScript parseSynthScript(const nlohmann::json& j, const std::string& source,
       SynthKey key = prev;
       if (!k.contains("frame")) throw core::InputError(at + " has no frame");
       key.frame = get(k, "frame", 0, at);
-      if (k.contains("camera")) {
-        const auto& c = k["camera"];
-        key.camDistance = get(c, "distance", key.camDistance, at + ".camera");
-        key.camElevationDeg = get(c, "elevation", key.camElevationDeg, at + ".camera");
-        key.camAzimuthDeg = get(c, "azimuth", key.camAzimuthDeg, at + ".camera");
-        key.camRollDeg = get(c, "roll", key.camRollDeg, at + ".camera");
-      }
-      if (k.contains("tip")) {
-        const auto& t = k["tip"];
-        key.tipLatDeg = get(t, "lat", key.tipLatDeg, at + ".tip");
-        key.tipLonDeg = get(t, "lon", key.tipLonDeg, at + ".tip");
-        key.tipHeightMm = get(t, "height_mm", key.tipHeightMm, at + ".tip");
-      }
-      if (k.contains("tool")) {
-        const auto& t = k["tool"];
-        key.toolTiltDeg = get(t, "tilt", key.toolTiltDeg, at + ".tool");
-        key.toolTurnDeg = get(t, "turn", key.toolTurnDeg, at + ".tool");
-      }
-      key.blur = get(k, "blur", key.blur, at);
-      key.noise = get(k, "noise", key.noise, at);
-      key.gain = get(k, "gain", key.gain, at);
-      key.occlusion = get(k, "occlusion", key.occlusion, at);
-      if (k.contains("hand")) {
-        const auto& h = k["hand"];
-        key.handX = get(h, "x", key.handX, at + ".hand");
-        key.handY = get(h, "y", key.handY, at + ".hand");
-        key.handHeight = get(h, "height", key.handHeight, at + ".hand");
-        key.handRadius = get(h, "radius", key.handRadius, at + ".hand");
+      for (const KeyField& field : kKeyFields) {
+        const bool nested = field.group[0] != '\0';
+        if (nested && !k.contains(field.group)) continue;
+        key.*field.member = get(nested ? k[field.group] : k, field.name, key.*field.member,
+                                nested ? at + "." + field.group : at);
       }
       s.keys.push_back(key);
       prev = key;
@@ -222,25 +224,19 @@ nlohmann::json toJson(const SynthScript& s) {
   if (s.board) j["board"] = toJson(*s.board);
   if (s.toolLayout) j["tool_layout"] = toJson(*s.toolLayout);
   nlohmann::json keys = nlohmann::json::array();
-  for (const auto& k : s.keys)
-    keys.push_back(
-        {{"frame", int(k.frame)},
-         {"camera",
-          {{"distance", k.camDistance},
-           {"elevation", k.camElevationDeg},
-           {"azimuth", k.camAzimuthDeg},
-           {"roll", k.camRollDeg}}},
-         {"tip", {{"lat", k.tipLatDeg}, {"lon", k.tipLonDeg}, {"height_mm", k.tipHeightMm}}},
-         {"tool", {{"tilt", k.toolTiltDeg}, {"turn", k.toolTurnDeg}}},
-         {"blur", k.blur},
-         {"noise", k.noise},
-         {"gain", k.gain},
-         {"occlusion", k.occlusion}});
   for (std::size_t i = 0; i < s.keys.size(); ++i) {
     const SynthKey& k = s.keys[i];
-    if (k.handRadius > 0 || (i > 0 && s.keys[i - 1].handRadius > 0))
-      keys[i]["hand"] = {
-          {"x", k.handX}, {"y", k.handY}, {"height", k.handHeight}, {"radius", k.handRadius}};
+    nlohmann::json key = {{"frame", int(k.frame)}};
+    // The hand only where one is (or was just before: its radius shrinking to 0 matters).
+    const bool hand = k.handRadius > 0 || (i > 0 && s.keys[i - 1].handRadius > 0);
+    for (const KeyField& field : kKeyFields) {
+      if (std::string(field.group) == "hand" && !hand) continue;
+      if (field.group[0] == '\0')
+        key[field.name] = k.*field.member;
+      else
+        key[field.group][field.name] = k.*field.member;
+    }
+    keys.push_back(key);
   }
   j["keys"] = keys;
   return j;
