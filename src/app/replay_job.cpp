@@ -98,6 +98,155 @@ cv::Mat closeup(const cv::Mat& before, const cv::Mat& after, cv::Rect box) {
   return both;
 }
 
+// What a replay runs with once a session sidecar (if any) has had its say.
+struct ReplayInputs {
+  std::optional<replay::SessionTimeline> timeline;
+  std::filesystem::path sidecar;
+  replay::ReplayOptions options;
+  std::filesystem::path planetFile;
+  int gridLevel = 0;
+  std::uint64_t seed = 0;
+};
+
+// The sidecar wins over the command line: it holds what the live session ran with.
+ReplayInputs resolveInputs(const ReplayJob& job) {
+  ReplayInputs in;
+  in.sidecar = job.session.empty() ? replay::sessionSidecarPath(job.video) : job.session;
+  if (!job.noSession && (!job.session.empty() || std::filesystem::exists(in.sidecar)))
+    in.timeline = replay::readSessionTimeline(in.sidecar);
+  in.options = job.options;
+  in.planetFile = job.planetFile;
+  in.gridLevel = job.gridLevel;
+  in.seed = job.seed;
+  if (!in.timeline) return in;
+  const replay::SessionStart& st = in.timeline->start;
+  st.applyTo(in.options);
+  const replay::SessionSettings& ss = in.timeline->settings;
+  in.options.tool = ss.tool;
+  in.options.brush = ss.brush;
+  in.options.displace = ss.displace;
+  in.options.pressDepth = ss.pressDepth;
+  in.options.scene.planetRadius = ss.planetRadius;
+  in.options.validate();
+  if (in.planetFile.empty() && !st.planetFile.empty()) {
+    in.planetFile = st.planetFile;
+    // Written relative to where `live` ran; a start planet lies beside the sidecar.
+    const auto beside = in.sidecar.parent_path() / in.planetFile.filename();
+    if (!std::filesystem::exists(in.planetFile) && std::filesystem::exists(beside))
+      in.planetFile = beside;
+    if (!std::filesystem::exists(in.planetFile))
+      throw core::InputError(in.sidecar.string() + ":1: the session started from the planet file " +
+                             st.planetFile + ", which is not there (nor beside the sidecar); " +
+                             "give it with --planet, or --no-session");
+  } else if (in.planetFile.empty()) {
+    in.gridLevel = core::GridSize::fromSide(st.gridSide).n();
+    in.seed = st.seed;
+  }
+  std::cerr << "replay: settings from the session sidecar " << in.sidecar.string() << " ("
+            << in.timeline->entries.size() << " changes, undos and redos)\n";
+  if (!job.givenOptions.empty()) {
+    std::string given;
+    for (const auto& o : job.givenOptions) given += (given.empty() ? "" : ", ") + o;
+    std::cerr << "replay: warning: " << given
+              << " ignored: the session sidecar records what the session ran with "
+                 "(--no-session to replay with the options instead)\n";
+  }
+  return in;
+}
+
+// The AR recorder the job asks for; without a GL context, pictures go on without the AR view and
+// `noRender` says why (a `--render` job fails instead).
+std::unique_ptr<ArRecorder> makeRecorder(const ReplayJob& job, std::string& noRender) {
+  if (!job.render && !job.pictures) return nullptr;
+  if (job.renderEvery < 1)
+    throw core::InputError("--render-every = " + std::to_string(job.renderEvery) +
+                           " must be at least 1");
+  ArRecorderSettings rs;
+  if (job.render) rs.frameDir = job.out / "ar";
+  rs.every = job.renderEvery;
+  rs.showcase = job.pictures;
+  try {
+    return std::make_unique<ArRecorder>(rs);
+  } catch (const std::runtime_error& e) {
+    if (job.render) throw;
+    noRender = e.what();  // pictures without the AR view; said in the summary
+    return nullptr;
+  }
+}
+
+// The sculpted planet as a 16-bit heightmap and a planet file; returns the heightmap's size.
+cv::Size writeHeightmapAndPlanet(const terrain::Terrain& planet, const std::filesystem::path& out) {
+  Progress p("heightmap");
+  const int hmH = std::min(planet.grid().m(), 4096), hmW = 2 * hmH;
+  io::writeHeightPng16(io::resampleEquirectangular(planet, hmW, hmH), out / "heightmap.png");
+  p.update(0.6);
+  io::savePlanet(planet, out / "planet.planet");
+  p.done((out / "heightmap.png").string() + ", planet.planet");
+  return {hmW, hmH};
+}
+
+void writeForcePlot(PlotSeries forceSeries, const std::filesystem::path& out) {
+  forceSeries.label = "largest force of the frame's 1 kHz ticks";
+  forceSeries.colour = seriesColour(3);
+  io::writePngAtomically(
+      drawPlots({PlotPanel{"Haptic force on the tool tip during the replay (paper 004 sand)",
+                           "time (s)",
+                           "force (N)",
+                           false,
+                           false,
+                           {forceSeries}}},
+                1100, 360),
+      out / "forces.png");
+}
+
+constexpr int kPictureW = 2048, kPictureH = 1024;
+
+// Relief previews before and after, the close-up of the largest change and a tessellated view of
+// it (with its measured screen error in the summary).
+void writeReliefPictures(const ReplayJob& job, const terrain::Terrain& planet,
+                         const std::vector<float>& before, const io::Raster& beforeRaster,
+                         nlohmann::json& summary, nlohmann::json& files) {
+  const std::filesystem::path& out = job.out;
+  Progress p("pictures");
+  const int w = kPictureW, h = kPictureH;
+  const double mpp = std::numbers::pi * planet.chart().radius() / h;
+  const cv::Mat after = io::reliefImage(io::resampleEquirectangular(planet, w, h), mpp);
+  const cv::Mat beforeImg = io::reliefImage(beforeRaster, mpp);
+  p.update(0.3);
+  cv::Mat small;
+  cv::resize(after, small, {1024, 512}, 0, 0, cv::INTER_AREA);
+  io::writePngAtomically(small, out / "relief.png");
+  cv::resize(beforeImg, small, {1024, 512}, 0, 0, cv::INTER_AREA);
+  io::writePngAtomically(small, out / "relief_before.png");
+  files.push_back("relief.png");
+  files.push_back("relief_before.png");
+  const Change change = findChange(planet, before, w, h);
+  int vu = 0, vv = planet.grid().side() / 2;
+  if (change.any) {
+    io::writePngAtomically(closeup(beforeImg, after, change.box), out / "closeup.png");
+    files.push_back("closeup.png");
+    vu = change.u, vv = change.v;
+    summary["largest_change_m"] = change.largest;
+  }
+  p.update(0.6);
+  const terrain::Camera cam = viewOf(planet, vu, vv);
+  terrain::Tessellator tess;
+  terrain::TessellationSettings ts;
+  ts.distMaxPx = job.distMaxPx;
+  ts.triangleBudget = job.triangleBudget;
+  const auto& mesh = tess.tessellate(planet, cam, ts);
+  const auto err = terrain::measureScreenError(planet, cam, mesh);
+  io::writePngAtomically(renderSnapshot(planet, mesh, cam, false), out / "view.png");
+  io::writePngAtomically(renderSnapshot(planet, mesh, cam, true), out / "view_wireframe.png");
+  files.push_back("view.png");
+  files.push_back("view_wireframe.png");
+  summary["view"] = {{"triangles", mesh.triangleCount()},
+                     {"dist_max_px", ts.distMaxPx},
+                     {"effective_dist_max_px", tess.stats().effectiveDistMaxPx},
+                     {"measured_max_screen_error_px", err.maxPx}};
+  p.done(std::to_string(mesh.triangleCount()) + " triangles in view");
+}
+
 }  // namespace
 
 nlohmann::json runReplayJob(const ReplayJob& job) {
@@ -106,79 +255,24 @@ nlohmann::json runReplayJob(const ReplayJob& job) {
   tracking::FrameSource source(job.video.string());
   const auto calib = tracking::loadCalibration(job.calibration);
   calib.forImageSize(source.size());  // refuses another aspect ratio, naming the file
-  std::optional<replay::SessionTimeline> timeline;
-  const std::filesystem::path sidecar =
-      job.session.empty() ? replay::sessionSidecarPath(job.video) : job.session;
-  if (!job.noSession && (!job.session.empty() || std::filesystem::exists(sidecar)))
-    timeline = replay::readSessionTimeline(sidecar);
-  replay::ReplayOptions options = job.options;
-  std::filesystem::path planetFile = job.planetFile;
-  int gridLevel = job.gridLevel;
-  std::uint64_t seed = job.seed;
-  if (timeline) {
-    // The sidecar wins: it holds what the live session ran with.
-    const replay::SessionStart& st = timeline->start;
-    st.applyTo(options);
-    const replay::SessionSettings& ss = timeline->settings;
-    options.tool = ss.tool;
-    options.brush = ss.brush;
-    options.displace = ss.displace;
-    options.pressDepth = ss.pressDepth;
-    options.scene.planetRadius = ss.planetRadius;
-    options.validate();
-    if (planetFile.empty() && !st.planetFile.empty()) {
-      planetFile = st.planetFile;
-      // Written relative to where `live` ran; a start planet lies beside the sidecar.
-      const auto beside = sidecar.parent_path() / planetFile.filename();
-      if (!std::filesystem::exists(planetFile) && std::filesystem::exists(beside))
-        planetFile = beside;
-      if (!std::filesystem::exists(planetFile))
-        throw core::InputError(sidecar.string() + ":1: the session started from the planet file " +
-                               st.planetFile + ", which is not there (nor beside the sidecar); " +
-                               "give it with --planet, or --no-session");
-    } else if (planetFile.empty()) {
-      gridLevel = core::GridSize::fromSide(st.gridSide).n();
-      seed = st.seed;
-    }
-    std::cerr << "replay: settings from the session sidecar " << sidecar.string() << " ("
-              << timeline->entries.size() << " changes, undos and redos)\n";
-    if (!job.givenOptions.empty()) {
-      std::string given;
-      for (const auto& o : job.givenOptions) given += (given.empty() ? "" : ", ") + o;
-      std::cerr << "replay: warning: " << given
-                << " ignored: the session sidecar records what the session ran with "
-                   "(--no-session to replay with the options instead)\n";
-    }
-  }
-  std::unique_ptr<terrain::Terrain> planet =
-      planetFile.empty() ? makeDefaultPlanet(gridLevel, seed) : io::loadPlanet(planetFile);
+  ReplayInputs in = resolveInputs(job);
+  const std::optional<replay::SessionTimeline>& timeline = in.timeline;
+  const std::filesystem::path& sidecar = in.sidecar;
+  const replay::ReplayOptions& options = in.options;
+  std::unique_ptr<terrain::Terrain> planet = in.planetFile.empty()
+                                                 ? makeDefaultPlanet(in.gridLevel, in.seed)
+                                                 : io::loadPlanet(in.planetFile);
   // Another start planet or calibration would sculpt another planet: refused before any edit.
   if (timeline) replay::checkSessionStart(*timeline, *planet, calib.forImageSize(source.size()));
   const std::vector<float> before(planet->heights().begin(), planet->heights().end());
   // The pictures' "before" raster, resampled now rather than from a rebuilt terrain afterwards.
-  constexpr int kPictureW = 2048, kPictureH = 1024;
   const bool sphere = planet->chart().radius() > 0;
   io::Raster beforeRaster;
   if (job.pictures && sphere)
     beforeRaster = io::resampleEquirectangular(*planet, kPictureW, kPictureH);
 
-  std::unique_ptr<ArRecorder> recorder;
   std::string noRender;
-  if (job.render || job.pictures) {
-    if (job.renderEvery < 1)
-      throw core::InputError("--render-every = " + std::to_string(job.renderEvery) +
-                             " must be at least 1");
-    ArRecorderSettings rs;
-    if (job.render) rs.frameDir = job.out / "ar";
-    rs.every = job.renderEvery;
-    rs.showcase = job.pictures;
-    try {
-      recorder = std::make_unique<ArRecorder>(rs);
-    } catch (const std::runtime_error& e) {
-      if (job.render) throw;
-      noRender = e.what();  // pictures without the AR view; said in the summary
-    }
-  }
+  std::unique_ptr<ArRecorder> recorder = makeRecorder(job, noRender);
 
   const std::filesystem::path& out = job.out;
   std::filesystem::create_directories(out);
@@ -242,38 +336,31 @@ nlohmann::json runReplayJob(const ReplayJob& job) {
   nlohmann::json files = {"heightmap.png", "heightmap.png.json", "planet.planet", "log.jsonl",
                           "timings.jsonl"};
   if (job.forces) files.push_back("forces.csv");
-  int hmW = 0, hmH = 0;
-  {
-    Progress p("heightmap");
-    hmH = std::min(planet->grid().m(), 4096), hmW = 2 * hmH;
-    io::writeHeightPng16(io::resampleEquirectangular(*planet, hmW, hmH), out / "heightmap.png");
-    p.update(0.6);
-    io::savePlanet(*planet, out / "planet.planet");
-    p.done((out / "heightmap.png").string() + ", planet.planet");
-  }
-  nlohmann::json summary = {{"video", job.video.string()},
-                            {"calibration", job.calibration.string()},
-                            {"tool", replay::toString(options.tool)},
-                            {"session", timeline ? sidecar.string() : ""},
-                            {"session_changes", s.sessionChanges},
-                            {"frames", s.frames},
-                            {"announced_frames", s.announcedFrames},
-                            {"truncated", s.truncated},
-                            {"frames_with_planet", s.framesWithPlanet},
-                            {"frames_with_tool", s.framesWithTool},
-                            {"frames_with_tip", s.framesWithTip},
-                            {"touching_frames", s.touchingFrames},
-                            {"strokes", s.strokes},
-                            {"stamps", s.stamps},
-                            {"modified_vertices", s.modifiedVertices},
-                            {"skipped_frames", s.skippedFrames},
-                            {"settle_cell_steps", s.settleCellSteps},
-                            {"force_ticks", forceRows},
-                            {"peak_force_n", peakForce},
-                            {"warnings", s.warnings},
-                            {"grid", planet->grid().label()},
-                            {"radius_m", planet->chart().radius()},
-                            {"heightmap", {{"width", hmW}, {"height", hmH}}}};
+  const cv::Size heightmap = writeHeightmapAndPlanet(*planet, out);
+  nlohmann::json summary = {
+      {"video", job.video.string()},
+      {"calibration", job.calibration.string()},
+      {"tool", replay::toString(options.tool)},
+      {"session", timeline ? sidecar.string() : ""},
+      {"session_changes", s.sessionChanges},
+      {"frames", s.frames},
+      {"announced_frames", s.announcedFrames},
+      {"truncated", s.truncated},
+      {"frames_with_planet", s.framesWithPlanet},
+      {"frames_with_tool", s.framesWithTool},
+      {"frames_with_tip", s.framesWithTip},
+      {"touching_frames", s.touchingFrames},
+      {"strokes", s.strokes},
+      {"stamps", s.stamps},
+      {"modified_vertices", s.modifiedVertices},
+      {"skipped_frames", s.skippedFrames},
+      {"settle_cell_steps", s.settleCellSteps},
+      {"force_ticks", forceRows},
+      {"peak_force_n", peakForce},
+      {"warnings", s.warnings},
+      {"grid", planet->grid().label()},
+      {"radius_m", planet->chart().radius()},
+      {"heightmap", {{"width", heightmap.width}, {"height", heightmap.height}}}};
 
   if (recorder) {
     summary["renderer"] = recorder->renderer();
@@ -291,59 +378,11 @@ nlohmann::json runReplayJob(const ReplayJob& job) {
     std::cerr << "replay: no AR pictures: " << noRender << "\n";
   }
   if (job.pictures && job.forces && !forceSeries.x.empty()) {
-    forceSeries.label = "largest force of the frame's 1 kHz ticks";
-    forceSeries.colour = seriesColour(3);
-    io::writePngAtomically(
-        drawPlots({PlotPanel{"Haptic force on the tool tip during the replay (paper 004 sand)",
-                             "time (s)",
-                             "force (N)",
-                             false,
-                             false,
-                             {forceSeries}}},
-                  1100, 360),
-        out / "forces.png");
+    writeForcePlot(forceSeries, out);
     files.push_back("forces.png");
   }
-  if (job.pictures && sphere) {
-    Progress p("pictures");
-    const int w = kPictureW, h = kPictureH;
-    const double mpp = std::numbers::pi * planet->chart().radius() / h;
-    const cv::Mat after = io::reliefImage(io::resampleEquirectangular(*planet, w, h), mpp);
-    const cv::Mat beforeImg = io::reliefImage(beforeRaster, mpp);
-    p.update(0.3);
-    cv::Mat small;
-    cv::resize(after, small, {1024, 512}, 0, 0, cv::INTER_AREA);
-    io::writePngAtomically(small, out / "relief.png");
-    cv::resize(beforeImg, small, {1024, 512}, 0, 0, cv::INTER_AREA);
-    io::writePngAtomically(small, out / "relief_before.png");
-    files.push_back("relief.png");
-    files.push_back("relief_before.png");
-    const Change change = findChange(*planet, before, w, h);
-    int vu = 0, vv = planet->grid().side() / 2;
-    if (change.any) {
-      io::writePngAtomically(closeup(beforeImg, after, change.box), out / "closeup.png");
-      files.push_back("closeup.png");
-      vu = change.u, vv = change.v;
-      summary["largest_change_m"] = change.largest;
-    }
-    p.update(0.6);
-    const terrain::Camera cam = viewOf(*planet, vu, vv);
-    terrain::Tessellator tess;
-    terrain::TessellationSettings ts;
-    ts.distMaxPx = job.distMaxPx;
-    ts.triangleBudget = job.triangleBudget;
-    const auto& mesh = tess.tessellate(*planet, cam, ts);
-    const auto err = terrain::measureScreenError(*planet, cam, mesh);
-    io::writePngAtomically(renderSnapshot(*planet, mesh, cam, false), out / "view.png");
-    io::writePngAtomically(renderSnapshot(*planet, mesh, cam, true), out / "view_wireframe.png");
-    files.push_back("view.png");
-    files.push_back("view_wireframe.png");
-    summary["view"] = {{"triangles", mesh.triangleCount()},
-                       {"dist_max_px", ts.distMaxPx},
-                       {"effective_dist_max_px", tess.stats().effectiveDistMaxPx},
-                       {"measured_max_screen_error_px", err.maxPx}};
-    p.done(std::to_string(mesh.triangleCount()) + " triangles in view");
-  }
+  if (job.pictures && sphere)
+    writeReliefPictures(job, *planet, before, beforeRaster, summary, files);
   summary["files"] = files;
   std::ofstream(out / "summary.json") << summary.dump(2) << "\n";
   for (const auto& w : s.warnings) std::cerr << "replay: warning: " << w << "\n";
