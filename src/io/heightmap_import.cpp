@@ -89,34 +89,38 @@ long long defaultGridSide(ChartKind chart, int width, int height) {
   return (1LL << levelFor(cells)) + 1;
 }
 
-ImportResult importHeightImage(HeightImage img, const ImportOptions& o, const std::string& name) {
-  ImportResult res;
-  const int w = img.width, h = img.height;
-  const std::size_t n = img.values.size();
-  if (w <= 0 || h <= 0 || n != std::size_t(w) * std::size_t(h)) fail(name, "image has no pixels");
-  const double radius = o.radius           ? *o.radius
-                        : img.radiusMetres ? *img.radiusMetres
-                                           : kDefaultImportRadius;
-  if (o.chart == ChartKind::kLatLong && (!std::isfinite(radius) || radius <= 0)) {
-    fail(name, "radius " + num(radius) + " m must be positive and finite");
-  }
+namespace {
 
-  // 1. No-data: declared by the file (GDAL_NODATA, sidecar) or by the user.
-  std::optional<double> noData = img.noData;
-  std::string noDataSource = img.noDataSource;
+// Which pixels hold no data (declared by the file, e.g. GDAL_NODATA or a sidecar, or by the
+// user); any other non-finite pixel, every pixel missing, or holes under --nodata refuse are
+// refused naming the file.
+struct NoDataScan {
+  std::optional<double> value;
+  std::string source;
+  bool nan = false;  // NaN marks no data
+  std::vector<std::uint8_t> hole;
+  std::size_t holes = 0;
+};
+
+NoDataScan scanNoData(const HeightImage& img, const ImportOptions& o, const std::string& name) {
+  const int w = img.width;
+  const std::size_t n = img.values.size();
+  NoDataScan r;
+  r.value = img.noData;
+  r.source = img.noDataSource;
   if (o.noDataValue) {
-    noData = o.noDataValue;
-    noDataSource = "--nodata-value";
+    r.value = o.noDataValue;
+    r.source = "--nodata-value";
   }
-  const bool nanIsNoData = noData && std::isnan(*noData);
-  const float noDataF = noData && !nanIsNoData ? float(*noData) : 0.0f;
-  std::vector<std::uint8_t> hole(n, 0);
-  std::size_t holes = 0, nonFinite = 0, firstBad = n;
+  r.nan = r.value && std::isnan(*r.value);
+  const float noDataF = r.value && !r.nan ? float(*r.value) : 0.0f;
+  r.hole.assign(n, 0);
+  std::size_t nonFinite = 0, firstBad = n;
   for (std::size_t i = 0; i < n; ++i) {
     const float x = img.values[i];
-    if (noData && (nanIsNoData ? std::isnan(x) : x == noDataF)) {
-      hole[i] = 1;
-      ++holes;
+    if (r.value && (r.nan ? std::isnan(x) : x == noDataF)) {
+      r.hole[i] = 1;
+      ++r.holes;
     } else if (!std::isfinite(x)) {
       if (firstBad == n) firstBad = i;
       ++nonFinite;
@@ -133,29 +137,35 @@ ImportResult importHeightImage(HeightImage img, const ImportOptions& o, const st
              ": a height must be finite; if these mark missing data, say so with "
              "--nodata-value nan");
   }
-  res.noDataPixels = holes;
-  if (holes == n)
-    fail(name, "every pixel is no-data (value " + num(*noData) + ", " + noDataSource + ")");
-  if (holes > 0 && o.noData == NoDataPolicy::kRefuse) {
-    fail(name, std::to_string(holes) + " pixels are no-data (value " + num(*noData) + ", " +
-                   noDataSource +
+  if (r.holes == n)
+    fail(name, "every pixel is no-data (value " + num(*r.value) + ", " + r.source + ")");
+  if (r.holes > 0 && o.noData == NoDataPolicy::kRefuse) {
+    fail(name, std::to_string(r.holes) + " pixels are no-data (value " + num(*r.value) + ", " +
+                   r.source +
                    "); refused as asked (--nodata refuse); --nodata fill fills them from their "
                    "surroundings");
   }
+  return r;
+}
 
-  // 2. Stored values -> metres.
+// Stored values -> metres, in place (holes left alone): the user's scale and offset, a
+// PlanetSculpt PNG's own text chunks, or metres as stored. Returns {scale, offset}.
+std::pair<double, double> toMetres(HeightImage& img, const ImportOptions& o,
+                                   const std::vector<std::uint8_t>& hole, const std::string& name,
+                                   std::vector<std::string>& notes) {
+  const int w = img.width;
   double scale = 1.0, offset = 0.0;
   if (o.scale || o.offset) {
     scale = o.scale.value_or(1.0);
     offset = o.offset.value_or(0.0);
-    res.notes.push_back("heights: value x " + num(scale) + " + " + num(offset) + " m");
+    notes.push_back("heights: value x " + num(scale) + " + " + num(offset) + " m");
   } else if (img.value0Metres && img.value65535Metres && img.kind == "16-bit grey PNG") {
     offset = *img.value0Metres;
     scale = (*img.value65535Metres - *img.value0Metres) / 65535.0;
-    res.notes.push_back("heights: the PNG's PlanetSculpt text chunks map 0 to " + num(offset) +
-                        " m and 65535 to " + num(*img.value65535Metres) + " m");
+    notes.push_back("heights: the PNG's PlanetSculpt text chunks map 0 to " + num(offset) +
+                    " m and 65535 to " + num(*img.value65535Metres) + " m");
   } else {
-    res.notes.push_back(
+    notes.push_back(
         "heights: the stored values are taken as metres (scale 1, offset 0); "
         "--scale and --offset map them otherwise");
   }
@@ -164,7 +174,7 @@ ImportResult importHeightImage(HeightImage img, const ImportOptions& o, const st
                    " must be finite, scale non-zero");
   }
   std::vector<float>& v = img.values;
-  for (std::size_t i = 0; i < n; ++i) {
+  for (std::size_t i = 0; i < v.size(); ++i) {
     if (hole[i]) continue;
     const double m = double(v[i]) * scale + offset;
     if (!std::isfinite(float(m))) {
@@ -174,13 +184,143 @@ ImportResult importHeightImage(HeightImage img, const ImportOptions& o, const st
     }
     v[i] = float(m);
   }
+  return {scale, offset};
+}
+
+// The equirectangular image onto a lat-long grid: area-averaged first where the image is finer,
+// then bilinear; pole rows one point each.
+void resampleLatLong(const HeightImage& img, const ImportOptions& o, double radius,
+                     const core::GridSize& g, const std::string& name, std::vector<float>& heights,
+                     ImportResult& res, nlohmann::json& source) {
+  const int w = img.width, h = img.height, m = g.m();
+  const std::vector<float>& v = img.values;
+  double west = -180.0;
+  if (o.westLongitudeDeg) {
+    west = *o.westLongitudeDeg;
+  } else if (img.column0LongitudeDeg) {
+    west = *img.column0LongitudeDeg;
+  } else if (img.geo && img.geo->geographic) {
+    west = img.geo->originX;
+  }
+  if (!std::isfinite(west)) fail(name, "western longitude must be finite");
+  res.notes.push_back("equirectangular: column 0 starts at " + num(west) +
+                      " deg longitude, row 0 at 90 deg N");
+  // Area-average first where the image is finer than the grid, then bilinear.
+  std::vector<float> src = v;
+  int sw = w, sh = h;
+  if (w > m || h > m) {
+    sw = std::min(w, m);
+    sh = std::min(h, m);
+    cv::Mat in(h, w, CV_32F, const_cast<float*>(v.data())), out;  // read only
+    cv::resize(in, out, cv::Size(sw, sh), 0, 0, cv::INTER_AREA);
+    src.assign(out.begin<float>(), out.end<float>());
+  }
+  for (int gv = 1; gv < m; ++gv) {
+    const double lat = 180.0 * gv / m - 90.0;
+    const double y = (90.0 - lat) / 180.0 * sh - 0.5;
+    for (int gu = 0; gu < m; ++gu) {
+      const double lon = 360.0 * gu / m - 180.0;
+      const double x = (lon - west) / 360.0 * sw - 0.5;
+      heights[g.index(gu, gv)] = float(bilinear(src, sw, sh, x, y, true));
+    }
+    heights[g.index(m, gv)] = heights[g.index(0, gv)];
+  }
+  // Pole rows: one point each, the mean of the image's samples along the pole's edge.
+  for (const int gv : {0, m}) {
+    const double y = gv == 0 ? double(sh - 1) : 0.0;
+    double sum = 0;
+    for (int gu = 0; gu < m; ++gu) {
+      const double lon = 360.0 * gu / m - 180.0;
+      sum += bilinear(src, sw, sh, (lon - west) / 360.0 * sw - 0.5, y, true);
+    }
+    const float pole = float(sum / m);
+    for (int gu = 0; gu <= m; ++gu) heights[g.index(gu, gv)] = pole;
+  }
+  res.planet.chart = std::make_shared<core::LatLongChart>(g, radius);
+  res.notes.push_back("radius " + num(radius) + " m, " +
+                      (o.radius           ? "as given"
+                       : img.radiusMetres ? "from the file"
+                                          : "the default (--radius sets it)"));
+  source["column0_longitude_deg"] = west;
+}
+
+// A flat image onto a flat chart's grid (bilinear), its spacing from the user, the file's own
+// metadata or its GeoTIFF pixel scale.
+void resampleFlat(const HeightImage& img, const ImportOptions& o, const core::GridSize& g,
+                  const std::string& name, std::vector<float>& heights, ImportResult& res,
+                  nlohmann::json& source) {
+  const int w = img.width, h = img.height, m = g.m();
+  const std::vector<float>& v = img.values;
+  double sx = 1.0, sy = 1.0;
+  std::string from = "default 1 m per pixel (--spacing sets it)";
+  if (o.spacing) {
+    sx = sy = *o.spacing;
+    from = "--spacing";
+  } else if (img.pixelSpacingX && img.pixelSpacingY) {
+    sx = *img.pixelSpacingX;
+    sy = *img.pixelSpacingY;
+    from = "the file's own metadata";
+  } else if (img.geo) {
+    if (img.geo->geographic) {
+      // Degrees on the Earth: metres along a parallel shrink with cos(latitude).
+      constexpr double kEarthMean = 6371008.8;
+      const double latC = img.geo->originY - 0.5 * h * img.geo->pixelScaleY;
+      const double k = kEarthMean * std::numbers::pi / 180.0;
+      sx = img.geo->pixelScaleX * k * std::cos(latC * std::numbers::pi / 180.0);
+      sy = img.geo->pixelScaleY * k;
+      from = "the GeoTIFF's pixel scale in degrees, at latitude " + num(latC) +
+             " on the Earth's mean sphere";
+    } else {
+      sx = img.geo->pixelScaleX;
+      sy = img.geo->pixelScaleY;
+      from = "the GeoTIFF's pixel scale (taken as metres)";
+    }
+  }
+  if (!std::isfinite(sx) || sx <= 0 || !std::isfinite(sy) || sy <= 0) {
+    fail(name, "pixel spacing " + num(sx) + " x " + num(sy) + " m must be positive and finite");
+  }
+  res.notes.push_back("flat: " + num(sx) + " x " + num(sy) + " m between pixels, from " + from +
+                      "; image row 0 is the north (v = m) edge");
+  const double kx = w > 1 ? double(w - 1) / m : 0.0, ky = h > 1 ? double(h - 1) / m : 0.0;
+  for (int gv = 0; gv <= m; ++gv) {
+    for (int gu = 0; gu <= m; ++gu) {
+      heights[g.index(gu, gv)] = float(bilinear(v, w, h, gu * kx, (m - gv) * ky, false));
+    }
+  }
+  const double dx = w > 1 ? sx * kx : sx, dy = h > 1 ? sy * ky : sy;
+  res.planet.chart = std::make_shared<core::FlatChart>(g, dx, dy);
+  source["pixel_spacing_m"] = {sx, sy};
+}
+
+}  // namespace
+
+ImportResult importHeightImage(HeightImage img, const ImportOptions& o, const std::string& name) {
+  ImportResult res;
+  const int w = img.width, h = img.height;
+  const std::size_t n = img.values.size();
+  if (w <= 0 || h <= 0 || n != std::size_t(w) * std::size_t(h)) fail(name, "image has no pixels");
+  const double radius = o.radius           ? *o.radius
+                        : img.radiusMetres ? *img.radiusMetres
+                                           : kDefaultImportRadius;
+  if (o.chart == ChartKind::kLatLong && (!std::isfinite(radius) || radius <= 0)) {
+    fail(name, "radius " + num(radius) + " m must be positive and finite");
+  }
+
+  // 1. No-data.
+  const NoDataScan noData = scanNoData(img, o, name);
+  const std::size_t holes = noData.holes;
+  res.noDataPixels = holes;
+
+  // 2. Stored values -> metres.
+  const auto [scale, offset] = toMetres(img, o, noData.hole, name, res.notes);
+  std::vector<float>& v = img.values;
 
   // 3. Fill the holes.
   if (holes > 0) {
-    const FillReport fr = fillHoles(v, w, h, hole, o.chart == ChartKind::kLatLong);
+    const FillReport fr = fillHoles(v, w, h, noData.hole, o.chart == ChartKind::kLatLong);
     res.notes.push_back(
-        std::to_string(holes) + " no-data pixels (value " + num(*noData) + ", " + noDataSource +
-        ") filled by harmonic interpolation from the surrounding heights (" +
+        std::to_string(holes) + " no-data pixels (value " + num(*noData.value) + ", " +
+        noData.source + ") filled by harmonic interpolation from the surrounding heights (" +
         std::to_string(fr.sweeps) + " relaxation sweeps); none of them became a height as stored");
   }
 
@@ -202,99 +342,14 @@ ImportResult importHeightImage(HeightImage img, const ImportOptions& o, const st
                            {"offset_m", offset},
                            {"nodata_pixels", holes}};
   if (holes > 0) {
-    source["nodata_value"] = nanIsNoData ? nlohmann::json("nan") : nlohmann::json(*noData);
+    source["nodata_value"] = noData.nan ? nlohmann::json("nan") : nlohmann::json(*noData.value);
     source["nodata_fill"] = "harmonic";
   }
 
   if (o.chart == ChartKind::kLatLong) {
-    double west = -180.0;
-    if (o.westLongitudeDeg) {
-      west = *o.westLongitudeDeg;
-    } else if (img.column0LongitudeDeg) {
-      west = *img.column0LongitudeDeg;
-    } else if (img.geo && img.geo->geographic) {
-      west = img.geo->originX;
-    }
-    if (!std::isfinite(west)) fail(name, "western longitude must be finite");
-    res.notes.push_back("equirectangular: column 0 starts at " + num(west) +
-                        " deg longitude, row 0 at 90 deg N");
-    // Area-average first where the image is finer than the grid, then bilinear.
-    std::vector<float> src = v;
-    int sw = w, sh = h;
-    if (w > m || h > m) {
-      sw = std::min(w, m);
-      sh = std::min(h, m);
-      cv::Mat in(h, w, CV_32F, v.data()), out;
-      cv::resize(in, out, cv::Size(sw, sh), 0, 0, cv::INTER_AREA);
-      src.assign(out.begin<float>(), out.end<float>());
-    }
-    for (int gv = 1; gv < m; ++gv) {
-      const double lat = 180.0 * gv / m - 90.0;
-      const double y = (90.0 - lat) / 180.0 * sh - 0.5;
-      for (int gu = 0; gu < m; ++gu) {
-        const double lon = 360.0 * gu / m - 180.0;
-        const double x = (lon - west) / 360.0 * sw - 0.5;
-        heights[g.index(gu, gv)] = float(bilinear(src, sw, sh, x, y, true));
-      }
-      heights[g.index(m, gv)] = heights[g.index(0, gv)];
-    }
-    // Pole rows: one point each, the mean of the image's samples along the pole's edge.
-    for (const int gv : {0, m}) {
-      const double y = gv == 0 ? double(sh - 1) : 0.0;
-      double sum = 0;
-      for (int gu = 0; gu < m; ++gu) {
-        const double lon = 360.0 * gu / m - 180.0;
-        sum += bilinear(src, sw, sh, (lon - west) / 360.0 * sw - 0.5, y, true);
-      }
-      const float pole = float(sum / m);
-      for (int gu = 0; gu <= m; ++gu) heights[g.index(gu, gv)] = pole;
-    }
-    res.planet.chart = std::make_shared<core::LatLongChart>(g, radius);
-    res.notes.push_back("radius " + num(radius) + " m, " +
-                        (o.radius           ? "as given"
-                         : img.radiusMetres ? "from the file"
-                                            : "the default (--radius sets it)"));
-    source["column0_longitude_deg"] = west;
+    resampleLatLong(img, o, radius, g, name, heights, res, source);
   } else {
-    double sx = 1.0, sy = 1.0;
-    std::string from = "default 1 m per pixel (--spacing sets it)";
-    if (o.spacing) {
-      sx = sy = *o.spacing;
-      from = "--spacing";
-    } else if (img.pixelSpacingX && img.pixelSpacingY) {
-      sx = *img.pixelSpacingX;
-      sy = *img.pixelSpacingY;
-      from = "the file's own metadata";
-    } else if (img.geo) {
-      if (img.geo->geographic) {
-        // Degrees on the Earth: metres along a parallel shrink with cos(latitude).
-        constexpr double kEarthMean = 6371008.8;
-        const double latC = img.geo->originY - 0.5 * h * img.geo->pixelScaleY;
-        const double k = kEarthMean * std::numbers::pi / 180.0;
-        sx = img.geo->pixelScaleX * k * std::cos(latC * std::numbers::pi / 180.0);
-        sy = img.geo->pixelScaleY * k;
-        from = "the GeoTIFF's pixel scale in degrees, at latitude " + num(latC) +
-               " on the Earth's mean sphere";
-      } else {
-        sx = img.geo->pixelScaleX;
-        sy = img.geo->pixelScaleY;
-        from = "the GeoTIFF's pixel scale (taken as metres)";
-      }
-    }
-    if (!std::isfinite(sx) || sx <= 0 || !std::isfinite(sy) || sy <= 0) {
-      fail(name, "pixel spacing " + num(sx) + " x " + num(sy) + " m must be positive and finite");
-    }
-    res.notes.push_back("flat: " + num(sx) + " x " + num(sy) + " m between pixels, from " + from +
-                        "; image row 0 is the north (v = m) edge");
-    const double kx = w > 1 ? double(w - 1) / m : 0.0, ky = h > 1 ? double(h - 1) / m : 0.0;
-    for (int gv = 0; gv <= m; ++gv) {
-      for (int gu = 0; gu <= m; ++gu) {
-        heights[g.index(gu, gv)] = float(bilinear(v, w, h, gu * kx, (m - gv) * ky, false));
-      }
-    }
-    const double dx = w > 1 ? sx * kx : sx, dy = h > 1 ? sy * ky : sy;
-    res.planet.chart = std::make_shared<core::FlatChart>(g, dx, dy);
-    source["pixel_spacing_m"] = {sx, sy};
+    resampleFlat(img, o, g, name, heights, res, source);
   }
   if (side != (long long)(std::max(w, h))) {
     res.notes.push_back(
