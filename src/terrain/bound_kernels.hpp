@@ -3,10 +3,10 @@
 //
 // Levels 0 .. 5 are 63/64 of all vertices, and every vertex whose diamond lies inside the grid
 // reads its children, corners and scanned points at the same offsets as its neighbours on the
-// row: the per-vertex arithmetic of ErrorBounds::computeLevel runs here as loops over a run of
-// a row's vertices, on positions computed once per row (Chart::rowPositions) instead of afresh
-// for every vertex that reads them, with the square roots and encodings of a run in loops of
-// their own. The formulas and their order are computeLevel's, so the codes are the ones the
+// row: the per-vertex arithmetic of the scalar path (vertex_bounds.hpp) runs here as loops over a
+// run of a row's vertices, on positions computed once per row (Chart::rowPositions) instead of
+// afresh for every vertex that reads them, with the square roots and encodings of a run in loops of
+// their own. The formulas and their order are the scalar path's, so the codes are the ones the
 // scalar path gave (the checksums of whole planets did not move; a code from a squared distance
 // differs from the code of its rounded root only where that root is exactly a code's value).
 // The scalar path stays for the vertices on the grid's edges and the seam; which path a vertex

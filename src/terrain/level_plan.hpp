@@ -1,0 +1,81 @@
+#pragma once
+// Which vertices of one level of ErrorBounds a region holds, and how they are shared among
+// threads (error_bounds.cpp includes this; nothing else should): the level's rows inside the
+// region, its column ranges (two across the seam), bands of rows as work items, and whether the
+// work is worth waking the team.
+#include <algorithm>
+#include <array>
+#include <cstddef>
+#include <utility>
+#include <vector>
+
+#include "core/grid.hpp"
+#include "terrain/diamond.hpp"
+#include "terrain/error_bounds.hpp"
+#include "terrain/grid_region.hpp"
+
+namespace ps::terrain::detail {
+
+struct LevelPlan {
+  // Levels 0-5 go to the row kernels in bands of kBand rows, chunk by chunk across the band, so
+  // that neighbouring rows share the rows of positions they read (BoundKernels::forgetRows at
+  // the start of an item: nothing is shared across items, whose order is the scheduler's).
+  static constexpr std::size_t kBand = 8;
+
+  LevelPlan(const core::GridSize& g, int level, const GridRegion& region)
+      : m(g.m()),
+        s(levelHalfSize(level)),
+        centre(levelIsCentre(level)),
+        kernelLevel(s <= ErrorBounds::kExactMaxHalfSize),
+        band(kernelLevel ? kBand : 1) {
+    const int vFirst = ((region.vBegin + s - 1) / s) * s;
+    for (int v = vFirst; v <= region.vEnd; v += s) {
+      const bool vOdd = ((v / s) & 1) != 0;
+      if (centre && !vOdd) continue;  // centre vertices sit on odd rows only
+      rows.push_back(v);
+    }
+    // A region across the seam is two column ranges; one loop over (row, range) items keeps
+    // both cores on one team instead of two fork-joins per level, each with half the work.
+    double work = 0;
+    region.forEachColumnRange(g, [&](int uA, int uB) {
+      ranges[rangeCount++] = {uA, uB};
+      work += double(rows.size()) * double(uB - uA + 1) / double(2 * s);
+    });
+    // Small regions (a typical edit near the fine levels) stay on this thread: waking the team
+    // costs more than the work, and much more when the machine is busy. About 2,000 vertices
+    // (0.1-0.2 ms of work) pays: at 20,000 the pole's level 6 (17,000 vertices, 1.7 ms) and
+    // most levels of a 600 km edit elsewhere ran on one thread (bench deform: 300 km polar cap
+    // 19.5-21.5 -> 17.5-20.2 ms, latitude 30 / 600 km 6.6-7.7 -> 5.2-6.0 ms).
+    parallel = work > 2000.0;
+    items = (rows.size() + band - 1) / band * rangeCount;
+  }
+
+  // The first column of the level on row v at or after uA.
+  int firstColumn(int v, int uA) const {
+    // On an odd row (v/s odd), edge vertices have u/s even and centres u/s odd; on an even row
+    // only edge vertices, u/s odd.
+    const bool wantUOdd = centre || ((v / s) & 1) == 0;
+    int u = ((uA + s - 1) / s) * s;
+    if ((((u / s) & 1) != 0) != wantUOdd) u += s;
+    return u;
+  }
+  // Work item `item`: rows [rowBegin, rowEnd) within column range `range`.
+  std::size_t rowBegin(std::size_t item) const { return (item / rangeCount) * band; }
+  std::size_t rowEnd(std::size_t item) const {
+    return std::min(rows.size(), rowBegin(item) + band);
+  }
+  std::pair<int, int> range(std::size_t item) const { return ranges[item % rangeCount]; }
+
+  int m;
+  int s;             // the level's half-size
+  bool centre;       // centre vertices (odd levels) or edge vertices
+  bool kernelLevel;  // the row kernels take the rows' inner vertices
+  std::size_t band;  // rows per work item
+  std::vector<int> rows;
+  std::array<std::pair<int, int>, 2> ranges{};
+  std::size_t rangeCount = 0;
+  std::size_t items = 0;
+  bool parallel = false;
+};
+
+}  // namespace ps::terrain::detail
