@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <memory>
 #include <span>
+#include <utility>
 #include <vector>
 
 #include "core/chart.hpp"
@@ -157,9 +158,26 @@ class SandField {
                    std::uint8_t& busy);
   void diffusionTile(int tu, int tv, const DiffusionTables& tb, double dt, const PushForce* force,
                      double* hs, std::uint8_t& busy);
-  void semiImplicit(const DiffusionTables& tb, double dt, const PushForce* force);
   double driftFlux(const PushForce& force, double zetaInv, int ua, int va, int ub, int vb) const;
-  void applyDrift(const PushForce& force, double zetaInv, double dt);
+
+  // The semi-implicit step (sand_semi_implicit.cpp) and its parts, in order: next = cur, the
+  // force's drift (explicit), the rows' implicit solves, the columns', the polar caps'.
+  void semiImplicit(const DiffusionTables& tb, double dt, const PushForce* force);
+  // Per tile of P: whether the step moved sand there (set from several threads).
+  using BusyFlags = std::unique_ptr<std::atomic<std::uint8_t>[]>;
+  struct RowRun;
+  struct ColumnRun;
+  void setBusy(BusyFlags& busy, int u, int v) const;
+  void copyCurToNext();
+  void applyDrift(const PushForce& force, const DiffusionTables& tb, double dt, BusyFlags& busy);
+  std::vector<std::pair<int, int>> tileRunsOfRow(int tv) const;
+  std::vector<RowRun> rowRuns() const;
+  void solveRows(const std::vector<RowRun>& runs, const DiffusionTables& tb, double dt,
+                 BusyFlags& busy);
+  std::vector<ColumnRun> columnRuns() const;
+  void solveColumns(const std::vector<ColumnRun>& runs, const DiffusionTables& tb, double dt,
+                    BusyFlags& busy);
+  void solvePolarCaps(const DiffusionTables& tb, double dt, BusyFlags& busy);
 
   SandGrid grid_;
   std::span<float> heights_;

@@ -1,0 +1,288 @@
+#include <algorithm>
+#include <cmath>
+
+#include "core/input_error.hpp"
+#include "sand/sand_field_parts.hpp"
+
+namespace ps::sand {
+
+using detail::kNever;
+using detail::kParallelTiles;
+using detail::kT;
+using detail::kW;
+using detail::kWall;
+
+// ---------------------------------------------------------------------------------------------
+// Drift-diffusion
+
+double SandField::explicitBound(const Material& material, bool wholeGrid) const {
+  material.validate();
+  std::vector<std::uint8_t> rowUsed(std::size_t(m_) + 1, wholeGrid ? 1 : 0);
+  bool polesUsed[2] = {wholeGrid, wholeGrid};
+  if (!wholeGrid) {
+    for (std::size_t t = 0; t < tiles_.size(); ++t) {
+      if (!busy_[t] && !marked_[t]) continue;
+      const int tv = int(t) / tilesU_;
+      for (int v = tv * kT; v < std::min(m_ + 1, tv * kT + kT); ++v) rowUsed[std::size_t(v)] = 1;
+    }
+    if (grid_.sphere()) {
+      for (int p = 0; p < 2; ++p) polesUsed[p] = poles_[p].busy || poles_[p].marked;
+    }
+  }
+  return boundOverRows(material, rowUsed, polesUsed);
+}
+
+double SandField::boundOverRows(const Material& material, const std::vector<std::uint8_t>& rowUsed,
+                                const bool polesUsed[2]) const {
+  const double D = material.diffusion;
+  if (!(D > 0.0)) return std::numeric_limits<double>::infinity();
+  const double l2 = grid_.cellSize() * grid_.cellSize();
+  auto gH = [&](int v) { return D * l2 * grid_.horizontalFace(v) / grid_.horizontal(v); };
+  auto gV = [&](int v) { return D * l2 * grid_.verticalFace(v) / grid_.vertical(v); };
+  double bound = std::numeric_limits<double>::infinity();
+  for (int v = 0; v <= m_; ++v) {
+    if (!rowUsed[std::size_t(v)]) continue;
+    if (!grid_.ordinaryRow(v)) continue;
+    double g = 2.0 * gH(v);
+    if (v > 0) g += gV(v - 1);  // includes a ring cell's face to its pole
+    if (v < m_) g += gV(v);
+    bound = std::min(bound, grid_.area(v) / g);
+  }
+  if (grid_.sphere()) {
+    for (int p = 0; p < 2; ++p) {
+      if (!polesUsed[p]) continue;
+      const int v = p == 0 ? 0 : m_;
+      bound = std::min(bound, grid_.area(v) / (double(m_) * gV(p == 0 ? 0 : m_ - 1)));
+    }
+  }
+  return bound;
+}
+
+void SandField::diffusionTile(int tu, int tv, const DiffusionTables& tb, double dt,
+                              const PushForce* force, double* hs, std::uint8_t& busy) {
+  gather(tu, tv, hs);
+  const int v0 = tv * kT - 2;
+  const bool sphere = grid_.sphere();
+  unsigned any = 0;
+  Tile& tile = *tiles_[std::size_t(tileIndex(tu, tv))];
+  for (int lv = 0; lv < kT; ++lv) {
+    const int r = lv + 2, v = v0 + r;
+    double* out = tile.cur.get() + lv * kT - 2;  // in place: the scratch holds the old values
+    if (!grid_.ordinaryRow(v)) {
+      std::fill_n(out + 2, kT, kWall);
+      continue;
+    }
+    const std::size_t i = std::size_t(v + 2);
+    const kernels::DiffusionRow k{tb.gH[i], tb.invH[i], tb.gV[i - 1],   tb.invV[i - 1],
+                                  tb.gV[i], tb.invV[i], dt * tb.invA[i]};
+    const double* hm = hs + (r - 1) * kW;
+    const double* h0 = hs + r * kW;
+    const double* hp = hs + (r + 1) * kW;
+    any |= kernels::diffusionRow(hm, h0, hp, out, k, tb.repose);
+    if (sphere && (v == 1 || v == m_ - 1)) {
+      const int p = v == 1 ? 0 : 1;
+      const double* hq = p == 0 ? hm : hp;
+      const double g = p == 0 ? k.gS : k.gN, inv = p == 0 ? k.invS : k.invN;
+      for (int c = 2; c < kT + 2; ++c) {
+        const int u = tu * kT + c - 2;
+        if (u >= cols_) break;
+        poleFlux_[p][std::size_t(u)] = kernels::faceFlux(h0[c], hq[c], g, inv, tb.repose);
+      }
+    }
+    if (force) {
+      for (int c = 2; c < kT + 2; ++c) {
+        const int u = tu * kT + c - 2;
+        if (u >= cols_) break;
+        double f = 0.0;
+        const int un[4] = {u - 1, u + 1, u, u};
+        const int vn[4] = {v, v, v - 1, v + 1};
+        for (int q = 0; q < 4; ++q) {
+          int uu = un[q];
+          if (sphere) uu = (uu + m_) % m_;
+          if (!cellExists(uu, vn[q])) continue;
+          f += driftFlux(*force, tb.zetaInv, u, v, uu, vn[q]);
+        }
+        if (f != 0.0) {
+          out[c] -= dt * f * tb.invA[i];
+          any = 1;
+        }
+      }
+    }
+  }
+  busy = any ? 1 : 0;
+}
+
+double SandField::driftFlux(const PushForce& force, double zetaInv, int ua, int va, int ub,
+                            int vb) const {
+  // Canonical order so that both cells of a face compute the same number.
+  const bool swap = (vb < va) || (vb == va && ub < ua);
+  if (swap) {
+    std::swap(ua, ub);
+    std::swap(va, vb);
+  }
+  const core::Chart& chart = grid_.chart();
+  const Eigen::Vector3d pa = chart.position(ua, va, 0.0), pb = chart.position(ub, vb, 0.0);
+  const Eigen::Vector3d mid = 0.5 * (pa + pb);
+  Eigen::Vector3d foot = force.centre;
+  if (grid_.sphere()) {
+    foot = chart.radius() * force.centre.normalized();
+  } else {
+    foot.z() = 0.0;
+  }
+  Eigen::Vector3d radial = mid - foot;
+  if (grid_.sphere()) {
+    const Eigen::Vector3d up = mid.normalized();
+    radial -= radial.dot(up) * up;
+  }
+  const double rho = radial.norm();
+  if (!(rho < force.radius) || rho == 0.0) return 0.0;
+  const Eigen::Vector3d n = (pb - pa).normalized();
+  const double t = rho / force.radius;
+  const double prof = (1.0 - t * t) * (1.0 - t * t);
+  const double fn = force.strength * prof * radial.dot(n) / rho;
+  const double faceLength = va == vb ? grid_.horizontalFace(va) : grid_.verticalFace(va);
+  const double flux = zetaInv * fn * grid_.cellSize() * faceLength;
+  return swap ? -flux : flux;
+}
+
+void SandField::markForce(const PushForce& force) {
+  const core::Chart& chart = grid_.chart();
+  const auto foot = chart.inverse(force.centre);
+  if (!foot) return;
+  const double spacingV = grid_.sphere() ? grid_.vertical(m_ / 2) : grid_.vertical(0);
+  const int dv = int(std::ceil(force.radius / spacingV)) + 2;
+  const int vc = int(std::lround((*foot)(1))), uc = int(std::lround((*foot)(0)));
+  terrain::GridRegion r;
+  r.vBegin = std::max(0, vc - dv);
+  r.vEnd = std::min(m_, vc + dv);
+  double minH = std::numeric_limits<double>::infinity();
+  for (int v = r.vBegin; v <= r.vEnd; ++v) {
+    if (grid_.ordinaryRow(v)) minH = std::min(minH, grid_.horizontal(v));
+  }
+  const int du = std::isfinite(minH) ? int(std::min(1e9, std::ceil(force.radius / minH))) + 2 : m_;
+  if (grid_.sphere() && (2 * du + 1 >= m_ || r.vBegin == 0 || r.vEnd == m_)) {
+    r.uBegin = 0;
+    r.uEnd = m_;
+  } else {
+    r.uBegin = uc - du;
+    r.uEnd = uc + du;
+    if (!grid_.sphere()) {
+      r.uBegin = std::max(0, r.uBegin);
+      r.uEnd = std::min(m_, r.uEnd);
+    }
+  }
+  mark(r);
+}
+
+const SandField::DiffusionTables& SandField::diffusionTables(const Material& material) {
+  if (diffusionTables_ && diffusionMaterial_ == material) return *diffusionTables_;
+  auto tables = std::make_unique<DiffusionTables>();
+  DiffusionTables& tb = *tables;
+  tb.repose = kernels::Repose::of(material);
+  tb.zetaInv = material.frictionInverse;
+  const std::size_t rows = std::size_t(m_) + 5;
+  for (auto* a : {&tb.gH, &tb.gV, &tb.invH, &tb.invV, &tb.invA}) a->assign(rows, 0.0);
+  const double Dl2 = material.diffusion * grid_.cellSize() * grid_.cellSize();
+  for (int v = 0; v <= m_; ++v) {
+    const std::size_t i = std::size_t(v + 2);
+    tb.invA[i] = 1.0 / grid_.area(v);
+    if (grid_.ordinaryRow(v)) {
+      tb.gH[i] = Dl2 * grid_.horizontalFace(v) / grid_.horizontal(v);
+      tb.invH[i] = 1.0 / grid_.horizontal(v);
+    }
+    if (v < m_ && (grid_.ordinaryRow(v) || grid_.ordinaryRow(v + 1))) {
+      tb.gV[i] = Dl2 * grid_.verticalFace(v) / grid_.vertical(v);
+      tb.invV[i] = 1.0 / grid_.vertical(v);
+    }
+  }
+  diffusionTables_ = std::move(tables);
+  diffusionMaterial_ = material;
+  return *diffusionTables_;
+}
+
+StepReport SandField::diffusionStep(const Material& material, double dt, DiffusionScheme scheme,
+                                    StepPolicy policy, const PushForce* force) {
+  material.validate();
+  if (!std::isfinite(dt) || !(dt > 0.0)) {
+    throw core::InputError("diffusion time step dt = " + core::exactNumber(dt) +
+                           " must be finite and > 0");
+  }
+  if (force) {
+    if (!force->centre.allFinite() || !std::isfinite(force->radius) || !(force->radius > 0.0) ||
+        !std::isfinite(force->strength)) {
+      throw core::InputError("push force: centre, radius (> 0) and strength must be finite");
+    }
+    markForce(*force);
+  }
+  StepReport rep;
+  rep.dt = dt;
+  if (atRest()) return rep;
+  buildActiveSet(Predicate::kDiffusion, material);
+  if (scheme == DiffusionScheme::kExplicit) {
+    // The bound over the rows this step visits (the closed active set).
+    std::vector<std::uint8_t> rowUsed(std::size_t(m_) + 1, 0);
+    for (int t : tileList_) {
+      const int tv = t / tilesU_;
+      for (int v = tv * kT; v < std::min(m_ + 1, tv * kT + kT); ++v) rowUsed[std::size_t(v)] = 1;
+    }
+    const bool polesUsed[2] = {grid_.sphere() && poles_[0].inP, grid_.sphere() && poles_[1].inP};
+    const double bound = boundOverRows(material, rowUsed, polesUsed);
+    if (dt > bound) {
+      if (policy == StepPolicy::kRefuse) {
+        // Nothing has moved: forget the set this step would have visited.
+        for (int t : tileList_) inP_[std::size_t(t)] = 0;
+        tileList_.clear();
+        if (grid_.sphere()) poles_[0].inP = poles_[1].inP = false;
+        throw core::InputError("explicit diffusion time step dt = " + core::exactNumber(dt) +
+                               " exceeds the stability bound " + core::exactNumber(bound) +
+                               " (dt <= min A_i / (D l^2 sum L_f / d_f))");
+      }
+      if (policy == StepPolicy::kClamp) dt = bound;
+    }
+  }
+  rep.dt = dt;
+  const DiffusionTables& tb = diffusionTables(material);
+  const bool sphere = grid_.sphere();
+  if (sphere) {
+    for (int p = 0; p < 2; ++p) {
+      if (poles_[p].inP) std::fill(poleFlux_[p].begin(), poleFlux_[p].end(), 0.0);
+    }
+  }
+  if (scheme == DiffusionScheme::kExplicit) {
+    std::vector<std::uint8_t> busyOut(tileList_.size(), 0);
+    const int n = int(tileList_.size());
+#pragma omp parallel if (n >= kParallelTiles)
+    {
+      std::vector<double> hs(std::size_t(kW) * kW);
+#pragma omp for schedule(static)
+      for (int j = 0; j < n; ++j) tiles_[std::size_t(tileList_[std::size_t(j)])]->snapshot();
+#pragma omp for schedule(dynamic, 1)
+      for (int j = 0; j < n; ++j) {
+        const int t = tileList_[std::size_t(j)];
+        diffusionTile(t % tilesU_, t / tilesU_, tb, dt, force, hs.data(), busyOut[std::size_t(j)]);
+      }
+    }
+    for (int j = 0; j < n; ++j)
+      busy_[std::size_t(tileList_[std::size_t(j)])] = busyOut[std::size_t(j)];
+    if (sphere) {
+      for (int p = 0; p < 2; ++p) {
+        Pole& pole = poles_[std::size_t(p)];
+        if (!pole.inP) continue;
+        double in = 0.0;
+        bool moved = false;
+        for (double f : poleFlux_[p]) {
+          in += f;
+          moved |= f != 0.0;
+        }
+        pole.h += dt * in * (1.0 / grid_.area(p == 0 ? 0 : m_));
+        pole.busy = moved;
+      }
+    }
+  } else {
+    semiImplicit(tb, dt, force);
+  }
+  finishStep(rep);
+  return rep;
+}
+
+}  // namespace ps::sand

@@ -1,0 +1,80 @@
+#pragma once
+// SandField's private parts, shared by the files that implement it (sand_field.cpp: storage and
+// output; sand_active_set.cpp; sand_thermal.cpp; sand_diffusion.cpp; sand_semi_implicit.cpp);
+// nothing else should include this.
+#include <memory>
+#include <vector>
+
+#include "sand/kernels.hpp"
+#include "sand/sand_field.hpp"
+
+namespace ps::sand {
+
+namespace detail {
+
+inline constexpr int kT = SandField::kTile;
+inline constexpr int kW = kernels::kScratch;  // scratch row stride: the tile and 2 cells each side
+static_assert(kW == kT + 4);
+inline constexpr double kWall = kernels::kWall;
+inline constexpr double kNever = 1e300;  // threshold of a link that does not exist
+// Steps over fewer tiles run on one thread: a fork/join costs more than a few tiles of work
+// (milliseconds when the cores are shared and a waiting thread is descheduled).
+inline constexpr int kParallelTiles = 64;
+
+}  // namespace detail
+
+// A tile's heights are updated in place; before a step writes any tile, every tile of the step
+// copies its two outermost rows and columns (`edge`), and neighbours read their halo from there.
+// `next` exists only for the semi-implicit step (allocated on first use).
+struct SandField::Tile {
+  std::unique_ptr<double[]> cur, next;
+  // rows 0, 1, detail::kT-2, detail::kT-1 (4 x detail::kT), then columns 0, 1, detail::kT-2,
+  // detail::kT-1 (4 x detail::kT, by row)
+  std::unique_ptr<double[]> edge;
+  bool unwritten = false;  // cur may differ from the floats
+
+  void snapshot() {
+    double* e = edge.get();
+    const int rows[4] = {0, 1, detail::kT - 2, detail::kT - 1};
+    for (int k = 0; k < 4; ++k)
+      std::copy_n(cur.get() + rows[k] * detail::kT, detail::kT, e + k * detail::kT);
+    double* c = e + 4 * detail::kT;
+    for (int lv = 0; lv < detail::kT; ++lv) {
+      const double* row = cur.get() + lv * detail::kT;
+      c[lv] = row[0];
+      c[detail::kT + lv] = row[1];
+      c[2 * detail::kT + lv] = row[detail::kT - 2];
+      c[3 * detail::kT + lv] = row[detail::kT - 1];
+    }
+  }
+  // Value of (lu, lv) from the snapshot; (lu, lv) must lie in the two outer rows or columns.
+  double edgeAt(int lu, int lv) const {
+    const double* e = edge.get();
+    if (lv < 2) return e[lv * detail::kT + lu];
+    if (lv >= detail::kT - 2) return e[(lv - detail::kT + 4) * detail::kT + lu];
+    const int k = lu < 2 ? lu : lu - detail::kT + 4;
+    return e[4 * detail::kT + k * detail::kT + lv];
+  }
+};
+
+struct SandField::Pole {
+  double h = 0.0;
+  bool resident = false;
+  bool busy = false, marked = false, inP = false, unwritten = false;
+  double s = 0.0;  // thermal: outflow scale of this step
+};
+
+// Per-row constants of a thermal step, indexed v + 2 (rows -2 .. m + 2).
+struct SandField::ThermalTables {
+  std::vector<double> tH, eH, tV, eV, tD, eD, cap, hra, invA;
+  double tPole[2] = {0, 0}, ePole[2] = {0, 0};
+};
+
+// Per-row constants of a diffusion step, indexed v + 2.
+struct SandField::DiffusionTables {
+  std::vector<double> gH, gV, invH, invV, invA;
+  kernels::Repose repose;
+  double zetaInv = 0;
+};
+
+}  // namespace ps::sand
