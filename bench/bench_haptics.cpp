@@ -31,7 +31,7 @@
 #include "bench/bench.hpp"
 #include "bench/bench_util.hpp"
 #include "edit/edit_pipeline.hpp"
-#include "haptics/session.hpp"
+#include "haptics/force_path.hpp"
 #include "replay/replay.hpp"
 #include "sand/settler.hpp"
 #include "terrain/camera.hpp"
@@ -83,10 +83,10 @@ void run(bool withEditor, const BenchOptions& options, terrain::Terrain& planet,
   edit::EditPipeline pipe(planet);
   pipe.setUndoEnabled(false);
   sand::Settler settler(planet, sand::Material::sand(), {.cellBudget = std::size_t(1) << 18});
-  haptics::SessionConfig cfg;
+  haptics::ForcePathConfig cfg;
   cfg.map.scale = R / kGlobe;
   cfg.press.displacement.radius = 60e3;
-  haptics::HapticSession session(planet, withEditor ? &pipe : nullptr, cfg,
+  haptics::ForcePath session(planet, withEditor ? &pipe : nullptr, cfg,
                                  withEditor ? &settler : nullptr);
   std::ostringstream forceLog;
   if (withEditor) session.setLog(&forceLog);
@@ -228,7 +228,7 @@ void plotForces(const std::vector<haptics::ForceRecord>& rs, const std::string& 
 }
 
 // The bundled demo video replayed (replay::runReplay, brush tool as in `planetsculpt demo`) with
-// the haptic session hooked in through replay's frame hook: forces only, offline ticks at 1 kHz
+// the force path hooked in through replay's frame hook: forces only, offline ticks at 1 kHz
 // between frames, the force log kept. Reports the per-frame cost of onFrame.
 void demoReplay(const BenchOptions& options, std::ostream& out) {
   const std::string video = (ps::app::sourceDir() / "data/demo.mkv").string();
@@ -242,9 +242,9 @@ void demoReplay(const BenchOptions& options, std::ostream& out) {
   auto planet = app::makeDefaultPlanet(options.quick ? 9 : 11, 1);
   replay::ReplayOptions ro;
   if (options.quick) ro.maxFrames = 150;
-  haptics::SessionConfig cfg;
+  haptics::ForcePathConfig cfg;
   cfg.map.scale = planet->chart().radius() / ro.scene.planetRadius;
-  haptics::HapticSession session(*planet, nullptr, cfg);
+  haptics::ForcePath session(*planet, nullptr, cfg);
   std::ostringstream csv;
   session.setLog(&csv);
   std::vector<double> frameMs;

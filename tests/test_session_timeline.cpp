@@ -1,5 +1,5 @@
 // A live session's settings timeline (replay/session_timeline.hpp): a session scripted through
-// the live app's path (FrameStepper + SessionControl, the frames recorded by FrameRecorder, the
+// the live app's path (FrameStepper + SettingsControl, the frames recorded by FrameRecorder, the
 // changes by TimelineWriter) replays from its files to the same planet, bit for bit, and not
 // without its sidecar; a bad sidecar is refused naming the file and the line.
 #include <gtest/gtest.h>
@@ -21,7 +21,7 @@
 #include "tracking/video.hpp"
 
 using namespace ps;
-using replay::SessionControl;
+using replay::SettingsControl;
 
 namespace {
 
@@ -33,7 +33,7 @@ bool sameHeights(const terrain::Terrain& a, const terrain::Terrain& b) {
 
 // What the user does after a window frame: (frame, action), applied once that frame is stepped,
 // as the live app applies the panel after the frame it drew.
-using Script = std::vector<std::pair<int, std::function<void(SessionControl&)>>>;
+using Script = std::vector<std::pair<int, std::function<void(SettingsControl&)>>>;
 
 // The live app's frame loop without the window: record the frame, step it, apply the panel.
 // `clock` gives a frame's time from its index: the video's (index / fps) by default, or a
@@ -47,7 +47,7 @@ std::filesystem::path recordSession(const std::filesystem::path& dir, terrain::T
   const auto calib = testkit::shortSceneCamera().forImageSize(src.size());
   options.undo = true;  // as live
   replay::FrameStepper stepper(calib, planet, options);
-  SessionControl control(stepper);
+  SettingsControl control(stepper);
   session::FrameRecorder recorder;
   replay::TimelineWriter timeline;
   const auto video = dir / "session.mkv";
@@ -78,7 +78,7 @@ std::filesystem::path recordSession(const std::filesystem::path& dir, terrain::T
 
 Script changesOfEveryKind() {
   auto with = [](std::function<void(replay::SessionSettings&)> f) {
-    return [f](SessionControl& c) {
+    return [f](SettingsControl& c) {
       auto s = c.settings();
       f(s);
       c.apply(s);
@@ -89,12 +89,12 @@ Script changesOfEveryKind() {
       {3, with([](auto& s) { s.brush.strength *= 2.5; })},
       {4, with([](auto& s) { s.brush.mode = edit::BrushMode::kLower; })},
       {5, with([](auto& s) { s.planetRadius *= 1.1f; })},
-      {6, [](SessionControl& c) { c.undo(); }},
+      {6, [](SettingsControl& c) { c.undo(); }},
       {7, with([](auto& s) { s.spinDeg = 30; })},
       {8, with([](auto& s) { s.tool = replay::ReplayTool::kDisplace; })},
-      {9, [](SessionControl& c) { c.undo(); }},
-      {9, [](SessionControl& c) { c.redo(); }},
-      {12, [](SessionControl& c) { c.undo(); }},  // after the last frame (11)
+      {9, [](SettingsControl& c) { c.undo(); }},
+      {9, [](SettingsControl& c) { c.redo(); }},
+      {12, [](SettingsControl& c) { c.undo(); }},  // after the last frame (11)
   };
 }
 

@@ -16,7 +16,7 @@
 #include "app/snapshot.hpp"
 #include "core/grid.hpp"
 #include "core/input_error.hpp"
-#include "haptics/session.hpp"
+#include "haptics/force_path.hpp"
 #include "io/heightmap_export.hpp"
 #include "io/planet_file.hpp"
 #include "replay/session_timeline.hpp"
@@ -278,16 +278,16 @@ nlohmann::json runReplayJob(const ReplayJob& job) {
   std::filesystem::create_directories(out);
   std::ofstream log(out / "log.jsonl.part"), timings(out / "timings.jsonl.part");
   if (!log || !timings) throw std::runtime_error("cannot write in " + out.string());
-  std::unique_ptr<haptics::HapticSession> haptic;
+  std::unique_ptr<haptics::ForcePath> haptic;
   std::ofstream forces;
   double peakForce = 0;
   PlotSeries forceSeries;  // per frame: time, the largest force of its ticks
   if (job.forces) {
-    haptics::SessionConfig hc;
+    haptics::ForcePathConfig hc;
     hc.map.scale = planet->chart().radius() / options.scene.planetRadius;
     forces.open(out / "forces.csv.part");
     if (!forces) throw std::runtime_error("cannot write in " + out.string());
-    haptic = std::make_unique<haptics::HapticSession>(*planet, nullptr, hc);
+    haptic = std::make_unique<haptics::ForcePath>(*planet, nullptr, hc);
     haptic->setLog(&forces);
   }
   replay::ReplaySummary s;

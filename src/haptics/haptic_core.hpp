@@ -1,7 +1,7 @@
 #pragma once
 // One haptic tick from a device reading: device -> planet frame -> depth under the tool in the
 // terrain snapshot -> ForceModel. Shared by the real-time loop (HapticLoop) and the offline,
-// deterministic stepping a replay uses (HapticSession::onFrame).
+// deterministic stepping a replay uses (ForcePath::onFrame).
 #include <Eigen/Core>
 
 #include "haptics/force_model.hpp"

@@ -17,7 +17,7 @@
 
 #include "core/input_error.hpp"
 #include "haptics/device.hpp"
-#include "haptics/session.hpp"
+#include "haptics/force_path.hpp"
 #include "io/planet_file.hpp"
 #include "io/stroke_journal.hpp"
 #include "live/panel.hpp"
@@ -52,10 +52,10 @@ class SculptLoop {
         stepper_(calib, planet, options),
         // The planet on disk: saved now, then autosaved; every stroke, undo and redo journaled.
         store_(planet, files, {settings_.autosaveSeconds, true}, now()),
-        // Every settings change, undo and redo goes through `sessionControl_`, which also writes it
+        // Every settings change, undo and redo goes through `settingsControl_`, which also writes it
         // to the recording's sidecar (replay/session_timeline.hpp): a replay applies them the
         // same way.
-        sessionControl_(stepper_),
+        settingsControl_(stepper_),
         startCrc_(io::heightsChecksum(planet.heights())),
         // With no planet pose yet: the camera image alone (an empty mesh, any valid camera).
         placeholder_(render::arCamera(Eigen::Matrix3d::Identity(), Eigen::Vector3d(0, 0, 1),
@@ -266,7 +266,7 @@ class SculptLoop {
     if (!sculptingChanged(panel_, applied_)) return;
     const double scale = stepper_.scale();
     try {
-      sessionControl_.apply(panelTarget(panel_, applied_, sessionControl_.settings()));
+      settingsControl_.apply(panelTarget(panel_, applied_, settingsControl_.settings()));
       applied_ = panel_;
     } catch (const core::InputError& e) {
       note_ = e.what();
@@ -277,11 +277,11 @@ class SculptLoop {
   void applyActions(const PanelActions& actions) {
     try {
       if (actions.undo) {
-        sessionControl_.undo();
+        settingsControl_.undo();
         note_ = "undone";
       }
       if (actions.redo) {
-        sessionControl_.redo();
+        settingsControl_.redo();
         note_ = "redone";
       }
     } catch (const core::InputError& e) {
@@ -367,11 +367,11 @@ class SculptLoop {
         replay::SessionStart::of(planet_, planetFile, planet_.grid().side(), settings_.start.seed,
                                  calib_, settings_.start.calibrationFile, stepper_.options(),
                                  shell_.input.fps(), stepper_.pipeline().journal().undoCount());
-    timeline_.open(replay::sessionSidecarPath(video), origin, sessionControl_.settings());
-    sessionControl_.setWriter(&timeline_);
+    timeline_.open(replay::sessionSidecarPath(video), origin, settingsControl_.settings());
+    settingsControl_.setWriter(&timeline_);
   }
   std::string stopRecording() {
-    sessionControl_.setWriter(nullptr);
+    settingsControl_.setWriter(nullptr);
     timeline_.close();
     const std::filesystem::path p = recorder_.path();
     const int n = recorder_.stop();
@@ -403,7 +403,7 @@ class SculptLoop {
     haptic_.reset();
     hapticConfig_.map.scale = stepper_.scale();
     hapticDevice_ = std::make_unique<haptics::TrackedMarkerDevice>();
-    haptic_ = std::make_unique<haptics::HapticSession>(planet_, nullptr, hapticConfig_);
+    haptic_ = std::make_unique<haptics::ForcePath>(planet_, nullptr, hapticConfig_);
     haptic_->startLoop(*hapticDevice_);
   }
 
@@ -420,7 +420,7 @@ class SculptLoop {
   terrain::Tessellator tessellator_;
   Texture overview_;
   session::SessionStore store_;
-  replay::SessionControl sessionControl_;
+  replay::SettingsControl settingsControl_;
   replay::TimelineWriter timeline_;
   const std::uint32_t startCrc_;
   session::FrameRecorder recorder_;
@@ -437,9 +437,9 @@ class SculptLoop {
   std::optional<tracking::Pose> pose_;
   std::optional<core::GridPoint> controlVertex_;
   double smoothedMs_ = 0;
-  haptics::SessionConfig hapticConfig_;
+  haptics::ForcePathConfig hapticConfig_;
   std::unique_ptr<haptics::TrackedMarkerDevice> hapticDevice_;
-  std::unique_ptr<haptics::HapticSession> haptic_;
+  std::unique_ptr<haptics::ForcePath> haptic_;
   std::optional<haptics::ForceRecord> lastForce_;
 };
 

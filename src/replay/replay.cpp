@@ -339,7 +339,7 @@ ReplaySummary runReplay(tracking::FrameSource& source, const tracking::CameraCal
   o.validate();
   const tracking::CameraCalibration calib = calibIn.forImageSize(source.size());
   FrameStepper stepper(calib, planet, o);
-  std::optional<SessionControl> control;
+  std::optional<SettingsControl> control;
   std::optional<TimelinePlayer> player;
   if (timeline) {
     control.emplace(stepper);

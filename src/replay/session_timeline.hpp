@@ -3,7 +3,7 @@
 // carries only frames, so the settings the user changes while recording (tool, r_d, strength,
 // raise/lower, planet size, the planet turned by hand, undo and redo) go to a JSON-lines sidecar
 // next to it, and a replay applies them at the same recorded frames. Both sides change the
-// stepper through one class, SessionControl, so a replay cannot apply a change differently from
+// stepper through one class, SettingsControl, so a replay cannot apply a change differently from
 // the live app.
 #include <Eigen/Core>
 #include <cstdint>
@@ -20,6 +20,8 @@
 namespace ps::replay {
 
 inline constexpr int kSessionTimelineVersion = 1;
+// The sidecar header's "format".
+inline constexpr const char* kSessionFormat = "planetsculpt-session";
 
 // What changes what the tool does to the planet. (dist_max and the triangle budget change only
 // the view, so they are not here.)
@@ -74,6 +76,8 @@ struct SessionStart {
   // Copies the marker and tracker options into `o`.
   void applyTo(ReplayOptions& o) const;
 };
+// The sidecar header's "start" (the reader's parseStart reads it back).
+nlohmann::json toJson(const SessionStart& s);
 
 // Appends the sidecar while a recording runs: the header at open(), then one line per change
 // and per undo or redo, each flushed at once so that a crash leaves every line before it.
@@ -95,7 +99,7 @@ class TimelineWriter {
   // line of its own, so that filters and rate brushes see the live times in a replay.
   void frameRecorded(double time);
   int frames() const { return frames_; }
-  // Lines for what SessionControl did; no-ops when closed. A write the disk refuses closes the
+  // Lines for what SettingsControl did; no-ops when closed. A write the disk refuses closes the
   // writer and sets error() (the frame loop goes on; the sidecar's lines so far stay readable).
   void change(const SessionSettings& before, const SessionSettings& after);
   void event(const std::string& what);
@@ -111,9 +115,9 @@ class TimelineWriter {
 };
 
 // The one path from a settings change (the live panel, or a sidecar line) to the stepper.
-class SessionControl {
+class SettingsControl {
  public:
-  explicit SessionControl(FrameStepper& stepper);
+  explicit SettingsControl(FrameStepper& stepper);
   const SessionSettings& settings() const { return s_; }
   // Makes the stepper's settings `target`, in a fixed order (turn, size, brush, displacement,
   // tool; each ends an open stroke). A refused value throws core::InputError; what was applied
@@ -170,7 +174,7 @@ void checkSessionStart(const SessionTimeline& t, const terrain::Terrain& planet,
 // (a stroke made before the recording started) become warnings.
 class TimelinePlayer {
  public:
-  TimelinePlayer(const SessionTimeline& t, SessionControl& control);
+  TimelinePlayer(const SessionTimeline& t, SettingsControl& control);
   void before(int frame);
   void finish(int frames);
   int applied() const { return applied_; }
@@ -179,7 +183,7 @@ class TimelinePlayer {
  private:
   void run(const TimelineEntry& e);
   const SessionTimeline& t_;
-  SessionControl& control_;
+  SettingsControl& control_;
   std::size_t next_ = 0;
   int applied_ = 0;
   std::vector<std::string> warnings_;

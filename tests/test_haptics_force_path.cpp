@@ -1,4 +1,4 @@
-// The haptic session: offline per-frame stepping (what a replay calls), presses through the edit
+// The force path: offline per-frame stepping (what a replay calls), presses through the edit
 // pipeline, lost tracking, and the live 1 kHz thread beside an editor loop (no timing asserted).
 #include <gtest/gtest.h>
 
@@ -8,7 +8,7 @@
 
 #include "core/input_error.hpp"
 #include "edit/edit_pipeline.hpp"
-#include "haptics/session.hpp"
+#include "haptics/force_path.hpp"
 #include "sand/sand_grid.hpp"
 #include "terrain/terrain.hpp"
 #include "test_haptics_util.hpp"
@@ -27,8 +27,8 @@ Eigen::Vector3d dirAt(double latDeg, double lonDeg) {
   return haptictest::latLon(latDeg, lonDeg);
 }
 
-SessionConfig globeConfig() {
-  SessionConfig c;
+ForcePathConfig globeConfig() {
+  ForcePathConfig c;
   c.map.scale = kR / kGlobe;
   return c;
 }
@@ -62,7 +62,7 @@ StrokeRun runStroke(double depthDevice, const std::function<bool(double)>& track
   terrain::Terrain t = flatPlanet(9);
   edit::EditPipeline pipe(t);
   pipe.setUndoEnabled(false);
-  HapticSession s(t, &pipe, globeConfig());
+  ForcePath s(t, &pipe, globeConfig());
   std::ostringstream log;
   s.setLog(&log);
   StrokeRun r;
@@ -80,7 +80,7 @@ StrokeRun runStroke(double depthDevice, const std::function<bool(double)>& track
 
 }  // namespace
 
-TEST(HapticsSession, ReplayStrokeIsLoggedDeterministicallyAndSculptsThroughThePipeline) {
+TEST(HapticsForcePath, ReplayStrokeIsLoggedDeterministicallyAndSculptsThroughThePipeline) {
   const StrokeRun a = runStroke(0.0015);
   std::istringstream in(a.log);
   const std::vector<ForceRecord> rs = readForceLog(in);
@@ -119,7 +119,7 @@ TEST(HapticsSession, ReplayStrokeIsLoggedDeterministicallyAndSculptsThroughThePi
   EXPECT_EQ(a.heights, b.heights);
 }
 
-TEST(HapticsSession, DeeperPushesMoveMoreSand) {
+TEST(HapticsForcePath, DeeperPushesMoveMoreSand) {
   const terrain::Terrain base = flatPlanet(9);
   auto removed = [&](const StrokeRun& r) {
     double sum = 0;
@@ -132,7 +132,7 @@ TEST(HapticsSession, DeeperPushesMoveMoreSand) {
   EXPECT_GT(deep, 1.5 * shallow);
 }
 
-TEST(HapticsSession, LostTrackingGivesZeroForceAndTheSessionContinues) {
+TEST(HapticsForcePath, LostTrackingGivesZeroForceAndTheSessionContinues) {
   // The marker is not seen from 1.3 s to 1.7 s (mid-drag; last seen at 38/30 s): 0.2 s later the
   // device stops answering, forces are zero, then they ramp back in and sculpting goes on.
   const StrokeRun r = runStroke(0.0015, [](double t) { return t < 1.3 || t > 1.7; });
@@ -158,17 +158,17 @@ TEST(HapticsSession, LostTrackingGivesZeroForceAndTheSessionContinues) {
   EXPECT_GT(r.stamps, 3u);
 }
 
-TEST(HapticsSession, BadConfigurationNamesTheParameter) {
+TEST(HapticsForcePath, BadConfigurationNamesTheParameter) {
   terrain::Terrain t = flatPlanet(9);
-  auto expectNamed = [&](SessionConfig c, const std::string& name) {
+  auto expectNamed = [&](ForcePathConfig c, const std::string& name) {
     try {
-      HapticSession s(t, nullptr, c);
+      ForcePath s(t, nullptr, c);
       ADD_FAILURE() << "no InputError for " << name;
     } catch (const core::InputError& e) {
       EXPECT_NE(std::string(e.what()).find(name), std::string::npos) << e.what();
     }
   };
-  SessionConfig c = globeConfig();
+  ForcePathConfig c = globeConfig();
   c.haptics.rateHz = 20000;
   expectNamed(c, "rate");
   c = globeConfig();
@@ -184,7 +184,7 @@ TEST(HapticsSession, BadConfigurationNamesTheParameter) {
   c.map.scale = std::numeric_limits<double>::quiet_NaN();
   expectNamed(c, "workspace scale");
   // A non-finite frame time is a note, not an exception.
-  HapticSession s(t, nullptr, globeConfig());
+  ForcePath s(t, nullptr, globeConfig());
   const FrameForces f = s.onFrame(Eigen::Vector3d(kR, 0, 0), std::nan(""));
   EXPECT_EQ(f.ticks, 0);
   EXPECT_FALSE(f.notes.empty());
@@ -194,7 +194,7 @@ TEST(HapticsLoop, LiveThreadFeedsTheEditorWithoutEditingItself) {
   terrain::Terrain t = flatPlanet(9);
   edit::EditPipeline pipe(t);
   pipe.setUndoEnabled(false);
-  HapticSession s(t, &pipe, globeConfig());
+  ForcePath s(t, &pipe, globeConfig());
   const double scale = kR / kGlobe;
   const double surface = (kR + 2000.0) / scale;  // device metres from the centre
   const Eigen::Vector3d d0 = dirAt(20, 40), d1 = dirAt(20, 41);

@@ -40,7 +40,7 @@ struct PressSettings {
   void validate(const core::Chart& chart) const;
 };
 
-struct SessionConfig {
+struct ForcePathConfig {
   HapticSettings haptics;
   WorkspaceMap map;             // scale = planet metres per device metre
   double patchRadius = 0.01;    // device metres of terrain around the tip in each snapshot
@@ -59,14 +59,14 @@ struct FrameForces {
   std::vector<std::string> notes;   // faults (first of each kind), refused edits
 };
 
-class HapticSession {
+class ForcePath {
  public:
   // `pipeline` may be null (forces only, no sculpting: e.g. from replay's read-only frame hook);
   // otherwise it must edit `terrain`. `listener` (e.g. a sand::Settler) is told what the
-  // displacement changed. All must outlive the session.
-  HapticSession(const terrain::Terrain& terrain, edit::EditPipeline* pipeline, SessionConfig config,
+  // displacement changed. All must outlive the force path.
+  ForcePath(const terrain::Terrain& terrain, edit::EditPipeline* pipeline, ForcePathConfig config,
                 sand::EditListener* listener = nullptr);
-  ~HapticSession();
+  ~ForcePath();
 
   // Force log (CSV, force_log.hpp) from now on; nullptr stops logging. Editor thread.
   void setLog(std::ostream* csv);
@@ -86,7 +86,7 @@ class HapticSession {
   // around it). Editor thread.
   void focus(const Eigen::Vector3d& planetPoint);
 
-  const SessionConfig& config() const { return config_; }
+  const ForcePathConfig& config() const { return config_; }
   int patchHalfSize() const { return halfSize_; }
   std::uint64_t totalStamps() const { return totalStamps_; }
 
@@ -96,7 +96,7 @@ class HapticSession {
 
   const terrain::Terrain& terrain_;
   edit::EditPipeline* pipeline_;
-  SessionConfig config_;
+  ForcePathConfig config_;
   int halfSize_;
   sand::DisplacementTool tool_;
 

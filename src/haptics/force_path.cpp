@@ -1,4 +1,4 @@
-#include "haptics/session.hpp"
+#include "haptics/force_path.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -21,7 +21,7 @@ void PressSettings::validate(const core::Chart& chart) const {
   displacement.validate(&chart);
 }
 
-void SessionConfig::validate(const core::Chart& chart) const {
+void ForcePathConfig::validate(const core::Chart& chart) const {
   haptics.validate();
   map.validate();
   if (!(std::isfinite(patchRadius) && patchRadius > 0 && patchRadius <= 1))
@@ -35,13 +35,13 @@ void SessionConfig::validate(const core::Chart& chart) const {
 
 namespace {
 
-const SessionConfig& checked(const SessionConfig& c, const core::Chart& chart) {
+const ForcePathConfig& checked(const ForcePathConfig& c, const core::Chart& chart) {
   c.validate(chart);
   return c;
 }
 
 // Grid cells (along v, the finest spacing on a lat-long chart) the snapshot must reach.
-int halfSizeFor(const SessionConfig& c, const core::Chart& chart) {
+int halfSizeFor(const ForcePathConfig& c, const core::Chart& chart) {
   const double cell = sand::largestSpacing(chart);
   const double cells = std::ceil(c.patchRadius * c.map.scale / cell);
   return int(std::clamp(cells, 2.0, 1024.0));
@@ -49,8 +49,8 @@ int halfSizeFor(const SessionConfig& c, const core::Chart& chart) {
 
 }  // namespace
 
-HapticSession::HapticSession(const terrain::Terrain& terrain, edit::EditPipeline* pipeline,
-                             SessionConfig config, sand::EditListener* listener)
+ForcePath::ForcePath(const terrain::Terrain& terrain, edit::EditPipeline* pipeline,
+                             ForcePathConfig config, sand::EditListener* listener)
     : terrain_(terrain),
       pipeline_(pipeline),
       config_(checked(config, terrain.chart())),
@@ -62,22 +62,22 @@ HapticSession::HapticSession(const terrain::Terrain& terrain, edit::EditPipeline
     throw core::InputError("haptics: the edit pipeline edits another terrain");
 }
 
-HapticSession::~HapticSession() {
+ForcePath::~ForcePath() {
   stopLoop();
 }
 
-void HapticSession::focus(const Eigen::Vector3d& planetPoint) {
+void ForcePath::focus(const Eigen::Vector3d& planetPoint) {
   if (!planetPoint.allFinite()) throw core::InputError("haptics: focus point is not finite");
   lastTip_ = planetPoint;
   haveTip_ = true;
   if (loop_) loop_->publishPatch(terrain_, lastTip_, halfSize_);
 }
 
-void HapticSession::setLog(std::ostream* csv) {
+void ForcePath::setLog(std::ostream* csv) {
   writer_ = csv ? std::make_unique<ForceLogWriter>(*csv) : nullptr;
 }
 
-FrameForces HapticSession::onFrame(const std::optional<Eigen::Vector3d>& tipPlanet, double time) {
+FrameForces ForcePath::onFrame(const std::optional<Eigen::Vector3d>& tipPlanet, double time) {
   if (loop_) throw core::InputError("haptics: onFrame while the live loop runs");
   FrameForces f;
   if (!std::isfinite(time)) {
@@ -114,7 +114,7 @@ FrameForces HapticSession::onFrame(const std::optional<Eigen::Vector3d>& tipPlan
   return f;
 }
 
-void HapticSession::startLoop(HapticDevice& device, LoopOptions options) {
+void ForcePath::startLoop(HapticDevice& device, LoopOptions options) {
   if (loop_) throw core::InputError("haptics: the live loop is already running");
   auto settings = config_.haptics;
   if (const auto lim = device.limits()) {  // the tighter of the device's and ours
@@ -128,13 +128,13 @@ void HapticSession::startLoop(HapticDevice& device, LoopOptions options) {
   loop_->start();
 }
 
-void HapticSession::stopLoop() {
+void ForcePath::stopLoop() {
   if (!loop_) return;
   loop_->stop();
   loop_.reset();
 }
 
-FrameForces HapticSession::editorFrame() {
+FrameForces ForcePath::editorFrame() {
   FrameForces f;
   if (!loop_) throw core::InputError("haptics: editorFrame without a running loop");
   records_.clear();
@@ -149,7 +149,7 @@ FrameForces HapticSession::editorFrame() {
   return f;
 }
 
-void HapticSession::consume(const std::vector<ForceRecord>& records, FrameForces& f) {
+void ForcePath::consume(const std::vector<ForceRecord>& records, FrameForces& f) {
   Fault seen[6] = {};
   for (const ForceRecord& r : records) {
     ++f.ticks;
@@ -166,7 +166,7 @@ void HapticSession::consume(const std::vector<ForceRecord>& records, FrameForces
   if (writer_) writer_->write(records);
 }
 
-void HapticSession::press(const ForceRecord& r, FrameForces& f) {
+void ForcePath::press(const ForceRecord& r, FrameForces& f) {
   const PressSettings& ps = config_.press;
   if (!pipeline_ || !ps.enabled) return;
   if (r.fault != Fault::kNone || !r.touching || !(r.depth > ps.minDepth)) {

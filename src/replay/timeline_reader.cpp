@@ -1,17 +1,12 @@
 #include "replay/session_timeline.hpp"
 
-#include <Eigen/Geometry>
 #include <algorithm>
-#include <cerrno>
 #include <cmath>
-#include <cstring>
 #include <fstream>
 #include <functional>
 #include <iterator>
 #include <map>
 #include <memory>
-#include <numbers>
-#include <stdexcept>
 #include <type_traits>
 #include <utility>
 
@@ -23,8 +18,6 @@
 namespace ps::replay {
 
 namespace {
-
-constexpr const char* kFormat = "planetsculpt-session";
 
 // One settings field of a line: how to read it into SessionSettings. Numbers are written with
 // nlohmann's shortest round-trip form, so a double read back is the double written.
@@ -177,249 +170,7 @@ SessionStart parseStart(const nlohmann::json& j, const std::filesystem::path& pa
   return s;
 }
 
-nlohmann::json toJson(const SessionStart& s) {
-  nlohmann::json j = {{"planet",
-                       {{"file", s.planetFile},
-                        {"grid", s.gridSide},
-                        {"seed", s.seed},
-                        {"radius_m", s.radius},
-                        {"heights_crc32", s.heightsCrc}}},
-                      {"calibration",
-                       {{"file", s.calibrationFile},
-                        {"width", s.imageSize.width},
-                        {"height", s.imageSize.height},
-                        {"K", s.K},
-                        {"distortion", s.distortion}}},
-                      {"fps", s.fps},
-                      {"markers",
-                       {{"family", s.family},
-                        {"decimate", s.decimate},
-                        {"planet_id", s.planetId},
-                        {"planet_marker_m", s.planetMarkerSize},
-                        {"tool_id", s.toolId},
-                        {"tool_marker_m", s.toolMarkerSize},
-                        {"tip_m", {s.tipOffset.x(), s.tipOffset.y(), s.tipOffset.z()}},
-                        {"touch_m", s.touchDistance},
-                        {"filter", s.filter}}},
-                      {"settle", s.settle},
-                      {"undo_steps", s.undoSteps}};
-  if (s.board) j["markers"]["board"] = tracking::toJson(*s.board);
-  if (s.toolLayout) j["markers"]["tool_layout"] = tracking::toJson(*s.toolLayout);
-  return j;
-}
-
 }  // namespace
-
-SessionSettings SessionSettings::of(const ReplayOptions& o) {
-  SessionSettings s;
-  s.tool = o.tool;
-  s.brush = o.brush;
-  s.displace = o.displace;
-  s.pressDepth = o.pressDepth;
-  s.planetRadius = o.scene.planetRadius;
-  return s;
-}
-
-Eigen::Matrix3d SessionSettings::rotation() const {
-  const double deg = std::numbers::pi / 180;
-  return (Eigen::AngleAxisd(tiltDeg * deg, Eigen::Vector3d::UnitX()) *
-          Eigen::AngleAxisd(spinDeg * deg, Eigen::Vector3d::UnitZ()))
-      .toRotationMatrix();
-}
-
-void SessionSettings::validate() const {
-  ReplayOptions o;
-  o.tool = tool;
-  o.brush = brush;
-  o.displace = displace;
-  o.pressDepth = pressDepth;
-  o.scene.planetRadius = planetRadius;
-  o.validate();
-  if (!(std::isfinite(spinDeg) && std::isfinite(tiltDeg)))
-    throw core::InputError("planet turn (spin, tilt) is not finite");
-}
-
-nlohmann::json toJson(const SessionSettings& s) {
-  return {{"tool", toString(s.tool)},
-          {"brush_radius_m", s.brush.radius},
-          {"sigma", s.brush.sigma},
-          {"mu", s.brush.mu},
-          {"mode", edit::toString(s.brush.mode)},
-          {"strength_m", s.brush.strength},
-          {"rate", s.brush.rate},
-          {"target_m", s.brush.target},
-          {"spacing", s.brush.spacing},
-          {"displace_radius_m", s.displace.radius},
-          {"rampart_width", s.displace.rampartWidth},
-          {"displace_spacing", s.displace.spacing},
-          {"press_m", s.pressDepth},
-          {"planet_radius_m", s.planetRadius},
-          {"spin_deg", s.spinDeg},
-          {"tilt_deg", s.tiltDeg}};
-}
-
-nlohmann::json diff(const SessionSettings& before, const SessionSettings& after) {
-  const nlohmann::json a = toJson(before), b = toJson(after);
-  nlohmann::json d = nlohmann::json::object();
-  for (const auto& [key, value] : b.items())
-    if (a.at(key) != value) d[key] = value;
-  return d;
-}
-
-SessionStart SessionStart::of(const terrain::Terrain& planet, const std::string& planetFile,
-                              int gridSide, std::uint64_t seed,
-                              const tracking::CameraCalibration& calib,
-                              const std::string& calibrationFile, const ReplayOptions& o,
-                              double fps, std::size_t undoSteps) {
-  SessionStart s;
-  s.planetFile = planetFile;
-  s.gridSide = gridSide;
-  s.seed = seed;
-  s.radius = planet.chart().radius();
-  s.heightsCrc = io::heightsChecksum(planet.heights());
-  s.calibrationFile = calibrationFile;
-  s.imageSize = calib.imageSize;
-  for (int i = 0; i < 9; ++i) s.K.push_back(calib.K(i / 3, i % 3));
-  for (int i = 0; i < int(calib.distortion.total()); ++i)
-    s.distortion.push_back(calib.distortion.at<double>(i));
-  s.fps = fps;
-  s.family = o.detector.family;
-  s.decimate = o.detector.decimate;
-  s.planetId = o.scene.planet.id;
-  s.planetMarkerSize = o.scene.planet.size;
-  s.toolId = o.scene.tool.id;
-  s.toolMarkerSize = o.scene.tool.size;
-  s.tipOffset = o.scene.tipOffset;
-  s.board = o.scene.planet.layout;
-  s.toolLayout = o.scene.tool.layout;
-  s.touchDistance = o.scene.touchDistance;
-  s.filter = o.scene.planet.filter && o.scene.tool.filter && o.scene.filterTip;
-  s.settle = o.settle;
-  s.undoSteps = undoSteps;
-  return s;
-}
-
-void SessionStart::applyTo(ReplayOptions& o) const {
-  o.detector.family = family;
-  o.detector.decimate = decimate;
-  o.scene.planet.id = planetId;
-  o.scene.planet.size = planetMarkerSize;
-  o.scene.tool.id = toolId;
-  o.scene.tool.size = toolMarkerSize;
-  o.scene.useBoard(board);
-  o.scene.useToolLayout(toolLayout);
-  o.scene.tipOffset = tipOffset;
-  o.scene.touchDistance = touchDistance;
-  o.scene.planet.filter = o.scene.tool.filter = o.scene.filterTip = filter;
-  o.settle = settle;
-}
-
-TimelineWriter::~TimelineWriter() {
-  close();
-}
-
-void TimelineWriter::open(const std::filesystem::path& path, const SessionStart& start,
-                          const SessionSettings& settings) {
-  close();
-  file_ = std::fopen(path.c_str(), "w");
-  if (!file_)
-    throw std::runtime_error(path.string() + ": cannot write the session sidecar (" +
-                             std::strerror(errno) + ")");
-  path_ = path;
-  frames_ = 0;
-  fps_ = start.fps > 0 ? start.fps : 30;
-  error_.clear();
-  writeLine({{"format", kFormat},
-             {"version", kSessionTimelineVersion},
-             {"frame", 0},
-             {"start", nlohmann::ordered_json(toJson(start))},
-             {"settings", nlohmann::ordered_json(toJson(settings))}});
-}
-
-void TimelineWriter::close() {
-  if (file_) std::fclose(file_);
-  file_ = nullptr;
-}
-
-void TimelineWriter::writeLine(const nlohmann::ordered_json& j) {
-  if (!file_) return;
-  const std::string line = j.dump() + "\n";
-  // One write and a flush per line: a crash (not a power cut) leaves whole lines only, and at
-  // most the last one torn; the reader ignores that one.
-  if (std::fwrite(line.data(), 1, line.size(), file_) != line.size() || std::fflush(file_) != 0) {
-    error_ = path_.string() + ": cannot write the session sidecar (" + std::strerror(errno) +
-             "); stopped writing it";
-    close();
-  }
-}
-
-void TimelineWriter::frameRecorded(double time) {
-  if (time != frames_ / fps_) writeLine({{"frame", frames_}, {"time_s", time}});
-  ++frames_;
-}
-
-void TimelineWriter::change(const SessionSettings& before, const SessionSettings& after) {
-  const nlohmann::json d = diff(before, after);
-  if (d.empty()) return;
-  nlohmann::ordered_json line = {{"frame", frames_}};  // the frame first, for people reading
-  for (const auto& [key, value] : d.items()) line[key] = value;
-  writeLine(line);
-}
-
-void TimelineWriter::event(const std::string& what) {
-  writeLine({{"frame", frames_}, {"event", what}});
-}
-
-SessionControl::SessionControl(FrameStepper& stepper)
-    : stepper_(stepper), s_(SessionSettings::of(stepper.options())) {}
-
-void SessionControl::apply(const SessionSettings& t) {
-  const SessionSettings before = s_;
-  try {
-    applyParts(t);
-  } catch (...) {
-    if (writer_) writer_->change(before, s_);  // the sidecar holds what the stepper has
-    throw;
-  }
-  if (writer_) writer_->change(before, s_);
-}
-
-void SessionControl::applyParts(const SessionSettings& t) {
-  if (t.spinDeg != s_.spinDeg || t.tiltDeg != s_.tiltDeg) {
-    stepper_.setUserRotation(t.rotation());
-    s_.spinDeg = t.spinDeg;
-    s_.tiltDeg = t.tiltDeg;
-  }
-  if (t.planetRadius != s_.planetRadius) {
-    stepper_.setPlanetSize(t.planetRadius);
-    s_.planetRadius = t.planetRadius;
-  }
-  if (!(t.brush == s_.brush)) {
-    stepper_.setBrush(t.brush);
-    s_.brush = t.brush;
-  }
-  if (!(t.displace == s_.displace) || t.pressDepth != s_.pressDepth) {
-    stepper_.setDisplacement(t.displace, t.pressDepth);
-    s_.displace = t.displace;
-    s_.pressDepth = t.pressDepth;
-  }
-  if (t.tool != s_.tool) {
-    stepper_.setTool(t.tool);
-    s_.tool = t.tool;
-  }
-}
-
-void SessionControl::undo() {
-  stepper_.endStroke();
-  stepper_.pipeline().undo();
-  if (writer_) writer_->event("undo");
-}
-
-void SessionControl::redo() {
-  stepper_.endStroke();
-  stepper_.pipeline().redo();
-  if (writer_) writer_->event("redo");
-}
 
 bool SessionTimeline::hasUndoRedo() const {
   for (const auto& e : entries)
@@ -471,8 +222,9 @@ SessionTimeline parseSessionTimeline(const std::string& all, const std::filesyst
       fail(path, line, j.is_discarded() ? "not JSON" : "not a JSON object");
     }
     if (line == 1) {
-      if (!j.contains("format") || j["format"] != kFormat)
-        fail(path, line, std::string("not a session sidecar (no \"format\": \"") + kFormat + "\")");
+      if (!j.contains("format") || j["format"] != kSessionFormat)
+        fail(path, line,
+             std::string("not a session sidecar (no \"format\": \"") + kSessionFormat + "\")");
       const int version = read<int>(j, "version", path, line);
       if (version != kSessionTimelineVersion)
         fail(path, line,
@@ -566,41 +318,6 @@ void checkSessionStart(const SessionTimeline& t, const terrain::Terrain& planet,
     throw core::InputError(where + "the session was recorded with another calibration (" +
                            s.calibrationFile + ") than " + calib.source +
                            "; give that one with --calib, or --no-session");
-}
-
-TimelinePlayer::TimelinePlayer(const SessionTimeline& t, SessionControl& control)
-    : t_(t), control_(control) {
-  control_.apply(t.settings);
-}
-
-void TimelinePlayer::run(const TimelineEntry& e) {
-  try {
-    if (e.event == "undo")
-      control_.undo();
-    else if (e.event == "redo")
-      control_.redo();
-    else
-      control_.apply(e.settings);
-    ++applied_;
-  } catch (const core::InputError& x) {
-    warnings_.push_back(t_.path.string() + ":" + std::to_string(e.line) + ": " +
-                        (e.event.empty() ? "change" : e.event) + " at frame " +
-                        std::to_string(e.frame) + " refused (" + x.what() +
-                        "): the replay differs from the session from there on");
-  }
-}
-
-void TimelinePlayer::before(int frame) {
-  while (next_ < t_.entries.size() && t_.entries[next_].frame <= frame) run(t_.entries[next_++]);
-}
-
-void TimelinePlayer::finish(int frames) {
-  before(frames);
-  if (next_ < t_.entries.size())
-    warnings_.push_back(t_.path.string() + ":" + std::to_string(t_.entries[next_].line) +
-                        ": changes at frame " + std::to_string(t_.entries[next_].frame) +
-                        " and later were not applied: the video has only " +
-                        std::to_string(frames) + " frames");
 }
 
 }  // namespace ps::replay
