@@ -8,7 +8,8 @@ cd "$(dirname "$0")/.."
 seconds="${1:-60}"
 shift || true
 targets=("$@")
-[ ${#targets[@]} -gt 0 ] || targets=(planet_file heightmap_image sidecar_json)
+[ ${#targets[@]} -gt 0 ] || targets=(planet_file heightmap_image sidecar_json stroke_journal session_sidecar stroke_script synth_script
+                                 marker_layout calibration)
 if ! command -v clang++ >/dev/null; then
   echo "fuzz: clang++ not found (apt-get install clang libclang-rt-14-dev)" >&2
   exit 2

@@ -10,7 +10,7 @@ PACKAGES=(
   libopencv-dev libopencv-contrib-dev libapriltag-dev libtiff-dev zlib1g-dev
   libegl-dev libopengl-dev libgl-dev libegl-mesa0 libgl1-mesa-dri
   libglfw3-dev libimgui-dev libstb-dev xvfb xauth
-  clang libclang-rt-14-dev ccache
+  clang libclang-rt-14-dev ccache python3
 )
 
 missing=()

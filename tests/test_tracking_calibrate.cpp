@@ -4,11 +4,14 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdlib>
 #include <filesystem>
 #include <opencv2/aruco/charuco.hpp>
 #include <opencv2/calib3d.hpp>
+#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "app/build_paths.hpp"
 #include "core/input_error.hpp"
 #include "tracking/calibration.hpp"
 #include "tracking/charuco_calibration.hpp"
@@ -114,18 +117,21 @@ double deg(double d) {
   return d * M_PI / 180;
 }
 
-// Fifteen views: the board's centre on a 3x3 grid over the image and at its middle, tilted
-// 20-40 degrees both ways, turned in its plane, at 0.40-0.55 m.
-void addStandardViews(tracking::CharucoCalibrator& calibrator, const ViewRenderer& r, int count) {
+// View i of the standard set: the board's centre on a 3x3 grid over the image and at its
+// middle, tilted 20-40 degrees both ways, turned in its plane, at 0.40-0.55 m.
+cv::Mat standardView(const ViewRenderer& r, int i) {
   const double xs[3] = {150, 320, 490}, ys[3] = {130, 240, 350};
+  const double px = xs[i % 3], py = ys[(i / 3) % 3];
+  const double sx = (i % 2 ? 1 : -1), sy = ((i / 2) % 2 ? 1 : -1);
+  const double ax = sx * deg(25 + 5 * (i % 5)), ay = sy * deg(25 + 6 * (i % 4));
+  const double az = deg(-30 + 13 * i % 60);
+  const double z = 0.40 + 0.015 * (i % 11);
+  return r.view(px, py, z, ax, ay, az, std::uint64_t(i + 1));
+}
+
+void addStandardViews(tracking::CharucoCalibrator& calibrator, const ViewRenderer& r, int count) {
   for (int i = 0; i < count; ++i) {
-    const double px = xs[i % 3], py = ys[(i / 3) % 3];
-    const double sx = (i % 2 ? 1 : -1), sy = ((i / 2) % 2 ? 1 : -1);
-    const double ax = sx * deg(25 + 5 * (i % 5)), ay = sy * deg(25 + 6 * (i % 4));
-    const double az = deg(-30 + 13 * i % 60);
-    const double z = 0.40 + 0.015 * (i % 11);
-    const auto v = calibrator.addImage(r.view(px, py, z, ax, ay, az, std::uint64_t(i + 1)),
-                                       "view " + std::to_string(i));
+    const auto v = calibrator.addImage(standardView(r, i), "view " + std::to_string(i));
     EXPECT_TRUE(v.kept) << "view " << i << ": " << v.reason << " (" << v.corners << " corners)";
   }
 }
@@ -265,4 +271,33 @@ TEST(TrackingCalibrate, BadBoardsAreRefused) {
   tracking::CalibrationThresholds th;
   th.minViews = 2;
   EXPECT_THROW(th.validate(), core::InputError);
+}
+
+// `planetsculpt calibrate` end to end: a folder of rendered views in, a calibration file out
+// that holds the true camera.
+TEST(TrackingCalibrate, CommandCalibratesAFolderOfRenderedViews) {
+  const std::filesystem::path exe = app::commandPath();
+  if (!std::filesystem::exists(exe)) GTEST_SKIP() << "no " << exe << " in this build";
+  const TrueCamera cam;
+  const ViewRenderer renderer(CharucoBoardSpec{}, cam);
+  const auto dir = std::filesystem::temp_directory_path() / "ps_test_calibrate_command";
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir / "views");
+  for (int i = 0; i < 16; ++i) {
+    const auto file = dir / "views" / ("view" + std::to_string(100 + i) + ".png");
+    ASSERT_TRUE(cv::imwrite(file.string(), standardView(renderer, i))) << file;
+  }
+  const std::string command = "'" + exe.string() + "' calibrate '" + (dir / "views").string() +
+                              "' --out '" + (dir / "cam.yml").string() + "' > '" +
+                              (dir / "log.txt").string() + "' 2>&1";
+  ASSERT_EQ(std::system(command.c_str()), 0) << command;
+  const auto c = tracking::loadCalibration(dir / "cam.yml");
+  EXPECT_NEAR(c.K(0, 0), cam.K(0, 0), 3.0);
+  EXPECT_NEAR(c.K(1, 1), cam.K(1, 1), 3.0);
+  EXPECT_NEAR(c.K(0, 2), cam.K(0, 2), 3.0);
+  EXPECT_NEAR(c.K(1, 2), cam.K(1, 2), 3.0);
+  EXPECT_NEAR(c.distortion.at<double>(0), -0.12, 0.02);
+  EXPECT_EQ(c.imageSize, cam.size);
+  EXPECT_LT(c.rms, 0.5);
+  std::filesystem::remove_all(dir);
 }

@@ -1,13 +1,15 @@
 #pragma once
-// Where this build's source tree lies, and the shared data folder beside it (SOURCE/../shared),
-// as CMake configured them. The paths live in one generated file (build_paths.cpp.in, written
-// into the build folder), so that a clone in another folder recompiles that file alone and a
-// compiler cache serves every other object (docs/CI.md).
+// Where this build's source tree lies, the shared data folder beside it (SOURCE/../shared) and
+// the program it builds, as CMake configured them. The paths live in one generated file
+// (build_paths.cpp.in, written into the build folder), so that a clone in another folder recompiles
+// that file alone and a compiler cache serves every other object (docs/CI.md).
 #include <filesystem>
 
 namespace ps::app {
 
 std::filesystem::path sourceDir();
 std::filesystem::path sharedDir();
+// This build's `planetsculpt` (the tests that run a command end to end).
+std::filesystem::path commandPath();
 
 }  // namespace ps::app

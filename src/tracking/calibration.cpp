@@ -84,19 +84,10 @@ CameraCalibration CameraCalibration::forImageSize(cv::Size size) const {
   return c;
 }
 
-CameraCalibration loadCalibration(const std::filesystem::path& path) {
-  const std::string name = path.string();
-  {
-    std::ifstream probe(path);
-    if (!probe) throw core::InputError(name + ": cannot open the calibration file");
-  }
-  cv::FileStorage fs;
-  try {
-    if (!fs.open(name, cv::FileStorage::READ))
-      throw core::InputError(name + ": not a calibration file OpenCV can read (YAML/XML/JSON)");
-  } catch (const cv::Exception& e) {
-    throw core::InputError(name + ": malformed calibration file (" + e.err + ")");
-  }
+namespace {
+
+// The calibration in an opened file (`name` for messages).
+CameraCalibration readCalibration(cv::FileStorage& fs, const std::string& name) {
   CameraCalibration c;
   c.source = name;
   try {
@@ -129,6 +120,35 @@ CameraCalibration loadCalibration(const std::filesystem::path& path) {
   }
   c.validate();
   return c;
+}
+
+}  // namespace
+
+CameraCalibration loadCalibration(const std::filesystem::path& path) {
+  const std::string name = path.string();
+  {
+    std::ifstream probe(path);
+    if (!probe) throw core::InputError(name + ": cannot open the calibration file");
+  }
+  cv::FileStorage fs;
+  try {
+    if (!fs.open(name, cv::FileStorage::READ))
+      throw core::InputError(name + ": not a calibration file OpenCV can read (YAML/XML/JSON)");
+  } catch (const cv::Exception& e) {
+    throw core::InputError(name + ": malformed calibration file (" + e.err + ")");
+  }
+  return readCalibration(fs, name);
+}
+
+CameraCalibration parseCalibration(const std::string& text, const std::string& name) {
+  cv::FileStorage fs;
+  try {
+    if (!fs.open(text, cv::FileStorage::READ | cv::FileStorage::MEMORY))
+      throw core::InputError(name + ": not a calibration file OpenCV can read (YAML/XML/JSON)");
+  } catch (const cv::Exception& e) {
+    throw core::InputError(name + ": malformed calibration file (" + e.err + ")");
+  }
+  return readCalibration(fs, name);
 }
 
 void saveCalibration(const CameraCalibration& c, const std::filesystem::path& path,

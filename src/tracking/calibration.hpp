@@ -31,6 +31,8 @@ struct CameraCalibration {
 
 // Throws core::InputError "FILE: what is wrong" for a missing, unreadable or malformed file.
 CameraCalibration loadCalibration(const std::filesystem::path& path);
+// The same from a file's text (YAML with its %YAML header, XML or JSON; `name` in messages).
+CameraCalibration parseCalibration(const std::string& text, const std::string& name);
 // Writes image_width/height (when known), camera_matrix, distortion_coefficients (1xN) and
 // avg_reprojection_error (when known), plus any `comment`, as YAML whatever the extension;
 // atomic (a temporary file renamed). Throws on I/O errors.

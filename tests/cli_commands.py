@@ -1,0 +1,272 @@
+#!/usr/bin/env python3
+"""ctest cli_*: each `planetsculpt` command end to end on small inputs, its outputs checked.
+
+Usage: cli_commands.py GROUP EXE SOURCE_DIR OUT_DIR [BENCH]
+Groups: demo, import_export, synth_detect, markers, bench (with a benchmark's name), errors. (`live` has live_smoke.sh;
+`calibrate` runs from ps_tests, TrackingCalibrate.CommandCalibratesAFolderOfRenderedViews,
+which renders the views it reads.) Python's standard library only: the values are compared
+through the raw float32 format, which needs no image decoder.
+"""
+import json
+import math
+import os
+import shutil
+import struct
+import subprocess
+import sys
+
+GROUP, EXE, SRC, OUT = sys.argv[1:5]
+CALIB = os.path.join(SRC, "calib", "synthetic-640x480.yml")
+
+
+def fail(message):
+    print("FAIL: " + message)
+    sys.exit(1)
+
+
+def run(*args, expect=0):
+    """Runs the command; returns (stdout, stderr). A signal (a crash) always fails."""
+    p = subprocess.run([EXE, *args], capture_output=True, text=True)
+    if p.returncode < 0:
+        fail(f"{' '.join(args)}: killed by signal {-p.returncode}\n{p.stderr[-3000:]}")
+    if expect is not None and p.returncode != expect:
+        fail(f"{' '.join(args)}: exit {p.returncode}, expected {expect}\n{p.stderr[-3000:]}")
+    return p.stdout, p.stderr
+
+
+def out(*parts):
+    return os.path.join(OUT, *parts)
+
+
+def write_raw(path, width, height, values, extra=None):
+    with open(path, "wb") as f:
+        f.write(struct.pack(f"<{len(values)}f", *values))
+    meta = {"format": "float32le", "width": width, "height": height}
+    meta.update(extra or {})
+    with open(path + ".json", "w") as f:
+        json.dump(meta, f)
+
+
+def read_raw(path):
+    with open(path + ".json") as f:
+        meta = json.load(f)
+    with open(path, "rb") as f:
+        data = f.read()
+    n = meta["width"] * meta["height"]
+    if len(data) != 4 * n:
+        fail(f"{path}: {len(data)} bytes for {meta['width']}x{meta['height']} float32")
+    return meta, struct.unpack(f"<{n}f", data)
+
+
+def is_png(path):
+    with open(path, "rb") as f:
+        return f.read(8) == b"\x89PNG\r\n\x1a\n"
+
+
+def group_demo():
+    # A 12-frame synthetic recording, replayed by `demo` on a small planet: every file it
+    # announces is written, the pictures are PNGs, and the recording sculpted the planet.
+    video = out("short.mkv")
+    run("synth", "short", "--out", video)
+    if not os.path.exists(out("short.truth.jsonl")):
+        fail("synth wrote no ground truth beside the video")
+    run("demo", "--video", video, "--calib", CALIB, "--grid", "1025", "--out", out("demo"))
+    with open(out("demo", "summary.json")) as f:
+        s = json.load(f)
+    if s["frames"] != 12:
+        fail(f"demo replayed {s['frames']} frames of 12")
+    if s["frames_with_planet"] < 10 or s["touching_frames"] < 1 or s["strokes"] < 1:
+        fail(f"demo tracked or sculpted too little: {s}")
+    if not (0 < s["largest_change_m"] < 1e5) or s["modified_vertices"] <= 0:
+        fail("the replay did not change the planet's heights within reason")
+    for name in s["files"]:
+        p = out("demo", name)
+        if not os.path.getsize(p):
+            fail(f"demo announced {name} but wrote nothing")
+        if name.endswith(".png") and not is_png(p):
+            fail(f"{p} is not a PNG")
+    leftovers = [n for n in os.listdir(out("demo")) if n.endswith(".part")]
+    if leftovers:
+        fail(f"temporary files left: {leftovers}")
+    frames = [json.loads(l) for l in open(out("demo", "log.jsonl"))]
+    if len([l for l in frames if "frame" in l]) < 12:
+        fail("log.jsonl holds fewer lines than frames")
+
+
+def group_import_export():
+    # A flat tile through raw float32: import then export at its own size gives the same floats
+    # back, bit for bit (the grid is the tile's own 2^n+1 side).
+    w = h = 33
+    tile = [100.0 * math.sin(0.3 * x) * math.cos(0.2 * y) + 0.25 * x for y in range(h) for x in range(w)]
+    tile = list(struct.unpack(f"<{len(tile)}f", struct.pack(f"<{len(tile)}f", *tile)))  # float32
+    write_raw(out("tile.raw"), w, h, tile)
+    run("import", out("tile.raw"), "--chart", "flat", "--spacing", "30", "--out", out("tile.planet"))
+    run("export", out("tile.planet"), "--out", out("tile_back.raw"))
+    meta, back = read_raw(out("tile_back.raw"))
+    if (meta["width"], meta["height"]) != (w, h):
+        fail(f"flat round trip came back {meta['width']}x{meta['height']}, not {w}x{h}")
+    worst = max(abs(a - b) for a, b in zip(tile, back))
+    if worst != 0.0:
+        fail(f"flat round trip changed heights by up to {worst} m")
+    # A global lat-long field (smooth: one bilinear resampling each way) comes back close.
+    w, h = 128, 64
+    field = []
+    for y in range(h):
+        lat = math.pi / 2 - (y + 0.5) * math.pi / h
+        for x in range(w):
+            lon = -math.pi + (x + 0.5) * 2 * math.pi / w
+            field.append(2000.0 * math.cos(lat) * math.sin(2 * lon) + 500.0 * math.sin(lat))
+    write_raw(out("globe.raw"), w, h, field)
+    run("import", out("globe.raw"), "--grid", "257", "--radius", "1737400", "--out", out("globe.planet"))
+    run("export", out("globe.planet"), "--width", str(w), "--height", str(h), "--out", out("globe_back.raw"))
+    _, back = read_raw(out("globe_back.raw"))
+    rms = math.sqrt(sum((a - b) ** 2 for a, b in zip(field, back)) / len(field))
+    if not rms < 20.0:  # 0.5 % of the field's 4 km range
+        fail(f"lat-long round trip rms {rms:.2f} m (over 20 m)")
+    # Meshes: OBJ vertices lie within the requested error of the surface's height range; PLY
+    # and GLB carry their magic bytes.
+    run("export", out("tile.planet"), "--max-error", "1", "--out", out("tile.obj"))
+    verts = [tuple(map(float, l.split()[1:4])) for l in open(out("tile.obj")) if l.startswith("v ")]
+    faces = [l for l in open(out("tile.obj")) if l.startswith("f ")]
+    if len(verts) < 4 or len(faces) < 2:
+        fail(f"tile.obj has {len(verts)} vertices, {len(faces)} faces")
+    lo, hi = min(tile), max(tile)
+    for v in verts:
+        if not (lo - 1e-3 <= v[2] <= hi + 1e-3) or not all(map(math.isfinite, v)):
+            fail(f"OBJ vertex {v} outside the tile's heights [{lo}, {hi}]")
+    run("export", out("tile.planet"), "--max-error", "1", "--out", out("tile.ply"))
+    run("export", out("globe.planet"), "--max-error", "50", "--out", out("globe.glb"))
+    if not open(out("tile.ply"), "rb").read(4) == b"ply\n":
+        fail("tile.ply has no PLY header")
+    if not open(out("globe.glb"), "rb").read(4) == b"glTF":
+        fail("globe.glb has no glTF magic")
+
+
+def group_synth_detect():
+    # A rendered still scene: `detect` finds the tool marker where the ground truth put it.
+    video = out("still.mkv")
+    run("synth", "still", "--frames", "3", "--out", video)
+    truth = [json.loads(l) for l in open(out("still.truth.jsonl"))]
+    frames = {t["frame"]: t for t in truth if t.get("type") == "frame"}
+    stdout, _ = run("detect", video, "--calib", CALIB, "--marker-size", "0.05", "--ids", "1")
+    found = [json.loads(l) for l in stdout.splitlines() if l.startswith("{")]
+    if len(found) != 3:
+        fail(f"detect found the tool marker in {len(found)} of 3 frames")
+    for d in found:
+        if d["id"] != 1 or len(d["corners"]) != 4:
+            fail(f"unexpected detection {d}")
+        t = frames[d["frame"]]["tool"]["tvec"]
+        err = math.dist(d["tvec"], t)
+        if err > 0.002:
+            fail(f"frame {d['frame']}: tool marker at {d['tvec']}, truth {t} ({err * 1000:.2f} mm)")
+
+
+def group_markers():
+    # The sheets: PNGs that `detect` reads back with every id, PDFs of the paper's size.
+    run("markers", "--out", out("sheets"), "--paper", "a4")
+    expected = {"planet-marker-a4": {0}, "tool-marker-a4": {1},
+                "planet-board-a4": set(range(10, 19)), "tool-cube-a4": set(range(20, 25))}
+    for name, ids in expected.items():
+        png, pdf = out("sheets", name + ".png"), out("sheets", name + ".pdf")
+        if not is_png(png):
+            fail(f"{png} is not a PNG")
+        data = open(pdf, "rb").read()
+        if not data.startswith(b"%PDF-") or b"595.2" not in data:
+            fail(f"{pdf} is not an A4 PDF")
+        stdout, _ = run("detect", png, "--decimate", "1")
+        seen = {json.loads(l)["id"] for l in stdout.splitlines() if l.startswith("{")}
+        if not ids <= seen:
+            fail(f"{png}: detect read ids {sorted(seen)}, the sheet holds {sorted(ids)}")
+
+
+def finite_numbers(x, where):
+    if isinstance(x, dict):
+        for k, v in x.items():
+            finite_numbers(v, f"{where}.{k}")
+    elif isinstance(x, list):
+        for i, v in enumerate(x):
+            finite_numbers(v, f"{where}[{i}]")
+    elif isinstance(x, float) and not math.isfinite(x):
+        fail(f"{where} is {x}")
+
+
+BENCHES = ("bounds", "deform", "erosion", "export", "frame", "haptics", "tessellate", "track")
+
+
+def check_bench_row(r):
+    finite_numbers(r, r.get("bench", "?"))
+    b = r.get("bench")
+    # Peers (Martini, Delatin) promise no bound; this project's meshes guarantee theirs.
+    if b in ("bounds", "export") and r.get("tool", "planetsculpt") == "planetsculpt" and \
+            "requested_error_m" in r and "true_error_m" in r:
+        if r["true_error_m"] > r["requested_error_m"] * (1 + 1e-9) or r.get("triangles", 1) <= 0:
+            fail(f"{b}: true error {r['true_error_m']} over the requested {r['requested_error_m']}")
+    if b == "deform" and r.get("modified_vertices", 1) <= 0:
+        fail(f"deform: no vertex modified in {r}")
+    if b == "erosion" and abs(r.get("volume_drift", 0.0)) > 1e-6:
+        fail(f"erosion: volume drift {r['volume_drift']}")
+    for key in ("planet_detected", "control_vertex_within_3mm"):
+        if b == "track" and key in r and not (0.0 <= r[key] <= 1.0):
+            fail(f"track: {key} {r[key]} outside [0, 1]")
+    for key, v in r.items():
+        if (key == "ms" or key.endswith("_ms")) and isinstance(v, (int, float)) and v < 0:
+            fail(f"{b}: {key} = {v} is negative")
+
+
+def group_bench():
+    # One benchmark (`bench_NAME`) with --quick: JSON rows that parse, finite numbers, the
+    # figures that are exact (errors, counts) in their valid ranges, and its plots PNGs.
+    name = sys.argv[5] if len(sys.argv) > 5 else ""
+    if name not in BENCHES:
+        fail(f"bench group needs one of {', '.join(BENCHES)}")
+    stdout, _ = run("bench", name, "--quick", "--out", out("bench"))
+    rows = [json.loads(l) for l in stdout.splitlines() if l.startswith("{")]
+    if not any(r.get("bench") == name for r in rows):
+        fail(f"bench {name} --quick wrote no {name} row")
+    for r in rows:
+        check_bench_row(r)
+    pngs = [n for n in os.listdir(out("bench")) if n.endswith(".png")] if os.path.isdir(out("bench")) else []
+    if not all(is_png(out("bench", n)) for n in pngs):
+        fail("bench --out wrote a plot that is not a PNG")
+
+
+def group_errors():
+    # Bad input: a clear error naming the file, a non-zero exit, never a crash.
+    missing = out("no-such-file.planet")
+    _, err = run("export", missing, "--out", out("x.png"), expect=None)
+    if missing not in err:
+        fail(f"export of a missing file did not name it: {err}")
+    with open(out("bad.planet"), "wb") as f:
+        f.write(b"PSPLANET" + b"\x00" * 40)
+    for args in (("export", out("bad.planet"), "--out", out("x.png")),
+                 ("demo", "--video", out("no-such.mkv"), "--out", out("d")),
+                 ("replay", out("no-such.mkv"), "--calib", CALIB, "--out", out("r")),
+                 ("detect", out("no-such.png")),
+                 ("import", out("bad.planet"), "--out", out("y.planet"))):
+        p = subprocess.run([EXE, *args], capture_output=True, text=True)
+        if p.returncode <= 0:
+            fail(f"{' '.join(args)}: exit {p.returncode} (expected a refusal)")
+        named = [a for a in args[1:] if a.startswith(OUT) and os.path.basename(a) in p.stderr]
+        if not named:
+            fail(f"{' '.join(args)}: the error does not name the file:\n{p.stderr}")
+    with open(out("bad.yml"), "w") as f:
+        f.write("%YAML:1.0\ncamera_matrix: [1, 2\n")
+    p = subprocess.run([EXE, "replay", os.path.join(SRC, "data", "demo.mkv"), "--calib", out("bad.yml"),
+                        "--out", out("r")],
+                       capture_output=True, text=True)
+    if p.returncode <= 0 or "bad.yml" not in p.stderr:
+        fail(f"a malformed calibration was not refused by name: {p.returncode} {p.stderr}")
+    p = subprocess.run([EXE, "export", out("tile.planet"), "--width", "-3", "--out", out("x.png")],
+                       capture_output=True, text=True)
+    if p.returncode <= 0:
+        fail("a negative width was accepted")
+
+
+if __name__ == "__main__":
+    shutil.rmtree(OUT, ignore_errors=True)
+    os.makedirs(OUT)
+    groups = {n[len("group_"):]: f for n, f in globals().items() if n.startswith("group_")}
+    if GROUP not in groups:
+        fail(f"unknown group {GROUP} (one of {', '.join(groups)})")
+    groups[GROUP]()
+    print(f"cli {GROUP}: passed")
