@@ -3,6 +3,9 @@
 // carries its resolution and decodes to the same pixels; the PDF's structure is sound.
 #include <gtest/gtest.h>
 
+#include <zlib.h>
+#include <algorithm>
+#include <cstdio>
 #include <cstring>
 #include <opencv2/aruco/charuco.hpp>
 #include <opencv2/imgcodecs.hpp>
@@ -140,39 +143,86 @@ TEST(TrackingMarkers, PngHasItsResolutionAndThePixels) {
   EXPECT_THROW(tracking::encodeSheetPng(grey, 300), std::invalid_argument);
 }
 
-TEST(TrackingMarkers, PdfIsOnePageOfThePapersSizeWithAConsistentXref) {
+// The page's drawing: every FlateDecode stream of the PDF inflated and joined.
+std::string inflatedStreams(const std::string& pdf) {
+  std::string all;
+  for (std::size_t at = pdf.find("stream\n"); at != std::string::npos;
+       at = pdf.find("stream\n", at + 1)) {
+    if (at >= 3 && pdf.compare(at - 3, 3, "end") == 0) continue;
+    const std::size_t begin = at + 7, end = pdf.find("endstream", begin);
+    if (end == std::string::npos) break;
+    std::string out(64u << 20, '\0');
+    uLongf size = uLongf(out.size());
+    if (uncompress(reinterpret_cast<Bytef*>(out.data()), &size,
+                   reinterpret_cast<const Bytef*>(pdf.data() + begin), uLong(end - begin)) == Z_OK)
+      all += out.substr(0, size);
+  }
+  return all;
+}
+
+// The rectangles (x y w h) of the content's "x y w h re f" operators.
+std::vector<cv::Vec4d> rectangles(const std::string& content) {
+  std::vector<cv::Vec4d> out;
+  for (std::size_t at = content.find(" re f"); at != std::string::npos;
+       at = content.find(" re f", at + 1)) {
+    std::size_t begin = at;
+    for (int spaces = 0; begin > 0 && spaces < 4; --begin)
+      if (content[begin - 1] == ' ' && ++spaces == 4) break;
+    cv::Vec4d r;
+    if (std::sscanf(content.c_str() + begin, "%lf %lf %lf %lf re", &r[0], &r[1], &r[2], &r[3]) == 4)
+      out.push_back(r);
+  }
+  return out;
+}
+
+std::size_t occurrences(const std::string& s, const std::string& what) {
+  std::size_t n = 0;
+  for (std::size_t at = s.find(what); at != std::string::npos; at = s.find(what, at + 1)) ++n;
+  return n;
+}
+
+TEST(TrackingMarkers, PdfIsOnePageOfThePapersSizeWithTheMarkersAsVectors) {
   tracking::MarkerSheetSpec tool;
   tool.id = 1;
   tool.sizeMm = 50;
   tool.tool = true;
-  const auto paper = tracking::paperA4();
-  const auto sheet = tracking::renderMarkerSheet(tool, paper, 300);
-  const std::string pdf = asString(tracking::encodeSheetPdf(sheet.image, 300, paper, sheet.title));
-  EXPECT_EQ(pdf.rfind("%PDF-1.4", 0), 0u);
-  EXPECT_EQ(pdf.substr(pdf.size() - 6), "%%EOF\n");
-  EXPECT_NE(pdf.find("/MediaBox [0 0 595.276 841.890]"), std::string::npos);
-  EXPECT_NE(pdf.find("/Width 2480 /Height 3508"), std::string::npos);
-  EXPECT_NE(pdf.find("/Count 1"), std::string::npos);
-  // startxref points at the xref table, and each entry at its object.
-  const auto sx = pdf.rfind("startxref\n");
-  ASSERT_NE(sx, std::string::npos);
-  const std::size_t xref = std::stoul(pdf.substr(sx + 10));
-  ASSERT_EQ(pdf.compare(xref, 5, "xref\n"), 0);
-  const int count = std::stoi(pdf.substr(xref + 7));
-  ASSERT_EQ(count, 7);
-  for (int i = 1; i < count; ++i) {
-    const std::size_t entry = xref + 7 + std::to_string(count).size() + 1 + 20 * std::size_t(i);
-    const std::size_t offset = std::stoul(pdf.substr(entry, 10));
-    EXPECT_EQ(pdf.compare(offset, std::to_string(i).size() + 6, std::to_string(i) + " 0 obj"), 0)
-        << "object " << i;
+  for (const auto& paper : {tracking::paperA4(), tracking::paperLetter()}) {
+    const auto sheet = tracking::renderMarkerSheet(tool, paper, 300);
+    const std::string pdf = asString(tracking::encodeSheetPdf(sheet));
+    EXPECT_EQ(pdf.rfind("%PDF-", 0), 0u);
+    EXPECT_EQ(occurrences(pdf, "/Type /Page ") + occurrences(pdf, "/Type /Page\n"), 1u);
+    const auto media = pdf.find("/MediaBox [ 0 0 ");
+    ASSERT_NE(media, std::string::npos);
+    double w = 0, h = 0;
+    ASSERT_EQ(std::sscanf(pdf.c_str() + media, "/MediaBox [ 0 0 %lf %lf ]", &w, &h), 2);
+    EXPECT_NEAR(w, paper.widthMm / 25.4 * 72, 1e-3) << paper.name;
+    EXPECT_NEAR(h, paper.heightMm / 25.4 * 72, 1e-3) << paper.name;
+    EXPECT_NE(pdf.find("/Title (" + sheet.title + ")"), std::string::npos);
+    EXPECT_EQ(pdf.find("/Subtype /Image"), std::string::npos) << "the sheet must not be a raster";
+    // Every box of the drawing is a rectangle in the page's content, and the marker's cells
+    // are where the sheet put them (points = mm * 72 / 25.4; y down from the top after the
+    // page's flip).
+    const std::string content = inflatedStreams(pdf);
+    std::size_t boxes = 0;
+    for (const auto& op : sheet.ops) boxes += op.kind == tracking::SheetOp::Kind::kBox;
+    EXPECT_EQ(occurrences(content, " re f"), boxes);
+    const auto firstCell = std::find_if(sheet.ops.begin(), sheet.ops.end(), [](const auto& op) {
+      return op.kind == tracking::SheetOp::Kind::kBox;
+    });
+    ASSERT_NE(firstCell, sheet.ops.end());
+    const auto rects = rectangles(content);
+    const double k = 72 / 25.4;
+    const bool placed = std::any_of(rects.begin(), rects.end(), [&](const cv::Vec4d& r) {
+      return std::abs(r[0] - firstCell->x0 * k) < 0.01 &&
+             std::abs(r[1] - firstCell->y0 * k) < 0.01 &&
+             std::abs(r[2] - (firstCell->x1 - firstCell->x0) * k) < 0.01 &&
+             std::abs(r[3] - (firstCell->y1 - firstCell->y0) * k) < 0.01;
+    });
+    EXPECT_TRUE(placed) << "no rectangle at the first cell (" << firstCell->x0 << ", "
+                        << firstCell->y0 << ") mm";
+    // The text is text (a font), not pixels.
+    EXPECT_NE(content.find("(PlanetSculpt tool marker)Tj"), std::string::npos);
   }
-  // The image stream is as long as its /Length says.
-  const auto lenAt = pdf.find("/Length ", pdf.find("/Subtype /Image"));
-  const std::size_t len = std::stoul(pdf.substr(lenAt + 8));
-  const auto start = pdf.find("stream\n", lenAt) + 7;
-  EXPECT_EQ(pdf.compare(start + len, 10, "\nendstream"), 0);
-  // Drawn at its physical size: 2480 px at 300 dpi = 595.2 points.
-  EXPECT_NE(pdf.find("q 595.2000 0 0 841.9200 "), std::string::npos);
 }
 
 TEST(TrackingMarkers, BadSheetsAreRefused) {

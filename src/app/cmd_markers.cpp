@@ -108,7 +108,7 @@ int runMarkers(const MarkersArgs& a) {
                   << "x" << sheet.image.rows << ", " << png.size() / 1024 << " KiB)\n";
       }
       if (a.format != "png") {
-        const auto pdf = tracking::encodeSheetPdf(sheet.image, sheet.dpi, paper, sheet.title);
+        const auto pdf = tracking::encodeSheetPdf(sheet);
         writeFile(dir / (base + ".pdf"), pdf);
         total += (long long)pdf.size();
         std::cerr << "markers: " << (dir / (base + ".pdf")).string() << " (" << pdf.size() / 1024

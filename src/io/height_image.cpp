@@ -10,10 +10,10 @@
 #include <fstream>
 #include <limits>
 #include <nlohmann/json.hpp>
-#include <opencv2/imgcodecs.hpp>
+#include <optional>
 
 #include "core/input_error.hpp"
-#include "io/png_text.hpp"
+#include "io/png_codec.hpp"
 
 namespace ps::io {
 
@@ -35,11 +35,6 @@ void checkDims(std::uint64_t w, std::uint64_t h, const std::string& name,
                    "), more than this build accepts (" + std::to_string(maxPixels) + " pixels, " +
                    std::to_string(kMaxImageSide) + " per side): crop or downsample it first");
   }
-}
-
-std::uint32_t be32(const unsigned char* p) {
-  return (std::uint32_t(p[0]) << 24) | (std::uint32_t(p[1]) << 16) | (std::uint32_t(p[2]) << 8) |
-         p[3];
 }
 
 double parseNumberText(const std::string& s, bool& ok) {
@@ -68,14 +63,15 @@ double parseNumberText(const std::string& s, bool& ok) {
 
 HeightImage decodePng(std::span<const unsigned char> b, const std::string& name,
                       std::uint64_t maxPixels) {
-  // Signature (8) + IHDR length (4) + "IHDR" (4) + 13 data bytes + CRC (4).
-  if (b.size() < 33)
-    fail(name, "truncated PNG: " + std::to_string(b.size()) + " bytes, no complete header");
-  if (be32(b.data() + 8) != 13 || std::memcmp(b.data() + 12, "IHDR", 4) != 0) {
-    fail(name, "corrupt PNG: the first chunk is not a 13-byte IHDR");
+  std::optional<PngReader> reader;
+  try {
+    reader.emplace(b);
+  } catch (const PngError& e) {
+    fail(name, std::string("truncated PNG, or a corrupt header (") + e.what() + ")");
   }
-  const std::uint32_t w = be32(b.data() + 16), h = be32(b.data() + 20);
-  const int depth = b[24], colour = b[25];
+  const PngHeader& hd = reader->header();
+  const std::uint32_t w = std::uint32_t(hd.width), h = std::uint32_t(hd.height);
+  const int depth = hd.bitDepth, colour = hd.colourType;
   checkDims(w, h, name, maxPixels);
   if (colour != 0) {
     static const char* kinds[] = {"grey", "?", "RGB", "palette", "grey+alpha", "?", "RGBA"};
@@ -93,43 +89,32 @@ HeightImage decodePng(std::span<const unsigned char> b, const std::string& name,
     fail(name, "truncated PNG: " + std::to_string(b.size()) + " bytes cannot hold the " +
                    dims(w, h) + " pixels its header declares");
   }
-  HeightImage img;
-  img.kind = std::to_string(depth) + "-bit grey PNG";
-  try {
-    for (const auto& [key, value] : readPngTextChunks({b.begin(), b.end()})) {
-      bool ok = false;
-      const double x = parseNumberText(value, ok);
-      if (key == "planetsculpt:min_m" && ok && std::isfinite(x)) img.value0Metres = x;
-      if (key == "planetsculpt:max_m" && ok && std::isfinite(x)) img.value65535Metres = x;
-      if (key == "planetsculpt:projection") {
-        img.projection = value.rfind("flat", 0) == 0 ? "flat" : "equirectangular";
-      }
-      if (key == "planetsculpt:pixel_spacing_m") {
-        double sx = 0, sy = 0;
-        char tail = 0;
-        if (std::sscanf(value.c_str(), "%lf %lf %c", &sx, &sy, &tail) == 2 && std::isfinite(sx) &&
-            std::isfinite(sy) && sx > 0 && sy > 0) {
-          img.pixelSpacingX = sx;
-          img.pixelSpacingY = sy;
-        }
-      }
-    }
-  } catch (const std::invalid_argument&) {
-    fail(name, "truncated or corrupt PNG: a chunk runs past the end of the file");
-  }
   cv::Mat m;
   try {
-    m = cv::imdecode(cv::Mat(1, int(std::min<std::size_t>(b.size(), std::size_t(INT32_MAX))),
-                             CV_8UC1, const_cast<unsigned char*>(b.data())),
-                     cv::IMREAD_UNCHANGED);
-  } catch (const cv::Exception& e) {
-    fail(name, std::string("PNG decoder failed: ") + e.what());
+    m = reader->pixels();
+  } catch (const PngError& e) {
+    fail(name, std::string("corrupt or truncated PNG: ") + e.what());
   }
-  if (m.empty()) fail(name, "corrupt or truncated PNG: the decoder could not read the pixel data");
-  if (m.channels() != 1 || std::uint32_t(m.cols) != w || std::uint32_t(m.rows) != h ||
-      (m.depth() != CV_8U && m.depth() != CV_16U)) {
-    fail(name, "PNG decoded to an unexpected layout (" + std::to_string(m.cols) + "x" +
-                   std::to_string(m.rows) + ", " + std::to_string(m.channels()) + " channels)");
+  HeightImage img;
+  img.kind = std::to_string(depth) + "-bit grey PNG";
+  const PngText text = reader->text();
+  for (const auto& [key, value] : text) {
+    bool ok = false;
+    const double x = parseNumberText(value, ok);
+    if (key == "planetsculpt:min_m" && ok && std::isfinite(x)) img.value0Metres = x;
+    if (key == "planetsculpt:max_m" && ok && std::isfinite(x)) img.value65535Metres = x;
+    if (key == "planetsculpt:projection") {
+      img.projection = value.rfind("flat", 0) == 0 ? "flat" : "equirectangular";
+    }
+    if (key == "planetsculpt:pixel_spacing_m") {
+      double sx = 0, sy = 0;
+      char tail = 0;
+      if (std::sscanf(value.c_str(), "%lf %lf %c", &sx, &sy, &tail) == 2 && std::isfinite(sx) &&
+          std::isfinite(sy) && sx > 0 && sy > 0) {
+        img.pixelSpacingX = sx;
+        img.pixelSpacingY = sy;
+      }
+    }
   }
   img.width = int(w);
   img.height = int(h);

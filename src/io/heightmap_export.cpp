@@ -15,7 +15,7 @@
 
 #include "core/flat_chart.hpp"
 #include "io/atomic_file.hpp"
-#include "io/png_text.hpp"
+#include "io/png_codec.hpp"
 
 namespace ps::io {
 
@@ -162,18 +162,14 @@ void writeHeightPng16(const Raster& raster, const std::filesystem::path& path) {
       row[x] = std::uint16_t(std::lround(std::clamp((h - minM) / span, 0.0, 1.0) * 65535.0));
     }
   }
-  std::vector<unsigned char> png;
-  if (!cv::imencode(".png", img, png))
-    throw std::runtime_error("cannot encode PNG for " + path.string());
-  std::vector<std::pair<std::string, std::string>> text = {
-      {"planetsculpt:min_m", decimal(minM)},
-      {"planetsculpt:max_m", decimal(maxM)},
-      {"planetsculpt:projection", projectionText(raster)}};
+  PngText text = {{"planetsculpt:min_m", decimal(minM)},
+                  {"planetsculpt:max_m", decimal(maxM)},
+                  {"planetsculpt:projection", projectionText(raster)}};
   if (raster.layout == Raster::Layout::kFlat) {
     text.emplace_back("planetsculpt:pixel_spacing_m",
                       decimal(raster.pixelWidthM) + " " + decimal(raster.pixelHeightM));
   }
-  png = addPngTextChunks(png, text);
+  const std::vector<unsigned char> png = encodePng(img, {.text = text});
   writeAtomically(path, [&](const std::filesystem::path& tmp) {
     std::ofstream f(tmp, std::ios::binary);
     f.write(reinterpret_cast<const char*>(png.data()), std::streamsize(png.size()));

@@ -87,7 +87,8 @@ class RegionDetector final : public Detector {
     finishDetections(config_, found);
     previous_.clear();
     for (const auto& [id, d] : last_)
-      if (std::any_of(found.begin(), found.end(), [&](const Detection& x) { return x.id == id; }))
+      if (std::any_of(found.begin(), found.end(),
+                      [want = id](const Detection& x) { return x.id == want; }))
         previous_[id] = d;
     last_.clear();
     std::map<int, int> count;

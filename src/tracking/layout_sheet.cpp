@@ -100,6 +100,7 @@ Sheet renderBoardSheet(const MarkerLayout& board, const Paper& paper, double dpi
   c.scaleBar(c.heightMm() - 23);
   footer(c, paper, dpi);
   sheet.image = c.img;
+  sheet.ops = std::move(c.ops);
   return sheet;
 }
 
@@ -182,6 +183,7 @@ Sheet renderCubeNetSheet(const MarkerLayout& cube, const Paper& paper, double dp
   c.scaleBar(c.heightMm() - 23);
   footer(c, paper, dpi);
   sheet.image = c.img;
+  sheet.ops = std::move(c.ops);
   return sheet;
 }
 

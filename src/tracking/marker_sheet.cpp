@@ -1,11 +1,10 @@
 #include "tracking/marker_sheet.hpp"
 
-#include <zlib.h>
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
-#include <opencv2/imgcodecs.hpp>
+#include <opencv2/aruco.hpp>
 #include <opencv2/imgproc.hpp>
 #include <sstream>
 #include <stdexcept>
@@ -20,51 +19,26 @@ using namespace sheet_detail;
 
 namespace {
 
-// --- PNG and PDF -----------------------------------------------------------------------------
-
-void put32(std::vector<std::uint8_t>& v, std::uint32_t x) {
-  for (int s = 24; s >= 0; s -= 8) v.push_back(std::uint8_t(x >> s));
-}
-std::uint32_t get32(const std::uint8_t* p) {
-  return (std::uint32_t(p[0]) << 24) | (std::uint32_t(p[1]) << 16) | (std::uint32_t(p[2]) << 8) |
-         std::uint32_t(p[3]);
-}
-
-void checkBilevel(const cv::Mat& image) {
-  if (image.type() != CV_8U || image.empty())
-    throw std::invalid_argument("sheet images are 8-bit grey");
-  cv::Mat other = (image != 0) & (image != 255);
-  if (cv::countNonZero(other) > 0) throw std::invalid_argument("sheet images are 0 or 255 only");
-}
-
-struct PngParts {
-  int width = 0, height = 0, bitDepth = 0, colourType = 0, interlace = 0;
-  std::vector<std::uint8_t> idat;  // the zlib stream, all IDAT chunks joined
-};
-
-PngParts parsePng(const std::vector<std::uint8_t>& png) {
-  static const std::uint8_t sig[8] = {137, 80, 78, 71, 13, 10, 26, 10};
-  if (png.size() < 8 || std::memcmp(png.data(), sig, 8) != 0)
-    throw std::runtime_error("not a PNG stream");
-  PngParts parts;
-  std::size_t at = 8;
-  while (at + 12 <= png.size()) {
-    const std::uint32_t len = get32(&png[at]);
-    const std::string type(reinterpret_cast<const char*>(&png[at + 4]), 4);
-    if (at + 12 + len > png.size()) throw std::runtime_error("truncated PNG chunk " + type);
-    const std::uint8_t* d = &png[at + 8];
-    if (type == "IHDR") {
-      parts.width = int(get32(d));
-      parts.height = int(get32(d + 4));
-      parts.bitDepth = d[8];
-      parts.colourType = d[9];
-      parts.interlace = d[12];
-    } else if (type == "IDAT") {
-      parts.idat.insert(parts.idat.end(), d, d + len);
-    }
-    at += 12 + len;
+// The ChArUco board's squares and markers as vector steps with its top-left corner at (x0, y0)
+// mm (renderCharucoBoard draws the same boxes into the raster).
+void charucoSteps(Canvas& c, const CharucoBoardSpec& spec, double x0, double y0) {
+  const auto board = spec.create();
+  const double sq = spec.squareLength * 1e3;
+  for (int r = 0; r < spec.squaresY; ++r)
+    for (int k = 0; k < spec.squaresX; ++k)
+      if (r % 2 == k % 2)
+        c.vectorBox(x0 + k * sq, y0 + r * sq, x0 + (k + 1) * sq, y0 + (r + 1) * sq);
+  const int cells = board->dictionary->markerSize + 2;
+  const double cell = spec.markerLength * 1e3 / cells;
+  for (std::size_t i = 0; i < board->ids.size(); ++i) {
+    cv::Mat bits;
+    cv::aruco::drawMarker(board->dictionary, board->ids[i], cells, bits, 1);
+    const double mx = x0 + board->objPoints[i][0].x * 1e3, my = y0 + board->objPoints[i][0].y * 1e3;
+    for (int a = 0; a < cells; ++a)
+      for (int b = 0; b < cells; ++b)
+        c.vectorBox(mx + b * cell, my + a * cell, mx + (b + 1) * cell, my + (a + 1) * cell,
+                    bits.at<uchar>(a, b) ? 255 : 0);
   }
-  return parts;
 }
 
 }  // namespace
@@ -155,6 +129,7 @@ Sheet renderMarkerSheet(const MarkerSheetSpec& spec, const Paper& paper, double 
   c.scaleBar(c.heightMm() - 32);
   footer(c, paper, dpi);
   sheet.image = c.img;
+  sheet.ops = std::move(c.ops);
   return sheet;
 }
 
@@ -179,6 +154,7 @@ Sheet renderCharucoSheet(const CharucoBoardSpec& board, const Paper& paper, doub
   const cv::Mat img = renderCharucoBoard(board, dpi / 0.0254, 0);
   const cv::Rect r(c.ipx(x0), c.ipx(top), img.cols, img.rows);
   img.copyTo(c.img(r));
+  charucoSteps(c, board, r.x * 25.4 / dpi, r.y * 25.4 / dpi);
   sheet.corners = {cv::Point2d(r.x - 0.5, r.y - 0.5), cv::Point2d(r.x + r.width - 0.5, r.y - 0.5),
                    cv::Point2d(r.x + r.width - 0.5, r.y + r.height - 0.5),
                    cv::Point2d(r.x - 0.5, r.y + r.height - 0.5)};
@@ -195,75 +171,8 @@ Sheet renderCharucoSheet(const CharucoBoardSpec& board, const Paper& paper, doub
   c.scaleBar(c.heightMm() - 23);
   footer(c, paper, dpi);
   sheet.image = c.img;
+  sheet.ops = std::move(c.ops);
   return sheet;
-}
-
-std::vector<std::uint8_t> encodeSheetPng(const cv::Mat& image, double dpi) {
-  checkBilevel(image);
-  std::vector<std::uint8_t> png;
-  if (!cv::imencode(".png", image, png,
-                    {cv::IMWRITE_PNG_BILEVEL, 1, cv::IMWRITE_PNG_COMPRESSION, 9}))
-    throw std::runtime_error("PNG encoding failed");
-  // pHYs (pixels per metre) right after IHDR (8-byte signature + 25-byte IHDR chunk).
-  const std::uint32_t ppm = std::uint32_t(std::lround(dpi / 0.0254));
-  std::vector<std::uint8_t> chunk;
-  put32(chunk, 9);
-  const std::size_t typeAt = chunk.size();
-  for (char ch : std::string("pHYs")) chunk.push_back(std::uint8_t(ch));
-  put32(chunk, ppm);
-  put32(chunk, ppm);
-  chunk.push_back(1);  // unit: metre
-  put32(chunk, std::uint32_t(::crc32(0, &chunk[typeAt], uInt(chunk.size() - typeAt))));
-  png.insert(png.begin() + 33, chunk.begin(), chunk.end());
-  return png;
-}
-
-std::vector<std::uint8_t> encodeSheetPdf(const cv::Mat& image, double dpi, const Paper& paper,
-                                         const std::string& title) {
-  const PngParts png = parsePng(encodeSheetPng(image, dpi));
-  if (png.bitDepth != 1 || png.colourType != 0 || png.interlace != 0)
-    throw std::runtime_error("unexpected PNG layout for the PDF (bit depth " +
-                             std::to_string(png.bitDepth) + ")");
-  const double pageW = paper.widthMm / 25.4 * 72, pageH = paper.heightMm / 25.4 * 72;
-  const double imgW = png.width * 72.0 / dpi, imgH = png.height * 72.0 / dpi;
-  std::string out = "%PDF-1.4\n%\xE2\xE3\xCF\xD3\n";
-  std::vector<std::size_t> offsets;
-  char buf[512];
-  auto object = [&](const std::string& body) {
-    offsets.push_back(out.size());
-    out += std::to_string(offsets.size()) + " 0 obj\n" + body + "\nendobj\n";
-  };
-  object("<< /Type /Catalog /Pages 2 0 R >>");
-  object("<< /Type /Pages /Kids [3 0 R] /Count 1 >>");
-  std::snprintf(buf, sizeof buf,
-                "<< /Type /Page /Parent 2 0 R /MediaBox [0 0 %.3f %.3f] /Resources << /XObject "
-                "<< /Im0 4 0 R >> >> /Contents 5 0 R >>",
-                pageW, pageH);
-  object(buf);
-  std::snprintf(buf, sizeof buf,
-                "<< /Type /XObject /Subtype /Image /Width %d /Height %d /ColorSpace /DeviceGray "
-                "/BitsPerComponent 1 /Filter /FlateDecode /DecodeParms << /Predictor 15 /Colors 1 "
-                "/BitsPerComponent 1 /Columns %d >> /Length %zu >>\nstream\n",
-                png.width, png.height, png.width, png.idat.size());
-  object(std::string(buf) + std::string(png.idat.begin(), png.idat.end()) + "\nendstream");
-  // The image at its physical size, centred (72 points per inch).
-  std::snprintf(buf, sizeof buf, "q %.4f 0 0 %.4f %.4f %.4f cm /Im0 Do Q\n", imgW, imgH,
-                (pageW - imgW) / 2, (pageH - imgH) / 2);
-  const std::string content = buf;
-  object("<< /Length " + std::to_string(content.size()) + " >>\nstream\n" + content + "endstream");
-  std::string safe;
-  for (char ch : title)
-    if (ch != '(' && ch != ')' && ch != '\\' && ch >= 32 && ch < 127) safe += ch;
-  object("<< /Title (" + safe + ") /Producer (planetsculpt markers) >>");
-  const std::size_t xref = out.size();
-  out += "xref\n0 " + std::to_string(offsets.size() + 1) + "\n0000000000 65535 f \n";
-  for (const std::size_t o : offsets) {
-    std::snprintf(buf, sizeof buf, "%010zu 00000 n \n", o);
-    out += buf;
-  }
-  out += "trailer\n<< /Size " + std::to_string(offsets.size() + 1) +
-         " /Root 1 0 R /Info 6 0 R >>\nstartxref\n" + std::to_string(xref) + "\n%%EOF\n";
-  return {out.begin(), out.end()};
 }
 
 }  // namespace ps::tracking

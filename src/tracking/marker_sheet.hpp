@@ -5,9 +5,9 @@
 // physical size, family and ids printed on the sheet and a 100 mm scale bar to check that it
 // was printed at 100 %.
 //
-// Files: a 1-bit PNG with its resolution in a pHYs chunk, and a one-page PDF that embeds the same
-// compressed pixels (PNG's zlib stream with PNG predictors is a valid PDF FlateDecode stream), so
-// no PDF library and no second compressor are needed.
+// Files (sheet_files.cpp): a 1-bit PNG with its resolution in a pHYs chunk (libpng), and a
+// one-page vector PDF (cairo) drawn from the same steps at their exact sizes in millimetres, so
+// that the markers' cells print sharp at any printer resolution.
 #include <Eigen/Core>
 #include <array>
 #include <cstdint>
@@ -38,8 +38,21 @@ struct MarkerSheetSpec {
   double planetRadiusMm = 60;              // planet marker: the planet's radius (label only)
 };
 
+// One drawing step of a sheet, in millimetres from the page's top-left corner: what the PDF draws
+// as vectors (the sheet's image is the same steps rasterised at its dpi).
+struct SheetOp {
+  enum class Kind { kBox, kLine, kText };
+  Kind kind = Kind::kBox;
+  double x0 = 0, y0 = 0, x1 = 0, y1 = 0;  // a box's corners, a line's ends; text: its anchor
+  bool black = true;                      // a box's colour (white boxes cover black ones)
+  double size = 0;                        // a line's width, the text's capital height
+  std::string text;
+  bool centre = false, bold = false;  // text centred on x0; bold
+};
+
 struct Sheet {
-  cv::Mat image;  // CV_8U, 0 or 255 only, portrait, paper size at `dpi`
+  cv::Mat image;             // CV_8U, 0 or 255 only, portrait, paper size at `dpi`
+  std::vector<SheetOp> ops;  // the same drawing, in millimetres, in painting order
   double dpi = 300;
   Paper paper;
   std::string title;
@@ -65,11 +78,11 @@ Sheet renderBoardSheet(const MarkerLayout& board, const Paper& paper, double dpi
 // (markers/tool-cube.json: face frames as docs/TRACKING.md shows) or does not fit the page.
 Sheet renderCubeNetSheet(const MarkerLayout& cube, const Paper& paper, double dpi = 300);
 
-// A bilevel image (0 or 255) as a 1-bit PNG with a pHYs chunk saying `dpi`.
+// A bilevel image (0 or 255) as a 1-bit PNG with a pHYs chunk saying `dpi`; std::invalid_argument
+// for other values.
 std::vector<std::uint8_t> encodeSheetPng(const cv::Mat& image, double dpi);
-// The same pixels as a one-page PDF of the paper's size, the image at `dpi` (its physical size),
-// centred. `title` goes into the document information.
-std::vector<std::uint8_t> encodeSheetPdf(const cv::Mat& image, double dpi, const Paper& paper,
-                                         const std::string& title);
+// The sheet's drawing steps as a one-page vector PDF of its paper's size, its title in the
+// document information.
+std::vector<std::uint8_t> encodeSheetPdf(const Sheet& sheet);
 
 }  // namespace ps::tracking

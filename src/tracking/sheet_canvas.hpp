@@ -8,6 +8,7 @@
 #include <opencv2/imgproc.hpp>
 #include <sstream>
 #include <string>
+#include <vector>
 
 #include "tracking/marker_sheet.hpp"
 
@@ -20,10 +21,12 @@ inline std::string mm(double v) {
   return s.str();
 }
 
-// Drawing in millimetres on a page at `dpi` (origin at the page's top-left corner).
+// Drawing in millimetres on a page at `dpi` (origin at the page's top-left corner): into the
+// raster image, and recorded as steps for the vector PDF.
 struct Canvas {
   cv::Mat img;
   double dpi;
+  std::vector<SheetOp> ops;
 
   Canvas(const Paper& paper, double d)
       : img(int(std::lround(paper.heightMm / 25.4 * d)), int(std::lround(paper.widthMm / 25.4 * d)),
@@ -36,17 +39,24 @@ struct Canvas {
 
   // Box from (x0, y0) to (x1, y1) mm, edges at the rounded pixel boundaries.
   void box(double x0, double y0, double x1, double y1, uchar v = 0) {
+    vectorBox(x0, y0, x1, y1, v);
     const int ix0 = ipx(x0), iy0 = ipx(y0), ix1 = ipx(x1), iy1 = ipx(y1);
     const cv::Rect r = cv::Rect(ix0, iy0, ix1 - ix0, iy1 - iy0) & cv::Rect({}, img.size());
     if (r.area() > 0) img(r).setTo(v);
   }
+  // A box in the PDF only (where the raster comes from another renderer at this page's pixels).
+  void vectorBox(double x0, double y0, double x1, double y1, uchar v = 0) {
+    ops.push_back({SheetOp::Kind::kBox, x0, y0, x1, y1, v == 0, 0, {}, false, false});
+  }
   void line(double x0, double y0, double x1, double y1, double widthMm) {
+    ops.push_back({SheetOp::Kind::kLine, x0, y0, x1, y1, true, widthMm, {}, false, false});
     cv::line(img, {ipx(x0), ipx(y0)}, {ipx(x1), ipx(y1)}, cv::Scalar(0), std::max(1, ipx(widthMm)),
              cv::LINE_8);
   }
   // Text with its baseline at y and capital letters `heightMm` tall; centred on x or from x.
   void text(const std::string& s, double x, double y, double heightMm, bool centre = false,
             bool bold = false) {
+    ops.push_back({SheetOp::Kind::kText, x, y, x, y, true, heightMm, s, centre, bold});
     const int font = cv::FONT_HERSHEY_SIMPLEX;
     const double scale = px(heightMm) / 22.0;  // capital height of this font at scale 1
     const int thick = std::max(1, int(std::lround(scale * (bold ? 2.6 : 1.5))));
