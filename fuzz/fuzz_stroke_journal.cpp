@@ -1,9 +1,10 @@
 // libFuzzer: the stroke journal (io::parseStrokeJournal), the file a crashed live session leaves
 // for recovery. Any input must parse or be refused with core::InputError; what parses must
-// encode back to the same bytes, record by record.
+// encode back to the same bytes: the header's fields (its reserved bytes are the writer's to
+// fill, under the header's checksum) and every record.
+#include <algorithm>
 #include <cstddef>
 #include <cstdint>
-#include <algorithm>
 #include <cstdlib>
 #include <vector>
 
@@ -16,7 +17,11 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     std::vector<unsigned char> again = ps::io::encodeJournalHeader(j.base);
     for (const ps::io::JournalRecord& r : j.records)
       ps::io::encodeJournalRecord(r.kind, r.sequence, r.heights, again);
-    if (again.size() != j.validBytes || !std::equal(again.begin(), again.end(), data)) std::abort();
+    constexpr std::size_t kFields = 40;  // magic, version, length, side, CRC, radius, generation
+    const std::size_t header = ps::io::kStrokeJournalHeaderBytes;
+    if (again.size() != j.validBytes || !std::equal(again.begin(), again.begin() + kFields, data) ||
+        !std::equal(again.begin() + std::ptrdiff_t(header), again.end(), data + header))
+      std::abort();
   } catch (const ps::core::InputError&) {
   }
   return 0;

@@ -13,7 +13,7 @@ namespace ps::app {
 namespace {
 
 struct ExportArgs {
-  std::string input, output, format, noData = "fill", noDataValue;
+  std::string input, output, format, noData = "fill", noDataValue, interpolation = "cubic";
   int width = 0, height = 0;
   std::optional<double> maxError, scale, offset, spacing;
   long long grid = 0;
@@ -26,6 +26,7 @@ int runExport(const ExportArgs& a) {
   heightmap.offset = a.offset;
   heightmap.spacing = a.spacing;
   heightmap.gridSide = a.grid;
+  heightmap.interpolation = io::interpolationFromString(a.interpolation);
   heightmap.noData = io::noDataPolicyFromString(a.noData);
   if (!a.noDataValue.empty()) {
     heightmap.noDataValue = io::noDataValueFromString(a.noDataValue);
@@ -35,6 +36,7 @@ int runExport(const ExportArgs& a) {
   o.width = a.width;
   o.height = a.height;
   o.maxErrorM = a.maxError;
+  o.interpolation = heightmap.interpolation;
   // Check the output side before the (possibly long) load.
   const io::ExportFormat format = o.format ? *o.format : io::exportFormatFromPath(a.output);
   if (io::isMeshFormat(format) && !o.maxErrorM)
@@ -62,6 +64,9 @@ const CommandRegistration kExport([](CLI::App& root, CLI::App*& sub) -> CommandA
   sub->add_option("--width", a->width,
                   "Heightmap width in pixels (default: the grid's resolution)");
   sub->add_option("--height", a->height, "Heightmap height in pixels");
+  sub->add_option("--interpolation", a->interpolation,
+                  "Resampling between the grid and pixels: cubic (Catmull-Rom) or bilinear")
+      ->capture_default_str();
   sub->add_option(
       "--max-error", a->maxError,
       "Meshes: the largest distance in metres between the mesh and any full-resolution vertex");

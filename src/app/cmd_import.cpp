@@ -15,7 +15,7 @@ namespace {
 
 struct ImportArgs {
   std::string input, output, chart = "latlong", noData = "fill", noDataValue, encoding = "f32",
-                             rule = "hybrid-exact";
+                             rule = "hybrid-exact", interpolation = "cubic";
   std::optional<double> radius, scale, offset, westLon, spacing;
   long long grid = 0;
 };
@@ -32,6 +32,7 @@ int runImport(const ImportArgs& a) {
   o.westLongitudeDeg = a.westLon;
   o.spacing = a.spacing;
   o.rule = terrain::errorRuleFromString(a.rule);
+  o.interpolation = io::interpolationFromString(a.interpolation);
   io::ImportResult r = io::importHeightmap(a.input, o);
   for (const auto& note : r.notes) std::cerr << "import: " << a.input << ": " << note << "\n";
   io::PlanetSaveOptions save;
@@ -74,6 +75,9 @@ const CommandRegistration kImport([](CLI::App& root, CLI::App*& sub) -> CommandA
   sub->add_option("--nodata-value", a->noDataValue, "Declare the no-data value (a number or nan)");
   sub->add_option("--encoding", a->encoding,
                   "Planet file heights: f32 (exact) or u16 (quantised, half the size)")
+      ->capture_default_str();
+  sub->add_option("--interpolation", a->interpolation,
+                  "Sampling the image at the grid's vertices: cubic (Catmull-Rom) or bilinear")
       ->capture_default_str();
   sub->add_option("--error-rule", a->rule, "Error bounds: hybrid-exact or wedgie")
       ->capture_default_str();

@@ -101,7 +101,8 @@ nlohmann::json exportTerrain(const terrain::Terrain& t, const std::filesystem::p
     throw core::InputError("heightmap size " + std::to_string(w) + "x" + std::to_string(h) +
                            " is too large");
   }
-  const Raster raster = flat ? resampleFlat(t, w, h) : resampleEquirectangular(t, w, h);
+  const Raster raster = flat ? resampleFlat(t, w, h, o.interpolation)
+                             : resampleEquirectangular(t, w, h, o.interpolation);
   switch (format) {
     case ExportFormat::kPng16:
       writeHeightPng16(raster, out);

@@ -22,9 +22,10 @@ ExportFormat exportFormatFromPath(const std::filesystem::path& path);
 bool isMeshFormat(ExportFormat f);
 
 struct ExportOptions {
-  std::optional<ExportFormat> format;  // unset: from the extension
-  int width = 0, height = 0;           // heightmaps; 0: the default size
-  std::optional<double> maxErrorM;     // meshes (required for them)
+  std::optional<ExportFormat> format;                   // unset: from the extension
+  int width = 0, height = 0;                            // heightmaps; 0: the default size
+  std::optional<double> maxErrorM;                      // meshes (required for them)
+  Interpolation interpolation = Interpolation::kCubic;  // heightmaps: sampling the grid
 };
 
 // Writes `out` (and a sidecar JSON for heightmaps); returns a summary of what was written.

@@ -19,7 +19,8 @@
 
 namespace ps::io {
 
-Raster resampleEquirectangular(const terrain::Terrain& t, int width, int height) {
+Raster resampleEquirectangular(const terrain::Terrain& t, int width, int height,
+                               Interpolation how) {
   if (width <= 0 || height <= 0 || double(width) * height > 4e8) {
     throw std::invalid_argument("raster size " + std::to_string(width) + "x" +
                                 std::to_string(height) + " is empty or too large");
@@ -31,18 +32,16 @@ Raster resampleEquirectangular(const terrain::Terrain& t, int width, int height)
   Raster r{width, height, std::vector<float>(std::size_t(width) * std::size_t(height))};
   r.radiusMetres = t.chart().radius();
   const int m = t.grid().m();
+  // Grid vertex (u, v) is sample (u, v): u wraps round the m columns (u = m is u = 0), v clamps
+  // at the poles.
+  const auto at = [&](int u, int v) { return double(t.height(u, v)); };
 #pragma omp parallel for schedule(static)
   for (int y = 0; y < height; ++y) {
     const double v = (1.0 - (y + 0.5) / height) * m;
-    const int v0 = std::min(m - 1, int(v));
-    const double fv = v - v0;
     for (int x = 0; x < width; ++x) {
       const double u = (x + 0.5) / width * m;
-      const int u0 = std::min(m - 1, int(u));
-      const double fu = u - u0;
-      const double h = (1 - fv) * ((1 - fu) * t.height(u0, v0) + fu * t.height(u0 + 1, v0)) +
-                       fv * ((1 - fu) * t.height(u0, v0 + 1) + fu * t.height(u0 + 1, v0 + 1));
-      r.metres[std::size_t(y) * std::size_t(width) + std::size_t(x)] = float(h);
+      r.metres[std::size_t(y) * std::size_t(width) + std::size_t(x)] =
+          float(sample(at, m, m + 1, u, v, true, how));
     }
   }
   return r;
@@ -112,7 +111,7 @@ const TIFFFieldInfo kGeoTiffFields[] = {
 
 }  // namespace
 
-Raster resampleFlat(const terrain::Terrain& t, int width, int height) {
+Raster resampleFlat(const terrain::Terrain& t, int width, int height, Interpolation how) {
   const auto* flat = dynamic_cast<const core::FlatChart*>(&t.chart());
   if (!flat)
     throw std::invalid_argument("resampleFlat needs a flat chart, not '" + t.chart().name() + "'");
@@ -127,24 +126,13 @@ Raster resampleFlat(const terrain::Terrain& t, int width, int height) {
                ky = height > 1 ? double(m) / (height - 1) : 0.0;
   r.pixelWidthM = width > 1 ? flat->dx() * kx : flat->dx() * m;
   r.pixelHeightM = height > 1 ? flat->dy() * ky : flat->dy() * m;
+  const auto at = [&](int u, int v) { return double(t.height(u, v)); };
 #pragma omp parallel for schedule(static)
   for (int y = 0; y < height; ++y) {
     const double v = m - y * ky;
-    const int v0 = std::clamp(int(v), 0, m - 1);
-    const double fv = std::clamp(v - v0, 0.0, 1.0);
-    for (int x = 0; x < width; ++x) {
-      const double u = x * kx;
-      const int u0 = std::clamp(int(u), 0, m - 1);
-      const double fu = std::clamp(u - u0, 0.0, 1.0);
-      double h;
-      if (fu == 0.0 && fv == 0.0) {
-        h = t.height(u0, v0);  // exact at vertices (no 0 * x rounding)
-      } else {
-        h = (1 - fv) * ((1 - fu) * t.height(u0, v0) + fu * t.height(u0 + 1, v0)) +
-            fv * ((1 - fu) * t.height(u0, v0 + 1) + fu * t.height(u0 + 1, v0 + 1));
-      }
-      r.metres[std::size_t(y) * std::size_t(width) + std::size_t(x)] = float(h);
-    }
+    for (int x = 0; x < width; ++x)
+      r.metres[std::size_t(y) * std::size_t(width) + std::size_t(x)] =
+          float(sample(at, m + 1, m + 1, x * kx, v, false, how));
   }
   return r;
 }

@@ -3,6 +3,7 @@
 #include <opencv2/core.hpp>
 #include <vector>
 
+#include "io/resample.hpp"
 #include "terrain/terrain.hpp"
 
 namespace ps::io {
@@ -25,13 +26,15 @@ struct Raster {
 };
 
 // Bilinear in (u, v) between grid vertices; across the seam the grid wraps.
-Raster resampleEquirectangular(const terrain::Terrain& terrain, int width, int height);
+Raster resampleEquirectangular(const terrain::Terrain& terrain, int width, int height,
+                               Interpolation how = Interpolation::kCubic);
 
 // A flat chart's heights as a width x height image whose corner pixels sit on the grid's corner
 // vertices (pixel-is-point); at the grid's own size (side x side) every pixel is one vertex,
 // exactly. Bilinear in between. Row 0 is the v = m edge. Throws std::invalid_argument unless
 // the terrain's chart is a core::FlatChart.
-Raster resampleFlat(const terrain::Terrain& terrain, int width, int height);
+Raster resampleFlat(const terrain::Terrain& terrain, int width, int height,
+                    Interpolation how = Interpolation::kCubic);
 
 // 32-bit float TIFF (one band, metres; strips, uncompressed) readable by GDAL/QGIS: for an
 // equirectangular raster with a known radius it carries GeoTIFF tags (geographic degrees on a

@@ -7,6 +7,7 @@
 
 #include "io/height_image.hpp"
 #include "io/planet_file.hpp"
+#include "io/resample.hpp"
 
 namespace ps::io {
 
@@ -26,7 +27,7 @@ struct ImportOptions {
   std::optional<double> radius;
   // metres = value * scale + offset. Unset: a PlanetSculpt 16-bit PNG's own range, else 1 and 0.
   std::optional<double> scale, offset;
-  long long gridSide = 0;  // 2^n+1; 0 picks the smallest grid that keeps the image's detail
+  long long gridSide = 0;  // 2^n+1; 0: defaultGridSide
   NoDataPolicy noData = NoDataPolicy::kFill;
   std::optional<double> noDataValue;  // declares (or overrides) the no-data value; NaN allowed
   // latlong: longitude of the image's western edge (default: the file's, else -180).
@@ -34,6 +35,8 @@ struct ImportOptions {
   // flat: metres between pixel centres (default: the file's or the GeoTIFF's, else 1).
   std::optional<double> spacing;
   terrain::ErrorRule rule = terrain::ErrorRule::kHybridExact;
+  // How the image is sampled at the grid's vertices (after area-averaging where it is finer).
+  Interpolation interpolation = Interpolation::kCubic;
 };
 
 struct ImportResult {

@@ -1,6 +1,7 @@
 #include "tracking/calibration.hpp"
 
 #include <cmath>
+#include <cstdint>
 #include <fstream>
 #include <sstream>
 
@@ -86,11 +87,42 @@ CameraCalibration CameraCalibration::forImageSize(cv::Size size) const {
 
 namespace {
 
+// Opens `source` (a file name, or the text with FileStorage::MEMORY) for reading; InputError
+// naming `name` for anything OpenCV refuses or throws.
+void openStorage(cv::FileStorage& fs, const std::string& source, int flags,
+                 const std::string& name) {
+  try {
+    if (!fs.open(source, flags))
+      throw core::InputError(name + ": not a calibration file OpenCV can read (YAML/XML/JSON)");
+  } catch (const core::InputError&) {
+    throw;
+  } catch (const cv::Exception& e) {
+    throw core::InputError(name + ": malformed calibration file (" + e.err + ")");
+  } catch (const std::exception& e) {  // OpenCV's parser also lets std::length_error out
+    throw core::InputError(name + ": malformed calibration file (" + e.what() + ")");
+  }
+}
+
+// An OpenCV matrix node's declared size, checked before OpenCV allocates for it (a damaged
+// "rows" or "cols" once asked for gigabytes): at most 3 x 14 elements, as integers.
+void checkMatrixNode(const cv::FileNode& node, const std::string& name, const char* key) {
+  if (node.empty() || !node.isMap()) return;  // absent or not a matrix: the reader says which
+  const cv::FileNode rows = node["rows"], cols = node["cols"];
+  if (!rows.isInt() || !cols.isInt())
+    throw core::InputError(name + ": " + key + ": rows and cols must be integers");
+  const int r = int(rows), c = int(cols);
+  if (r < 0 || c < 0 || std::int64_t(r) * c > 3 * 14)
+    throw core::InputError(name + ": " + key + " is " + std::to_string(r) + "x" +
+                           std::to_string(c) + ": too large for a camera calibration");
+}
+
 // The calibration in an opened file (`name` for messages).
 CameraCalibration readCalibration(cv::FileStorage& fs, const std::string& name) {
   CameraCalibration c;
   c.source = name;
   try {
+    checkMatrixNode(fs["camera_matrix"], name, "camera_matrix");
+    checkMatrixNode(fs["distortion_coefficients"], name, "distortion_coefficients");
     cv::Mat k, d;
     fs["camera_matrix"] >> k;
     if (k.empty()) throw core::InputError(name + ": no camera_matrix");
@@ -115,8 +147,12 @@ CameraCalibration readCalibration(cv::FileStorage& fs, const std::string& name) 
     }
     const cv::FileNode e = fs["avg_reprojection_error"];
     if (!e.empty() && e.isReal()) c.rms = double(e);
+  } catch (const core::InputError&) {
+    throw;
   } catch (const cv::Exception& e) {
     throw core::InputError(name + ": malformed calibration file (" + e.err + ")");
+  } catch (const std::exception& e) {  // OpenCV's parser also lets std::length_error out
+    throw core::InputError(name + ": malformed calibration file (" + e.what() + ")");
   }
   c.validate();
   return c;
@@ -131,23 +167,13 @@ CameraCalibration loadCalibration(const std::filesystem::path& path) {
     if (!probe) throw core::InputError(name + ": cannot open the calibration file");
   }
   cv::FileStorage fs;
-  try {
-    if (!fs.open(name, cv::FileStorage::READ))
-      throw core::InputError(name + ": not a calibration file OpenCV can read (YAML/XML/JSON)");
-  } catch (const cv::Exception& e) {
-    throw core::InputError(name + ": malformed calibration file (" + e.err + ")");
-  }
+  openStorage(fs, name, cv::FileStorage::READ, name);
   return readCalibration(fs, name);
 }
 
 CameraCalibration parseCalibration(const std::string& text, const std::string& name) {
   cv::FileStorage fs;
-  try {
-    if (!fs.open(text, cv::FileStorage::READ | cv::FileStorage::MEMORY))
-      throw core::InputError(name + ": not a calibration file OpenCV can read (YAML/XML/JSON)");
-  } catch (const cv::Exception& e) {
-    throw core::InputError(name + ": malformed calibration file (" + e.err + ")");
-  }
+  openStorage(fs, text, cv::FileStorage::READ | cv::FileStorage::MEMORY, name);
   return readCalibration(fs, name);
 }
 
