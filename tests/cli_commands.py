@@ -58,6 +58,38 @@ def read_raw(path):
     return meta, struct.unpack(f"<{n}f", data)
 
 
+def gdalinfo(path):
+    p = subprocess.run(["gdalinfo", "-json", path], capture_output=True, text=True)
+    if p.returncode != 0:
+        fail(f"gdalinfo could not read {path} (apt install gdal-bin):\n{p.stderr}")
+    return json.loads(p.stdout)
+
+
+def write_pds3(label, image):
+    """A 64x32 simple-cylindrical PDS3 product of the Moon: radii = value * 0.5 + 1737400 m."""
+    w, h = 64, 32
+    vals = [int(1000 * math.sin(x / 10.0) + 200 * y) for y in range(h) for x in range(w)]
+    with open(image, "wb") as f:
+        f.write(struct.pack(f">{len(vals)}h", *vals))
+    lines = ["PDS_VERSION_ID = PDS3", "RECORD_TYPE = FIXED_LENGTH", f"RECORD_BYTES = {2 * w}",
+             f"FILE_RECORDS = {h}", f'^IMAGE = "{os.path.basename(image)}"', "OBJECT = IMAGE",
+             f"  LINES = {h}", f"  LINE_SAMPLES = {w}", "  SAMPLE_TYPE = MSB_INTEGER",
+             "  SAMPLE_BITS = 16", "  SCALING_FACTOR = 0.5", "  OFFSET = 1737400", "END_OBJECT = IMAGE",
+             "OBJECT = IMAGE_MAP_PROJECTION", '  MAP_PROJECTION_TYPE = "SIMPLE CYLINDRICAL"',
+             "  A_AXIS_RADIUS = 1737.4 <KM>", "  B_AXIS_RADIUS = 1737.4 <KM>",
+             "  C_AXIS_RADIUS = 1737.4 <KM>", '  POSITIVE_LONGITUDE_DIRECTION = "EAST"',
+             "  CENTER_LATITUDE = 0.0 <DEG>", "  CENTER_LONGITUDE = 180.0 <DEG>",
+             f"  MAP_RESOLUTION = {w / 360.0} <PIX/DEG>",
+             f"  MAP_SCALE = {2 * math.pi * 1737.4 / w} <KM/PIXEL>",
+             "  MAXIMUM_LATITUDE = 90.0 <DEG>", "  MINIMUM_LATITUDE = -90.0 <DEG>",
+             f"  LINE_PROJECTION_OFFSET = {h / 2 - 0.5} <PIXEL>",
+             f"  SAMPLE_PROJECTION_OFFSET = {w / 2 - 0.5} <PIXEL>",
+             "  EASTERNMOST_LONGITUDE = 360.0 <DEG>", "  WESTERNMOST_LONGITUDE = 0.0 <DEG>",
+             '  COORDINATE_SYSTEM_NAME = "PLANETOCENTRIC"', "END_OBJECT = IMAGE_MAP_PROJECTION", "END"]
+    with open(label, "w") as f:
+        f.write("\n".join(lines) + "\n")
+
+
 def is_png(path):
     with open(path, "rb") as f:
         return f.read(8) == b"\x89PNG\r\n\x1a\n"
@@ -123,6 +155,40 @@ def group_import_export():
     rms = math.sqrt(sum((a - b) ** 2 for a, b in zip(field, back)) / len(field))
     if not rms < 20.0:  # 0.5 % of the field's 4 km range
         fail(f"lat-long round trip rms {rms:.2f} m (over 20 m)")
+    # GeoTIFFs that GIS tools read with the right CRS (gdalinfo, GDAL's own reader).
+    run("export", out("globe.planet"), "--width", str(w), "--height", str(h), "--out", out("globe.tif"))
+    info = gdalinfo(out("globe.tif"))
+    if info["size"] != [w, h] or info["geoTransform"] != [-180.0, 360.0 / w, 0.0, 90.0, 0.0, -180.0 / h]:
+        fail(f"globe.tif: size {info['size']}, geotransform {info['geoTransform']}")
+    wkt = info["coordinateSystem"]["wkt"]
+    if not wkt.startswith("GEOGCRS") or "ELLIPSOID[" not in wkt or ",1737400,0," not in wkt:
+        fail(f"globe.tif is not on a geographic CRS of a 1737.4 km sphere:\n{wkt}")
+    run("export", out("tile.planet"), "--out", out("tile.tif"))
+    info = gdalinfo(out("tile.tif"))
+    if info["geoTransform"][1] != 30.0 or info["geoTransform"][5] != -30.0:
+        fail(f"tile.tif: pixel size {info['geoTransform']}, not 30 m")
+    if info.get("metadata", {}).get("", {}).get("AREA_OR_POINT") != "Point":
+        fail("tile.tif is not pixel-is-point")
+    # A PDS3 product (label + image, how NASA ships LOLA and MOLA grids): its label's sphere,
+    # scale, offset (distances from the centre) and projection are used.
+    write_pds3(out("moon.lbl"), out("moon.img"))
+    _, err = run("import", out("moon.lbl"), "--grid", "129", "--out", out("moon.planet"))
+    for said in ("radius 1737400 m, from the file", "the radius 1737400 m is subtracted",
+                 "column 0 starts at 0 deg longitude"):
+        if said not in err:
+            fail(f"PDS3 import did not say '{said}':\n{err}")
+    run("export", out("moon.planet"), "--out", out("moon.raw"), "--width", "64", "--height", "32")
+    meta, back = read_raw(out("moon.raw"))
+    if meta.get("radius_m") != 1737400.0 or not (-560 < min(back) and max(back) < 3660):
+        fail(f"PDS3 planet: radius {meta.get('radius_m')}, heights {min(back)} .. {max(back)}")
+    # An SRTM .hgt tile (big-endian int16, named by its corner) through GDAL's SRTMHGT driver.
+    side = 1201
+    hgt = [int(100 * math.sin(x / 50.0) + y) for y in range(side) for x in range(side)]
+    with open(out("N46W122.hgt"), "wb") as f:
+        f.write(struct.pack(f">{len(hgt)}h", *hgt))
+    _, err = run("import", out("N46W122.hgt"), "--chart", "flat", "--grid", "129", "--out", out("hgt.planet"))
+    if "georeferencing in degrees, at latitude 46.5" not in err:
+        fail(f"the .hgt tile was not read as a geographic SRTM tile:\n{err}")
     # Meshes: OBJ vertices lie within the requested error of the surface's height range; PLY
     # and GLB carry their magic bytes.
     run("export", out("tile.planet"), "--max-error", "1", "--out", out("tile.obj"))

@@ -1,7 +1,5 @@
 #include "io/height_image.hpp"
 
-#include <tiffio.h>
-
 #include <algorithm>
 #include <bit>
 #include <cmath>
@@ -13,6 +11,7 @@
 #include <optional>
 
 #include "core/input_error.hpp"
+#include "io/gdal_raster.hpp"
 #include "io/png_codec.hpp"
 
 namespace ps::io {
@@ -124,296 +123,6 @@ HeightImage decodePng(std::span<const unsigned char> b, const std::string& name,
   return img;
 }
 
-// --------------------------------------------------------------------------------------- TIFF
-
-struct MemStream {
-  const unsigned char* data;
-  std::uint64_t size;
-  std::uint64_t pos = 0;
-};
-
-tmsize_t memRead(thandle_t h, void* buf, tmsize_t n) {
-  auto* s = static_cast<MemStream*>(h);
-  if (n <= 0 || s->pos >= s->size) return 0;
-  const std::uint64_t k = std::min<std::uint64_t>(std::uint64_t(n), s->size - s->pos);
-  std::memcpy(buf, s->data + s->pos, std::size_t(k));
-  s->pos += k;
-  return tmsize_t(k);
-}
-tmsize_t memWrite(thandle_t, void*, tmsize_t) {
-  return 0;
-}
-toff_t memSeek(thandle_t h, toff_t off, int whence) {
-  auto* s = static_cast<MemStream*>(h);
-  std::uint64_t base = 0;
-  if (whence == SEEK_CUR) base = s->pos;
-  if (whence == SEEK_END) base = s->size;
-  if (off > std::numeric_limits<std::uint64_t>::max() - base) return toff_t(-1);
-  s->pos = base + off;
-  return s->pos;
-}
-int memClose(thandle_t) {
-  return 0;
-}
-toff_t memSize(thandle_t h) {
-  return static_cast<MemStream*>(h)->size;
-}
-int memMap(thandle_t, void**, toff_t*) {
-  return 0;
-}
-void memUnmap(thandle_t, void*, toff_t) {}
-
-int collectError(TIFF*, void* user, const char* module, const char* fmt, va_list ap) {
-  auto* msg = static_cast<std::string*>(user);
-  if (msg->empty()) {
-    char buf[512];
-    std::vsnprintf(buf, sizeof buf, fmt, ap);
-    *msg = (module && *module ? std::string(module) + ": " : std::string()) + buf;
-  }
-  return 1;
-}
-int ignoreWarning(TIFF*, void*, const char*, const char*, va_list) {
-  return 1;
-}
-
-struct TiffCloser {
-  void operator()(TIFF* t) const { TIFFClose(t); }
-};
-
-template <class T>
-float sampleAs(const unsigned char* p) {
-  T x;
-  std::memcpy(&x, p, sizeof(T));
-  return float(x);
-}
-
-// Reads the anonymous (auto-registered) GeoTIFF double arrays.
-bool getDoubles(TIFF* t, ttag_t tag, std::vector<double>& out) {
-  const TIFFField* field = TIFFFindField(t, tag, TIFF_ANY);
-  if (!field || TIFFFieldDataType(field) != TIFF_DOUBLE || !TIFFFieldPassCount(field)) return false;
-  void* data = nullptr;
-  if (TIFFFieldReadCount(field) == TIFF_VARIABLE2) {
-    std::uint32_t n = 0;
-    if (!TIFFGetField(t, tag, &n, &data) || !data) return false;
-    out.assign(static_cast<double*>(data), static_cast<double*>(data) + n);
-  } else {
-    std::uint16_t n = 0;
-    if (!TIFFGetField(t, tag, &n, &data) || !data) return false;
-    out.assign(static_cast<double*>(data), static_cast<double*>(data) + n);
-  }
-  return true;
-}
-
-bool getShorts(TIFF* t, ttag_t tag, std::vector<std::uint16_t>& out) {
-  const TIFFField* field = TIFFFindField(t, tag, TIFF_ANY);
-  if (!field || TIFFFieldDataType(field) != TIFF_SHORT || !TIFFFieldPassCount(field)) return false;
-  void* data = nullptr;
-  if (TIFFFieldReadCount(field) == TIFF_VARIABLE2) {
-    std::uint32_t n = 0;
-    if (!TIFFGetField(t, tag, &n, &data) || !data) return false;
-    out.assign(static_cast<std::uint16_t*>(data), static_cast<std::uint16_t*>(data) + n);
-  } else {
-    std::uint16_t n = 0;
-    if (!TIFFGetField(t, tag, &n, &data) || !data) return false;
-    out.assign(static_cast<std::uint16_t*>(data), static_cast<std::uint16_t*>(data) + n);
-  }
-  return true;
-}
-
-// The GDAL_NODATA tag (42113, ASCII). libtiff's registration of it passes a count or not
-// depending on the version: ask the field.
-std::optional<std::string> gdalNoData(TIFF* t) {
-  const TIFFField* field = TIFFFindField(t, TIFFTAG_GDAL_NODATA, TIFF_ANY);
-  if (!field || TIFFFieldDataType(field) != TIFF_ASCII) return std::nullopt;
-  char* text = nullptr;
-  std::uint32_t count = 0;
-  if (TIFFFieldPassCount(field)) {
-    if (TIFFFieldReadCount(field) == TIFF_VARIABLE2) {
-      if (!TIFFGetField(t, TIFFTAG_GDAL_NODATA, &count, &text) || !text) return std::nullopt;
-    } else {
-      std::uint16_t n16 = 0;
-      if (!TIFFGetField(t, TIFFTAG_GDAL_NODATA, &n16, &text) || !text) return std::nullopt;
-      count = n16;
-    }
-    return std::string(text, strnlen(text, count));
-  }
-  if (!TIFFGetField(t, TIFFTAG_GDAL_NODATA, &text) || !text) return std::nullopt;
-  return std::string(text);
-}
-
-std::optional<GeoReference> readGeoReference(TIFF* t) {
-  std::vector<double> scale, tie;
-  if (!getDoubles(t, 33550, scale) || !getDoubles(t, 33922, tie)) return std::nullopt;
-  if (scale.size() < 2 || tie.size() < 6) return std::nullopt;
-  GeoReference g;
-  g.pixelScaleX = scale[0];
-  g.pixelScaleY = scale[1];
-  // Tie point (i, j, k) -> (x, y, z): the top-left corner is (x - i * sx, y + j * sy).
-  g.originX = tie[3] - tie[0] * g.pixelScaleX;
-  g.originY = tie[4] + tie[1] * g.pixelScaleY;
-  std::vector<std::uint16_t> keys;
-  std::vector<double> doubles;
-  getDoubles(t, 34736, doubles);
-  if (getShorts(t, 34735, keys) && keys.size() >= 4) {
-    const std::size_t n = keys[3];
-    std::optional<double> major, minor;
-    bool pixelIsPoint = false;
-    for (std::size_t k = 0; k < n && 4 + 4 * k + 3 < keys.size(); ++k) {
-      const std::uint16_t* e = keys.data() + 4 + 4 * k;
-      if (e[0] == 1024 && e[1] == 0) g.geographic = e[3] == 2;  // GTModelTypeGeoKey
-      if (e[0] == 1025 && e[1] == 0) pixelIsPoint = e[3] == 2;  // GTRasterTypeGeoKey
-      // GeogSemiMajorAxisGeoKey / GeogSemiMinorAxisGeoKey, stored in GeoDoubleParams.
-      if ((e[0] == 2057 || e[0] == 2058) && e[1] == 34736 && e[2] == 1 && e[3] < doubles.size()) {
-        (e[0] == 2057 ? major : minor) = doubles[e[3]];
-      }
-    }
-    if (major && minor && *major == *minor && std::isfinite(*major) && *major > 0) {
-      g.sphereRadius = *major;
-    }
-    // Pixel-is-point: the tie point is a pixel's centre; the raster's corner is half a pixel out.
-    if (pixelIsPoint) {
-      g.originX -= 0.5 * g.pixelScaleX;
-      g.originY += 0.5 * g.pixelScaleY;
-    }
-  }
-  for (double x : {g.pixelScaleX, g.pixelScaleY, g.originX, g.originY}) {
-    if (!std::isfinite(x)) return std::nullopt;
-  }
-  if (g.pixelScaleX <= 0 || g.pixelScaleY <= 0) return std::nullopt;
-  return g;
-}
-
-HeightImage decodeTiff(std::span<const unsigned char> b, const std::string& name,
-                       std::uint64_t maxPixels) {
-  MemStream stream{b.data(), b.size()};
-  std::string error;
-  TIFFOpenOptions* opts = TIFFOpenOptionsAlloc();
-  TIFFOpenOptionsSetErrorHandlerExtR(opts, collectError, &error);
-  TIFFOpenOptionsSetWarningHandlerExtR(opts, ignoreWarning, nullptr);
-  TIFFOpenOptionsSetMaxSingleMemAlloc(opts, tmsize_t(1) << 30);
-  std::unique_ptr<TIFF, TiffCloser> tif(TIFFClientOpenExt(name.c_str(), "rm", &stream, memRead,
-                                                          memWrite, memSeek, memClose, memSize,
-                                                          memMap, memUnmap, opts));
-  TIFFOpenOptionsFree(opts);
-  if (!tif) fail(name, "corrupt or truncated TIFF" + (error.empty() ? "" : " (" + error + ")"));
-  TIFF* t = tif.get();
-  std::uint32_t w = 0, h = 0;
-  std::uint16_t bits = 1, spp = 1, format = SAMPLEFORMAT_UINT, planar = PLANARCONFIG_CONTIG;
-  if (!TIFFGetField(t, TIFFTAG_IMAGEWIDTH, &w) || !TIFFGetField(t, TIFFTAG_IMAGELENGTH, &h)) {
-    fail(name, "TIFF has no image width or length tag");
-  }
-  checkDims(w, h, name, maxPixels);
-  TIFFGetFieldDefaulted(t, TIFFTAG_BITSPERSAMPLE, &bits);
-  TIFFGetFieldDefaulted(t, TIFFTAG_SAMPLESPERPIXEL, &spp);
-  TIFFGetFieldDefaulted(t, TIFFTAG_SAMPLEFORMAT, &format);
-  TIFFGetFieldDefaulted(t, TIFFTAG_PLANARCONFIG, &planar);
-  if (spp != 1) {
-    fail(name, "TIFF has " + std::to_string(spp) +
-                   " samples per pixel: a heightmap must have one (a single band)");
-  }
-  std::string type;
-  float (*convert)(const unsigned char*) = nullptr;
-  if (format == SAMPLEFORMAT_UINT || format == SAMPLEFORMAT_VOID) {
-    if (bits == 8) convert = sampleAs<std::uint8_t>, type = "uint8";
-    if (bits == 16) convert = sampleAs<std::uint16_t>, type = "uint16";
-    if (bits == 32) convert = sampleAs<std::uint32_t>, type = "uint32";
-  } else if (format == SAMPLEFORMAT_INT) {
-    if (bits == 8) convert = sampleAs<std::int8_t>, type = "int8";
-    if (bits == 16) convert = sampleAs<std::int16_t>, type = "int16";
-    if (bits == 32) convert = sampleAs<std::int32_t>, type = "int32";
-  } else if (format == SAMPLEFORMAT_IEEEFP) {
-    if (bits == 32) convert = sampleAs<float>, type = "float32";
-    if (bits == 64) convert = sampleAs<double>, type = "float64";
-  }
-  if (!convert) {
-    fail(name, "TIFF sample type (" + std::to_string(bits) + " bits, sample format " +
-                   std::to_string(format) +
-                   ") is not supported: use 8/16/32-bit integers or 32/64-bit floats");
-  }
-  HeightImage img;
-  img.kind = type + " TIFF";
-  img.width = int(w);
-  img.height = int(h);
-  const std::size_t bytesPer = bits / 8;
-  std::uint16_t compression = COMPRESSION_NONE;
-  TIFFGetFieldDefaulted(t, TIFFTAG_COMPRESSION, &compression);
-  // Uncompressed samples cannot be fewer bytes than the file: say so before allocating for them.
-  if (compression == COMPRESSION_NONE && std::uint64_t(w) * h * bytesPer > b.size()) {
-    fail(name, "truncated TIFF: " + dims(w, h) + " uncompressed " + type + " samples need " +
-                   std::to_string(std::uint64_t(w) * h * bytesPer) + " bytes, the file has " +
-                   std::to_string(b.size()));
-  }
-
-  if (const std::optional<std::string> nodata = gdalNoData(t)) {
-    bool ok = false;
-    const double x = parseNumberText(*nodata, ok);
-    if (!ok) fail(name, "GDAL_NODATA tag holds '" + *nodata + "', which is not a number");
-    img.noData = x;
-    img.noDataSource = "GDAL_NODATA tag";
-  }
-  img.geo = readGeoReference(t);
-  if (img.geo && img.geo->sphereRadius) img.radiusMetres = img.geo->sphereRadius;
-
-  img.values.resize(img.pixelCount());
-  auto bad = [&](const std::string& what) {
-    fail(name, what + (error.empty() ? "" : " (" + error + ")"));
-  };
-  if (TIFFIsTiled(t)) {
-    std::uint32_t tw = 0, th = 0;
-    TIFFGetField(t, TIFFTAG_TILEWIDTH, &tw);
-    TIFFGetField(t, TIFFTAG_TILELENGTH, &th);
-    if (tw == 0 || th == 0) bad("TIFF tile size is 0");
-    // Tiles are multiples of 16 pixels; one larger than the image rounded up to that is corrupt
-    // (and would make us allocate for pixels that do not exist).
-    const auto roundUp16 = [](std::uint64_t x) { return (x + 15) / 16 * 16; };
-    if (tw > roundUp16(w) || th > roundUp16(h)) {
-      bad("TIFF tile is " + dims(tw, th) + " pixels, larger than the " + dims(w, h) + " image");
-    }
-    const tmsize_t tileBytes = TIFFTileSize(t);
-    if (tileBytes <= 0 || std::uint64_t(tileBytes) < std::uint64_t(tw) * th * bytesPer) {
-      bad("TIFF tile size is inconsistent");
-    }
-    std::vector<unsigned char> buf(static_cast<std::size_t>(tileBytes));
-    for (std::uint32_t y0 = 0; y0 < h; y0 += th) {
-      for (std::uint32_t x0 = 0; x0 < w; x0 += tw) {
-        const tmsize_t got =
-            TIFFReadEncodedTile(t, TIFFComputeTile(t, x0, y0, 0, 0), buf.data(), tileBytes);
-        if (got < 0)
-          bad("corrupt or truncated TIFF: cannot read the tile at (" + std::to_string(x0) + ", " +
-              std::to_string(y0) + ")");
-        for (std::uint32_t y = y0; y < std::min(h, y0 + th); ++y) {
-          for (std::uint32_t x = x0; x < std::min(w, x0 + tw); ++x) {
-            const std::size_t off = (std::size_t(y - y0) * tw + (x - x0)) * bytesPer;
-            img.values[std::size_t(y) * w + x] = convert(buf.data() + off);
-          }
-        }
-      }
-    }
-  } else {
-    std::uint32_t rps = 0;
-    TIFFGetFieldDefaulted(t, TIFFTAG_ROWSPERSTRIP, &rps);
-    rps = std::clamp<std::uint32_t>(rps, 1, h);
-    const tmsize_t stripBytes = TIFFStripSize(t);
-    if (stripBytes <= 0) bad("TIFF strip size is inconsistent");
-    std::vector<unsigned char> buf(static_cast<std::size_t>(stripBytes));
-    const std::uint32_t strips = TIFFNumberOfStrips(t);
-    for (std::uint32_t y0 = 0, s = 0; y0 < h; y0 += rps, ++s) {
-      if (s >= strips) bad("TIFF has fewer strips than its height needs");
-      const std::uint32_t rows = std::min(rps, h - y0);
-      const std::uint64_t need = std::uint64_t(rows) * w * bytesPer;
-      const tmsize_t got = TIFFReadEncodedStrip(t, s, buf.data(), stripBytes);
-      if (got < 0 || std::uint64_t(got) < need) {
-        bad("corrupt or truncated TIFF: strip " + std::to_string(s) + " (rows " +
-            std::to_string(y0) + "..) is short or unreadable");
-      }
-      for (std::size_t i = 0; i < std::size_t(rows) * w; ++i) {
-        img.values[std::size_t(y0) * w + i] = convert(buf.data() + i * bytesPer);
-      }
-    }
-  }
-  return img;
-}
-
 double numberField(const nlohmann::json& j, const char* key, const std::string& name) {
   const auto& v = j.at(key);
   if (!v.is_number()) fail(name, std::string("sidecar field '") + key + "' must be a number");
@@ -444,7 +153,7 @@ HeightImage decodeHeightImage(std::span<const unsigned char> bytes, const std::s
     case ImageFormat::kPng:
       return decodePng(bytes, name, maxPixels);
     case ImageFormat::kTiff:
-      return decodeTiff(bytes, name, maxPixels);
+      return decodeGdalTiff(bytes, name, maxPixels);
     case ImageFormat::kPlanet:
       fail(name, "this is a planet file, not a heightmap image");
     default:
@@ -568,14 +277,35 @@ std::vector<unsigned char> readFileBytes(const std::filesystem::path& path,
   return bytes;
 }
 
+namespace {
+
+// Up to n bytes from the start of a file (what sniffFormat needs); "no such file" as readFileBytes.
+std::vector<unsigned char> readFileHead(const std::filesystem::path& path, std::size_t n) {
+  std::error_code ec;
+  if (!std::filesystem::exists(path, ec)) fail(path.string(), "no such file");
+  std::ifstream f(path, std::ios::binary);
+  if (!f) fail(path.string(), "cannot open for reading");
+  std::vector<unsigned char> head(n);
+  f.read(reinterpret_cast<char*>(head.data()), std::streamsize(n));
+  head.resize(std::size_t(f.gcount()));
+  return head;
+}
+
+}  // namespace
+
 HeightImage readHeightImage(const std::filesystem::path& path) {
   const std::string name = path.string();
-  const std::vector<unsigned char> bytes = readFileBytes(path);
-  const ImageFormat format = sniffFormat(bytes);
-  if (format == ImageFormat::kPng || format == ImageFormat::kTiff ||
-      format == ImageFormat::kPlanet) {
-    return decodeHeightImage(bytes, name);
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec)) return readGdalRaster(path);  // an ESRI grid
+  // PNG (with this project's tEXt metadata) and raw float32 (with its sidecar) are read here;
+  // TIFF and everything else GDAL opens (PDS3 with its label, SRTM .hgt, ESRI grids, netCDF ...)
+  // through GDAL, from the path, so that it finds a format's sibling files.
+  const std::vector<unsigned char> head = readFileHead(path, 16);
+  const ImageFormat format = sniffFormat(head);
+  if (format == ImageFormat::kPng || format == ImageFormat::kPlanet) {
+    return decodeHeightImage(readFileBytes(path), name);
   }
+  if (format == ImageFormat::kTiff) return readGdalRaster(path, kMaxImagePixels, true);
   auto sidecar = path;
   sidecar += ".json";
   if (std::filesystem::exists(sidecar)) {
@@ -583,10 +313,17 @@ HeightImage readHeightImage(const std::filesystem::path& path) {
     const RawSidecar s =
         parseRawSidecar(std::string_view(reinterpret_cast<const char*>(text.data()), text.size()),
                         sidecar.string());
-    return decodeRaw(bytes, s, name);
+    return decodeRaw(readFileBytes(path), s, name);
   }
-  if (bytes.empty()) fail(name, "empty file (0 bytes)");
-  fail(name, "not a PNG or TIFF image, and no sidecar " + sidecar.filename().string() +
+  if (head.empty()) fail(name, "empty file (0 bytes)");
+  try {
+    return readGdalRaster(path);
+  } catch (const core::InputError& e) {
+    const std::string why = e.what();
+    if (why.find("not a raster GDAL can open") == std::string::npos) throw;
+  }
+  fail(name, "not a PNG or TIFF image, nor a raster GDAL opens, and no sidecar " +
+                 sidecar.filename().string() +
                  " describes it as raw float32: cannot tell what it holds");
 }
 

@@ -16,12 +16,12 @@ namespace ps::io {
 inline constexpr std::uint64_t kMaxImagePixels = std::uint64_t(1) << 28;
 inline constexpr std::uint64_t kMaxImageSide = std::uint64_t(1) << 20;
 
-// GeoTIFF georeferencing (ModelPixelScale + ModelTiepoint + GTModelType), when present.
+// A raster's georeferencing (GDAL's north-up geotransform and CRS), when present.
 struct GeoReference {
   double pixelScaleX = 0, pixelScaleY = 0;  // CRS units per pixel
   double originX = 0, originY = 0;          // CRS coordinates of the raster's top-left corner
-  bool geographic = false;                  // CRS in degrees (GTModelType 2)
-  std::optional<double> sphereRadius;       // a user-defined ellipsoid with equal axes (metres)
+  bool geographic = false;                  // a geographic CRS (degrees)
+  std::optional<double> sphereRadius;       // the CRS's ellipsoid when its axes are equal (metres)
 };
 
 struct HeightImage {
@@ -31,6 +31,8 @@ struct HeightImage {
   // Declared no-data value in stored units (NaN: NaN marks no data) and where it came from.
   std::optional<double> noData;
   std::string noDataSource;
+  // The file's own scale and offset (metres = value * scale + offset), when it declares them.
+  std::optional<double> fileScale, fileOffset;
   // A PlanetSculpt 16-bit PNG's tEXt chunks: the metres that 0 and 65535 stand for.
   std::optional<double> value0Metres, value65535Metres;
   // Longitude of the western edge, when a sidecar says so.
@@ -53,10 +55,10 @@ struct HeightImage {
 enum class ImageFormat { kUnknown, kPng, kTiff, kPlanet };
 ImageFormat sniffFormat(std::span<const unsigned char> firstBytes);
 
-// PNG (8/16-bit grey) or TIFF (one sample per pixel: 8/16/32-bit integers, 32/64-bit floats,
-// strips or tiles, any compression libtiff reads; GDAL_NODATA tag 42113 and the GeoTIFF pixel
-// scale/tie point are read), chosen by the magic bytes. Images of more than maxPixels (at most
-// kMaxImagePixels) are refused before any buffer is allocated for them.
+// PNG (8/16-bit grey, libpng) or TIFF (one band of integers or floats, through GDAL's GTiff
+// driver with its georeferencing, no-data, scale and offset), chosen by the magic bytes. Images of
+// more than maxPixels (at most kMaxImagePixels) are refused before any buffer is allocated for
+// them.
 HeightImage decodeHeightImage(std::span<const unsigned char> bytes, const std::string& name,
                               std::uint64_t maxPixels = kMaxImagePixels);
 
@@ -74,7 +76,8 @@ RawSidecar parseRawSidecar(std::string_view json, const std::string& name);
 HeightImage decodeRaw(std::span<const unsigned char> bytes, const RawSidecar& sidecar,
                       const std::string& name);
 
-// Reads a file: PNG or TIFF by their magic, otherwise raw float32 when `<file>.json` exists.
+// Reads a file: PNG by its magic, raw float32 when `<file>.json` exists, anything else (TIFF,
+// PDS3, SRTM .hgt, an ESRI grid's folder, ...) through GDAL (io/gdal_raster.hpp).
 HeightImage readHeightImage(const std::filesystem::path& path);
 
 // The whole file, refusing more than maxBytes (named in the error).

@@ -1,7 +1,5 @@
 #include "io/heightmap_export.hpp"
 
-#include <tiffio.h>
-
 #include <algorithm>
 #include <bit>
 #include <cmath>
@@ -15,6 +13,7 @@
 
 #include "core/flat_chart.hpp"
 #include "io/atomic_file.hpp"
+#include "io/gdal_raster.hpp"
 #include "io/png_codec.hpp"
 
 namespace ps::io {
@@ -101,14 +100,6 @@ void writeSidecar(const nlohmann::json& side, const std::filesystem::path& path)
   });
 }
 
-// GeoTIFF tags libtiff does not know; registered per file before they are set.
-const TIFFFieldInfo kGeoTiffFields[] = {
-    {33550, -1, -1, TIFF_DOUBLE, FIELD_CUSTOM, 1, 1, const_cast<char*>("ModelPixelScaleTag")},
-    {33922, -1, -1, TIFF_DOUBLE, FIELD_CUSTOM, 1, 1, const_cast<char*>("ModelTiepointTag")},
-    {34735, -1, -1, TIFF_SHORT, FIELD_CUSTOM, 1, 1, const_cast<char*>("GeoKeyDirectoryTag")},
-    {34736, -1, -1, TIFF_DOUBLE, FIELD_CUSTOM, 1, 1, const_cast<char*>("GeoDoubleParamsTag")},
-};
-
 }  // namespace
 
 Raster resampleFlat(const terrain::Terrain& t, int width, int height, Interpolation how) {
@@ -173,64 +164,7 @@ void writeHeightPng16(const Raster& raster, const std::filesystem::path& path) {
 
 void writeHeightTiff32(const Raster& raster, const std::filesystem::path& path) {
   checkRaster(raster, path);
-  writeAtomically(path, [&](const std::filesystem::path& tmp) {
-    std::unique_ptr<TIFF, void (*)(TIFF*)> tif(TIFFOpen(tmp.c_str(), "w"), [](TIFF* t) {
-      if (t) TIFFClose(t);
-    });
-    if (!tif)
-      throw std::runtime_error("cannot create " + tmp.string() + " to write " + path.string());
-    TIFF* t = tif.get();
-    TIFFMergeFieldInfo(t, kGeoTiffFields, sizeof kGeoTiffFields / sizeof kGeoTiffFields[0]);
-    TIFFSetField(t, TIFFTAG_IMAGEWIDTH, std::uint32_t(raster.width));
-    TIFFSetField(t, TIFFTAG_IMAGELENGTH, std::uint32_t(raster.height));
-    TIFFSetField(t, TIFFTAG_SAMPLESPERPIXEL, std::uint16_t(1));
-    TIFFSetField(t, TIFFTAG_BITSPERSAMPLE, std::uint16_t(32));
-    TIFFSetField(t, TIFFTAG_SAMPLEFORMAT, std::uint16_t(SAMPLEFORMAT_IEEEFP));
-    TIFFSetField(t, TIFFTAG_PHOTOMETRIC, std::uint16_t(PHOTOMETRIC_MINISBLACK));
-    TIFFSetField(t, TIFFTAG_PLANARCONFIG, std::uint16_t(PLANARCONFIG_CONTIG));
-    TIFFSetField(t, TIFFTAG_COMPRESSION, std::uint16_t(COMPRESSION_NONE));
-    TIFFSetField(t, TIFFTAG_ROWSPERSTRIP, TIFFDefaultStripSize(t, 0));
-    TIFFSetField(t, TIFFTAG_SOFTWARE, "PlanetSculpt");
-    const std::string description = "heights in metres; " + projectionText(raster);
-    TIFFSetField(t, TIFFTAG_IMAGEDESCRIPTION, description.c_str());
-    if (raster.layout == Raster::Layout::kEquirectangular && raster.radiusMetres > 0) {
-      // Geographic degrees on a sphere of the planet's radius, pixel-is-area.
-      double scale[3] = {360.0 / raster.width, 180.0 / raster.height, 0.0};
-      double tie[6] = {0, 0, 0, -180.0, 90.0, 0};
-      std::uint16_t keys[] = {1,    1,     0, 9,      //
-                              1024, 0,     1, 2,      // GTModelType: geographic
-                              1025, 0,     1, 1,      // GTRasterType: pixel is area
-                              2048, 0,     1, 32767,  // GeographicType: user-defined
-                              2050, 0,     1, 32767,  // GeodeticDatum: user-defined
-                              2052, 0,     1, 9001,   // GeogLinearUnits: metre
-                              2054, 0,     1, 9102,   // GeogAngularUnits: degree
-                              2056, 0,     1, 32767,  // Ellipsoid: user-defined
-                              2057, 34736, 1, 0,      // SemiMajorAxis = doubles[0]
-                              2058, 34736, 1, 1};     // SemiMinorAxis = doubles[1]
-      double radii[2] = {raster.radiusMetres, raster.radiusMetres};
-      TIFFSetField(t, 33550, 3, scale);
-      TIFFSetField(t, 33922, 6, tie);
-      TIFFSetField(t, 34735, int(sizeof keys / sizeof keys[0]), keys);
-      TIFFSetField(t, 34736, 2, radii);
-    } else if (raster.layout == Raster::Layout::kFlat && raster.pixelWidthM > 0 &&
-               raster.pixelHeightM > 0) {
-      // Metres, no CRS: pixel centres at (x * dx, (height - 1 - y) * dy), like the flat chart.
-      double scale[3] = {raster.pixelWidthM, raster.pixelHeightM, 0.0};
-      double tie[6] = {
-          0, 0, 0, -0.5 * raster.pixelWidthM, (raster.height - 0.5) * raster.pixelHeightM, 0};
-      TIFFSetField(t, 33550, 3, scale);
-      TIFFSetField(t, 33922, 6, tie);
-    }
-    std::vector<float> row(std::size_t(raster.width));
-    for (int y = 0; y < raster.height; ++y) {
-      std::memcpy(row.data(), raster.metres.data() + std::size_t(y) * std::size_t(raster.width),
-                  row.size() * sizeof(float));
-      if (TIFFWriteScanline(t, row.data(), std::uint32_t(y), 0) < 0) {
-        throw std::runtime_error("cannot write row " + std::to_string(y) + " of " + path.string());
-      }
-    }
-    if (!TIFFFlush(t)) throw std::runtime_error("cannot write " + path.string() + " (disk full?)");
-  });
+  writeGdalGeoTiff(raster, path, "heights in metres; " + projectionText(raster));
   nlohmann::json side = describe(raster, path, "tiff-float32");
   writeSidecar(side, path);
 }

@@ -168,6 +168,11 @@ std::pair<double, double> toMetres(HeightImage& img, const ImportOptions& o,
     scale = (*img.value65535Metres - *img.value0Metres) / 65535.0;
     notes.push_back("heights: the PNG's PlanetSculpt text chunks map 0 to " + num(offset) +
                     " m and 65535 to " + num(*img.value65535Metres) + " m");
+  } else if (img.fileScale || img.fileOffset) {
+    scale = img.fileScale.value_or(1.0);
+    offset = img.fileOffset.value_or(0.0);
+    notes.push_back("heights: value x " + num(scale) + " + " + num(offset) +
+                    " m, the file's own scale and offset (--scale and --offset override them)");
   } else {
     notes.push_back(
         "heights: the stored values are taken as metres (scale 1, offset 0); "
@@ -189,6 +194,25 @@ std::pair<double, double> toMetres(HeightImage& img, const ImportOptions& o,
     v[i] = float(m);
   }
   return {scale, offset};
+}
+
+// Planetary radius products (e.g. LOLA's, whose label's offset is the body's radius) hold each
+// point's distance from the centre, not its height: when the median value is over half the
+// radius, the radius is subtracted (and the user told).
+void radiiToHeights(std::vector<float>& v, const std::vector<std::uint8_t>& hole, double radius,
+                    std::vector<std::string>& notes) {
+  std::vector<float> sample;
+  const std::size_t step = std::max<std::size_t>(1, v.size() / 100000);
+  for (std::size_t i = 0; i < v.size(); i += step)
+    if (hole.empty() || !hole[i]) sample.push_back(v[i]);
+  if (sample.empty()) return;
+  auto mid = sample.begin() + std::ptrdiff_t(sample.size() / 2);
+  std::nth_element(sample.begin(), mid, sample.end());
+  if (!(double(*mid) > 0.5 * radius)) return;
+  for (std::size_t i = 0; i < v.size(); ++i)
+    if (hole.empty() || !hole[i]) v[i] = float(double(v[i]) - radius);
+  notes.push_back("heights: the values are distances from the centre (median " + num(*mid) +
+                  " m), so the radius " + num(radius) + " m is subtracted");
 }
 
 // The equirectangular image onto a lat-long grid: area-averaged first where the image is finer,
@@ -272,12 +296,12 @@ void resampleFlat(const HeightImage& img, const ImportOptions& o, const core::Gr
       const double k = kEarthMean * std::numbers::pi / 180.0;
       sx = img.geo->pixelScaleX * k * std::cos(latC * std::numbers::pi / 180.0);
       sy = img.geo->pixelScaleY * k;
-      from = "the GeoTIFF's pixel scale in degrees, at latitude " + num(latC) +
+      from = "the file's georeferencing in degrees, at latitude " + num(latC) +
              " on the Earth's mean sphere";
     } else {
       sx = img.geo->pixelScaleX;
       sy = img.geo->pixelScaleY;
-      from = "the GeoTIFF's pixel scale (taken as metres)";
+      from = "the file's georeferencing (taken as metres)";
     }
   }
   if (!std::isfinite(sx) || sx <= 0 || !std::isfinite(sy) || sy <= 0) {
@@ -319,6 +343,7 @@ ImportResult importHeightImage(HeightImage img, const ImportOptions& o, const st
   // 2. Stored values -> metres.
   const auto [scale, offset] = toMetres(img, o, noData.hole, name, res.notes);
   std::vector<float>& v = img.values;
+  if (o.chart == ChartKind::kLatLong) radiiToHeights(v, noData.hole, radius, res.notes);
 
   // 3. Fill the holes.
   if (holes > 0) {

@@ -25,7 +25,8 @@ struct ImportOptions {
   // latlong: metres. Unset: the file's (a GeoTIFF's sphere, a sidecar's radius_m), else
   // kDefaultImportRadius.
   std::optional<double> radius;
-  // metres = value * scale + offset. Unset: a PlanetSculpt 16-bit PNG's own range, else 1 and 0.
+  // metres = value * scale + offset. Unset: a PlanetSculpt 16-bit PNG's own range, the file's
+  // own scale and offset (GDAL's), else 1 and 0.
   std::optional<double> scale, offset;
   long long gridSide = 0;  // 2^n+1; 0: defaultGridSide
   NoDataPolicy noData = NoDataPolicy::kFill;
