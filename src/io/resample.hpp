@@ -37,7 +37,12 @@ double sample(const At& at, int width, int height, double x, double y, bool wrap
               Interpolation how) {
   using namespace resample_detail;
   y = std::clamp(y, 0.0, double(height - 1));
-  if (!wrapX) x = std::clamp(x, 0.0, double(width - 1));
+  if (wrapX) {
+    x = std::fmod(x, double(width));  // any finite x (a file's far-off western longitude)
+    if (x < 0) x += width;
+  } else {
+    x = std::clamp(x, 0.0, double(width - 1));
+  }
   const double xf = std::floor(x), yf = std::floor(y);
   const int x0 = int(xf), y0 = int(yf);
   const double fx = x - xf, fy = y - yf;

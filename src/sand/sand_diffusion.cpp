@@ -6,12 +6,6 @@
 
 namespace ps::sand {
 
-using detail::kNever;
-using detail::kParallelTiles;
-using detail::kT;
-using detail::kW;
-using detail::kWall;
-
 // ---------------------------------------------------------------------------------------------
 // Drift-diffusion
 
@@ -93,15 +87,7 @@ void SandField::diffusionTile(int tu, int tv, const DiffusionTables& tb, double 
       for (int c = 2; c < kT + 2; ++c) {
         const int u = tu * kT + c - 2;
         if (u >= cols_) break;
-        double f = 0.0;
-        const int un[4] = {u - 1, u + 1, u, u};
-        const int vn[4] = {v, v, v - 1, v + 1};
-        for (int q = 0; q < 4; ++q) {
-          int uu = un[q];
-          if (sphere) uu = (uu + m_) % m_;
-          if (!cellExists(uu, vn[q])) continue;
-          f += driftFlux(*force, tb.zetaInv, u, v, uu, vn[q]);
-        }
+        const double f = netDriftFlux(*force, tb.zetaInv, u, v);
         if (f != 0.0) {
           out[c] -= dt * f * tb.invA[i];
           any = 1;
@@ -143,6 +129,20 @@ double SandField::driftFlux(const PushForce& force, double zetaInv, int ua, int 
   const double faceLength = va == vb ? grid_.horizontalFace(va) : grid_.verticalFace(va);
   const double flux = zetaInv * fn * grid_.cellSize() * faceLength;
   return swap ? -flux : flux;
+}
+
+double SandField::netDriftFlux(const PushForce& force, double zetaInv, int u, int v) const {
+  const bool sphere = grid_.sphere();
+  double f = 0.0;
+  const int un[4] = {u - 1, u + 1, u, u};
+  const int vn[4] = {v, v, v - 1, v + 1};
+  for (int q = 0; q < 4; ++q) {
+    int uu = un[q];
+    if (sphere) uu = (uu + m_) % m_;
+    if (!cellExists(uu, vn[q])) continue;
+    f += driftFlux(force, zetaInv, u, v, uu, vn[q]);
+  }
+  return f;
 }
 
 void SandField::markForce(const PushForce& force) {

@@ -11,12 +11,6 @@
 
 namespace ps::sand {
 
-using detail::kNever;
-using detail::kParallelTiles;
-using detail::kT;
-using detail::kW;
-using detail::kWall;
-
 SandField::SandField(std::shared_ptr<const core::Chart> chart, std::span<float> heights)
     : grid_(std::move(chart)), heights_(heights) {
   if (heights.size() != grid_.grid().count()) {

@@ -159,6 +159,8 @@ class SandField {
   void diffusionTile(int tu, int tv, const DiffusionTables& tb, double dt, const PushForce* force,
                      double* hs, std::uint8_t& busy);
   double driftFlux(const PushForce& force, double zetaInv, int ua, int va, int ub, int vb) const;
+  // The force's drift out of cell (u, v) through its four faces.
+  double netDriftFlux(const PushForce& force, double zetaInv, int u, int v) const;
 
   // The semi-implicit step (sand_semi_implicit.cpp) and its parts, in order: next = cur, the
   // force's drift (explicit), the rows' implicit solves, the columns', the polar caps'.

@@ -23,6 +23,12 @@ inline constexpr int kParallelTiles = 64;
 
 }  // namespace detail
 
+using detail::kNever;
+using detail::kParallelTiles;
+using detail::kT;
+using detail::kW;
+using detail::kWall;
+
 // A tile's heights are updated in place; before a step writes any tile, every tile of the step
 // copies its two outermost rows and columns (`edge`), and neighbours read their halo from there.
 // `next` exists only for the semi-implicit step (allocated on first use).

@@ -11,9 +11,6 @@
 
 namespace ps::sand {
 
-using detail::kParallelTiles;
-using detail::kT;
-
 // One ordinary row's cells u0 .. u0 + len - 1 (mod m on the sphere) inside P; `circle`: the
 // whole row of the sphere, closed on itself.
 struct SandField::RowRun {
@@ -57,7 +54,6 @@ void SandField::copyCurToNext() {
 // The drift of the force, explicit: it does not depend on h.
 void SandField::applyDrift(const PushForce& force, const DiffusionTables& tb, double dt,
                            BusyFlags& busy) {
-  const bool sphere = grid_.sphere();
   for (int t : tileList_) {
     const int tu = t % tilesU_, tv = t / tilesU_;
     Tile& tile = *tiles_[std::size_t(t)];
@@ -67,15 +63,7 @@ void SandField::applyDrift(const PushForce& force, const DiffusionTables& tb, do
       for (int lu = 0; lu < kT; ++lu) {
         const int u = tu * kT + lu;
         if (u >= cols_) break;
-        double f = 0.0;
-        const int un[4] = {u - 1, u + 1, u, u};
-        const int vn[4] = {v, v, v - 1, v + 1};
-        for (int q = 0; q < 4; ++q) {
-          int uu = un[q];
-          if (sphere) uu = (uu + m_) % m_;
-          if (!cellExists(uu, vn[q])) continue;
-          f += driftFlux(force, tb.zetaInv, u, v, uu, vn[q]);
-        }
+        const double f = netDriftFlux(force, tb.zetaInv, u, v);
         if (f != 0.0) {
           tile.next[std::size_t(lv * kT + lu)] -= dt * f * tb.invA[std::size_t(v + 2)];
           busy[std::size_t(t)].store(1, std::memory_order_relaxed);

@@ -5,12 +5,6 @@
 
 namespace ps::sand {
 
-using detail::kNever;
-using detail::kParallelTiles;
-using detail::kT;
-using detail::kW;
-using detail::kWall;
-
 // ---------------------------------------------------------------------------------------------
 // Thermal erosion
 

@@ -3,7 +3,9 @@
 #include <cmath>
 #include <cstdint>
 #include <fstream>
+#include <iterator>
 #include <sstream>
+#include <string_view>
 
 #include "core/input_error.hpp"
 
@@ -87,6 +89,27 @@ CameraCalibration CameraCalibration::forImageSize(cv::Size size) const {
 
 namespace {
 
+// OpenCV 4.6's YAML parser never returns on some malformed document markers (found by
+// fuzz_calibration: "%YAML:1.\n-----0\n----\n..." loops forever), so YAML text whose lines begin
+// with "---" must hold exactly that marker before OpenCV sees it.
+void checkYamlMarkers(const std::string& text, const std::string& name) {
+  if (text.rfind("%YAML", 0) != 0) return;
+  std::size_t begin = 0;
+  for (int line = 1; begin < text.size(); ++line) {
+    std::size_t end = text.find('\n', begin);
+    if (end == std::string::npos) end = text.size();
+    std::string_view l(text.data() + begin, end - begin);
+    if (l.rfind("---", 0) == 0) {
+      l.remove_prefix(3);
+      if (l.find_first_not_of(" \t\r") != std::string_view::npos)
+        throw core::InputError(name + ": line " + std::to_string(line) +
+                               ": malformed YAML document marker (only \"---\" may start a line "
+                               "with three dashes)");
+    }
+    begin = end + 1;
+  }
+}
+
 // Opens `source` (a file name, or the text with FileStorage::MEMORY) for reading; InputError
 // naming `name` for anything OpenCV refuses or throws.
 void openStorage(cv::FileStorage& fs, const std::string& source, int flags,
@@ -166,12 +189,18 @@ CameraCalibration loadCalibration(const std::filesystem::path& path) {
     std::ifstream probe(path);
     if (!probe) throw core::InputError(name + ": cannot open the calibration file");
   }
+  {
+    std::ifstream in(path, std::ios::binary);
+    std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    checkYamlMarkers(text, name);
+  }
   cv::FileStorage fs;
   openStorage(fs, name, cv::FileStorage::READ, name);
   return readCalibration(fs, name);
 }
 
 CameraCalibration parseCalibration(const std::string& text, const std::string& name) {
+  checkYamlMarkers(text, name);
   cv::FileStorage fs;
   openStorage(fs, text, cv::FileStorage::READ | cv::FileStorage::MEMORY, name);
   return readCalibration(fs, name);
