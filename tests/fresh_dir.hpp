@@ -1,11 +1,13 @@
 #pragma once
-// Scratch folders for tests: TMP/ps_test_<name>_<pid>, emptied first and removed when the test
+// Scratch folders for tests, and reading a file back: TMP/ps_test_<name>_<pid>, emptied first and removed when the test
 // process ends (named per process, they would otherwise pile up in TMP run after run). A process
 // with a failed test keeps them, as evidence.
 #include <gtest/gtest.h>
 #include <unistd.h>
 
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <string>
 #include <system_error>
 #include <vector>
@@ -38,6 +40,12 @@ inline std::filesystem::path freshDir(const std::string& name) {
   std::filesystem::create_directories(d);
   ScratchFolders::add(d);
   return d;
+}
+
+// A file's bytes (empty when it cannot be read).
+inline std::vector<unsigned char> readAll(const std::filesystem::path& p) {
+  std::ifstream f(p, std::ios::binary);
+  return {std::istreambuf_iterator<char>(f), std::istreambuf_iterator<char>()};
 }
 
 }  // namespace ps::testkit

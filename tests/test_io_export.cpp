@@ -31,10 +31,7 @@ fs::path freshDir(const std::string& name) {
   return testkit::freshDir("io_" + name);
 }
 
-std::vector<unsigned char> readAll(const fs::path& p) {
-  std::ifstream f(p, std::ios::binary);
-  return {std::istreambuf_iterator<char>(f), std::istreambuf_iterator<char>()};
-}
+using testkit::readAll;
 
 template <class T>
 T le(const unsigned char* p) {

@@ -42,10 +42,7 @@ void writeText(const fs::path& p, const std::string& s) {
   std::ofstream(p) << s;
 }
 
-std::vector<unsigned char> readAll(const fs::path& p) {
-  std::ifstream f(p, std::ios::binary);
-  return {std::istreambuf_iterator<char>(f), std::istreambuf_iterator<char>()};
-}
+using testkit::readAll;
 
 // Expects importing `file` to fail with a message that starts with the file's name and
 // contains `what`.

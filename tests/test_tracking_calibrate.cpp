@@ -301,3 +301,36 @@ TEST(TrackingCalibrate, CommandCalibratesAFolderOfRenderedViews) {
   EXPECT_LT(c.rms, 0.5);
   std::filesystem::remove_all(dir);
 }
+
+// OpenCV's FileStorage parsers loop forever on some malformed text (the fuzzer's finds): such
+// files are refused, naming the file, before OpenCV reads them; well-formed YAML, XML and JSON
+// calibrations still load.
+TEST(TrackingCalibrate, MalformedFilesAreRefusedBeforeOpenCvParsesThem) {
+  for (const std::string& text :
+       {std::string("%YAML:1.\n-----0\n----\nd"), std::string("%YAML:1.\n t:d\n%Y\n-"),
+        std::string("{\"camera_matrix\": [1, 2"),
+        std::string("<?xml version=\"1.0\"?>\n<opencv_storage><a>")}) {
+    try {
+      (void)tracking::parseCalibration(text, "bad.yml");
+      ADD_FAILURE() << "accepted: " << text;
+    } catch (const core::InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("bad.yml: malformed calibration file"),
+                std::string::npos)
+          << e.what();
+    }
+  }
+  cv::Mat K = (cv::Mat_<double>(3, 3) << 600, 0, 319.5, 0, 600, 239.5, 0, 0, 1);
+  cv::Mat d = cv::Mat::zeros(1, 5, CV_64F);
+  for (const char* ext : {".yml", ".xml", ".json"}) {
+    cv::FileStorage fs(std::string("x") + ext,
+                       cv::FileStorage::WRITE | cv::FileStorage::MEMORY |
+                           (ext[1] == 'x'   ? cv::FileStorage::FORMAT_XML
+                            : ext[1] == 'j' ? cv::FileStorage::FORMAT_JSON
+                                            : cv::FileStorage::FORMAT_YAML));
+    fs << "camera_matrix" << K << "distortion_coefficients" << d;
+    const std::string text = fs.releaseAndGetString();
+    const auto c = tracking::parseCalibration(text, std::string("good") + ext);
+    EXPECT_EQ(c.K(0, 0), 600.0) << ext;
+    EXPECT_EQ(c.K(1, 2), 239.5) << ext;
+  }
+}

@@ -63,23 +63,16 @@ std::size_t SandField::resync() {
   for (std::size_t t = 0; t < tiles_.size(); ++t) {
     Tile* tile = tiles_[t].get();
     if (!tile) continue;
-    const int tu = int(t) % tilesU_, tv = int(t) / tilesU_;
     bool any = false;
-    for (int lv = 0; lv < kT; ++lv) {
-      const int v = tv * kT + lv;
-      if (!grid_.ordinaryRow(v)) continue;
-      for (int lu = 0; lu < kT; ++lu) {
-        const int u = tu * kT + lu;
-        if (u >= cols_) break;
-        double& x = tile->cur[std::size_t(lv * kT + lu)];
-        const float f = heights_[g.index(u, v)];
-        if (static_cast<float>(x) != f) {
-          x = double(f);
-          any = true;
-          ++reloaded;
-        }
+    forEachCellOf(int(t), [&](int u, int v, std::size_t i) {
+      double& x = tile->cur[i];
+      const float f = heights_[g.index(u, v)];
+      if (static_cast<float>(x) != f) {
+        x = double(f);
+        any = true;
+        ++reloaded;
       }
-    }
+    });
     if (any) marked_[t] = 1;
   }
   if (grid_.sphere()) {

@@ -191,25 +191,18 @@ terrain::GridRegion SandField::writeBack(double limit) {
     Tile* tile = tiles_[t].get();
     if (!tile || !tile->unwritten) continue;
     tile->unwritten = false;
-    const int tu = int(t) % tilesU_, tv = int(t) / tilesU_;
     int ua = cols_, ub = -1, va = m_ + 1, vb = -1;
-    for (int lv = 0; lv < kT; ++lv) {
-      const int v = tv * kT + lv;
-      if (!grid_.ordinaryRow(v)) continue;
-      for (int lu = 0; lu < kT; ++lu) {
-        const int u = tu * kT + lu;
-        if (u >= cols_) break;
-        const double x = tile->cur[std::size_t(lv * kT + lu)];
-        bool changed = store(u, v, x);
-        if (sphere && u == 0) changed |= store(m_, v, x);
-        if (changed) {
-          ua = std::min(ua, u);
-          ub = std::max(ub, u);
-          va = std::min(va, v);
-          vb = std::max(vb, v);
-        }
+    forEachCellOf(int(t), [&](int u, int v, std::size_t i) {
+      const double x = tile->cur[i];
+      bool changed = store(u, v, x);
+      if (sphere && u == 0) changed |= store(m_, v, x);
+      if (changed) {
+        ua = std::min(ua, u);
+        ub = std::max(ub, u);
+        va = std::min(va, v);
+        vb = std::max(vb, v);
       }
-    }
+    });
     if (vb < 0) continue;
     terrain::GridRegion r{ua, ub, va, vb};
     if (sphere && ua == 0) r = terrain::GridRegion{m_, m_ + ub, va, vb};  // names u = m too

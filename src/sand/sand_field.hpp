@@ -134,6 +134,10 @@ class SandField {
   enum class Predicate { kThermal, kDiffusion };
 
   int tileIndex(int tu, int tv) const { return tv * tilesU_ + tu; }
+  // Calls f(u, v, i) for every ordinary cell of tile t, i its index in the tile's arrays
+  // (sand_field_parts.hpp).
+  template <class F>
+  void forEachCellOf(int t, F&& f) const;
   bool cellExists(int u, int v) const;
   // Tile of a neighbour column (wrapping on the sphere); -1 outside.
   int wrapTileU(int tu) const;

@@ -83,4 +83,18 @@ struct SandField::DiffusionTables {
   double zetaInv = 0;
 };
 
+template <class F>
+void SandField::forEachCellOf(int t, F&& f) const {
+  const int tu = t % tilesU_, tv = t / tilesU_;
+  for (int lv = 0; lv < kT; ++lv) {
+    const int v = tv * kT + lv;
+    if (!grid_.ordinaryRow(v)) continue;
+    for (int lu = 0; lu < kT; ++lu) {
+      const int u = tu * kT + lu;
+      if (u >= cols_) break;
+      f(u, v, std::size_t(lv * kT + lu));
+    }
+  }
+}
+
 }  // namespace ps::sand

@@ -55,21 +55,14 @@ void SandField::copyCurToNext() {
 void SandField::applyDrift(const PushForce& force, const DiffusionTables& tb, double dt,
                            BusyFlags& busy) {
   for (int t : tileList_) {
-    const int tu = t % tilesU_, tv = t / tilesU_;
     Tile& tile = *tiles_[std::size_t(t)];
-    for (int lv = 0; lv < kT; ++lv) {
-      const int v = tv * kT + lv;
-      if (!grid_.ordinaryRow(v)) continue;
-      for (int lu = 0; lu < kT; ++lu) {
-        const int u = tu * kT + lu;
-        if (u >= cols_) break;
-        const double f = netDriftFlux(force, tb.zetaInv, u, v);
-        if (f != 0.0) {
-          tile.next[std::size_t(lv * kT + lu)] -= dt * f * tb.invA[std::size_t(v + 2)];
-          busy[std::size_t(t)].store(1, std::memory_order_relaxed);
-        }
+    forEachCellOf(t, [&](int u, int v, std::size_t i) {
+      const double f = netDriftFlux(force, tb.zetaInv, u, v);
+      if (f != 0.0) {
+        tile.next[i] -= dt * f * tb.invA[std::size_t(v + 2)];
+        busy[std::size_t(t)].store(1, std::memory_order_relaxed);
       }
-    }
+    });
   }
 }
 

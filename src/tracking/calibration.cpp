@@ -1,10 +1,16 @@
 #include "tracking/calibration.hpp"
 
+#include <libxml/parser.h>
+#include <yaml.h>
+
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <fstream>
 #include <iterator>
+#include <nlohmann/json.hpp>
 #include <sstream>
+#include <stdexcept>
 #include <string_view>
 
 #include "core/input_error.hpp"
@@ -89,41 +95,74 @@ CameraCalibration CameraCalibration::forImageSize(cv::Size size) const {
 
 namespace {
 
-// OpenCV 4.6's YAML parser never returns on some malformed document markers (found by
-// fuzz_calibration: "%YAML:1.\n-----0\n----\n..." loops forever), so YAML text whose lines begin
-// with "---" must hold exactly that marker before OpenCV sees it.
-void checkYamlMarkers(const std::string& text, const std::string& name) {
-  if (text.rfind("%YAML", 0) != 0) return;
-  std::size_t begin = 0;
-  for (int line = 1; begin < text.size(); ++line) {
-    std::size_t end = text.find('\n', begin);
-    if (end == std::string::npos) end = text.size();
-    std::string_view l(text.data() + begin, end - begin);
-    if (l.rfind("---", 0) == 0) {
-      l.remove_prefix(3);
-      if (l.find_first_not_of(" \t\r") != std::string_view::npos)
-        throw core::InputError(name + ": line " + std::to_string(line) +
-                               ": malformed YAML document marker (only \"---\" may start a line "
-                               "with three dashes)");
-    }
-    begin = end + 1;
+// OpenCV 4.6's FileStorage parsers loop forever on some malformed text (fuzz_calibration found
+// "%YAML:1.\n t:d\n%Y\n-" and others), so the text must be well-formed before OpenCV reads it:
+// JSON by nlohmann-json, XML by libxml2, YAML by libyaml (after OpenCV's own "%YAML:1.0" line,
+// which is not a YAML 1.x directive).
+void checkWellFormed(const std::string& text, const std::string& name) {
+  const std::size_t first = text.find_first_not_of(" \t\r\n");
+  if (first == std::string::npos) throw core::InputError(name + ": empty calibration file");
+  if (text[first] == '{') {
+    if (!nlohmann::json::accept(text))
+      throw core::InputError(name + ": malformed calibration file (not valid JSON)");
+    return;
   }
+  if (text[first] == '<') {
+    xmlDocPtr doc =
+        xmlReadMemory(text.data(), int(std::min<std::size_t>(text.size(), INT32_MAX)), name.c_str(),
+                      nullptr, XML_PARSE_NONET | XML_PARSE_NOERROR | XML_PARSE_NOWARNING);
+    if (!doc) throw core::InputError(name + ": malformed calibration file (not well-formed XML)");
+    xmlFreeDoc(doc);
+    return;
+  }
+  std::string_view yaml = text;
+  int lineOffset = 0;
+  if (yaml.rfind("%YAML:", 0) == 0) {
+    const std::size_t eol = yaml.find('\n');
+    yaml = eol == std::string_view::npos ? std::string_view() : yaml.substr(eol + 1);
+    lineOffset = 1;
+  }
+  yaml_parser_t parser;
+  if (!yaml_parser_initialize(&parser)) throw std::runtime_error("libyaml could not start");
+  yaml_parser_set_input_string(&parser, reinterpret_cast<const unsigned char*>(yaml.data()),
+                               yaml.size());
+  std::string problem;
+  for (bool done = false; !done;) {
+    yaml_event_t event;
+    if (!yaml_parser_parse(&parser, &event)) {
+      problem = "line " + std::to_string(parser.problem_mark.line + 1 + std::size_t(lineOffset)) +
+                ": " + (parser.problem ? parser.problem : "malformed YAML");
+      break;
+    }
+    done = event.type == YAML_STREAM_END_EVENT;
+    yaml_event_delete(&event);
+  }
+  yaml_parser_delete(&parser);
+  if (!problem.empty())
+    throw core::InputError(name + ": malformed calibration file (YAML " + problem + ")");
 }
 
-// Opens `source` (a file name, or the text with FileStorage::MEMORY) for reading; InputError
-// naming `name` for anything OpenCV refuses or throws.
-void openStorage(cv::FileStorage& fs, const std::string& source, int flags,
-                 const std::string& name) {
+// Runs `read` with what OpenCV throws (cv::Exception, and the std::length_error its parser lets
+// out) turned into InputError naming `name`.
+template <class Read>
+void translatingOpenCvErrors(const std::string& name, Read&& read) {
   try {
-    if (!fs.open(source, flags))
-      throw core::InputError(name + ": not a calibration file OpenCV can read (YAML/XML/JSON)");
+    read();
   } catch (const core::InputError&) {
     throw;
   } catch (const cv::Exception& e) {
     throw core::InputError(name + ": malformed calibration file (" + e.err + ")");
-  } catch (const std::exception& e) {  // OpenCV's parser also lets std::length_error out
+  } catch (const std::exception& e) {
     throw core::InputError(name + ": malformed calibration file (" + e.what() + ")");
   }
+}
+
+void openStorage(cv::FileStorage& fs, const std::string& source, int flags,
+                 const std::string& name) {
+  translatingOpenCvErrors(name, [&] {
+    if (!fs.open(source, flags))
+      throw core::InputError(name + ": not a calibration file OpenCV can read (YAML/XML/JSON)");
+  });
 }
 
 // An OpenCV matrix node's declared size, checked before OpenCV allocates for it (a damaged
@@ -143,7 +182,7 @@ void checkMatrixNode(const cv::FileNode& node, const std::string& name, const ch
 CameraCalibration readCalibration(cv::FileStorage& fs, const std::string& name) {
   CameraCalibration c;
   c.source = name;
-  try {
+  translatingOpenCvErrors(name, [&] {
     checkMatrixNode(fs["camera_matrix"], name, "camera_matrix");
     checkMatrixNode(fs["distortion_coefficients"], name, "distortion_coefficients");
     cv::Mat k, d;
@@ -170,13 +209,7 @@ CameraCalibration readCalibration(cv::FileStorage& fs, const std::string& name) 
     }
     const cv::FileNode e = fs["avg_reprojection_error"];
     if (!e.empty() && e.isReal()) c.rms = double(e);
-  } catch (const core::InputError&) {
-    throw;
-  } catch (const cv::Exception& e) {
-    throw core::InputError(name + ": malformed calibration file (" + e.err + ")");
-  } catch (const std::exception& e) {  // OpenCV's parser also lets std::length_error out
-    throw core::InputError(name + ": malformed calibration file (" + e.what() + ")");
-  }
+  });
   c.validate();
   return c;
 }
@@ -192,7 +225,7 @@ CameraCalibration loadCalibration(const std::filesystem::path& path) {
   {
     std::ifstream in(path, std::ios::binary);
     std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-    checkYamlMarkers(text, name);
+    checkWellFormed(text, name);
   }
   cv::FileStorage fs;
   openStorage(fs, name, cv::FileStorage::READ, name);
@@ -200,7 +233,7 @@ CameraCalibration loadCalibration(const std::filesystem::path& path) {
 }
 
 CameraCalibration parseCalibration(const std::string& text, const std::string& name) {
-  checkYamlMarkers(text, name);
+  checkWellFormed(text, name);
   cv::FileStorage fs;
   openStorage(fs, text, cv::FileStorage::READ | cv::FileStorage::MEMORY, name);
   return readCalibration(fs, name);

@@ -97,11 +97,7 @@ Sheet renderBoardSheet(const MarkerLayout& board, const Paper& paper, double dpi
   c.text("A hand or the tool over some of the markers is fine.  Layout: " +
              std::filesystem::path(board.source).filename().string(),
          W / 2, y, 2.4, true);
-  c.scaleBar(c.heightMm() - 23);
-  footer(c, paper, dpi);
-  sheet.image = c.img;
-  sheet.ops = std::move(c.ops);
-  return sheet;
+  return finish(c, std::move(sheet), c.heightMm() - 23);
 }
 
 Sheet renderCubeNetSheet(const MarkerLayout& cube, const Paper& paper, double dpi) {
@@ -180,11 +176,7 @@ Sheet renderCubeNetSheet(const MarkerLayout& cube, const Paper& paper, double dp
       "Glue on card, cut out, fold printed side out, tape the edges; the stick goes into the "
       "cross.",
       W / 2, y, 2.4, true);
-  c.scaleBar(c.heightMm() - 23);
-  footer(c, paper, dpi);
-  sheet.image = c.img;
-  sheet.ops = std::move(c.ops);
-  return sheet;
+  return finish(c, std::move(sheet), c.heightMm() - 23);
 }
 
 }  // namespace ps::tracking

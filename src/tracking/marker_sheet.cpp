@@ -126,11 +126,7 @@ Sheet renderMarkerSheet(const MarkerSheetSpec& spec, const Paper& paper, double 
     c.text(n, 18, y, 2.6);
     y += 4.6;
   }
-  c.scaleBar(c.heightMm() - 32);
-  footer(c, paper, dpi);
-  sheet.image = c.img;
-  sheet.ops = std::move(c.ops);
-  return sheet;
+  return finish(c, std::move(sheet), c.heightMm() - 32);
 }
 
 Sheet renderCharucoSheet(const CharucoBoardSpec& board, const Paper& paper, double dpi) {
@@ -168,11 +164,7 @@ Sheet renderCharucoSheet(const CharucoBoardSpec& board, const Paper& paper, doub
   y += 4.5;
   c.text("Glue flat on stiff card. Film it from many angles, filling the image's corners.", W / 2,
          y, 2.4, true);
-  c.scaleBar(c.heightMm() - 23);
-  footer(c, paper, dpi);
-  sheet.image = c.img;
-  sheet.ops = std::move(c.ops);
-  return sheet;
+  return finish(c, std::move(sheet), c.heightMm() - 23);
 }
 
 }  // namespace ps::tracking

@@ -8,6 +8,7 @@
 #include <opencv2/imgproc.hpp>
 #include <sstream>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "tracking/marker_sheet.hpp"
@@ -111,6 +112,16 @@ inline void footer(Canvas& c, const Paper& paper, double dpi) {
   c.text("PlanetSculpt  |  " + paper.name + " " + mm(paper.widthMm) + " x " + mm(paper.heightMm) +
              " mm  |  " + mm(dpi) + " dpi  |  docs/TRACKING.md",
          c.widthMm() / 2, c.heightMm() - 8, 2.2, true);
+}
+
+// The sheet's last lines (the scale bar with its top at `scaleBarY`, the footer) and the drawing
+// into `sheet`.
+inline Sheet finish(Canvas& c, Sheet sheet, double scaleBarY) {
+  c.scaleBar(scaleBarY);
+  footer(c, sheet.paper, c.dpi);
+  sheet.image = c.img;
+  sheet.ops = std::move(c.ops);
+  return sheet;
 }
 
 }  // namespace ps::tracking::sheet_detail
