@@ -126,20 +126,40 @@ void checkWellFormed(const std::string& text, const std::string& name) {
   if (!yaml_parser_initialize(&parser)) throw std::runtime_error("libyaml could not start");
   yaml_parser_set_input_string(&parser, reinterpret_cast<const unsigned char*>(yaml.data()),
                                yaml.size());
+  yaml_document_t doc;
+  const bool loaded = yaml_parser_load(&parser, &doc) != 0;
   std::string problem;
-  for (bool done = false; !done;) {
-    yaml_event_t event;
-    if (!yaml_parser_parse(&parser, &event)) {
-      problem = "line " + std::to_string(parser.problem_mark.line + 1 + std::size_t(lineOffset)) +
-                ": " + (parser.problem ? parser.problem : "malformed YAML");
-      break;
+  if (!loaded) {
+    problem = "YAML line " +
+              std::to_string(parser.problem_mark.line + 1 + std::size_t(lineOffset)) + ": " +
+              (parser.problem ? parser.problem : "malformed YAML");
+  } else {
+    // A calibration is a mapping that holds camera_matrix (OpenCV's parser has been seen to loop
+    // on other well-formed documents, e.g. a lone multi-line scalar).
+    const yaml_node_t* root = yaml_document_get_root_node(&doc);
+    bool hasMatrix = false;
+    if (root && root->type == YAML_MAPPING_NODE) {
+      for (auto* pair = root->data.mapping.pairs.start; pair < root->data.mapping.pairs.top;
+           ++pair) {
+        const yaml_node_t* key = yaml_document_get_node(&doc, pair->key);
+        if (key && key->type == YAML_SCALAR_NODE &&
+            std::string_view(reinterpret_cast<const char*>(key->data.scalar.value),
+                             key->data.scalar.length) == "camera_matrix")
+          hasMatrix = true;
+      }
     }
-    done = event.type == YAML_STREAM_END_EVENT;
-    yaml_event_delete(&event);
+    if (!root || root->type != YAML_MAPPING_NODE) {
+      problem = "YAML: not a mapping of calibration fields";
+    } else if (!hasMatrix) {
+      yaml_document_delete(&doc);
+      yaml_parser_delete(&parser);
+      throw core::InputError(name + ": no camera_matrix");
+    }
+    yaml_document_delete(&doc);
   }
   yaml_parser_delete(&parser);
   if (!problem.empty())
-    throw core::InputError(name + ": malformed calibration file (YAML " + problem + ")");
+    throw core::InputError(name + ": malformed calibration file (" + problem + ")");
 }
 
 // Runs `read` with what OpenCV throws (cv::Exception, and the std::length_error its parser lets
