@@ -124,8 +124,11 @@ void checkWellFormed(const std::string& text, const std::string& name) {
   }
   yaml_parser_t parser;
   if (!yaml_parser_initialize(&parser)) throw std::runtime_error("libyaml could not start");
-  yaml_parser_set_input_string(&parser, reinterpret_cast<const unsigned char*>(yaml.data()),
-                               yaml.size());
+  // libyaml asserts on a null input, which an empty view may hold.
+  static const char kNothing[] = "";
+  yaml_parser_set_input_string(
+      &parser, reinterpret_cast<const unsigned char*>(yaml.empty() ? kNothing : yaml.data()),
+      yaml.size());
   yaml_document_t doc;
   const bool loaded = yaml_parser_load(&parser, &doc) != 0;
   std::string problem;
