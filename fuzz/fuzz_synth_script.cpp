@@ -1,28 +1,14 @@
 // libFuzzer: synth scripts (tracking::parseSynthScript), the JSON scenes `synth` renders. Any
 // JSON must parse or be refused with core::InputError; what parses writes back (toJson) to a
 // script that parses to the same JSON.
-#include <cstddef>
-#include <cstdint>
-#include <cstdlib>
-#include <nlohmann/json.hpp>
-
-#include "core/input_error.hpp"
+#include "json_round_trip.hpp"
 #include "tracking/synth.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
-  const nlohmann::json j = nlohmann::json::parse(data, data + size, nullptr, false);
-  if (j.is_discarded()) return 0;
-  nlohmann::json once;
-  try {
-    once = ps::tracking::toJson(ps::tracking::parseSynthScript(j, "fuzz.json"));
-  } catch (const ps::core::InputError&) {
-    return 0;
-  }
-  try {
-    if (ps::tracking::toJson(ps::tracking::parseSynthScript(once, "again.json")) != once)
-      std::abort();
-  } catch (const ps::core::InputError&) {
-    std::abort();
-  }
-  return 0;
+  return ps::fuzz::jsonRoundTrip(
+      data, size,
+      [](const nlohmann::json& j, const char* name) {
+        return ps::tracking::parseSynthScript(j, name);
+      },
+      [](const ps::tracking::SynthScript& s) { return ps::tracking::toJson(s); });
 }
