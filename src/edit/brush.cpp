@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "core/input_error.hpp"
+#include "core/named_values.hpp"
 
 namespace ps::edit {
 
@@ -56,23 +57,18 @@ GaussianProfile::GaussianProfile(double radius, double sigma, double mu) {
   invDenominator_ = -1.0 / std::expm1(q0);
 }
 
+namespace {
+constexpr core::NameTable<BrushMode, 3> kBrushModes{
+    "brush mode",
+    {{{BrushMode::kRaise, "raise"}, {BrushMode::kLower, "lower"}, {BrushMode::kSet, "set"}}}};
+}  // namespace
+
 std::string toString(BrushMode mode) {
-  switch (mode) {
-    case BrushMode::kRaise:
-      return "raise";
-    case BrushMode::kLower:
-      return "lower";
-    case BrushMode::kSet:
-      return "set";
-  }
-  return "?";
+  return kBrushModes.nameOf(mode);
 }
 
 BrushMode brushModeFromString(const std::string& s) {
-  if (s == "raise") return BrushMode::kRaise;
-  if (s == "lower") return BrushMode::kLower;
-  if (s == "set") return BrushMode::kSet;
-  throw core::InputError("brush mode '" + s + "' is not one of raise, lower, set");
+  return kBrushModes.parse(s);
 }
 
 void BrushSettings::validate() const {

@@ -15,14 +15,6 @@ namespace {
 constexpr const char* kHeader =
     "t_s,x_m,y_m,z_m,fx_n,fy_n,fz_n,depth_m,repulse_n,damping_nspm,ramp,touching,fault";
 
-Fault faultFromString(const std::string& s) {
-  for (Fault f : {Fault::kNone, Fault::kDeviceLost, Fault::kNonFinite, Fault::kJump,
-                  Fault::kTimeOrder, Fault::kNoTerrain}) {
-    if (s == toString(f)) return f;
-  }
-  throw core::InputError("force log: unknown fault '" + s + "'");
-}
-
 }  // namespace
 
 ForceLogWriter::ForceLogWriter(std::ostream& out) : out_(out) {
@@ -81,7 +73,11 @@ std::vector<ForceRecord> readForceLog(std::istream& in) {
     r.damping = num(9);
     r.ramp = num(10);
     r.touching = f[11] == "1";
-    r.fault = faultFromString(f[12]);
+    try {
+      r.fault = faultFromString(f[12]);
+    } catch (const core::InputError& e) {
+      throw core::InputError("force log: line " + std::to_string(lineNo) + ": " + e.what());
+    }
     out.push_back(r);
   }
   return out;

@@ -4,24 +4,26 @@
 #include <cmath>
 #include <numbers>
 
+#include "core/named_values.hpp"
+
 namespace ps::haptics {
 
+namespace {
+constexpr core::NameTable<Fault, 6> kFaults{"fault",
+                                            {{{Fault::kNone, "none"},
+                                              {Fault::kDeviceLost, "device-lost"},
+                                              {Fault::kNonFinite, "non-finite"},
+                                              {Fault::kJump, "jump"},
+                                              {Fault::kTimeOrder, "time-order"},
+                                              {Fault::kNoTerrain, "no-terrain"}}}};
+}  // namespace
+
 const char* toString(Fault f) {
-  switch (f) {
-    case Fault::kNone:
-      return "none";
-    case Fault::kDeviceLost:
-      return "device-lost";
-    case Fault::kNonFinite:
-      return "non-finite";
-    case Fault::kJump:
-      return "jump";
-    case Fault::kTimeOrder:
-      return "time-order";
-    case Fault::kNoTerrain:
-      return "no-terrain";
-  }
-  return "?";
+  return kFaults.nameOf(f);
+}
+
+Fault faultFromString(const std::string& s) {
+  return kFaults.parse(s);
 }
 
 RepulseLaw::RepulseLaw(const ForceConstants& c, const DeviceLimits& limits)

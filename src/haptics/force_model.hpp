@@ -21,6 +21,7 @@ enum class Fault : std::uint8_t {
   kNoTerrain,   // no terrain snapshot under the tool (none published yet, or tool outside it)
 };
 const char* toString(Fault f);
+Fault faultFromString(const std::string& s);  // InputError naming the choices
 
 // The stiffness- and force-clamped repulse law: F(d) = integral_0^d min(k_s k_c e^{k_c x}, K) dx,
 // capped at maxForce. Equal to k_s (e^{k_c d} - 1) while its slope is below K, linear with slope

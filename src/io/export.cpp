@@ -5,41 +5,35 @@
 #include <fstream>
 
 #include "core/input_error.hpp"
+#include "core/named_values.hpp"
 #include "io/heightmap_export.hpp"
 #include "io/mesh_export.hpp"
 #include "io/planet_file.hpp"
 
 namespace ps::io {
 
+namespace {
+// Aliases are the file extensions, so that the format follows from the output's name.
+constexpr core::NameTable<ExportFormat, 9> kExportFormats{"export format",
+                                                          {{{ExportFormat::kPng16, "png16"},
+                                                            {ExportFormat::kTiff32, "tiff"},
+                                                            {ExportFormat::kRaw32, "raw"},
+                                                            {ExportFormat::kObj, "obj"},
+                                                            {ExportFormat::kPly, "ply"},
+                                                            {ExportFormat::kGlb, "glb"},
+                                                            {ExportFormat::kPng16, "png"},
+                                                            {ExportFormat::kTiff32, "tif"},
+                                                            {ExportFormat::kRaw32, "f32"}}}};
+}  // namespace
+
 std::string toString(ExportFormat f) {
-  switch (f) {
-    case ExportFormat::kPng16:
-      return "png16";
-    case ExportFormat::kTiff32:
-      return "tiff";
-    case ExportFormat::kRaw32:
-      return "raw";
-    case ExportFormat::kObj:
-      return "obj";
-    case ExportFormat::kPly:
-      return "ply";
-    case ExportFormat::kGlb:
-      return "glb";
-  }
-  return "?";
+  return kExportFormats.nameOf(f);
 }
 
 ExportFormat exportFormatFromName(const std::string& name) {
   std::string s = name;
   for (char& c : s) c = char(std::tolower(static_cast<unsigned char>(c)));
-  if (s == "png16" || s == "png") return ExportFormat::kPng16;
-  if (s == "tiff" || s == "tif") return ExportFormat::kTiff32;
-  if (s == "raw" || s == "f32") return ExportFormat::kRaw32;
-  if (s == "obj") return ExportFormat::kObj;
-  if (s == "ply") return ExportFormat::kPly;
-  if (s == "glb") return ExportFormat::kGlb;
-  throw core::InputError("unknown export format '" + name +
-                         "' (expected png16, tiff, raw, obj, ply or glb)");
+  return kExportFormats.parse(s);
 }
 
 ExportFormat exportFormatFromPath(const std::filesystem::path& path) {

@@ -10,6 +10,7 @@
 #include "core/flat_chart.hpp"
 #include "core/input_error.hpp"
 #include "core/latlong_chart.hpp"
+#include "core/named_values.hpp"
 #include "io/nodata_fill.hpp"
 #include "io/resample.hpp"
 
@@ -45,26 +46,27 @@ double sampleImage(const std::vector<float>& v, int w, int h, double x, double y
 
 }  // namespace
 
+constexpr core::NameTable<Interpolation, 2> kInterpolations{
+    "interpolation", {{{Interpolation::kCubic, "cubic"}, {Interpolation::kBilinear, "bilinear"}}}};
+
 std::string toString(Interpolation i) {
-  return i == Interpolation::kCubic ? "cubic" : "bilinear";
+  return kInterpolations.nameOf(i);
 }
 
 Interpolation interpolationFromString(const std::string& s) {
-  if (s == "cubic") return Interpolation::kCubic;
-  if (s == "bilinear") return Interpolation::kBilinear;
-  throw core::InputError("interpolation '" + s + "' is not one of cubic, bilinear");
+  return kInterpolations.parse(s);
 }
 
 ChartKind chartKindFromString(const std::string& s) {
-  if (s == "latlong") return ChartKind::kLatLong;
-  if (s == "flat") return ChartKind::kFlat;
-  throw core::InputError("unknown chart '" + s + "' (expected latlong or flat)");
+  constexpr core::NameTable<ChartKind, 2> kCharts{
+      "chart", {{{ChartKind::kLatLong, "latlong"}, {ChartKind::kFlat, "flat"}}}};
+  return kCharts.parse(s);
 }
 
 NoDataPolicy noDataPolicyFromString(const std::string& s) {
-  if (s == "fill") return NoDataPolicy::kFill;
-  if (s == "refuse") return NoDataPolicy::kRefuse;
-  throw core::InputError("unknown no-data policy '" + s + "' (expected fill or refuse)");
+  constexpr core::NameTable<NoDataPolicy, 2> kPolicies{
+      "no-data policy", {{{NoDataPolicy::kFill, "fill"}, {NoDataPolicy::kRefuse, "refuse"}}}};
+  return kPolicies.parse(s);
 }
 
 double noDataValueFromString(const std::string& s) {

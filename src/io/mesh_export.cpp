@@ -13,6 +13,7 @@
 
 #include "core/flat_chart.hpp"
 #include "core/input_error.hpp"
+#include "core/named_values.hpp"
 #include "io/atomic_file.hpp"
 #include "terrain/error_mesher.hpp"
 
@@ -204,15 +205,10 @@ void writeGlb(const terrain::Terrain& t, const terrain::Mesh& mesh,
 }
 
 std::string toString(MeshFormat f) {
-  switch (f) {
-    case MeshFormat::kObj:
-      return "obj";
-    case MeshFormat::kPly:
-      return "ply";
-    case MeshFormat::kGlb:
-      return "glb";
-  }
-  return "?";
+  constexpr core::NameTable<MeshFormat, 3> kNames{
+      "mesh format",
+      {{{MeshFormat::kObj, "obj"}, {MeshFormat::kPly, "ply"}, {MeshFormat::kGlb, "glb"}}}};
+  return kNames.nameOf(f);
 }
 
 double coordinateRoundingBound(const terrain::Terrain& t, MeshFormat format) {

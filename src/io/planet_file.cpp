@@ -13,6 +13,7 @@
 #include "core/flat_chart.hpp"
 #include "core/input_error.hpp"
 #include "core/latlong_chart.hpp"
+#include "core/named_values.hpp"
 #include "io/atomic_file.hpp"
 
 namespace ps::io {
@@ -387,14 +388,19 @@ PlanetData parseBody(const Header& h, const unsigned char* body, const std::stri
 
 }  // namespace
 
+constexpr core::NameTable<HeightEncoding, 4> kHeightEncodings{
+    "height encoding",
+    {{{HeightEncoding::kFloat32, "f32"},
+      {HeightEncoding::kUint16, "u16"},
+      {HeightEncoding::kFloat32, "float32"},
+      {HeightEncoding::kUint16, "uint16"}}}};
+
 std::string toString(HeightEncoding e) {
-  return e == HeightEncoding::kFloat32 ? "f32" : "u16";
+  return kHeightEncodings.nameOf(e);
 }
 
 HeightEncoding heightEncodingFromString(const std::string& s) {
-  if (s == "f32" || s == "float32") return HeightEncoding::kFloat32;
-  if (s == "u16" || s == "uint16") return HeightEncoding::kUint16;
-  throw core::InputError("unknown height encoding '" + s + "' (expected f32 or u16)");
+  return kHeightEncodings.parse(s);
 }
 
 bool looksLikePlanetFile(std::span<const unsigned char> b) {

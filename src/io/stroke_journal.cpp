@@ -14,6 +14,7 @@
 #include <system_error>
 
 #include "core/input_error.hpp"
+#include "core/named_values.hpp"
 #include "io/atomic_file.hpp"
 
 namespace ps::io {
@@ -61,17 +62,15 @@ std::string errnoText() {
 }  // namespace
 
 std::string toString(JournalRecordKind kind) {
-  switch (kind) {
-    case JournalRecordKind::kStroke:
-      return "stroke";
-    case JournalRecordKind::kUndo:
-      return "undo";
-    case JournalRecordKind::kRedo:
-      return "redo";
-    case JournalRecordKind::kSettle:
-      return "settle";
-  }
-  return "record kind " + std::to_string(std::uint32_t(kind));
+  constexpr core::NameTable<JournalRecordKind, 4> kNames{
+      "journal record kind",
+      {{{JournalRecordKind::kStroke, "stroke"},
+        {JournalRecordKind::kUndo, "undo"},
+        {JournalRecordKind::kRedo, "redo"},
+        {JournalRecordKind::kSettle, "settle"}}}};
+  // A kind read from a damaged file has no name; its number is what helps.
+  if (!kNames.contains(kind)) return "record kind " + std::to_string(std::uint32_t(kind));
+  return kNames.nameOf(kind);
 }
 
 std::uint32_t heightsChecksum(std::span<const float> heights) {

@@ -6,6 +6,7 @@
 #include <nlohmann/json.hpp>
 
 #include "core/input_error.hpp"
+#include "core/named_values.hpp"
 #include "edit/control_vertex.hpp"
 #include "edit/edit_pipeline.hpp"
 #include "replay/session_timeline.hpp"
@@ -44,14 +45,15 @@ double msSince(std::chrono::steady_clock::time_point t0) {
 
 }  // namespace
 
+constexpr core::NameTable<ReplayTool, 2> kReplayTools{
+    "replay tool", {{{ReplayTool::kBrush, "brush"}, {ReplayTool::kDisplace, "displace"}}}};
+
 std::string toString(ReplayTool t) {
-  return t == ReplayTool::kBrush ? "brush" : "displace";
+  return kReplayTools.nameOf(t);
 }
 
 ReplayTool replayToolFromString(const std::string& s) {
-  if (s == "brush") return ReplayTool::kBrush;
-  if (s == "displace") return ReplayTool::kDisplace;
-  throw core::InputError("unknown replay tool '" + s + "' (brush or displace)");
+  return kReplayTools.parse(s);
 }
 
 sand::DisplacementSettings ReplayOptions::defaultDisplacement() {

@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "core/input_error.hpp"
+#include "core/named_values.hpp"
 #include "edit/brush.hpp"
 
 namespace ps::sand {
@@ -13,26 +14,20 @@ using Clock = std::chrono::steady_clock;
 double ms(Clock::time_point a, Clock::time_point b) {
   return std::chrono::duration<double, std::milli>(b - a).count();
 }
+
+constexpr core::NameTable<SettleMethod, 3> kSettleMethods{
+    "settling method",
+    {{{SettleMethod::kThermal, "thermal"},
+      {SettleMethod::kDiffusionExplicit, "diffusion-explicit"},
+      {SettleMethod::kDiffusionSemiImplicit, "diffusion-implicit"}}}};
 }  // namespace
 
 std::string toString(SettleMethod method) {
-  switch (method) {
-    case SettleMethod::kThermal:
-      return "thermal";
-    case SettleMethod::kDiffusionExplicit:
-      return "diffusion-explicit";
-    case SettleMethod::kDiffusionSemiImplicit:
-      return "diffusion-implicit";
-  }
-  return "?";
+  return kSettleMethods.nameOf(method);
 }
 
 SettleMethod settleMethodFromString(const std::string& s) {
-  if (s == "thermal") return SettleMethod::kThermal;
-  if (s == "diffusion-explicit") return SettleMethod::kDiffusionExplicit;
-  if (s == "diffusion-implicit") return SettleMethod::kDiffusionSemiImplicit;
-  throw core::InputError("settling method '" + s +
-                         "' is not one of thermal, diffusion-explicit, diffusion-implicit");
+  return kSettleMethods.parse(s);
 }
 
 void SettleSettings::validate() const {

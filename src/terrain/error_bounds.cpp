@@ -11,6 +11,7 @@
 #include "core/flat_chart.hpp"
 #include "core/input_error.hpp"
 #include "core/latlong_chart.hpp"
+#include "core/named_values.hpp"
 #include "terrain/bound_kernels.hpp"
 #include "terrain/diamond.hpp"
 #include "terrain/level_plan.hpp"
@@ -18,14 +19,17 @@
 
 namespace ps::terrain {
 
+constexpr core::NameTable<ErrorRule, 3> kErrorRules{"error rule",
+                                                    {{{ErrorRule::kWedgie, "wedgie"},
+                                                      {ErrorRule::kHybridExact, "hybrid-exact"},
+                                                      {ErrorRule::kHybridExact, "hybrid"}}}};
+
 std::string toString(ErrorRule rule) {
-  return rule == ErrorRule::kWedgie ? "wedgie" : "hybrid-exact";
+  return kErrorRules.nameOf(rule);
 }
 
 ErrorRule errorRuleFromString(const std::string& s) {
-  if (s == "wedgie") return ErrorRule::kWedgie;
-  if (s == "hybrid-exact" || s == "hybrid") return ErrorRule::kHybridExact;
-  throw core::InputError("unknown error rule '" + s + "' (expected wedgie or hybrid-exact)");
+  return kErrorRules.parse(s);
 }
 
 namespace {

@@ -5,30 +5,25 @@
 #include <opencv2/imgproc.hpp>
 
 #include "core/input_error.hpp"
+#include "core/named_values.hpp"
 
 namespace ps::tracking {
 
+namespace {
+constexpr core::NameTable<ArucoRefinement, 4> kRefinements{
+    "aruco corner refinement",
+    {{{ArucoRefinement::kNone, "none"},
+      {ArucoRefinement::kSubpix, "subpix"},
+      {ArucoRefinement::kContour, "contour"},
+      {ArucoRefinement::kAprilTag, "apriltag"}}}};
+}  // namespace
+
 std::string toString(ArucoRefinement r) {
-  switch (r) {
-    case ArucoRefinement::kNone:
-      return "none";
-    case ArucoRefinement::kSubpix:
-      return "subpix";
-    case ArucoRefinement::kContour:
-      return "contour";
-    case ArucoRefinement::kAprilTag:
-      return "apriltag";
-  }
-  return "?";
+  return kRefinements.nameOf(r);
 }
 
 ArucoRefinement arucoRefinementFromString(const std::string& s) {
-  if (s == "none") return ArucoRefinement::kNone;
-  if (s == "subpix") return ArucoRefinement::kSubpix;
-  if (s == "contour") return ArucoRefinement::kContour;
-  if (s == "apriltag") return ArucoRefinement::kAprilTag;
-  throw core::InputError("aruco corner refinement '" + s +
-                         "' is not one of none, subpix, contour, apriltag");
+  return kRefinements.parse(s);
 }
 
 void DetectorConfig::validate() const {

@@ -6,6 +6,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "core/input_error.hpp"
+#include "core/named_values.hpp"
 #include "tracking/apriltag_families.hpp"
 
 extern "C" {
@@ -77,23 +78,16 @@ bool classicAprilTag(const std::string& name) {
 }
 }  // namespace
 
+constexpr core::NameTable<Backend, 3> kBackends{
+    "detector back end",
+    {{{Backend::kAuto, "auto"}, {Backend::kAruco, "aruco"}, {Backend::kAprilTag, "apriltag"}}}};
+
 std::string toString(Backend b) {
-  switch (b) {
-    case Backend::kAuto:
-      return "auto";
-    case Backend::kAruco:
-      return "aruco";
-    case Backend::kAprilTag:
-      return "apriltag";
-  }
-  return "?";
+  return kBackends.nameOf(b);
 }
 
 Backend backendFromString(const std::string& s) {
-  if (s == "auto") return Backend::kAuto;
-  if (s == "aruco") return Backend::kAruco;
-  if (s == "apriltag") return Backend::kAprilTag;
-  throw core::InputError("detector back end '" + s + "' is not one of auto, aruco, apriltag");
+  return kBackends.parse(s);
 }
 
 std::vector<std::string> knownFamilies() {

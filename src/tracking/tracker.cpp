@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "core/input_error.hpp"
+#include "core/named_values.hpp"
 #include "tracking/body_pose.hpp"
 
 namespace ps::tracking {
@@ -32,15 +33,11 @@ Eigen::Vector2d centre(const std::array<cv::Point2d, 4>& c) {
 }  // namespace
 
 std::string toString(TrackState s) {
-  switch (s) {
-    case TrackState::kLost:
-      return "lost";
-    case TrackState::kTracked:
-      return "tracked";
-    case TrackState::kHeld:
-      return "held";
-  }
-  return "?";
+  constexpr core::NameTable<TrackState, 3> kNames{"track state",
+                                                  {{{TrackState::kLost, "lost"},
+                                                    {TrackState::kTracked, "tracked"},
+                                                    {TrackState::kHeld, "held"}}}};
+  return kNames.nameOf(s);
 }
 
 void MarkerTrackerConfig::validate() const {
