@@ -26,6 +26,7 @@
 #include "app/default_planet.hpp"
 #include "bench/bench.hpp"
 #include "bench/bench_util.hpp"
+#include "bench/demo_options.hpp"
 #include "bench/frame_skips.hpp"
 #include "render/egl_context.hpp"
 #include "render/planet_renderer.hpp"
@@ -128,7 +129,7 @@ void benchCase(const BenchOptions& options, std::ostream& out, nlohmann::json ma
   auto planet = app::makeDefaultPlanet(gridLevel, 1);
   tracking::FrameSource source(video);
   const auto calib = tracking::loadCalibration(calibPath).forImageSize(source.size());
-  replay::ReplayOptions ro;
+  replay::ReplayOptions ro = demoReplayOptions();
   replay::FrameStepper stepper(calib, *planet, ro);
   const double fps = source.fps() > 0 ? source.fps() : ro.fallbackFps;
   const int maxFrames = options.quick ? 90 : 0;

@@ -30,6 +30,7 @@
 #include "app/default_planet.hpp"
 #include "bench/bench.hpp"
 #include "bench/bench_util.hpp"
+#include "bench/demo_options.hpp"
 #include "edit/edit_pipeline.hpp"
 #include "haptics/force_path.hpp"
 #include "replay/replay.hpp"
@@ -87,7 +88,7 @@ void run(bool withEditor, const BenchOptions& options, terrain::Terrain& planet,
   cfg.map.scale = R / kGlobe;
   cfg.press.displacement.radius = 60e3;
   haptics::ForcePath session(planet, withEditor ? &pipe : nullptr, cfg,
-                                 withEditor ? &settler : nullptr);
+                             withEditor ? &settler : nullptr);
   std::ostringstream forceLog;
   if (withEditor) session.setLog(&forceLog);
   haptics::ScriptedDevice device(strokePath(planet, cfg.map.scale), "scripted-stroke");
@@ -240,7 +241,7 @@ void demoReplay(const BenchOptions& options, std::ostream& out) {
   tracking::FrameSource source(video);
   const auto calib = tracking::loadCalibration(calibPath);
   auto planet = app::makeDefaultPlanet(options.quick ? 9 : 11, 1);
-  replay::ReplayOptions ro;
+  replay::ReplayOptions ro = demoReplayOptions();
   if (options.quick) ro.maxFrames = 150;
   haptics::ForcePathConfig cfg;
   cfg.map.scale = planet->chart().radius() / ro.scene.planetRadius;

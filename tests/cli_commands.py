@@ -101,20 +101,25 @@ def is_png(path):
 
 
 def group_demo():
-    # A 12-frame synthetic recording, replayed by `demo` on a small planet: every file it
-    # announces is written, the pictures are PNGs, and the recording sculpted the planet.
-    video = out("short.mkv")
-    run("synth", "short", "--out", video)
-    if not os.path.exists(out("short.truth.jsonl")):
-        fail("synth wrote no ground truth beside the video")
-    run("demo", "--video", video, "--calib", CALIB, "--grid", "1025", "--out", out("demo"))
+    # The first 60 frames of the bundled demo (the demo's story on the planet board, the
+    # default markers), replayed by `demo` on a small planet: every file it announces is
+    # written, the pictures are PNGs, the recording sculpted the planet, and the summary
+    # compares the replay with the ground truth beside the video (data/demo.truth.jsonl).
+    run("demo", "--max-frames", "60", "--grid", "1025", "--out", out("demo"))
     with open(out("demo", "summary.json")) as f:
         s = json.load(f)
-    if s["frames"] != 12:
-        fail(f"demo replayed {s['frames']} frames of 12")
-    if s["frames_with_planet"] < 10 or s["touching_frames"] < 1 or s["strokes"] < 1:
-        fail(f"demo tracked or sculpted too little: {s}")
-    if not (0 < s["largest_change_m"] < 1e5) or s["modified_vertices"] <= 0:
+    if s["frames"] != 60:
+        fail(f"demo replayed {s['frames']} frames of 60")
+    if s["planet_tracked"] + s["planet_held"] != s["frames_with_planet"] or s["planet_lost"] != 60 - s["frames_with_planet"]:
+        fail(f"the planet's tracked / held / lost counts do not add up: {s}")
+    t = s.get("truth")
+    if not t or t["frames"] != 60 or t["touching_frames"] < 20:
+        fail(f"no comparison with the ground truth in the summary: {t}")
+    if t["sculpted_when_touching"] < 0.95 * t["touching_frames"] or t["pose_when_in_view"] != t["planet_in_view"]:
+        fail(f"the board demo lost the planet or missed touching frames: {t}")
+    if not (0 <= t["tip_error_mm"]["median"] < 2 and t["planet_centre_error_mm"]["median"] < 1):
+        fail(f"tip or planet centre far from the truth: {t}")
+    if not (0 < s["largest_change_m"] < 1e5) or s["modified_vertices"] <= 0 or s["strokes"] < 1:
         fail("the replay did not change the planet's heights within reason")
     for name in s["files"]:
         p = out("demo", name)
@@ -126,8 +131,23 @@ def group_demo():
     if leftovers:
         fail(f"temporary files left: {leftovers}")
     frames = [json.loads(l) for l in open(out("demo", "log.jsonl"))]
-    if len([l for l in frames if "frame" in l]) < 12:
+    if len([l for l in frames if "frame" in l]) < 60:
         fail("log.jsonl holds fewer lines than frames")
+    # A recording made with the single planet and tool markers: the default board and cube
+    # see nothing and say how to replay it; with --board single --tool-layout flat it sculpts.
+    video = out("short.mkv")
+    run("synth", "short", "--out", video)
+    run("replay", video, "--calib", CALIB, "--grid", "1025", "--out", out("short-board"))
+    with open(out("short-board", "summary.json")) as f:
+        s = json.load(f)
+    if s["frames_with_planet"] != 0 or not any("--board single --tool-layout flat" in w for w in s["warnings"]):
+        fail(f"a single-marker recording under the default board: {s['warnings']}")
+    run("replay", video, "--calib", CALIB, "--grid", "1025", "--board", "single", "--tool-layout", "flat",
+        "--out", out("short"))
+    with open(out("short", "summary.json")) as f:
+        s = json.load(f)
+    if s["frames_with_planet"] < 10 or s["touching_frames"] < 1 or s["strokes"] < 1:
+        fail(f"the single-marker recording tracked or sculpted too little: {s}")
 
 
 def group_import_export():

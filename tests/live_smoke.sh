@@ -45,7 +45,7 @@ run "$out/live2.txt" --frames 3 --planet "$out/a/planet.planet" --out "$out/b"
 rc=$?
 [ $rc -eq 0 ] || { cat "$out/live2.txt"; fail "live --planet exited with $rc"; }
 cmp -s "$out/a/planet.planet" "$out/b/planet.planet" || fail "the reloaded planet changed"
-# Past the video's end (341 frames): the window stays, the planet is kept and saved. The run
+# Past the video's end (346 frames): the window stays, the planet is kept and saved. The run
 # records the frames it processed (--record into a folder: the next recording-NNN.mkv there);
 # replaying that recording sculpts the same planet, byte for byte.
 run "$out/live4.txt" --frames 350 --out "$out/d" --record "$out/d/recs/"
@@ -53,12 +53,12 @@ rc=$?
 [ $rc -eq 0 ] || { cat "$out/live4.txt"; fail "live past the video's end exited with $rc"; }
 grep -q "live: 350 frames" "$out/live4.txt" || { cat "$out/live4.txt"; fail "no 'live: 350 frames'"; }
 [ -s "$out/d/planet.planet" ] || fail "no $out/d/planet.planet after the video ended"
-grep -q "recorded 341 frames to $out/d/recs/recording-001.mkv" "$out/live4.txt" ||
-  { cat "$out/live4.txt"; fail "no 'recorded 341 frames' line"; }
+grep -q "recorded 346 frames to $out/d/recs/recording-001.mkv" "$out/live4.txt" ||
+  { cat "$out/live4.txt"; fail "no 'recorded 346 frames' line"; }
 [ "$(stat -c %s "$out/d/planet.journal")" -eq 64 ] || fail "the journal was not restarted at the end"
 "$exe" replay "$out/d/recs/recording-001.mkv" --calib "$src/calib/synthetic-640x480.yml" --grid 1025 \
   --out "$out/d/replay" >"$out/replay.txt" 2>&1 || { cat "$out/replay.txt"; fail "replay of the recording failed"; }
-grep -q '"frames": *341' "$out/d/replay/summary.json" || fail "the recording did not replay 341 frames"
+grep -q '"frames": *346' "$out/d/replay/summary.json" || fail "the recording did not replay 346 frames"
 cmp -s "$out/d/planet.planet" "$out/d/replay/planet.planet" ||
   fail "replaying the recording sculpted another planet than the live session"
 # A session whose settings change while it records (--at FRAME:SETTING=VALUE, as if set in the
@@ -68,12 +68,12 @@ cmp -s "$out/d/planet.planet" "$out/d/replay/planet.planet" ||
 run "$out/live12.txt" --frames 350 --out "$out/i" --record "$out/i/session.mkv" \
   --at 50:radius_km=400 --at 80:strength_m=1500 --at 100:size_cm=6.5 --at 130:undo \
   --at 140:redo --at 170:mode=lower --at 200:tool=displace --at 230:tool=brush \
-  --at 290:spin_deg=15 --at 343:undo --at 345:redo --at 346:undo ||
+  --at 290:spin_deg=15 --at 347:undo --at 348:redo --at 349:undo ||
   { cat "$out/live12.txt"; fail "live with scripted settings failed"; }
 side="$out/i/session.mkv.session.jsonl"
 [ "$(wc -l <"$side")" -ge 11 ] || { cat "$side"; fail "the sidecar lacks the session's changes"; }
 grep -q '"frame":51,.*"brush_radius_m":400000' "$side" || { cat "$side"; fail "no r_d change at frame 51"; }
-grep -q '"frame":341,"event":"redo"' "$side" ||
+grep -q '"frame":346,"event":"redo"' "$side" ||
   { cat "$side"; fail "no redo after the video's end"; }
 "$exe" replay "$out/i/session.mkv" --calib "$src/calib/synthetic-640x480.yml" \
   --out "$out/i/replay" >"$out/replay3.txt" 2>&1 || { cat "$out/replay3.txt"; fail "replay with the sidecar failed"; }

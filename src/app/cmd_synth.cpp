@@ -15,6 +15,7 @@
 #include "core/input_error.hpp"
 #include "core/latlong_chart.hpp"
 #include "edit/control_vertex.hpp"
+#include "replay/truth_check.hpp"
 #include "tracking/synth.hpp"
 #include "tracking/video.hpp"
 
@@ -23,7 +24,7 @@ namespace ps::app {
 namespace {
 
 struct SynthArgs {
-  std::string scene = "demo", out, truth;
+  std::string scene = "board-demo", out, truth;
   int frames = 0;
   long long grid = 2049;
   double touch = 0.004;
@@ -31,12 +32,6 @@ struct SynthArgs {
   int stillsEvery = 0;
   double noiseScale = 1.0;
 };
-
-std::filesystem::path truthPathFor(const std::filesystem::path& video) {
-  std::filesystem::path p = video;
-  p.replace_extension(".truth.jsonl");
-  return p;
-}
 
 int runSynth(const SynthArgs& a) {
   tracking::SynthScript script = std::filesystem::exists(a.scene) || a.scene.ends_with(".json")
@@ -55,7 +50,7 @@ int runSynth(const SynthArgs& a) {
   const std::filesystem::path out = a.out.empty() ? "synth.mkv" : a.out;
   if (out.has_parent_path()) std::filesystem::create_directories(out.parent_path());
   const std::filesystem::path truthPath =
-      a.truth.empty() ? truthPathFor(out) : std::filesystem::path(a.truth);
+      a.truth.empty() ? replay::truthPathFor(out) : std::filesystem::path(a.truth);
   std::ofstream truth(truthPath.string() + ".part");
   if (!truth) throw std::runtime_error("cannot write " + truthPath.string());
   truth << nlohmann::json{{"type", "header"},

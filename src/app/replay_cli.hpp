@@ -18,7 +18,10 @@ struct ReplayCli {
   // The planet's markers: "single" (one marker, --planet-id/--planet-marker-size), "board" (the
   // committed markers/planet-board.json) or a layout file; the tool's: "flat" (one marker on a
   // stick, --tool-id/--tool-marker-size/--tip), "cube" (markers/tool-cube.json) or a file.
-  std::string board = "single", toolLayout = "flat";
+  // The board and the cube by default: a hand over the board or the cube turned edge-on does
+  // not lose them. A recording made with the single markers replays with `--board single
+  // --tool-layout flat` (or by itself, when its session sidecar says so).
+  std::string board = "board", toolLayout = "cube";
 
   // Adds the shared options to `sub` (they write into this object, which must outlive it).
   void addOptions(CLI::App* sub);

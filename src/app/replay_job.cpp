@@ -20,6 +20,7 @@
 #include "io/heightmap_export.hpp"
 #include "io/planet_file.hpp"
 #include "replay/session_timeline.hpp"
+#include "replay/truth_check.hpp"
 #include "terrain/screen_error.hpp"
 #include "terrain/tessellator.hpp"
 
@@ -247,6 +248,26 @@ void writeReliefPictures(const ReplayJob& job, const terrain::Terrain& planet,
   p.done(std::to_string(mesh.triangleCount()) + " triangles in view");
 }
 
+// A synthetic recording's ground truth (VIDEO.truth.jsonl, from `synth`) beside the video: the
+// replay's log compared with it (replay/truth_check.hpp). A truth file that does not read is a
+// warning, not a failed replay: the sculpting did not depend on it.
+nlohmann::json compareWithTruthBeside(const std::filesystem::path& video,
+                                      const std::filesystem::path& logPath,
+                                      std::vector<std::string>& warnings) {
+  const std::filesystem::path truthPath = replay::truthPathFor(video);
+  if (!std::filesystem::exists(truthPath)) return nullptr;
+  std::ifstream truth(truthPath), log(logPath);
+  try {
+    nlohmann::json j =
+        replay::compareWithTruth(truth, truthPath.string(), log, logPath.string()).toJson();
+    j["file"] = truthPath.string();
+    return j;
+  } catch (const core::InputError& e) {
+    warnings.push_back(std::string("ground truth not compared: ") + e.what());
+    return nullptr;
+  }
+}
+
 }  // namespace
 
 nlohmann::json runReplayJob(const ReplayJob& job) {
@@ -324,6 +345,7 @@ nlohmann::json runReplayJob(const ReplayJob& job) {
   timings.close();
   renameInto(out / "log.jsonl.part", out / "log.jsonl");
   renameInto(out / "timings.jsonl.part", out / "timings.jsonl");
+  const nlohmann::json truth = compareWithTruthBeside(job.video, out / "log.jsonl", s.warnings);
   std::size_t forceRows = 0;
   if (haptic) {
     forceRows = haptic->logRows();
@@ -347,6 +369,9 @@ nlohmann::json runReplayJob(const ReplayJob& job) {
       {"announced_frames", s.announcedFrames},
       {"truncated", s.truncated},
       {"frames_with_planet", s.framesWithPlanet},
+      {"planet_tracked", s.framesWithPlanet - s.framesPlanetHeld},
+      {"planet_held", s.framesPlanetHeld},
+      {"planet_lost", s.frames - s.framesWithPlanet},
       {"frames_with_tool", s.framesWithTool},
       {"frames_with_tip", s.framesWithTip},
       {"touching_frames", s.touchingFrames},
@@ -361,6 +386,7 @@ nlohmann::json runReplayJob(const ReplayJob& job) {
       {"grid", planet->grid().label()},
       {"radius_m", planet->chart().radius()},
       {"heightmap", {{"width", heightmap.width}, {"height", heightmap.height}}}};
+  if (!truth.is_null()) summary["truth"] = truth;
 
   if (recorder) {
     summary["renderer"] = recorder->renderer();

@@ -256,6 +256,7 @@ StepResult FrameStepper::step(const cv::Mat& image, int frame, double time) {
   out.times.trackMs = msSince(t1);
   anyMarker_ = anyMarker_ || !found.empty();
   s.framesWithPlanet += f.planet.usable();
+  s.framesPlanetHeld += f.planet.usable() && f.planet.state == tracking::TrackState::kHeld;
   s.framesWithTool += f.tool.usable();
   j["markers"] = found.size();
   j["planet"] = markerJson(f.planet);
@@ -409,7 +410,12 @@ ReplaySummary runReplay(tracking::FrameSource& source, const tracking::CameraCal
   if (!anyMarker)
     s.warnings.push_back(source.name() + ": no marker of " + stepper.family() + " (" +
                          which(o.scene.planet) + "; " + which(o.scene.tool) +
-                         ") was ever seen; nothing was sculpted");
+                         ") was ever seen; nothing was sculpted" +
+                         (o.scene.planet.layout || o.scene.tool.layout
+                              ? std::string(" (a recording made with the single planet and tool "
+                                            "markers replays with --board single --tool-layout "
+                                            "flat)")
+                              : std::string()));
   else if (s.framesWithPlanet == 0)
     s.warnings.push_back(source.name() + ": the planet's markers (" + which(o.scene.planet) +
                          ") were never seen");

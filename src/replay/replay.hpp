@@ -59,6 +59,8 @@ struct ReplayOptions {
 struct ReplaySummary {
   int frames = 0;
   int framesWithPlanet = 0, framesWithTool = 0, framesWithTip = 0, touchingFrames = 0;
+  // Of framesWithPlanet, those whose pose was held (no planet marker read this frame).
+  int framesPlanetHeld = 0;
   int strokes = 0, stamps = 0;
   std::size_t modifiedVertices = 0;
   int skippedFrames = 0;            // frames whose edit was refused (see the log's notes)
