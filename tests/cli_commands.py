@@ -252,6 +252,18 @@ def group_synth_detect():
             fail(f"frame {d['frame']}: tool marker at {d['tvec']}, truth {t} ({err * 1000:.2f} mm)")
 
 
+    # A still image is searched at full size (decimate 1), a video as the live path does.
+    _, err = run("detect", os.path.join(SRC, "docs", "images", "ar_view.png"))
+    if " d1 " not in err:
+        fail(f"detect on a still image did not search at decimate 1: {err}")
+    _, err = run("detect", os.path.join(SRC, "docs", "images", "ar_view.png"), "--decimate", "2")
+    if " d2 " not in err:
+        fail(f"detect --decimate 2 on a still image was not searched at decimate 2: {err}")
+    _, err = run("detect", video, "--max-frames", "1", "--ids", "1")
+    if " d2 " not in err:
+        fail(f"detect on a video did not keep decimate 2: {err}")
+
+
 def group_markers():
     # The sheets: PNGs that `detect` reads back with every id, PDFs of the paper's size.
     run("markers", "--out", out("sheets"), "--paper", "a4")
