@@ -263,21 +263,24 @@ void benchTrack(const BenchOptions& o, std::ostream& out) {
   const int stride = o.quick ? 5 : 1;
   std::vector<cv::Size> sizes = {{640, 480}};
   if (!o.quick) sizes.push_back({1280, 720});
-  // PS_TRACK_SCENE=sweep|tilt|near runs one scene only (to re-measure one without the rest).
+  // PS_TRACK_SCENE=sweep|tilt|near|board runs one scene only (to re-measure one without the
+  // rest); board also runs the single-marker default on the 640x480 sweep, its time baseline.
   const char* sceneEnv = std::getenv("PS_TRACK_SCENE");
   const std::string onlyScene = sceneEnv ? sceneEnv : "";
   auto wanted = [&](const std::string& scene) { return onlyScene.empty() || onlyScene == scene; };
-  if (!wanted("sweep")) sizes.clear();
+  const bool baselineOnly = onlyScene == "board";
+  if (baselineOnly) sizes = {{640, 480}};
+  if (!wanted("sweep") && !baselineOnly) sizes.clear();
   double defaultMs = 0;  // the single-marker default on the 640x480 sweep
   for (const auto& size : sizes) {
     const Recording rec = record("sweep", size, stride);
     const char* only = std::getenv("PS_TRACK_ONLY");
     for (const auto& c : configs)
-      if (!only || c.label == only) {
+      if ((!only || c.label == only) && (!baselineOnly || &c == &configs[0])) {
         const double m = evaluate(rec, c, chart, 0.004, out);
         if (size.width == 640 && &c == &configs[0]) defaultMs = m;
       }
-    if (size.width == 640 && !only) {
+    if (size.width == 640 && !only && !baselineOnly) {
       Config raw = configs[0];
       raw.filter = false;
       raw.label += " unfiltered";

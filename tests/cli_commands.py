@@ -293,7 +293,7 @@ def finite_numbers(x, where):
         fail(f"{where} is {x}")
 
 
-BENCHES = ("bounds", "deform", "erosion", "export", "frame", "haptics", "tessellate", "track")
+BENCHES = ("bounds", "deform", "erosion", "export", "frame", "haptics", "render", "tessellate", "track")
 
 
 def check_bench_row(r):
@@ -311,6 +311,8 @@ def check_bench_row(r):
     for key in ("planet_detected", "control_vertex_within_3mm"):
         if b == "track" and key in r and not (0.0 <= r[key] <= 1.0):
             fail(f"track: {key} {r[key]} outside [0, 1]")
+    if b == "render" and not r.get("skipped") and not (-1.0 <= r["ssim"] <= 1.0 and r["texture_bytes"] >= 0):
+        fail(f"render: ssim {r['ssim']} or texture bytes {r['texture_bytes']} out of range")
     for key, v in r.items():
         if (key == "ms" or key.endswith("_ms")) and isinstance(v, (int, float)) and v < 0:
             fail(f"{b}: {key} = {v} is negative")
@@ -328,6 +330,13 @@ def group_bench():
         fail(f"bench {name} --quick wrote no {name} row")
     for r in rows:
         check_bench_row(r)
+    # Per-pixel shading's claim (docs/RENDERING.md): a 4 px mesh shaded per pixel is closer to
+    # the full-resolution surface than a 1 px mesh in facets, in every view.
+    rendered = [r for r in rows if r.get("bench") == "render" and not r.get("skipped")]
+    for view in {r["view"] for r in rendered}:
+        at = {(r["shading"], r["dist_max_px"]): r for r in rendered if r["view"] == view}
+        if at[("per_pixel", 4.0)]["mean_abs_diff"] >= at[("faceted", 1.0)]["mean_abs_diff"]:
+            fail(f"render {view}: per-pixel at 4 px is not closer to the reference than facets at 1 px")
     pngs = [n for n in os.listdir(out("bench")) if n.endswith(".png")] if os.path.isdir(out("bench")) else []
     if not all(is_png(out("bench", n)) for n in pngs):
         fail("bench --out wrote a plot that is not a PNG")

@@ -12,6 +12,7 @@
 #include <random>
 
 #include "app/build_paths.hpp"
+#include "gl_test.hpp"
 #include "edit/brush.hpp"
 #include "edit/edit_pipeline.hpp"
 #include "render/changed_ranges.hpp"
@@ -41,23 +42,10 @@ terrain::Terrain smoothPlanet(int n) {
   return terrain::Terrain(chart, std::vector<float>(chart->grid().count(), 0.0f));
 }
 
-// Mesa's llvmpipe keeps allocations made from its JIT-compiled code until exit; their stacks
-// end in code that belongs to no module, so no LSan suppression can name them. Leak checking is
-// off for a test process that made a GL context (ctest runs one test per process) and on for
-// all the others.
-std::atomic<bool> gMadeGlContext{false};
-
-#define SKIP_WITHOUT_GL()                                                              \
-  do {                                                                                 \
-    gMadeGlContext = true;                                                             \
-    std::string why;                                                                   \
-    if (!render::headlessGlAvailable(&why)) GTEST_SKIP() << "no headless GL: " << why; \
-  } while (0)
-
 }  // namespace
 
 extern "C" int __lsan_is_turned_off() {
-  return gMadeGlContext.load() ? 1 : 0;
+  return testkit::madeGlContext.load() ? 1 : 0;
 }
 
 TEST(RenderProjection, ClipSpaceLandsOnOpenCVPixels) {

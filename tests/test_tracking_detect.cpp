@@ -12,9 +12,12 @@
 
 #include "app/build_paths.hpp"
 #include "core/input_error.hpp"
+#include "tracking/body_pose.hpp"
 #include "tracking/detector.hpp"
 #include "tracking/marker_family.hpp"
+#include "tracking/marker_layout.hpp"
 #include "tracking/render.hpp"
+#include "tracking/synth.hpp"
 
 using namespace ps;
 using tracking::Backend;
@@ -165,6 +168,71 @@ TEST(TrackingDetect, RegionTrackingFindsNoisyNearAndFarMarkersWithTheirCorners) 
                          std::to_string(int(gain * 10)),
                      std::to_string(worst));
     }
+  }
+}
+
+// Region boxes holding many large markers of one rigid set (the board) are searched at the
+// frame's decimation, the rest at full resolution. On the board demo's first 60 frames (the
+// tool sweeping over the board) the board's pose from the coarse search puts the planet's
+// centre as close to the truth as the full-resolution search's (measured, one frame's pose, no
+// filter: 0.35 / 0.84 mm median / p95 against 0.36 / 0.64 mm; the corners 0.12 / 1.50 px
+// against 0.10 / 0.96 px, which 36 corners mostly absorb); a single-marker scene, with
+// no such set, is detected bit for bit as before.
+TEST(TrackingDetect, CoarseRegionSearchOnlyWhereABoxHoldsManyMarkers) {
+  const auto root = ps::app::sourceDir();
+  const auto board = tracking::loadMarkerLayout(tracking::defaultBoardPath(root));
+  const auto cube = tracking::loadMarkerLayout(tracking::defaultToolLayoutPath(root));
+  auto quantile = [](std::vector<double> v, double q) {
+    std::sort(v.begin(), v.end());
+    return v.empty() ? 0.0 : v[std::size_t(q * double(v.size() - 1))];
+  };
+  for (const std::string scene : {"board-demo", "short"}) {
+    const auto script = tracking::builtinScene(scene, root);
+    tracking::SynthRenderer renderer(script);
+    tracking::DetectorConfig coarse;
+    if (scene == "short") {
+      coarse.ids = {0, 1};
+    } else {
+      coarse.ids = board.ids();
+      for (int id : cube.ids()) coarse.ids.push_back(id);
+      coarse.sets = {board.ids(), cube.ids()};
+    }
+    ASSERT_GT(coarse.coarseRegionPx, 0);
+    tracking::DetectorConfig fine = coarse;
+    fine.coarseRegionPx = 0;
+    auto a = tracking::makeDetector(coarse), b = tracking::makeDetector(fine);
+    std::vector<double> coarseMm, fineMm;
+    bool identical = true;
+    for (int f = 0; f < std::min(renderer.frames(), 60); ++f) {
+      const cv::Mat image = renderer.render(f);
+      const auto x = a->detect(image), y = b->detect(image);
+      identical &= x.size() == y.size();
+      for (std::size_t i = 0; identical && i < x.size(); ++i)
+        identical &= x[i].id == y[i].id && maxCornerError(x[i], y[i].corners) == 0;
+      if (scene == "short") continue;
+      const auto truth = renderer.truth(f);
+      auto centreErrorMm = [&](const std::vector<tracking::Detection>& found) {
+        const auto r = tracking::solveBodyPose(board, found, script.camera, nullptr, 4.0);
+        if (!r.valid) return 1e9;
+        return 1e3 * (r.pose.apply(*board.planetCentre) - truth.planetCentreCamera).norm();
+      };
+      coarseMm.push_back(centreErrorMm(x));
+      fineMm.push_back(centreErrorMm(y));
+    }
+    if (scene == "short") {
+      EXPECT_TRUE(identical) << "single markers were searched coarsely";
+      continue;
+    }
+    EXPECT_FALSE(identical) << "the board's box was never searched coarsely";
+    ASSERT_EQ(coarseMm.size(), 60u);
+    const double coarseMedian = quantile(coarseMm, 0.5), fineMedian = quantile(fineMm, 0.5);
+    const double coarseP95 = quantile(coarseMm, 0.95), fineP95 = quantile(fineMm, 0.95);
+    EXPECT_LT(coarseMedian, fineMedian + 0.15);
+    EXPECT_LT(coarseP95, std::max(1.25 * fineP95, fineP95 + 0.3));
+    EXPECT_LT(coarseP95, 3.0);  // the target for the planet's centre
+    RecordProperty("centre_mm_coarse",
+                   std::to_string(coarseMedian) + " / " + std::to_string(coarseP95));
+    RecordProperty("centre_mm_full", std::to_string(fineMedian) + " / " + std::to_string(fineP95));
   }
 }
 

@@ -108,6 +108,7 @@ const char* shortcutHelp() {
          "[  ]         r_d smaller / larger (x 0.8 / x 1.25)\n"
          "-  =         strength smaller / larger\n"
          "W            wireframe\n"
+         "F            facets: shade each triangle (the tessellation shows) / per pixel\n"
          "C            contour lines\n"
          "O            overview inset\n"
          "Left/Right   turn the planet about its axis (5 degrees; or drag, right button)\n"
@@ -139,6 +140,7 @@ void applyShortcuts(PanelSettings& s, PanelActions& a) {
   if (pressed(GLFW_KEY_D)) s.displace = true;
   if (pressed(GLFW_KEY_R)) s.lower = !s.lower;
   if (pressed(GLFW_KEY_W)) s.wireframe = !s.wireframe;
+  if (pressed(GLFW_KEY_F)) s.facets = !s.facets;
   if (pressed(GLFW_KEY_C)) s.contours = !s.contours;
   if (pressed(GLFW_KEY_O)) s.showOverview = !s.showOverview;
   if (pressed(GLFW_KEY_LEFT_BRACKET)) s.brushRadiusKm = std::max(20.f, s.brushRadiusKm * 0.8f);
@@ -208,6 +210,8 @@ void drawPanel(PanelSettings& s, PanelActions& a, const PanelStatus& st) {
   ImGui::Checkbox("contours (C)", &s.contours);
   ImGui::SameLine();
   ImGui::Checkbox("overview (O)", &s.showOverview);
+  ImGui::SameLine();
+  ImGui::Checkbox("facets (F)", &s.facets);
   ImGui::SliderFloat("spin (Left/Right)", &s.spinDeg, -180, 180, "%.0f deg");
   ImGui::SliderFloat("tilt (Up/Down)", &s.tiltDeg, -90, 90, "%.0f deg");
   ImGui::SameLine();

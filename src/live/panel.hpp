@@ -21,6 +21,7 @@ struct PanelSettings {
   float distMaxPx = 4;
   int triangleBudget = 70000;
   bool wireframe = false, contours = false;
+  bool facets = false;  // shade each triangle from its geometry instead of per pixel
   bool showHelp = false, showOverview = true;
   float spinDeg = 0, tiltDeg = 0;  // the planet turned by hand on its marker
   float planetSizeCm = 6;          // the planet's radius on its marker, scaled by hand

@@ -52,8 +52,8 @@ class SculptLoop {
         stepper_(calib, planet, options),
         // The planet on disk: saved now, then autosaved; every stroke, undo and redo journaled.
         store_(planet, files, {settings_.autosaveSeconds, true}, now()),
-        // Every settings change, undo and redo goes through `settingsControl_`, which also writes it
-        // to the recording's sidecar (replay/session_timeline.hpp): a replay applies them the
+        // Every settings change, undo and redo goes through `settingsControl_`, which also writes
+        // it to the recording's sidecar (replay/session_timeline.hpp): a replay applies them the
         // same way.
         settingsControl_(stepper_),
         startCrc_(io::heightsChecksum(planet.heights())),
@@ -196,6 +196,7 @@ class SculptLoop {
     ts.triangleBudget = std::size_t(std::max(1000, panel_.triangleBudget));
     render::RenderStyle style;
     style.wireframe = panel_.wireframe;
+    style.shading = panel_.facets ? render::Shading::kFaceted : render::Shading::kPerPixel;
     style.contours = panel_.contours;
     std::optional<terrain::Camera> cam;
     const terrain::Mesh* mesh = &empty_;

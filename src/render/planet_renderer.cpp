@@ -7,6 +7,8 @@
 #include <Eigen/Geometry>
 #include <array>
 #include <cmath>
+#include <cstdint>
+#include <iostream>
 #include <numbers>
 #include <opencv2/imgproc.hpp>
 #include <stdexcept>
@@ -15,53 +17,13 @@
 
 #include "io/heightmap_export.hpp"
 #include "render/changed_ranges.hpp"
+#include "render/height_texture.hpp"
+#include "render/mesh_shaders.hpp"
 #include "render/projection.hpp"
 
 namespace ps::render {
 
 namespace {
-
-constexpr const char* kMeshVertex = R"(#version 330 core
-layout(location = 0) in vec3 position;  // relative to the mesh's eye (planet frame)
-layout(location = 1) in float height;   // metres above the reference surface
-uniform mat4 clipFromEyeRelative;       // projection * rotation * translate(meshEye - cameraEye)
-uniform vec3 offset;                    // meshEye - cameraEye
-out vec3 eyeRelative;                   // planet frame, relative to the camera
-out float metres;
-void main() {
-  eyeRelative = position + offset;
-  metres = height;
-  gl_Position = clipFromEyeRelative * vec4(position, 1.0);
-}
-)";
-
-constexpr const char* kMeshFragment = R"(#version 330 core
-in vec3 eyeRelative;
-in float metres;
-uniform sampler1D ramp;       // hypsometric colours over [rampLow, rampHigh] metres
-uniform float rampLow, rampHigh;
-uniform vec3 sun;             // planet frame
-uniform vec3 cameraPosition;  // planet frame (only for the outward direction)
-uniform float contourInterval;  // 0: none
-uniform int wireOnly;
-out vec4 colour;
-void main() {
-  if (wireOnly == 1) { colour = vec4(0.08, 0.08, 0.08, 1.0); return; }
-  // Flat normals from screen-space derivatives: the facets of the tessellation show, as in
-  // paper 003's figures.
-  vec3 n = normalize(cross(dFdx(eyeRelative), dFdy(eyeRelative)));
-  if (dot(n, normalize(eyeRelative + cameraPosition)) < 0.0) n = -n;
-  float light = 0.3 + 0.7 * max(dot(n, sun), 0.0);
-  vec3 c = texture(ramp, clamp((metres - rampLow) / (rampHigh - rampLow), 0.0, 1.0)).rgb;
-  c *= light;
-  if (contourInterval > 0.0) {
-    float x = metres / contourInterval;
-    float d = abs(fract(x - 0.5) - 0.5) / max(fwidth(x), 1e-6);
-    c = mix(vec3(0.05), c, clamp(d - 0.5, 0.0, 1.0) * 0.6 + 0.4);
-  }
-  colour = vec4(c, 1.0);
-}
-)";
 
 constexpr const char* kLineVertex = R"(#version 330 core
 layout(location = 0) in vec3 position;  // relative to the camera (planet frame)
@@ -139,7 +101,10 @@ constexpr float kRampLow = -9000, kRampHigh = 9000;
 struct PlanetRenderer::Gl {
   GLuint meshProgram = 0, lineProgram = 0, backgroundProgram = 0;
   GLuint meshVao = 0, positionBuffer = 0, heightBuffer = 0, indexBuffer = 0;
-  ShadowedBuffer positions, heights, indices;  // what the three mesh buffers hold
+  GLuint gridBuffer = 0, frameBuffer = 0;                     // per vertex: (u, v); up, d/du, d/dv
+  ShadowedBuffer positions, heights, indices, grids, frames;  // what the mesh buffers hold
+  HeightTexture heightTexture;
+  bool heightTextureOk = false;
   GLuint lineVao = 0, lineBuffer = 0, emptyVao = 0;
   GLuint rampTexture = 0, imageTexture = 0;
   GLuint framebuffer = 0, colourBuffer = 0, depthBuffer = 0;
@@ -155,6 +120,8 @@ PlanetRenderer::PlanetRenderer() : gl_(new Gl) {
   glGenBuffers(1, &g.positionBuffer);
   glGenBuffers(1, &g.heightBuffer);
   glGenBuffers(1, &g.indexBuffer);
+  glGenBuffers(1, &g.gridBuffer);
+  glGenBuffers(1, &g.frameBuffer);
   glBindVertexArray(g.meshVao);
   glBindBuffer(GL_ARRAY_BUFFER, g.positionBuffer);
   glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, 3 * sizeof(float), nullptr);
@@ -162,6 +129,15 @@ PlanetRenderer::PlanetRenderer() : gl_(new Gl) {
   glBindBuffer(GL_ARRAY_BUFFER, g.heightBuffer);
   glVertexAttribPointer(1, 1, GL_FLOAT, GL_FALSE, sizeof(float), nullptr);
   glEnableVertexAttribArray(1);
+  glBindBuffer(GL_ARRAY_BUFFER, g.gridBuffer);
+  glVertexAttribPointer(2, 2, GL_FLOAT, GL_FALSE, 2 * sizeof(float), nullptr);
+  glEnableVertexAttribArray(2);
+  glBindBuffer(GL_ARRAY_BUFFER, g.frameBuffer);
+  for (GLuint k = 0; k < 3; ++k) {  // up, along u, along v: 9 floats per vertex
+    glVertexAttribPointer(3 + k, 3, GL_FLOAT, GL_FALSE, 9 * sizeof(float),
+                          reinterpret_cast<const void*>(std::uintptr_t(3 * k * sizeof(float))));
+    glEnableVertexAttribArray(3 + k);
+  }
   glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, g.indexBuffer);
   glGenVertexArrays(1, &g.lineVao);
   glGenBuffers(1, &g.lineBuffer);
@@ -193,8 +169,9 @@ PlanetRenderer::~PlanetRenderer() {
   glDeleteProgram(g.meshProgram);
   glDeleteProgram(g.lineProgram);
   glDeleteProgram(g.backgroundProgram);
-  const GLuint buffers[] = {g.positionBuffer, g.heightBuffer, g.indexBuffer, g.lineBuffer};
-  glDeleteBuffers(4, buffers);
+  const GLuint buffers[] = {g.positionBuffer, g.heightBuffer, g.indexBuffer,
+                            g.lineBuffer,     g.gridBuffer,   g.frameBuffer};
+  glDeleteBuffers(6, buffers);
   const GLuint arrays[] = {g.meshVao, g.lineVao, g.emptyVao};
   glDeleteVertexArrays(3, arrays);
   const GLuint textures[] = {g.rampTexture, g.imageTexture};
@@ -240,10 +217,26 @@ void PlanetRenderer::upload(const terrain::Terrain& planet, const terrain::Mesh&
   if (uploadedMesh_ == &mesh && uploadedGeneration_ == mesh.generation) return;
   Gl& g = *gl_;
   const int side = planet.grid().side();
-  std::vector<float> heights(mesh.gridIndex.size());
+  const core::Chart& chart = planet.chart();
+  std::vector<float> heights(mesh.gridIndex.size()), grids(2 * heights.size()),
+      frames(9 * heights.size());
   for (std::size_t i = 0; i < heights.size(); ++i) {
     const auto gi = mesh.gridIndex[i];
-    heights[i] = planet.height(int(gi % std::uint64_t(side)), int(gi / std::uint64_t(side)));
+    const int u = int(gi % std::uint64_t(side)), v = int(gi / std::uint64_t(side));
+    heights[i] = planet.height(u, v);
+    grids[2 * i] = float(u);
+    grids[2 * i + 1] = float(v);
+    // The chart's frame at the vertex, for per-pixel normals: central differences of the
+    // reference surface half a step either side (exact for the flat chart, and 1e-8 relative
+    // for lat-long's).
+    const Eigen::Vector3d n = chart.up(u, v);
+    const Eigen::Vector3d du = chart.positionAt(u + 0.5, v, 0) - chart.positionAt(u - 0.5, v, 0);
+    const Eigen::Vector3d dv = chart.positionAt(u, v + 0.5, 0) - chart.positionAt(u, v - 0.5, 0);
+    for (int k = 0; k < 3; ++k) {
+      frames[9 * i + std::size_t(k)] = float(n[k]);
+      frames[9 * i + 3 + std::size_t(k)] = float(du[k]);
+      frames[9 * i + 6 + std::size_t(k)] = float(dv[k]);
+    }
   }
   // Only the byte ranges that changed since the last upload are sent (render/changed_ranges).
   auto send = [this](ShadowedBuffer& shadow, GLenum target, GLuint buffer, const void* data,
@@ -263,6 +256,9 @@ void PlanetRenderer::upload(const terrain::Terrain& planet, const terrain::Mesh&
                           mesh.positions.size() * sizeof(Eigen::Vector3f));
   sent += send(g.heights, GL_ARRAY_BUFFER, g.heightBuffer, heights.data(),
                heights.size() * sizeof(float));
+  sent += send(g.grids, GL_ARRAY_BUFFER, g.gridBuffer, grids.data(), grids.size() * sizeof(float));
+  sent +=
+      send(g.frames, GL_ARRAY_BUFFER, g.frameBuffer, frames.data(), frames.size() * sizeof(float));
   glBindVertexArray(g.meshVao);
   sent += send(g.indices, GL_ELEMENT_ARRAY_BUFFER, g.indexBuffer, mesh.indices.data(),
                mesh.indices.size() * sizeof(std::uint32_t));
@@ -273,8 +269,28 @@ void PlanetRenderer::upload(const terrain::Terrain& planet, const terrain::Mesh&
   ++stats_.uploads;
   stats_.uploadedBytes = sent;
   stats_.meshBytes = mesh.positions.size() * sizeof(Eigen::Vector3f) +
-                     heights.size() * sizeof(float) + mesh.indices.size() * sizeof(std::uint32_t);
+                     (heights.size() + grids.size() + frames.size()) * sizeof(float) +
+                     mesh.indices.size() * sizeof(std::uint32_t);
   stats_.uploadedThisFrame = true;
+}
+
+void PlanetRenderer::syncHeights(const terrain::Terrain& planet, const RenderStyle& style) {
+  Gl& g = *gl_;
+  wrapsU_ = planet.chart().wrapsU();
+  radialUp_ = planet.chart().radius() > 0;
+  stats_.heightUploadBytes = 0;
+  if (style.shading != Shading::kPerPixel) return;
+  if (g.heightTexture.side() == 0 && failedSide_ == planet.grid().side()) return;  // said once
+  std::string why;
+  g.heightTextureOk = g.heightTexture.sync(planet, why);
+  stats_.heightUploadBytes = g.heightTexture.lastUploadBytes();
+  stats_.heightTextureBytes = g.heightTextureOk ? g.heightTexture.bytes() : 0;
+  if (!g.heightTextureOk) {
+    // Facets rather than a black planet, and the reason said once.
+    failedSide_ = planet.grid().side();
+    stats_.shadingNote = "per-pixel shading off (" + why + "): drawing facets";
+    std::cerr << "renderer: " << stats_.shadingNote << "\n";
+  }
 }
 
 void PlanetRenderer::drawMesh(const terrain::Mesh& mesh, const terrain::Camera& camera,
@@ -301,6 +317,16 @@ void PlanetRenderer::drawMesh(const terrain::Mesh& mesh, const terrain::Camera& 
   glActiveTexture(GL_TEXTURE0);
   glBindTexture(GL_TEXTURE_1D, g.rampTexture);
   glUniform1i(glGetUniformLocation(g.meshProgram, "ramp"), 0);
+  const bool perPixel = style.shading == Shading::kPerPixel && g.heightTextureOk;
+  glUniform1i(glGetUniformLocation(g.meshProgram, "perPixel"), perPixel ? 1 : 0);
+  glActiveTexture(GL_TEXTURE1);
+  glBindTexture(GL_TEXTURE_2D, perPixel ? g.heightTexture.texture() : 0);
+  glUniform1i(glGetUniformLocation(g.meshProgram, "heights"), 1);
+  glActiveTexture(GL_TEXTURE0);
+  glUniform1f(glGetUniformLocation(g.meshProgram, "gridM"), float(g.heightTexture.side() - 1));
+  glUniform1i(glGetUniformLocation(g.meshProgram, "wrapsU"), wrapsU_ ? 1 : 0);
+  glUniform1i(glGetUniformLocation(g.meshProgram, "radialUp"), radialUp_ ? 1 : 0);
+  glUniform1f(glGetUniformLocation(g.meshProgram, "reliefScale"), float(style.reliefScale));
   glBindVertexArray(g.meshVao);
   if (wireOnly) {
     glPolygonMode(GL_FRONT_AND_BACK, GL_LINE);
@@ -371,6 +397,7 @@ cv::Mat PlanetRenderer::renderAR(const cv::Mat& background, const terrain::Terra
   Gl& g = *gl_;
   target(camera.width, camera.height);
   upload(planet, mesh);
+  syncHeights(planet, style);
   glClearColor(0, 0, 0, 1);
   glClearDepth(1.0);
   glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
@@ -473,6 +500,7 @@ cv::Mat PlanetRenderer::renderOverview(const terrain::Terrain& planet, const ter
   const Eigen::Matrix4d clip = clipFromCamera(over, depth.nearZ, depth.farZ);
   RenderStyle style;
   style.wireframe = true;
+  style.shading = Shading::kFaceted;  // the overview shows the tessellation
   drawMesh(arMesh, over, clip, style, false);
   drawMesh(arMesh, over, clip, style, true);
   glDisable(GL_CULL_FACE);

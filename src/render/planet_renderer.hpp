@@ -14,6 +14,7 @@
 #include <cstdint>
 #include <opencv2/core.hpp>
 #include <optional>
+#include <string>
 
 #include "core/grid.hpp"
 #include "terrain/camera.hpp"
@@ -22,7 +23,13 @@
 
 namespace ps::render {
 
+// How a pixel of the planet takes its colour (render/mesh_shaders.hpp): from the
+// full-resolution heights (per pixel) or from its triangle (faceted: the tessellation shows).
+enum class Shading { kPerPixel, kFaceted };
+
 struct RenderStyle {
+  Shading shading = Shading::kPerPixel;
+  double reliefScale = 8;  // vertical exaggeration of per-pixel shading, as the previews'
   bool wireframe = false;
   bool contours = false;
   double contourIntervalM = 1000;
@@ -44,6 +51,9 @@ struct RenderStats {
   std::size_t uploadedBytes = 0;  // bytes sent by the last upload (only its changed ranges)
   std::size_t meshBytes = 0;      // bytes of the last uploaded mesh (what a full upload sends)
   bool uploadedThisFrame = false;
+  std::size_t heightTextureBytes = 0;  // GPU memory of the height texture (0: none)
+  std::size_t heightUploadBytes = 0;   // height texels sent by the last frame (only changes)
+  std::string shadingNote;             // why per-pixel shading is off, when it is
 };
 
 class PlanetRenderer {
@@ -82,6 +92,7 @@ class PlanetRenderer {
  private:
   struct Gl;
   void upload(const terrain::Terrain& planet, const terrain::Mesh& mesh);
+  void syncHeights(const terrain::Terrain& planet, const RenderStyle& style);
   void target(int width, int height);
   void drawMesh(const terrain::Mesh& mesh, const terrain::Camera& camera,
                 const Eigen::Matrix4d& clip, const RenderStyle& style, bool wireOnly);
@@ -96,6 +107,8 @@ class PlanetRenderer {
   std::uint64_t uploadedGeneration_ = 0;
   std::size_t uploadedIndices_ = 0;
   bool partialUploads_ = true;
+  bool wrapsU_ = false, radialUp_ = false;
+  int failedSide_ = 0;  // a grid side the height texture could not hold
 };
 
 }  // namespace ps::render

@@ -81,7 +81,7 @@ void meshWith(const ChartT& chart, const Terrain& terrain, double maxErrorMetres
   forEachLeaf([&](const Tri&) { ++triangles; });
   mesh.clear();
   mesh.eye = Eigen::Vector3d::Zero();
-  ++mesh.generation;
+  mesh.generation = nextMeshGeneration();
   mesh.indices.reserve(3 * triangles);
   mesh.gridIndex.reserve((triangles + 4 * std::size_t(m) + 2) / 2);
   mesh.positions.reserve((triangles + 4 * std::size_t(m) + 2) / 2);

@@ -12,8 +12,9 @@ struct Mesh {
   std::vector<std::uint64_t> gridIndex;           // per vertex: v * side + u
   std::vector<Eigen::Vector3f> positions;         // per vertex: P - eye
   std::vector<std::uint32_t> indices;             // 3 per triangle
-  // Advances every time the producer rebuilds this mesh in place (a renderer re-uploads only
-  // when it changed).
+  // Renewed every time the producer rebuilds this mesh in place, and unique across all meshes
+  // of the process (nextMeshGeneration()): a renderer re-uploads only when it changed, and a
+  // new mesh that happens to live where an old one did is not taken for it.
   std::uint64_t generation = 0;
 
   std::size_t triangleCount() const { return indices.size() / 3; }
@@ -23,5 +24,8 @@ struct Mesh {
     indices.clear();
   }
 };
+
+// A value no mesh of this process has had as its generation yet.
+std::uint64_t nextMeshGeneration();
 
 }  // namespace ps::terrain

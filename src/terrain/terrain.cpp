@@ -76,6 +76,7 @@ Terrain::Terrain(std::shared_ptr<const core::Chart> chart, std::vector<float> he
   bounds_.build(*chart_, heights_, rule, content);
   refreshHeightRange();
   revision_ = nextRevision();
+  oldestKnown_ = revision_;
 }
 
 void Terrain::refreshHeightRange() {
@@ -116,12 +117,36 @@ void Terrain::commitEdit(const GridRegion& changed) {
     }
   });
   revision_ = nextRevision();
+  recordChange(changed);
 }
 
 void Terrain::rebuildBounds(ErrorRule rule, BoundsContent content) {
   bounds_.build(*chart_, heights_, rule, content);
   refreshHeightRange();
   revision_ = nextRevision();
+  // Called after heights changed wholesale as often as for a new rule: all may have changed.
+  recordChange(GridRegion::all(grid()));
+}
+
+void Terrain::recordChange(const GridRegion& region) {
+  changes_.push_back({revision_, region});
+  if (changes_.size() > kKeptChanges) {
+    oldestKnown_ = changes_.front().revision;
+    changes_.pop_front();
+  }
+}
+
+bool Terrain::changedSince(std::uint64_t revision, std::vector<GridRegion>& regions) const {
+  regions.clear();
+  if (revision < oldestKnown_ || revision > revision_) return false;
+  // Revisions are unique across terrains: one this terrain never had is another's.
+  if (revision != oldestKnown_ &&
+      std::none_of(changes_.begin(), changes_.end(),
+                   [&](const Change& c) { return c.revision == revision; }))
+    return false;
+  for (const Change& c : changes_)
+    if (c.revision > revision) regions.push_back(c.region);
+  return true;
 }
 
 }  // namespace ps::terrain

@@ -1,5 +1,6 @@
 #pragma once
 #include <cstdint>
+#include <deque>
 #include <memory>
 #include <span>
 #include <vector>
@@ -43,6 +44,13 @@ class Terrain {
   // a tessellation cached for one revision is valid as long as the revision is the same.
   std::uint64_t revision() const { return revision_; }
 
+  // The regions whose heights changed after `revision` (a revision of this terrain), for
+  // copies that follow the heights (a GPU texture sends only what changed). False when that
+  // revision is older than the changes kept (the last kKeptChanges) or not this terrain's:
+  // then anything may have changed.
+  static constexpr std::size_t kKeptChanges = 256;
+  bool changedSince(std::uint64_t revision, std::vector<GridRegion>& regions) const;
+
   // Lowest and highest height, refreshed on commitEdit (used by horizon culling).
   float minHeight() const { return minHeight_; }
   float maxHeight() const { return maxHeight_; }
@@ -59,6 +67,15 @@ class Terrain {
   std::vector<float, core::HugePageAllocator<float>> heights_;
   ErrorBounds bounds_;
   std::uint64_t revision_ = 0;
+  // Each committed change with the revision it made; oldestKnown_ is the revision from which
+  // this list is complete.
+  struct Change {
+    std::uint64_t revision;
+    GridRegion region;
+  };
+  std::deque<Change> changes_;
+  std::uint64_t oldestKnown_ = 0;
+  void recordChange(const GridRegion& region);
   float minHeight_ = 0, maxHeight_ = 0;
 };
 

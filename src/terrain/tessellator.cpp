@@ -184,7 +184,7 @@ bool Tessellator::pass(const ChartT& chart, const Terrain& terrain, const Camera
 
   mesh_.clear();
   mesh_.eye = eye;
-  ++mesh_.generation;
+  mesh_.generation = nextMeshGeneration();
   stats_.visited = stats_.culledFrustum = stats_.culledHorizon = stats_.leafPairsUnvisited = 0;
 
   auto corner = [&](GridPoint p) {

@@ -139,7 +139,9 @@ BodyPoseResult solveBodyPose(const MarkerLayout& layout, std::span<const Detecti
   std::vector<Pose> seeds;
   for (const Detection* d : bySize) {
     const LayoutMarker& m = *layout.find(d->id);
-    const PoseCandidates c = solveMarkerPose(d->corners, m.edge(), calibration);
+    // Unpolished: every seed is scored over all corners and the two kept are polished there.
+    const PoseCandidates c =
+        used.size() > 1 ? markerPoseSeeds(d->corners, m.edge(), calibration) : PoseCandidates{};
     const Pose bodyInMarker = m.inBody().inverse();
     for (int i = 0; i < c.count; ++i) {
       const Pose s = c.poses[std::size_t(i)] * bodyInMarker;

@@ -28,7 +28,10 @@ CameraMotionJudge::CameraMotionJudge(CameraMotionConfig config) : config_(config
 }
 
 void CameraMotionJudge::reset() {
+  pending_.release();
+  pendingQuads_.clear();
   reference_.release();
+  referencePyramid_.clear();
   mask_.release();
   features_.clear();
   featuresPicked_ = false;
@@ -45,10 +48,25 @@ cv::Mat CameraMotionJudge::toWorkingGrey(const cv::Mat& image) const {
 
 void CameraMotionJudge::setReference(const cv::Mat& image,
                                      const std::vector<std::array<cv::Point2d, 4>>& exclude) {
-  reference_ = toWorkingGrey(image);
+  // Kept as it is (a copy: the caller's frame buffer is reused); made into the working
+  // reference only when a frame without the board needs it, so frames with the board pay for
+  // a copy only.
+  const cv::Mat grey = toGrey(image);
+  pending_ = grey.data == image.data ? grey.clone() : grey;
+  pendingQuads_ = exclude;
+  reference_.release();
+  referencePyramid_.clear();
+  mask_.release();
+  features_.clear();
+  featuresPicked_ = false;
+}
+
+void CameraMotionJudge::buildReference() {
+  reference_ = toWorkingGrey(pending_);
+  pending_.release();
   mask_ = cv::Mat(reference_.size(), CV_8U, cv::Scalar(255));
   const double s = 1.0 / config_.downscale;
-  for (const auto& q : exclude) {
+  for (const auto& q : pendingQuads_) {
     cv::Point2d c(0, 0);
     for (const auto& p : q) c += 0.25 * p;
     std::vector<cv::Point> poly;
@@ -58,12 +76,12 @@ void CameraMotionJudge::setReference(const cv::Mat& image,
     }
     cv::fillConvexPoly(mask_, poly, cv::Scalar(0));
   }
-  features_.clear();
-  featuresPicked_ = false;
+  pendingQuads_.clear();
 }
 
 CameraMotion CameraMotionJudge::judge(const cv::Mat& image) {
   CameraMotion m;
+  if (!pending_.empty()) buildReference();
   if (reference_.empty()) return m;
   if (!featuresPicked_) {
     // Picked once per reference, on the first frame that needs them: frames with the board in
@@ -78,10 +96,20 @@ CameraMotion CameraMotionJudge::judge(const cv::Mat& image) {
   std::vector<cv::Point2f> found, back;
   std::vector<unsigned char> status, backStatus;
   std::vector<float> err;
-  cv::calcOpticalFlowPyrLK(reference_, now, features_, found, status, err, cv::Size(15, 15), 3);
+  // Pyramids built once per image: the reference's is kept for every frame it is judged
+  // against, and each frame's serves both directions.
+  const cv::Size window(15, 15);
+  constexpr int kLevels = 3;
+  if (referencePyramid_.empty())
+    cv::buildOpticalFlowPyramid(reference_, referencePyramid_, window, kLevels);
+  std::vector<cv::Mat> nowPyramid;
+  cv::buildOpticalFlowPyramid(now, nowPyramid, window, kLevels);
+  cv::calcOpticalFlowPyrLK(referencePyramid_, nowPyramid, features_, found, status, err, window,
+                           kLevels);
   // Forward-backward check: a corner under a hand or the tool now does not track back to where
   // it was, and is left out (what is left is the background that can still be seen).
-  cv::calcOpticalFlowPyrLK(now, reference_, found, back, backStatus, err, cv::Size(15, 15), 3);
+  cv::calcOpticalFlowPyrLK(nowPyramid, referencePyramid_, found, back, backStatus, err, window,
+                           kLevels);
   std::vector<double> shifts;
   for (std::size_t i = 0; i < features_.size(); ++i)
     if (status[i] && backStatus[i] && cv::norm(back[i] - features_[i]) < 0.5)

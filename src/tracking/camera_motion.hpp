@@ -44,13 +44,17 @@ class CameraMotionJudge {
   void setReference(const cv::Mat& image, const std::vector<std::array<cv::Point2d, 4>>& exclude);
   // The frame now, against the reference (not judged without one).
   CameraMotion judge(const cv::Mat& image);
-  bool hasReference() const { return !reference_.empty(); }
+  bool hasReference() const { return !reference_.empty() || !pending_.empty(); }
   void reset();
 
  private:
   cv::Mat toWorkingGrey(const cv::Mat& image) const;
+  void buildReference();  // pending_ and pendingQuads_ -> reference_ and mask_
   CameraMotionConfig config_;
+  cv::Mat pending_;  // the last frame with the board, full size, until a judge needs it
+  std::vector<std::array<cv::Point2d, 4>> pendingQuads_;
   cv::Mat reference_, mask_;
+  std::vector<cv::Mat> referencePyramid_;
   std::vector<cv::Point2f> features_;
   bool featuresPicked_ = false;
 };

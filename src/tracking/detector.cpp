@@ -50,6 +50,12 @@ void DetectorConfig::validate() const {
   if (setSearchEvery < 1 || setSearchEvery > 1000)
     throw core::InputError("set search every = " + std::to_string(setSearchEvery) +
                            " is not in 1..1000");
+  if (!(coarseRegionPx >= 0) || !std::isfinite(coarseRegionPx))
+    throw core::InputError("coarse region size = " + std::to_string(coarseRegionPx) +
+                           " px is not >= 0");
+  if (coarseRegionMarkers < 1)
+    throw core::InputError("coarse region markers = " + std::to_string(coarseRegionMarkers) +
+                           " is not >= 1");
   if (!std::isfinite(regionMargin) || regionMargin < 0.1 || regionMargin > 5)
     throw core::InputError("region margin = " + std::to_string(regionMargin) +
                            " is not in [0.1, 5]");

@@ -63,6 +63,14 @@ struct DetectorConfig {
   std::vector<std::vector<int>> sets;
   int setSearchEvery = 8;
   double regionMargin = 0.3;  // box margin, as a fraction of the marker's size in the image
+  // A box that holds at least coarseRegionMarkers markers, each at least coarseRegionPx
+  // pixels across, is searched at `decimate` (the quads found on the smaller image, their edges
+  // still refined on the full one): a board's nine markers then cost about a third of a
+  // full-resolution search, and the pose from 36 corners hardly notices (docs/TRACKING.md).
+  // Fewer markers (a single marker, the tool cube's faces) keep the full resolution their
+  // poses need. coarseRegionPx 0: always full resolution.
+  double coarseRegionPx = 20;
+  int coarseRegionMarkers = 4;
 
   // Throws core::InputError naming the bad field.
   void validate() const;

@@ -23,6 +23,7 @@ class RegionDetector final : public Detector {
       return x.backend == Backend::kAprilTag ? makeAprilTagDetector(x) : makeArucoDetector(x);
     };
     finder_ = make(base);
+    coarseRefiner_ = c.coarseRegionPx > 0 ? make(base) : nullptr;
     base.decimate = 1.0;
     refiner_ = make(base);
   }
@@ -41,7 +42,7 @@ class RegionDetector final : public Detector {
     ++frameNo_;
     std::vector<Detection> found;
     // 1. Where each marker was, moved on by its last motion.
-    std::vector<cv::Rect> boxes;
+    std::vector<Region> boxes, coarseBoxes;
     for (const auto& [id, d] : last_) {
       Detection p = d;
       const auto prev = previous_.find(id);
@@ -49,10 +50,15 @@ class RegionDetector final : public Detector {
         const cv::Point2d motion = centre(d) - centre(prev->second);
         for (auto& c : p.corners) c += motion;
       }
-      boxes.push_back(box(p, frame));
-      boxes.back() |= box(d, frame);
+      const bool inLargeSet = largeSet(id) && side(d) >= config_.coarseRegionPx;
+      (inLargeSet ? coarseBoxes : boxes).push_back({box(p, frame) | box(d, frame), 1});
     }
-    for (const auto& b : mergeBoxes(boxes)) addFrom(grey, b, found);
+    // Few or small markers first, at full resolution; then the large sets' boxes, at the
+    // frame's decimation where enough of their markers are in one box (what the first pass
+    // found there already is kept).
+    for (const auto& b : mergeBoxes(boxes)) addFrom(grey, b, found, false);
+    for (const auto& b : mergeBoxes(coarseBoxes))
+      addFrom(grey, b, found, b.markers >= config_.coarseRegionMarkers);
     // 2. The whole frame when something expected is missing: an id outside the rigid sets, or
     // a whole set (every `searchEvery` frames); a set with some markers in view is searched for
     // the rest only every `setSearchEvery` frames (a face turning into view, a hand lifting).
@@ -77,12 +83,12 @@ class RegionDetector final : public Detector {
     const int since = frameNo_ - lastSearch_;
     if ((missing && since >= config_.searchEvery) || (partial && since >= config_.setSearchEvery)) {
       lastSearch_ = frameNo_;
-      std::vector<cv::Rect> fresh;
+      std::vector<Region> fresh;
       for (const auto& d : finder_->detect(grey)) {
         if (!wanted(d.id) || known(found, d)) continue;
-        fresh.push_back(box(d, frame));
+        fresh.push_back({box(d, frame), 1});
       }
-      for (const auto& b : mergeBoxes(fresh)) addFrom(grey, b, found);
+      for (const auto& b : mergeBoxes(fresh)) addFrom(grey, b, found, false);
     }
     finishDetections(config_, found);
     previous_.clear();
@@ -119,30 +125,55 @@ class RegionDetector final : public Detector {
                      cv::Point(int(std::ceil(x1 + m)) + 1, int(std::ceil(y1 + m)) + 1));
     return r & frame;
   }
-  static std::vector<cv::Rect> mergeBoxes(std::vector<cv::Rect> boxes) {
+  // A box to search and how many markers were expected in it.
+  struct Region {
+    cv::Rect rect;
+    int markers = 1;
+  };
+  static double side(const Detection& d) {
+    double x0 = 1e18, y0 = 1e18, x1 = -1e18, y1 = -1e18;
+    for (const auto& c : d.corners) {
+      x0 = std::min(x0, c.x), x1 = std::max(x1, c.x);
+      y0 = std::min(y0, c.y), y1 = std::max(y1, c.y);
+    }
+    return std::max(x1 - x0, y1 - y0);
+  }
+  static std::vector<Region> mergeBoxes(std::vector<Region> boxes) {
     bool merged = true;
     while (merged) {
       merged = false;
       for (std::size_t i = 0; i < boxes.size() && !merged; ++i)
         for (std::size_t j = i + 1; j < boxes.size() && !merged; ++j)
-          if ((boxes[i] & boxes[j]).area() > 0) {
-            boxes[i] |= boxes[j];
+          if ((boxes[i].rect & boxes[j].rect).area() > 0) {
+            boxes[i].rect |= boxes[j].rect;
+            boxes[i].markers += boxes[j].markers;
             boxes.erase(boxes.begin() + std::ptrdiff_t(j));
             merged = true;
           }
     }
-    std::erase_if(boxes, [](const cv::Rect& r) { return r.width < 16 || r.height < 16; });
+    std::erase_if(boxes, [](const Region& r) { return r.rect.width < 16 || r.rect.height < 16; });
     return boxes;
   }
-  void addFrom(const cv::Mat& grey, const cv::Rect& r, std::vector<Detection>& found) {
-    for (auto d : refiner_->detect(grey(r))) {
+  // Whether `id` belongs to a rigid set large enough for a coarse search.
+  bool largeSet(int id) const {
+    if (!coarseRefiner_) return false;
+    return std::any_of(config_.sets.begin(), config_.sets.end(), [&](const auto& set) {
+      return int(set.size()) >= config_.coarseRegionMarkers &&
+             std::find(set.begin(), set.end(), id) != set.end();
+    });
+  }
+  void addFrom(const cv::Mat& grey, const Region& region, std::vector<Detection>& found,
+               bool coarse) {
+    const cv::Rect& r = region.rect;
+    Detector& search = coarse ? *coarseRefiner_ : *refiner_;
+    for (auto d : search.detect(grey(r))) {
       for (auto& c : d.corners) c += cv::Point2d(r.x, r.y);
       if (wanted(d.id) && !known(found, d)) found.push_back(d);
     }
   }
 
   DetectorConfig config_;
-  std::unique_ptr<Detector> finder_, refiner_;
+  std::unique_ptr<Detector> finder_, refiner_, coarseRefiner_;
   std::map<int, Detection> last_, previous_;
   cv::Size lastSize_;
   long long frameNo_ = 0, lastSearch_ = -1000000;

@@ -41,8 +41,12 @@ std::array<Eigen::Vector3d, 4> markerObjectPoints(double size) {
           Eigen::Vector3d(-h, -h, 0)};
 }
 
-PoseCandidates solveMarkerPose(const std::array<cv::Point2d, 4>& corners, double size,
-                               const CameraCalibration& calibration) {
+namespace {
+
+// Every candidate (IPPE_SQUARE's two and SQPNP's), polished by Levenberg-Marquardt when asked,
+// with its RMS reprojection error; the two best distinct ones kept.
+PoseCandidates markerCandidates(const std::array<cv::Point2d, 4>& corners, double size,
+                                const CameraCalibration& calibration, bool polish) {
   PoseCandidates out;
   std::vector<cv::Point3d> object;
   for (const auto& p : markerObjectPoints(size)) object.emplace_back(p.x(), p.y(), p.z());
@@ -70,10 +74,12 @@ PoseCandidates solveMarkerPose(const std::array<cv::Point2d, 4>& corners, double
     cv::Mat rv, tv;
     rvecs[i].convertTo(rv, CV_64F);
     tvecs[i].convertTo(tv, CV_64F);
-    try {
-      cv::solvePnPRefineLM(object, image, cv::Mat(calibration.K), calibration.distortion, rv, tv);
-    } catch (const cv::Exception&) {
-      continue;
+    if (polish) {
+      try {
+        cv::solvePnPRefineLM(object, image, cv::Mat(calibration.K), calibration.distortion, rv, tv);
+      } catch (const cv::Exception&) {
+        continue;
+      }
     }
     std::vector<cv::Point2d> projected;
     cv::projectPoints(object, rv, tv, cv::Mat(calibration.K), calibration.distortion, projected);
@@ -105,6 +111,18 @@ PoseCandidates solveMarkerPose(const std::array<cv::Point2d, 4>& corners, double
     if (++out.count == 2) break;
   }
   return out;
+}
+
+}  // namespace
+
+PoseCandidates solveMarkerPose(const std::array<cv::Point2d, 4>& corners, double size,
+                               const CameraCalibration& calibration) {
+  return markerCandidates(corners, size, calibration, true);
+}
+
+PoseCandidates markerPoseSeeds(const std::array<cv::Point2d, 4>& corners, double size,
+                               const CameraCalibration& calibration) {
+  return markerCandidates(corners, size, calibration, false);
 }
 
 PoseChoice choosePose(const PoseCandidates& c, const Pose* previous, double ratioThreshold) {
