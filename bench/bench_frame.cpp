@@ -21,6 +21,7 @@
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <thread>
+#include <tuple>
 
 #include "app/build_paths.hpp"
 #include "app/default_planet.hpp"
@@ -78,7 +79,7 @@ struct Series {
 
 void benchCase(const BenchOptions& options, std::ostream& out, nlohmann::json machine,
                render::EglContext& context, int gridLevel, const std::string& name,
-               double kDistMaxPx);
+               double kDistMaxPx, render::Shading shading);
 
 void benchFrame(const BenchOptions& options, std::ostream& out) {
   namespace fs = std::filesystem;
@@ -111,14 +112,21 @@ void benchFrame(const BenchOptions& options, std::ostream& out) {
 
   const int gridLevel = options.quick ? 11 : 12;  // the demo's planet is 4097^2
   // The app's dist_max (4 px: the demo's planet is ~100 px across, a few hundred triangles) and
-  // a dense view that runs into the 70,000-triangle budget (the worst case of the render).
-  for (const auto& [name, distMaxPx] : {std::pair{"demo", 4.0}, std::pair{"dense", 0.05}})
-    benchCase(options, out, machine, *context, gridLevel, name, distMaxPx);
+  // a dense view that runs into the 70,000-triangle budget (the worst case of the render);
+  // both shaded per pixel (the app's default), and the demo's also in facets, the shading
+  // per-pixel replaced, as the baseline of its frame rate in the same run.
+  const auto perPixel = render::Shading::kPerPixel, faceted = render::Shading::kFaceted;
+  for (const auto& [name, distMaxPx, shading] :
+       {std::tuple{"demo", 4.0, perPixel}, std::tuple{"demo_faceted", 4.0, faceted},
+        std::tuple{"dense", 0.05, perPixel}})
+    benchCase(options, out, machine, *context, gridLevel, name, distMaxPx, shading);
 }
 
 void benchCase(const BenchOptions& options, std::ostream& out, nlohmann::json machine,
                render::EglContext& context, int gridLevel, const std::string& name,
-               double kDistMaxPx) {
+               double kDistMaxPx, render::Shading shading) {
+  render::RenderStyle style;
+  style.shading = shading;
   namespace fs = std::filesystem;
   const fs::path video = ps::app::sourceDir() / "data" / "demo.mkv";
   const fs::path calibPath = ps::app::sourceDir() / "calib" / "synthetic-640x480.yml";
@@ -170,7 +178,7 @@ void benchCase(const BenchOptions& options, std::ostream& out, nlohmann::json ma
       std::optional<render::Cursor> cursor;
       if (r.control) cursor = render::Cursor{*r.control, stepper.toolRadius()};
       t0 = std::chrono::steady_clock::now();
-      renderer.renderAR(image, *planet, mesh, cam, render::RenderStyle{}, cursor);
+      renderer.renderAR(image, *planet, mesh, cam, style, cursor);
       renderMs = ms(t0);
       if (frame % kOverviewEvery == 0) {
         t0 = std::chrono::steady_clock::now();
@@ -186,7 +194,7 @@ void benchCase(const BenchOptions& options, std::ostream& out, nlohmann::json ma
     } else {
       const auto t0 = std::chrono::steady_clock::now();
       renderer.renderAR(image, *planet, empty, lastView ? *lastView : placeholder,
-                        render::RenderStyle{});
+                        style);
       renderMs = ms(t0);
     }
     noUpload += !renderer.stats().uploadedThisFrame;
@@ -221,6 +229,7 @@ void benchCase(const BenchOptions& options, std::ostream& out, nlohmann::json ma
                         {"size", std::to_string(W) + "x" + std::to_string(H)},
                         {"grid", planet->grid().side()},
                         {"dist_max_px", kDistMaxPx},
+                        {"shading", shading == render::Shading::kPerPixel ? "per_pixel" : "faceted"},
                         {"triangle_budget", kBudget},
                         {"frames", frames},
                         {"planet_frames", planetFrames},
@@ -278,7 +287,7 @@ void benchCase(const BenchOptions& options, std::ostream& out, nlohmann::json ma
       tess.push_back(ms(t0));
       reusedStill += tessellator.stats().reused;
       t0 = std::chrono::steady_clock::now();
-      renderer.renderAR(image, *planet, *mesh, *lastView, render::RenderStyle{});
+      renderer.renderAR(image, *planet, *mesh, *lastView, style);
       rend.push_back(ms(t0));
     }
     out << nlohmann::json{{"bench", "frame"},
@@ -294,7 +303,9 @@ void benchCase(const BenchOptions& options, std::ostream& out, nlohmann::json ma
         << std::endl;
   }
 
-  // Each skip against doing the work, on views of this replay.
+  // Each skip against doing the work, on views of this replay (the faceted baseline only
+  // measures its frame rate).
+  if (shading == render::Shading::kFaceted) return;
   std::cerr << "bench frame: skips (" << name << ")\n";
   skips.settings = ts;
   skips.editTouchingMs = median(s.editTouching);

@@ -64,6 +64,12 @@ cv::Size Window::framebufferSize() const {
   return {w, h};
 }
 
+cv::Size Window::windowSize() const {
+  int w = 0, h = 0;
+  glfwGetWindowSize(window_, &w, &h);
+  return {w, h};
+}
+
 void Window::clear(cv::Size framebuffer) const {
   glBindFramebuffer(GL_FRAMEBUFFER, 0);
   glViewport(0, 0, framebuffer.width, framebuffer.height);

@@ -31,6 +31,7 @@ class Window {
   bool closeRequested() const;
   void requestClose();
   cv::Size framebufferSize() const;
+  cv::Size windowSize() const;  // in display units (the framebuffer's on most screens)
   // Binds framebuffer 0 with the whole window as viewport, cleared to the backdrop colour.
   void clear(cv::Size framebuffer) const;
   void swapBuffers();

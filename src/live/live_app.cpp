@@ -19,6 +19,7 @@
 #include "live/live_shell.hpp"
 #include "live/panel.hpp"
 #include "live/sculpt_loop.hpp"
+#include "live/window_layout.hpp"
 #include "render/planet_renderer.hpp"
 #include "render/projection.hpp"
 #include "session/session_store.hpp"
@@ -162,7 +163,8 @@ LiveResult runLive(FrameInput& input, const tracking::CameraCalibration& calibra
 
   GlfwLibrary glfw;
   const int W = input.size().width, H = input.size().height;
-  Window window(std::max(W, 960), std::max(H, 720), "PlanetSculpt live", settings.frames == 0);
+  const cv::Size windowSize = windowSizeFor({W, H});
+  Window window(windowSize.width, windowSize.height, "PlanetSculpt live", settings.frames == 0);
   LiveResult result;
   render::PlanetRenderer renderer;
   ImGuiLayer imgui(window);

@@ -3,6 +3,7 @@
 #include <algorithm>
 
 #include "io/heightmap_export.hpp"
+#include "live/window_layout.hpp"
 
 namespace ps::live {
 
@@ -17,9 +18,9 @@ cv::Size Shell::present(const terrain::Terrain& planet, const terrain::Mesh& mes
   renderer.renderAR(image, planet, mesh, cam, style, cursor);
   const cv::Size fb = window.framebufferSize();
   window.clear(fb);
-  const double fit = std::min(double(fb.width) / camera.width, double(fb.height) / camera.height);
-  const int vw = int(camera.width * fit), vh = int(camera.height * fit);
-  renderer.present((fb.width - vw) / 2, (fb.height - vh) / 2, vw, vh);
+  // GL's window coordinates start at the bottom: the rectangle's y from there.
+  const cv::Rect view = arViewRect(fb, window.windowSize().width, {camera.width, camera.height});
+  renderer.present(view.x, fb.height - view.y - view.height, view.width, view.height);
   return fb;
 }
 

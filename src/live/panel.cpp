@@ -11,6 +11,7 @@
 #include <iterator>
 
 #include "core/input_error.hpp"
+#include "live/window_layout.hpp"
 
 namespace ps::live {
 
@@ -166,17 +167,23 @@ void applyShortcuts(PanelSettings& s, PanelActions& a) {
   }
 }
 
-void drawPanel(PanelSettings& s, PanelActions& a, const PanelStatus& st) {
-  ImGui::SetNextWindowPos(ImVec2(8, 8), ImGuiCond_FirstUseEver);
-  ImGui::SetNextWindowBgAlpha(0.75f);
-  ImGui::Begin("PlanetSculpt", nullptr, ImGuiWindowFlags_AlwaysAutoResize);
-  ImGui::Text("%.1f fps  (%.1f ms: track %.1f, edit %.1f, tess %.1f, render %.1f)", st.fps,
-              st.frameMs, st.trackMs, st.editMs, st.tessellateMs, st.renderMs);
+float drawPanel(PanelSettings& s, PanelActions& a, const PanelStatus& st) {
+  // Docked in the column at the right (live/window_layout.hpp), beside the AR view.
+  const ImVec2 display = ImGui::GetIO().DisplaySize;
+  ImGui::SetNextWindowPos(ImVec2(display.x - kSideColumnWidth + 4, 4), ImGuiCond_Always);
+  ImGui::SetNextWindowSize(ImVec2(kSideColumnWidth - 8, 0), ImGuiCond_Always);
+  ImGui::SetNextWindowBgAlpha(0.9f);
+  ImGui::Begin("PlanetSculpt", nullptr,
+               ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoResize | ImGuiWindowFlags_NoCollapse);
+  ImGui::PushItemWidth(-150);  // sliders leave room for their labels
+  ImGui::PushTextWrapPos(0);   // long lines wrap at the column's edge
+  ImGui::Text("%.1f fps, %.1f ms a frame", st.fps, st.frameMs);
+  ImGui::Text("track %.1f  edit %.1f  tess %.1f  render %.1f ms", st.trackMs, st.editMs,
+              st.tessellateMs, st.renderMs);
   ImGui::Text("triangles %zu%s", st.triangles, st.reused ? "  (view unchanged: reused)" : "");
-  ImGui::Text("planet marker: %s   tool marker: %s%s", st.planetState.c_str(), st.toolState.c_str(),
+  ImGui::Text("planet: %s   tool: %s%s", st.planetState.c_str(), st.toolState.c_str(),
               st.touching ? "   TOUCHING" : "");
-  ImGui::Text("haptic force %.2f N  (loop %.0f Hz, tracked marker: computed, drawn, not felt)",
-              st.forceN, st.hapticHz);
+  ImGui::Text("haptic force %.2f N (%.0f Hz loop; drawn, not felt)", st.forceN, st.hapticHz);
   if (!st.message.empty()) ImGui::TextColored(ImVec4(1, 0.4f, 0.3f, 1), "%s", st.message.c_str());
   ImGui::Separator();
   int tool = s.displace ? 1 : 0;
@@ -206,53 +213,52 @@ void drawPanel(PanelSettings& s, PanelActions& a, const PanelStatus& st) {
   ImGui::SliderInt("triangle budget", &s.triangleBudget, 5000, 500000, "%d",
                    ImGuiSliderFlags_Logarithmic);
   ImGui::Checkbox("wireframe (W)", &s.wireframe);
-  ImGui::SameLine();
+  ImGui::SameLine(ImGui::GetWindowWidth() * 0.5f);
   ImGui::Checkbox("contours (C)", &s.contours);
-  ImGui::SameLine();
   ImGui::Checkbox("overview (O)", &s.showOverview);
-  ImGui::SameLine();
+  ImGui::SameLine(ImGui::GetWindowWidth() * 0.5f);
   ImGui::Checkbox("facets (F)", &s.facets);
   ImGui::SliderFloat("spin (Left/Right)", &s.spinDeg, -180, 180, "%.0f deg");
   ImGui::SliderFloat("tilt (Up/Down)", &s.tiltDeg, -90, 90, "%.0f deg");
-  ImGui::SameLine();
   if (ImGui::Button("reset")) s.spinDeg = s.tiltDeg = 0;
-  // The planet's size on its marker shares the tilt row (PgUp/PgDn or the wheel change it): a
-  // row more would push the panel over the planet marker in a 960x720 window.
   ImGui::SameLine();
-  ImGui::Text("radius %.1f cm", double(s.planetSizeCm));
+  ImGui::Text("planet radius %.1f cm (PgUp/PgDn)", double(s.planetSizeCm));
   ImGui::Separator();
   if (ImGui::Button("undo (Ctrl+Z)")) a.undo = true;
   ImGui::SameLine();
   if (ImGui::Button("redo (Ctrl+Y)")) a.redo = true;
   ImGui::SameLine();
   ImGui::Text("%zu / %zu", st.undoCount, st.redoCount);
-  if (ImGui::Button("save (Ctrl+S)")) a.save = true;
   ImGui::SameLine();
-  ImGui::TextDisabled("%s", st.savePath.c_str());
+  if (ImGui::Button("save (Ctrl+S)")) a.save = true;
   if (st.autosaveInS >= 0)
-    ImGui::TextDisabled("autosave in %.0f s; journal: %zu records since the last save",
+    ImGui::TextDisabled("%s; autosave in %.0f s; %zu journal records since", st.savePath.c_str(),
                         st.autosaveInS, st.journalRecords);
   else
-    ImGui::TextDisabled("autosave off; journal: %zu records since the last save",
+    ImGui::TextDisabled("%s; autosave off; %zu journal records since", st.savePath.c_str(),
                         st.journalRecords);
   if (ImGui::Button("export (Ctrl+E)")) a.exportPlanet = true;
   ImGui::SameLine();
-  ImGui::TextDisabled(
-      "%s", st.exportPath.empty() ? "heightmap + mesh to OUT/exports/" : st.exportPath.c_str());
-  if (ImGui::Button(st.recordPath.empty() ? "record (Ctrl+R)" : "stop recording (Ctrl+R)"))
+  if (ImGui::Button(st.recordPath.empty() ? "record (Ctrl+R)" : "stop rec (Ctrl+R)"))
     a.record = true;
+  ImGui::SameLine();
+  if (ImGui::Button("keys (?)")) s.showHelp = !s.showHelp;
+  ImGui::TextDisabled("%s", st.exportPath.empty() ? "exports: heightmap + mesh to OUT/exports/"
+                                                  : st.exportPath.c_str());
   if (!st.recordPath.empty()) {
-    ImGui::SameLine();
     ImGui::TextColored(ImVec4(1, 0.3f, 0.3f, 1), "REC %d frames -> %s", st.recordedFrames,
                        st.recordPath.c_str());
   }
-  if (ImGui::Button("shortcuts (?)")) s.showHelp = !s.showHelp;
+  ImGui::PopTextWrapPos();
+  ImGui::PopItemWidth();
+  const float bottom = ImGui::GetWindowPos().y + ImGui::GetWindowSize().y;
   ImGui::End();
   if (s.showHelp) {
     ImGui::Begin("Shortcuts", &s.showHelp, ImGuiWindowFlags_AlwaysAutoResize);
     ImGui::TextUnformatted(shortcutHelp());
     ImGui::End();
   }
+  return bottom;
 }
 
 RecoveryAnswer drawRecoveryModal(const std::string& message) {

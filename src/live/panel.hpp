@@ -85,6 +85,7 @@ const char* shortcutHelp();
 void applyShortcuts(PanelSettings& settings, PanelActions& actions);
 
 // Draws the panel (and the help window when settings.showHelp).
-void drawPanel(PanelSettings& settings, PanelActions& actions, const PanelStatus& status);
+// Returns the panel's bottom edge (display units), for what goes below it in its column.
+float drawPanel(PanelSettings& settings, PanelActions& actions, const PanelStatus& status);
 
 }  // namespace ps::live

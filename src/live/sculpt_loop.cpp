@@ -22,6 +22,7 @@
 #include "io/stroke_journal.hpp"
 #include "live/panel.hpp"
 #include "live/panel_mapping.hpp"
+#include "live/window_layout.hpp"
 #include "render/projection.hpp"
 #include "replay/session_timeline.hpp"
 #include "session/frame_recorder.hpp"
@@ -238,17 +239,21 @@ class SculptLoop {
     applyShortcuts(panel_, actions);
     status_.undoCount = stepper_.pipeline().journal().undoCount();
     status_.redoCount = stepper_.pipeline().journal().redoCount();
-    live::drawPanel(panel_, actions, status_);
+    const float panelBottom = live::drawPanel(panel_, actions, status_);
     applyScript(settings_.script, result_.frames, actions, panel_);
     if (actions.crash) std::raise(SIGKILL);     // a scripted crash: nothing saved, nothing flushed
     if (actions.interrupt) std::raise(SIGINT);  // handled as a Ctrl-C from outside is
     if (panel_.showOverview && overview_.valid()) {
       const ImVec2 display = ImGui::GetIO().DisplaySize;
-      ImGui::SetNextWindowPos(ImVec2(display.x - 8, display.y - 8), ImGuiCond_Always, ImVec2(1, 1));
+      // At the foot of the panel's column, beside the AR view.
+      ImGui::SetNextWindowPos(ImVec2(display.x - kSideColumnWidth / 2.0f, display.y - 8),
+                              ImGuiCond_Always, ImVec2(0.5f, 1));
       ImGui::SetNextWindowBgAlpha(0.6f);
       ImGui::Begin("overview", nullptr,
                    ImGuiWindowFlags_AlwaysAutoResize | ImGuiWindowFlags_NoDecoration);
-      ImGui::Image(overview_.imgui(), ImVec2(256, 256));
+      // As large as the column's room under the panel allows (the panel grows with a message).
+      const float side = std::clamp(display.y - panelBottom - 24, 96.0f, float(kOverviewSide));
+      ImGui::Image(overview_.imgui(), ImVec2(side, side));
       ImGui::End();
     }
     if (!shell_.input.status().empty()) {
