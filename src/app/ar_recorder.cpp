@@ -34,6 +34,10 @@ void ArRecorder::onFrame(const replay::FrameContext& f, const Eigen::Vector3d& f
   if (!f.touching) closeRun();
   if (!wantSequence && !wantShowcase) return;
   const auto t0 = std::chrono::steady_clock::now();
+  // The camera image as the pinhole K sees it, so the planet lands on its board
+  // (tracking/undistort.hpp); made once, for the calibration the replay runs with.
+  if (!undistort_) undistort_.emplace(f.calibration.forImageSize(f.image.size()));
+  const cv::Mat image = undistort_->apply(f.image);
   cv::Mat view, overview;
   if (f.planetInCamera) {
     const cv::Matx33d& K = f.calibration.K;
@@ -57,14 +61,14 @@ void ArRecorder::onFrame(const replay::FrameContext& f, const Eigen::Vector3d& f
         cursor->arrow = force * (0.25 * f.planet.chart().radius() / 8.0);
       }
     }
-    view = renderer_.renderAR(f.image, f.planet, mesh, cam, style, cursor);
+    view = renderer_.renderAR(image, f.planet, mesh, cam, style, cursor);
     overview = renderer_.renderOverview(f.planet, mesh, cam, 480, 480);
   } else {
     // No planet: the camera image alone (the planet is not drawn where it is not tracked).
-    if (f.image.channels() == 1)
-      cv::cvtColor(f.image, view, cv::COLOR_GRAY2BGR);
+    if (image.channels() == 1)
+      cv::cvtColor(image, view, cv::COLOR_GRAY2BGR);
     else
-      view = f.image.clone();
+      view = image.clone();
   }
   renderMs_ +=
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();

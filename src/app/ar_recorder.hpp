@@ -8,10 +8,13 @@
 #include <memory>
 #include <opencv2/core.hpp>
 
+#include <optional>
+
 #include "render/egl_context.hpp"
 #include "render/planet_renderer.hpp"
 #include "replay/replay.hpp"
 #include "terrain/tessellator.hpp"
+#include "tracking/undistort.hpp"
 
 namespace ps::app {
 
@@ -44,6 +47,7 @@ class ArRecorder {
   render::EglContext context_;
   render::PlanetRenderer renderer_;
   terrain::Tessellator tessellator_;
+  std::optional<tracking::FrameUndistorter> undistort_;
   int written_ = 0;
   double renderMs_ = 0;
   // The current touching run's frames and the best (longest) run's middle frame.

@@ -28,6 +28,7 @@
 #include "session/frame_recorder.hpp"
 #include "session/planet_export.hpp"
 #include "terrain/tessellator.hpp"
+#include "tracking/undistort.hpp"
 
 namespace ps::live {
 
@@ -124,7 +125,9 @@ class SculptLoop {
   // A camera frame: recorded (when recording), tracked and sculpted with; the tool's tip goes
   // to the haptic device.
   void track(const cv::Mat& frame) {
-    shell_.image = frame;
+    // Shown as the pinhole K sees it, under the planet drawn with that K
+    // (tracking/undistort.hpp); tracked and recorded as the camera gave it.
+    shell_.image = undistort_.apply(frame);
     if (recorder_.recording()) try {
         if (sidecarPending_) openSidecar();  // no recording without its sidecar
         recorder_.write(frame);
@@ -417,6 +420,7 @@ class SculptLoop {
   const LiveSettings& settings_;
   LiveResult& result_;
   const tracking::CameraCalibration& calib_;
+  const tracking::FrameUndistorter undistort_{calib_.forImageSize(shell_.camera)};
   const Eigen::Matrix3d K_;
   terrain::Terrain& planet_;
   const bool recovered_;

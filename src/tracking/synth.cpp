@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "core/input_error.hpp"
@@ -124,6 +125,28 @@ SynthRenderer::SynthRenderer(SynthScript script) : script_(std::move(script)) {
   if (script_.toolLayout)
     for (const auto& m : script_.toolLayout->markers)
       toolFaceCards_.push_back(makeCard(script_.family, m.id, 0));
+  if (cv::countNonZero(script_.camera.distortion) > 0) {
+    // Each frame pixel's ray, undistorted: the scene is drawn through a pinhole and then
+    // resampled there, so the frame shows what the lens shows.
+    const cv::Size size = script_.size;
+    std::vector<cv::Point2f> pixels;
+    pixels.reserve(std::size_t(size.area()));
+    for (int y = 0; y < size.height; ++y)
+      for (int x = 0; x < size.width; ++x) pixels.emplace_back(float(x), float(y));
+    std::vector<cv::Point2f> pinhole;
+    cv::undistortPoints(
+        pixels, pinhole, cv::Mat(script_.camera.K), script_.camera.distortion, cv::noArray(),
+        cv::Mat(script_.camera.K),
+        cv::TermCriteria(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, 40, 1e-6));
+    distortMapX_.create(size, CV_32F);
+    distortMapY_.create(size, CV_32F);
+    for (int y = 0; y < size.height; ++y)
+      for (int x = 0; x < size.width; ++x) {
+        const cv::Point2f& p = pinhole[std::size_t(y) * std::size_t(size.width) + std::size_t(x)];
+        distortMapX_.at<float>(y, x) = p.x;
+        distortMapY_.at<float>(y, x) = p.y;
+      }
+  }
 }
 
 SynthKey SynthRenderer::keyAt(double f) const {
@@ -141,6 +164,8 @@ SynthKey SynthRenderer::keyAt(double f) const {
   k.camElevationDeg = mix(a.camElevationDeg, b.camElevationDeg);
   k.camAzimuthDeg = mix(a.camAzimuthDeg, b.camAzimuthDeg);
   k.camRollDeg = mix(a.camRollDeg, b.camRollDeg);
+  k.camPanDeg = mix(a.camPanDeg, b.camPanDeg);
+  k.camTiltDeg = mix(a.camTiltDeg, b.camTiltDeg);
   k.tipLatDeg = mix(a.tipLatDeg, b.tipLatDeg);
   k.tipLonDeg = mix(a.tipLonDeg, b.tipLonDeg);
   k.tipHeightMm = mix(a.tipHeightMm, b.tipHeightMm);
@@ -172,6 +197,11 @@ void SynthRenderer::poses(const SynthKey& k, Pose& camera, Pose& tool) const {
   camera.R.row(0) = x.transpose();
   camera.R.row(1) = y.transpose();
   camera.R.row(2) = z.transpose();
+  const Eigen::Matrix3d aim =
+      (Eigen::AngleAxisd(-k.camTiltDeg * kDeg, Eigen::Vector3d::UnitX()) *
+       Eigen::AngleAxisd(k.camPanDeg * kDeg, Eigen::Vector3d::UnitY()))
+          .toRotationMatrix();
+  camera.R = aim * camera.R;
   camera.t = -(camera.R * C);
 
   // Tool: the tip on its spot; the stick (tip -> marker) across the line of sight, pointing
@@ -396,6 +426,11 @@ cv::Mat SynthRenderer::render(int frame) const {
                int(std::lround(o.discRadius * 16)), cv::Scalar(110, 140, 190), cv::FILLED,
                cv::LINE_AA, 4);
 
+  if (!distortMapX_.empty()) {
+    cv::Mat lens;
+    cv::remap(img, lens, distortMapX_, distortMapY_, cv::INTER_LINEAR, cv::BORDER_REPLICATE);
+    img = lens;
+  }
   cv::Mat f;
   img.convertTo(f, CV_32F, k.gain);
   if (k.blur > 0.05) cv::GaussianBlur(f, f, cv::Size(0, 0), k.blur);

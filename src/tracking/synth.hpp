@@ -55,6 +55,9 @@ namespace ps::tracking {
 struct SynthKey {
   double frame = 0;
   double camDistance = 0.6, camElevationDeg = 50, camAzimuthDeg = -90, camRollDeg = 0;
+  // The camera turned away from the planet about its own axes (right, then down): the scene
+  // off the image's centre, where a lens distorts most.
+  double camPanDeg = 0, camTiltDeg = 0;
   double tipLatDeg = 40, tipLonDeg = -90, tipHeightMm = 20;
   double toolTiltDeg = 20, toolTurnDeg = 0;
   double blur = 0.4, noise = 1.0, gain = 1.0, occlusion = 0.0;
@@ -158,6 +161,8 @@ class SynthRenderer {
   cv::Mat planetCard_, toolCard_;
   std::vector<cv::Mat> boardCards_, toolFaceCards_;
   int planetMargin_ = 2, toolMargin_ = 2;
+  // With lens distortion: for each pixel of the frame, where the pinhole image has it.
+  cv::Mat distortMapX_, distortMapY_;
 };
 
 }  // namespace ps::tracking

@@ -42,6 +42,8 @@ constexpr KeyField kKeyFields[] = {{"camera", "distance", &SynthKey::camDistance
                                    {"camera", "elevation", &SynthKey::camElevationDeg},
                                    {"camera", "azimuth", &SynthKey::camAzimuthDeg},
                                    {"camera", "roll", &SynthKey::camRollDeg},
+                                   {"camera", "pan", &SynthKey::camPanDeg},
+                                   {"camera", "tilt", &SynthKey::camTiltDeg},
                                    {"tip", "lat", &SynthKey::tipLatDeg},
                                    {"tip", "lon", &SynthKey::tipLonDeg},
                                    {"tip", "height_mm", &SynthKey::tipHeightMm},
@@ -105,6 +107,8 @@ void SynthScript::validate() const {
     if (!(k.camDistance > 0.05)) fail(at + "camera distance must be > 0.05 m");
     if (!(k.camElevationDeg > 0 && k.camElevationDeg < 90))
       fail(at + "camera elevation must be in (0, 90)");
+    if (!(std::abs(k.camPanDeg) < 80 && std::abs(k.camTiltDeg) < 80))
+      fail(at + "camera pan and tilt must be within +-80 degrees");
     if (!(k.tipLatDeg >= -90 && k.tipLatDeg <= 90)) fail(at + "tip latitude must be in [-90, 90]");
     if (!(k.toolTiltDeg >= -80 && k.toolTiltDeg <= 80)) fail(at + "tool tilt must be in [-80, 80]");
     if (!(k.blur >= 0 && k.blur < 20)) fail(at + "blur must be in [0, 20)");
@@ -139,6 +143,18 @@ SynthScript parseSynthScript(const nlohmann::json& j, const std::string& source,
                                             get(c, "cx", s.camera.K(0, 2), "camera"),
                                             get(c, "cy", s.camera.K(1, 2), "camera"), s.size);
       s.camera.source = "synthetic camera";
+      if (c.contains("distortion")) {
+        // OpenCV's k1, k2, p1, p2, k3: the recording shows the lens a real webcam has.
+        const auto& d = c["distortion"];
+        if (!d.is_array() || d.size() != 5)
+          throw core::InputError("camera.distortion must be [k1, k2, p1, p2, k3]");
+        for (int i = 0; i < 5; ++i) {
+          if (!d[std::size_t(i)].is_number())
+            throw core::InputError("camera.distortion[" + std::to_string(i) + "] is not a number");
+          s.camera.distortion.at<double>(0, i) = d[std::size_t(i)].get<double>();
+        }
+        s.camera.validate();
+      }
     }
     if (j.contains("planet")) {
       const auto& p = j["planet"];
@@ -221,6 +237,12 @@ nlohmann::json toJson(const SynthScript& s) {
         {"tip", {s.tipOffset.x(), s.tipOffset.y(), s.tipOffset.z()}}}},
       {"exposure", s.exposure},
       {"motion_samples", s.motionSamples}};
+  if (cv::countNonZero(s.camera.distortion) > 0) {
+    std::vector<double> d(5, 0.0);
+    for (int i = 0; i < std::min(5, int(s.camera.distortion.total())); ++i)
+      d[std::size_t(i)] = s.camera.distortion.at<double>(i);
+    j["camera"]["distortion"] = d;
+  }
   if (s.board) j["board"] = toJson(*s.board);
   if (s.toolLayout) j["tool_layout"] = toJson(*s.toolLayout);
   nlohmann::json keys = nlohmann::json::array();
