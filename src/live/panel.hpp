@@ -24,7 +24,10 @@ struct PanelSettings {
   bool facets = false;  // shade each triangle from its geometry instead of per pixel
   bool showHelp = false, showOverview = true;
   float spinDeg = 0, tiltDeg = 0;  // the planet turned by hand on its marker
-  float planetSizeCm = 6;          // the planet's radius on its marker, scaled by hand
+  // Where the light comes from, in the planet's frame (longitude, latitude of the sub-solar
+  // point): 45, 35 is the renderer's default sun (1, 1, 1).
+  float sunLonDeg = 45, sunLatDeg = 35.26f;
+  float planetSizeCm = 6;  // the planet's radius on its marker, scaled by hand
   bool operator==(const PanelSettings&) const = default;
 };
 

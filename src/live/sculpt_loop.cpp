@@ -201,6 +201,8 @@ class SculptLoop {
     render::RenderStyle style;
     style.wireframe = panel_.wireframe;
     style.shading = panel_.facets ? render::Shading::kFaceted : render::Shading::kPerPixel;
+    const double lon = panel_.sunLonDeg * M_PI / 180, lat = panel_.sunLatDeg * M_PI / 180;
+    style.sun = {std::cos(lat) * std::cos(lon), std::cos(lat) * std::sin(lon), std::sin(lat)};
     style.contours = panel_.contours;
     std::optional<terrain::Camera> cam;
     const terrain::Mesh* mesh = &empty_;
