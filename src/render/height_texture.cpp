@@ -39,7 +39,10 @@ bool HeightTexture::sync(const terrain::Terrain& planet, std::string& why) {
       r.forEachColumnRange(planet.grid(),
                            [&](int u0, int u1) { sendRows(planet, u0, u1, r.vBegin, r.vEnd); });
     revision_ = planet.revision();
-    return glGetError() == GL_NO_ERROR || (why = "height texture update failed", false);
+    if (glGetError() == GL_NO_ERROR) return true;
+    release();
+    why = "the height texture could not be updated";
+    return false;
   }
   GLint maxSize = 0;
   glGetIntegerv(GL_MAX_TEXTURE_SIZE, &maxSize);
