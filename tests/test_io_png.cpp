@@ -3,10 +3,12 @@
 // refused with libpng's reason, never read as something else.
 #include <gtest/gtest.h>
 
+#include <sys/resource.h>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <random>
+#include <vector>
 
 #include "io/png_codec.hpp"
 
@@ -90,6 +92,26 @@ TEST(IoPng, DamagedStreamsAreRefusedWithTheReason) {
         io::PngError)
         << n << " bytes";
   }
+}
+
+// A chunk that declares more bytes than the stream holds is refused without allocating them
+// (libpng allocates a chunk's declared length before reading it: 2 GB for a 300-byte stream).
+TEST(IoPng, AChunkLongerThanTheStreamAllocatesNothingLikeIt) {
+  const auto png = io::encodePng(randomImage(CV_16UC1, 4), {});
+  std::vector<unsigned char> bad(png.begin(), png.begin() + 33);  // signature + IHDR
+  const unsigned char chunk[] = {0x7f, 0xff, 0xff, 0xf0, 't', 'E', 'X', 't'};
+  bad.insert(bad.end(), std::begin(chunk), std::end(chunk));
+  bad.resize(bad.size() + 200, 'a');
+  rusage before{}, after{};
+  getrusage(RUSAGE_SELF, &before);
+  EXPECT_THROW(
+      {
+        io::PngReader r(bad);
+        (void)r.pixels();
+      },
+      io::PngError);
+  getrusage(RUSAGE_SELF, &after);
+  EXPECT_LT(after.ru_maxrss - before.ru_maxrss, 200 * 1024) << "KiB more resident at the peak";
 }
 
 TEST(IoPng, BadRequestsAreRefused) {
