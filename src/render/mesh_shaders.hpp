@@ -64,13 +64,19 @@ void main() {
   vec3 n;
   float h;
   if (perPixel == 1) {
-    h = heightAt(grid);
-    // Differences on the full-resolution grid (one step forward: three fetches a pixel where
-    // central ones take five, for a normal half a texel off), turned into the surface gradient
-    // with the chart's tangents (orthogonal on every chart here); where a tangent vanishes (a
-    // pole) its term does too.
-    float dhu = heightAt(grid + vec2(1.0, 0.0)) - h;
-    float dhv = heightAt(grid + vec2(0.0, 1.0)) - h;
+    // Where a pixel spans many texels (a small planet far away), one sample per pixel would
+    // pick texels at random: the slope is taken over the pixel's footprint and the height is
+    // the mean of two samples across it, so the picture stays still as the mesh changes (at
+    // four fetches a pixel, one more than a magnified texture needs).
+    vec2 footprint = fwidth(grid);
+    float step = max(1.0, 0.5 * max(footprint.x, footprint.y));
+    float h0 = heightAt(grid);
+    h = step > 1.0 ? 0.5 * (h0 + heightAt(grid + 0.5 * footprint)) : h0;
+    // Differences on the grid (one step forward, for a normal half a step off), turned into the
+    // surface gradient with the chart's tangents (orthogonal on every chart here); where a
+    // tangent vanishes (a pole) its term does too.
+    float dhu = (heightAt(grid + vec2(step, 0.0)) - h0) / step;
+    float dhv = (heightAt(grid + vec2(0.0, step)) - h0) / step;
     float uu = dot(tangentU, tangentU), vv = dot(tangentV, tangentV);
     vec3 gradient = (uu > 1e-6 ? dhu / uu * tangentU : vec3(0.0)) +
                     (vv > 1e-6 ? dhv / vv * tangentV : vec3(0.0));
