@@ -29,6 +29,7 @@
 #include "bench/bench_util.hpp"
 #include "bench/demo_options.hpp"
 #include "bench/frame_skips.hpp"
+#include "bench/gl_context.hpp"
 #include "render/egl_context.hpp"
 #include "render/planet_renderer.hpp"
 #include "render/projection.hpp"
@@ -87,18 +88,8 @@ void benchFrame(const BenchOptions& options, std::ostream& out) {
                             {"load_avg_before", loadAverage()}};
   const fs::path video = ps::app::sourceDir() / "data" / "demo.mkv";
   const fs::path calibPath = ps::app::sourceDir() / "calib" / "synthetic-640x480.yml";
-  std::unique_ptr<render::EglContext> context;
-  try {
-    context = std::make_unique<render::EglContext>();
-  } catch (const std::exception& e) {
-    out << nlohmann::json{{"bench", "frame"},
-                          {"skipped", true},
-                          {"reason", std::string("no headless OpenGL: ") + e.what()},
-                          {"machine", machine}}
-               .dump()
-        << std::endl;
-    return;
-  }
+  const auto context = glContextOrSkip("frame", out, {{"machine", machine}});
+  if (!context) return;
   if (!fs::exists(video) || !fs::exists(calibPath)) {
     out << nlohmann::json{{"bench", "frame"},
                           {"skipped", true},
@@ -193,8 +184,7 @@ void benchCase(const BenchOptions& options, std::ostream& out, nlohmann::json ma
       }
     } else {
       const auto t0 = std::chrono::steady_clock::now();
-      renderer.renderAR(image, *planet, empty, lastView ? *lastView : placeholder,
-                        style);
+      renderer.renderAR(image, *planet, empty, lastView ? *lastView : placeholder, style);
       renderMs = ms(t0);
     }
     noUpload += !renderer.stats().uploadedThisFrame;
@@ -229,7 +219,8 @@ void benchCase(const BenchOptions& options, std::ostream& out, nlohmann::json ma
                         {"size", std::to_string(W) + "x" + std::to_string(H)},
                         {"grid", planet->grid().side()},
                         {"dist_max_px", kDistMaxPx},
-                        {"shading", shading == render::Shading::kPerPixel ? "per_pixel" : "faceted"},
+                        {"shading",
+                         shading == render::Shading::kPerPixel ? "per_pixel" : "faceted"},
                         {"triangle_budget", kBudget},
                         {"frames", frames},
                         {"planet_frames", planetFrames},

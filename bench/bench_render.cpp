@@ -14,6 +14,7 @@
 #include "app/default_planet.hpp"
 #include "bench/bench.hpp"
 #include "bench/bench_util.hpp"
+#include "bench/gl_context.hpp"
 #include "render/egl_context.hpp"
 #include "render/image_compare.hpp"
 #include "render/planet_renderer.hpp"
@@ -45,17 +46,8 @@ std::vector<View> views(double R, int w, int h) {
 }  // namespace
 
 void benchRender(const BenchOptions& o, std::ostream& out) {
-  std::unique_ptr<render::EglContext> gl;
-  try {
-    gl = std::make_unique<render::EglContext>();
-  } catch (const std::exception& e) {
-    out << nlohmann::json{{"bench", "render"},
-                          {"skipped", true},
-                          {"reason", std::string("no headless OpenGL: ") + e.what()}}
-               .dump()
-        << std::endl;
-    return;
-  }
+  const auto gl = glContextOrSkip("render", out);
+  if (!gl) return;
   const int level = o.quick ? 10 : 12;
   const auto planet = app::makeDefaultPlanet(level, 1);
   const double R = planet->chart().radius();

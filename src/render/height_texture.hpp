@@ -26,7 +26,7 @@ class HeightTexture {
   // textures, out of memory): the caller draws without it.
   bool sync(const terrain::Terrain& planet, std::string& why);
 
-  unsigned texture() const { return texture_; }
+  unsigned texture() const { return texture_; }  // 0 after a failed sync
   int side() const { return side_; }
   std::size_t bytes() const { return std::size_t(side_) * std::size_t(side_) * sizeof(float); }
   std::size_t lastUploadBytes() const { return lastUpload_; }  // sent by the last sync

@@ -124,8 +124,7 @@ struct PlanetRenderer::Gl {
   GLuint meshVao = 0, positionBuffer = 0, heightBuffer = 0, indexBuffer = 0;
   GLuint gridBuffer = 0, frameBuffer = 0;                     // per vertex: (u, v); up, d/du, d/dv
   ShadowedBuffer positions, heights, indices, grids, frames;  // what the mesh buffers hold
-  HeightTexture heightTexture;
-  bool heightTextureOk = false;
+  HeightTexture heightTexture;  // holds a texture only while it is good to shade from
   GLuint lineVao = 0, lineBuffer = 0, emptyVao = 0;
   GLuint rampTexture = 0, imageTexture = 0;
   GLuint framebuffer = 0, colourBuffer = 0, depthBuffer = 0;
@@ -300,10 +299,10 @@ void PlanetRenderer::syncHeights(const terrain::Terrain& planet, const RenderSty
   if (style.shading != Shading::kPerPixel) return;
   if (g.heightTexture.side() == 0 && failedSide_ == planet.grid().side()) return;  // said once
   std::string why;
-  g.heightTextureOk = g.heightTexture.sync(planet, why);
+  const bool ok = g.heightTexture.sync(planet, why);
   stats_.heightUploadBytes = g.heightTexture.lastUploadBytes();
-  stats_.heightTextureBytes = g.heightTextureOk ? g.heightTexture.bytes() : 0;
-  if (!g.heightTextureOk) {
+  stats_.heightTextureBytes = ok ? g.heightTexture.bytes() : 0;
+  if (!ok) {
     // Facets rather than a black planet, and the reason said once.
     failedSide_ = planet.grid().side();
     stats_.shadingNote = "per-pixel shading off (" + why + "): drawing facets";
@@ -335,7 +334,7 @@ void PlanetRenderer::drawMesh(const terrain::Mesh& mesh, const terrain::Camera& 
   glActiveTexture(GL_TEXTURE0);
   glBindTexture(GL_TEXTURE_1D, g.rampTexture);
   glUniform1i(glGetUniformLocation(g.meshProgram, "ramp"), 0);
-  const bool perPixel = style.shading == Shading::kPerPixel && g.heightTextureOk;
+  const bool perPixel = style.shading == Shading::kPerPixel && g.heightTexture.texture() != 0;
   glUniform1i(glGetUniformLocation(g.meshProgram, "perPixel"), perPixel ? 1 : 0);
   glActiveTexture(GL_TEXTURE1);
   glBindTexture(GL_TEXTURE_2D, perPixel ? g.heightTexture.texture() : 0);

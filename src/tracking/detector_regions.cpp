@@ -114,15 +114,25 @@ class RegionDetector final : public Detector {
       return x.id == d.id && cv::norm(centre(x) - centre(d)) < 4.0;
     });
   }
-  cv::Rect box(const Detection& d, const cv::Rect& frame) const {
+  // The corners' bounding box in the image (x0, y0, x1, y1).
+  static cv::Vec4d extent(const Detection& d) {
     double x0 = 1e18, y0 = 1e18, x1 = -1e18, y1 = -1e18;
     for (const auto& c : d.corners) {
       x0 = std::min(x0, c.x), x1 = std::max(x1, c.x);
       y0 = std::min(y0, c.y), y1 = std::max(y1, c.y);
     }
-    const double m = config_.regionMargin * std::max(x1 - x0, y1 - y0) + 8.0;
-    const cv::Rect r(cv::Point(int(std::floor(x0 - m)), int(std::floor(y0 - m))),
-                     cv::Point(int(std::ceil(x1 + m)) + 1, int(std::ceil(y1 + m)) + 1));
+    return {x0, y0, x1, y1};
+  }
+  // The marker's larger extent in the image (px).
+  static double side(const Detection& d) {
+    const cv::Vec4d e = extent(d);
+    return std::max(e[2] - e[0], e[3] - e[1]);
+  }
+  cv::Rect box(const Detection& d, const cv::Rect& frame) const {
+    const cv::Vec4d e = extent(d);
+    const double m = config_.regionMargin * side(d) + 8.0;
+    const cv::Rect r(cv::Point(int(std::floor(e[0] - m)), int(std::floor(e[1] - m))),
+                     cv::Point(int(std::ceil(e[2] + m)) + 1, int(std::ceil(e[3] + m)) + 1));
     return r & frame;
   }
   // A box to search and how many markers were expected in it.
@@ -130,14 +140,6 @@ class RegionDetector final : public Detector {
     cv::Rect rect;
     int markers = 1;
   };
-  static double side(const Detection& d) {
-    double x0 = 1e18, y0 = 1e18, x1 = -1e18, y1 = -1e18;
-    for (const auto& c : d.corners) {
-      x0 = std::min(x0, c.x), x1 = std::max(x1, c.x);
-      y0 = std::min(y0, c.y), y1 = std::max(y1, c.y);
-    }
-    return std::max(x1 - x0, y1 - y0);
-  }
   static std::vector<Region> mergeBoxes(std::vector<Region> boxes) {
     bool merged = true;
     while (merged) {
