@@ -8,6 +8,7 @@ PACKAGES=(
   libeigen3-dev libgtest-dev libbenchmark-dev
   libcli11-dev nlohmann-json3-dev libfmt-dev
   libopencv-dev libopencv-contrib-dev libapriltag-dev libtiff-dev libgdal-dev gdal-bin libpng-dev zlib1g-dev libcairo2-dev libyaml-dev libxml2-dev
+  libcgal-dev
   libegl-dev libopengl-dev libgl-dev libegl-mesa0 libgl1-mesa-dri
   libglfw3-dev libimgui-dev libstb-dev xvfb xauth
   clang libclang-rt-14-dev ccache python3

@@ -1,0 +1,66 @@
+#include "tin/sample_field.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "core/input_error.hpp"
+
+namespace ps::tin {
+
+double SampleField::heightAt(double x, double y) const {
+  const double cx = std::clamp(x, 0.0, double(width - 1)),
+               cy = std::clamp(y, 0.0, double(height - 1));
+  const int i0 = std::min(int(cx), std::max(width - 2, 0)),
+            j0 = std::min(int(cy), std::max(height - 2, 0));
+  const int i1 = std::min(i0 + 1, width - 1), j1 = std::min(j0 + 1, height - 1);
+  const double fx = cx - i0, fy = cy - j0;
+  const double south = (1 - fx) * at(i0, j0) + fx * at(i1, j0);
+  const double north = (1 - fx) * at(i0, j1) + fx * at(i1, j1);
+  return (1 - fy) * south + fy * north;
+}
+
+Eigen::Vector3d SampleField::positionAt(double x, double y, double h) const {
+  if (metric == ErrorMetric::kChart3d) return chart->positionAt(x, y, h);
+  return {x * dx, y * dy, h};
+}
+
+std::uint64_t SampleField::weldKey(int i, int j) const {
+  if (metric == ErrorMetric::kChart3d) {
+    const int m = width - 1;
+    if (chart->hasPoleRows() && (j == 0 || j == m)) i = 0;
+    if (chart->wrapsU() && i == m) i = 0;
+  }
+  return index(i, j);
+}
+
+void SampleField::validate(const std::string& what) const {
+  if (width < 2 || height < 2)
+    throw core::InputError(what + ": a TIN needs at least 2 x 2 samples (got " +
+                           std::to_string(width) + " x " + std::to_string(height) + ")");
+  const std::size_t n = std::size_t(width) * std::size_t(height);
+  if (heights.size() != n)
+    throw core::InputError(what + ": " + std::to_string(heights.size()) + " heights for " +
+                           std::to_string(width) + " x " + std::to_string(height) + " samples");
+  if (!perSampleTolerance.empty() && perSampleTolerance.size() != n)
+    throw core::InputError(what + ": the control map has " +
+                           std::to_string(perSampleTolerance.size()) + " values for " +
+                           std::to_string(n) + " samples");
+  if (perSampleTolerance.empty() && !(std::isfinite(uniformTolerance) && uniformTolerance > 0))
+    throw core::InputError(what + ": the maximum error " + core::exactNumber(uniformTolerance) +
+                           " m must be positive and finite");
+  for (const float t : perSampleTolerance)
+    if (!(std::isfinite(t) && t > 0))
+      throw core::InputError(what + ": every sample's allowed error must be positive and finite (" +
+                             core::exactNumber(t) + " m found)");
+  if (metric == ErrorMetric::kChart3d) {
+    if (!chart) throw core::InputError(what + ": the 3D error needs the planet's chart");
+    if (chart->grid().side() != width || width != height)
+      throw core::InputError(what + ": the samples are not the chart's " +
+                             std::to_string(chart->grid().side()) + "^2 grid");
+  } else if (!(std::isfinite(dx) && dx > 0 && std::isfinite(dy) && dy > 0)) {
+    throw core::InputError(what + ": sample spacing " + core::exactNumber(dx) + " x " +
+                           core::exactNumber(dy) + " m must be positive and finite");
+  }
+}
+
+}  // namespace ps::tin

@@ -1,0 +1,272 @@
+#include "tin/tin_mesher.hpp"
+
+#include <CGAL/Delaunay_mesher_2.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <numbers>
+#include <queue>
+#include <set>
+#include <stdexcept>
+
+#include "core/input_error.hpp"
+#include "tin/cdt.hpp"
+#include "tin/triangle_error.hpp"
+
+namespace ps::tin {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double msSince(Clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+}
+
+double vertexHeight(const SampleField& field, const VertexHandle& v) {
+  double& h = v->info().height;
+  if (std::isnan(h)) h = field.heightAt(v->point().x(), v->point().y());
+  return h;
+}
+
+LatticeTriangle latticeTriangle(const SampleField& field, const FaceHandle& f) {
+  LatticeTriangle t;
+  for (int k = 0; k < 3; ++k) {
+    const Point& p = f->vertex(k)->point();
+    t.xy[std::size_t(k)] = {p.x(), p.y()};
+    t.h[std::size_t(k)] = vertexHeight(field, f->vertex(k));
+  }
+  return t;
+}
+
+// sin^2 of the triangle's smallest angle (as CGAL's Delaunay_mesh_criteria_2 computes it).
+double smallestAngleSine2(const Point& a, const Point& b, const Point& c) {
+  const double area2 = (b.x() - a.x()) * (c.y() - a.y()) - (b.y() - a.y()) * (c.x() - a.x());
+  const double la = CGAL::squared_distance(b, c), lb = CGAL::squared_distance(c, a),
+               lc = CGAL::squared_distance(a, b);
+  const double shortest = std::min({la, lb, lc});
+  const double product = la * lb * lc / shortest;  // the two longer sides' squared lengths
+  return product > 0 ? area2 * area2 / product : 0.0;
+}
+
+double angleDegFromSine2(double s2) {
+  return std::asin(std::sqrt(std::clamp(s2, 0.0, 1.0))) * 180.0 / std::numbers::pi;
+}
+
+// Greedy insertion: a max-heap of triangles over tolerance, each with its worst sample. An
+// entry names its triangle by its three vertices (handles of vertices stay valid; faces do
+// not), so an entry whose triangle was split since is recognised and dropped.
+class GreedyInserter {
+ public:
+  GreedyInserter(Cdt& cdt, const SampleField& field) : cdt_(cdt), field_(field) {}
+
+  void measureAll() {
+    for (auto f = cdt_.finite_faces_begin(); f != cdt_.finite_faces_end(); ++f) measure(f);
+  }
+
+  void run() {
+    const int m = field_.width - 1;
+    const bool twins = field_.metric == ErrorMetric::kChart3d && field_.chart->wrapsU();
+    while (!queue_.empty()) {
+      const Entry e = queue_.top();
+      queue_.pop();
+      FaceHandle f;
+      if (!cdt_.is_face(e.a, e.b, e.c, f)) continue;
+      const int i = int(e.sample % std::uint64_t(field_.width));
+      const int j = int(e.sample / std::uint64_t(field_.width));
+      insert(i, j, f);
+      if (twins && (i == 0 || i == m)) insert(m - i, j, FaceHandle());
+    }
+  }
+
+ private:
+  struct Entry {
+    double ratio;
+    std::uint64_t sample;
+    VertexHandle a, b, c;
+    bool operator<(const Entry& o) const { return ratio < o.ratio; }
+  };
+
+  void measure(const FaceHandle& f) {
+    const WorstSample w = worstSample(field_, latticeTriangle(field_, f));
+    if (w.ratio > 1.0)
+      queue_.push({w.ratio, std::uint64_t(w.sample), f->vertex(0), f->vertex(1), f->vertex(2)});
+  }
+
+  void insert(int i, int j, const FaceHandle& hint) {
+    const VertexHandle v = cdt_.insert(Point(i, j), hint);
+    v->info().height = field_.at(i, j);
+    auto f = cdt_.incident_faces(v), done = f;
+    do {
+      if (!cdt_.is_infinite(f)) measure(f);
+    } while (++f != done);
+  }
+
+  Cdt& cdt_;
+  const SampleField& field_;
+  std::priority_queue<Entry> queue_;
+};
+
+// Delaunay_mesher_2's criterion: the angle (above minArea) and the error on every sample.
+class QualityCriteria {
+ public:
+  struct Quality {
+    double sine2 = 1, ratio = 0;
+    bool small = false;
+    // The mesher refines the lowest first: errors over tolerance (largest first), then angles.
+    double key() const { return ratio > 1 ? -ratio : sine2; }
+    bool operator<(const Quality& o) const { return key() < o.key(); }
+  };
+
+  QualityCriteria(const SampleField& field, double sine2Bound, double minArea)
+      : field_(&field), bound_(sine2Bound), minArea_(minArea) {}
+
+  class Is_bad {
+   public:
+    Is_bad(const QualityCriteria& c) : c_(c) {}
+    CGAL::Mesh_2::Face_badness operator()(const Quality& q) const {
+      if (q.ratio > 1.0) return CGAL::Mesh_2::IMPERATIVELY_BAD;
+      if (!q.small && q.sine2 < c_.bound_) return CGAL::Mesh_2::BAD;
+      return CGAL::Mesh_2::NOT_BAD;
+    }
+    CGAL::Mesh_2::Face_badness operator()(const FaceHandle& f, Quality& q) const {
+      const Point &a = f->vertex(0)->point(), &b = f->vertex(1)->point(),
+                  &c = f->vertex(2)->point();
+      q.sine2 = smallestAngleSine2(a, b, c);
+      q.small = std::abs(CGAL::area(a, b, c)) < c_.minArea_;
+      q.ratio = worstSample(*c_.field_, latticeTriangle(*c_.field_, f)).ratio;
+      return (*this)(q);
+    }
+
+   private:
+    const QualityCriteria& c_;
+  };
+  Is_bad is_bad_object() const { return Is_bad(*this); }
+
+ private:
+  const SampleField* field_;
+  double bound_, minArea_;
+};
+
+using Mesher = CGAL::Delaunay_mesher_2<Cdt, QualityCriteria>;
+
+// Refines until the criteria hold or `budget` points were added; returns the points added.
+std::size_t refine(Cdt& cdt, const QualityCriteria& criteria, std::size_t budget, bool& exhausted) {
+  const std::size_t before = cdt.number_of_vertices();
+  Mesher mesher(cdt, criteria);
+  mesher.init();
+  exhausted = false;
+  while (!mesher.is_refinement_done()) {
+    if (cdt.number_of_vertices() - before >= budget) {
+      exhausted = true;
+      break;
+    }
+    mesher.step_by_step_refine_mesh();
+  }
+  return cdt.number_of_vertices() - before;
+}
+
+// The lattice's border as constraints (the quality refinement must not leave the rectangle).
+void constrainBorder(Cdt& cdt, const std::array<VertexHandle, 4>& corner) {
+  for (int k = 0; k < 4; ++k)
+    cdt.insert_constraint(corner[std::size_t(k)], corner[std::size_t((k + 1) % 4)]);
+}
+
+// Seam twins for vertices the refinement put on one side of a planet's seam only. Returns how
+// many were added.
+std::size_t addMissingSeamTwins(Cdt& cdt, const SampleField& field) {
+  const double m = field.width - 1;
+  std::set<double> left, right;
+  for (auto v = cdt.finite_vertices_begin(); v != cdt.finite_vertices_end(); ++v) {
+    if (v->point().x() == 0) left.insert(v->point().y());
+    if (v->point().x() == m) right.insert(v->point().y());
+  }
+  std::size_t added = 0;
+  for (const double y : left)
+    if (!right.count(y)) cdt.insert(Point(m, y)), ++added;
+  for (const double y : right)
+    if (!left.count(y)) cdt.insert(Point(0, y)), ++added;
+  return added;
+}
+
+}  // namespace
+
+Tin buildTin(const SampleField& field, const TinOptions& o, TinReport* reportOut) {
+  field.validate("TIN");
+  if (!(std::isfinite(o.minAngleDeg) && o.minAngleDeg >= 0 && o.minAngleDeg <= kMaxAngleDeg))
+    throw core::InputError("minimum angle " + core::exactNumber(o.minAngleDeg) +
+                           " degrees is outside 0 .. " + core::exactNumber(kMaxAngleDeg) +
+                           " (Delaunay refinement is proven to end up to " +
+                           core::exactNumber(kGuaranteedAngleDeg) + ")");
+  if (!(std::isfinite(o.minArea) && o.minArea >= 0))
+    throw core::InputError("minimum area " + core::exactNumber(o.minArea) +
+                           " must be zero or positive");
+  TinReport report;
+  report.requestedAngleDeg = o.minAngleDeg;
+
+  Cdt cdt;
+  std::array<VertexHandle, 4> corner;
+  const std::array<std::array<int, 2>, 4> ij = {
+      {{0, 0}, {field.width - 1, 0}, {field.width - 1, field.height - 1}, {0, field.height - 1}}};
+  for (std::size_t k = 0; k < 4; ++k) {
+    corner[k] = cdt.insert(Point(ij[k][0], ij[k][1]));
+    corner[k]->info().height = field.at(ij[k][0], ij[k][1]);
+  }
+
+  auto t0 = Clock::now();
+  GreedyInserter greedy(cdt, field);
+  greedy.measureAll();
+  greedy.run();
+  report.greedyMs = msSince(t0);
+  report.greedyVertices = cdt.number_of_vertices();
+
+  if (o.minAngleDeg > 0) {
+    t0 = Clock::now();
+    constrainBorder(cdt, corner);
+    const double s = std::sin(o.minAngleDeg * std::numbers::pi / 180.0);
+    const std::size_t budget =
+        o.steinerBudget ? o.steinerBudget : 4 * report.greedyVertices + 10000;
+    const bool planetSeam = field.metric == ErrorMetric::kChart3d && field.chart->wrapsU();
+    for (int round = 0;; ++round) {
+      bool exhausted = false;
+      refine(cdt, QualityCriteria(field, s * s, o.minArea), budget, exhausted);
+      if (exhausted) {
+        // Above the proven bound the angle may be out of reach: keep the error, report the angle.
+        report.budgetExhausted = true;
+        bool never = false;
+        refine(cdt, QualityCriteria(field, 0.0, o.minArea), std::size_t(-1), never);
+      }
+      if (!planetSeam || addMissingSeamTwins(cdt, field) == 0) break;
+      if (round == 16)
+        throw std::runtime_error("TIN: the seam's two sides kept differing after 16 refinements");
+    }
+    report.steinerVertices = cdt.number_of_vertices() - report.greedyVertices;
+    report.refineMs = msSince(t0);
+  }
+
+  Tin tin;
+  tin.xy.reserve(cdt.number_of_vertices());
+  tin.h.reserve(cdt.number_of_vertices());
+  std::uint32_t next = 0;
+  for (auto v = cdt.finite_vertices_begin(); v != cdt.finite_vertices_end(); ++v) {
+    v->info().index = next++;
+    tin.xy.emplace_back(v->point().x(), v->point().y());
+    tin.h.push_back(vertexHeight(field, v));
+  }
+  double smallest = 1.0;
+  tin.triangles.reserve(cdt.number_of_faces());
+  for (auto f = cdt.finite_faces_begin(); f != cdt.finite_faces_end(); ++f) {
+    tin.triangles.push_back(
+        {f->vertex(0)->info().index, f->vertex(1)->info().index, f->vertex(2)->info().index});
+    smallest = std::min(smallest, smallestAngleSine2(f->vertex(0)->point(), f->vertex(1)->point(),
+                                                     f->vertex(2)->point()));
+  }
+  report.vertices = tin.xy.size();
+  report.triangles = tin.triangles.size();
+  report.smallestAngleDeg = angleDegFromSine2(smallest);
+  report.angleMet = report.smallestAngleDeg + 1e-6 >= o.minAngleDeg;
+  if (reportOut) *reportOut = report;
+  return tin;
+}
+
+}  // namespace ps::tin
