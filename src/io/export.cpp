@@ -9,6 +9,7 @@
 #include "io/heightmap_export.hpp"
 #include "io/mesh_export.hpp"
 #include "io/planet_file.hpp"
+#include "io/tin_export.hpp"
 
 namespace ps::io {
 
@@ -24,6 +25,21 @@ constexpr core::NameTable<ExportFormat, 9> kExportFormats{"export format",
                                                             {ExportFormat::kPng16, "png"},
                                                             {ExportFormat::kTiff32, "tif"},
                                                             {ExportFormat::kRaw32, "f32"}}}};
+
+bool isPlanetFile(const std::filesystem::path& path) {
+  std::vector<unsigned char> head(8, 0);
+  std::ifstream f(path, std::ios::binary);
+  if (f) f.read(reinterpret_cast<char*>(head.data()), 8);
+  head.resize(std::size_t(std::max<std::streamsize>(0, f.gcount())));
+  return looksLikePlanetFile(head);
+}
+
+MeshFormat meshFormatOf(ExportFormat f) {
+  return f == ExportFormat::kObj   ? MeshFormat::kObj
+         : f == ExportFormat::kPly ? MeshFormat::kPly
+                                   : MeshFormat::kGlb;
+}
+
 }  // namespace
 
 std::string toString(ExportFormat f) {
@@ -65,10 +81,7 @@ nlohmann::json exportTerrain(const terrain::Terrain& t, const std::filesystem::p
     if (!o.maxErrorM) throw core::InputError("a mesh export needs --max-error METRES");
     if (o.width || o.height)
       throw core::InputError("--width/--height apply to heightmaps, not to meshes");
-    const MeshFormat mf = format == ExportFormat::kObj   ? MeshFormat::kObj
-                          : format == ExportFormat::kPly ? MeshFormat::kPly
-                                                         : MeshFormat::kGlb;
-    const MeshExportReport r = exportMesh(t, *o.maxErrorM, mf, out);
+    const MeshExportReport r = exportMesh(t, *o.maxErrorM, meshFormatOf(format), out);
     summary["max_error_m"] = r.requestedErrorM;
     summary["meshed_at_error_m"] = r.meshedErrorM;
     summary["coordinate_rounding_m"] = r.roundingM;
@@ -114,16 +127,36 @@ nlohmann::json exportTerrain(const terrain::Terrain& t, const std::filesystem::p
   return summary;
 }
 
+nlohmann::json exportTinFromFile(const std::filesystem::path& input,
+                                 const ImportOptions& heightmapOptions,
+                                 const std::filesystem::path& out, ExportFormat format,
+                                 const TinExportOptions& options, std::vector<std::string>& notes) {
+  if (!isMeshFormat(format))
+    throw core::InputError("--tin writes a mesh (obj, ply, glb), not " + toString(format));
+  nlohmann::json summary;
+  if (isPlanetFile(input)) {
+    const auto terrain = loadPlanet(input);
+    summary = exportTerrainTin(*terrain, out, meshFormatOf(format), options);
+    summary["chart"] = terrain->chart().name();
+    summary["grid"] = terrain->grid().label();
+  } else {
+    if (heightmapOptions.gridSide > 0)
+      throw core::InputError("--grid resamples; a TIN is meshed on the heightmap's own samples");
+    HeightSamples samples = heightSamples(readHeightImage(input, heightmapOptions.encoding),
+                                          heightmapOptions, input.string());
+    notes = samples.notes;
+    summary = exportSamplesTin(samples, out, meshFormatOf(format), options);
+    summary["chart"] = "flat";
+  }
+  summary["file"] = out.string();
+  summary["format"] = toString(format);
+  return summary;
+}
+
 ExportInput loadExportInput(const std::filesystem::path& path,
                             const ImportOptions& heightmapOptions) {
   ExportInput in;
-  std::vector<unsigned char> head(8, 0);
-  {
-    std::ifstream f(path, std::ios::binary);
-    if (f) f.read(reinterpret_cast<char*>(head.data()), 8);
-    head.resize(std::size_t(std::max<std::streamsize>(0, f.gcount())));
-  }
-  if (looksLikePlanetFile(head)) {
+  if (isPlanetFile(path)) {
     in.terrain = loadPlanet(path);
     in.kind = "planet file";
     return in;

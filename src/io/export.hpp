@@ -42,4 +42,13 @@ struct ExportInput {
 ExportInput loadExportInput(const std::filesystem::path& path,
                             const ImportOptions& heightmapOptions);
 
+// `export --tin`: a planet file (its grid; 3D error on a sphere) or a heightmap's own samples
+// (nothing resampled; vertical error) as a TIN in a mesh format. `notes` receives what the user
+// must be told about the input.
+struct TinExportOptions;
+nlohmann::json exportTinFromFile(const std::filesystem::path& input,
+                                 const ImportOptions& heightmapOptions,
+                                 const std::filesystem::path& out, ExportFormat format,
+                                 const TinExportOptions& options, std::vector<std::string>& notes);
+
 }  // namespace ps::io

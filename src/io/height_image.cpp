@@ -11,6 +11,7 @@
 #include <optional>
 
 #include "core/input_error.hpp"
+#include "core/named_values.hpp"
 #include "io/gdal_raster.hpp"
 #include "io/png_codec.hpp"
 
@@ -60,8 +61,49 @@ double parseNumberText(const std::string& s, bool& ok) {
 
 // ---------------------------------------------------------------------------------------- PNG
 
+// A web DEM tile: three 8-bit channels hold one height (see PngHeightEncoding).
+HeightImage decodeRgbHeights(PngReader& reader, std::span<const unsigned char> b,
+                             const std::string& name, PngHeightEncoding encoding) {
+  const PngHeader& hd = reader.header();
+  const std::string what = toString(encoding);
+  if (hd.colourType != 2 && hd.colourType != 6 && hd.colourType != 3)
+    fail(name, "a " + what +
+                   " tile must be an RGB, RGBA or palette PNG; this one has colour type " +
+                   std::to_string(hd.colourType) + " (a grey heightmap needs no --encoding)");
+  if (hd.bitDepth != 8 && !(hd.colourType == 3 && hd.bitDepth <= 8))
+    fail(name, "a " + what + " tile has 8-bit channels; this one has " +
+                   std::to_string(hd.bitDepth) + "-bit samples");
+  const std::uint64_t w = std::uint64_t(hd.width), h = std::uint64_t(hd.height);
+  if (h * (1 + 4 * w) > 1032 * std::uint64_t(b.size()))
+    fail(name, "truncated PNG: " + std::to_string(b.size()) + " bytes cannot hold the " +
+                   dims(std::uint32_t(w), std::uint32_t(h)) + " pixels its header declares");
+  cv::Mat m;
+  try {
+    m = reader.pixels();
+  } catch (const PngError& e) {
+    fail(name, std::string("corrupt or truncated PNG: ") + e.what());
+  }
+  HeightImage img;
+  img.kind = what + " PNG";
+  img.width = m.cols;
+  img.height = m.rows;
+  img.values.resize(img.pixelCount());
+  const int channels = m.channels();
+  for (int y = 0; y < m.rows; ++y) {
+    const std::uint8_t* row = m.ptr<std::uint8_t>(y);
+    for (int x = 0; x < m.cols; ++x) {
+      const double b0 = row[channels * x], g = row[channels * x + 1], r = row[channels * x + 2];
+      img.values[std::size_t(y) * std::size_t(m.cols) + std::size_t(x)] =
+          encoding == PngHeightEncoding::kTerrainRgb
+              ? float(-10000.0 + (r * 65536.0 + g * 256.0 + b0) * 0.1)
+              : float(r * 256.0 + g + b0 / 256.0 - 32768.0);
+    }
+  }
+  return img;
+}
+
 HeightImage decodePng(std::span<const unsigned char> b, const std::string& name,
-                      std::uint64_t maxPixels) {
+                      std::uint64_t maxPixels, PngHeightEncoding encoding) {
   std::optional<PngReader> reader;
   try {
     reader.emplace(b);
@@ -72,11 +114,13 @@ HeightImage decodePng(std::span<const unsigned char> b, const std::string& name,
   const std::uint32_t w = std::uint32_t(hd.width), h = std::uint32_t(hd.height);
   const int depth = hd.bitDepth, colour = hd.colourType;
   checkDims(w, h, name, maxPixels);
+  if (encoding != PngHeightEncoding::kStored) return decodeRgbHeights(*reader, b, name, encoding);
   if (colour != 0) {
     static const char* kinds[] = {"grey", "?", "RGB", "palette", "grey+alpha", "?", "RGBA"};
     fail(name, std::string("PNG colour type ") + std::to_string(colour) + " (" +
                    (colour <= 6 ? kinds[colour] : "invalid") +
-                   "): a heightmap must be a single-channel grey PNG (8 or 16 bits)");
+                   "): a heightmap must be a single-channel grey PNG (8 or 16 bits), or a web "
+                   "DEM tile read with --encoding terrain-rgb or terrarium");
   }
   if (depth != 8 && depth != 16) {
     fail(name, "grey PNG with " + std::to_string(depth) + "-bit samples: 8 and 16 are supported");
@@ -145,13 +189,32 @@ ImageFormat sniffFormat(std::span<const unsigned char> b) {
   return ImageFormat::kUnknown;
 }
 
+namespace {
+constexpr core::NameTable<PngHeightEncoding, 3> kEncodings{
+    "PNG height encoding",
+    {{{PngHeightEncoding::kStored, "stored"},
+      {PngHeightEncoding::kTerrainRgb, "terrain-rgb"},
+      {PngHeightEncoding::kTerrarium, "terrarium"}}}};
+}  // namespace
+
+std::string toString(PngHeightEncoding e) {
+  return kEncodings.nameOf(e);
+}
+
+PngHeightEncoding pngHeightEncodingFromString(const std::string& s) {
+  return kEncodings.parse(s);
+}
+
 HeightImage decodeHeightImage(std::span<const unsigned char> bytes, const std::string& name,
-                              std::uint64_t maxPixels) {
+                              std::uint64_t maxPixels, PngHeightEncoding encoding) {
   if (bytes.empty()) fail(name, "empty file (0 bytes)");
   maxPixels = std::min(maxPixels, kMaxImagePixels);
-  switch (sniffFormat(bytes)) {
+  const ImageFormat format = sniffFormat(bytes);
+  if (encoding != PngHeightEncoding::kStored && format != ImageFormat::kPng)
+    fail(name, "--encoding " + toString(encoding) + " applies to PNG tiles; this is not a PNG");
+  switch (format) {
     case ImageFormat::kPng:
-      return decodePng(bytes, name, maxPixels);
+      return decodePng(bytes, name, maxPixels, encoding);
     case ImageFormat::kTiff:
       return decodeGdalTiff(bytes, name, maxPixels);
     case ImageFormat::kPlanet:
@@ -293,8 +356,10 @@ std::vector<unsigned char> readFileHead(const std::filesystem::path& path, std::
 
 }  // namespace
 
-HeightImage readHeightImage(const std::filesystem::path& path) {
+HeightImage readHeightImage(const std::filesystem::path& path, PngHeightEncoding encoding) {
   const std::string name = path.string();
+  if (encoding != PngHeightEncoding::kStored)
+    return decodeHeightImage(readFileBytes(path), name, kMaxImagePixels, encoding);
   std::error_code ec;
   if (std::filesystem::is_directory(path, ec)) return readGdalRaster(path);  // an ESRI grid
   // PNG (with this project's tEXt metadata) and raw float32 (with its sidecar) are read here;

@@ -53,14 +53,25 @@ struct HeightImage {
 };
 
 enum class ImageFormat { kUnknown, kPng, kTiff, kPlanet };
+
+// How a PNG's pixels hold heights. kStored: one grey sample per pixel, the value as stored.
+// Web DEM tiles pack a height into the three 8-bit colour channels:
+//   kTerrainRgb (Mapbox Terrain-RGB): metres = -10000 + (R * 65536 + G * 256 + B) * 0.1
+//   kTerrarium (Mapzen / AWS Terrain Tiles): metres = R * 256 + G + B / 256 - 32768
+enum class PngHeightEncoding { kStored, kTerrainRgb, kTerrarium };
+std::string toString(PngHeightEncoding e);
+PngHeightEncoding pngHeightEncodingFromString(
+    const std::string& s);  // "stored" | "terrain-rgb" | "terrarium"
 ImageFormat sniffFormat(std::span<const unsigned char> firstBytes);
 
 // PNG (8/16-bit grey, libpng) or TIFF (one band of integers or floats, through GDAL's GTiff
 // driver with its georeferencing, no-data, scale and offset), chosen by the magic bytes. Images of
 // more than maxPixels (at most kMaxImagePixels) are refused before any buffer is allocated for
 // them.
+// An RGB encoding applies to PNGs only (other files are refused with it).
 HeightImage decodeHeightImage(std::span<const unsigned char> bytes, const std::string& name,
-                              std::uint64_t maxPixels = kMaxImagePixels);
+                              std::uint64_t maxPixels = kMaxImagePixels,
+                              PngHeightEncoding encoding = PngHeightEncoding::kStored);
 
 // Raw little-endian float32 samples described by a sidecar JSON (what `export --format raw`
 // writes next to the data as `<file>.json`).
@@ -78,7 +89,8 @@ HeightImage decodeRaw(std::span<const unsigned char> bytes, const RawSidecar& si
 
 // Reads a file: PNG by its magic, raw float32 when `<file>.json` exists, anything else (TIFF,
 // PDS3, SRTM .hgt, an ESRI grid's folder, ...) through GDAL (io/gdal_raster.hpp).
-HeightImage readHeightImage(const std::filesystem::path& path);
+HeightImage readHeightImage(const std::filesystem::path& path,
+                            PngHeightEncoding encoding = PngHeightEncoding::kStored);
 
 // The whole file, refusing more than maxBytes (named in the error).
 std::vector<unsigned char> readFileBytes(const std::filesystem::path& path,

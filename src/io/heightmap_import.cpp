@@ -6,6 +6,7 @@
 #include <numbers>
 #include <opencv2/imgproc.hpp>
 #include <sstream>
+#include <tuple>
 
 #include "core/flat_chart.hpp"
 #include "core/input_error.hpp"
@@ -274,43 +275,75 @@ void resampleLatLong(const HeightImage& img, const ImportOptions& o, double radi
   source["column0_longitude_deg"] = west;
 }
 
-// A flat image onto a flat chart's grid (o.interpolation), its spacing from the user, the file's
-// own metadata or its GeoTIFF pixel scale.
+struct MetresReport {
+  NoDataScan noData;
+  double scale = 1, offset = 0;
+};
+
+// The image's values -> metres in place, its no-data pixels filled: 1. which pixels hold no data,
+// 2. stored values -> metres (radii -> heights on a sphere), 3. the holes filled.
+MetresReport toFilledMetres(HeightImage& img, const ImportOptions& o, double radius,
+                            const std::string& name, std::vector<std::string>& notes) {
+  MetresReport r;
+  r.noData = scanNoData(img, o, name);
+  std::tie(r.scale, r.offset) = toMetres(img, o, r.noData.hole, name, notes);
+  std::vector<float>& v = img.values;
+  if (o.chart == ChartKind::kLatLong) radiiToHeights(v, r.noData.hole, radius, notes);
+  if (r.noData.holes > 0) {
+    const FillReport fr =
+        fillHoles(v, img.width, img.height, r.noData.hole, o.chart == ChartKind::kLatLong);
+    notes.push_back(
+        std::to_string(r.noData.holes) + " no-data pixels (value " + num(*r.noData.value) + ", " +
+        r.noData.source + ") filled by harmonic interpolation from the surrounding heights (" +
+        std::to_string(fr.sweeps) + " relaxation sweeps); none of them became a height as stored");
+  }
+  return r;
+}
+
+struct PixelSpacing {
+  double x = 1.0, y = 1.0;
+  std::string from;
+};
+
+// Metres between a flat image's pixel centres: the user's, the file's own metadata or its
+// GeoTIFF pixel scale.
+PixelSpacing flatSpacing(const HeightImage& img, const ImportOptions& o, const std::string& name) {
+  PixelSpacing s{1.0, 1.0, "default 1 m per pixel (--spacing sets it)"};
+  if (o.spacing) {
+    s = {*o.spacing, *o.spacing, "--spacing"};
+  } else if (img.pixelSpacingX && img.pixelSpacingY) {
+    s = {*img.pixelSpacingX, *img.pixelSpacingY, "the file's own metadata"};
+  } else if (img.geo) {
+    if (img.geo->geographic) {
+      // Degrees on the Earth: metres along a parallel shrink with cos(latitude).
+      constexpr double kEarthMean = 6371008.8;
+      const double latC = img.geo->originY - 0.5 * img.height * img.geo->pixelScaleY;
+      const double k = kEarthMean * std::numbers::pi / 180.0;
+      s = {img.geo->pixelScaleX * k * std::cos(latC * std::numbers::pi / 180.0),
+           img.geo->pixelScaleY * k,
+           "the file's georeferencing in degrees, at latitude " + num(latC) +
+               " on the Earth's mean sphere"};
+    } else {
+      s = {img.geo->pixelScaleX, img.geo->pixelScaleY,
+           "the file's georeferencing (taken as metres)"};
+    }
+  }
+  if (!std::isfinite(s.x) || s.x <= 0 || !std::isfinite(s.y) || s.y <= 0) {
+    fail(name, "pixel spacing " + num(s.x) + " x " + num(s.y) + " m must be positive and finite");
+  }
+  return s;
+}
+
+// A flat image onto a flat chart's grid (o.interpolation).
 void resampleFlat(const HeightImage& img, const ImportOptions& o, const core::GridSize& g,
                   const std::string& name, std::vector<float>& heights, ImportResult& res,
                   nlohmann::json& source) {
   const int w = img.width, h = img.height, m = g.m();
   const std::vector<float>& v = img.values;
-  double sx = 1.0, sy = 1.0;
-  std::string from = "default 1 m per pixel (--spacing sets it)";
-  if (o.spacing) {
-    sx = sy = *o.spacing;
-    from = "--spacing";
-  } else if (img.pixelSpacingX && img.pixelSpacingY) {
-    sx = *img.pixelSpacingX;
-    sy = *img.pixelSpacingY;
-    from = "the file's own metadata";
-  } else if (img.geo) {
-    if (img.geo->geographic) {
-      // Degrees on the Earth: metres along a parallel shrink with cos(latitude).
-      constexpr double kEarthMean = 6371008.8;
-      const double latC = img.geo->originY - 0.5 * h * img.geo->pixelScaleY;
-      const double k = kEarthMean * std::numbers::pi / 180.0;
-      sx = img.geo->pixelScaleX * k * std::cos(latC * std::numbers::pi / 180.0);
-      sy = img.geo->pixelScaleY * k;
-      from = "the file's georeferencing in degrees, at latitude " + num(latC) +
-             " on the Earth's mean sphere";
-    } else {
-      sx = img.geo->pixelScaleX;
-      sy = img.geo->pixelScaleY;
-      from = "the file's georeferencing (taken as metres)";
-    }
-  }
-  if (!std::isfinite(sx) || sx <= 0 || !std::isfinite(sy) || sy <= 0) {
-    fail(name, "pixel spacing " + num(sx) + " x " + num(sy) + " m must be positive and finite");
-  }
-  res.notes.push_back("flat: " + num(sx) + " x " + num(sy) + " m between pixels, from " + from +
-                      "; image row 0 is the north (v = m) edge");
+  const PixelSpacing spacing = flatSpacing(img, o, name);
+  const double sx = spacing.x, sy = spacing.y;
+  res.notes.push_back("flat: " + num(sx) + " x " + num(sy) + " m between pixels, from " +
+                      spacing.from + "; image row 0 is the north (v = m) edge");
   const double kx = w > 1 ? double(w - 1) / m : 0.0, ky = h > 1 ? double(h - 1) / m : 0.0;
   for (int gv = 0; gv <= m; ++gv) {
     for (int gu = 0; gu <= m; ++gu) {
@@ -337,24 +370,12 @@ ImportResult importHeightImage(HeightImage img, const ImportOptions& o, const st
     fail(name, "radius " + num(radius) + " m must be positive and finite");
   }
 
-  // 1. No-data.
-  const NoDataScan noData = scanNoData(img, o, name);
+  // 1-3. No-data, metres, holes filled.
+  const MetresReport metres = toFilledMetres(img, o, radius, name, res.notes);
+  const NoDataScan& noData = metres.noData;
   const std::size_t holes = noData.holes;
+  const double scale = metres.scale, offset = metres.offset;
   res.noDataPixels = holes;
-
-  // 2. Stored values -> metres.
-  const auto [scale, offset] = toMetres(img, o, noData.hole, name, res.notes);
-  std::vector<float>& v = img.values;
-  if (o.chart == ChartKind::kLatLong) radiiToHeights(v, noData.hole, radius, res.notes);
-
-  // 3. Fill the holes.
-  if (holes > 0) {
-    const FillReport fr = fillHoles(v, w, h, noData.hole, o.chart == ChartKind::kLatLong);
-    res.notes.push_back(
-        std::to_string(holes) + " no-data pixels (value " + num(*noData.value) + ", " +
-        noData.source + ") filled by harmonic interpolation from the surrounding heights (" +
-        std::to_string(fr.sweeps) + " relaxation sweeps); none of them became a height as stored");
-  }
 
   // 4. Resample onto the grid.
   const long long side = o.gridSide > 0 ? o.gridSide : defaultGridSide(o.chart, w, h);
@@ -400,8 +421,38 @@ ImportResult importHeightImage(HeightImage img, const ImportOptions& o, const st
   return res;
 }
 
+HeightSamples heightSamples(HeightImage img, const ImportOptions& options,
+                            const std::string& name) {
+  ImportOptions o = options;
+  o.chart = ChartKind::kFlat;
+  const int w = img.width, h = img.height;
+  if (w <= 0 || h <= 0 || img.values.size() != std::size_t(w) * std::size_t(h))
+    fail(name, "image has no pixels");
+  HeightSamples out;
+  const MetresReport metres = toFilledMetres(img, o, 0.0, name, out.notes);
+  out.noDataPixels = metres.noData.holes;
+  const PixelSpacing spacing = flatSpacing(img, o, name);
+  out.dx = spacing.x;
+  out.dy = spacing.y;
+  out.notes.push_back("flat: " + num(spacing.x) + " x " + num(spacing.y) +
+                      " m between pixels, from " + spacing.from +
+                      "; the image's own samples, none resampled");
+  out.width = w;
+  out.height = h;
+  out.heights.resize(img.values.size());
+  for (int j = 0; j < h; ++j) {  // row 0 of the image is the north edge: j = h - 1
+    const float* src = img.values.data() + std::size_t(h - 1 - j) * std::size_t(w);
+    std::copy(src, src + w, out.heights.begin() + std::ptrdiff_t(std::size_t(j) * std::size_t(w)));
+  }
+  for (const float x : out.heights)
+    if (!std::isfinite(x) || std::abs(x) > core::FlatChart::kHeightLimit)
+      fail(name, "height " + num(x) + " m is not finite or beyond +-" +
+                     num(core::FlatChart::kHeightLimit) + " m");
+  return out;
+}
+
 ImportResult importHeightmap(const std::filesystem::path& path, const ImportOptions& options) {
-  return importHeightImage(readHeightImage(path), options, path.string());
+  return importHeightImage(readHeightImage(path, options.encoding), options, path.string());
 }
 
 }  // namespace ps::io

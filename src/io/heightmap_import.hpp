@@ -38,6 +38,8 @@ struct ImportOptions {
   terrain::ErrorRule rule = terrain::ErrorRule::kHybridExact;
   // How the image is sampled at the grid's vertices (after area-averaging where it is finer).
   Interpolation interpolation = Interpolation::kCubic;
+  // PNGs: grey samples as stored, or a web DEM tile's RGB-packed heights.
+  PngHeightEncoding encoding = PngHeightEncoding::kStored;
 };
 
 struct ImportResult {
@@ -50,6 +52,19 @@ struct ImportResult {
 ImportResult importHeightImage(HeightImage image, const ImportOptions& options,
                                const std::string& name);
 ImportResult importHeightmap(const std::filesystem::path& path, const ImportOptions& options);
+
+// A flat heightmap's own samples in metres (no-data filled, scale and offset applied, nothing
+// resampled), for meshers that keep every sample (the TIN export). Rows run south to north:
+// heights[j * width + i], j = 0 the image's bottom row, as a flat chart's v. `name` in errors.
+struct HeightSamples {
+  int width = 0, height = 0;
+  std::vector<float> heights;
+  double dx = 1, dy = 1;  // metres between samples
+  std::vector<std::string> notes;
+  std::size_t noDataPixels = 0;
+};
+HeightSamples heightSamples(HeightImage image, const ImportOptions& options,
+                            const std::string& name);
 
 // The default grid side for an image (see ImportOptions::gridSide).
 long long defaultGridSide(ChartKind chart, int width, int height);

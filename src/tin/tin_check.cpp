@@ -9,7 +9,32 @@
 
 namespace ps::tin {
 
-TinErrorCheck measureTinError(const SampleField& field, const Tin& tin) {
+namespace {
+
+// The height of the plane through a, b, c above p (metres); where the three are the lattice's
+// own corners, that is the barycentric blend l0 a + l1 b + l2 c the locator found.
+double planeHeight(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c,
+                   const Eigen::Vector2d& p, double l0, double l1, double l2) {
+  const Eigen::Vector2d e1 = (b - a).head<2>(), e2 = (c - a).head<2>(), d = p - a.head<2>();
+  const double det = e1.x() * e2.y() - e1.y() * e2.x();
+  if (det == 0) return l0 * a.z() + l1 * b.z() + l2 * c.z();
+  const double s = (d.x() * e2.y() - d.y() * e2.x()) / det;
+  const double t = (e1.x() * d.y() - e1.y() * d.x()) / det;
+  return a.z() + s * (b.z() - a.z()) + t * (c.z() - a.z());
+}
+
+}  // namespace
+
+TinErrorCheck measureTinError(const SampleField& field, const Tin& tin,
+                              std::span<const Eigen::Vector3d> written) {
+  // Samples are located among the triangles in lattice coordinates; the error is that of the
+  // corners as written (a rounded corner moves its triangle's plane, and the plane is evaluated
+  // where the sample truly is).
+  const bool rounded = written.size() == tin.xy.size();
+  const std::vector<Eigen::Vector2d>& xy = tin.xy;
+  std::vector<Eigen::Vector3d> corner(tin.xy.size());
+  for (std::size_t v = 0; v < tin.xy.size(); ++v)
+    corner[v] = rounded ? written[v] : field.positionAt(tin.xy[v].x(), tin.xy[v].y(), tin.h[v]);
   // Buckets of about 8 x 8 samples, each listing the triangles whose bounding box touches it.
   constexpr int kBucket = 8;
   const int bw = (field.width + kBucket - 1) / kBucket, bh = (field.height + kBucket - 1) / kBucket;
@@ -17,8 +42,8 @@ TinErrorCheck measureTinError(const SampleField& field, const Tin& tin) {
   for (std::size_t t = 0; t < tin.triangles.size(); ++t) {
     double x0 = INFINITY, x1 = -INFINITY, y0 = INFINITY, y1 = -INFINITY;
     for (const auto v : tin.triangles[t]) {
-      x0 = std::min(x0, tin.xy[v].x()), x1 = std::max(x1, tin.xy[v].x());
-      y0 = std::min(y0, tin.xy[v].y()), y1 = std::max(y1, tin.xy[v].y());
+      x0 = std::min(x0, xy[v].x()), x1 = std::max(x1, xy[v].x());
+      y0 = std::min(y0, xy[v].y()), y1 = std::max(y1, xy[v].y());
     }
     const int bx0 = std::clamp(int(std::floor(x0 - 1e-6)) / kBucket, 0, bw - 1);
     const int bx1 = std::clamp(int(std::floor(x1 + 1e-6)) / kBucket, 0, bw - 1);
@@ -38,7 +63,7 @@ TinErrorCheck measureTinError(const SampleField& field, const Tin& tin) {
       for (const auto t :
            bucket[std::size_t(j / kBucket) * std::size_t(bw) + std::size_t(i / kBucket)]) {
         const auto& tri = tin.triangles[t];
-        const Eigen::Vector2d &a = tin.xy[tri[0]], &b = tin.xy[tri[1]], &c = tin.xy[tri[2]];
+        const Eigen::Vector2d &a = xy[tri[0]], &b = xy[tri[1]], &c = xy[tri[2]];
         const double area = (b - a).x() * (c - a).y() - (b - a).y() * (c - a).x();
         if (area == 0) continue;
         const double l0 = ((b - p).x() * (c - p).y() - (b - p).y() * (c - p).x()) / area;
@@ -48,14 +73,12 @@ TinErrorCheck measureTinError(const SampleField& field, const Tin& tin) {
         if (l0 < kOn || l1 < kOn || l2 < kOn) continue;
         double error;
         if (field.metric == ErrorMetric::kVertical) {
-          const double h = l0 * tin.h[tri[0]] + l1 * tin.h[tri[1]] + l2 * tin.h[tri[2]];
-          error = std::abs(double(field.heights[k]) - h);
+          error = std::abs(double(field.heights[k]) -
+                           planeHeight(corner[tri[0]], corner[tri[1]], corner[tri[2]],
+                                       {i * field.dx, j * field.dy}, l0, l1, l2));
         } else {
-          const auto corner = [&](std::uint32_t v) {
-            return field.positionAt(tin.xy[v].x(), tin.xy[v].y(), tin.h[v]);
-          };
           error = pointTriangleDistance(field.chart->position(i, j, field.heights[k]),
-                                        corner(tri[0]), corner(tri[1]), corner(tri[2]));
+                                        corner[tri[0]], corner[tri[1]], corner[tri[2]]);
         }
         best = std::min(best, error);
       }

@@ -5,6 +5,7 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <span>
 #include <vector>
 
 #include "tin/sample_field.hpp"
@@ -19,7 +20,10 @@ struct TinErrorCheck {
   std::size_t samples = 0;    // samples measured
   std::size_t uncovered = 0;  // samples inside no triangle (must be 0)
 };
-TinErrorCheck measureTinError(const SampleField& field, const Tin& tin);
+// `written`, when given, holds each TIN vertex's position as a file stores it (rounded): the
+// error is then that of the written mesh (kVertical: its x, y and z; kChart3d: its corners).
+TinErrorCheck measureTinError(const SampleField& field, const Tin& tin,
+                              std::span<const Eigen::Vector3d> written = {});
 
 // The TIN as a surface: vertices welded where the field's chart makes them one point (seam
 // twins, pole rows), triangles that the welding collapsed dropped.
