@@ -16,20 +16,42 @@ std::string eglError(const char* step) {
     char b[16];
     std::snprintf(b, sizeof b, "%04x", unsigned(eglGetError()));
     return std::string(b);
-  }() + "); Mesa's EGL (libegl-mesa0, libgl1-mesa-dri) is needed";
+  }() + "); an EGL driver is needed (Mesa's: libegl-mesa0, libgl1-mesa-dri; or a GPU's)";
+}
+
+bool initialised(EGLDisplay d) {
+  EGLint major = 0, minor = 0;
+  return d != EGL_NO_DISPLAY && eglInitialize(d, &major, &minor);
+}
+
+// The first display that initialises: Mesa's surfaceless platform, then each EGL device (how
+// NVIDIA's driver offers its GPUs without a window system), then the default display.
+EGLDisplay openDisplay() {
+  auto getPlatformDisplay = reinterpret_cast<PFNEGLGETPLATFORMDISPLAYEXTPROC>(
+      eglGetProcAddress("eglGetPlatformDisplayEXT"));
+  auto queryDevices =
+      reinterpret_cast<PFNEGLQUERYDEVICESEXTPROC>(eglGetProcAddress("eglQueryDevicesEXT"));
+  if (getPlatformDisplay) {
+    EGLDisplay d = getPlatformDisplay(EGL_PLATFORM_SURFACELESS_MESA, EGL_DEFAULT_DISPLAY, nullptr);
+    if (initialised(d)) return d;
+    EGLDeviceEXT devices[16];
+    EGLint n = 0;
+    if (queryDevices && queryDevices(16, devices, &n)) {
+      for (EGLint i = 0; i < n; ++i) {
+        d = getPlatformDisplay(EGL_PLATFORM_DEVICE_EXT, devices[i], nullptr);
+        if (initialised(d)) return d;
+      }
+    }
+  }
+  const EGLDisplay d = eglGetDisplay(EGL_DEFAULT_DISPLAY);
+  return initialised(d) ? d : EGL_NO_DISPLAY;
 }
 }  // namespace
 
 EglContext::EglContext() {
-  auto getPlatformDisplay = reinterpret_cast<PFNEGLGETPLATFORMDISPLAYEXTPROC>(
-      eglGetProcAddress("eglGetPlatformDisplayEXT"));
-  EGLDisplay d = EGL_NO_DISPLAY;
-  if (getPlatformDisplay)
-    d = getPlatformDisplay(EGL_PLATFORM_SURFACELESS_MESA, EGL_DEFAULT_DISPLAY, nullptr);
+  const EGLDisplay d = openDisplay();
   if (d == EGL_NO_DISPLAY)
-    throw std::runtime_error(eglError("eglGetPlatformDisplayEXT(surfaceless)"));
-  EGLint major = 0, minor = 0;
-  if (!eglInitialize(d, &major, &minor)) throw std::runtime_error(eglError("eglInitialize"));
+    throw std::runtime_error(eglError("eglInitialize (surfaceless, device and default display)"));
   display_ = d;
   if (!eglBindAPI(EGL_OPENGL_API)) throw std::runtime_error(eglError("eglBindAPI(OpenGL)"));
   const EGLint configAttribs[] = {EGL_SURFACE_TYPE, EGL_PBUFFER_BIT, EGL_RENDERABLE_TYPE,

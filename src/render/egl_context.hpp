@@ -1,15 +1,16 @@
 #pragma once
-// A headless OpenGL 3.3 core context through EGL (Mesa's surfaceless platform: no display, no
-// window; llvmpipe on machines without a GPU). One per thread that renders; made current on
-// construction. Rendering goes to framebuffer objects (render/planet_renderer.hpp).
+// A headless OpenGL 3.3 core context through EGL (no display, no window): Mesa's surfaceless
+// platform (llvmpipe on machines without a GPU), else an EGL device (NVIDIA's driver), else the
+// default display. One per thread that renders; made current on construction. Rendering goes to
+// framebuffer objects (render/planet_renderer.hpp).
 #include <string>
 
 namespace ps::render {
 
 class EglContext {
  public:
-  // Throws std::runtime_error saying which EGL step failed (no EGL library, no surfaceless
-  // platform, no OpenGL 3.3 core).
+  // Throws std::runtime_error saying which EGL step failed (no EGL library, no display that
+  // initialises, no OpenGL 3.3 core).
   EglContext();
   ~EglContext();
   EglContext(const EglContext&) = delete;
