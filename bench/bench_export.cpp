@@ -3,6 +3,9 @@
 // Martini (@mapbox/martini, run with node) on the same heights in the same run. For both tools
 // the true error is measured here, against every full-resolution vertex, with the same code.
 //
+// The TIN rows (tool planetsculpt-tin, delatin, compare-tin, control-map) are described in
+// bench/bench_export_tin.cpp.
+//
 // JSON lines:
 //   tool planetsculpt | martini: heightmap, grid, requested_error_m, true_error_m, triangles,
 //     ms (error table build + mesh), build_ms, mesh_ms (medians of warm repeats, like Martini's),
@@ -24,6 +27,7 @@
 
 #include "app/build_paths.hpp"
 #include "bench/bench.hpp"
+#include "bench/bench_export.hpp"
 #include "bench/bench_util.hpp"
 #include "core/flat_chart.hpp"
 #include "io/height_image.hpp"
@@ -36,14 +40,6 @@ namespace ps::bench {
 namespace {
 
 namespace fs = std::filesystem;
-
-struct Heightmap {
-  std::string name;
-  int side = 0;
-  double dx = 1, dy = 1;
-  std::vector<float> heights;  // index v * side + u
-  nlohmann::json info;
-};
 
 // fBm of value noise (8 octaves, persistence 0.5), scaled to 0 .. 2000 m: a rough synthetic
 // terrain whose features are not aligned with the bintree.
@@ -123,30 +119,8 @@ std::optional<Heightmap> srtm(int side) {
 std::string runMartini(const Heightmap& h, const std::vector<double>& thresholds, int repeats,
                        const fs::path& work) {
   const fs::path dir = ps::app::sourceDir() / "scripts" / "martini";
-  if (std::system("command -v node >/dev/null 2>&1") != 0) {
-    std::cerr << "bench export: node is not installed; Martini is skipped\n";
-    return "";
-  }
-  if (!fs::exists(dir / "node_modules" / "@mapbox" / "martini")) {
-    if (std::system("command -v npm >/dev/null 2>&1") != 0) {
-      std::cerr << "bench export: npm is not installed and @mapbox/martini is absent; Martini is "
-                   "skipped\n";
-      return "";
-    }
-    std::cerr << "bench export: npm install @mapbox/martini in " << dir.string() << "\n";
-    const std::string cmd =
-        "cd '" + dir.string() + "' && npm install --no-audit --no-fund --silent >&2";
-    if (std::system(cmd.c_str()) != 0) {
-      std::cerr << "bench export: npm install failed (offline?); Martini is skipped\n";
-      return "";
-    }
-  }
-  const fs::path heights = work / (h.name + ".f32"), result = work / (h.name + ".martini.jsonl");
-  {
-    std::ofstream f(heights, std::ios::binary);
-    f.write(reinterpret_cast<const char*>(h.heights.data()),
-            std::streamsize(h.heights.size() * sizeof(float)));
-  }
+  if (!peerMesherReady("@mapbox/martini")) return "";
+  const fs::path heights = writeHeightsF32(h, work), result = work / (h.name + ".martini.jsonl");
   std::string csv;
   for (const double t : thresholds) {
     char buf[32];
@@ -165,6 +139,37 @@ std::string runMartini(const Heightmap& h, const std::vector<double>& thresholds
 }
 
 }  // namespace
+
+bool peerMesherReady(const std::string& module) {
+  const fs::path dir = ps::app::sourceDir() / "scripts" / "martini";
+  if (std::system("command -v node >/dev/null 2>&1") != 0) {
+    std::cerr << "bench export: node is not installed; " << module << " is skipped\n";
+    return false;
+  }
+  if (fs::exists(dir / "node_modules" / module)) return true;
+  if (std::system("command -v npm >/dev/null 2>&1") != 0) {
+    std::cerr << "bench export: npm is not installed and " << module << " is absent; skipped\n";
+    return false;
+  }
+  std::cerr << "bench export: npm install in " << dir.string() << "\n";
+  const std::string cmd =
+      "cd '" + dir.string() + "' && npm install --no-audit --no-fund --silent >&2";
+  if (std::system(cmd.c_str()) != 0 || !fs::exists(dir / "node_modules" / module)) {
+    std::cerr << "bench export: npm install failed (offline?); " << module << " is skipped\n";
+    return false;
+  }
+  return true;
+}
+
+fs::path writeHeightsF32(const Heightmap& h, const fs::path& work) {
+  const fs::path file = work / (h.name + ".f32");
+  if (!fs::exists(file)) {
+    std::ofstream f(file, std::ios::binary);
+    f.write(reinterpret_cast<const char*>(h.heights.data()),
+            std::streamsize(h.heights.size() * sizeof(float)));
+  }
+  return file;
+}
 
 void benchExport(const BenchOptions& options, std::ostream& out) {
   const int side = options.quick ? 513 : 1025;
@@ -190,6 +195,7 @@ void benchExport(const BenchOptions& options, std::ostream& out) {
   for (const Heightmap& h : maps) {
     const std::string grid = std::to_string(side) + "x" + std::to_string(side);
     std::cerr << "bench export: " << h.name << " " << grid << "\n";
+    benchExportTin(h, requests, repeats, work, out);
     auto chart = std::make_shared<core::FlatChart>(core::GridSize::fromSide(side), h.dx, h.dy);
     terrain::Terrain t(chart, h.heights);
     // The bounds build on one core (what compares with Martini's one) and on two (what

@@ -1,0 +1,32 @@
+#pragma once
+// What `bench export`'s parts share: the heightmaps it meshes and the peers (node scripts in
+// scripts/martini/) it compares with.
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <ostream>
+#include <string>
+#include <vector>
+
+namespace ps::bench {
+
+struct Heightmap {
+  std::string name;
+  int side = 0;  // side x side samples
+  double dx = 1, dy = 1;
+  std::vector<float> heights;  // index v * side + u
+  nlohmann::json info;
+};
+
+// True when node and the npm module (e.g. "delatin", "@mapbox/martini") are ready in
+// scripts/martini/ (npm-installed there on first use); else false with the reason on stderr.
+bool peerMesherReady(const std::string& module);
+
+// Writes h.heights as little-endian float32 into `work` and returns the file.
+std::filesystem::path writeHeightsF32(const Heightmap& h, const std::filesystem::path& work);
+
+// The TIN rows: our greedy and quality TINs against Delatin at each request, and paper 001's
+// control-map experiment (bench/bench_export_tin.cpp).
+void benchExportTin(const Heightmap& h, const std::vector<double>& requests, int repeats,
+                    const std::filesystem::path& work, std::ostream& out);
+
+}  // namespace ps::bench

@@ -1,0 +1,214 @@
+// `bench export`'s TIN rows: our TIN mesher (src/tin) on the same heightmaps as the bintree
+// rows, against Delatin (npm `delatin`: the same greedy Delaunay insertion, in JavaScript, run
+// with node) in the same run. Every mesh's error, ours and Delatin's, is measured here on every
+// sample by the same independent locator (tin::measureTinError, vertical distance).
+//
+// JSON lines (bench "export"):
+//   tool planetsculpt-tin: mode fewest | quality, requested_error_m, true_error_m, triangles,
+//     vertices, ms (median of repeats), smallest_angle_deg (quality: min_angle_deg, angle_met)
+//   tool delatin: requested_error_m, true_error_m, triangles, vertices, ms (median, from scratch)
+//   tool compare-tin: per request, triangles_ratio and time_ratio (ours / Delatin's), both
+//     true errors
+//   tool control-map: paper 001's experiment: a control region (a disc over a sixth of the tile)
+//     at MinError, elsewhere MaxError, for (5, 50) and (10, 100): triangles against MinError
+//     everywhere, the reduction, and the measured error inside and outside the region
+#include <cmath>
+#include <cstdlib>
+#include <fstream>
+#include <iostream>
+
+#include "app/build_paths.hpp"
+#include "bench/bench.hpp"
+#include "bench/bench_export.hpp"
+#include "bench/bench_util.hpp"
+#include "tin/tin_check.hpp"
+#include "tin/tin_mesher.hpp"
+
+namespace ps::bench {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+tin::SampleField fieldOf(const Heightmap& h, double tolerance) {
+  tin::SampleField f;
+  f.width = f.height = h.side;
+  f.heights = h.heights;
+  f.metric = tin::ErrorMetric::kVertical;
+  f.dx = h.dx;
+  f.dy = h.dy;
+  f.uniformTolerance = tolerance;
+  return f;
+}
+
+struct Run {
+  double request = 0, trueError = 0, ms = 0;
+  std::size_t triangles = 0, vertices = 0;
+};
+
+// Delatin's meshes for each request: "" and a reason on stderr when node or the module is absent.
+std::vector<Run> runDelatin(const Heightmap& h, const std::vector<double>& requests, int repeats,
+                            const fs::path& work) {
+  if (!peerMesherReady("delatin")) return {};
+  const fs::path script = ps::app::sourceDir() / "scripts" / "martini" / "delatin.mjs";
+  const fs::path result = work / (h.name + ".delatin.jsonl");
+  std::string csv;
+  for (const double e : requests) csv += (csv.empty() ? "" : ",") + std::to_string(e);
+  const std::string cmd = "node '" + script.string() + "' '" + writeHeightsF32(h, work).string() +
+                          "' " + std::to_string(h.side) + " " + std::to_string(h.side) + " " + csv +
+                          " '" + result.string() + "' " + std::to_string(repeats);
+  if (std::system(cmd.c_str()) != 0) {
+    std::cerr << "bench export: node " << script.string() << " failed; Delatin is skipped\n";
+    return {};
+  }
+  std::vector<Run> runs;
+  std::ifstream f(result);
+  std::string line;
+  while (std::getline(f, line)) {
+    const nlohmann::json j = nlohmann::json::parse(line);
+    const auto coords = j["coords"].get<std::vector<double>>();
+    const auto tris = j["triangles"].get<std::vector<std::uint32_t>>();
+    tin::Tin t;
+    for (std::size_t i = 0; i + 1 < coords.size(); i += 2) {
+      t.xy.emplace_back(coords[i], coords[i + 1]);
+      t.h.push_back(
+          h.heights[std::size_t(coords[i + 1]) * std::size_t(h.side) + std::size_t(coords[i])]);
+    }
+    for (std::size_t k = 0; k + 2 < tris.size(); k += 3)
+      t.triangles.push_back({tris[k], tris[k + 1], tris[k + 2]});
+    const double e = j["max_error"].get<double>();
+    const tin::TinErrorCheck check = tin::measureTinError(fieldOf(h, e), t);
+    runs.push_back({e, check.maxError, median(j["ms"].get<std::vector<double>>()),
+                    t.triangles.size(), t.xy.size()});
+  }
+  return runs;
+}
+
+// Paper 001's experiment on this heightmap: a disc of a sixth of the tile's area as the control
+// region.
+void controlMapRows(const Heightmap& h, std::ostream& out) {
+  const double c = 0.5 * (h.side - 1), r = h.side * std::sqrt(1.0 / (6.0 * M_PI));
+  std::vector<bool> inside(h.heights.size());
+  std::size_t insideCount = 0;
+  for (int j = 0; j < h.side; ++j)
+    for (int i = 0; i < h.side; ++i) {
+      const bool in = (i - c) * (i - c) + (j - c) * (j - c) <= r * r;
+      inside[std::size_t(j) * std::size_t(h.side) + std::size_t(i)] = in;
+      insideCount += in;
+    }
+  for (const auto& [minError, maxError] : {std::pair{5.0, 50.0}, std::pair{10.0, 100.0}}) {
+    std::vector<float> tolerance(h.heights.size());
+    for (std::size_t k = 0; k < tolerance.size(); ++k)
+      tolerance[k] = float(inside[k] ? minError : maxError);
+    tin::SampleField field = fieldOf(h, maxError);
+    field.perSampleTolerance = tolerance;
+    const tin::Tin controlled = tin::buildTin(field, {});
+    const tin::Tin everywhere = tin::buildTin(fieldOf(h, minError), {});
+    // The measured error inside and outside the region, sample by sample.
+    std::vector<float> inOnly(tolerance.size()), outOnly(tolerance.size());
+    for (std::size_t k = 0; k < tolerance.size(); ++k) {
+      inOnly[k] = inside[k] ? 1.0f : 1e30f;  // ratio = error in metres inside, ~0 outside
+      outOnly[k] = inside[k] ? 1e30f : 1.0f;
+    }
+    tin::SampleField probe = fieldOf(h, 1.0);
+    probe.perSampleTolerance = inOnly;
+    const double errorInside = tin::measureTinError(probe, controlled).maxRatio;
+    probe.perSampleTolerance = outOnly;
+    const double errorOutside = tin::measureTinError(probe, controlled).maxRatio;
+    out << nlohmann::json{{"bench", "export"},
+                          {"tool", "control-map"},
+                          {"heightmap", h.name},
+                          {"min_error_m", minError},
+                          {"max_error_m", maxError},
+                          {"control_fraction", double(insideCount) / double(h.heights.size())},
+                          {"triangles", controlled.triangles.size()},
+                          {"triangles_min_error_everywhere", everywhere.triangles.size()},
+                          {"reduction", 1.0 - double(controlled.triangles.size()) /
+                                                  double(everywhere.triangles.size())},
+                          {"measured_error_inside_m", errorInside},
+                          {"measured_error_outside_m", errorOutside}}
+               .dump()
+        << std::endl;
+  }
+}
+
+}  // namespace
+
+void benchExportTin(const Heightmap& h, const std::vector<double>& requests, int repeats,
+                    const fs::path& work, std::ostream& out) {
+  const std::string grid = std::to_string(h.side) + "x" + std::to_string(h.side);
+  std::vector<Run> ours;
+  for (const double e : requests) {
+    for (const double angle : {0.0, 20.0, 30.0}) {
+      const tin::SampleField field = fieldOf(h, e);
+      tin::Tin t;
+      tin::TinReport rep;
+      std::vector<double> ms;
+      for (int r = 0; r < repeats; ++r)
+        ms.push_back(timeMs([&] { t = tin::buildTin(field, {.minAngleDeg = angle}, &rep); }));
+      const tin::TinErrorCheck check = tin::measureTinError(field, t);
+      nlohmann::json line = {{"bench", "export"},
+                             {"tool", "planetsculpt-tin"},
+                             {"heightmap", h.name},
+                             {"grid", grid},
+                             {"mode", angle > 0 ? "quality" : "fewest"},
+                             {"requested_error_m", e},
+                             {"true_error_m", check.maxError},
+                             {"triangles", t.triangles.size()},
+                             {"vertices", t.xy.size()},
+                             {"ms", median(ms)},
+                             {"smallest_angle_deg", rep.smallestAngleDeg}};
+      if (angle > 0) {
+        line["min_angle_deg"] = angle;
+        line["angle_met"] = rep.angleMet;
+        line["steiner_vertices"] = rep.steinerVertices;
+      } else {
+        ours.push_back({e, check.maxError, median(ms), t.triangles.size(), t.xy.size()});
+      }
+      out << line.dump() << std::endl;
+    }
+  }
+  const std::vector<Run> theirs = runDelatin(h, requests, repeats, work);
+  if (theirs.empty()) {
+    out << nlohmann::json{{"bench", "export"},
+                          {"tool", "delatin"},
+                          {"heightmap", h.name},
+                          {"skipped", true}}
+               .dump()
+        << std::endl;
+  }
+  for (const Run& d : theirs) {
+    out << nlohmann::json{{"bench", "export"},
+                          {"tool", "delatin"},
+                          {"heightmap", h.name},
+                          {"grid", grid},
+                          {"requested_error_m", d.request},
+                          {"true_error_m", d.trueError},
+                          {"triangles", d.triangles},
+                          {"vertices", d.vertices},
+                          {"ms", d.ms}}
+               .dump()
+        << std::endl;
+    for (const Run& o : ours) {
+      if (o.request != d.request) continue;
+      out << nlohmann::json{{"bench", "export"},
+                            {"tool", "compare-tin"},
+                            {"heightmap", h.name},
+                            {"grid", grid},
+                            {"requested_error_m", o.request},
+                            {"planetsculpt_true_error_m", o.trueError},
+                            {"delatin_true_error_m", d.trueError},
+                            {"planetsculpt_triangles", o.triangles},
+                            {"delatin_triangles", d.triangles},
+                            {"triangles_ratio", double(o.triangles) / double(d.triangles)},
+                            {"planetsculpt_ms", o.ms},
+                            {"delatin_ms", d.ms},
+                            {"time_ratio", o.ms / d.ms}}
+                 .dump()
+          << std::endl;
+    }
+  }
+  controlMapRows(h, out);
+}
+
+}  // namespace ps::bench
