@@ -16,8 +16,8 @@ struct TinExportOptions {
   double maxErrorM = 0;  // everywhere the control map is black (or everywhere, without one)
   // A grey image of the lattice's own size (a heightmap's W x H; a planet's grid side^2): its
   // white pixels allow controlErrorM, black ones maxErrorM, grey ones in between (linearly).
-  std::optional<std::filesystem::path> controlMap;
-  std::optional<double> controlErrorM;
+  std::optional<std::filesystem::path> controlMap = {};
+  std::optional<double> controlErrorM = {};
   double minAngleDeg = 0;  // 0: fewest triangles (greedy); else the quality refinement
   double minAreaM2 = 0;    // triangles smaller than this are not split for their angle
 };

@@ -1,0 +1,241 @@
+// `export --tin` (io/tin_export, io::exportTinFromFile): the files as written, read back and
+// measured here against every sample by brute force; web DEM tile encodings; refusals.
+#include <gtest/gtest.h>
+
+#include <Eigen/Geometry>
+#include <cmath>
+#include <fstream>
+#include <opencv2/imgcodecs.hpp>
+#include <random>
+
+#include "core/input_error.hpp"
+#include "fresh_dir.hpp"
+#include "io/export.hpp"
+#include "io/height_image.hpp"
+#include "io/planet_file.hpp"
+#include "io/tin_export.hpp"
+#include "test_terrains.hpp"
+#include "tin/tin_check.hpp"
+#include "tin/triangle_error.hpp"
+
+using namespace ps;
+namespace fs = std::filesystem;
+
+namespace {
+
+struct ObjMesh {
+  std::vector<Eigen::Vector3d> v;
+  std::vector<std::array<std::uint32_t, 3>> f;
+};
+
+ObjMesh readObj(const fs::path& p) {
+  std::ifstream in(p);
+  ObjMesh m;
+  std::string tag;
+  while (in >> tag) {
+    if (tag == "v") {
+      double x, y, z;
+      in >> x >> y >> z;
+      m.v.emplace_back(x, y, z);
+    } else if (tag == "f") {
+      std::array<std::uint32_t, 3> t;
+      in >> t[0] >> t[1] >> t[2];
+      m.f.push_back({t[0] - 1, t[1] - 1, t[2] - 1});
+    } else {
+      std::getline(in, tag);
+    }
+  }
+  return m;
+}
+
+// A 16-bit grey PNG of random relief (row 0 north), values = metres * 10 (scale 0.1).
+fs::path writeRelief(const fs::path& dir, int w, int h, std::uint32_t seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> uni(0, 1);
+  cv::Mat img(h, w, CV_16UC1);
+  const double cx = w * uni(rng), cy = h * uni(rng);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const double z = 300 * std::exp(-((x - cx) * (x - cx) + (y - cy) * (y - cy)) / 150.0) +
+                       40 * std::sin(0.4 * x) * std::cos(0.3 * y) + 5 * uni(rng) + 100;
+      img.at<std::uint16_t>(y, x) = std::uint16_t(std::lround(z * 10));
+    }
+  const fs::path p = dir / "relief.png";
+  cv::imwrite(p.string(), img);
+  return p;
+}
+
+io::ImportOptions heightmapOptions(double spacing) {
+  io::ImportOptions o;
+  o.chart = io::ChartKind::kFlat;
+  o.scale = 0.1;
+  o.offset = 0.0;
+  o.spacing = spacing;
+  return o;
+}
+
+TEST(TinExport, AHeightmapIsMeshedOnItsOwnSamplesWithinTheErrorAsWritten) {
+  const fs::path dir = testkit::freshDir("tin_heightmap");
+  const int w = 37, h = 29;
+  const double spacing = 2.5, maxError = 1.5;
+  const fs::path png = writeRelief(dir, w, h, 3);
+  std::vector<std::string> notes;
+  io::TinExportOptions o;
+  o.maxErrorM = maxError;
+  const nlohmann::json s = io::exportTinFromFile(png, heightmapOptions(spacing), dir / "t.obj",
+                                                 io::ExportFormat::kObj, o, notes);
+  EXPECT_LE(s["measured_error_m"].get<double>(), maxError);
+  EXPECT_EQ(s["samples_checked"].get<std::size_t>(), std::size_t(w * h));
+  const ObjMesh m = readObj(dir / "t.obj");
+  EXPECT_EQ(m.v.size(), s["vertices"].get<std::size_t>());
+  EXPECT_LT(m.v.size(), std::size_t(w * h));
+  // Every vertex sits on one of the image's own samples (no resampling).
+  for (const auto& p : m.v) {
+    EXPECT_NEAR(p.x() / spacing, std::round(p.x() / spacing), 1e-4);
+    EXPECT_NEAR(p.y() / spacing, std::round(p.y() / spacing), 1e-4);
+  }
+  // Brute force: every sample's height against the triangle above it in the file.
+  const cv::Mat img = cv::imread(png.string(), cv::IMREAD_UNCHANGED);
+  double worst = 0;
+  for (int row = 0; row < h; ++row)
+    for (int col = 0; col < w; ++col) {
+      const Eigen::Vector2d p(col * spacing, (h - 1 - row) * spacing);
+      const double truth = 0.1 * img.at<std::uint16_t>(row, col);
+      double best = INFINITY;
+      for (const auto& t : m.f) {
+        const Eigen::Vector3d &a = m.v[t[0]], &b = m.v[t[1]], &c = m.v[t[2]];
+        const double area = (b - a).x() * (c - a).y() - (b - a).y() * (c - a).x();
+        ASSERT_GT(area, 0) << "counter-clockwise seen from +z";
+        const double l0 =
+            ((b.x() - p.x()) * (c.y() - p.y()) - (b.y() - p.y()) * (c.x() - p.x())) / area;
+        const double l1 =
+            ((c.x() - p.x()) * (a.y() - p.y()) - (c.y() - p.y()) * (a.x() - p.x())) / area;
+        const double l2 = 1 - l0 - l1;
+        if (l0 < -1e-6 || l1 < -1e-6 || l2 < -1e-6) continue;
+        best = std::min(best, std::abs(truth - (l0 * a.z() + l1 * b.z() + l2 * c.z())));
+      }
+      ASSERT_TRUE(std::isfinite(best))
+          << "sample (" << col << ", " << row << ") is under no triangle";
+      worst = std::max(worst, best);
+    }
+  EXPECT_LE(worst, maxError + 1e-9);
+  EXPECT_GT(worst, 0.5 * maxError) << "the mesh is not finer than it needs to be";
+}
+
+TEST(TinExport, APlanetTinIsAClosedOutwardSphereWithinTheErrorOfEverySample) {
+  const fs::path dir = testkit::freshDir("tin_planet");
+  const terrain::Terrain t = testkit::bumpyTerrain(5, 9, 30000.0);
+  io::savePlanet(t, dir / "p.planet");
+  std::vector<std::string> notes;
+  io::TinExportOptions o;
+  o.maxErrorM = 5000.0;
+  const nlohmann::json s = io::exportTinFromFile(dir / "p.planet", io::ImportOptions{},
+                                                 dir / "p.obj", io::ExportFormat::kObj, o, notes);
+  EXPECT_EQ(s["error_metric"], "3d");
+  const ObjMesh m = readObj(dir / "p.obj");
+  const tin::MeshTopology top = tin::meshTopology(m.v.size(), m.f);
+  EXPECT_EQ(top.borderEdges, 0u);
+  EXPECT_EQ(top.nonManifoldEdges, 0u);
+  EXPECT_EQ(top.degenerate, 0u);
+  EXPECT_EQ(top.euler(), 2);
+  double volume6 = 0;
+  for (const auto& f : m.f) volume6 += m.v[f[0]].dot(m.v[f[1]].cross(m.v[f[2]]));
+  EXPECT_GT(volume6, 0) << "triangles face outwards";
+  double worst = 0;
+  const int side = t.grid().side();
+  for (int v = 0; v < side; ++v)
+    for (int u = 0; u < side; ++u) {
+      const Eigen::Vector3d p = t.chart().position(u, v, t.height(u, v));
+      double best = INFINITY;
+      for (const auto& f : m.f)
+        best = std::min(best, tin::pointTriangleDistance(p, m.v[f[0]], m.v[f[1]], m.v[f[2]]));
+      worst = std::max(worst, best);
+    }
+  EXPECT_LE(worst, o.maxErrorM);
+}
+
+TEST(TinExport, WebDemTilesDecodeTheirPackedHeights) {
+  const fs::path dir = testkit::freshDir("tin_webdem");
+  // 1234.5 m: Terrain-RGB (1234.5 + 10000) / 0.1 = 112345 = 1 * 65536 + 182 * 256 + 217;
+  // Terrarium 1234.5 + 32768 = 34002.5 = 132 * 256 + 210 + 128 / 256.
+  cv::Mat rgb(2, 3, CV_8UC3, cv::Scalar(217, 182, 1));  // OpenCV stores B, G, R
+  cv::imwrite((dir / "mapbox.png").string(), rgb);
+  cv::Mat terrarium(2, 3, CV_8UC3, cv::Scalar(128, 210, 132));
+  cv::imwrite((dir / "terrarium.png").string(), terrarium);
+  const io::HeightImage a =
+      io::readHeightImage(dir / "mapbox.png", io::PngHeightEncoding::kTerrainRgb);
+  const io::HeightImage b =
+      io::readHeightImage(dir / "terrarium.png", io::PngHeightEncoding::kTerrarium);
+  ASSERT_EQ(a.values.size(), 6u);
+  for (const float x : a.values) EXPECT_NEAR(x, 1234.5, 1e-3);
+  for (const float x : b.values) EXPECT_NEAR(x, 1234.5, 1e-3);
+  // Without --encoding an RGB tile is refused with the hint; a grey PNG is refused with one.
+  try {
+    io::readHeightImage(dir / "mapbox.png");
+    ADD_FAILURE() << "an RGB PNG was read as a grey heightmap";
+  } catch (const core::InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("--encoding terrain-rgb"), std::string::npos) << e.what();
+  }
+  cv::imwrite((dir / "grey.png").string(), cv::Mat(2, 2, CV_8UC1, cv::Scalar(7)));
+  EXPECT_THROW(io::readHeightImage(dir / "grey.png", io::PngHeightEncoding::kTerrarium),
+               core::InputError);
+  EXPECT_EQ(io::pngHeightEncodingFromString("terrain-rgb"), io::PngHeightEncoding::kTerrainRgb);
+  EXPECT_THROW(io::pngHeightEncodingFromString("rgb"), core::InputError);
+}
+
+TEST(TinExport, RefusesBadRequestsNamingTheProblemAndWritesNothing) {
+  const fs::path dir = testkit::freshDir("tin_bad");
+  const fs::path png = writeRelief(dir, 20, 16, 5);
+  auto expectRefused = [&](io::TinExportOptions o, const std::string& expected) {
+    std::vector<std::string> notes;
+    try {
+      io::exportTinFromFile(png, heightmapOptions(1.0), dir / "out.obj", io::ExportFormat::kObj, o,
+                            notes);
+      ADD_FAILURE() << "accepted; expected: " << expected;
+    } catch (const core::InputError& e) {
+      EXPECT_NE(std::string(e.what()).find(expected), std::string::npos) << e.what();
+    }
+    EXPECT_FALSE(fs::exists(dir / "out.obj"));
+  };
+  io::TinExportOptions o;
+  o.maxErrorM = 0;
+  expectRefused(o, "above 0");
+  o.maxErrorM = 1;
+  o.minAngleDeg = 40;
+  expectRefused(o, "minimum angle 40");
+  o.minAngleDeg = 0;
+  o.controlErrorM = 0.2;
+  expectRefused(o, "go together");
+  cv::imwrite((dir / "small.png").string(), cv::Mat(8, 8, CV_8UC1, cv::Scalar(255)));
+  o.controlMap = dir / "small.png";
+  expectRefused(o, "small.png: the control map is 8x8 pixels; it must match the 20x16");
+  std::vector<std::string> notes;
+  EXPECT_THROW(
+      io::exportTinFromFile(png, heightmapOptions(1.0), dir / "out.png", io::ExportFormat::kPng16,
+                            io::TinExportOptions{.maxErrorM = 1}, notes),
+      core::InputError);
+}
+
+TEST(TinExport, AControlMapHoldsItsTighterErrorWhereItIsWhite) {
+  const fs::path dir = testkit::freshDir("tin_control");
+  const int w = 40, h = 30;
+  const fs::path png = writeRelief(dir, w, h, 8);
+  cv::Mat control(h, w, CV_8UC1, cv::Scalar(0));
+  control(cv::Rect(5, 5, 15, 12)).setTo(255);
+  cv::imwrite((dir / "control.png").string(), control);
+  io::TinExportOptions o;
+  o.maxErrorM = 8;
+  o.controlMap = dir / "control.png";
+  o.controlErrorM = 0.5;
+  std::vector<std::string> notes;
+  const nlohmann::json s = io::exportTinFromFile(png, heightmapOptions(1.0), dir / "c.ply",
+                                                 io::ExportFormat::kPly, o, notes);
+  EXPECT_LE(s["measured_error_ratio"].get<double>(), 1.0);
+  io::TinExportOptions uniform;
+  uniform.maxErrorM = 0.5;
+  const nlohmann::json fine = io::exportTinFromFile(png, heightmapOptions(1.0), dir / "f.ply",
+                                                    io::ExportFormat::kPly, uniform, notes);
+  EXPECT_LT(s["triangles"].get<std::size_t>(), fine["triangles"].get<std::size_t>());
+}
+
+}  // namespace
