@@ -52,13 +52,19 @@ measure() {
   for f in "$kit"/fallback/*; do
     ldconfig -p | grep -q "^[[:space:]]*$(basename "$f") " || ln -sf "$f" "$fb/"
   done
-  export LD_LIBRARY_PATH=$kit/lib:$fb
+  # NVIDIA's own libraries (libEGL_nvidia...) where the loader's cache does not list them.
+  local nv=
+  if ! ldconfig -p | grep -q libEGL_nvidia && [ -d /usr/local/nvidia/lib64 ]; then
+    nv=:/usr/local/nvidia/lib64
+  fi
+  export LD_LIBRARY_PATH=$kit/lib:$fb$nv
   if ldd "$bin" 2>&1 | grep -q "not found"; then ln -sf "$kit"/fallback/* "$fb/"; fi
-  echo "kit fallback libraries used: $(ls "$fb" | tr '\n' ' ')"
+  echo "kit fallback libraries used: $(ls "$fb" | tr '\n' ' '); LD_LIBRARY_PATH=$LD_LIBRARY_PATH"
 
   echo "== machine"
   nvidia-smi -L || echo "no nvidia-smi"
   nvidia-smi --query-gpu=name,driver_version,clocks.sm,clocks.mem --format=csv,noheader
+  ldconfig -p | grep -E "libEGL_nvidia|libnvidia-eglcore" || echo "no libEGL_nvidia in the loader's cache"
   ldd --version | head -1
   echo "nproc $(nproc)"
   echo "== libraries not found (none expected):"
