@@ -6,7 +6,7 @@
 # It needs, beside the tree (both ignored, made on the build machine):
 #   .gpukit/kit.tar.xz  the stripped release binary and the shared libraries it loads, glibc's
 #                       and OpenGL's left out (libraries these benches never call are stubs);
-#                       made by .gpukit/make-kit.py, kept beside it
+#                       made by scripts/gpu-kit.py
 #   .gl/*.deb           glvnd's loaders (libEGL, libOpenGL, libGLX...), which dispatch to the
 #                       NVIDIA driver; unpacked onto / (GPU_MEASURE_SKIP_GL=1 skips that, for a
 #                       trial run on a machine that has its own)
