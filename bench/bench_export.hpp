@@ -25,8 +25,9 @@ bool peerMesherReady(const std::string& module);
 std::filesystem::path writeHeightsF32(const Heightmap& h, const std::filesystem::path& work);
 
 // The TIN rows: our greedy and quality TINs against Delatin at each request, and paper 001's
-// control-map experiment (bench/bench_export_tin.cpp).
+// control-map experiment, with its picture in outDir (when not empty) (bench/bench_export_tin.cpp).
 void benchExportTin(const Heightmap& h, const std::vector<double>& requests, int repeats,
-                    const std::filesystem::path& work, std::ostream& out);
+                    const std::filesystem::path& work, const std::string& outDir,
+                    std::ostream& out);
 
 }  // namespace ps::bench

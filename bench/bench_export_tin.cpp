@@ -16,6 +16,8 @@
 #include <cstdlib>
 #include <fstream>
 #include <iostream>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include "app/build_paths.hpp"
 #include "bench/bench.hpp"
@@ -84,9 +86,68 @@ std::vector<Run> runDelatin(const Heightmap& h, const std::vector<double>& reque
   return runs;
 }
 
+// Hill shading of the heightmap's samples in [x0, x0 + n)^2, `scale` pixels per sample, north up.
+cv::Mat hillshade(const Heightmap& h, int x0, int y0, int n, int scale) {
+  cv::Mat out(n * scale, n * scale, CV_8UC3);
+  const Eigen::Vector3d sun = Eigen::Vector3d(-1, 1, 1.2).normalized();
+  auto at = [&](int i, int j) {
+    i = std::clamp(i, 0, h.side - 1), j = std::clamp(j, 0, h.side - 1);
+    return double(h.heights[std::size_t(j) * std::size_t(h.side) + std::size_t(i)]);
+  };
+  for (int py = 0; py < n * scale; ++py)
+    for (int px = 0; px < n * scale; ++px) {
+      const int i = x0 + px / scale, j = y0 + (n - 1 - py / scale);
+      const Eigen::Vector3d normal(-(at(i + 1, j) - at(i - 1, j)) / (2 * h.dx),
+                                   -(at(i, j + 1) - at(i, j - 1)) / (2 * h.dy), 1.0);
+      const double shade = std::clamp(normal.normalized().dot(sun), 0.0, 1.0);
+      const auto g = std::uint8_t(60 + 180 * shade);
+      out.at<cv::Vec3b>(py, px) = {g, g, g};
+    }
+  return out;
+}
+
+// Paper 001's picture: the control map (white: MinError) beside the TIN it gives, wireframe over
+// hill shading, on a window across the control region's edge.
+void writeControlMapPicture(const Heightmap& h, const std::vector<bool>& inside, const tin::Tin& t,
+                            const std::string& path) {
+  const int n = std::min(h.side, 160), scale = 4;
+  const int x0 =
+      std::max(0, int(0.5 * (h.side - 1) - h.side * std::sqrt(1.0 / (6.0 * M_PI))) - n / 2);
+  const int y0 = std::max(0, (h.side - n) / 2);
+  cv::Mat left = hillshade(h, x0, y0, n, scale), right = left.clone();
+  for (int py = 0; py < n * scale; ++py)
+    for (int px = 0; px < n * scale; ++px) {
+      const int i = x0 + px / scale, j = y0 + (n - 1 - py / scale);
+      if (inside[std::size_t(j) * std::size_t(h.side) + std::size_t(i)]) {
+        cv::Vec3b& c = left.at<cv::Vec3b>(py, px);
+        for (int k = 0; k < 3; ++k) c[k] = std::uint8_t(155 + c[k] * 100 / 255);
+      } else {
+        cv::Vec3b& c = left.at<cv::Vec3b>(py, px);
+        for (int k = 0; k < 3; ++k) c[k] = std::uint8_t(c[k] / 4);
+      }
+    }
+  auto pixel = [&](const Eigen::Vector2d& p) {
+    return cv::Point2d((p.x() - x0 + 0.5) * scale, (n - 1 - (p.y() - y0) + 0.5) * scale);
+  };
+  for (const auto& tri : t.triangles) {
+    for (int k = 0; k < 3; ++k) {
+      const Eigen::Vector2d& a = t.xy[tri[std::size_t(k)]];
+      const Eigen::Vector2d& b = t.xy[tri[std::size_t((k + 1) % 3)]];
+      if (std::max(a.x(), b.x()) < x0 || std::min(a.x(), b.x()) > x0 + n ||
+          std::max(a.y(), b.y()) < y0 || std::min(a.y(), b.y()) > y0 + n)
+        continue;
+      cv::line(right, pixel(a), pixel(b), cv::Scalar(40, 90, 230), 1, cv::LINE_AA);
+    }
+  }
+  cv::Mat both;
+  cv::hconcat(left, cv::Mat(n * scale, 8, CV_8UC3, cv::Scalar(255, 255, 255)), both);
+  cv::hconcat(both, right, both);
+  cv::imwrite(path, both);
+}
+
 // Paper 001's experiment on this heightmap: a disc of a sixth of the tile's area as the control
 // region.
-void controlMapRows(const Heightmap& h, std::ostream& out) {
+void controlMapRows(const Heightmap& h, const std::string& outDir, std::ostream& out) {
   const double c = 0.5 * (h.side - 1), r = h.side * std::sqrt(1.0 / (6.0 * M_PI));
   std::vector<bool> inside(h.heights.size());
   std::size_t insideCount = 0;
@@ -104,6 +165,8 @@ void controlMapRows(const Heightmap& h, std::ostream& out) {
     field.perSampleTolerance = tolerance;
     const tin::Tin controlled = tin::buildTin(field, {});
     const tin::Tin everywhere = tin::buildTin(fieldOf(h, minError), {});
+    if (!outDir.empty() && minError == 5.0)
+      writeControlMapPicture(h, inside, controlled, outDir + "/tin_control_map_" + h.name + ".png");
     // The measured error inside and outside the region, sample by sample.
     std::vector<float> inOnly(tolerance.size()), outOnly(tolerance.size());
     for (std::size_t k = 0; k < tolerance.size(); ++k) {
@@ -135,7 +198,7 @@ void controlMapRows(const Heightmap& h, std::ostream& out) {
 }  // namespace
 
 void benchExportTin(const Heightmap& h, const std::vector<double>& requests, int repeats,
-                    const fs::path& work, std::ostream& out) {
+                    const fs::path& work, const std::string& outDir, std::ostream& out) {
   const std::string grid = std::to_string(h.side) + "x" + std::to_string(h.side);
   std::vector<Run> ours;
   for (const double e : requests) {
@@ -208,7 +271,7 @@ void benchExportTin(const Heightmap& h, const std::vector<double>& requests, int
           << std::endl;
     }
   }
-  controlMapRows(h, out);
+  controlMapRows(h, outDir, out);
 }
 
 }  // namespace ps::bench
