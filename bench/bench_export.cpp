@@ -329,6 +329,7 @@ void benchExport(const BenchOptions& options, std::ostream& out) {
     }
   }
   omp_set_num_threads(threadsBefore);
+  benchExportPlanetTin(options.quick, out);
   std::error_code ec;
   fs::remove_all(work, ec);
 }

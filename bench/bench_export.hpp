@@ -30,4 +30,7 @@ void benchExportTin(const Heightmap& h, const std::vector<double>& requests, int
                     const std::filesystem::path& work, const std::string& outDir,
                     std::ostream& out);
 
+// Whole planets as TINs (3D error) beside the bintree export.
+void benchExportPlanetTin(bool quick, std::ostream& out);
+
 }  // namespace ps::bench

@@ -164,6 +164,28 @@ TEST(TinMesher, APlanetTinIsClosedAndWithinItsError) {
   }
 }
 
+TEST(TinMesher, APlanetQualityTinKeepsItsSeamClosed) {
+  const terrain::Terrain t = testkit::bumpyTerrain(5, 6, 20000.0);
+  SampleField field;
+  field.width = field.height = t.grid().side();
+  field.heights = t.heights();
+  field.metric = ErrorMetric::kChart3d;
+  field.chart = &t.chart();
+  field.uniformTolerance = 3000.0;
+  TinReport rep;
+  const Tin tin = buildTin(field, {.minAngleDeg = 20.0}, &rep);
+  EXPECT_GT(rep.steinerVertices, 0u);
+  const TinErrorCheck check = measureTinError(field, tin);
+  EXPECT_EQ(check.uncovered, 0u);
+  EXPECT_LE(check.maxRatio, 1.0 + 1e-9);
+  const WeldedMesh welded = weldTin(field, tin);
+  const MeshTopology top = meshTopology(welded.vertices, welded.triangles);
+  EXPECT_EQ(top.borderEdges, 0u);
+  EXPECT_EQ(top.nonManifoldEdges, 0u);
+  EXPECT_EQ(top.degenerate, 0u);
+  EXPECT_EQ(top.euler(), 2);
+}
+
 TEST(TinMesher, RefusesWhatItCannotDo) {
   const int w = 10, h = 10;
   const auto heights = randomRelief(w, h, 1);

@@ -14,8 +14,8 @@ namespace ps::app {
 namespace {
 
 struct ImportArgs {
-  std::string input, output, chart = "latlong", noData = "fill", noDataValue, encoding = "f32",
-                             rule = "hybrid-exact", interpolation = "cubic";
+  std::string input, output, chart = "latlong", noData = "fill", noDataValue, encoding = "stored",
+                             store = "f32", rule = "hybrid-exact", interpolation = "cubic";
   std::optional<double> radius, scale, offset, westLon, spacing;
   long long grid = 0;
 };
@@ -33,10 +33,18 @@ int runImport(const ImportArgs& a) {
   o.spacing = a.spacing;
   o.rule = terrain::errorRuleFromString(a.rule);
   o.interpolation = io::interpolationFromString(a.interpolation);
+  // --encoding f32|u16 named the planet file's storage before web DEM tiles were read: those two
+  // values still do, as --store does.
+  std::string store = a.store;
+  if (a.encoding == "f32" || a.encoding == "u16") {
+    store = a.encoding;
+  } else {
+    o.encoding = io::pngHeightEncodingFromString(a.encoding);
+  }
   io::ImportResult r = io::importHeightmap(a.input, o);
   for (const auto& note : r.notes) std::cerr << "import: " << a.input << ": " << note << "\n";
   io::PlanetSaveOptions save;
-  save.encoding = io::heightEncodingFromString(a.encoding);
+  save.encoding = io::heightEncodingFromString(store);
   save.metadata = r.planet.metadata;
   io::savePlanet(*r.planet.chart, r.planet.heights, r.planet.rule, a.output, save);
   const auto [lo, hi] = std::minmax_element(r.planet.heights.begin(), r.planet.heights.end());
@@ -74,6 +82,10 @@ const CommandRegistration kImport([](CLI::App& root, CLI::App*& sub) -> CommandA
       ->capture_default_str();
   sub->add_option("--nodata-value", a->noDataValue, "Declare the no-data value (a number or nan)");
   sub->add_option("--encoding", a->encoding,
+                  "PNG input: heights as stored (grey), or a web DEM tile's terrain-rgb (Mapbox) "
+                  "or terrarium packing (f32 and u16 are taken as --store, as before)")
+      ->capture_default_str();
+  sub->add_option("--store", a->store,
                   "Planet file heights: f32 (exact) or u16 (quantised, half the size)")
       ->capture_default_str();
   sub->add_option("--interpolation", a->interpolation,
