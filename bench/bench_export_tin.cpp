@@ -12,6 +12,9 @@
 //   tool planet-tin: a planet (Mars from the shared MOLA grid, and a synthetic one) meshed whole
 //     with the 3D error, welded: triangles, measured error, Euler characteristic, against the
 //     bintree export (terrain::meshToError) at the same error
+//   tool overlay: a road stitched (crossing vertices, the added vertices' distance from the
+//     terrain mesh) and stenciled (removed and refilled vertices, the footprint's error, the
+//     ground's error ratio) into the 20 m TIN, with a picture of both
 //   tool control-map: paper 001's experiment: a control region (a disc over a sixth of the tile)
 //     at MinError, elsewhere MaxError, for (5, 50) and (10, 100): triangles against MinError
 //     everywhere, the reduction, and the measured error inside and outside the region
@@ -19,16 +22,17 @@
 #include <cstdlib>
 #include <fstream>
 #include <iostream>
-#include <opencv2/imgcodecs.hpp>
-#include <opencv2/imgproc.hpp>
 
 #include "app/build_paths.hpp"
 #include "bench/bench.hpp"
 #include "bench/bench_export.hpp"
 #include "bench/bench_util.hpp"
+#include "bench/tin_pictures.hpp"
 #include "core/latlong_chart.hpp"
 #include "io/heightmap_import.hpp"
 #include "terrain/error_mesher.hpp"
+#include "tin/overlay.hpp"
+#include "tin/strip.hpp"
 #include "tin/tin_check.hpp"
 #include "tin/tin_mesher.hpp"
 
@@ -92,65 +96,6 @@ std::vector<Run> runDelatin(const Heightmap& h, const std::vector<double>& reque
   return runs;
 }
 
-// Hill shading of the heightmap's samples in [x0, x0 + n)^2, `scale` pixels per sample, north up.
-cv::Mat hillshade(const Heightmap& h, int x0, int y0, int n, int scale) {
-  cv::Mat out(n * scale, n * scale, CV_8UC3);
-  const Eigen::Vector3d sun = Eigen::Vector3d(-1, 1, 1.2).normalized();
-  auto at = [&](int i, int j) {
-    i = std::clamp(i, 0, h.side - 1), j = std::clamp(j, 0, h.side - 1);
-    return double(h.heights[std::size_t(j) * std::size_t(h.side) + std::size_t(i)]);
-  };
-  for (int py = 0; py < n * scale; ++py)
-    for (int px = 0; px < n * scale; ++px) {
-      const int i = x0 + px / scale, j = y0 + (n - 1 - py / scale);
-      const Eigen::Vector3d normal(-(at(i + 1, j) - at(i - 1, j)) / (2 * h.dx),
-                                   -(at(i, j + 1) - at(i, j - 1)) / (2 * h.dy), 1.0);
-      const double shade = std::clamp(normal.normalized().dot(sun), 0.0, 1.0);
-      const auto g = std::uint8_t(60 + 180 * shade);
-      out.at<cv::Vec3b>(py, px) = {g, g, g};
-    }
-  return out;
-}
-
-// Paper 001's picture: the control map (white: MinError) beside the TIN it gives, wireframe over
-// hill shading, on a window across the control region's edge.
-void writeControlMapPicture(const Heightmap& h, const std::vector<bool>& inside, const tin::Tin& t,
-                            const std::string& path) {
-  const int n = std::min(h.side, 128), scale = 5;
-  const int x0 =
-      std::max(0, int(0.5 * (h.side - 1) - h.side * std::sqrt(1.0 / (6.0 * M_PI))) - n / 2);
-  const int y0 = std::max(0, (h.side - n) / 2);
-  cv::Mat left = hillshade(h, x0, y0, n, scale), right = left.clone();
-  for (int py = 0; py < n * scale; ++py)
-    for (int px = 0; px < n * scale; ++px) {
-      const int i = x0 + px / scale, j = y0 + (n - 1 - py / scale);
-      if (inside[std::size_t(j) * std::size_t(h.side) + std::size_t(i)]) {
-        cv::Vec3b& c = left.at<cv::Vec3b>(py, px);
-        for (int k = 0; k < 3; ++k) c[k] = std::uint8_t(155 + c[k] * 100 / 255);
-      } else {
-        cv::Vec3b& c = left.at<cv::Vec3b>(py, px);
-        for (int k = 0; k < 3; ++k) c[k] = std::uint8_t(c[k] / 4);
-      }
-    }
-  auto pixel = [&](const Eigen::Vector2d& p) {
-    return cv::Point2d((p.x() - x0 + 0.5) * scale, (n - 1 - (p.y() - y0) + 0.5) * scale);
-  };
-  for (const auto& tri : t.triangles) {
-    for (int k = 0; k < 3; ++k) {
-      const Eigen::Vector2d& a = t.xy[tri[std::size_t(k)]];
-      const Eigen::Vector2d& b = t.xy[tri[std::size_t((k + 1) % 3)]];
-      if (std::max(a.x(), b.x()) < x0 || std::min(a.x(), b.x()) > x0 + n ||
-          std::max(a.y(), b.y()) < y0 || std::min(a.y(), b.y()) > y0 + n)
-        continue;
-      cv::line(right, pixel(a), pixel(b), cv::Scalar(40, 90, 230), 1, cv::LINE_AA);
-    }
-  }
-  cv::Mat both;
-  cv::hconcat(left, cv::Mat(n * scale, 8, CV_8UC3, cv::Scalar(255, 255, 255)), both);
-  cv::hconcat(both, right, both);
-  cv::imwrite(path, both);
-}
-
 // Paper 001's experiment on this heightmap: a disc of a sixth of the tile's area as the control
 // region.
 void controlMapRows(const Heightmap& h, const std::string& outDir, std::ostream& out) {
@@ -199,6 +144,51 @@ void controlMapRows(const Heightmap& h, const std::string& outDir, std::ostream&
                .dump()
         << std::endl;
   }
+}
+
+// Paper 001's overlay on this heightmap: a 12-sample-wide road along a curve across the tile,
+// stitched into the 20 m TIN, and the same road raised 3 m stenciled into it.
+void overlayRows(const Heightmap& h, const std::string& outDir, std::ostream& out) {
+  const tin::SampleField field = fieldOf(h, 20.0);
+  const tin::Tin terrain = tin::buildTin(field, {});
+  std::vector<Eigen::Vector2d> centre;
+  for (int k = 0; k <= 40; ++k) {
+    const double x = 0.1 * h.side + 0.8 * h.side * k / 40.0;
+    centre.emplace_back(x, 0.45 * h.side + 0.08 * h.side * std::sin(6.0 * x / h.side));
+  }
+  const tin::Strip strip = tin::stripAlong(centre, 12.0);
+  tin::Track road{strip.xy, {}, strip.triangles};
+  for (const auto& p : strip.xy) road.h.push_back(field.heightAt(p.x(), p.y()) + 3.0);
+  tin::OverlayResult result[2];
+  for (const tin::OverlayMode mode : {tin::OverlayMode::kStitch, tin::OverlayMode::kStencil}) {
+    const bool stitch = mode == tin::OverlayMode::kStitch;
+    tin::OverlayResult& r = result[stitch ? 0 : 1];
+    const double ms = timeMs([&] { r = tin::overlayTrack(field, terrain, road, mode); });
+    const tin::MeshTopology top = tin::meshTopology(r.tin.xy.size(), r.tin.triangles);
+    nlohmann::json line = {{"bench", "export"},
+                           {"tool", "overlay"},
+                           {"heightmap", h.name},
+                           {"mode", stitch ? "stitch" : "stencil"},
+                           {"error_m", 20.0},
+                           {"terrain_triangles", terrain.triangles.size()},
+                           {"track_triangles", road.triangles.size()},
+                           {"triangles", r.tin.triangles.size()},
+                           {"euler", top.euler()},
+                           {"non_manifold_edges", top.nonManifoldEdges},
+                           {"ms", ms}};
+    if (stitch) {
+      line["crossing_vertices"] = r.report.crossingVertices;
+      line["added_vertex_error_m"] = r.report.addedVertexErrorM;
+    } else {
+      line["removed_terrain_vertices"] = r.report.removedTerrainVertices;
+      line["refill_vertices"] = r.report.refillVertices;
+      line["footprint_error_m"] = r.report.footprintErrorM;
+      line["outside_error_ratio"] = r.report.outsideErrorRatio;
+    }
+    out << line.dump() << std::endl;
+  }
+  if (!outDir.empty())
+    writeOverlayPicture(h, result[0], result[1], outDir + "/tin_overlay_" + h.name + ".png");
 }
 
 }  // namespace
@@ -281,6 +271,7 @@ void benchExportTin(const Heightmap& h, const std::vector<double>& requests, int
     }
   }
   controlMapRows(h, outDir, out);
+  overlayRows(h, outDir, out);
 }
 
 void benchExportPlanetTin(bool quick, std::ostream& out) {

@@ -9,7 +9,7 @@ seconds="${1:-60}"
 shift || true
 targets=("$@")
 [ ${#targets[@]} -gt 0 ] || targets=(planet_file heightmap_image sidecar_json stroke_journal session_sidecar stroke_script synth_script
-                                 marker_layout calibration)
+                                 marker_layout calibration obj_triangles)
 if ! command -v clang++ >/dev/null; then
   echo "fuzz: clang++ not found (apt-get install clang libclang-rt-14-dev)" >&2
   exit 2

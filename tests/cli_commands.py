@@ -231,6 +231,34 @@ def group_import_export():
         fail("tile.ply has no PLY header")
     if not open(out("globe.glb"), "rb").read(4) == b"glTF":
         fail("globe.glb has no glTF magic")
+    # TINs: the error measured on every sample of the file as written; a road stitched and
+    # stenciled into the tile (its x, y the tile's metres); a demo stroke as a track on the globe.
+    stdout, _ = run("export", out("tile.planet"), "--tin", "--max-error", "1", "--out", out("tile_tin.obj"))
+    tin = json.loads(stdout)
+    if not (tin["tin"] and tin["measured_error_ratio"] <= 1.0 and tin["samples_checked"] == 33 * 33):
+        fail(f"export --tin: {tin}")
+    with open(out("road.obj"), "w") as f:
+        f.write("v 100 200 0\nv 850 500 0\nv 850 560 0\nv 100 260 0\nf 1 2 3\nf 1 3 4\n")
+    for mode in ("stitch", "stencil"):
+        stdout, _ = run("overlay", out("tile.planet"), out("road.obj"), "--mode", mode, "--error", "1",
+                        "--out", out(f"road_{mode}.obj"))
+        r = json.loads(stdout)
+        if r["euler"] != 1 or r["non_manifold_edges"] != 0 or r["track_group_triangles"] < 2:
+            fail(f"overlay --mode {mode}: {r}")
+        if mode == "stitch" and not (r["crossing_vertices"] > 0 and r["added_vertex_error_m"] < 1e-6):
+            fail(f"overlay --mode stitch: {r}")
+        if mode == "stencil" and not (r["footprint_error_m"] < 1e-6 and r["outside_error_ratio"] <= 1.0):
+            fail(f"overlay --mode stencil: {r}")
+        if "g track" not in open(out(f"road_{mode}.obj")).read():
+            fail(f"road_{mode}.obj has no track group")
+    stdout, _ = run("track", os.path.join(SRC, "data", "demo-strokes.txt"), "--width", "20000",
+                    "--planet", out("globe.planet"), "--out", out("demo_track.obj"))
+    track = json.loads(stdout)
+    stdout, _ = run("overlay", out("globe.planet"), out("demo_track.obj"), "--at", track["at"],
+                    "--mode", "stitch", "--error", "200", "--out", out("globe_road.ply"))
+    r = json.loads(stdout)
+    if r["euler"] != 2 or r["border_edges"] != 0 or r["track_group_triangles"] < track["triangles"]:
+        fail(f"a demo stroke overlaid on the globe: {r}")
 
 
 def group_synth_detect():
@@ -304,6 +332,19 @@ def check_bench_row(r):
             "requested_error_m" in r and "true_error_m" in r:
         if r["true_error_m"] > r["requested_error_m"] * (1 + 1e-9) or r.get("triangles", 1) <= 0:
             fail(f"{b}: true error {r['true_error_m']} over the requested {r['requested_error_m']}")
+    tool = r.get("tool")
+    if b == "export" and tool in ("planetsculpt-tin", "planet-tin") and \
+            r["true_error_m"] > r["requested_error_m"] * (1 + 1e-9):
+        fail(f"export {tool}: true error {r['true_error_m']} over the requested {r['requested_error_m']}")
+    if b == "export" and tool == "planet-tin" and (r["euler"] != 2 or r["border_edges"] != 0):
+        fail(f"export planet-tin: not a closed sphere: {r}")
+    if b == "export" and tool == "control-map" and \
+            r["measured_error_inside_m"] > r["min_error_m"] * (1 + 1e-9):
+        fail(f"export control-map: {r['measured_error_inside_m']} m inside the control region")
+    if b == "export" and tool == "overlay" and (r["euler"] != 1 or r.get("added_vertex_error_m", 0) > 1e-6
+                                                or r.get("footprint_error_m", 0) > 1e-6
+                                                or r.get("outside_error_ratio", 0) > 1.0):
+        fail(f"export overlay: {r}")
     if b == "deform" and r.get("modified_vertices", 1) <= 0:
         fail(f"deform: no vertex modified in {r}")
     if b == "erosion" and abs(r.get("volume_drift", 0.0)) > 1e-6:

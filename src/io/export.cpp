@@ -26,20 +26,6 @@ constexpr core::NameTable<ExportFormat, 9> kExportFormats{"export format",
                                                             {ExportFormat::kTiff32, "tif"},
                                                             {ExportFormat::kRaw32, "f32"}}}};
 
-bool isPlanetFile(const std::filesystem::path& path) {
-  std::vector<unsigned char> head(8, 0);
-  std::ifstream f(path, std::ios::binary);
-  if (f) f.read(reinterpret_cast<char*>(head.data()), 8);
-  head.resize(std::size_t(std::max<std::streamsize>(0, f.gcount())));
-  return looksLikePlanetFile(head);
-}
-
-MeshFormat meshFormatOf(ExportFormat f) {
-  return f == ExportFormat::kObj   ? MeshFormat::kObj
-         : f == ExportFormat::kPly ? MeshFormat::kPly
-                                   : MeshFormat::kGlb;
-}
-
 }  // namespace
 
 std::string toString(ExportFormat f) {
@@ -125,6 +111,20 @@ nlohmann::json exportTerrain(const terrain::Terrain& t, const std::filesystem::p
   summary["height"] = h;
   summary["sidecar"] = out.string() + ".json";
   return summary;
+}
+
+bool isPlanetFile(const std::filesystem::path& path) {
+  std::vector<unsigned char> head(8, 0);
+  std::ifstream f(path, std::ios::binary);
+  if (f) f.read(reinterpret_cast<char*>(head.data()), 8);
+  head.resize(std::size_t(std::max<std::streamsize>(0, f.gcount())));
+  return looksLikePlanetFile(head);
+}
+
+MeshFormat meshFormatOf(ExportFormat f) {
+  return f == ExportFormat::kObj   ? MeshFormat::kObj
+         : f == ExportFormat::kPly ? MeshFormat::kPly
+                                   : MeshFormat::kGlb;
 }
 
 nlohmann::json exportTinFromFile(const std::filesystem::path& input,

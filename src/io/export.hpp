@@ -20,6 +20,8 @@ ExportFormat exportFormatFromName(const std::string& name);
 // From the file name's extension (.png .tif .tiff .raw .f32 .obj .ply .glb).
 ExportFormat exportFormatFromPath(const std::filesystem::path& path);
 bool isMeshFormat(ExportFormat f);
+// True when the file starts with a planet file's magic (anything else is taken as a heightmap).
+bool isPlanetFile(const std::filesystem::path& path);
 
 struct ExportOptions {
   std::optional<ExportFormat> format;                   // unset: from the extension
@@ -46,6 +48,8 @@ ExportInput loadExportInput(const std::filesystem::path& path,
 // (nothing resampled; vertical error) as a TIN in a mesh format. `notes` receives what the user
 // must be told about the input.
 struct TinExportOptions;
+enum class MeshFormat;
+MeshFormat meshFormatOf(ExportFormat f);  // obj, ply, glb
 nlohmann::json exportTinFromFile(const std::filesystem::path& input,
                                  const ImportOptions& heightmapOptions,
                                  const std::filesystem::path& out, ExportFormat format,

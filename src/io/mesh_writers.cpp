@@ -66,9 +66,15 @@ void writeObjFile(const MeshData& mesh, const std::filesystem::path& path) {
       std::snprintf(line, sizeof line, "v %.4f %.4f %.4f\n", p.x(), p.y(), p.z());
       f << line;
     }
-    for (std::size_t k = 0; k + 2 < mesh.indices.size(); k += 3) {
-      f << "f " << mesh.indices[k] + 1 << ' ' << mesh.indices[k + 1] + 1 << ' '
-        << mesh.indices[k + 2] + 1 << '\n';
+    const bool grouped = mesh.triangleGroup.size() * 3 == mesh.indices.size();
+    const std::size_t groups = grouped ? mesh.groupNames.size() : 1;
+    for (std::size_t g = 0; g < groups; ++g) {
+      if (grouped) f << "g " << mesh.groupNames[g] << '\n';
+      for (std::size_t k = 0; k + 2 < mesh.indices.size(); k += 3) {
+        if (grouped && mesh.triangleGroup[k / 3] != g) continue;
+        f << "f " << mesh.indices[k] + 1 << ' ' << mesh.indices[k + 1] + 1 << ' '
+          << mesh.indices[k + 2] + 1 << '\n';
+      }
     }
     if (!f) throw std::runtime_error("cannot write " + path.string());
   });

@@ -14,6 +14,10 @@ struct MeshData {
   std::vector<Eigen::Vector3f> normals;    // unit, one per position (PLY and GLB; empty: computed)
   std::vector<std::uint32_t> indices;      // three per triangle
   std::string description;                 // OBJ's and PLY's comment line
+  // OBJ only: a group per triangle (index into groupNames), written as `g NAME` sections in
+  // group order. Empty: one unnamed group.
+  std::vector<std::uint8_t> triangleGroup;
+  std::vector<std::string> groupNames;
 };
 
 // Area-weighted vertex normals of a welded mesh (a vertex without area gets +z).

@@ -192,23 +192,42 @@ nlohmann::json meshAndWrite(tin::SampleField field, const std::filesystem::path&
 
 }  // namespace
 
-nlohmann::json exportTerrainTin(const terrain::Terrain& t, const std::filesystem::path& out,
-                                MeshFormat format, const TinExportOptions& o) {
+tin::SampleField terrainSampleField(const terrain::Terrain& t) {
   tin::SampleField field;
   field.width = field.height = t.grid().side();
   field.heights = t.heights();
-  const int m = t.grid().m();
-  const double hMax = std::max(std::abs(double(t.minHeight())), std::abs(double(t.maxHeight())));
-  double area, maxCoordinate;
   if (const auto* flat = dynamic_cast<const core::FlatChart*>(&t.chart())) {
     field.metric = tin::ErrorMetric::kVertical;
     field.dx = flat->dx();
     field.dy = flat->dy();
-    area = flat->dx() * flat->dy();
-    maxCoordinate = std::max({flat->dx() * m, flat->dy() * m, hMax});
   } else {
     field.metric = tin::ErrorMetric::kChart3d;
     field.chart = &t.chart();
+  }
+  return field;
+}
+
+tin::SampleField heightSampleField(const HeightSamples& s) {
+  tin::SampleField field;
+  field.width = s.width;
+  field.height = s.height;
+  field.heights = s.heights;
+  field.metric = tin::ErrorMetric::kVertical;
+  field.dx = s.dx;
+  field.dy = s.dy;
+  return field;
+}
+
+nlohmann::json exportTerrainTin(const terrain::Terrain& t, const std::filesystem::path& out,
+                                MeshFormat format, const TinExportOptions& o) {
+  const tin::SampleField field = terrainSampleField(t);
+  const int m = t.grid().m();
+  const double hMax = std::max(std::abs(double(t.minHeight())), std::abs(double(t.maxHeight())));
+  double area, maxCoordinate;
+  if (field.metric == tin::ErrorMetric::kVertical) {
+    area = field.dx * field.dy;
+    maxCoordinate = std::max({field.dx * m, field.dy * m, hMax});
+  } else {
     // A lattice cell's area at the equator, where cells are largest.
     const double r = t.chart().radius();
     area = (2 * std::numbers::pi * r / m) * (std::numbers::pi * r / m);
@@ -221,17 +240,11 @@ nlohmann::json exportTerrainTin(const terrain::Terrain& t, const std::filesystem
 
 nlohmann::json exportSamplesTin(const HeightSamples& s, const std::filesystem::path& out,
                                 MeshFormat format, const TinExportOptions& o) {
-  tin::SampleField field;
-  field.width = s.width;
-  field.height = s.height;
-  field.heights = s.heights;
-  field.metric = tin::ErrorMetric::kVertical;
-  field.dx = s.dx;
-  field.dy = s.dy;
   double hMax = 0;
   for (const float h : s.heights) hMax = std::max(hMax, double(std::abs(h)));
   const double maxCoordinate = std::max({s.dx * (s.width - 1), s.dy * (s.height - 1), hMax});
-  nlohmann::json summary = meshAndWrite(field, out, format, o, s.dx * s.dy, maxCoordinate);
+  nlohmann::json summary =
+      meshAndWrite(heightSampleField(s), out, format, o, s.dx * s.dy, maxCoordinate);
   summary["error_metric"] = "vertical";
   summary["samples"] = {s.width, s.height};
   summary["spacing_m"] = {s.dx, s.dy};

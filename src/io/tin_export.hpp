@@ -9,6 +9,7 @@
 #include "io/heightmap_import.hpp"
 #include "io/mesh_export.hpp"
 #include "terrain/terrain.hpp"
+#include "tin/sample_field.hpp"
 
 namespace ps::io {
 
@@ -21,6 +22,12 @@ struct TinExportOptions {
   double minAngleDeg = 0;  // 0: fewest triangles (greedy); else the quality refinement
   double minAreaM2 = 0;    // triangles smaller than this are not split for their angle
 };
+
+// The samples a TIN of this terrain is measured on: the 3D distance on a sphere's chart, the
+// vertical one on a flat chart (the field refers to the terrain's heights: keep it alive).
+tin::SampleField terrainSampleField(const terrain::Terrain& terrain);
+// A flat heightmap's own samples, vertical distance (refers to samples.heights).
+tin::SampleField heightSampleField(const HeightSamples& samples);
 
 // A planet (3D distance on its chart; the mesh welded at the seam and poles) or a flat terrain
 // from a planet file (vertical distance).

@@ -5,6 +5,7 @@
 #include <map>
 #include <unordered_map>
 
+#include "tin/tin_locator.hpp"
 #include "tin/triangle_error.hpp"
 
 namespace ps::tin {
@@ -35,53 +36,26 @@ TinErrorCheck measureTinError(const SampleField& field, const Tin& tin,
   std::vector<Eigen::Vector3d> corner(tin.xy.size());
   for (std::size_t v = 0; v < tin.xy.size(); ++v)
     corner[v] = rounded ? written[v] : field.positionAt(tin.xy[v].x(), tin.xy[v].y(), tin.h[v]);
-  // Buckets of about 8 x 8 samples, each listing the triangles whose bounding box touches it.
-  constexpr int kBucket = 8;
-  const int bw = (field.width + kBucket - 1) / kBucket, bh = (field.height + kBucket - 1) / kBucket;
-  std::vector<std::vector<std::uint32_t>> bucket(std::size_t(bw) * std::size_t(bh));
-  for (std::size_t t = 0; t < tin.triangles.size(); ++t) {
-    double x0 = INFINITY, x1 = -INFINITY, y0 = INFINITY, y1 = -INFINITY;
-    for (const auto v : tin.triangles[t]) {
-      x0 = std::min(x0, xy[v].x()), x1 = std::max(x1, xy[v].x());
-      y0 = std::min(y0, xy[v].y()), y1 = std::max(y1, xy[v].y());
-    }
-    const int bx0 = std::clamp(int(std::floor(x0 - 1e-6)) / kBucket, 0, bw - 1);
-    const int bx1 = std::clamp(int(std::floor(x1 + 1e-6)) / kBucket, 0, bw - 1);
-    const int by0 = std::clamp(int(std::floor(y0 - 1e-6)) / kBucket, 0, bh - 1);
-    const int by1 = std::clamp(int(std::floor(y1 + 1e-6)) / kBucket, 0, bh - 1);
-    for (int by = by0; by <= by1; ++by)
-      for (int bx = bx0; bx <= bx1; ++bx)
-        bucket[std::size_t(by) * std::size_t(bw) + std::size_t(bx)].push_back(std::uint32_t(t));
-  }
+  const TinLocator locator(xy, tin.triangles, field.width, field.height);
 
   TinErrorCheck out;
   for (int j = 0; j < field.height; ++j) {
     for (int i = 0; i < field.width; ++i) {
       const std::size_t k = field.index(i, j);
-      const Eigen::Vector2d p(i, j);
       double best = INFINITY;  // a sample on an edge belongs to both sides: the smaller error
-      for (const auto t :
-           bucket[std::size_t(j / kBucket) * std::size_t(bw) + std::size_t(i / kBucket)]) {
-        const auto& tri = tin.triangles[t];
-        const Eigen::Vector2d &a = xy[tri[0]], &b = xy[tri[1]], &c = xy[tri[2]];
-        const double area = (b - a).x() * (c - a).y() - (b - a).y() * (c - a).x();
-        if (area == 0) continue;
-        const double l0 = ((b - p).x() * (c - p).y() - (b - p).y() * (c - p).x()) / area;
-        const double l1 = ((c - p).x() * (a - p).y() - (c - p).y() * (a - p).x()) / area;
-        const double l2 = 1.0 - l0 - l1;
-        constexpr double kOn = -1e-9;
-        if (l0 < kOn || l1 < kOn || l2 < kOn) continue;
+      locator.visit({i, j}, [&](const TinLocator::Hit& hit) {
+        const auto& tri = tin.triangles[hit.triangle];
         double error;
         if (field.metric == ErrorMetric::kVertical) {
           error = std::abs(double(field.heights[k]) -
                            planeHeight(corner[tri[0]], corner[tri[1]], corner[tri[2]],
-                                       {i * field.dx, j * field.dy}, l0, l1, l2));
+                                       {i * field.dx, j * field.dy}, hit.l0, hit.l1, hit.l2));
         } else {
           error = pointTriangleDistance(field.chart->position(i, j, field.heights[k]),
                                         corner[tri[0]], corner[tri[1]], corner[tri[2]]);
         }
         best = std::min(best, error);
-      }
+      });
       ++out.samples;
       if (!std::isfinite(best)) {
         ++out.uncovered;
@@ -111,7 +85,8 @@ WeldedMesh weldTin(const SampleField& field, const Tin& tin) {
     out.vertexOf[v] = it->second;
   }
   out.vertices = key.size();
-  for (const auto& t : tin.triangles) {
+  for (std::size_t k = 0; k < tin.triangles.size(); ++k) {
+    const auto& t = tin.triangles[k];
     const std::array<std::uint32_t, 3> w = {out.vertexOf[t[0]], out.vertexOf[t[1]],
                                             out.vertexOf[t[2]]};
     if (w[0] == w[1] || w[1] == w[2] || w[2] == w[0]) {
@@ -119,6 +94,7 @@ WeldedMesh weldTin(const SampleField& field, const Tin& tin) {
       continue;
     }
     out.triangles.push_back(w);
+    out.sourceTriangle.push_back(std::uint32_t(k));
   }
   return out;
 }

@@ -31,7 +31,8 @@ struct WeldedMesh {
   std::vector<std::uint32_t> vertexOf;  // TIN vertex -> welded vertex
   std::size_t vertices = 0;
   std::vector<std::array<std::uint32_t, 3>> triangles;
-  std::size_t collapsed = 0;  // TIN triangles dropped (two corners welded into one)
+  std::vector<std::uint32_t> sourceTriangle;  // the TIN triangle each one came from
+  std::size_t collapsed = 0;                  // TIN triangles dropped (two corners welded into one)
 };
 WeldedMesh weldTin(const SampleField& field, const Tin& tin);
 

@@ -12,6 +12,7 @@
 
 #include "core/input_error.hpp"
 #include "tin/cdt.hpp"
+#include "tin/greedy_inserter.hpp"
 #include "tin/triangle_error.hpp"
 
 namespace ps::tin {
@@ -21,22 +22,6 @@ namespace {
 using Clock = std::chrono::steady_clock;
 double msSince(Clock::time_point t0) {
   return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
-}
-
-double vertexHeight(const SampleField& field, const VertexHandle& v) {
-  double& h = v->info().height;
-  if (std::isnan(h)) h = field.heightAt(v->point().x(), v->point().y());
-  return h;
-}
-
-LatticeTriangle latticeTriangle(const SampleField& field, const FaceHandle& f) {
-  LatticeTriangle t;
-  for (int k = 0; k < 3; ++k) {
-    const Point& p = f->vertex(k)->point();
-    t.xy[std::size_t(k)] = {p.x(), p.y()};
-    t.h[std::size_t(k)] = vertexHeight(field, f->vertex(k));
-  }
-  return t;
 }
 
 // sin^2 of the triangle's smallest angle (as CGAL's Delaunay_mesh_criteria_2 computes it).
@@ -53,60 +38,6 @@ double angleDegFromSine2(double s2) {
   return std::asin(std::sqrt(std::clamp(s2, 0.0, 1.0))) * 180.0 / std::numbers::pi;
 }
 
-// Greedy insertion: a max-heap of triangles over tolerance, each with its worst sample. An
-// entry names its triangle by its three vertices (handles of vertices stay valid; faces do
-// not), so an entry whose triangle was split since is recognised and dropped.
-class GreedyInserter {
- public:
-  GreedyInserter(Cdt& cdt, const SampleField& field) : cdt_(cdt), field_(field) {}
-
-  void measureAll() {
-    for (auto f = cdt_.finite_faces_begin(); f != cdt_.finite_faces_end(); ++f) measure(f);
-  }
-
-  void run() {
-    const int m = field_.width - 1;
-    const bool twins = field_.metric == ErrorMetric::kChart3d && field_.chart->wrapsU();
-    while (!queue_.empty()) {
-      const Entry e = queue_.top();
-      queue_.pop();
-      FaceHandle f;
-      if (!cdt_.is_face(e.a, e.b, e.c, f)) continue;
-      const int i = int(e.sample % std::uint64_t(field_.width));
-      const int j = int(e.sample / std::uint64_t(field_.width));
-      insert(i, j, f);
-      if (twins && (i == 0 || i == m)) insert(m - i, j, FaceHandle());
-    }
-  }
-
- private:
-  struct Entry {
-    double ratio;
-    std::uint64_t sample;
-    VertexHandle a, b, c;
-    bool operator<(const Entry& o) const { return ratio < o.ratio; }
-  };
-
-  void measure(const FaceHandle& f) {
-    const WorstSample w = worstSample(field_, latticeTriangle(field_, f));
-    if (w.ratio > 1.0)
-      queue_.push({w.ratio, std::uint64_t(w.sample), f->vertex(0), f->vertex(1), f->vertex(2)});
-  }
-
-  void insert(int i, int j, const FaceHandle& hint) {
-    const VertexHandle v = cdt_.insert(Point(i, j), hint);
-    v->info().height = field_.at(i, j);
-    auto f = cdt_.incident_faces(v), done = f;
-    do {
-      if (!cdt_.is_infinite(f)) measure(f);
-    } while (++f != done);
-  }
-
-  Cdt& cdt_;
-  const SampleField& field_;
-  std::priority_queue<Entry> queue_;
-};
-
 // Delaunay_mesher_2's criterion: the angle (above minArea) and the error on every sample.
 class QualityCriteria {
  public:
@@ -114,7 +45,7 @@ class QualityCriteria {
     double sine2 = 1, ratio = 0;
     bool small = false;
     // The mesher refines the lowest first: errors over tolerance (largest first), then angles.
-    double key() const { return ratio > 1 ? -ratio : sine2; }
+    double key() const { return ratio > kWithinTolerance ? -ratio : sine2; }
     bool operator<(const Quality& o) const { return key() < o.key(); }
   };
 
@@ -125,7 +56,7 @@ class QualityCriteria {
    public:
     Is_bad(const QualityCriteria& c) : c_(c) {}
     CGAL::Mesh_2::Face_badness operator()(const Quality& q) const {
-      if (q.ratio > 1.0) return CGAL::Mesh_2::IMPERATIVELY_BAD;
+      if (q.ratio > kWithinTolerance) return CGAL::Mesh_2::IMPERATIVELY_BAD;
       if (!q.small && q.sine2 < c_.bound_) return CGAL::Mesh_2::BAD;
       return CGAL::Mesh_2::NOT_BAD;
     }

@@ -1,0 +1,82 @@
+#pragma once
+// Greedy insertion into a CGAL triangulation (tin/cdt.hpp: include from .cpp files only), shared
+// by the TIN mesher and the overlay's re-meshing around a stenciled track.
+#include <queue>
+
+#include "tin/cdt.hpp"
+#include "tin/sample_field.hpp"
+#include "tin/triangle_error.hpp"
+
+namespace ps::tin {
+
+inline double vertexHeight(const SampleField& field, const VertexHandle& v) {
+  double& h = v->info().height;
+  if (std::isnan(h)) h = field.heightAt(v->point().x(), v->point().y());
+  return h;
+}
+
+inline LatticeTriangle latticeTriangle(const SampleField& field, const FaceHandle& f) {
+  LatticeTriangle t;
+  for (int k = 0; k < 3; ++k) {
+    const Point& p = f->vertex(k)->point();
+    t.xy[std::size_t(k)] = {p.x(), p.y()};
+    t.h[std::size_t(k)] = vertexHeight(field, f->vertex(k));
+  }
+  return t;
+}
+
+// Greedy insertion: a max-heap of triangles over tolerance, each with its worst sample. An
+// entry names its triangle by its three vertices (handles of vertices stay valid; faces do
+// not), so an entry whose triangle was split since is recognised and dropped.
+class GreedyInserter {
+ public:
+  GreedyInserter(Cdt& cdt, const SampleField& field) : cdt_(cdt), field_(field) {}
+
+  void measureAll() {
+    for (auto f = cdt_.finite_faces_begin(); f != cdt_.finite_faces_end(); ++f) measure(f);
+  }
+
+  void run() {
+    const int m = field_.width - 1;
+    const bool twins = field_.metric == ErrorMetric::kChart3d && field_.chart->wrapsU();
+    while (!queue_.empty()) {
+      const Entry e = queue_.top();
+      queue_.pop();
+      FaceHandle f;
+      if (!cdt_.is_face(e.a, e.b, e.c, f)) continue;
+      const int i = int(e.sample % std::uint64_t(field_.width));
+      const int j = int(e.sample / std::uint64_t(field_.width));
+      insert(i, j, f);
+      if (twins && (i == 0 || i == m)) insert(m - i, j, FaceHandle());
+    }
+  }
+
+ private:
+  struct Entry {
+    double ratio;
+    std::uint64_t sample;
+    VertexHandle a, b, c;
+    bool operator<(const Entry& o) const { return ratio < o.ratio; }
+  };
+
+  void measure(const FaceHandle& f) {
+    const WorstSample w = worstSample(field_, latticeTriangle(field_, f));
+    if (w.ratio > kWithinTolerance)
+      queue_.push({w.ratio, std::uint64_t(w.sample), f->vertex(0), f->vertex(1), f->vertex(2)});
+  }
+
+  void insert(int i, int j, const FaceHandle& hint) {
+    const VertexHandle v = cdt_.insert(Point(i, j), hint);
+    v->info().height = field_.at(i, j);
+    auto f = cdt_.incident_faces(v), done = f;
+    do {
+      if (!cdt_.is_infinite(f)) measure(f);
+    } while (++f != done);
+  }
+
+  Cdt& cdt_;
+  const SampleField& field_;
+  std::priority_queue<Entry> queue_;
+};
+
+}  // namespace ps::tin

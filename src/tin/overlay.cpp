@@ -1,0 +1,270 @@
+#include "tin/overlay.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <optional>
+#include <set>
+
+#include "core/input_error.hpp"
+#include "tin/cdt.hpp"
+#include "tin/greedy_inserter.hpp"
+#include "tin/tin_check.hpp"
+#include "tin/tin_locator.hpp"
+#include "tin/triangle_error.hpp"
+
+namespace ps::tin {
+
+namespace {
+
+struct PolyVertex {
+  Eigen::Vector2d p;
+  double h;
+};
+
+// Sutherland-Hodgman: the polygon's part inside the half-plane sign * (p[axis] - bound) <= 0.
+std::vector<PolyVertex> clipHalfPlane(const std::vector<PolyVertex>& in, int axis, double bound,
+                                      double sign) {
+  std::vector<PolyVertex> out;
+  for (std::size_t k = 0; k < in.size(); ++k) {
+    const PolyVertex& a = in[k];
+    const PolyVertex& b = in[(k + 1) % in.size()];
+    const double da = sign * (a.p[axis] - bound), db = sign * (b.p[axis] - bound);
+    if (da <= 0) out.push_back(a);
+    if ((da < 0 && db > 0) || (da > 0 && db < 0)) {
+      const double s = da / (da - db);
+      PolyVertex c{a.p + s * (b.p - a.p), a.h + s * (b.h - a.h)};
+      c.p[axis] = bound;  // exactly on the border, whatever the rounding
+      out.push_back(c);
+    }
+  }
+  return out;
+}
+
+double signedArea(const Eigen::Vector2d& a, const Eigen::Vector2d& b, const Eigen::Vector2d& c) {
+  return 0.5 * ((b - a).x() * (c - a).y() - (b - a).y() * (c - a).x());
+}
+
+// The track's part inside [0, xMax] x [0, yMax]: triangles wholly inside kept, the others cut
+// (fan-triangulated) or dropped; vertices shared by exact coordinates.
+Track clipTrack(const Track& in, double xMax, double yMax, std::size_t& clipped) {
+  Track out;
+  std::map<std::pair<double, double>, std::uint32_t> index;
+  auto vertex = [&](const PolyVertex& v) {
+    const auto [it, fresh] =
+        index.emplace(std::pair(v.p.x(), v.p.y()), std::uint32_t(out.xy.size()));
+    if (fresh) out.xy.push_back(v.p), out.h.push_back(v.h);
+    return it->second;
+  };
+  for (const auto& t : in.triangles) {
+    std::vector<PolyVertex> poly;
+    for (const auto v : t) poly.push_back({in.xy[v], in.h[v]});
+    const bool inside = std::all_of(poly.begin(), poly.end(), [&](const PolyVertex& v) {
+      return v.p.x() >= 0 && v.p.x() <= xMax && v.p.y() >= 0 && v.p.y() <= yMax;
+    });
+    if (!inside) {
+      ++clipped;
+      poly = clipHalfPlane(poly, 0, 0.0, -1.0);
+      poly = clipHalfPlane(poly, 0, xMax, 1.0);
+      poly = clipHalfPlane(poly, 1, 0.0, -1.0);
+      poly = clipHalfPlane(poly, 1, yMax, 1.0);
+    }
+    for (std::size_t k = 1; k + 1 < poly.size(); ++k) {
+      if (std::abs(signedArea(poly[0].p, poly[k].p, poly[k + 1].p)) < 1e-12) continue;
+      out.triangles.push_back({vertex(poly[0]), vertex(poly[k]), vertex(poly[k + 1])});
+    }
+  }
+  return out;
+}
+
+std::set<std::pair<std::uint32_t, std::uint32_t>> edgesOf(
+    const std::vector<std::array<std::uint32_t, 3>>& triangles) {
+  std::set<std::pair<std::uint32_t, std::uint32_t>> edges;
+  for (const auto& t : triangles)
+    for (int k = 0; k < 3; ++k) {
+      const std::uint32_t a = t[std::size_t(k)], b = t[std::size_t((k + 1) % 3)];
+      edges.insert({std::min(a, b), std::max(a, b)});
+    }
+  return edges;
+}
+
+// A track must be a proper mesh in the plane: no degenerate triangle (checked as given, before
+// clipping), no two edges crossing, no two triangles overlapping (checked on the clipped track).
+void refuseDegenerateTriangles(const Track& t) {
+  for (std::size_t k = 0; k < t.triangles.size(); ++k) {
+    const auto& tri = t.triangles[k];
+    for (const auto v : tri)
+      if (v >= t.xy.size() || v >= t.h.size())
+        throw core::InputError("track triangle " + std::to_string(k + 1) + " names vertex " +
+                               std::to_string(v + 1) + " of " + std::to_string(t.xy.size()));
+    if (std::abs(signedArea(t.xy[tri[0]], t.xy[tri[1]], t.xy[tri[2]])) < 1e-12)
+      throw core::InputError("track triangle " + std::to_string(k + 1) +
+                             " is degenerate (its corners are collinear or repeated)");
+  }
+}
+
+void refuseSelfIntersection(const Track& t, const TinLocator& footprint) {
+  Cdt cdt;
+  std::vector<VertexHandle> v;
+  for (const auto& p : t.xy) v.push_back(cdt.insert(Point(p.x(), p.y())));
+  const std::size_t distinct = cdt.number_of_vertices();
+  for (const auto& [a, b] : edgesOf(t.triangles)) cdt.insert_constraint(v[a], v[b]);
+  if (cdt.number_of_vertices() != distinct)
+    throw core::InputError(
+        "the track crosses itself: " + std::to_string(cdt.number_of_vertices() - distinct) +
+        " points where its edges cross (seen from above)");
+  double trackArea = 0, covered = 0;
+  for (const auto& tri : t.triangles)
+    trackArea += std::abs(signedArea(t.xy[tri[0]], t.xy[tri[1]], t.xy[tri[2]]));
+  for (auto f = cdt.finite_faces_begin(); f != cdt.finite_faces_end(); ++f) {
+    const Eigen::Vector2d a(f->vertex(0)->point().x(), f->vertex(0)->point().y());
+    const Eigen::Vector2d b(f->vertex(1)->point().x(), f->vertex(1)->point().y());
+    const Eigen::Vector2d c(f->vertex(2)->point().x(), f->vertex(2)->point().y());
+    if (footprint.contains((a + b + c) / 3.0, 0.0)) covered += std::abs(signedArea(a, b, c));
+  }
+  if (trackArea > covered * (1 + 1e-9) + 1e-12)
+    throw core::InputError("the track overlaps itself: its triangles cover " +
+                           core::exactNumber(trackArea) + " lattice units^2 but only " +
+                           core::exactNumber(covered) + " of ground");
+}
+
+}  // namespace
+
+OverlayResult overlayTrack(const SampleField& field, const Tin& terrain, const Track& trackIn,
+                           OverlayMode mode) {
+  field.validate("overlay");
+  OverlayResult result;
+  OverlayReport& rep = result.report;
+  rep.terrainVertices = terrain.xy.size();
+  rep.trackVertices = trackIn.xy.size();
+  rep.trackTriangles = trackIn.triangles.size();
+  const double xMax = field.width - 1, yMax = field.height - 1;
+  refuseDegenerateTriangles(trackIn);
+  const Track track = clipTrack(trackIn, xMax, yMax, rep.clippedTrackTriangles);
+  if (track.triangles.empty()) throw core::InputError("the track lies wholly outside the terrain");
+  const TinLocator footprint(track.xy, track.triangles, field.width, field.height);
+  refuseSelfIntersection(track, footprint);
+  const TinLocator onTerrain(terrain.xy, terrain.triangles, field.width, field.height);
+  std::vector<Eigen::Vector3d> terrainCorner(terrain.xy.size());
+  for (std::size_t v = 0; v < terrain.xy.size(); ++v)
+    terrainCorner[v] = field.positionAt(terrain.xy[v].x(), terrain.xy[v].y(), terrain.h[v]);
+
+  Cdt cdt;
+  std::vector<VertexHandle> terrainVertex(terrain.xy.size());
+  for (std::size_t v = 0; v < terrain.xy.size(); ++v) {
+    terrainVertex[v] = cdt.insert(Point(terrain.xy[v].x(), terrain.xy[v].y()));
+    terrainVertex[v]->info().height = terrain.h[v];
+  }
+  if (mode == OverlayMode::kStitch) {
+    // Every terrain edge constrained: the triangulation is the terrain's, edge for edge.
+    for (const auto& [a, b] : edgesOf(terrain.triangles))
+      cdt.insert_constraint(terrainVertex[a], terrainVertex[b]);
+  } else {
+    for (std::size_t v = 0; v < terrain.xy.size(); ++v) {
+      const Eigen::Vector2d& p = terrain.xy[v];
+      const bool corner = (p.x() == 0 || p.x() == xMax) && (p.y() == 0 || p.y() == yMax);
+      if (!corner && footprint.contains(p)) {
+        cdt.remove(terrainVertex[v]);
+        ++rep.removedTerrainVertices;
+      }
+    }
+  }
+  std::vector<VertexHandle> trackVertex(track.xy.size());
+  for (std::size_t v = 0; v < track.xy.size(); ++v) {
+    trackVertex[v] = cdt.insert(Point(track.xy[v].x(), track.xy[v].y()));
+    if (mode == OverlayMode::kStencil) trackVertex[v]->info().height = track.h[v];
+  }
+  for (const auto& [a, b] : edgesOf(track.triangles))
+    cdt.insert_constraint(trackVertex[a], trackVertex[b]);
+
+  std::vector<float> tolerance;
+  if (mode == OverlayMode::kStencil) {
+    // The ground outside the footprint, meshed again to the error; the footprint is the track's.
+    const std::size_t before = cdt.number_of_vertices();
+    tolerance.resize(field.heights.size());
+    for (int j = 0; j < field.height; ++j)
+      for (int i = 0; i < field.width; ++i) {
+        const std::size_t k = field.index(i, j);
+        tolerance[k] = footprint.contains({i, j}) ? 1e30f : float(field.tolerance(k));
+      }
+    SampleField refill = field;
+    refill.perSampleTolerance = tolerance;
+    GreedyInserter greedy(cdt, refill);
+    greedy.measureAll();
+    greedy.run();
+    rep.refillVertices = cdt.number_of_vertices() - before;
+  }
+
+  // Vertices out: a stitch's added ones (track corners, crossings) sit on the terrain mesh.
+  std::set<VertexHandle> fromTrack(trackVertex.begin(), trackVertex.end());
+  std::uint32_t next = 0;
+  for (auto v = cdt.finite_vertices_begin(); v != cdt.finite_vertices_end(); ++v) {
+    v->info().index = next++;
+    const Eigen::Vector2d p(v->point().x(), v->point().y());
+    Eigen::Vector3d position;
+    if (std::isnan(v->info().height)) {
+      std::optional<TinLocator::Hit> host;
+      onTerrain.visit(p, [&](const TinLocator::Hit& hit) {
+        if (!host) host = hit;
+      });
+      if (!host) throw std::logic_error("overlay: a track vertex lies outside the terrain mesh");
+      const auto& tri = terrain.triangles[host->triangle];
+      v->info().height = host->l0 * terrain.h[tri[0]] + host->l1 * terrain.h[tri[1]] +
+                         host->l2 * terrain.h[tri[2]];
+      position = host->l0 * terrainCorner[tri[0]] + host->l1 * terrainCorner[tri[1]] +
+                 host->l2 * terrainCorner[tri[2]];
+      rep.addedVertexErrorM =
+          std::max(rep.addedVertexErrorM,
+                   pointTriangleDistance(position, terrainCorner[tri[0]], terrainCorner[tri[1]],
+                                         terrainCorner[tri[2]]));
+      if (!fromTrack.count(v)) ++rep.crossingVertices;
+    } else {
+      position = field.positionAt(p.x(), p.y(), v->info().height);
+    }
+    result.tin.xy.push_back(p);
+    result.tin.h.push_back(v->info().height);
+    result.positions.push_back(position);
+  }
+  for (auto f = cdt.finite_faces_begin(); f != cdt.finite_faces_end(); ++f) {
+    const std::array<std::uint32_t, 3> t = {f->vertex(0)->info().index, f->vertex(1)->info().index,
+                                            f->vertex(2)->info().index};
+    result.tin.triangles.push_back(t);
+    const Eigen::Vector2d centroid =
+        (result.tin.xy[t[0]] + result.tin.xy[t[1]] + result.tin.xy[t[2]]) / 3.0;
+    result.onTrack.push_back(footprint.contains(centroid, 0.0) ? 1 : 0);
+  }
+
+  if (mode == OverlayMode::kStencil) {
+    // Inside the footprint: the track's surface against the result's, sample by sample.
+    std::vector<Eigen::Vector3d> trackCorner(track.xy.size());
+    for (std::size_t v = 0; v < track.xy.size(); ++v)
+      trackCorner[v] = field.positionAt(track.xy[v].x(), track.xy[v].y(), track.h[v]);
+    const TinLocator onResult(result.tin.xy, result.tin.triangles, field.width, field.height);
+    for (int j = 0; j < field.height; ++j)
+      for (int i = 0; i < field.width; ++i) {
+        std::optional<TinLocator::Hit> inTrack;
+        footprint.visit({i, j}, [&](const TinLocator::Hit& hit) {
+          if (!inTrack) inTrack = hit;
+        });
+        if (!inTrack) continue;
+        const auto& tt = track.triangles[inTrack->triangle];
+        const Eigen::Vector3d q = inTrack->l0 * trackCorner[tt[0]] +
+                                  inTrack->l1 * trackCorner[tt[1]] +
+                                  inTrack->l2 * trackCorner[tt[2]];
+        double best = INFINITY;
+        onResult.visit({i, j}, [&](const TinLocator::Hit& hit) {
+          const auto& rt = result.tin.triangles[hit.triangle];
+          best = std::min(best,
+                          pointTriangleDistance(q, result.positions[rt[0]], result.positions[rt[1]],
+                                                result.positions[rt[2]]));
+        });
+        rep.footprintErrorM = std::max(rep.footprintErrorM, best);
+      }
+    SampleField outside = field;
+    outside.perSampleTolerance = tolerance;
+    rep.outsideErrorRatio = measureTinError(outside, result.tin, result.positions).maxRatio;
+  }
+  return result;
+}
+
+}  // namespace ps::tin

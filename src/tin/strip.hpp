@@ -1,0 +1,22 @@
+#pragma once
+// A strip of a given width along a polyline: what a stroke becomes as a track (a road along a
+// sculpted ridge), in any plane frame.
+#include <Eigen/Core>
+#include <array>
+#include <cstdint>
+#include <vector>
+
+namespace ps::tin {
+
+struct Strip {
+  std::vector<Eigen::Vector2d> xy;  // two per centre point: left then right of the direction
+  std::vector<std::array<std::uint32_t, 3>> triangles;  // two per segment, counter-clockwise
+};
+
+// Points closer than 1e-9 of the width to the previous one are dropped; each point's two
+// vertices are offset by half the width along the bisector of its segments (a mitre, limited to
+// twice the half width at sharp turns). Throws core::InputError for a width that is not
+// positive or a polyline of fewer than two distinct points.
+Strip stripAlong(const std::vector<Eigen::Vector2d>& centre, double width);
+
+}  // namespace ps::tin

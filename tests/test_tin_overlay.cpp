@@ -1,0 +1,291 @@
+// Tracks stitched and stenciled into a terrain TIN (tin/overlay): the surface kept (stitch) or
+// the track's kept and the ground within its error (stencil), every input edge present, the
+// mesh a manifold; refusals of tracks that are not proper meshes; the OBJ track reader.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <fstream>
+#include <random>
+
+#include "core/input_error.hpp"
+#include "fresh_dir.hpp"
+#include "io/obj_triangles.hpp"
+#include "io/overlay_export.hpp"
+#include "io/planet_file.hpp"
+#include "test_terrains.hpp"
+#include "tin/overlay.hpp"
+#include "tin/tin_check.hpp"
+#include "tin/tin_locator.hpp"
+
+namespace ps::tin {
+namespace {
+
+struct Scene {
+  int w = 61, h = 47;
+  std::vector<float> heights;
+  SampleField field;
+  Tin terrain;
+};
+
+Scene makeScene(double tolerance, std::uint32_t seed) {
+  Scene s;
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> uni(0, 1);
+  s.heights.resize(std::size_t(s.w) * std::size_t(s.h));
+  for (int j = 0; j < s.h; ++j)
+    for (int i = 0; i < s.w; ++i)
+      s.heights[std::size_t(j * s.w + i)] =
+          float(30 * std::sin(0.15 * i) * std::cos(0.2 * j) + 10 * std::sin(0.05 * i * j / 7.0) +
+                0.5 * uni(rng));
+  s.field.width = s.w;
+  s.field.height = s.h;
+  s.field.heights = s.heights;
+  s.field.dx = 2.0;
+  s.field.dy = 2.0;
+  s.field.uniformTolerance = tolerance;
+  s.terrain = buildTin(s.field, {});
+  return s;
+}
+
+// A road: a strip of quads (two triangles each) along a curve, `width` lattice units wide.
+Track road(const std::vector<Eigen::Vector2d>& centre, double width, double lift,
+           const SampleField& field) {
+  Track t;
+  for (std::size_t k = 0; k < centre.size(); ++k) {
+    const Eigen::Vector2d d =
+        (centre[std::min(k + 1, centre.size() - 1)] - centre[k == 0 ? 0 : k - 1]).normalized();
+    const Eigen::Vector2d n(-d.y(), d.x());
+    for (const double side : {-0.5, 0.5}) {
+      const Eigen::Vector2d p = centre[k] + side * width * n;
+      t.xy.push_back(p);
+      t.h.push_back(field.heightAt(std::clamp(p.x(), 0.0, double(field.width - 1)),
+                                   std::clamp(p.y(), 0.0, double(field.height - 1))) +
+                    lift);
+    }
+    if (k > 0) {
+      const auto a = std::uint32_t(2 * k - 2), b = a + 1, c = a + 2, d2 = a + 3;
+      t.triangles.push_back({a, c, d2});
+      t.triangles.push_back({a, d2, b});
+    }
+  }
+  return t;
+}
+
+std::vector<Eigen::Vector2d> curve(double x0, double x1, double y, int n) {
+  std::vector<Eigen::Vector2d> c;
+  for (int k = 0; k < n; ++k) {
+    const double x = x0 + (x1 - x0) * k / (n - 1);
+    c.emplace_back(x, y + 6 * std::sin(0.2 * x) + 0.37);
+  }
+  return c;
+}
+
+// The total length of `edges` lying on the segment ab (collinear and inside it).
+double coveredLength(const Eigen::Vector2d& a, const Eigen::Vector2d& b, const Tin& tin) {
+  const Eigen::Vector2d d = b - a;
+  const double len = d.norm();
+  double covered = 0;
+  std::set<std::pair<std::uint32_t, std::uint32_t>> seen;
+  for (const auto& t : tin.triangles)
+    for (int k = 0; k < 3; ++k) {
+      const std::uint32_t p = t[std::size_t(k)], q = t[std::size_t((k + 1) % 3)];
+      if (!seen.insert({std::min(p, q), std::max(p, q)}).second) continue;
+      const Eigen::Vector2d &u = tin.xy[p], &v = tin.xy[q];
+      auto offLine = [&](const Eigen::Vector2d& x) {
+        return std::abs(d.x() * (x - a).y() - d.y() * (x - a).x()) / len;
+      };
+      auto along = [&](const Eigen::Vector2d& x) { return (x - a).dot(d) / len; };
+      if (offLine(u) > 1e-7 || offLine(v) > 1e-7) continue;
+      if (std::min(along(u), along(v)) < -1e-7 || std::max(along(u), along(v)) > len + 1e-7)
+        continue;
+      covered += (v - u).norm();
+    }
+  return covered;
+}
+
+double heightOn(const Tin& tin, const TinLocator& where, const Eigen::Vector2d& p) {
+  double h = NAN;
+  where.visit(p, [&](const TinLocator::Hit& hit) {
+    if (std::isnan(h)) {
+      const auto& t = tin.triangles[hit.triangle];
+      h = hit.l0 * tin.h[t[0]] + hit.l1 * tin.h[t[1]] + hit.l2 * tin.h[t[2]];
+    }
+  });
+  return h;
+}
+
+TEST(TinOverlay, StitchingKeepsTheSurfaceAndEveryEdgeOfBoth) {
+  const Scene s = makeScene(1.0, 3);
+  const Track track = road(curve(4.3, 55.1, 20.2, 14), 3.0, 0.0, s.field);
+  const OverlayResult r = overlayTrack(s.field, s.terrain, track, OverlayMode::kStitch);
+  EXPECT_GT(r.report.crossingVertices, 20u);
+  EXPECT_LE(r.report.addedVertexErrorM, 1e-9);
+  // The surface is the terrain's: every sample at the same height on both, and the result's
+  // error against the samples is the terrain TIN's.
+  const TinLocator before(s.terrain.xy, s.terrain.triangles, s.w, s.h);
+  const TinLocator after(r.tin.xy, r.tin.triangles, s.w, s.h);
+  for (int j = 0; j < s.h; ++j)
+    for (int i = 0; i < s.w; ++i)
+      ASSERT_NEAR(heightOn(r.tin, after, {i, j}), heightOn(s.terrain, before, {i, j}), 1e-9);
+  for (std::size_t v = 0; v < r.tin.xy.size(); ++v)
+    EXPECT_NEAR(heightOn(s.terrain, before, r.tin.xy[v]), r.tin.h[v], 1e-9) << "vertex " << v;
+  // Every edge of both meshes is a union of the result's edges.
+  for (const auto& t : s.terrain.triangles)
+    for (int k = 0; k < 3; ++k) {
+      const auto &a = s.terrain.xy[t[std::size_t(k)]],
+                 &b = s.terrain.xy[t[std::size_t((k + 1) % 3)]];
+      ASSERT_NEAR(coveredLength(a, b, r.tin), (b - a).norm(), 1e-6);
+    }
+  for (const auto& t : track.triangles)
+    for (int k = 0; k < 3; ++k) {
+      const auto &a = track.xy[t[std::size_t(k)]], &b = track.xy[t[std::size_t((k + 1) % 3)]];
+      ASSERT_NEAR(coveredLength(a, b, r.tin), (b - a).norm(), 1e-6);
+    }
+  const MeshTopology top = meshTopology(r.tin.xy.size(), r.tin.triangles);
+  EXPECT_EQ(top.nonManifoldEdges, 0u);
+  EXPECT_EQ(top.degenerate, 0u);
+  EXPECT_EQ(top.euler(), 1);
+  std::size_t onTrack = 0;
+  for (const auto f : r.onTrack) onTrack += f;
+  EXPECT_GE(onTrack, track.triangles.size());
+}
+
+TEST(TinOverlay, StencilingKeepsTheTrackAndTheGroundWithinItsError) {
+  const Scene s = makeScene(0.8, 5);
+  const Track track = road(curve(6.1, 50.3, 22.6, 12), 4.0, 2.5, s.field);  // a raised road
+  const OverlayResult r = overlayTrack(s.field, s.terrain, track, OverlayMode::kStencil);
+  EXPECT_GT(r.report.removedTerrainVertices, 0u);
+  EXPECT_LE(r.report.footprintErrorM, 1e-9);
+  EXPECT_LE(r.report.outsideErrorRatio, 1.0);
+  // The track's vertices are in the result with the track's heights.
+  for (std::size_t v = 0; v < track.xy.size(); ++v) {
+    bool found = false;
+    for (std::size_t w = 0; w < r.tin.xy.size(); ++w)
+      if ((r.tin.xy[w] - track.xy[v]).norm() < 1e-12) {
+        found = true;
+        EXPECT_DOUBLE_EQ(r.tin.h[w], track.h[v]);
+      }
+    EXPECT_TRUE(found) << "track vertex " << v;
+  }
+  // No terrain sample vertex is left strictly inside the footprint.
+  const TinLocator footprint(track.xy, track.triangles, s.w, s.h);
+  for (std::size_t w = 0; w < r.tin.xy.size(); ++w) {
+    const Eigen::Vector2d& p = r.tin.xy[w];
+    const bool trackVertex = std::any_of(track.xy.begin(), track.xy.end(),
+                                         [&](const auto& q) { return (q - p).norm() < 1e-12; });
+    if (!trackVertex) {
+      EXPECT_FALSE(footprint.contains(p, -1e-9)) << "vertex " << w;
+    }
+  }
+  const MeshTopology top = meshTopology(r.tin.xy.size(), r.tin.triangles);
+  EXPECT_EQ(top.nonManifoldEdges, 0u);
+  EXPECT_EQ(top.euler(), 1);
+}
+
+TEST(TinOverlay, ATrackLeavingTheTerrainIsClippedAtItsBorder) {
+  const Scene s = makeScene(1.0, 8);
+  const Track track = road(curve(-10.0, 30.0, 10.0, 9), 3.0, 0.0, s.field);
+  for (const OverlayMode mode : {OverlayMode::kStitch, OverlayMode::kStencil}) {
+    const OverlayResult r = overlayTrack(s.field, s.terrain, track, mode);
+    EXPECT_GT(r.report.clippedTrackTriangles, 0u);
+    for (const auto& p : r.tin.xy) {
+      EXPECT_GE(p.x(), 0.0);
+      EXPECT_GE(p.y(), 0.0);
+    }
+    const MeshTopology top = meshTopology(r.tin.xy.size(), r.tin.triangles);
+    EXPECT_EQ(top.nonManifoldEdges, 0u);
+    EXPECT_EQ(top.euler(), 1);
+  }
+}
+
+TEST(TinOverlay, RefusesTracksThatAreNotProperMeshes) {
+  const Scene s = makeScene(2.0, 1);
+  auto expectRefused = [&](const Track& t, const std::string& expected) {
+    try {
+      overlayTrack(s.field, s.terrain, t, OverlayMode::kStitch);
+      ADD_FAILURE() << "accepted; expected: " << expected;
+    } catch (const core::InputError& e) {
+      EXPECT_NE(std::string(e.what()).find(expected), std::string::npos) << e.what();
+    }
+  };
+  Track bowTie;  // two triangles whose edges cross
+  bowTie.xy = {{10, 10}, {20, 10}, {15, 20}, {10, 16}, {20, 16}, {15, 6}};
+  bowTie.h.assign(6, 0.0);
+  bowTie.triangles = {{0, 1, 2}, {3, 5, 4}};
+  expectRefused(bowTie, "crosses itself");
+  Track twice;
+  twice.xy = {{10, 10}, {20, 10}, {15, 20}};
+  twice.h.assign(3, 0.0);
+  twice.triangles = {{0, 1, 2}, {0, 1, 2}};
+  expectRefused(twice, "overlaps itself");
+  Track flat;
+  flat.xy = {{10, 10}, {20, 10}, {30, 10}};
+  flat.h.assign(3, 0.0);
+  flat.triangles = {{0, 1, 2}};
+  expectRefused(flat, "degenerate");
+  Track away = twice;
+  away.triangles = {{0, 1, 2}};
+  for (auto& p : away.xy) p += Eigen::Vector2d(500, 500);
+  expectRefused(away, "wholly outside");
+}
+
+TEST(TinOverlay, ObjTracksAreReadOrRefusedWithTheLine) {
+  const io::ObjTriangles ok = io::parseObjTriangles(
+      "# road\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvn 0 0 1\ng road\nf 1/1/1 2/2/1 3//1\nf -4 -2 "
+      "-1\n",
+      "road.obj");
+  ASSERT_EQ(ok.triangles.size(), 2u);
+  EXPECT_EQ(ok.triangles[1], (std::array<std::uint32_t, 3>{0, 2, 3}));
+  auto refused = [](const std::string& text, const std::string& expected) {
+    try {
+      io::parseObjTriangles(text, "t.obj");
+      ADD_FAILURE() << "accepted: " << text;
+    } catch (const core::InputError& e) {
+      EXPECT_NE(std::string(e.what()).find(expected), std::string::npos) << e.what();
+    }
+  };
+  refused("v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4\n", "t.obj:5: a face with 4 corners");
+  refused("v 0 0 0\nv 1 0 x\n", "t.obj:2: 'x' is not a finite number");
+  refused("v 0 0 0\nv 1 0 0\nf 1 2 3\n", "t.obj:3: vertex index 3 is out of range");
+  refused("v 0 0 0\nv 1 0 0\nv 1 1 0\nf 1 1 2\n", "repeats a vertex");
+  refused("v 0 0 0\n", "no triangles");
+  refused("v 0 0 0\nv 1 1 1\nl 1 2\n", "not a triangle mesh");
+}
+
+TEST(TinOverlay, APlanetKeepsItsClosedSurfaceWithATrackStitchedIn) {
+  const auto dir = testkit::freshDir("tin_overlay_planet");
+  const terrain::Terrain t = testkit::bumpyTerrain(6, 2, 20000.0);
+  io::savePlanet(t, dir / "p.planet");
+  // A 300 km x 40 km road.
+  std::ofstream(dir / "road.obj") << "v -150000 -20000 0\nv 150000 -20000 0\nv 150000 20000 0\n"
+                                     "v -150000 20000 0\nf 1 2 3\nf 1 3 4\n";
+  for (const auto mode : {OverlayMode::kStitch, OverlayMode::kStencil}) {
+    io::OverlayOptions o;
+    o.mode = mode;
+    o.errorM = 2000.0;
+    o.at = std::array<double, 3>{30.0, 45.0, 20.0};
+    std::vector<std::string> notes;
+    const nlohmann::json s =
+        io::overlayFromFiles(dir / "p.planet", io::ImportOptions{}, dir / "road.obj",
+                             dir / "out.obj", io::ExportFormat::kObj, o, notes);
+    EXPECT_EQ(s["euler"], 2) << s.dump();
+    EXPECT_EQ(s["border_edges"], 0);
+    EXPECT_EQ(s["non_manifold_edges"], 0);
+    EXPECT_GT(s["track_group_triangles"].get<int>(), 0);
+  }
+  io::OverlayOptions o;
+  o.errorM = 2000.0;
+  std::vector<std::string> notes;
+  EXPECT_THROW(io::overlayFromFiles(dir / "p.planet", io::ImportOptions{}, dir / "road.obj",
+                                    dir / "x.obj", io::ExportFormat::kObj, o, notes),
+               core::InputError)
+      << "a planet needs --at";
+  o.at = std::array<double, 3>{10.0, 179.9, 0.0};
+  EXPECT_THROW(io::overlayFromFiles(dir / "p.planet", io::ImportOptions{}, dir / "road.obj",
+                                    dir / "x.obj", io::ExportFormat::kObj, o, notes),
+               core::InputError)
+      << "across the seam";
+}
+
+}  // namespace
+}  // namespace ps::tin
