@@ -154,6 +154,52 @@ TEST(TinExport, APlanetTinIsAClosedOutwardSphereWithinTheErrorOfEverySample) {
   EXPECT_LE(worst, o.maxErrorM);
 }
 
+TEST(TinExport, APlanetRegionIsMeshedAloneWithinItsError) {
+  const fs::path dir = testkit::freshDir("tin_region");
+  const terrain::Terrain t = testkit::bumpyTerrain(6, 4, 30000.0);
+  io::savePlanet(t, dir / "p.planet");
+  io::TinExportOptions o;
+  o.maxErrorM = 1500.0;
+  o.regionDeg = std::array<double, 4>{-20.0, 30.0, 25.0, 100.0};
+  std::vector<std::string> notes;
+  const nlohmann::json s = io::exportTinFromFile(dir / "p.planet", io::ImportOptions{},
+                                                 dir / "r.obj", io::ExportFormat::kObj, o, notes);
+  EXPECT_LE(s["measured_error_ratio"].get<double>(), 1.0);
+  const ObjMesh m = readObj(dir / "r.obj");
+  const tin::MeshTopology top = tin::meshTopology(m.v.size(), m.f);
+  EXPECT_EQ(top.euler(), 1) << "a patch of the sphere";
+  EXPECT_GT(top.borderEdges, 0u);
+  EXPECT_EQ(top.nonManifoldEdges, 0u);
+  // Every vertex inside the region (widened to the grid's cells: 360 / 64 = 5.6 degrees).
+  for (const auto& p : m.v) {
+    const double lat = std::asin(p.z() / p.norm()) * 180 / M_PI;
+    const double lon = std::atan2(p.y(), p.x()) * 180 / M_PI;
+    EXPECT_GE(lat, -20.0 - 2.9);
+    EXPECT_LE(lat, 25.0 + 2.9);
+    EXPECT_GE(lon, 30.0 - 5.7);
+    EXPECT_LE(lon, 100.0 + 5.7);
+  }
+  // Every grid vertex inside the region is within the error of the patch (brute force).
+  double worst = 0;
+  const int side = t.grid().side();
+  for (int v = 0; v < side; ++v)
+    for (int u = 0; u < side; ++u) {
+      const double lat = -90.0 + 180.0 * v / (side - 1), lon = -180.0 + 360.0 * u / (side - 1);
+      if (lat < -20 || lat > 25 || lon < 30 || lon > 100) continue;
+      const Eigen::Vector3d p = t.chart().position(u, v, t.height(u, v));
+      double best = INFINITY;
+      for (const auto& f : m.f)
+        best = std::min(best, tin::pointTriangleDistance(p, m.v[f[0]], m.v[f[1]], m.v[f[2]]));
+      worst = std::max(worst, best);
+    }
+  EXPECT_LE(worst, o.maxErrorM);
+  o.regionDeg = std::array<double, 4>{10.0, 170.0, 20.0, -170.0};
+  EXPECT_THROW(io::exportTinFromFile(dir / "p.planet", io::ImportOptions{}, dir / "x.obj",
+                                     io::ExportFormat::kObj, o, notes),
+               core::InputError)
+      << "across the seam";
+}
+
 TEST(TinExport, WebDemTilesDecodeTheirPackedHeights) {
   const fs::path dir = testkit::freshDir("tin_webdem");
   // 1234.5 m: Terrain-RGB (1234.5 + 10000) / 0.1 = 112345 = 1 * 65536 + 182 * 256 + 217;

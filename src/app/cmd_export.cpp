@@ -20,6 +20,7 @@ struct ExportArgs {
   std::string controlMap;
   std::optional<double> controlError;
   double minAngle = 0, minArea = 0;
+  std::vector<double> region;
   int width = 0, height = 0;
   std::optional<double> maxError, scale, offset, spacing;
   long long grid = 0;
@@ -54,6 +55,11 @@ int runExport(const ExportArgs& a) {
     t.controlErrorM = a.controlError;
     t.minAngleDeg = a.minAngle;
     t.minAreaM2 = a.minArea;
+    if (!a.region.empty()) {
+      if (a.region.size() != 4)
+        throw core::InputError("--region takes SOUTH,WEST,NORTH,EAST (four numbers, degrees)");
+      t.regionDeg = std::array<double, 4>{a.region[0], a.region[1], a.region[2], a.region[3]};
+    }
     std::vector<std::string> notes;
     const nlohmann::json summary =
         io::exportTinFromFile(a.input, heightmap, a.output, format, t, notes);
@@ -111,6 +117,10 @@ const CommandRegistration kExport([](CLI::App& root, CLI::App*& sub) -> CommandA
   sub->add_option("--min-area", a->minArea,
                   "TIN: triangles below this many square metres are not split for their angle")
       ->capture_default_str();
+  sub->add_option("--region", a->region,
+                  "TIN of a planet: only SOUTH,WEST,NORTH,EAST (degrees; not across +-180)")
+      ->delimiter(',')
+      ->expected(4);
   sub->add_option("--encoding", a->encoding,
                   "Heightmap input: PNG heights as stored (grey), or a web DEM tile's "
                   "terrain-rgb (Mapbox) or terrarium packing")

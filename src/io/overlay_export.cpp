@@ -59,7 +59,7 @@ tin::Track placeTrack(const ObjTriangles& obj, const tin::SampleField& field,
                              ": the track reaches a pole's row of the lat-long chart; "
                              "place it away from the poles");
     uLo = std::min(uLo, uv->x()), uHi = std::max(uHi, uv->x());
-    track.xy.push_back(*uv);
+    track.xy.push_back(*uv - Eigen::Vector2d(field.i0, field.j0));
     track.h.push_back(p.z());
   }
   if (uHi - uLo > 0.5 * m)

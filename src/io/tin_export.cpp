@@ -1,5 +1,6 @@
 #include "io/tin_export.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <numbers>
@@ -218,9 +219,48 @@ tin::SampleField heightSampleField(const HeightSamples& s) {
   return field;
 }
 
+namespace {
+
+// The window of a lat-long grid covering a region given in degrees, its heights copied.
+std::vector<float> regionWindow(const terrain::Terrain& t, const std::array<double, 4>& r,
+                                tin::SampleField& field) {
+  const double south = r[0], west = r[1], north = r[2], east = r[3];
+  if (!(t.chart().hasPoleRows() && t.chart().wrapsU()))
+    throw core::InputError("--region is in latitude and longitude: it needs a lat-long planet");
+  if (!(south >= -90 && north <= 90 && south < north && west >= -180 && east <= 180 && west < east))
+    throw core::InputError("--region " + exactNumber(south) + "," + exactNumber(west) + "," +
+                           exactNumber(north) + "," + exactNumber(east) +
+                           ": give SOUTH,WEST,NORTH,EAST in degrees, south < north, west < east "
+                           "(a region across the +-180 meridian is not supported)");
+  const int m = t.grid().m();
+  const int i0 = std::clamp(int(std::floor((west + 180) / 360 * m)), 0, m);
+  const int i1 = std::clamp(int(std::ceil((east + 180) / 360 * m)), 0, m);
+  const int j0 = std::clamp(int(std::floor((south + 90) / 180 * m)), 0, m);
+  const int j1 = std::clamp(int(std::ceil((north + 90) / 180 * m)), 0, m);
+  if (i1 - i0 < 1 || j1 - j0 < 1)
+    throw core::InputError("--region is smaller than one cell of the planet's grid");
+  field.i0 = i0;
+  field.j0 = j0;
+  field.width = i1 - i0 + 1;
+  field.height = j1 - j0 + 1;
+  std::vector<float> heights(std::size_t(field.width) * std::size_t(field.height));
+  for (int j = 0; j < field.height; ++j)
+    for (int i = 0; i < field.width; ++i)
+      heights[std::size_t(j) * std::size_t(field.width) + std::size_t(i)] =
+          t.height(i + i0, j + j0);
+  return heights;
+}
+
+}  // namespace
+
 nlohmann::json exportTerrainTin(const terrain::Terrain& t, const std::filesystem::path& out,
                                 MeshFormat format, const TinExportOptions& o) {
-  const tin::SampleField field = terrainSampleField(t);
+  tin::SampleField field = terrainSampleField(t);
+  std::vector<float> window;
+  if (o.regionDeg) {
+    window = regionWindow(t, *o.regionDeg, field);
+    field.heights = window;
+  }
   const int m = t.grid().m();
   const double hMax = std::max(std::abs(double(t.minHeight())), std::abs(double(t.maxHeight())));
   double area, maxCoordinate;
@@ -235,11 +275,13 @@ nlohmann::json exportTerrainTin(const terrain::Terrain& t, const std::filesystem
   }
   nlohmann::json summary = meshAndWrite(field, out, format, o, area, maxCoordinate);
   summary["error_metric"] = field.metric == tin::ErrorMetric::kVertical ? "vertical" : "3d";
+  if (o.regionDeg) summary["region_grid_window"] = {field.i0, field.j0, field.width, field.height};
   return summary;
 }
 
 nlohmann::json exportSamplesTin(const HeightSamples& s, const std::filesystem::path& out,
                                 MeshFormat format, const TinExportOptions& o) {
+  if (o.regionDeg) throw core::InputError("--region applies to planets (lat-long charts)");
   double hMax = 0;
   for (const float h : s.heights) hMax = std::max(hMax, double(std::abs(h)));
   const double maxCoordinate = std::max({s.dx * (s.width - 1), s.dy * (s.height - 1), hMax});

@@ -2,6 +2,7 @@
 // `planetsculpt export ... --tin`: a planet or a flat heightmap as a triangulated irregular
 // network (src/tin) in OBJ, PLY or GLB, with its error measured on every sample of the file as
 // written (coordinates rounded as the format stores them).
+#include <array>
 #include <filesystem>
 #include <nlohmann/json.hpp>
 #include <optional>
@@ -21,6 +22,9 @@ struct TinExportOptions {
   std::optional<double> controlErrorM = {};
   double minAngleDeg = 0;  // 0: fewest triangles (greedy); else the quality refinement
   double minAreaM2 = 0;    // triangles smaller than this are not split for their angle
+  // Planets: mesh only the grid's window covering south, west, north, east (degrees; west <
+  // east, the seam not crossed); the control map then matches the window's samples.
+  std::optional<std::array<double, 4>> regionDeg = {};
 };
 
 // The samples a TIN of this terrain is measured on: the 3D distance on a sphere's chart, the

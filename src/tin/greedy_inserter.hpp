@@ -38,7 +38,7 @@ class GreedyInserter {
 
   void run() {
     const int m = field_.width - 1;
-    const bool twins = field_.metric == ErrorMetric::kChart3d && field_.chart->wrapsU();
+    const bool twins = field_.wrapsSeam();
     while (!queue_.empty()) {
       const Entry e = queue_.top();
       queue_.pop();

@@ -20,17 +20,29 @@ double SampleField::heightAt(double x, double y) const {
 }
 
 Eigen::Vector3d SampleField::positionAt(double x, double y, double h) const {
-  if (metric == ErrorMetric::kChart3d) return chart->positionAt(x, y, h);
+  if (metric == ErrorMetric::kChart3d) return chart->positionAt(x + i0, y + j0, h);
   return {x * dx, y * dy, h};
 }
 
-std::uint64_t SampleField::weldKey(int i, int j) const {
-  if (metric == ErrorMetric::kChart3d) {
-    const int m = width - 1;
-    if (chart->hasPoleRows() && (j == 0 || j == m)) i = 0;
-    if (chart->wrapsU() && i == m) i = 0;
-  }
-  return index(i, j);
+bool SampleField::wrapsSeam() const {
+  return metric == ErrorMetric::kChart3d && chart->wrapsU() && i0 == 0 &&
+         width == chart->grid().side();
+}
+
+bool SampleField::isPoleRow(int j) const {
+  if (metric != ErrorMetric::kChart3d || !chart->hasPoleRows()) return false;
+  const int v = j + j0;
+  return v == 0 || v == chart->grid().m();
+}
+
+void SampleField::rowPositions(int j, int iFirst, int iLast, core::Chart::RowOut out) const {
+  // The chart reads hRow[u] for the grid's u = iFirst + i0 .. iLast + i0: the window's row copied
+  // to where the chart looks for it.
+  thread_local std::vector<float> row;
+  const std::size_t first = std::size_t(iFirst + i0), n = std::size_t(iLast - iFirst + 1);
+  if (row.size() < first + n) row.resize(first + n);
+  std::copy_n(heights.data() + index(iFirst, j), n, row.data() + first);
+  chart->rowPositions(j + j0, iFirst + i0, iLast + i0, row.data(), out);
 }
 
 void SampleField::validate(const std::string& what) const {
@@ -54,9 +66,12 @@ void SampleField::validate(const std::string& what) const {
                              core::exactNumber(t) + " m found)");
   if (metric == ErrorMetric::kChart3d) {
     if (!chart) throw core::InputError(what + ": the 3D error needs the planet's chart");
-    if (chart->grid().side() != width || width != height)
-      throw core::InputError(what + ": the samples are not the chart's " +
-                             std::to_string(chart->grid().side()) + "^2 grid");
+    const int side = chart->grid().side();
+    if (i0 < 0 || j0 < 0 || i0 + width > side || j0 + height > side)
+      throw core::InputError(what + ": the samples' window " + std::to_string(width) + "x" +
+                             std::to_string(height) + " at (" + std::to_string(i0) + ", " +
+                             std::to_string(j0) + ") is not inside the chart's " +
+                             std::to_string(side) + "^2 grid");
   } else if (!(std::isfinite(dx) && dx > 0 && std::isfinite(dy) && dy > 0)) {
     throw core::InputError(what + ": sample spacing " + core::exactNumber(dx) + " x " +
                            core::exactNumber(dy) + " m must be positive and finite");

@@ -24,8 +24,11 @@ struct SampleField {
   int width = 0, height = 0;
   std::span<const float> heights;  // metres, index = j * width + i
   ErrorMetric metric = ErrorMetric::kVertical;
-  // kChart3d: the chart whose grid the lattice is (width == height == side). kVertical: unused.
+  // kChart3d: the chart whose grid the lattice is, whole or the window of it whose first sample
+  // is grid vertex (i0, j0) (a region of a planet): lattice sample (i, j) is grid vertex
+  // (i + i0, j + j0), and heights hold the window's samples only. kVertical: unused.
   const core::Chart* chart = nullptr;
+  int i0 = 0, j0 = 0;
   // Metres between samples along x and y (kVertical; output positions only, the vertical error
   // does not depend on them).
   double dx = 1.0, dy = 1.0;
@@ -46,9 +49,15 @@ struct SampleField {
   // Where the lattice point (x, y) with height h lies in the output's frame (metres): the flat
   // terrain's (x dx, y dy, h), or the chart's position.
   Eigen::Vector3d positionAt(double x, double y, double h) const;
-  // Two lattice points that are one point of the surface (a planet's seam twins and pole rows)
-  // share a key; any other sample has its own. Keys of non-sample points are not defined here.
-  std::uint64_t weldKey(int i, int j) const;
+  // kChart3d: the window's columns 0 and width - 1 are the seam's two sides (the whole grid's
+  // width on a chart that wraps), and row j is a pole row of the grid.
+  bool wrapsSeam() const;
+  bool isPoleRow(int j) const;
+  // kChart3d: the positions of samples iFirst..iLast of row j (Chart::rowPositions).
+  void rowPositions(int j, int iFirst, int iLast, core::Chart::RowOut out) const;
+  Eigen::Vector3d samplePosition(int i, int j) const {
+    return chart->position(i + i0, j + j0, double(at(i, j)));
+  }
 
   // Throws core::InputError naming `what` when the sizes, spans or tolerances do not fit.
   void validate(const std::string& what) const;

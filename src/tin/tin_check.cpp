@@ -51,8 +51,8 @@ TinErrorCheck measureTinError(const SampleField& field, const Tin& tin,
                            planeHeight(corner[tri[0]], corner[tri[1]], corner[tri[2]],
                                        {i * field.dx, j * field.dy}, hit.l0, hit.l1, hit.l2));
         } else {
-          error = pointTriangleDistance(field.chart->position(i, j, field.heights[k]),
-                                        corner[tri[0]], corner[tri[1]], corner[tri[2]]);
+          error = pointTriangleDistance(field.samplePosition(i, j), corner[tri[0]], corner[tri[1]],
+                                        corner[tri[2]]);
         }
         best = std::min(best, error);
       });
@@ -71,15 +71,15 @@ TinErrorCheck measureTinError(const SampleField& field, const Tin& tin,
 
 WeldedMesh weldTin(const SampleField& field, const Tin& tin) {
   // One surface point, one key: a chart's seam twins and pole rows meet at u = 0.
-  const double m = field.width - 1;
-  const bool chart = field.metric == ErrorMetric::kChart3d;
-  const bool poles = chart && field.chart->hasPoleRows(), seam = chart && field.chart->wrapsU();
+  const double m = field.width - 1, top = field.height - 1;
+  const bool seam = field.wrapsSeam();
+  const bool southPole = field.isPoleRow(0), northPole = field.isPoleRow(field.height - 1);
   std::map<std::pair<double, double>, std::uint32_t> key;
   WeldedMesh out;
   out.vertexOf.resize(tin.xy.size());
   for (std::size_t v = 0; v < tin.xy.size(); ++v) {
     double x = tin.xy[v].x(), y = tin.xy[v].y();
-    if (poles && (y == 0 || y == m)) x = 0;
+    if ((southPole && y == 0) || (northPole && y == top)) x = 0;
     if (seam && x == m) x = 0;
     const auto [it, fresh] = key.emplace(std::pair(x, y), std::uint32_t(key.size()));
     out.vertexOf[v] = it->second;

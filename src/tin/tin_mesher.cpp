@@ -157,7 +157,7 @@ Tin buildTin(const SampleField& field, const TinOptions& o, TinReport* reportOut
     const double s = std::sin(o.minAngleDeg * std::numbers::pi / 180.0);
     const std::size_t budget =
         o.steinerBudget ? o.steinerBudget : 4 * report.greedyVertices + 10000;
-    const bool planetSeam = field.metric == ErrorMetric::kChart3d && field.chart->wrapsU();
+    const bool planetSeam = field.wrapsSeam();
     for (int round = 0;; ++round) {
       bool exhausted = false;
       refine(cdt, QualityCriteria(field, s * s, o.minArea), budget, exhausted);

@@ -81,17 +81,15 @@ WorstSample worstSample(const SampleField& field, const LatticeTriangle& t) {
     });
     return worst;
   }
-  const core::Chart& chart = *field.chart;
   const std::array<Eigen::Vector3d, 3> corner = {
-      chart.positionAt(t.xy[0].x(), t.xy[0].y(), t.h[0]),
-      chart.positionAt(t.xy[1].x(), t.xy[1].y(), t.h[1]),
-      chart.positionAt(t.xy[2].x(), t.xy[2].y(), t.h[2])};
+      field.positionAt(t.xy[0].x(), t.xy[0].y(), t.h[0]),
+      field.positionAt(t.xy[1].x(), t.xy[1].y(), t.h[1]),
+      field.positionAt(t.xy[2].x(), t.xy[2].y(), t.h[2])};
   thread_local std::vector<double> xs, ys, zs;
   scan(field, t, worst, [&](int j, int i0, int i1, auto&& report) {
     const std::size_t n = std::size_t(i1 - i0 + 1);
     if (xs.size() < n) xs.resize(n), ys.resize(n), zs.resize(n);
-    chart.rowPositions(j, i0, i1, field.heights.data() + field.index(0, j),
-                       {xs.data(), ys.data(), zs.data()});
+    field.rowPositions(j, i0, i1, {xs.data(), ys.data(), zs.data()});
     for (int i = i0; i <= i1; ++i) {
       const std::size_t k = std::size_t(i - i0);
       report(i, pointTriangleDistance({xs[k], ys[k], zs[k]}, corner[0], corner[1], corner[2]));
