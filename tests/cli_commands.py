@@ -247,7 +247,7 @@ def group_import_export():
             fail(f"overlay --mode {mode}: {r}")
         if mode == "stitch" and not (r["crossing_vertices"] > 0 and r["added_vertex_error_m"] < 1e-6):
             fail(f"overlay --mode stitch: {r}")
-        if mode == "stencil" and not (r["footprint_error_m"] < 1e-6 and r["outside_error_ratio"] <= 1.0):
+        if mode == "stencil" and not (r["footprint_error_m"] < 1e-6 and r["outside_error_ratio"] <= 1 + 1e-9):
             fail(f"overlay --mode stencil: {r}")
         if "g track" not in open(out(f"road_{mode}.obj")).read():
             fail(f"road_{mode}.obj has no track group")
@@ -343,7 +343,7 @@ def check_bench_row(r):
         fail(f"export control-map: {r['measured_error_inside_m']} m inside the control region")
     if b == "export" and tool == "overlay" and (r["euler"] != 1 or r.get("added_vertex_error_m", 0) > 1e-6
                                                 or r.get("footprint_error_m", 0) > 1e-6
-                                                or r.get("outside_error_ratio", 0) > 1.0):
+                                                or r.get("outside_error_ratio", 0) > 1 + 1e-9):
         fail(f"export overlay: {r}")
     if b == "deform" and r.get("modified_vertices", 1) <= 0:
         fail(f"deform: no vertex modified in {r}")

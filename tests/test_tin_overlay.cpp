@@ -16,6 +16,7 @@
 #include "tin/overlay.hpp"
 #include "tin/tin_check.hpp"
 #include "tin/tin_locator.hpp"
+#include "tin/triangle_error.hpp"
 
 namespace ps::tin {
 namespace {
@@ -115,7 +116,7 @@ double heightOn(const Tin& tin, const TinLocator& where, const Eigen::Vector2d& 
 }
 
 TEST(TinOverlay, StitchingKeepsTheSurfaceAndEveryEdgeOfBoth) {
-  const Scene s = makeScene(1.0, 3);
+  const Scene s = makeScene(2.0, 3);
   const Track track = road(curve(4.3, 55.1, 20.2, 14), 3.0, 0.0, s.field);
   const OverlayResult r = overlayTrack(s.field, s.terrain, track, OverlayMode::kStitch);
   EXPECT_GT(r.report.crossingVertices, 20u);
@@ -156,7 +157,7 @@ TEST(TinOverlay, StencilingKeepsTheTrackAndTheGroundWithinItsError) {
   const OverlayResult r = overlayTrack(s.field, s.terrain, track, OverlayMode::kStencil);
   EXPECT_GT(r.report.removedTerrainVertices, 0u);
   EXPECT_LE(r.report.footprintErrorM, 1e-9);
-  EXPECT_LE(r.report.outsideErrorRatio, 1.0);
+  EXPECT_LE(r.report.outsideErrorRatio, 1.0 + kCheckSlack);
   // The track's vertices are in the result with the track's heights.
   for (std::size_t v = 0; v < track.xy.size(); ++v) {
     bool found = false;

@@ -68,10 +68,45 @@ class GreedyInserter {
   void insert(int i, int j, const FaceHandle& hint) {
     const VertexHandle v = cdt_.insert(Point(i, j), hint);
     v->info().height = field_.at(i, j);
+    keepOldDiagonals(v);
     auto f = cdt_.incident_faces(v), done = f;
     do {
       if (!cdt_.is_infinite(f)) measure(f);
     } while (++f != done);
+  }
+
+  // Where the new vertex v and an old edge's far side are cocircular (on a sample lattice every
+  // rectangle of samples is), either diagonal is Delaunay; CGAL's symbolic perturbation may
+  // have taken the one to v. Put the old edge back, as an insertion by flips with a strict
+  // in-circle test (Delatin's) keeps it: measured, that needs fewer vertices for the same error.
+  void keepOldDiagonals(const VertexHandle& v) {
+    for (bool flipped = true; flipped;) {
+      flipped = false;
+      auto fc = cdt_.incident_faces(v), done = fc;
+      do {
+        FaceHandle f = fc;
+        if (cdt_.is_infinite(f)) continue;
+        const int iv = f->index(v), i = cdt_.ccw(iv);  // edge i: v to w = vertex cw(iv)
+        if (f->is_constrained(i)) continue;
+        const FaceHandle g = f->neighbor(i);
+        if (cdt_.is_infinite(g)) continue;
+        const Point& a = f->vertex(i)->point();
+        const Point& b = g->vertex(cdt_.mirror_index(f, i))->point();
+        const Point& w = f->vertex(cdt_.cw(iv))->point();
+        if (CGAL::side_of_oriented_circle(v->point(), w, a, b) != CGAL::ON_ORIENTED_BOUNDARY)
+          continue;
+        if (CGAL::orientation(a, b, v->point()) == CGAL::orientation(a, b, w) ||
+            CGAL::orientation(a, b, v->point()) == CGAL::COLLINEAR ||
+            CGAL::orientation(a, b, w) == CGAL::COLLINEAR)
+          continue;  // not a convex quadrilateral: the old edge cannot come back
+        cdt_.flip(f, i);
+        for (int k = 0; k < 3; ++k)
+          if (!cdt_.is_infinite(f->neighbor(k))) measure(f->neighbor(k));
+        if (!cdt_.is_infinite(f)) measure(f);
+        flipped = true;
+        break;
+      } while (++fc != done);
+    }
   }
 
   Cdt& cdt_;

@@ -144,6 +144,12 @@ Tin buildTin(const SampleField& field, const TinOptions& o, TinReport* reportOut
     corner[k]->info().height = field.at(ij[k][0], ij[k][1]);
   }
 
+  // The lattice's four corners are cocircular: start from the diagonal (0, 0)-(W-1, H-1), as
+  // Delatin does, so that both start from the same two triangles.
+  FaceHandle across;
+  int edge = 0;
+  if (cdt.is_edge(corner[1], corner[3], across, edge)) cdt.flip(across, edge);
+
   auto t0 = Clock::now();
   GreedyInserter greedy(cdt, field);
   greedy.measureAll();

@@ -23,10 +23,12 @@ struct WorstSample {
   std::int64_t samples = 0;  // how many samples the triangle covers
 };
 
-// A triangle is within its tolerance when its worst ratio is at most this. The margin below 1
-// absorbs the last-digit differences between the mesher's plane and the checks' barycentric
-// blend, so an independent measurement never reads 1 + 1e-13 on a sample the mesher kept at 1.
-inline constexpr double kWithinTolerance = 1.0 - 1e-9;
+// A triangle is within its tolerance when its worst ratio is at most this: a sample exactly at
+// its tolerance is not inserted (Delatin's rule too, which matters on quantised heights, where
+// errors of exactly the request are common). An independent measurement, with its own rounding,
+// can read such a sample at 1 + 1e-15; checks allow kCheckSlack for that.
+inline constexpr double kWithinTolerance = 1.0;
+inline constexpr double kCheckSlack = 1e-9;
 
 // The sample of `field` inside `t` whose error relative to its tolerance is largest.
 WorstSample worstSample(const SampleField& field, const LatticeTriangle& t);
