@@ -1,6 +1,8 @@
 #pragma once
 // Greedy insertion into a CGAL triangulation (tin/cdt.hpp: include from .cpp files only), shared
 // by the TIN mesher and the overlay's re-meshing around a stenciled track.
+#include <cmath>
+#include <cstdint>
 #include <queue>
 
 #include "tin/cdt.hpp"
@@ -23,6 +25,35 @@ inline LatticeTriangle latticeTriangle(const SampleField& field, const FaceHandl
     t.h[std::size_t(k)] = vertexHeight(field, f->vertex(k));
   }
   return t;
+}
+
+// Lattice samples have integer coordinates: their in-circle and orientation tests are exact in
+// integer arithmetic, where EPICK's filtered predicates fall back to slow exact numbers on the
+// degenerate (cocircular, collinear) cases a lattice is full of.
+inline bool isLatticePoint(const Point& p) {
+  constexpr double kLimit = 1 << 20;  // differences < 2^21: the in-circle terms stay < 2^86
+  return p.x() == std::floor(p.x()) && p.y() == std::floor(p.y()) && std::abs(p.x()) < kLimit &&
+         std::abs(p.y()) < kLimit;
+}
+
+inline bool cocircular(const Point& a, const Point& b, const Point& c, const Point& d) {
+  if (!(isLatticePoint(a) && isLatticePoint(b) && isLatticePoint(c) && isLatticePoint(d)))
+    return CGAL::side_of_oriented_circle(a, b, c, d) == CGAL::ON_ORIENTED_BOUNDARY;
+  __extension__ using Wide = __int128;
+  const auto dx = [&](const Point& p) { return Wide(std::int64_t(p.x()) - std::int64_t(d.x())); };
+  const auto dy = [&](const Point& p) { return Wide(std::int64_t(p.y()) - std::int64_t(d.y())); };
+  const Wide ax = dx(a), ay = dy(a), bx = dx(b), by = dy(b), cx = dx(c), cy = dy(c);
+  const Wide al = ax * ax + ay * ay, bl = bx * bx + by * by, cl = cx * cx + cy * cy;
+  return ax * (by * cl - cy * bl) - ay * (bx * cl - cx * bl) + al * (bx * cy - cx * by) == 0;
+}
+
+inline CGAL::Orientation orientationOf(const Point& a, const Point& b, const Point& c) {
+  if (!(isLatticePoint(a) && isLatticePoint(b) && isLatticePoint(c)))
+    return CGAL::orientation(a, b, c);
+  const std::int64_t d =
+      (std::int64_t(b.x()) - std::int64_t(a.x())) * (std::int64_t(c.y()) - std::int64_t(a.y())) -
+      (std::int64_t(b.y()) - std::int64_t(a.y())) * (std::int64_t(c.x()) - std::int64_t(a.x()));
+  return d > 0 ? CGAL::LEFT_TURN : d < 0 ? CGAL::RIGHT_TURN : CGAL::COLLINEAR;
 }
 
 // Greedy insertion: a max-heap of triangles over tolerance, each with its worst sample. An
@@ -93,11 +124,9 @@ class GreedyInserter {
         const Point& a = f->vertex(i)->point();
         const Point& b = g->vertex(cdt_.mirror_index(f, i))->point();
         const Point& w = f->vertex(cdt_.cw(iv))->point();
-        if (CGAL::side_of_oriented_circle(v->point(), w, a, b) != CGAL::ON_ORIENTED_BOUNDARY)
-          continue;
-        if (CGAL::orientation(a, b, v->point()) == CGAL::orientation(a, b, w) ||
-            CGAL::orientation(a, b, v->point()) == CGAL::COLLINEAR ||
-            CGAL::orientation(a, b, w) == CGAL::COLLINEAR)
+        if (!cocircular(v->point(), w, a, b)) continue;
+        const CGAL::Orientation sv = orientationOf(a, b, v->point()), sw = orientationOf(a, b, w);
+        if (sv == sw || sv == CGAL::COLLINEAR || sw == CGAL::COLLINEAR)
           continue;  // not a convex quadrilateral: the old edge cannot come back
         cdt_.flip(f, i);
         for (int k = 0; k < 3; ++k)
