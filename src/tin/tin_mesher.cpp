@@ -6,7 +6,6 @@
 #include <chrono>
 #include <cmath>
 #include <numbers>
-#include <queue>
 #include <set>
 #include <stdexcept>
 
