@@ -8,6 +8,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <random>
 
+#include "core/flat_chart.hpp"
 #include "core/input_error.hpp"
 #include "fresh_dir.hpp"
 #include "io/export.hpp"
@@ -260,6 +261,42 @@ TEST(TinExport, RefusesBadRequestsNamingTheProblemAndWritesNothing) {
       io::exportTinFromFile(png, heightmapOptions(1.0), dir / "out.png", io::ExportFormat::kPng16,
                             io::TinExportOptions{.maxErrorM = 1}, notes),
       core::InputError);
+}
+
+TEST(TinExport, AGeoreferencedControlMapMustLieWhereTheHeightmapDoes) {
+  const fs::path dir = testkit::freshDir("tin_control_geo");
+  const core::GridSize g(5);  // 33^2
+  auto tiff = [&](double spacing, double scale, const std::string& file) {
+    std::vector<float> h(g.count());
+    for (int v = 0; v <= g.m(); ++v)
+      for (int u = 0; u <= g.m(); ++u)
+        h[g.index(u, v)] = float(scale * (0.5 + 0.5 * std::sin(0.3 * u) * std::cos(0.2 * v)));
+    const terrain::Terrain t(std::make_shared<core::FlatChart>(g, spacing, spacing), h);
+    io::exportTerrain(t, dir / file, io::ExportOptions{});
+  };
+  tiff(30.0, 400.0, "dem.tif");
+  tiff(30.0, 1.0, "same.tif");   // values 0..1, the heightmap's pixels
+  tiff(10.0, 1.0, "other.tif");  // the same size, another pixel size
+  io::ImportOptions h;
+  h.chart = io::ChartKind::kFlat;
+  io::TinExportOptions o;
+  o.maxErrorM = 20;
+  o.controlErrorM = 2;
+  o.controlMap = dir / "same.tif";
+  std::vector<std::string> notes;
+  const nlohmann::json s =
+      io::exportTinFromFile(dir / "dem.tif", h, dir / "a.obj", io::ExportFormat::kObj, o, notes);
+  EXPECT_LE(s["measured_error_ratio"].get<double>(), 1.0);
+  o.controlMap = dir / "other.tif";
+  try {
+    io::exportTinFromFile(dir / "dem.tif", h, dir / "b.obj", io::ExportFormat::kObj, o, notes);
+    ADD_FAILURE() << "a control map with another pixel size was accepted";
+  } catch (const core::InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("other.tif: the control map's georeferencing"),
+              std::string::npos)
+        << e.what();
+  }
+  EXPECT_FALSE(fs::exists(dir / "b.obj"));
 }
 
 TEST(TinExport, AControlMapHoldsItsTighterErrorWhereItIsWhite) {

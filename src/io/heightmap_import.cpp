@@ -439,6 +439,7 @@ HeightSamples heightSamples(HeightImage img, const ImportOptions& options,
                       "; the image's own samples, none resampled");
   out.width = w;
   out.height = h;
+  out.geo = img.geo;
   out.heights.resize(img.values.size());
   for (int j = 0; j < h; ++j) {  // row 0 of the image is the north edge: j = h - 1
     const float* src = img.values.data() + std::size_t(h - 1 - j) * std::size_t(w);

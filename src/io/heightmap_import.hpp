@@ -62,6 +62,7 @@ struct HeightSamples {
   double dx = 1, dy = 1;  // metres between samples
   std::vector<std::string> notes;
   std::size_t noDataPixels = 0;
+  std::optional<GeoReference> geo;  // the file's georeferencing, when it has one
 };
 HeightSamples heightSamples(HeightImage image, const ImportOptions& options,
                             const std::string& name);

@@ -20,9 +20,32 @@ namespace {
 using core::exactNumber;
 
 // The control map's value in [0, 1] per lattice sample (rows flipped: image row 0 is j = H-1).
-std::vector<float> readControlMap(const std::filesystem::path& path, int width, int height) {
+// `terrainGeo`: the heightmap's georeferencing, which a georeferenced control map must share;
+// `planet`: a planet's control map, which may only be georeferenced in degrees.
+std::vector<float> readControlMap(const std::filesystem::path& path, int width, int height,
+                                  const std::optional<GeoReference>& terrainGeo, bool planet) {
   const HeightImage img = readHeightImage(path);
   const std::string name = path.string();
+  if (img.geo && planet && !img.geo->geographic)
+    throw core::InputError(name +
+                           ": the control map is georeferenced in a projected system; a "
+                           "planet's control map is in latitude and longitude");
+  if (img.geo && terrainGeo) {
+    const GeoReference &a = *img.geo, &b = *terrainGeo;
+    auto near = [](double x, double y) {
+      return std::abs(x - y) <= 1e-9 * std::max({1.0, std::abs(x), std::abs(y)});
+    };
+    if (a.geographic != b.geographic || !near(a.pixelScaleX, b.pixelScaleX) ||
+        !near(a.pixelScaleY, b.pixelScaleY) || !near(a.originX, b.originX) ||
+        !near(a.originY, b.originY))
+      throw core::InputError(
+          name + ": the control map's georeferencing (origin " + exactNumber(a.originX) + ", " +
+          exactNumber(a.originY) + ", pixel " + exactNumber(a.pixelScaleX) + " x " +
+          exactNumber(a.pixelScaleY) + (a.geographic ? " degrees" : "") +
+          ") is not the heightmap's (origin " + exactNumber(b.originX) + ", " +
+          exactNumber(b.originY) + ", pixel " + exactNumber(b.pixelScaleX) + " x " +
+          exactNumber(b.pixelScaleY) + (b.geographic ? " degrees" : "") + ")");
+  }
   if (img.width != width || img.height != height)
     throw core::InputError(name + ": the control map is " + std::to_string(img.width) + "x" +
                            std::to_string(img.height) + " pixels; it must match the " +
@@ -78,11 +101,13 @@ using Clock = std::chrono::steady_clock;
 // any sample over (at most three tries; then it says so).
 nlohmann::json meshAndWrite(tin::SampleField field, const std::filesystem::path& out,
                             MeshFormat format, const TinExportOptions& o, double latticeAreaM2,
-                            double maxCoordinate) {
+                            double maxCoordinate,
+                            const std::optional<GeoReference>& terrainGeo = std::nullopt) {
   validateOptions(o);
   std::vector<float> requested;  // per-sample tolerances when there is a control map
   if (o.controlMap) {
-    requested = readControlMap(*o.controlMap, field.width, field.height);
+    requested = readControlMap(*o.controlMap, field.width, field.height, terrainGeo,
+                               field.metric == tin::ErrorMetric::kChart3d);
     for (float& c : requested)
       c = float(o.maxErrorM + double(c) * (*o.controlErrorM - o.maxErrorM));
   }
@@ -286,7 +311,7 @@ nlohmann::json exportSamplesTin(const HeightSamples& s, const std::filesystem::p
   for (const float h : s.heights) hMax = std::max(hMax, double(std::abs(h)));
   const double maxCoordinate = std::max({s.dx * (s.width - 1), s.dy * (s.height - 1), hMax});
   nlohmann::json summary =
-      meshAndWrite(heightSampleField(s), out, format, o, s.dx * s.dy, maxCoordinate);
+      meshAndWrite(heightSampleField(s), out, format, o, s.dx * s.dy, maxCoordinate, s.geo);
   summary["error_metric"] = "vertical";
   summary["samples"] = {s.width, s.height};
   summary["spacing_m"] = {s.dx, s.dy};
