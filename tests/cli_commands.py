@@ -251,6 +251,19 @@ def group_import_export():
             fail(f"overlay --mode stencil: {r}")
         if "g track" not in open(out(f"road_{mode}.obj")).read():
             fail(f"road_{mode}.obj has no track group")
+    # The terrain as a mesh this project wrote (the tile's TIN): stitched, every vertex kept.
+    for mode in ("stitch", "stencil"):
+        stdout, _ = run("overlay", out("tile_tin.obj"), out("road.obj"), "--mode", mode, "--error", "1",
+                        "--out", out(f"mesh_road_{mode}.obj"))
+        r = json.loads(stdout)
+        if r["euler"] != 1 or r["non_manifold_edges"] != 0 or r.get("outside_error_ratio", 0) > 1 + 1e-9:
+            fail(f"overlay onto a TIN mesh, --mode {mode}: {r}")
+        if mode == "stitch" and r["terrain_tin_vertices"] != tin["vertices"]:
+            fail(f"overlay onto a TIN mesh re-meshed it: {r['terrain_tin_vertices']} vertices, not {tin['vertices']}")
+    run("export", out("globe.planet"), "--tin", "--max-error", "500", "--out", out("globe_tin.obj"))
+    _, err = run("overlay", out("globe_tin.obj"), out("road.obj"), "--error", "1", "--out", out("x.obj"), expect=2)
+    if "not a heightfield" not in err:
+        fail(f"a sphere's mesh as the terrain was not refused as such:\n{err}")
     stdout, _ = run("track", os.path.join(SRC, "data", "demo-strokes.txt"), "--width", "20000",
                     "--planet", out("globe.planet"), "--out", out("demo_track.obj"))
     track = json.loads(stdout)

@@ -71,7 +71,9 @@ const CommandRegistration kOverlay([](CLI::App& root, CLI::App*& sub) -> Command
   auto a = std::make_shared<OverlayArgs>();
   sub = root.add_subcommand("overlay",
                             "Stitch or stencil a track (a triangle mesh OBJ) into a terrain's TIN");
-  sub->add_option("terrain", a->terrain, "Planet file, or a heightmap (its own samples)")
+  sub->add_option("terrain", a->terrain,
+                  "Planet file, a heightmap (its own samples), or a flat terrain mesh (.obj, as "
+                  "`export --tin` writes for a heightmap: kept as it is)")
       ->required();
   sub->add_option("track", a->track,
                   "Track mesh (OBJ triangles): x, y metres in its own frame, z height above the "
@@ -93,7 +95,9 @@ const CommandRegistration kOverlay([](CLI::App& root, CLI::App*& sub) -> Command
                   "axis, clockwise from north); flat terrains: X,Y[,HEADING] in metres (default "
                   "0,0,0)");
   sub->add_option("--format", a->format, "obj | ply | glb (overrides the extension)");
-  sub->add_option("--spacing", a->spacing, "Heightmap terrain: metres between pixels");
+  sub->add_option("--spacing", a->spacing,
+                  "Heightmap terrain: metres between pixels; mesh terrain: the step it is sampled "
+                  "at for the stencil (default: its smallest vertex gap)");
   sub->add_option("--scale", a->scale, "Heightmap terrain: metres = value * scale + offset");
   sub->add_option("--offset", a->offset, "Heightmap terrain: metres = value * scale + offset");
   sub->add_option("--encoding", a->encoding,

@@ -1,6 +1,8 @@
 #include "io/overlay_export.hpp"
 
 #include <Eigen/Geometry>
+#include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <numbers>
 
@@ -11,12 +13,105 @@
 #include "io/planet_file.hpp"
 #include "io/tin_export.hpp"
 #include "tin/tin_check.hpp"
+#include "tin/tin_locator.hpp"
 
 namespace ps::io {
 
 namespace {
 
+using core::exactNumber;
 constexpr double kDeg = std::numbers::pi / 180.0;
+
+// A flat terrain mesh (what `export --tin` writes for a heightmap: x east, y north, z up, in
+// metres): the TIN itself in lattice coordinates, and its surface sampled on a lattice of
+// `spacing` metres (default: the smallest gap between its vertices' distinct x and y values,
+// which is the heightmap's spacing for this project's exports), for the stencil's re-meshing.
+struct MeshTerrain {
+  HeightSamples samples;
+  tin::Tin tin;
+};
+
+double smallestGap(std::vector<double> values) {
+  std::sort(values.begin(), values.end());
+  double gap = INFINITY;
+  for (std::size_t k = 1; k < values.size(); ++k)
+    if (values[k] > values[k - 1]) gap = std::min(gap, values[k] - values[k - 1]);
+  return gap;
+}
+
+MeshTerrain meshTerrain(const ObjTriangles& mesh, std::optional<double> spacing,
+                        const std::string& name) {
+  Eigen::Vector3d lo = Eigen::Vector3d::Constant(INFINITY), hi = -lo;
+  std::vector<double> xs, ys;
+  for (const auto& p : mesh.vertices) {
+    lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
+    xs.push_back(p.x()), ys.push_back(p.y());
+  }
+  // A heightfield over its bounding rectangle: the triangles' areas seen from above add up to
+  // the rectangle's, with no fold (a planet's mesh, or a surface with overhangs, would not).
+  double covered = 0;
+  for (const auto& tri : mesh.triangles) {
+    const Eigen::Vector3d &a = mesh.vertices[tri[0]], &b = mesh.vertices[tri[1]],
+                          &c = mesh.vertices[tri[2]];
+    covered += 0.5 * std::abs((b - a).x() * (c - a).y() - (b - a).y() * (c - a).x());
+  }
+  const double rectangle = (hi.x() - lo.x()) * (hi.y() - lo.y());
+  if (!(rectangle > 0) || std::abs(covered - rectangle) > 1e-6 * rectangle)
+    throw core::InputError(name +
+                           ": the terrain mesh is not a heightfield over its bounding "
+                           "rectangle (its triangles cover " +
+                           exactNumber(covered / rectangle) +
+                           " times the rectangle seen from above); give a planet file or a "
+                           "heightmap, or a flat mesh as `export --tin` writes");
+  const double dx = spacing ? *spacing : smallestGap(xs), dy = spacing ? *spacing : smallestGap(ys);
+  if (!(std::isfinite(dx) && dx > 0 && std::isfinite(dy) && dy > 0))
+    throw core::InputError(name + ": the terrain mesh has no extent in x or y");
+  const double w = std::round((hi.x() - lo.x()) / dx) + 1,
+               h = std::round((hi.y() - lo.y()) / dy) + 1;
+  if (w * h > double(std::uint64_t(1) << 26))
+    throw core::InputError(name + ": sampling the terrain mesh every " + exactNumber(dx) + " x " +
+                           exactNumber(dy) + " m takes " + exactNumber(w * h) +
+                           " samples; give a coarser --spacing");
+  MeshTerrain t;
+  HeightSamples& s = t.samples;
+  s.width = int(w), s.height = int(h), s.dx = dx, s.dy = dy;
+  for (const auto& p : mesh.vertices) {
+    t.tin.xy.emplace_back((p.x() - lo.x()) / dx, (p.y() - lo.y()) / dy);
+    t.tin.h.push_back(p.z());
+  }
+  for (auto tri : mesh.triangles) {  // counter-clockwise seen from above
+    const Eigen::Vector2d &a = t.tin.xy[tri[0]], &b = t.tin.xy[tri[1]], &c = t.tin.xy[tri[2]];
+    if ((b - a).x() * (c - a).y() - (b - a).y() * (c - a).x() < 0) std::swap(tri[1], tri[2]);
+    t.tin.triangles.push_back(tri);
+  }
+  const tin::TinLocator where(t.tin.xy, t.tin.triangles, w, h);
+  s.heights.resize(std::size_t(w) * std::size_t(h));
+  for (int j = 0; j < s.height; ++j)
+    for (int i = 0; i < s.width; ++i) {
+      double z = NAN;
+      where.visit(
+          {i, j},
+          [&](const tin::TinLocator::Hit& hit) {
+            if (std::isnan(z)) {
+              const auto& tri = t.tin.triangles[hit.triangle];
+              z = hit.l0 * t.tin.h[tri[0]] + hit.l1 * t.tin.h[tri[1]] + hit.l2 * t.tin.h[tri[2]];
+            }
+          },
+          1e-7);
+      if (std::isnan(z))
+        throw core::InputError(name + ": the terrain mesh leaves a hole at (" +
+                               exactNumber(lo.x() + i * dx) + ", " + exactNumber(lo.y() + j * dy) +
+                               ") m");
+      s.heights[std::size_t(j) * std::size_t(s.width) + std::size_t(i)] = float(z);
+    }
+  s.notes.push_back("a terrain mesh of " + std::to_string(mesh.vertices.size()) +
+                    " vertices, sampled every " + exactNumber(dx) + " x " + exactNumber(dy) +
+                    " m (" + std::to_string(s.width) + "x" + std::to_string(s.height) +
+                    " samples) for the stencil's re-meshing; x, y "
+                    "measured from its south-west corner (" +
+                    exactNumber(lo.x()) + ", " + exactNumber(lo.y()) + ") m");
+  return t;
+}
 
 }  // namespace
 
@@ -83,7 +178,17 @@ nlohmann::json overlayFromFiles(const std::filesystem::path& terrainPath,
   std::unique_ptr<terrain::Terrain> planet;
   HeightSamples samples;
   tin::SampleField field;
-  if (isPlanetFile(terrainPath)) {
+  std::optional<tin::Tin> meshTin;  // a terrain given as a mesh is its own TIN
+  std::string ext = terrainPath.extension().string();
+  for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
+  if (ext == ".obj") {
+    MeshTerrain m =
+        meshTerrain(readObjTriangles(terrainPath), heightmapOptions.spacing, terrainPath.string());
+    samples = std::move(m.samples);
+    meshTin = std::move(m.tin);
+    notes = samples.notes;
+    field = heightSampleField(samples);
+  } else if (isPlanetFile(terrainPath)) {
     planet = loadPlanet(terrainPath);
     field = terrainSampleField(*planet);
   } else {
@@ -94,7 +199,7 @@ nlohmann::json overlayFromFiles(const std::filesystem::path& terrainPath,
   }
   field.uniformTolerance = o.errorM;
   const tin::Track track = placeTrack(trackObj, field, o, trackPath.string());
-  const tin::Tin terrainTin = tin::buildTin(field, {});
+  const tin::Tin terrainTin = meshTin ? *meshTin : tin::buildTin(field, {});
   tin::OverlayResult r;
   try {
     r = tin::overlayTrack(field, terrainTin, track, o.mode);
