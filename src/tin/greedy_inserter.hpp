@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdint>
 #include <queue>
+#include <vector>
 
 #include "tin/cdt.hpp"
 #include "tin/sample_field.hpp"
@@ -27,33 +28,25 @@ inline LatticeTriangle latticeTriangle(const SampleField& field, const FaceHandl
   return t;
 }
 
-// Lattice samples have integer coordinates: their in-circle and orientation tests are exact in
-// integer arithmetic, where EPICK's filtered predicates fall back to slow exact numbers on the
-// degenerate (cocircular, collinear) cases a lattice is full of.
+// Lattice samples have integer coordinates: their in-circle test is exact in integer arithmetic,
+// where EPICK's filtered predicates fall back to slow exact numbers on the degenerate (cocircular,
+// collinear) cases a lattice is full of.
 inline bool isLatticePoint(const Point& p) {
   constexpr double kLimit = 1 << 20;  // differences < 2^21: the in-circle terms stay < 2^86
   return p.x() == std::floor(p.x()) && p.y() == std::floor(p.y()) && std::abs(p.x()) < kLimit &&
          std::abs(p.y()) < kLimit;
 }
 
-inline bool cocircular(const Point& a, const Point& b, const Point& c, const Point& d) {
+// True when d lies strictly inside the circle through a, b, c (counter-clockwise).
+inline bool strictlyInCircle(const Point& a, const Point& b, const Point& c, const Point& d) {
   if (!(isLatticePoint(a) && isLatticePoint(b) && isLatticePoint(c) && isLatticePoint(d)))
-    return CGAL::side_of_oriented_circle(a, b, c, d) == CGAL::ON_ORIENTED_BOUNDARY;
+    return CGAL::side_of_oriented_circle(a, b, c, d) == CGAL::ON_POSITIVE_SIDE;
   __extension__ using Wide = __int128;
   const auto dx = [&](const Point& p) { return Wide(std::int64_t(p.x()) - std::int64_t(d.x())); };
   const auto dy = [&](const Point& p) { return Wide(std::int64_t(p.y()) - std::int64_t(d.y())); };
   const Wide ax = dx(a), ay = dy(a), bx = dx(b), by = dy(b), cx = dx(c), cy = dy(c);
   const Wide al = ax * ax + ay * ay, bl = bx * bx + by * by, cl = cx * cx + cy * cy;
-  return ax * (by * cl - cy * bl) - ay * (bx * cl - cx * bl) + al * (bx * cy - cx * by) == 0;
-}
-
-inline CGAL::Orientation orientationOf(const Point& a, const Point& b, const Point& c) {
-  if (!(isLatticePoint(a) && isLatticePoint(b) && isLatticePoint(c)))
-    return CGAL::orientation(a, b, c);
-  const std::int64_t d =
-      (std::int64_t(b.x()) - std::int64_t(a.x())) * (std::int64_t(c.y()) - std::int64_t(a.y())) -
-      (std::int64_t(b.y()) - std::int64_t(a.y())) * (std::int64_t(c.x()) - std::int64_t(a.x()));
-  return d > 0 ? CGAL::LEFT_TURN : d < 0 ? CGAL::RIGHT_TURN : CGAL::COLLINEAR;
+  return ax * (by * cl - cy * bl) - ay * (bx * cl - cx * bl) + al * (bx * cy - cx * by) > 0;
 }
 
 // Greedy insertion: a max-heap of triangles over tolerance, each with its worst sample. An
@@ -97,47 +90,41 @@ class GreedyInserter {
   }
 
   void insert(int i, int j, const FaceHandle& hint) {
-    const VertexHandle v = cdt_.insert(Point(i, j), hint);
+    // Into the triangle (or onto the edge) without CGAL's Delaunay flips, then Lawson's flips
+    // with a strict in-circle test, as Delatin does: where the new vertex and an old edge's far
+    // side are cocircular (every rectangle of lattice samples is), the old edge stays. CGAL's
+    // symbolic perturbation would take either; measured, keeping the old one needs fewer
+    // vertices for the same error. The result is a Delaunay triangulation all the same.
+    const VertexHandle v = cdt_.Cdt::Ctr::insert(Point(i, j), hint);
     v->info().height = field_.at(i, j);
-    keepOldDiagonals(v);
+    legalize(v);
     auto f = cdt_.incident_faces(v), done = f;
     do {
       if (!cdt_.is_infinite(f)) measure(f);
     } while (++f != done);
   }
 
-  // Where the new vertex v and an old edge's far side are cocircular (on a sample lattice every
-  // rectangle of samples is), either diagonal is Delaunay; CGAL's symbolic perturbation may
-  // have taken the one to v. Put the old edge back, as an insertion by flips with a strict
-  // in-circle test (Delatin's) keeps it: measured, that needs fewer vertices for the same error.
-  void keepOldDiagonals(const VertexHandle& v) {
-    for (bool flipped = true; flipped;) {
-      flipped = false;
-      auto fc = cdt_.incident_faces(v), done = fc;
-      do {
-        FaceHandle f = fc;
-        if (cdt_.is_infinite(f)) continue;
-        const int iv = f->index(v), i = cdt_.ccw(iv);  // edge i: v to w = vertex cw(iv)
-        if (f->is_constrained(i)) continue;
-        const FaceHandle g = f->neighbor(i);
-        if (cdt_.is_infinite(g)) continue;
-        const Point& a = f->vertex(i)->point();
-        const Point& b = g->vertex(cdt_.mirror_index(f, i))->point();
-        const Point& w = f->vertex(cdt_.cw(iv))->point();
-        if (!cocircular(v->point(), w, a, b)) continue;
-        const CGAL::Orientation sv = orientationOf(a, b, v->point()), sw = orientationOf(a, b, w);
-        if (sv == sw || sv == CGAL::COLLINEAR || sw == CGAL::COLLINEAR)
-          continue;  // not a convex quadrilateral: the old edge cannot come back
-        cdt_.flip(f, i);
-        for (int k = 0; k < 3; ++k)
-          if (!cdt_.is_infinite(f->neighbor(k))) measure(f->neighbor(k));
-        if (!cdt_.is_infinite(f)) measure(f);
-        flipped = true;
-        break;
-      } while (++fc != done);
+  void legalize(const VertexHandle& v) {
+    std::vector<FaceHandle> stack;
+    auto fc = cdt_.incident_faces(v), done = fc;
+    do stack.push_back(fc);
+    while (++fc != done);
+    while (!stack.empty()) {
+      FaceHandle f = stack.back();
+      stack.pop_back();
+      if (cdt_.is_infinite(f) || !f->has_vertex(v)) continue;
+      const int i = f->index(v);  // the edge opposite v
+      if (f->is_constrained(i)) continue;
+      FaceHandle g = f->neighbor(i);
+      if (cdt_.is_infinite(g)) continue;
+      const Point& w = g->vertex(cdt_.mirror_index(f, i))->point();
+      if (!strictlyInCircle(f->vertex(0)->point(), f->vertex(1)->point(), f->vertex(2)->point(), w))
+        continue;
+      cdt_.flip(f, i);
+      stack.push_back(f);
+      stack.push_back(g);
     }
   }
-
   Cdt& cdt_;
   const SampleField& field_;
   std::priority_queue<Entry> queue_;
