@@ -133,6 +133,17 @@ def group_demo():
     frames = [json.loads(l) for l in open(out("demo", "log.jsonl"))]
     if len([l for l in frames if "frame" in l]) < 60:
         fail("log.jsonl holds fewer lines than frames")
+    # A stroke sculpted in the recording becomes a road (a track mesh) that overlay takes.
+    stdout, _ = run("track", out("demo", "log.jsonl"), "--planet", out("demo", "planet.planet"),
+                    "--width", "100000", "--out", out("demo", "stroke_road.obj"))
+    road = json.loads(stdout)
+    if road["points"] < 2 or road["triangles"] != 2 * (road["points"] - 1):
+        fail(f"track from the demo's log: {road}")
+    stdout, _ = run("overlay", out("demo", "planet.planet"), out("demo", "stroke_road.obj"), "--at", road["at"],
+                    "--mode", "stencil", "--error", "500", "--out", out("demo", "stroke_road_stencil.glb"))
+    r = json.loads(stdout)
+    if r["euler"] != 2 or r["border_edges"] != 0 or r["footprint_error_m"] > 1e-3:
+        fail(f"the demo's stroke stenciled into its planet: {r}")
     # A recording made with the single planet and tool markers: the default board and cube
     # see nothing and say how to replay it; with --board single --tool-layout flat it sculpts.
     video = out("short.mkv")

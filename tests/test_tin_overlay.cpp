@@ -14,6 +14,7 @@
 #include "io/planet_file.hpp"
 #include "test_terrains.hpp"
 #include "tin/overlay.hpp"
+#include "tin/strip.hpp"
 #include "tin/tin_check.hpp"
 #include "tin/tin_locator.hpp"
 #include "tin/triangle_error.hpp"
@@ -228,6 +229,24 @@ TEST(TinOverlay, RefusesTracksThatAreNotProperMeshes) {
   away.triangles = {{0, 1, 2}};
   for (auto& p : away.xy) p += Eigen::Vector2d(500, 500);
   expectRefused(away, "wholly outside");
+}
+
+TEST(TinOverlay, AJitteryStrokeThatDoublesBackStillMakesAProperStrip) {
+  const Scene s = makeScene(2.0, 4);
+  std::mt19937 rng(9);
+  std::uniform_real_distribution<double> jitter(-1.5, 1.5);
+  std::vector<Eigen::Vector2d> path;  // out along a curve, a scrub back and forth, on again
+  for (int k = 0; k <= 60; ++k) {
+    const double x = 5 + 0.8 * (k < 30 ? k : k < 40 ? 30 - (k - 30) : k - 20);
+    const double back = k > 30 && k < 40 ? 7.0 : 0.0;  // the scrub back runs beside the path
+    path.emplace_back(x + jitter(rng), 20 + 8 * std::sin(0.1 * x) + back + jitter(rng));
+  }
+  const Strip strip = stripAlong(path, 3.0);
+  EXPECT_LT(strip.xy.size(), path.size()) << "the jitter is simplified away";
+  Track track{strip.xy, std::vector<double>(strip.xy.size(), 0.0), strip.triangles};
+  EXPECT_NO_THROW(overlayTrack(s.field, s.terrain, track, OverlayMode::kStitch));
+  EXPECT_THROW(stripAlong({{1, 1}, {1, 1}}, 2.0), core::InputError);
+  EXPECT_THROW(stripAlong(path, 0.0), core::InputError);
 }
 
 TEST(TinOverlay, ObjTracksAreReadOrRefusedWithTheLine) {

@@ -1,9 +1,11 @@
-// `planetsculpt track STROKES --width M --out TRACK.obj [--stroke N] [--planet P]`: a stroke of
-// a stroke file (a sculpted session's journal, `demo`'s strokes) as a strip of the given width:
+// `planetsculpt track STROKES --width M --out TRACK.obj [--stroke N] [--planet P]`: a stroke
+// sculpted in a recording (a replay's log.jsonl) or of a stroke file as a strip of the given width:
 // a track mesh that `overlay ... --at LAT,LON` stitches or stencils into a planet's TIN.
 #include <Eigen/Geometry>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
+#include <fstream>
 #include <iostream>
 #include <memory>
 #include <numbers>
@@ -45,8 +47,37 @@ std::vector<std::vector<Eigen::Vector3d>> strokePaths(const edit::StrokeScript& 
   return paths;
 }
 
+// A replay's log (`replay`/`demo` write OUT/log.jsonl, one line per frame): each stroke the
+// frames from its "begin" through its "move"s, at their control vertices on the planet.
+std::vector<std::vector<Eigen::Vector3d>> logPaths(const std::string& file,
+                                                   const terrain::Terrain& planet) {
+  std::ifstream in(file);
+  std::vector<std::vector<Eigen::Vector3d>> paths;
+  std::string line;
+  int lineNo = 0;
+  const int side = planet.grid().side();
+  while (std::getline(in, line)) {
+    ++lineNo;
+    const nlohmann::json j = nlohmann::json::parse(line, nullptr, false);
+    if (j.is_discarded() || !j.is_object())
+      throw core::InputError(file + ":" + std::to_string(lineNo) + ": not a JSON object");
+    const std::string stroke = j.value("stroke", "");
+    if ((stroke != "begin" && stroke != "move") || !j.contains("control_vertex")) continue;
+    const auto& c = j["control_vertex"];
+    if (!c.is_array() || c.size() != 2 || !c[0].is_number_integer() || !c[1].is_number_integer() ||
+        c[0].get<int>() < 0 || c[0].get<int>() >= side || c[1].get<int>() < 0 ||
+        c[1].get<int>() >= side)
+      throw core::InputError(file + ":" + std::to_string(lineNo) +
+                             ": control_vertex is not a vertex of the planet's " +
+                             planet.grid().label() + " grid (another planet's log?)");
+    const Eigen::Vector3d p = planet.chart().position(c[0].get<int>(), c[1].get<int>(), 0.0);
+    if (stroke == "begin" || paths.empty()) paths.emplace_back();
+    paths.back().push_back(p);
+  }
+  return paths;
+}
+
 int runTrack(const TrackArgs& a) {
-  const edit::StrokeScript script = edit::loadStrokeScript(a.strokes);
   std::unique_ptr<terrain::Terrain> planet;
   double radius = io::kDefaultImportRadius;
   if (!a.planet.empty()) {
@@ -55,7 +86,13 @@ int runTrack(const TrackArgs& a) {
       throw core::InputError(a.planet + ": a stroke's track needs a planet (a lat-long chart)");
     radius = planet->chart().radius();
   }
-  const auto paths = strokePaths(script, radius);
+  const bool replayLog = std::filesystem::path(a.strokes).extension() == ".jsonl";
+  if (replayLog && !planet)
+    throw core::InputError(a.strokes +
+                           ": a replay's log names grid vertices: give --planet (the "
+                           "planet the replay sculpted, OUT/planet.planet)");
+  const auto paths = replayLog ? logPaths(a.strokes, *planet)
+                               : strokePaths(edit::loadStrokeScript(a.strokes), radius);
   if (a.stroke < 1 || a.stroke > int(paths.size()))
     throw core::InputError(a.strokes + ": --stroke " + std::to_string(a.stroke) +
                            ": the file has " + std::to_string(paths.size()) + " strokes");
@@ -108,7 +145,7 @@ int runTrack(const TrackArgs& a) {
   io::writeObjFile(mesh, a.output);
   const nlohmann::json summary = {{"file", a.output},
                                   {"stroke", a.stroke},
-                                  {"points", centre.size()},
+                                  {"points", strip.xy.size() / 2},
                                   {"length_m", length},
                                   {"width_m", a.width},
                                   {"vertices", strip.xy.size()},
@@ -124,7 +161,8 @@ const CommandRegistration kTrack([](CLI::App& root, CLI::App*& sub) -> CommandAc
   sub = root.add_subcommand(
       "track", "A stroke of a stroke file as a strip (a track mesh OBJ for `overlay`)");
   sub->add_option("strokes", a->strokes,
-                  "Stroke file (a session's journal script, data/demo-strokes.txt, ...)")
+                  "A replay's log (OUT/log.jsonl of `replay`/`demo`: the strokes sculpted in the "
+                  "recording; needs --planet) or a stroke file (data/demo-strokes.txt, ...)")
       ->required();
   sub->add_option("--out", a->output, "Track mesh (.obj)")->required();
   sub->add_option("--width", a->width, "Strip width in metres")->required();
