@@ -49,6 +49,14 @@ ObjMesh readObj(const fs::path& p) {
   return m;
 }
 
+// Brute force: the distance from p to the nearest triangle of the mesh.
+double distanceToMesh(const Eigen::Vector3d& p, const ObjMesh& m) {
+  double best = INFINITY;
+  for (const auto& f : m.f)
+    best = std::min(best, tin::pointTriangleDistance(p, m.v[f[0]], m.v[f[1]], m.v[f[2]]));
+  return best;
+}
+
 // A 16-bit grey PNG of random relief (row 0 north), values = metres * 10 (scale 0.1).
 fs::path writeRelief(const fs::path& dir, int w, int h, std::uint32_t seed) {
   std::mt19937 rng(seed);
@@ -147,10 +155,7 @@ TEST(TinExport, APlanetTinIsAClosedOutwardSphereWithinTheErrorOfEverySample) {
   for (int v = 0; v < side; ++v)
     for (int u = 0; u < side; ++u) {
       const Eigen::Vector3d p = t.chart().position(u, v, t.height(u, v));
-      double best = INFINITY;
-      for (const auto& f : m.f)
-        best = std::min(best, tin::pointTriangleDistance(p, m.v[f[0]], m.v[f[1]], m.v[f[2]]));
-      worst = std::max(worst, best);
+      worst = std::max(worst, distanceToMesh(p, m));
     }
   EXPECT_LE(worst, o.maxErrorM);
 }
@@ -188,10 +193,7 @@ TEST(TinExport, APlanetRegionIsMeshedAloneWithinItsError) {
       const double lat = -90.0 + 180.0 * v / (side - 1), lon = -180.0 + 360.0 * u / (side - 1);
       if (lat < -20 || lat > 25 || lon < 30 || lon > 100) continue;
       const Eigen::Vector3d p = t.chart().position(u, v, t.height(u, v));
-      double best = INFINITY;
-      for (const auto& f : m.f)
-        best = std::min(best, tin::pointTriangleDistance(p, m.v[f[0]], m.v[f[1]], m.v[f[2]]));
-      worst = std::max(worst, best);
+      worst = std::max(worst, distanceToMesh(p, m));
     }
   EXPECT_LE(worst, o.maxErrorM);
   o.regionDeg = std::array<double, 4>{10.0, 170.0, 20.0, -170.0};

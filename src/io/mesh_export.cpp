@@ -99,6 +99,21 @@ std::string toString(MeshFormat f) {
   return kNames.nameOf(f);
 }
 
+void writeMeshFile(const MeshData& mesh, MeshFormat format, const std::filesystem::path& path,
+                   const std::string& extrasJson) {
+  switch (format) {
+    case MeshFormat::kObj:
+      writeObjFile(mesh, path);
+      break;
+    case MeshFormat::kPly:
+      writePlyFile(mesh, path);
+      break;
+    case MeshFormat::kGlb:
+      writeGlbFile(mesh, path, extrasJson);
+      break;
+  }
+}
+
 double coordinateRoundingBound(const terrain::Terrain& t, MeshFormat format) {
   if (format == MeshFormat::kObj) return std::sqrt(3.0) * 0.5e-4 * (1 + 1e-9);  // "%.4f"
   // Largest coordinate magnitude over the whole grid.

@@ -4,6 +4,7 @@
 #include <string>
 #include <vector>
 
+#include "io/mesh_writers.hpp"
 #include "terrain/mesh.hpp"
 #include "terrain/terrain.hpp"
 
@@ -32,6 +33,11 @@ void writeGlb(const terrain::Terrain& terrain, const terrain::Mesh& mesh,
 
 enum class MeshFormat { kObj, kPly, kGlb };
 std::string toString(MeshFormat f);
+
+// A mesh from any mesher (io/mesh_writers.hpp) in `format`; `extrasJson` goes into a GLB's
+// asset extras. Atomic.
+void writeMeshFile(const MeshData& mesh, MeshFormat format, const std::filesystem::path& path,
+                   const std::string& extrasJson = "{}");
 
 // The largest distance the format's coordinate rounding (float32; OBJ's 4 decimals) can move
 // any vertex of this terrain, from a bound on the coordinates' magnitude.

@@ -251,17 +251,8 @@ nlohmann::json overlayFromFiles(const std::filesystem::path& terrainPath,
     summary["footprint_error_m"] = rep.footprintErrorM;
     summary["outside_error_ratio"] = rep.outsideErrorRatio;
   }
-  switch (meshFormatOf(format)) {
-    case MeshFormat::kObj:
-      writeObjFile(mesh, out);
-      break;
-    case MeshFormat::kPly:
-      writePlyFile(mesh, out);
-      break;
-    case MeshFormat::kGlb:
-      writeGlbFile(mesh, out, nlohmann::json({{"planetsculpt", {{"overlay", summary}}}}).dump());
-      break;
-  }
+  writeMeshFile(mesh, meshFormatOf(format), out,
+                nlohmann::json({{"planetsculpt", {{"overlay", summary}}}}).dump());
   return summary;
 }
 

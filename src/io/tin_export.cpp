@@ -201,18 +201,8 @@ nlohmann::json meshAndWrite(tin::SampleField field, const std::filesystem::path&
   }
   if (o.controlErrorM) summary["control_error_m"] = *o.controlErrorM;
   if (welded.collapsed) summary["pole_triangles_welded_away"] = welded.collapsed;
-  switch (format) {
-    case MeshFormat::kObj:
-      writeObjFile(mesh, out);
-      break;
-    case MeshFormat::kPly:
-      writePlyFile(mesh, out);
-      break;
-    case MeshFormat::kGlb:
-      writeGlbFile(mesh, out,
-                   nlohmann::json({{"planetsculpt", {{"tin", summary}, {"units", "m"}}}}).dump());
-      break;
-  }
+  writeMeshFile(mesh, format, out,
+                nlohmann::json({{"planetsculpt", {{"tin", summary}, {"units", "m"}}}}).dump());
   return summary;
 }
 

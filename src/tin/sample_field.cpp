@@ -36,6 +36,10 @@ bool SampleField::isPoleRow(int j) const {
 }
 
 void SampleField::rowPositions(int j, int iFirst, int iLast, core::Chart::RowOut out) const {
+  if (i0 == 0) {  // the window's rows start where the grid's do
+    chart->rowPositions(j + j0, iFirst, iLast, heights.data() + index(0, j), out);
+    return;
+  }
   // The chart reads hRow[u] for the grid's u = iFirst + i0 .. iLast + i0: the window's row copied
   // to where the chart looks for it.
   thread_local std::vector<float> row;
