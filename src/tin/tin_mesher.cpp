@@ -154,6 +154,11 @@ Tin buildTin(const SampleField& field, const TinOptions& o, TinReport* reportOut
   greedy.measureAll();
   greedy.run();
   report.greedyMs = msSince(t0);
+  if (o.removeRedundant) {
+    t0 = Clock::now();
+    report.removedVertices = greedy.removeRedundant();
+    report.removeMs = msSince(t0);
+  }
   report.greedyVertices = cdt.number_of_vertices();
 
   if (o.minAngleDeg > 0) {

@@ -5,7 +5,9 @@
 //   fewest triangles (minAngleDeg = 0): greedy insertion (Garland and Heckbert's; Delatin's):
 //     the sample with the largest error relative to its tolerance is inserted into the Delaunay
 //     triangulation until none exceeds it; only the triangles around each new vertex are
-//     measured again.
+//     measured again. Then each vertex whose removal keeps every sample of the re-filled hole
+//     within its tolerance is removed (one sweep in rows; about 10-19 % fewer triangles for
+//     about a third more time, docs/BENCHMARKS.md).
 //   quality (minAngleDeg > 0): the greedy TIN, its border constrained, then Delaunay
 //     refinement (CGAL's Delaunay_mesher_2) with a criterion that splits a triangle whose
 //     smallest angle is under the request (unless smaller than minArea) or whose error exceeds
@@ -38,6 +40,9 @@ struct TinOptions {
   // Steiner points the angle refinement may add above kGuaranteedAngleDeg; 0: 4x the greedy
   // TIN's vertex count + 10,000.
   std::size_t steinerBudget = 0;
+  // After greedy insertion, remove the vertices the error does not need (fewer triangles for
+  // some more time; off: the plain greedy TIN, as Delatin makes it).
+  bool removeRedundant = true;
 };
 
 struct Tin {
@@ -47,14 +52,15 @@ struct Tin {
 };
 
 struct TinReport {
-  std::size_t greedyVertices = 0;   // after greedy insertion
+  std::size_t greedyVertices = 0;   // after greedy insertion (and removal)
+  std::size_t removedVertices = 0;  // by the redundant-vertex pass
   std::size_t steinerVertices = 0;  // added by the quality refinement
   std::size_t vertices = 0, triangles = 0;
   double requestedAngleDeg = 0;
   double smallestAngleDeg = 0;   // over every triangle of the result
   bool angleMet = true;          // smallestAngleDeg >= request (within 1e-6 degrees)
   bool budgetExhausted = false;  // the angle refinement stopped at its budget
-  double greedyMs = 0, refineMs = 0;
+  double greedyMs = 0, removeMs = 0, refineMs = 0;
 };
 
 // Throws core::InputError for a field that does not validate or options out of range.
