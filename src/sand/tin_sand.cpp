@@ -1,0 +1,336 @@
+#include "sand/tin_sand.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <numbers>
+
+#include "core/input_error.hpp"
+
+namespace ps::sand {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double msSince(Clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+}
+
+double cross(const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
+  return a.x() * b.y() - a.y() * b.x();
+}
+
+bool segmentsCross(const Eigen::Vector2d& a, const Eigen::Vector2d& b, const Eigen::Vector2d& c,
+                   const Eigen::Vector2d& d) {
+  const double d1 = cross(b - a, c - a), d2 = cross(b - a, d - a);
+  const double d3 = cross(d - c, a - c), d4 = cross(d - c, b - c);
+  return ((d1 > 0 && d2 < 0) || (d1 < 0 && d2 > 0)) && ((d3 > 0 && d4 < 0) || (d3 < 0 && d4 > 0));
+}
+
+// Whether p lies inside the closed polygon (crossing number).
+bool insidePolygon(const std::vector<Eigen::Vector2d>& poly, const Eigen::Vector2d& p) {
+  bool inside = false;
+  for (std::size_t i = 0, j = poly.size() - 1; i < poly.size(); j = i++) {
+    const Eigen::Vector2d &a = poly[i], &b = poly[j];
+    if ((a.y() > p.y()) != (b.y() > p.y()) &&
+        p.x() < (b.x() - a.x()) * (p.y() - a.y()) / (b.y() - a.y()) + a.x())
+      inside = !inside;
+  }
+  return inside;
+}
+
+double polygonDistance(const std::vector<Eigen::Vector2d>& poly, const Eigen::Vector2d& p) {
+  double best = INFINITY;
+  for (std::size_t i = 0, j = poly.size() - 1; i < poly.size(); j = i++) {
+    const Eigen::Vector2d ab = poly[i] - poly[j];
+    const double t = std::clamp((p - poly[j]).dot(ab) / ab.squaredNorm(), 0.0, 1.0);
+    best = std::min(best, (poly[j] + t * ab - p).norm());
+  }
+  return best;
+}
+
+// The rampart's profile (paper 004's): 1 at the outer contour, 0 at the rampart's edge.
+double rampartProfile(double t) {
+  t = std::clamp(t, 0.0, 1.0);
+  return 1.0 - 3.0 * t * t + 2.0 * t * t * t;
+}
+
+}  // namespace
+
+TinStampTool TinStampTool::disc(double radius, int segments) {
+  TinStampTool t;
+  for (int k = 0; k < segments; ++k) {
+    const double a = 2.0 * std::numbers::pi * k / segments;
+    t.outline.emplace_back(radius * std::cos(a), radius * std::sin(a));
+  }
+  t.rim = 0.05 * radius;
+  t.rampartWidth = radius;
+  return t;
+}
+
+void TinStampTool::validate() const {
+  const std::size_t n = outline.size();
+  if (n < 3)
+    throw core::InputError("stamp tool: its outline has " + std::to_string(n) +
+                           " points; it needs at least 3");
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!outline[i].allFinite())
+      throw core::InputError("stamp tool: outline point " + std::to_string(i) + " is not finite");
+    if (outline[i].norm() == 0)
+      throw core::InputError("stamp tool: outline point " + std::to_string(i) +
+                             " is the tool's centre");
+    if (outline[i] == outline[(i + 1) % n])
+      throw core::InputError("stamp tool: outline points " + std::to_string(i) + " and " +
+                             std::to_string((i + 1) % n) + " are the same point (degenerate)");
+  }
+  for (std::size_t i = 0; i < n; ++i)
+    for (std::size_t j = i + 2; j < n; ++j) {
+      if (i == 0 && j == n - 1) continue;
+      if (segmentsCross(outline[i], outline[(i + 1) % n], outline[j], outline[(j + 1) % n]))
+        throw core::InputError("stamp tool: the outline intersects itself (edges " +
+                               std::to_string(i) + " and " + std::to_string(j) + " cross)");
+    }
+  for (std::size_t i = 0; i < n; ++i)
+    if (!(cross(outline[i], outline[(i + 1) % n]) > 0))
+      throw core::InputError("stamp tool: edge " + std::to_string(i) +
+                             " does not turn counter-clockwise about the centre (the outline "
+                             "must be counter-clockwise and seen whole from its centre)");
+  if (!(std::isfinite(rim) && rim > 0))
+    throw core::InputError("stamp tool: rim " + core::exactNumber(rim) + " m must be positive");
+  if (!(std::isfinite(rampartWidth) && rampartWidth > 0))
+    throw core::InputError("stamp tool: rampart width " + core::exactNumber(rampartWidth) +
+                           " m must be positive");
+}
+
+double TinStampTool::outerRadius() const {
+  double r = 0;
+  for (const Eigen::Vector2d& q : outline) r = std::max(r, q.norm() + rim);
+  return r;
+}
+
+void TinSandSettings::validate() const {
+  material.validate();
+  if (!(std::isfinite(flatDeg) && flatDeg > 0 && flatDeg <= 10))
+    throw core::InputError("flat angle " + core::exactNumber(flatDeg) +
+                           " degrees is outside (0, 10]");
+  if (idleSteps < 1 || idleSteps > 100)
+    throw core::InputError("idle steps " + std::to_string(idleSteps) + " is outside 1 .. 100");
+}
+
+TinSand::TinSand(tin::DynamicTin tin, TinSandSettings settings)
+    : tin_(std::move(tin)), settings_(std::move(settings)) {
+  settings_.validate();
+  tanTalus_ = settings_.material.tanTalus();
+  tanFlat_ = std::tan(settings_.flatDeg * std::numbers::pi / 180.0);
+}
+
+void TinSand::activate(Vertex v) {
+  if (v >= inLe_.size()) {
+    inLe_.resize(std::size_t(v) + 1, 0);
+    idle_.resize(std::size_t(v) + 1, 0);
+  }
+  idle_[v] = 0;
+  if (!inLe_[v]) inLe_[v] = 1, le_.push_back(v);
+  markFlatCandidate(v);
+}
+
+void TinSand::markFlatCandidate(Vertex v) {
+  if (v >= inLr_.size()) inLr_.resize(std::size_t(v) + 1, 0);
+  if (!inLr_[v]) inLr_[v] = 1, lr_.push_back(v);
+}
+
+TinStampStats TinSand::stamp(const Eigen::Vector2d& centre, double bottom,
+                             const TinStampTool& tool) {
+  const auto t0 = Clock::now();
+  tool.validate();
+  if (!centre.allFinite() || !std::isfinite(bottom))
+    throw core::InputError("stamp: its centre or bottom height is not finite");
+  const double reach = tool.reach();
+  if (tin_.depthInside(centre) < reach)
+    throw core::InputError("stamp: the tool reaches " + core::exactNumber(reach) +
+                           " m from its centre, beyond the TIN's region there");
+  TinStampStats stats;
+  const double before = tin_.volume();
+  ++generation_;
+  const std::size_t n = tool.outline.size();
+  std::vector<Eigen::Vector2d> inner(n), outer(n);
+  for (std::size_t k = 0; k < n; ++k) {
+    const Eigen::Vector2d& q = tool.outline[k];
+    inner[k] = centre + q;
+    outer[k] = centre + q * (1.0 + tool.rim / q.norm());
+  }
+  stats.freedConstraints = tin_.freeConstraintsNear(centre, tool.outerRadius() * (1 + 1e-9));
+
+  // Outer contour first: it follows the terrain. Then the inner one, pressed.
+  const std::size_t countBefore = tin_.vertexCount();
+  std::vector<Vertex> outerIds(n), innerIds(n);
+  for (std::size_t k = 0; k < n; ++k) outerIds[k] = tin_.insertOnSurface(outer[k]);
+  for (std::size_t k = 0; k < n; ++k)
+    tin_.constrain(outerIds[k], outerIds[(k + 1) % n], generation_);
+  for (std::size_t k = 0; k < n; ++k)
+    innerIds[k] = tin_.insert(inner[k], std::min(tin_.heightAt(inner[k]), bottom));
+  for (std::size_t k = 0; k < n; ++k)
+    tin_.constrain(innerIds[k], innerIds[(k + 1) % n], generation_);
+  // A ring halfway across the rampart, so that the material pushed aside has vertices to land
+  // on however coarse the TIN is there.
+  for (std::size_t k = 0; k < n; ++k) {
+    const Eigen::Vector2d& q = tool.outline[k];
+    tin_.insertOnSurface(centre + q * (1.0 + (tool.rim + 0.5 * tool.rampartWidth) / q.norm()));
+  }
+  stats.inserted = tin_.vertexCount() - countBefore;
+
+  // Press everything inside the inner contour down to the bottom.
+  std::vector<Vertex> inside;
+  tin_.verticesWithin(centre, tool.outerRadius(), scratch_);
+  for (const Vertex v : scratch_) {
+    if (!insidePolygon(inner, tin_.position(v))) continue;
+    inside.push_back(v);
+    if (tin_.height(v) > bottom) tin_.setHeight(v, bottom), ++stats.pressed;
+  }
+  for (const Vertex v : inside) activate(v);
+  for (const Vertex v : outerIds) activate(v);
+
+  // Inner vertices on the bottom with no deeper neighbour carry nothing the contour does not.
+  for (const Vertex v : inside) {
+    if (std::find(innerIds.begin(), innerIds.end(), v) != innerIds.end()) continue;
+    if (tin_.height(v) != bottom) continue;
+    tin_.neighbours(v, neighbours_);
+    if (std::any_of(neighbours_.begin(), neighbours_.end(),
+                    [&](Vertex u) { return tin_.height(u) < bottom; }))
+      continue;
+    if (tin_.remove(v)) ++stats.removedInside;
+  }
+
+  // What the stamp changed goes onto the rampart, weighted by its profile.
+  const double displaced = before - tin_.volume();
+  stats.displacedVolume = displaced;
+  tin_.verticesWithin(centre, tool.reach(), scratch_);
+  std::vector<std::pair<Vertex, double>> rampart;
+  double weighted = 0;
+  for (const Vertex v : scratch_) {
+    const Eigen::Vector2d p = tin_.position(v);
+    // The inner contour's vertices lie on the polygon, where the inside test may go either way.
+    if (insidePolygon(inner, p) || tin_.onHull(v) ||
+        std::find(innerIds.begin(), innerIds.end(), v) != innerIds.end())
+      continue;
+    const double t = insidePolygon(outer, p) ? 0.0 : polygonDistance(outer, p) / tool.rampartWidth;
+    const double profile = rampartProfile(t);
+    if (profile <= 0) continue;
+    rampart.emplace_back(v, profile);
+    weighted += profile * tin_.weight(v);
+  }
+  if (weighted > 0 && displaced != 0) {
+    const double scale = displaced / weighted;
+    for (const auto& [v, profile] : rampart) {
+      tin_.setHeight(v, tin_.height(v) + scale * profile);
+      activate(v);
+    }
+  }
+  timing_.stampMs += msSince(t0);
+  return stats;
+}
+
+std::size_t TinSand::erode() {
+  const auto t0 = Clock::now();
+  const double cohesion = settings_.material.cohesion;
+  const double rate = settings_.material.erosionRate;
+  const double restTolerance = settings_.material.talusTolerance * tanTalus_;
+  std::size_t givers = 0;
+  const std::vector<Vertex> round = le_;
+  struct Share {
+    Vertex v;
+    double weight, amount, gap;
+  };
+  std::vector<Share> shares;
+  for (const Vertex k : round) {
+    if (!tin_.alive(k) || !inLe_[k]) continue;
+    const double hk = tin_.height(k);
+    const Eigen::Vector2d pk = tin_.position(k);
+    tin_.neighbours(k, neighbours_);
+    shares.clear();
+    double excessSum = 0;
+    for (const Vertex j : neighbours_) {
+      const double d = (tin_.position(j) - pk).norm();
+      const double gap = hk - tin_.height(j);
+      const double excess = gap - (tanTalus_ * d + cohesion);
+      if (excess > restTolerance * d) {
+        shares.push_back({j, tin_.weight(j), excess, gap});
+        excessSum += excess;
+      }
+    }
+    if (shares.empty()) {
+      if (++idle_[k] >= settings_.idleSteps) inLe_[k] = 0;
+      continue;
+    }
+    ++givers;
+    idle_[k] = 0;
+    // Each lower neighbour j would level its edge to the talus line alone with the volume
+    // e_j / (1/w_k + 1/w_j); the giver moves c times its share of that (by excess) to each.
+    const double wk = tin_.weight(k);
+    double total = 0;
+    for (Share& s : shares) {
+      s.amount = rate * (s.amount / excessSum) * s.amount / (1.0 / wk + 1.0 / s.weight);
+      total += s.amount;
+    }
+    // The giver stays at least as high as every receiver (no new extremum).
+    double lambda = 1.0;
+    for (const Share& s : shares)
+      lambda = std::min(lambda, s.gap / (total / wk + s.amount / s.weight));
+    if (!(lambda > 0)) continue;
+    double given = 0;
+    for (const Share& s : shares) {
+      const double m = lambda * s.amount;
+      tin_.setHeight(s.v, tin_.height(s.v) + m / s.weight);
+      given += m;
+    }
+    tin_.setHeight(k, hk - given / wk);
+    markFlatCandidate(k);
+    // The receivers rose and k sank: a higher neighbour may now be steeper than the talus.
+    for (const Vertex j : neighbours_) activate(j);
+  }
+  // Vertices that went idle leave the list.
+  le_.erase(
+      std::remove_if(le_.begin(), le_.end(), [&](Vertex v) { return !tin_.alive(v) || !inLe_[v]; }),
+      le_.end());
+  timing_.erodeMs += msSince(t0);
+  return givers;
+}
+
+bool TinSand::isFlat(Vertex v) {
+  const double h = tin_.height(v);
+  const Eigen::Vector2d p = tin_.position(v);
+  tin_.neighbours(v, neighbours_);
+  for (const Vertex u : neighbours_)
+    if (std::abs(tin_.height(u) - h) > tanFlat_ * (tin_.position(u) - p).norm()) return false;
+  return true;
+}
+
+std::size_t TinSand::removeRedundant() {
+  auto t0 = Clock::now();
+  std::vector<Vertex> flat;
+  for (const Vertex v : lr_) {
+    inLr_[v] = 0;
+    if (tin_.alive(v) && !tin_.onHull(v) && isFlat(v)) flat.push_back(v);
+  }
+  lr_.clear();
+  timing_.detectMs += msSince(t0);
+  if (!settings_.removeRedundant) return 0;
+  t0 = Clock::now();
+  std::size_t removed = 0;
+  for (const Vertex v : flat) {
+    // An earlier removal may have changed v's neighbours: test again.
+    if (!tin_.alive(v) || !isFlat(v)) continue;
+    tin_.neighbours(v, scratch_);
+    if (!tin_.remove(v)) continue;
+    if (v < inLe_.size()) inLe_[v] = 0;
+    ++removed;
+    for (const Vertex u : scratch_) activate(u);  // raised a little to keep the volume
+  }
+  le_.erase(
+      std::remove_if(le_.begin(), le_.end(), [&](Vertex u) { return !tin_.alive(u) || !inLe_[u]; }),
+      le_.end());
+  timing_.removeMs += msSince(t0);
+  return removed;
+}
+
+}  // namespace ps::sand

@@ -1,0 +1,468 @@
+#include "tin/dynamic_tin.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <unordered_map>
+#include <unordered_set>
+
+#include "core/input_error.hpp"
+#include "tin/cdt.hpp"
+
+namespace ps::tin {
+
+namespace {
+
+constexpr std::uint32_t kUnnumbered = ~std::uint32_t(0);
+
+std::uint64_t edgeKey(std::uint32_t a, std::uint32_t b) {
+  if (a > b) std::swap(a, b);
+  return (std::uint64_t(a) << 32) | b;
+}
+
+double signedArea2(const Point& a, const Point& b, const Point& c) {
+  return (b.x() - a.x()) * (c.y() - a.y()) - (b.y() - a.y()) * (c.x() - a.x());
+}
+
+// The volume under one face: its area times its mean height.
+double faceVolume(const FaceHandle& f) {
+  const Point &a = f->vertex(0)->point(), &b = f->vertex(1)->point(), &c = f->vertex(2)->point();
+  return 0.5 * signedArea2(a, b, c) *
+         (f->vertex(0)->info().height + f->vertex(1)->info().height + f->vertex(2)->info().height) /
+         3.0;
+}
+
+double segmentDistance(const Eigen::Vector2d& p, const Eigen::Vector2d& a,
+                       const Eigen::Vector2d& b) {
+  const Eigen::Vector2d ab = b - a;
+  const double len2 = ab.squaredNorm();
+  const double t = len2 > 0 ? std::clamp((p - a).dot(ab) / len2, 0.0, 1.0) : 0.0;
+  return (a + t * ab - p).norm();
+}
+
+Eigen::Vector2d xyOf(const Point& p) {
+  return {p.x(), p.y()};
+}
+
+}  // namespace
+
+struct DynamicTin::Impl {
+  Cdt cdt;
+  std::vector<VertexHandle> handles;  // by vertex number; null for a free number
+  std::vector<Vertex> freeNumbers;
+  std::unordered_map<std::uint64_t, std::uint32_t> generations;  // constrained edges
+  mutable VertexHandle hint;  // a live vertex near the last operation
+
+  Vertex number(const VertexHandle& v) {
+    if (v->info().index != kUnnumbered) return v->info().index;
+    Vertex id;
+    if (!freeNumbers.empty()) {
+      id = freeNumbers.back();
+      freeNumbers.pop_back();
+      handles[id] = v;
+    } else {
+      id = Vertex(handles.size());
+      handles.push_back(v);
+    }
+    v->info().index = id;
+    return id;
+  }
+
+  const VertexHandle& handle(Vertex v) const {
+    if (v >= handles.size() || handles[v] == VertexHandle())
+      throw std::out_of_range("DynamicTin: vertex " + std::to_string(v) + " does not exist");
+    return handles[v];
+  }
+
+  // Where point location starts walking: a live vertex, the last one an operation touched.
+  FaceHandle startFace() const { return hint->face(); }
+
+  // The finite faces that come within `radius` of `centre`, by walking across edges from the
+  // face there (a disc is convex: the faces it touches are connected).
+  void facesTouching(const Eigen::Vector2d& centre, double radius,
+                     std::vector<FaceHandle>& out) const {
+    out.clear();
+    const FaceHandle start = cdt.locate(Point(centre.x(), centre.y()), startFace());
+    if (cdt.is_infinite(start)) return;
+    std::vector<FaceHandle> stack{start};
+    std::unordered_set<const void*> seen;
+    while (!stack.empty()) {
+      const FaceHandle f = stack.back();
+      stack.pop_back();
+      if (cdt.is_infinite(f) || !seen.insert(&*f).second) continue;
+      if (!touches(f, centre, radius)) continue;
+      out.push_back(f);
+      for (int k = 0; k < 3; ++k) stack.push_back(f->neighbor(k));
+    }
+  }
+
+  static bool touches(const FaceHandle& f, const Eigen::Vector2d& c, double radius) {
+    const Eigen::Vector2d a = xyOf(f->vertex(0)->point()), b = xyOf(f->vertex(1)->point()),
+                          d = xyOf(f->vertex(2)->point());
+    const auto side = [&](const Eigen::Vector2d& p, const Eigen::Vector2d& q) {
+      return (q - p).x() * (c - p).y() - (q - p).y() * (c - p).x();
+    };
+    if (side(a, b) >= 0 && side(b, d) >= 0 && side(d, a) >= 0) return true;
+    return std::min({segmentDistance(c, a, b), segmentDistance(c, b, d),
+                     segmentDistance(c, d, a)}) <= radius;
+  }
+
+  // Tags the constrained path from a to b (split at the vertices on it) with `generation`.
+  void tagPath(const VertexHandle& a, const VertexHandle& b, std::uint32_t generation) {
+    VertexHandle at = a;
+    const Eigen::Vector2d dir = xyOf(b->point()) - xyOf(a->point());
+    for (std::size_t guard = 0; at != b && guard < handles.size() + 1; ++guard) {
+      VertexHandle next;
+      double best = -1;
+      auto c = cdt.incident_vertices(at), done = c;
+      do {
+        if (cdt.is_infinite(c)) continue;
+        const VertexHandle u = c;
+        if (CGAL::orientation(a->point(), b->point(), u->point()) != CGAL::COLLINEAR) continue;
+        const double along = (xyOf(u->point()) - xyOf(at->point())).dot(dir);
+        if (along > 0 && (best < 0 || along < best)) best = along, next = u;
+      } while (++c != done);
+      if (next == VertexHandle()) break;
+      generations[edgeKey(number(at), number(next))] = generation;
+      at = next;
+    }
+  }
+};
+
+DynamicTin::DynamicTin(std::span<const Eigen::Vector3d> points) : impl_(std::make_unique<Impl>()) {
+  for (std::size_t k = 0; k < points.size(); ++k) {
+    const Eigen::Vector3d& p = points[k];
+    if (!p.allFinite())
+      throw core::InputError("TIN: point " + std::to_string(k) +
+                             " has a coordinate that is not finite");
+  }
+  FaceHandle hint;
+  for (const Eigen::Vector3d& p : points) {
+    const std::size_t before = impl_->cdt.number_of_vertices();
+    const VertexHandle v = impl_->cdt.insert(Point(p.x(), p.y()), hint);
+    if (impl_->cdt.number_of_vertices() > before) {
+      v->info().index = kUnnumbered;
+      impl_->number(v);
+    }
+    v->info().height = p.z();  // a repeated point: the last height wins
+    hint = v->face();
+  }
+  if (impl_->cdt.dimension() != 2)
+    throw core::InputError("TIN: the points (" + std::to_string(points.size()) +
+                           ") do not span an area");
+  impl_->hint = impl_->cdt.finite_vertices_begin();
+}
+
+DynamicTin::~DynamicTin() = default;
+DynamicTin::DynamicTin(DynamicTin&&) noexcept = default;
+DynamicTin& DynamicTin::operator=(DynamicTin&&) noexcept = default;
+
+std::size_t DynamicTin::vertexCount() const {
+  return impl_->cdt.number_of_vertices();
+}
+std::size_t DynamicTin::triangleCount() const {
+  return impl_->cdt.number_of_faces();
+}
+std::size_t DynamicTin::constrainedEdgeCount() const {
+  return impl_->generations.size();
+}
+
+std::size_t DynamicTin::memoryBytes() const {
+  const auto& tds = impl_->cdt.tds();
+  return tds.vertices().capacity() * sizeof(Tds::Vertex) +
+         tds.faces().capacity() * sizeof(Tds::Face) +
+         impl_->handles.capacity() * sizeof(VertexHandle) +
+         impl_->freeNumbers.capacity() * sizeof(Vertex) +
+         impl_->generations.size() *
+             (sizeof(std::uint64_t) + sizeof(std::uint32_t) + 2 * sizeof(void*)) +
+         impl_->generations.bucket_count() * sizeof(void*);
+}
+
+bool DynamicTin::alive(Vertex v) const {
+  return v < impl_->handles.size() && impl_->handles[v] != VertexHandle();
+}
+
+Eigen::Vector2d DynamicTin::position(Vertex v) const {
+  return xyOf(impl_->handle(v)->point());
+}
+double DynamicTin::height(Vertex v) const {
+  return impl_->handle(v)->info().height;
+}
+void DynamicTin::setHeight(Vertex v, double h) {
+  impl_->handle(v)->info().height = h;
+}
+
+bool DynamicTin::onHull(Vertex v) const {
+  const VertexHandle& h = impl_->handle(v);
+  auto c = impl_->cdt.incident_vertices(h), done = c;
+  do
+    if (impl_->cdt.is_infinite(c)) return true;
+  while (++c != done);
+  return false;
+}
+
+void DynamicTin::neighbours(Vertex v, std::vector<Vertex>& out) const {
+  out.clear();
+  auto c = impl_->cdt.incident_vertices(impl_->handle(v)), done = c;
+  do
+    if (!impl_->cdt.is_infinite(c)) out.push_back(c->info().index);
+  while (++c != done);
+}
+
+double DynamicTin::weight(Vertex v) const {
+  double area2 = 0;
+  auto f = impl_->cdt.incident_faces(impl_->handle(v)), done = f;
+  do
+    if (!impl_->cdt.is_infinite(f))
+      area2 += signedArea2(f->vertex(0)->point(), f->vertex(1)->point(), f->vertex(2)->point());
+  while (++f != done);
+  return area2 / 6.0;
+}
+
+std::vector<DynamicTin::Vertex> DynamicTin::vertices() const {
+  std::vector<Vertex> out;
+  out.reserve(vertexCount());
+  for (Vertex v = 0; v < impl_->handles.size(); ++v)
+    if (impl_->handles[v] != VertexHandle()) out.push_back(v);
+  return out;
+}
+
+void DynamicTin::verticesWithin(const Eigen::Vector2d& centre, double radius,
+                                std::vector<Vertex>& out) const {
+  out.clear();
+  std::vector<FaceHandle> faces;
+  impl_->facesTouching(centre, radius, faces);
+  for (const FaceHandle& f : faces)
+    for (int k = 0; k < 3; ++k) {
+      const VertexHandle& v = f->vertex(k);
+      if ((xyOf(v->point()) - centre).norm() <= radius) out.push_back(v->info().index);
+    }
+  std::sort(out.begin(), out.end());
+  out.erase(std::unique(out.begin(), out.end()), out.end());
+}
+
+bool DynamicTin::contains(const Eigen::Vector2d& p) const {
+  Cdt::Locate_type lt;
+  int li = 0;
+  impl_->cdt.locate(Point(p.x(), p.y()), lt, li, impl_->startFace());
+  return lt != Cdt::OUTSIDE_CONVEX_HULL && lt != Cdt::OUTSIDE_AFFINE_HULL;
+}
+
+double DynamicTin::depthInside(const Eigen::Vector2d& p) const {
+  const Cdt& cdt = impl_->cdt;
+  double nearest = INFINITY;
+  auto c = cdt.incident_vertices(cdt.infinite_vertex()), done = c;
+  do {
+    auto next = c;
+    ++next;
+    nearest = std::min(nearest, segmentDistance(p, xyOf(c->point()), xyOf(next->point())));
+  } while (++c != done);
+  return contains(p) ? nearest : -nearest;
+}
+
+double DynamicTin::heightAt(const Eigen::Vector2d& p) const {
+  Cdt::Locate_type lt;
+  int li = 0;
+  const FaceHandle f = impl_->cdt.locate(Point(p.x(), p.y()), lt, li, impl_->startFace());
+  if (lt == Cdt::OUTSIDE_CONVEX_HULL || lt == Cdt::OUTSIDE_AFFINE_HULL) return NAN;
+  impl_->hint = f->vertex(0);
+  if (lt == Cdt::VERTEX) return f->vertex(li)->info().height;
+  const Point q(p.x(), p.y());
+  const Point &a = f->vertex(0)->point(), &b = f->vertex(1)->point(), &c = f->vertex(2)->point();
+  const double area = signedArea2(a, b, c);
+  const double l0 = signedArea2(q, b, c) / area, l1 = signedArea2(a, q, c) / area;
+  return l0 * f->vertex(0)->info().height + l1 * f->vertex(1)->info().height +
+         (1.0 - l0 - l1) * f->vertex(2)->info().height;
+}
+
+DynamicTin::Vertex DynamicTin::insert(const Eigen::Vector2d& p, double h) {
+  if (!std::isfinite(h) || !p.allFinite())
+    throw std::invalid_argument("DynamicTin: a vertex that is not finite");
+  Impl& m = *impl_;
+  const Point q(p.x(), p.y());
+  Cdt::Locate_type lt;
+  int li = 0;
+  const FaceHandle f = m.cdt.locate(q, lt, li, m.startFace());
+  if (lt == Cdt::OUTSIDE_CONVEX_HULL || lt == Cdt::OUTSIDE_AFFINE_HULL)
+    throw std::invalid_argument("DynamicTin: a vertex outside the domain");
+  // A constrained edge split by the new vertex: both halves keep its generation.
+  VertexHandle splitA, splitB;
+  std::uint32_t splitGeneration = 0;
+  if (lt == Cdt::EDGE && f->is_constrained(li)) {
+    splitA = f->vertex(Cdt::ccw(li));
+    splitB = f->vertex(Cdt::cw(li));
+    const auto it = m.generations.find(edgeKey(splitA->info().index, splitB->info().index));
+    if (it != m.generations.end()) {
+      splitGeneration = it->second;
+      m.generations.erase(it);
+    }
+  }
+  const std::size_t before = m.cdt.number_of_vertices();
+  const VertexHandle v = m.cdt.insert(q, lt, f, li);
+  if (m.cdt.number_of_vertices() > before) v->info().index = kUnnumbered;
+  const Vertex id = m.number(v);
+  v->info().height = h;
+  if (splitA != VertexHandle()) {
+    m.generations[edgeKey(splitA->info().index, id)] = splitGeneration;
+    m.generations[edgeKey(id, splitB->info().index)] = splitGeneration;
+  }
+  m.hint = v;
+  return id;
+}
+
+DynamicTin::Vertex DynamicTin::insertOnSurface(const Eigen::Vector2d& p) {
+  const double h = heightAt(p);
+  if (std::isnan(h)) throw std::invalid_argument("DynamicTin: a vertex outside the domain");
+  return insert(p, h);
+}
+
+void DynamicTin::constrain(Vertex a, Vertex b, std::uint32_t generation) {
+  Impl& m = *impl_;
+  const VertexHandle va = m.handle(a), vb = m.handle(b);
+  if (va == vb) return;
+  const std::size_t before = m.cdt.number_of_vertices();
+  m.cdt.insert_constraint(va, vb);
+  if (m.cdt.number_of_vertices() != before) {
+    // It crossed a constrained edge (the caller should have freed it): the crossings are
+    // vertices of both, with the height of the new edge there.
+    for (auto v = m.cdt.finite_vertices_begin(); v != m.cdt.finite_vertices_end(); ++v) {
+      if (v->info().index != kUnnumbered && v->info().index < m.handles.size() &&
+          m.handles[v->info().index] == VertexHandle(v))
+        continue;
+      v->info().index = kUnnumbered;
+      m.number(v);
+      const Eigen::Vector2d pa = xyOf(va->point()), pb = xyOf(vb->point());
+      const double t = (xyOf(v->point()) - pa).dot(pb - pa) / (pb - pa).squaredNorm();
+      v->info().height = (1 - t) * va->info().height + t * vb->info().height;
+    }
+  }
+  m.tagPath(va, vb, generation);
+}
+
+std::size_t DynamicTin::freeConstraintsNear(const Eigen::Vector2d& centre, double radius) {
+  Impl& m = *impl_;
+  std::vector<FaceHandle> faces;
+  m.facesTouching(centre, radius, faces);
+  std::vector<std::pair<VertexHandle, VertexHandle>> edges;
+  std::unordered_set<std::uint64_t> seen;
+  for (const FaceHandle& f : faces)
+    for (int k = 0; k < 3; ++k) {
+      if (!f->is_constrained(k)) continue;
+      const VertexHandle a = f->vertex(Cdt::ccw(k)), b = f->vertex(Cdt::cw(k));
+      if (segmentDistance(centre, xyOf(a->point()), xyOf(b->point())) <= radius &&
+          seen.insert(edgeKey(a->info().index, b->info().index)).second)
+        edges.emplace_back(a, b);
+    }
+  std::size_t freed = 0;
+  for (const auto& [a, b] : edges) {
+    FaceHandle f;
+    int i = 0;
+    if (!m.cdt.is_edge(a, b, f, i) || !f->is_constrained(i)) continue;
+    m.cdt.remove_constrained_edge(f, i);
+    m.generations.erase(edgeKey(a->info().index, b->info().index));
+    ++freed;
+  }
+  return freed;
+}
+
+std::uint32_t DynamicTin::generation(Vertex a, Vertex b) const {
+  const auto it = impl_->generations.find(edgeKey(a, b));
+  return it == impl_->generations.end() ? kNoVertex : it->second;
+}
+
+bool DynamicTin::remove(Vertex id, double* volumeChange) {
+  Impl& m = *impl_;
+  const VertexHandle v = m.handle(id);
+  if (onHull(id)) return false;
+  std::vector<VertexHandle> link;
+  double before = 0;
+  auto f = m.cdt.incident_faces(v), fdone = f;
+  do {
+    const int i = f->index(v);
+    link.push_back(f->vertex(Cdt::ccw(i)));
+    before += faceVolume(f);
+    // Freed without flips: the edges at v leave with it, and the hole is re-filled
+    // constrained-Delaunay, so nothing else changes.
+    if (f->is_constrained(Cdt::cw(i))) {
+      m.generations.erase(edgeKey(id, f->vertex(Cdt::ccw(i))->info().index));
+      f->set_constraint(Cdt::cw(i), false);
+      const FaceHandle g = f->neighbor(Cdt::cw(i));
+      g->set_constraint(g->index(f), false);
+    }
+  } while (++f != fdone);
+  const Point p = v->point();
+  m.cdt.remove(v);
+  m.handles[id] = VertexHandle();
+  m.freeNumbers.push_back(id);
+  m.hint = link.front();
+
+  // The hole's new faces: from the face over the removed point, not across the rim.
+  const auto onRim = [&](const VertexHandle& a, const VertexHandle& b) {
+    for (std::size_t k = 0; k < link.size(); ++k) {
+      const VertexHandle &x = link[k], &y = link[(k + 1) % link.size()];
+      if ((x == a && y == b) || (x == b && y == a)) return true;
+    }
+    return false;
+  };
+  double after = 0;
+  std::vector<FaceHandle> hole, stack{m.cdt.locate(p, link.front()->face())};
+  while (!stack.empty()) {
+    const FaceHandle g = stack.back();
+    stack.pop_back();
+    if (m.cdt.is_infinite(g) || std::find(hole.begin(), hole.end(), g) != hole.end()) continue;
+    hole.push_back(g);
+    after += faceVolume(g);
+    for (int k = 0; k < 3; ++k)
+      if (!onRim(g->vertex(Cdt::ccw(k)), g->vertex(Cdt::cw(k)))) stack.push_back(g->neighbor(k));
+  }
+  const double change = after - before;
+  if (volumeChange) *volumeChange = change;
+  double rimWeight = 0;
+  for (const VertexHandle& u : link) rimWeight += weight(u->info().index);
+  if (rimWeight > 0 && change != 0)
+    for (const VertexHandle& u : link) u->info().height -= change / rimWeight;
+  return true;
+}
+
+double DynamicTin::volume() const {
+  long double sum = 0;
+  for (auto f = impl_->cdt.finite_faces_begin(); f != impl_->cdt.finite_faces_end(); ++f)
+    sum += faceVolume(f);
+  return double(sum);
+}
+
+bool DynamicTin::isValid() const {
+  const Impl& m = *impl_;
+  if (!m.cdt.is_valid()) return false;
+  for (auto v = m.cdt.finite_vertices_begin(); v != m.cdt.finite_vertices_end(); ++v) {
+    if (!std::isfinite(v->info().height)) return false;
+    if (v->info().index >= m.handles.size() || m.handles[v->info().index] != VertexHandle(v))
+      return false;
+  }
+  std::size_t constrained = 0;
+  for (auto e = m.cdt.finite_edges_begin(); e != m.cdt.finite_edges_end(); ++e) {
+    if (!m.cdt.is_constrained(*e)) continue;
+    ++constrained;
+    const Vertex a = e->first->vertex(Cdt::ccw(e->second))->info().index;
+    const Vertex b = e->first->vertex(Cdt::cw(e->second))->info().index;
+    if (!m.generations.count(edgeKey(a, b))) return false;
+  }
+  return constrained == m.generations.size();
+}
+
+Tin DynamicTin::toTin() const {
+  Tin out;
+  std::vector<std::uint32_t> index(impl_->handles.size(), kUnnumbered);
+  for (Vertex v = 0; v < impl_->handles.size(); ++v) {
+    if (impl_->handles[v] == VertexHandle()) continue;
+    index[v] = std::uint32_t(out.xy.size());
+    out.xy.push_back(position(v));
+    out.h.push_back(height(v));
+  }
+  for (auto f = impl_->cdt.finite_faces_begin(); f != impl_->cdt.finite_faces_end(); ++f)
+    out.triangles.push_back({index[f->vertex(0)->info().index], index[f->vertex(1)->info().index],
+                             index[f->vertex(2)->info().index]});
+  return out;
+}
+
+}  // namespace ps::tin
