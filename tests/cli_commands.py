@@ -345,7 +345,8 @@ def finite_numbers(x, where):
         fail(f"{where} is {x}")
 
 
-BENCHES = ("bounds", "deform", "erosion", "export", "frame", "haptics", "render", "tessellate", "track")
+BENCHES = ("bounds", "deform", "erosion", "export", "frame", "haptics", "render", "sand-tin", "tessellate",
+           "track")
 
 
 def check_bench_row(r):
@@ -371,6 +372,9 @@ def check_bench_row(r):
         fail(f"export overlay: {r}")
     if b == "deform" and r.get("modified_vertices", 1) <= 0:
         fail(f"deform: no vertex modified in {r}")
+    if b == "sand-tin" and (r.get("model") not in ("tin", "grid") or abs(r["volume_drift"]) > 1e-6
+                            or r["vertices"] <= 0 or r["memory_bytes"] <= 0 or r.get("valid", True) is not True):
+        fail(f"sand-tin: {r}")
     if b == "erosion" and abs(r.get("volume_drift", 0.0)) > 1e-6:
         fail(f"erosion: volume drift {r['volume_drift']}")
     for key in ("planet_detected", "control_vertex_within_3mm"):

@@ -159,24 +159,35 @@ TinStampStats TinSand::stamp(const Eigen::Vector2d& centre, double bottom,
     inner[k] = centre + q;
     outer[k] = centre + q * (1.0 + tool.rim / q.norm());
   }
-  stats.freedConstraints = tin_.freeConstraintsNear(centre, tool.outerRadius() * (1 + 1e-9));
+  // Contour points may snap to vertices up to `snap` outside the outer contour: free what
+  // their edges could cross too.
+  const double snap = 0.25 * tool.rim;
+  stats.freedConstraints = tin_.freeConstraintsNear(centre, tool.outerRadius() + 2 * snap);
 
-  // Outer contour first: it follows the terrain. Then the inner one, pressed.
+  // Outer contour first: it follows the terrain. Then the inner one, pressed. A contour point
+  // next to a vertex already there (an earlier stamp's) takes that vertex instead of making a
+  // sliver beside it.
+  const auto place = [&](const Eigen::Vector2d& p, double cap) {
+    const Vertex near = tin_.vertexNear(p, snap);
+    if (near == tin::DynamicTin::kNoVertex) return tin_.insert(p, std::min(tin_.heightAt(p), cap));
+    tin_.setHeight(near, std::min(tin_.height(near), cap));
+    return near;
+  };
   const std::size_t countBefore = tin_.vertexCount();
   std::vector<Vertex> outerIds(n), innerIds(n);
-  for (std::size_t k = 0; k < n; ++k) outerIds[k] = tin_.insertOnSurface(outer[k]);
+  for (std::size_t k = 0; k < n; ++k) outerIds[k] = place(outer[k], INFINITY);
   for (std::size_t k = 0; k < n; ++k)
     tin_.constrain(outerIds[k], outerIds[(k + 1) % n], generation_);
-  for (std::size_t k = 0; k < n; ++k)
-    innerIds[k] = tin_.insert(inner[k], std::min(tin_.heightAt(inner[k]), bottom));
+  for (std::size_t k = 0; k < n; ++k) innerIds[k] = place(inner[k], bottom);
   for (std::size_t k = 0; k < n; ++k)
     tin_.constrain(innerIds[k], innerIds[(k + 1) % n], generation_);
-  // A ring halfway across the rampart, so that the material pushed aside has vertices to land
-  // on however coarse the TIN is there.
-  for (std::size_t k = 0; k < n; ++k) {
-    const Eigen::Vector2d& q = tool.outline[k];
-    tin_.insertOnSurface(centre + q * (1.0 + (tool.rim + 0.5 * tool.rampartWidth) / q.norm()));
-  }
+  // Rings halfway across the rampart and at its edge, so that the material pushed aside lands
+  // in the rampart's profile however coarse the TIN is there (and not beyond its edge).
+  for (const double across : {0.5, 1.0})
+    for (std::size_t k = 0; k < n; ++k) {
+      const Eigen::Vector2d& q = tool.outline[k];
+      place(centre + q * (1.0 + (tool.rim + across * tool.rampartWidth) / q.norm()), INFINITY);
+    }
   stats.inserted = tin_.vertexCount() - countBefore;
 
   // Press everything inside the inner contour down to the bottom.
@@ -254,7 +265,7 @@ std::size_t TinSand::erode() {
       const double gap = hk - tin_.height(j);
       const double excess = gap - (tanTalus_ * d + cohesion);
       if (excess > restTolerance * d) {
-        shares.push_back({j, tin_.weight(j), excess, gap});
+        shares.push_back({j, weight(j), excess, gap});
         excessSum += excess;
       }
     }
@@ -266,7 +277,7 @@ std::size_t TinSand::erode() {
     idle_[k] = 0;
     // Each lower neighbour j would level its edge to the talus line alone with the volume
     // e_j / (1/w_k + 1/w_j); the giver moves c times its share of that (by excess) to each.
-    const double wk = tin_.weight(k);
+    const double wk = weight(k);
     double total = 0;
     for (Share& s : shares) {
       s.amount = rate * (s.amount / excessSum) * s.amount / (1.0 / wk + 1.0 / s.weight);
@@ -294,6 +305,14 @@ std::size_t TinSand::erode() {
       le_.end());
   timing_.erodeMs += msSince(t0);
   return givers;
+}
+
+double TinSand::weight(Vertex v) {
+  if (v >= weight_.size())
+    weight_.resize(std::size_t(v) + 1), weightEpoch_.resize(weight_.size(), 0);
+  const std::uint64_t stamp = tin_.topologyEpoch() + 1;
+  if (weightEpoch_[v] != stamp) weight_[v] = tin_.weight(v), weightEpoch_[v] = stamp;
+  return weight_[v];
 }
 
 bool TinSand::isFlat(Vertex v) {

@@ -96,6 +96,8 @@ class TinSand {
   void activate(Vertex v);
   void markFlatCandidate(Vertex v);
   bool isFlat(Vertex v);
+  // tin_.weight(v), cached until the triangulation changes (erosion asks for it many times).
+  double weight(Vertex v);
 
   tin::DynamicTin tin_;
   TinSandSettings settings_;
@@ -105,6 +107,8 @@ class TinSand {
   std::vector<std::uint8_t> inLe_, inLr_;  // by vertex number
   std::vector<std::uint8_t> idle_;         // iterations without a transfer, by vertex number
   std::vector<Vertex> scratch_, neighbours_;
+  std::vector<double> weight_;
+  std::vector<std::uint64_t> weightEpoch_;  // epoch + 1 of each cached weight (0: none)
   Timing timing_;
 };
 

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
+#include <string>
 #include <unordered_map>
 #include <unordered_set>
 
@@ -52,6 +53,7 @@ struct DynamicTin::Impl {
   std::vector<Vertex> freeNumbers;
   std::unordered_map<std::uint64_t, std::uint32_t> generations;  // constrained edges
   mutable VertexHandle hint;  // a live vertex near the last operation
+  std::uint64_t epoch = 0;    // counts changes of the triangulation
 
   Vertex number(const VertexHandle& v) {
     if (v->info().index != kUnnumbered) return v->info().index;
@@ -107,21 +109,24 @@ struct DynamicTin::Impl {
                      segmentDistance(c, d, a)}) <= radius;
   }
 
-  // Tags the constrained path from a to b (split at the vertices on it) with `generation`.
+  // Tags the constrained path from a to b (split at the vertices on it, crossings included,
+  // which lie on it only to rounding) with `generation`: from each vertex, the constrained edge
+  // that gets closest to b.
   void tagPath(const VertexHandle& a, const VertexHandle& b, std::uint32_t generation) {
     VertexHandle at = a;
-    const Eigen::Vector2d dir = xyOf(b->point()) - xyOf(a->point());
-    for (std::size_t guard = 0; at != b && guard < handles.size() + 1; ++guard) {
+    const Eigen::Vector2d target = xyOf(b->point());
+    for (std::size_t guard = 0; at != b && guard <= handles.size(); ++guard) {
       VertexHandle next;
-      double best = -1;
-      auto c = cdt.incident_vertices(at), done = c;
+      double best = (xyOf(at->point()) - target).norm();
+      auto f = cdt.incident_faces(at), done = f;
       do {
-        if (cdt.is_infinite(c)) continue;
-        const VertexHandle u = c;
-        if (CGAL::orientation(a->point(), b->point(), u->point()) != CGAL::COLLINEAR) continue;
-        const double along = (xyOf(u->point()) - xyOf(at->point())).dot(dir);
-        if (along > 0 && (best < 0 || along < best)) best = along, next = u;
-      } while (++c != done);
+        const int i = f->index(at);
+        if (!f->is_constrained(Cdt::cw(i))) continue;  // the edge from at to vertex ccw(i)
+        const VertexHandle u = f->vertex(Cdt::ccw(i));
+        if (cdt.is_infinite(u)) continue;
+        const double d = (xyOf(u->point()) - target).norm();
+        if (d < best) best = d, next = u;
+      } while (++f != done);
       if (next == VertexHandle()) break;
       generations[edgeKey(number(at), number(next))] = generation;
       at = next;
@@ -163,6 +168,10 @@ std::size_t DynamicTin::vertexCount() const {
 std::size_t DynamicTin::triangleCount() const {
   return impl_->cdt.number_of_faces();
 }
+std::uint64_t DynamicTin::topologyEpoch() const {
+  return impl_->epoch;
+}
+
 std::size_t DynamicTin::constrainedEdgeCount() const {
   return impl_->generations.size();
 }
@@ -275,6 +284,23 @@ double DynamicTin::heightAt(const Eigen::Vector2d& p) const {
          (1.0 - l0 - l1) * f->vertex(2)->info().height;
 }
 
+DynamicTin::Vertex DynamicTin::vertexNear(const Eigen::Vector2d& p, double radius) const {
+  const FaceHandle f = impl_->cdt.locate(Point(p.x(), p.y()), impl_->startFace());
+  Vertex best = kNoVertex;
+  double nearest = radius;
+  const auto consider = [&](const FaceHandle& g) {
+    for (int k = 0; k < 3; ++k) {
+      const VertexHandle& v = g->vertex(k);
+      if (impl_->cdt.is_infinite(v)) continue;
+      const double d = (xyOf(v->point()) - p).norm();
+      if (d <= nearest) nearest = d, best = v->info().index;
+    }
+  };
+  consider(f);
+  for (int k = 0; k < 3; ++k) consider(f->neighbor(k));
+  return best;
+}
+
 DynamicTin::Vertex DynamicTin::insert(const Eigen::Vector2d& p, double h) {
   if (!std::isfinite(h) || !p.allFinite())
     throw std::invalid_argument("DynamicTin: a vertex that is not finite");
@@ -299,6 +325,7 @@ DynamicTin::Vertex DynamicTin::insert(const Eigen::Vector2d& p, double h) {
   }
   const std::size_t before = m.cdt.number_of_vertices();
   const VertexHandle v = m.cdt.insert(q, lt, f, li);
+  ++m.epoch;
   if (m.cdt.number_of_vertices() > before) v->info().index = kUnnumbered;
   const Vertex id = m.number(v);
   v->info().height = h;
@@ -322,6 +349,7 @@ void DynamicTin::constrain(Vertex a, Vertex b, std::uint32_t generation) {
   if (va == vb) return;
   const std::size_t before = m.cdt.number_of_vertices();
   m.cdt.insert_constraint(va, vb);
+  ++m.epoch;
   if (m.cdt.number_of_vertices() != before) {
     // It crossed a constrained edge (the caller should have freed it): the crossings are
     // vertices of both, with the height of the new edge there.
@@ -359,6 +387,7 @@ std::size_t DynamicTin::freeConstraintsNear(const Eigen::Vector2d& centre, doubl
     int i = 0;
     if (!m.cdt.is_edge(a, b, f, i) || !f->is_constrained(i)) continue;
     m.cdt.remove_constrained_edge(f, i);
+    ++m.epoch;
     m.generations.erase(edgeKey(a->info().index, b->info().index));
     ++freed;
   }
@@ -392,6 +421,7 @@ bool DynamicTin::remove(Vertex id, double* volumeChange) {
   } while (++f != fdone);
   const Point p = v->point();
   m.cdt.remove(v);
+  ++m.epoch;
   m.handles[id] = VertexHandle();
   m.freeNumbers.push_back(id);
   m.hint = link.front();
@@ -432,12 +462,18 @@ double DynamicTin::volume() const {
 }
 
 bool DynamicTin::isValid() const {
+  return validityProblem().empty();
+}
+
+std::string DynamicTin::validityProblem() const {
   const Impl& m = *impl_;
-  if (!m.cdt.is_valid()) return false;
+  if (!m.cdt.is_valid()) return "CGAL's check of the triangulation failed";
   for (auto v = m.cdt.finite_vertices_begin(); v != m.cdt.finite_vertices_end(); ++v) {
-    if (!std::isfinite(v->info().height)) return false;
+    if (!std::isfinite(v->info().height))
+      return "vertex " + std::to_string(v->info().index) + " has a height that is not finite";
     if (v->info().index >= m.handles.size() || m.handles[v->info().index] != VertexHandle(v))
-      return false;
+      return "a vertex at (" + std::to_string(v->point().x()) + ", " +
+             std::to_string(v->point().y()) + ") has no number";
   }
   std::size_t constrained = 0;
   for (auto e = m.cdt.finite_edges_begin(); e != m.cdt.finite_edges_end(); ++e) {
@@ -445,9 +481,14 @@ bool DynamicTin::isValid() const {
     ++constrained;
     const Vertex a = e->first->vertex(Cdt::ccw(e->second))->info().index;
     const Vertex b = e->first->vertex(Cdt::cw(e->second))->info().index;
-    if (!m.generations.count(edgeKey(a, b))) return false;
+    if (!m.generations.count(edgeKey(a, b)))
+      return "constrained edge " + std::to_string(a) + "-" + std::to_string(b) +
+             " has no generation";
   }
-  return constrained == m.generations.size();
+  if (constrained != m.generations.size())
+    return std::to_string(m.generations.size()) + " generations for " +
+           std::to_string(constrained) + " constrained edges";
+  return "";
 }
 
 Tin DynamicTin::toTin() const {

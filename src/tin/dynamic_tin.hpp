@@ -16,6 +16,7 @@
 #include <cstdint>
 #include <memory>
 #include <span>
+#include <string>
 #include <vector>
 
 #include "tin/tin_mesher.hpp"
@@ -37,6 +38,9 @@ class DynamicTin {
   std::size_t vertexCount() const;
   std::size_t triangleCount() const;
   std::size_t constrainedEdgeCount() const;
+  // Changes whenever the triangulation does (not when only heights do): what depends on it
+  // alone, such as weights, can be cached until it changes.
+  std::uint64_t topologyEpoch() const;
   // Bytes the triangulation holds (its vertex and face containers' capacity, and the id table).
   std::size_t memoryBytes() const;
 
@@ -60,6 +64,10 @@ class DynamicTin {
   // The surface's height at p (NaN outside the domain): point location walks from the last
   // triangle found, as the paper's rectangular walk does.
   double heightAt(const Eigen::Vector2d& p) const;
+
+  // A vertex within `radius` of p among those of the triangle over p and its neighbours (the
+  // nearest of them), or kNoVertex: inserting again next to a vertex would leave a sliver.
+  Vertex vertexNear(const Eigen::Vector2d& p, double radius) const;
 
   // A vertex at p with height h (an existing vertex there keeps its number and takes h). p must
   // lie in the domain.
@@ -87,6 +95,8 @@ class DynamicTin {
   double volume() const;
   // CGAL's own validity check of the triangulation, and every height finite.
   bool isValid() const;
+  // What is wrong when isValid() is false ("" when it is true).
+  std::string validityProblem() const;
   // The triangles as a Tin (positions in the TIN's own units, counter-clockwise).
   Tin toTin() const;
 

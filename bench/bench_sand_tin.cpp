@@ -1,0 +1,430 @@
+// `planetsculpt bench sand-tin`: the sand TIN (paper 000, sand::TinSand) in the paper's
+// experiments and side by side with the grid core (sand::SandField) on the same strokes.
+//
+// The scene (the paper's flat sand): a 10 m x 10 m box of sand 1 m deep; a disc tool of radius
+// 0.25 m (24 corners, rim 5 %, rampart one radius wide) pulled along the box's diagonal with its
+// bottom 0.15 m under the sand's surface, a stamp every quarter radius; after each stamp two
+// erosion iterations and the removal of redundant vertices (the paper's loop, Section 4).
+//   experiment size (Figures 7, 9): the trace 0.55 of the diagonal, the TIN started from a
+//     regular n x n grid of points (n^2 = 2.5 k .. 80 k vertices): time of each part
+//     (stamping, erosion, redundancy detection, vertex removal), vertex and triangle counts.
+//   experiment trace (Figures 8, 10): a 10,000-vertex TIN, the trace 0.1 .. 0.85 of the diagonal.
+//   experiment compare: the same stroke (0.55) on grids of 129^2 .. 1025^2 (the grid core: the
+//     same press and rampart on its float heights, then SandField's thermal erosion) and on the
+//     TIN started from 5 x 5 points (it grows where the tool went), with and without erosion.
+//     surface_error_m is the RMS difference from the finest grid's surface (1025^2; --quick
+//     513^2) over that grid's vertices (surface_error_max_m the largest: a wall one cell off
+//     makes it the tool's depth whatever the model); steepest_slope the steepest edge (the
+//     TIN) or link (the grid): how sharp an imprint each holds.
+//   experiment drift: one deep stamp into a 10,000-vertex TIN, then 10^4 erosion iterations
+//     with the removal on (--quick: 10^3): the relative volume drift.
+// Every row: "model" ("tin" or "grid"), vertices, memory_bytes (the TIN: its triangulation's
+// containers; the grid: its float heights and the sand field's resident tiles), surface_error_m,
+// volume_drift (|V_end - V_start| / V_start, each model's own V), ms.
+#include <cmath>
+#include <iostream>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <vector>
+
+#include "app/plot.hpp"
+#include "bench/bench.hpp"
+#include "bench/bench_util.hpp"
+#include "core/flat_chart.hpp"
+#include "sand/sand_field.hpp"
+#include "sand/tin_sand.hpp"
+
+namespace ps::bench {
+
+namespace {
+
+struct Scene {
+  double side = 10.0, sand = 1.0, radius = 0.25, depth = 0.15, spacing = 0.25;
+  int erosionSteps = 2;
+  double bottom() const { return sand - depth; }
+  // Stamp centres along the diagonal: `trace` of its length, centred.
+  std::vector<Eigen::Vector2d> stroke(double trace) const {
+    const Eigen::Vector2d mid(0.5 * side, 0.5 * side), dir = Eigen::Vector2d(1, 1).normalized();
+    const double half = 0.5 * trace * side * std::sqrt(2.0);
+    std::vector<Eigen::Vector2d> out;
+    for (double s = -half; s <= half + 1e-12; s += spacing * radius) out.push_back(mid + s * dir);
+    return out;
+  }
+};
+
+tin::DynamicTin flatTin(const Scene& scene, int n) {
+  std::vector<Eigen::Vector3d> points;
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i)
+      points.emplace_back(scene.side * i / (n - 1), scene.side * j / (n - 1), scene.sand);
+  return tin::DynamicTin(points);
+}
+
+double maxEdgeSlope(const tin::DynamicTin& t) {
+  double worst = 0;
+  std::vector<tin::DynamicTin::Vertex> nb;
+  for (const auto v : t.vertices()) {
+    t.neighbours(v, nb);
+    for (const auto u : nb)
+      worst = std::max(
+          worst, std::abs(t.height(u) - t.height(v)) / (t.position(u) - t.position(v)).norm());
+  }
+  return worst;
+}
+
+struct TinRun {
+  std::unique_ptr<sand::TinSand> sand;
+  double ms = 0, drift = 0;
+  std::size_t stamps = 0, erosionSteps = 0, removed = 0;
+};
+
+TinRun runTin(const Scene& scene, int n, double trace, bool erosion) {
+  TinRun run;
+  run.sand = std::make_unique<sand::TinSand>(flatTin(scene, n));
+  const double v0 = run.sand->tin().volume();
+  const sand::TinStampTool tool = sand::TinStampTool::disc(scene.radius);
+  run.ms = timeMs([&] {
+    for (const Eigen::Vector2d& c : scene.stroke(trace)) {
+      run.sand->stamp(c, scene.bottom(), tool);
+      ++run.stamps;
+      if (!erosion) continue;
+      for (int s = 0; s < scene.erosionSteps; ++s) run.sand->erode(), ++run.erosionSteps;
+      run.removed += run.sand->removeRedundant();
+    }
+  });
+  run.drift = std::abs(run.sand->tin().volume() - v0) / v0;
+  return run;
+}
+
+// The grid core on the same stroke: the same press (every vertex inside the tool's outline to
+// its bottom) and the same rampart (what was pressed out, spread with the same profile beyond
+// the outer contour), on the float heights, then SandField's thermal erosion.
+struct GridRun {
+  int side = 0;
+  std::shared_ptr<core::FlatChart> chart;
+  std::vector<float> heights;
+  double ms = 0, stampMs = 0, erodeMs = 0, drift = 0;
+  std::size_t stamps = 0, erosionSteps = 0, memory = 0;
+  double at(double x, double y) const {  // bilinear
+    const double d = chart->dx();
+    const double u = std::clamp(x / d, 0.0, double(side - 1)),
+                 v = std::clamp(y / d, 0.0, double(side - 1));
+    const int i = std::min(int(u), side - 2), j = std::min(int(v), side - 2);
+    const double fu = u - i, fv = v - j;
+    const auto h = [&](int a, int b) { return double(heights[std::size_t(b) * side + a]); };
+    return (1 - fv) * ((1 - fu) * h(i, j) + fu * h(i + 1, j)) +
+           fv * ((1 - fu) * h(i, j + 1) + fu * h(i + 1, j + 1));
+  }
+};
+
+void gridStamp(GridRun& g, const Scene& scene, const sand::TinStampTool& tool,
+               const Eigen::Vector2d& c, terrain::GridRegion& touched) {
+  const double d = g.chart->dx(), area = d * d;
+  const double outer = tool.outerRadius(), reach = tool.reach();
+  // Inside the outline (a polygon about c; crossing number).
+  const auto pressed = [&](const Eigen::Vector2d& p) {
+    bool inside = false;
+    const std::size_t n = tool.outline.size();
+    for (std::size_t a = 0, b = n - 1; a < n; b = a++) {
+      const Eigen::Vector2d pa = c + tool.outline[a], pb = c + tool.outline[b];
+      if ((pa.y() > p.y()) != (pb.y() > p.y()) &&
+          p.x() < (pb.x() - pa.x()) * (p.y() - pa.y()) / (pb.y() - pa.y()) + pa.x())
+        inside = !inside;
+    }
+    return inside;
+  };
+  const int i0 = std::max(0, int((c.x() - reach) / d) - 1),
+            i1 = std::min(g.side - 1, int((c.x() + reach) / d) + 1);
+  const int j0 = std::max(0, int((c.y() - reach) / d) - 1),
+            j1 = std::min(g.side - 1, int((c.y() + reach) / d) + 1);
+  double displaced = 0, weighted = 0;
+  for (int j = j0; j <= j1; ++j)
+    for (int i = i0; i <= i1; ++i) {
+      float& h = g.heights[std::size_t(j) * g.side + i];
+      const Eigen::Vector2d p(i * d, j * d);
+      const double r = (p - c).norm();
+      if (pressed(p)) {
+        if (h > scene.bottom()) displaced += area * (h - scene.bottom()), h = float(scene.bottom());
+      } else {
+        const double t = std::clamp((r - outer) / tool.rampartWidth, 0.0, 1.0);
+        weighted += area * (1 - 3 * t * t + 2 * t * t * t) * (r <= reach);
+      }
+    }
+  if (weighted > 0)
+    for (int j = j0; j <= j1; ++j)
+      for (int i = i0; i <= i1; ++i) {
+        const Eigen::Vector2d p(i * d, j * d);
+        const double r = (p - c).norm();
+        if (pressed(p) || r > reach) continue;
+        const double t = std::clamp((r - outer) / tool.rampartWidth, 0.0, 1.0);
+        float& h = g.heights[std::size_t(j) * g.side + i];
+        h = float(h + displaced / weighted * (1 - 3 * t * t + 2 * t * t * t));
+      }
+  touched = {i0, i1, j0, j1};
+}
+
+GridRun runGrid(const Scene& scene, int n, double trace, bool erosion) {
+  GridRun g;
+  const core::GridSize size(n);
+  g.side = size.side();
+  g.chart =
+      std::make_shared<core::FlatChart>(size, scene.side / (g.side - 1), scene.side / (g.side - 1));
+  g.heights.assign(std::size_t(g.side) * g.side, float(scene.sand));
+  const sand::SandGrid grid(g.chart);
+  const double v0 = grid.volume(g.heights);
+  sand::SandField field(g.chart, g.heights);
+  const sand::TinStampTool tool = sand::TinStampTool::disc(scene.radius);
+  const sand::Material material = sand::Material::sand();
+  std::size_t resident = 0;
+  g.ms = timeMs([&] {
+    for (const Eigen::Vector2d& c : scene.stroke(trace)) {
+      terrain::GridRegion touched;
+      g.stampMs += timeMs([&] {
+        field.writeBack(1e9);
+        gridStamp(g, scene, tool, c, touched);
+        field.mark(touched);
+      });
+      ++g.stamps;
+      if (!erosion) continue;
+      g.erodeMs += timeMs([&] {
+        for (int s = 0; s < scene.erosionSteps; ++s) field.thermalStep(material), ++g.erosionSteps;
+      });
+      resident = std::max(resident, field.residentBytes());
+    }
+    field.writeBack(1e9);
+  });
+  g.memory = g.heights.size() * sizeof(float) + resident;
+  g.drift = std::abs(grid.volume(g.heights) - v0) / v0;
+  return g;
+}
+
+double gridSteepest(const GridRun& g) {
+  const double d = g.chart->dx();
+  double worst = 0;
+  for (int j = 0; j < g.side; ++j)
+    for (int i = 0; i < g.side; ++i) {
+      const double h = g.heights[std::size_t(j) * g.side + i];
+      if (i + 1 < g.side)
+        worst = std::max(worst, std::abs(g.heights[std::size_t(j) * g.side + i + 1] - h) / d);
+      if (j + 1 < g.side)
+        worst = std::max(worst, std::abs(g.heights[std::size_t(j + 1) * g.side + i] - h) / d);
+    }
+  return worst;
+}
+
+// RMS and largest difference of a surface from the reference grid's, over its vertices.
+template <class F>
+std::pair<double, double> surfaceError(const GridRun& reference, F&& heightAt) {
+  const double d = reference.chart->dx();
+  double sum2 = 0, worst = 0;
+  for (int j = 0; j < reference.side; ++j)
+    for (int i = 0; i < reference.side; ++i) {
+      const double e =
+          heightAt(i * d, j * d) - double(reference.heights[std::size_t(j) * reference.side + i]);
+      sum2 += e * e;
+      worst = std::max(worst, std::abs(e));
+    }
+  return {std::sqrt(sum2 / (double(reference.side) * reference.side)), worst};
+}
+
+nlohmann::json tinRow(const std::string& experiment, const TinRun& r, double trace, int startN) {
+  const auto& t = r.sand->tin();
+  const auto& timing = r.sand->timing();
+  return {{"bench", "sand-tin"},
+          {"model", "tin"},
+          {"experiment", experiment},
+          {"start_vertices", startN * startN},
+          {"trace", trace},
+          {"stamps", r.stamps},
+          {"erosion_steps", r.erosionSteps},
+          {"vertices", t.vertexCount()},
+          {"triangles", t.triangleCount()},
+          {"constrained_edges", t.constrainedEdgeCount()},
+          {"removed_vertices", r.removed},
+          {"memory_bytes", t.memoryBytes()},
+          {"volume_drift", r.drift},
+          {"stamp_ms", timing.stampMs},
+          {"erosion_ms", timing.erodeMs},
+          {"detect_ms", timing.detectMs},
+          {"removal_ms", timing.removeMs},
+          {"ms", r.ms}};
+}
+
+void sizeAndTrace(const BenchOptions& options, const Scene& scene, std::ostream& out,
+                  std::vector<nlohmann::json>& rows) {
+  const std::vector<int> sides =
+      options.quick ? std::vector<int>{50, 100} : std::vector<int>{50, 71, 100, 142, 200, 283};
+  for (const int n : sides) {
+    std::cerr << "sand-tin: size " << n * n << "\n";
+    const TinRun r = runTin(scene, n, 0.55, true);
+    nlohmann::json row = tinRow("size", r, 0.55, n);
+    row["surface_error_m"] = nullptr;
+    rows.push_back(row);
+    out << row.dump() << std::endl;
+  }
+  const std::vector<double> traces = options.quick
+                                         ? std::vector<double>{0.2, 0.55}
+                                         : std::vector<double>{0.1, 0.2, 0.3, 0.4, 0.55, 0.7, 0.85};
+  for (const double trace : traces) {
+    std::cerr << "sand-tin: trace " << trace << "\n";
+    const TinRun r = runTin(scene, 100, trace, true);
+    nlohmann::json row = tinRow("trace", r, trace, 100);
+    row["surface_error_m"] = nullptr;
+    rows.push_back(row);
+    out << row.dump() << std::endl;
+  }
+}
+
+void compare(const BenchOptions& options, const Scene& scene, std::ostream& out,
+             std::vector<nlohmann::json>& rows) {
+  const int finest = options.quick ? 9 : 10;
+  for (const bool erosion : {false, true}) {
+    std::cerr << "sand-tin: compare, erosion " << (erosion ? "on" : "off") << "\n";
+    const GridRun reference = runGrid(scene, finest, 0.55, erosion);
+    const char* experiment = erosion ? "compare-eroded" : "compare-imprint";
+    for (int n = 7; n <= finest; ++n) {
+      const GridRun g = n == finest ? GridRun{} : runGrid(scene, n, 0.55, erosion);
+      const GridRun& run = n == finest ? reference : g;
+      const auto [rms, worst] =
+          surfaceError(reference, [&](double x, double y) { return run.at(x, y); });
+      nlohmann::json row = {
+          {"bench", "sand-tin"},
+          {"model", "grid"},
+          {"experiment", experiment},
+          {"grid", std::to_string(run.side) + "x" + std::to_string(run.side)},
+          {"vertices", std::size_t(run.side) * run.side},
+          {"memory_bytes", run.memory},
+          {"surface_error_m", rms},
+          {"surface_error_max_m", worst},
+          {"reference", n == finest ? "itself" : "finest grid"},
+          {"volume_drift", run.drift},
+          {"steepest_slope", gridSteepest(run)},
+          {"ms_per_stamp", run.stampMs / double(run.stamps)},
+          {"ms_per_erosion_step", run.erosionSteps ? run.erodeMs / double(run.erosionSteps) : 0.0},
+          {"ms", run.ms}};
+      rows.push_back(row);
+      out << row.dump() << std::endl;
+    }
+    const TinRun t = runTin(scene, 5, 0.55, erosion);
+    const auto [rms, worst] = surfaceError(reference, [&](double x, double y) {
+      return t.sand->tin().heightAt({x, y});
+    });
+    nlohmann::json row = tinRow(experiment, t, 0.55, 5);
+    row["surface_error_m"] = rms;
+    row["surface_error_max_m"] = worst;
+    row["reference"] = "finest grid";
+    row["steepest_slope"] = maxEdgeSlope(t.sand->tin());
+    row["ms_per_stamp"] = t.sand->timing().stampMs / double(t.stamps);
+    row["ms_per_erosion_step"] =
+        t.erosionSteps ? t.sand->timing().erodeMs / double(t.erosionSteps) : 0.0;
+    rows.push_back(row);
+    out << row.dump() << std::endl;
+  }
+}
+
+void drift(const BenchOptions& options, const Scene& scene, std::ostream& out) {
+  const int steps = options.quick ? 1000 : 10000;
+  std::cerr << "sand-tin: drift over " << steps << " erosion steps\n";
+  sand::TinSand s(flatTin(scene, 100));
+  const double v0 = s.tin().volume();
+  std::size_t removed = 0;
+  const double ms = timeMs([&] {
+    s.stamp({5.0, 5.0}, 0.3, sand::TinStampTool::disc(1.5));
+    for (int k = 0; k < steps; ++k) {
+      s.erode();
+      removed += s.removeRedundant();
+    }
+  });
+  out << nlohmann::json{{"bench", "sand-tin"},
+                        {"model", "tin"},
+                        {"experiment", "drift"},
+                        {"erosion_steps", steps},
+                        {"vertices", s.tin().vertexCount()},
+                        {"removed_vertices", removed},
+                        {"memory_bytes", s.tin().memoryBytes()},
+                        {"surface_error_m", nullptr},
+                        {"volume_drift", std::abs(s.tin().volume() - v0) / v0},
+                        {"still_active", s.activeCount()},
+                        {"valid", s.tin().isValid()},
+                        {"ms", ms}}
+             .dump()
+      << std::endl;
+}
+
+double num(const nlohmann::json& j, const char* key) {
+  return j.contains(key) && j[key].is_number() ? j[key].get<double>() : NAN;
+}
+
+void plots(const std::vector<nlohmann::json>& rows, const std::string& outDir) {
+  const auto partSeries = [&](const char* experiment, const char* x) {
+    std::vector<app::PlotSeries> out;
+    const char* parts[] = {"stamp_ms", "erosion_ms", "detect_ms", "removal_ms"};
+    const char* names[] = {"stamping", "erosion", "redundancy detection", "vertex removal"};
+    for (int p = 0; p < 4; ++p) {
+      app::PlotSeries s;
+      s.label = names[p];
+      s.colour = app::seriesColour(std::size_t(p));
+      for (const auto& r : rows)
+        if (r["experiment"] == experiment)
+          s.x.push_back(num(r, x)), s.y.push_back(num(r, parts[p]));
+      out.push_back(s);
+    }
+    return out;
+  };
+  const auto countSeries = [&](const char* experiment, const char* x) {
+    std::vector<app::PlotSeries> out;
+    const char* keys[] = {"vertices", "triangles"};
+    for (int p = 0; p < 2; ++p) {
+      app::PlotSeries s;
+      s.label = keys[p];
+      s.colour = app::seriesColour(std::size_t(p));
+      for (const auto& r : rows)
+        if (r["experiment"] == experiment) s.x.push_back(num(r, x)), s.y.push_back(num(r, keys[p]));
+      out.push_back(s);
+    }
+    return out;
+  };
+  std::vector<app::PlotPanel> panels = {
+      {"time per part (trace 0.55)", "TIN size (start vertices)", "ms, whole stroke", false, false,
+       partSeries("size", "start_vertices")},
+      {"time per part (10,000 vertices)", "trace length (of the diagonal)", "ms, whole stroke",
+       false, false, partSeries("trace", "trace")},
+      {"TIN after the stroke (trace 0.55)", "TIN size (start vertices)", "count", false, false,
+       countSeries("size", "start_vertices")},
+      {"TIN after the stroke (10,000 vertices)", "trace length (of the diagonal)", "count", false,
+       false, countSeries("trace", "trace")}};
+  app::PlotPanel memory{
+      "memory against surface error", "RMS surface error (m)", "memory (bytes)", true, true, {}};
+  std::size_t colour = 0;
+  for (const char* experiment : {"compare-imprint", "compare-eroded"})
+    for (const char* model : {"grid", "tin"}) {
+      app::PlotSeries s;
+      s.label = std::string(model) +
+                (experiment == std::string("compare-imprint") ? ", imprint" : ", eroded");
+      s.colour = app::seriesColour(colour++);
+      s.lines = std::string(model) == "grid";
+      for (const auto& r : rows)
+        if (r["experiment"] == experiment && r["model"] == model && num(r, "surface_error_m") > 0)
+          s.x.push_back(num(r, "surface_error_m")), s.y.push_back(num(r, "memory_bytes"));
+      memory.series.push_back(s);
+    }
+  panels.push_back(memory);
+  cv::imwrite(outDir + "/sand_tin.png", app::drawPlots(panels, 480, 360));
+  std::cerr << "bench: wrote " << outDir << "/sand_tin.png\n";
+}
+
+void benchSandTin(const BenchOptions& options, std::ostream& out) {
+  const Scene scene;
+  std::vector<nlohmann::json> rows;
+  sizeAndTrace(options, scene, out, rows);
+  compare(options, scene, out, rows);
+  drift(options, scene, out);
+  if (!options.outDir.empty()) plots(rows, options.outDir);
+}
+
+}  // namespace
+
+static const BenchRegistration kRegistered("sand-tin", benchSandTin);
+
+}  // namespace ps::bench

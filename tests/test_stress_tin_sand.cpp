@@ -1,0 +1,85 @@
+// The sand TIN under many random stamps (all radii, from a few rims across to a third of the
+// region, overlapping and at the border's edge), each followed by erosion and the removal of
+// flat vertices: CGAL's own validity check holds, nothing is NaN, the volume is kept, and
+// stamping one spot over and over does not grow the TIN. 600 stamps in CI (150 under ASan);
+// PS_STRESS_SCALE=k runs k times as many.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+#include "core/input_error.hpp"
+#include "sand/tin_sand.hpp"
+#include "stress_util.hpp"
+
+namespace {
+
+using ps::sand::TinSand;
+using ps::sand::TinStampTool;
+
+ps::tin::DynamicTin randomTin(int n, double side, std::mt19937& rng) {
+  std::uniform_real_distribution<double> noise(-0.05, 0.05);
+  std::vector<Eigen::Vector3d> points;
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) {
+      const double x = side * i / (n - 1), y = side * j / (n - 1);
+      points.emplace_back(x, y, 2.0 + 0.5 * std::sin(0.9 * x) * std::cos(0.6 * y) + noise(rng));
+    }
+  return ps::tin::DynamicTin(points);
+}
+
+TEST(StressTinSand, RandomStampsKeepTheTriangulationValidAndTheVolume) {
+  std::mt19937 rng(2026);
+  const double side = 20.0;
+  TinSand sand(randomTin(41, side, rng));
+  const double v0 = sand.tin().volume();
+  std::uniform_real_distribution<double> uni(0.0, 1.0);
+  const int stamps = 600 / (ps::testkit::underAsan() ? 4 : 1) * ps::testkit::stressScale();
+  std::size_t done = 0, refused = 0, most = 0;
+  for (int k = 0; k < stamps; ++k) {
+    const double r = 0.05 * std::pow(60.0, uni(rng));  // 0.05 .. 3 m, log-uniform
+    const TinStampTool tool = TinStampTool::disc(r, 3 + int(uni(rng) * 40));
+    // Centres over the whole region: some tools reach past its border and must be refused.
+    const Eigen::Vector2d c(uni(rng) * side, uni(rng) * side);
+    const double depth = 0.5 * r * uni(rng);
+    try {
+      sand.stamp(c, sand.tin().heightAt(c) - depth, tool);
+      ++done;
+    } catch (const ps::core::InputError&) {
+      ++refused;
+      continue;
+    }
+    for (int s = 0; s < 2; ++s) sand.erode();
+    sand.removeRedundant();
+    most = std::max(most, sand.tin().vertexCount());
+    if (k % 100 == 0) {
+      ASSERT_EQ(sand.tin().validityProblem(), "") << "after stamp " << k;
+    }
+  }
+  ASSERT_TRUE(sand.tin().isValid());
+  EXPECT_GT(done, std::size_t(stamps) / 2);
+  EXPECT_GT(refused, 0u) << "tools past the border were tried";
+  for (const double h : sand.tin().toTin().h) ASSERT_TRUE(std::isfinite(h));
+  EXPECT_LE(std::abs(sand.tin().volume() - v0) / v0, 1e-9);
+  RecordProperty("stamps", int(done));
+  RecordProperty("most_vertices", int(most));
+}
+
+TEST(StressTinSand, OneSpotStampedOverAndOverStaysTheSameSize) {
+  std::mt19937 rng(7);
+  TinSand sand(randomTin(21, 10.0, rng));
+  const TinStampTool tool = TinStampTool::disc(1.2, 32);
+  std::size_t afterTen = 0, most = 0;
+  const int stamps = 400 * ps::testkit::stressScale();
+  for (int k = 0; k < stamps; ++k) {
+    sand.stamp({5.0, 5.0}, 1.5, tool);
+    for (int s = 0; s < 4; ++s) sand.erode();
+    sand.removeRedundant();
+    if (k == 9) afterTen = sand.tin().vertexCount();
+    if (k >= 10) most = std::max(most, sand.tin().vertexCount());
+  }
+  EXPECT_LE(most, afterTen + 4 * tool.outline.size()) << "after ten stamps " << afterTen;
+  EXPECT_TRUE(sand.tin().isValid());
+}
+
+}  // namespace
