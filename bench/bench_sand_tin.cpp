@@ -385,32 +385,45 @@ void plots(const std::vector<nlohmann::json>& rows, const std::string& outDir) {
     }
     return out;
   };
-  std::vector<app::PlotPanel> panels = {
+  const std::vector<app::PlotPanel> times = {
       {"time per part (trace 0.55)", "TIN size (start vertices)", "ms, whole stroke", false, false,
        partSeries("size", "start_vertices")},
       {"time per part (10,000 vertices)", "trace length (of the diagonal)", "ms, whole stroke",
-       false, false, partSeries("trace", "trace")},
+       false, false, partSeries("trace", "trace")}};
+  const std::vector<app::PlotPanel> counts = {
       {"TIN after the stroke (trace 0.55)", "TIN size (start vertices)", "count", false, false,
        countSeries("size", "start_vertices")},
       {"TIN after the stroke (10,000 vertices)", "trace length (of the diagonal)", "count", false,
        false, countSeries("trace", "trace")}};
-  app::PlotPanel memory{
-      "memory against surface error", "RMS surface error (m)", "memory (bytes)", true, true, {}};
-  std::size_t colour = 0;
-  for (const char* experiment : {"compare-imprint", "compare-eroded"})
-    for (const char* model : {"grid", "tin"}) {
-      app::PlotSeries s;
-      s.label = std::string(model) +
-                (experiment == std::string("compare-imprint") ? ", imprint" : ", eroded");
-      s.colour = app::seriesColour(colour++);
-      s.lines = std::string(model) == "grid";
-      for (const auto& r : rows)
-        if (r["experiment"] == experiment && r["model"] == model && num(r, "surface_error_m") > 0)
-          s.x.push_back(num(r, "surface_error_m")), s.y.push_back(num(r, "memory_bytes"));
-      memory.series.push_back(s);
-    }
-  panels.push_back(memory);
-  cv::imwrite(outDir + "/sand_tin.png", app::drawPlots(panels, 480, 360));
+  const auto modelSeries = [&](const char* x, const char* y, bool skipReference) {
+    std::vector<app::PlotSeries> out;
+    std::size_t colour = 0;
+    for (const char* experiment : {"compare-imprint", "compare-eroded"})
+      for (const char* model : {"grid", "tin"}) {
+        app::PlotSeries s;
+        s.label = std::string(model) +
+                  (experiment == std::string("compare-imprint") ? ", imprint" : ", eroded");
+        s.colour = app::seriesColour(colour++);
+        s.lines = std::string(model) == "grid";
+        for (const auto& r : rows)
+          if (r["experiment"] == experiment && r["model"] == model &&
+              !(skipReference && r.contains("reference") && r["reference"] == "itself"))
+            s.x.push_back(num(r, x)), s.y.push_back(num(r, y));
+        out.push_back(s);
+      }
+    return out;
+  };
+  const std::vector<app::PlotPanel> memory = {
+      {"memory against surface error", "RMS difference from the finest grid (m)", "memory (bytes)",
+       true, true, modelSeries("surface_error_m", "memory_bytes", true)},
+      {"steepest wall against memory", "memory (bytes)", "steepest slope (rise / run)", true, true,
+       modelSeries("memory_bytes", "steepest_slope", false)}};
+  cv::Mat image;
+  cv::vconcat(
+      std::vector<cv::Mat>{app::drawPlots(times, 480, 330), app::drawPlots(counts, 480, 330),
+                           app::drawPlots(memory, 480, 330)},
+      image);
+  cv::imwrite(outDir + "/sand_tin.png", image);
   std::cerr << "bench: wrote " << outDir << "/sand_tin.png\n";
 }
 

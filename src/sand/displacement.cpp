@@ -159,6 +159,10 @@ terrain::GridRegion DisplacementTool::apply(const edit::ToolContext& ctx,
 
   const double limit = ctx.heightLimit;
   CompensatedSum deposited, floatChange;
+  // Rounding to float with the residual carried to the next vertex (error diffusion): the
+  // floats' volume then differs from the exact one by one vertex's rounding, not a random walk
+  // over every vertex the stamp touched.
+  double carry = 0.0;
   int vFirst = m + 1, vLast = -1;
   for (const Entry& e : entries) {
     const double p = profile(e);
@@ -169,7 +173,10 @@ terrain::GridRegion DisplacementTool::apply(const edit::ToolContext& ctx,
       ++stats_.raised;
     }
     const float old = heights[g.index(e.u, e.v)];
-    const float f = static_cast<float>(std::clamp(double(old) + add, -limit, limit));
+    const double area = grid_.area(e.v), exact = double(old) + add;
+    const double want = exact + carry / area;
+    const float f = static_cast<float>(std::clamp(want, -limit, limit));
+    if (std::abs(want) < limit) carry += area * (exact - double(f));
     floatChange.add(grid_.area(e.v) * (double(f) - double(old)));
     if (sphere && (e.v == 0 || e.v == m)) {
       std::fill_n(heights.begin() + std::ptrdiff_t(g.index(0, e.v)), g.side(), f);

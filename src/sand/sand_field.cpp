@@ -180,8 +180,17 @@ terrain::GridRegion SandField::writeBack(double limit) {
   const core::GridSize& g = grid_.grid();
   const bool sphere = grid_.sphere();
   terrain::GridRegion dirty = terrain::GridRegion::none();
-  auto store = [&](int u, int v, double x) {
-    const float f = static_cast<float>(std::clamp(x, -limit, limit));
+  // Each height is rounded to float with the volume its rounding loses carried to the next one
+  // (error diffusion, carry_ kept from one write-back to the next): the floats' volume then
+  // stays within a few cells' rounding of the volume the steps conserve (in the doubles, which
+  // stay as they are), instead of wandering by every cell's rounding at every commit.
+  auto round = [&](int v, double x) {
+    const double area = grid_.area(v), want = x + carry_ / area;
+    const float f = static_cast<float>(std::clamp(want, -limit, limit));
+    if (std::abs(want) < limit) carry_ += area * (x - double(f));
+    return f;
+  };
+  auto store = [&](int u, int v, float f) {
     float& dst = heights_[g.index(u, v)];
     if (std::bit_cast<std::uint32_t>(f) == std::bit_cast<std::uint32_t>(dst)) return false;
     dst = f;
@@ -193,9 +202,9 @@ terrain::GridRegion SandField::writeBack(double limit) {
     tile->unwritten = false;
     int ua = cols_, ub = -1, va = m_ + 1, vb = -1;
     forEachCellOf(int(t), [&](int u, int v, std::size_t i) {
-      const double x = tile->cur[i];
-      bool changed = store(u, v, x);
-      if (sphere && u == 0) changed |= store(m_, v, x);
+      const float f = round(v, tile->cur[i]);
+      bool changed = store(u, v, f);
+      if (sphere && u == 0) changed |= store(m_, v, f);
       if (changed) {
         ua = std::min(ua, u);
         ub = std::max(ub, u);
@@ -214,8 +223,9 @@ terrain::GridRegion SandField::writeBack(double limit) {
       if (!pole.resident || !pole.unwritten) continue;
       pole.unwritten = false;
       const int v = p == 0 ? 0 : m_;
+      const float f = round(v, pole.h);
       bool changed = false;
-      for (int u = 0; u <= m_; ++u) changed |= store(u, v, pole.h);
+      for (int u = 0; u <= m_; ++u) changed |= store(u, v, f);
       if (changed) dirty = dirty.unite(terrain::GridRegion{0, m_, v, v}, g, sphere);
     }
   }

@@ -194,6 +194,8 @@ class SandField {
   std::vector<int> tileList_;
   std::vector<double> poleFlux_[2];  // per column: net flux into the pole this step
   std::size_t totalCellSteps_ = 0;
+  // m^3 the floats written so far hold less than the doubles did (writeBack's error diffusion).
+  double carry_ = 0.0;
   // Per-row constants of the last material used (rebuilt when it changes).
   std::unique_ptr<ThermalTables> thermalTables_;
   std::unique_ptr<DiffusionTables> diffusionTables_;
