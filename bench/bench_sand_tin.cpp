@@ -145,12 +145,15 @@ void gridStamp(GridRun& g, const Scene& scene, const sand::TinStampTool& tool,
       const Eigen::Vector2d p(i * d, j * d);
       const double r = (p - c).norm();
       if (pressed(p)) {
-        if (h > scene.bottom()) displaced += area * (h - scene.bottom()), h = float(scene.bottom());
+        // The bottom as a float: what is pressed out is then exactly what the floats lose.
+        const float bottom = float(scene.bottom());
+        if (h > bottom) displaced += area * (double(h) - bottom), h = bottom;
       } else {
         const double t = std::clamp((r - outer) / tool.rampartWidth, 0.0, 1.0);
         weighted += area * (1 - 3 * t * t + 2 * t * t * t) * (r <= reach);
       }
     }
+  double carry = 0;
   if (weighted > 0)
     for (int j = j0; j <= j1; ++j)
       for (int i = i0; i <= i1; ++i) {
@@ -159,7 +162,11 @@ void gridStamp(GridRun& g, const Scene& scene, const sand::TinStampTool& tool,
         if (pressed(p) || r > reach) continue;
         const double t = std::clamp((r - outer) / tool.rampartWidth, 0.0, 1.0);
         float& h = g.heights[std::size_t(j) * g.side + i];
-        h = float(h + displaced / weighted * (1 - 3 * t * t + 2 * t * t * t));
+        // Rounded with the residual carried on, as the grid core's displacement tool does.
+        const double exact = h + displaced / weighted * (1 - 3 * t * t + 2 * t * t * t);
+        const float f = float(exact + carry / area);
+        carry += area * (exact - double(f));
+        h = f;
       }
   touched = {i0, i1, j0, j1};
 }

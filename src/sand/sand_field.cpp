@@ -184,7 +184,11 @@ terrain::GridRegion SandField::writeBack(double limit) {
   // (error diffusion, carry_ kept from one write-back to the next): the floats' volume then
   // stays within a few cells' rounding of the volume the steps conserve (in the doubles, which
   // stay as they are), instead of wandering by every cell's rounding at every commit.
-  auto round = [&](int v, double x) {
+  // A height its float already holds exactly is left alone: the carry lands only on heights
+  // that changed (elsewhere it would change floats, and their bounds, that nothing moved).
+  auto round = [&](int u, int v, double x) {
+    const float old = heights_[g.index(u, v)];
+    if (double(old) == x) return old;
     const double area = grid_.area(v), want = x + carry_ / area;
     const float f = static_cast<float>(std::clamp(want, -limit, limit));
     if (std::abs(want) < limit) carry_ += area * (x - double(f));
@@ -202,7 +206,7 @@ terrain::GridRegion SandField::writeBack(double limit) {
     tile->unwritten = false;
     int ua = cols_, ub = -1, va = m_ + 1, vb = -1;
     forEachCellOf(int(t), [&](int u, int v, std::size_t i) {
-      const float f = round(v, tile->cur[i]);
+      const float f = round(u, v, tile->cur[i]);
       bool changed = store(u, v, f);
       if (sphere && u == 0) changed |= store(m_, v, f);
       if (changed) {
@@ -223,7 +227,7 @@ terrain::GridRegion SandField::writeBack(double limit) {
       if (!pole.resident || !pole.unwritten) continue;
       pole.unwritten = false;
       const int v = p == 0 ? 0 : m_;
-      const float f = round(v, pole.h);
+      const float f = round(0, v, pole.h);
       bool changed = false;
       for (int u = 0; u <= m_; ++u) changed |= store(u, v, f);
       if (changed) dirty = dirty.unite(terrain::GridRegion{0, m_, v, v}, g, sphere);
