@@ -1,0 +1,75 @@
+#pragma once
+// The sand TIN as an edit tool: each application makes a TIN of the region around the control
+// vertex from the terrain's heights (in a local frame: the tangent plane at the control vertex,
+// so it works the same at a pole, across the seam and on a flat grid), stamps the tool into it,
+// erodes it along its edges and removes its flat vertices (sand/tin_sand, paper 000), and writes
+// the result back into the grid's heights, keeping the grid's volume. Through the edit pipeline
+// it gets what every tool gets: undo, the journal, saves, exports and the 4-8 mesh's bounds.
+//
+// The TIN holds every grid vertex of the region when it is made (the heights exactly, an error
+// of 0) and thins itself where the sand turns flat; the tool's imprint is crisp in the TIN and
+// reaches the grid at the grid's spacing.
+#include <memory>
+#include <string>
+
+#include "core/chart.hpp"
+#include "edit/region_growing.hpp"
+#include "edit/tool.hpp"
+#include "sand/tin_sand.hpp"
+
+namespace ps::sand {
+
+struct TinSandToolSettings {
+  double radius = 100e3;      // m: the stamp's radius (a regular polygon's corners on it)
+  int segments = 24;          // the stamp's corners, 3..256
+  double regionRadius = 3.0;  // the TIN's region around the control vertex, x radius, [2.5, 8]
+  double spacing = 0.25;      // between stamps of a stroke, x radius, (0, 1]
+  int erosionSteps = 8;       // erosion iterations after each stamp, 0..1000
+  TinSandSettings sand;       // material, flat angle, removal
+
+  // Throws core::InputError naming the first bad field; with a chart, also checks the radius
+  // against its grid (at least two cells) and the planet.
+  void validate(const core::Chart* chart = nullptr) const;
+  bool operator==(const TinSandToolSettings& o) const {
+    return radius == o.radius && segments == o.segments && regionRadius == o.regionRadius &&
+           spacing == o.spacing && erosionSteps == o.erosionSteps &&
+           sand.material == o.sand.material && sand.flatDeg == o.sand.flatDeg &&
+           sand.idleSteps == o.sand.idleSteps && sand.removeRedundant == o.sand.removeRedundant;
+  }
+};
+
+// What the last apply() did.
+struct TinSandToolStats {
+  std::size_t gridVertices = 0;  // distinct grid points in the region (the TIN's start)
+  std::size_t tinVertices = 0;   // after the stamp, erosion and removal
+  std::size_t tinTriangles = 0;
+  std::size_t removed = 0;          // flat vertices removed
+  double displacedVolume = 0;       // m^3 the stamp moved onto its rampart
+  double gridVolumeCorrection = 0;  // m^3 put back after sampling the TIN onto the grid
+  std::size_t changed = 0;          // grid points whose height changed
+};
+
+class TinSandTool final : public edit::Tool {
+ public:
+  TinSandTool(std::shared_ptr<const core::Chart> chart, TinSandToolSettings settings = {});
+
+  const TinSandToolSettings& settings() const { return settings_; }
+  void setSettings(const TinSandToolSettings& s) { settings_ = s; }
+  const TinSandToolStats& lastStats() const { return stats_; }
+
+  std::string name() const override { return "tin-sand"; }
+  void validate() const override { settings_.validate(chart_.get()); }
+  double radius() const override { return settings_.radius; }
+  double spacing() const override { return settings_.spacing * settings_.radius; }
+  const edit::Region& footprint(const edit::ToolContext& ctx) const override;
+  terrain::GridRegion apply(const edit::ToolContext& ctx, std::span<float> heights) const override;
+
+ private:
+  std::shared_ptr<const core::Chart> chart_;
+  TinSandToolSettings settings_;
+  mutable edit::RegionGrower grower_;
+  mutable edit::Region footprint_;
+  mutable TinSandToolStats stats_;
+};
+
+}  // namespace ps::sand
