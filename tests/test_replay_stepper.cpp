@@ -12,7 +12,9 @@
 
 #include "core/input_error.hpp"
 #include "replay/replay.hpp"
+#include "sand/sand_grid.hpp"
 #include "short_scene.hpp"
+#include "test_edit_util.hpp"
 #include "test_terrains.hpp"
 #include "tracking/synth.hpp"
 #include "tracking/video.hpp"
@@ -109,6 +111,35 @@ TEST(ReplayStepper, ToolAndBrushChangeBetweenFramesAndBadValuesAreRefused) {
   cv::Mat image;
   while (src.read(image)) stepper.step(image, src.index(), src.index() / src.fps());
   EXPECT_EQ(stepper.summary().frames, 12);
+}
+
+TEST(ReplayStepper, TheSandTinToolSculptsTheSameWayTwiceAndKeepsTheVolume) {
+  // A 257^2 planet (156 km cells): the 400 km stamp is 2.6 cells across its radius.
+  const auto run = [](int& applied) {
+    auto planet = testkit::bumpyTerrain(8, 4, 3000.0);
+    const sand::SandGrid grid(planet.chartPtr());
+    const double v0 = grid.volume(planet.heights());
+    auto o = shortSceneOptions();
+    o.tool = replay::ReplayTool::kTinSand;
+    tracking::FrameSource src(shortSceneVideo());
+    replay::FrameStepper stepper(shortSceneCamera().forImageSize(src.size()), planet, o);
+    cv::Mat image;
+    applied = 0;
+    while (src.read(image))
+      applied += stepper.step(image, src.index(), src.index() / src.fps()).touching;
+    EXPECT_LE(std::abs(grid.volume(planet.heights()) - v0) / grid.absVolume(planet.heights()),
+              1e-9);
+    EXPECT_TRUE(edittest::boundsEqualFullRebuild(planet));
+    return std::vector<float>(planet.heights().begin(), planet.heights().end());
+  };
+  int touchedA = 0, touchedB = 0;
+  const auto a = run(touchedA), b = run(touchedB);
+  EXPECT_GT(touchedA, 0) << "the short scene's tool touches the planet";
+  EXPECT_EQ(touchedA, touchedB);
+  EXPECT_EQ(0, std::memcmp(a.data(), b.data(), a.size() * sizeof(float)));
+  const auto fresh = testkit::bumpyTerrain(8, 4, 3000.0);
+  EXPECT_NE(0, std::memcmp(a.data(), fresh.heights().data(), a.size() * sizeof(float)))
+      << "the stamps changed the planet";
 }
 
 TEST(ReplayStepper, PlanetScaledByHandIsThePlanetConfiguredAtThatSize) {

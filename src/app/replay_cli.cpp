@@ -56,7 +56,9 @@ void ReplayCli::addOptions(CLI::App* sub) {
       ->capture_default_str();
   sub->add_option("--touch", o.scene.touchDistance, "Touching within this height (m)")
       ->capture_default_str();
-  sub->add_option("--tool", tool, "What touching does: brush (Gaussian) or displace (sand)")
+  sub->add_option("--tool", tool,
+                  "What touching does: brush (Gaussian), displace (sand on the grid) or tin-sand "
+                  "(sand on a TIN, paper 000: the displacement's radius and --press-m)")
       ->capture_default_str();
   sub->add_option("--brush-radius-km", brushRadiusKm, "Brush radius r_d on the planet (km)")
       ->capture_default_str();

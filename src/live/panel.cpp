@@ -58,7 +58,7 @@ ScriptedAction parseScriptedAction(const std::string& text) {
     const std::string value = a.action.substr(eq + 1);
     a.action.clear();
     if (a.setting == "tool")
-      known = value == "brush" || value == "displace";
+      known = value == "brush" || value == "displace" || value == "tin-sand";
     else if (a.setting == "mode")
       known = value == "raise" || value == "lower";
     else if (PanelSettings probe; scriptedNumber(probe, a.setting)) {
@@ -73,12 +73,13 @@ ScriptedAction parseScriptedAction(const std::string& text) {
     a.word = value;
   }
   if (colon == std::string::npos || used != colon || a.frame < 0 || !known) {
-    throw core::InputError("--at " + text +
-                           ": expected FRAME:ACTION with FRAME >= 0 and ACTION one of export, "
-                           "record, save, undo, redo, quit, or FRAME:SETTING="
-                           "VALUE with tool=brush|displace, mode=raise|lower or a number for "
-                           "radius_km, strength_m, sigma, displace_radius_km, press_m, size_cm, "
-                           "spin_deg, tilt_deg");
+    throw core::InputError(
+        "--at " + text +
+        ": expected FRAME:ACTION with FRAME >= 0 and ACTION one of export, "
+        "record, save, undo, redo, quit, or FRAME:SETTING="
+        "VALUE with tool=brush|displace|tin-sand, mode=raise|lower or a number for "
+        "radius_km, strength_m, sigma, displace_radius_km, press_m, size_cm, "
+        "spin_deg, tilt_deg");
   }
   return a;
 }
@@ -95,7 +96,10 @@ void applyScript(const std::vector<ScriptedAction>& script, int frame, PanelActi
     a.quit |= s.action == "quit";
     a.crash |= s.action == "crash";
     a.interrupt |= s.action == "interrupt";
-    if (s.setting == "tool") settings.displace = s.word == "displace";
+    if (s.setting == "tool") {
+      settings.displace = s.word == "displace" || s.word == "tin-sand";
+      settings.tinSand = s.word == "tin-sand";
+    }
     if (s.setting == "mode") settings.lower = s.word == "lower";
     if (float* f = scriptedNumber(settings, s.setting)) *f = s.number;
   }
@@ -137,8 +141,8 @@ void applyShortcuts(PanelSettings& s, PanelActions& a) {
     if (pressed(GLFW_KEY_R)) a.record = true;
     return;
   }
-  if (pressed(GLFW_KEY_B)) s.displace = false;
-  if (pressed(GLFW_KEY_D)) s.displace = true;
+  if (pressed(GLFW_KEY_B)) s.displace = false, s.tinSand = false;
+  if (pressed(GLFW_KEY_D)) s.displace = true, s.tinSand = false;
   if (pressed(GLFW_KEY_R)) s.lower = !s.lower;
   if (pressed(GLFW_KEY_W)) s.wireframe = !s.wireframe;
   if (pressed(GLFW_KEY_F)) s.facets = !s.facets;
@@ -186,11 +190,14 @@ float drawPanel(PanelSettings& s, PanelActions& a, const PanelStatus& st) {
   ImGui::Text("haptic force %.2f N (%.0f Hz loop; drawn, not felt)", st.forceN, st.hapticHz);
   if (!st.message.empty()) ImGui::TextColored(ImVec4(1, 0.4f, 0.3f, 1), "%s", st.message.c_str());
   ImGui::Separator();
-  int tool = s.displace ? 1 : 0;
+  int tool = s.displace ? (s.tinSand ? 2 : 1) : 0;
   ImGui::RadioButton("brush (B)", &tool, 0);
   ImGui::SameLine();
   ImGui::RadioButton("displace (D)", &tool, 1);
-  s.displace = tool == 1;
+  ImGui::SameLine();
+  ImGui::RadioButton("sand TIN", &tool, 2);
+  s.displace = tool >= 1;
+  s.tinSand = tool == 2;
   if (!s.displace) {
     ImGui::SliderFloat("r_d (km)", &s.brushRadiusKm, 20, 2000, "%.0f",
                        ImGuiSliderFlags_Logarithmic);

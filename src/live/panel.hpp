@@ -15,6 +15,7 @@ inline constexpr float kPlanetSizeMinCm = 1.0f, kPlanetSizeMaxCm = 50.0f;
 
 struct PanelSettings {
   bool displace = false;  // tool: brush (false) or sand displacement (true)
+  bool tinSand = false;   // sand on a TIN (paper 000) instead of the grid's displacement
   float brushRadiusKm = 250, strengthM = 600, sigma = 0.17f;
   bool lower = false;  // brush: raise (false) or lower
   float displaceRadiusKm = 400, pressM = 8000;
@@ -45,7 +46,7 @@ struct PanelActions {
 struct ScriptedAction {
   int frame = 0;
   std::string action;  // export, record, save, undo, redo, quit, interrupt, crash; "" : a setting
-  // tool (brush, displace), mode (raise, lower), radius_km, strength_m, sigma,
+  // tool (brush, displace, tin-sand), mode (raise, lower), radius_km, strength_m, sigma,
   // displace_radius_km, press_m, size_cm, spin_deg, tilt_deg
   std::string setting;
   std::string word;  // tool, mode

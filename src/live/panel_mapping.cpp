@@ -5,7 +5,8 @@ namespace ps::live {
 PanelSettings panelFrom(const LiveSettings& s) {
   PanelSettings p;
   const auto& o = s.options;
-  p.displace = o.tool == replay::ReplayTool::kDisplace;
+  p.displace = o.tool != replay::ReplayTool::kBrush;
+  p.tinSand = o.tool == replay::ReplayTool::kTinSand;
   p.brushRadiusKm = float(o.brush.radius / 1e3);
   p.strengthM = float(o.brush.strength);
   p.sigma = float(o.brush.sigma);
@@ -19,7 +20,7 @@ PanelSettings panelFrom(const LiveSettings& s) {
 }
 
 bool sculptingChanged(const PanelSettings& a, const PanelSettings& b) {
-  return a.displace != b.displace || a.brushRadiusKm != b.brushRadiusKm ||
+  return a.displace != b.displace || a.tinSand != b.tinSand || a.brushRadiusKm != b.brushRadiusKm ||
          a.strengthM != b.strengthM || a.sigma != b.sigma || a.lower != b.lower ||
          a.displaceRadiusKm != b.displaceRadiusKm || a.pressM != b.pressM ||
          a.spinDeg != b.spinDeg || a.tiltDeg != b.tiltDeg || a.planetSizeCm != b.planetSizeCm;
@@ -28,7 +29,9 @@ bool sculptingChanged(const PanelSettings& a, const PanelSettings& b) {
 replay::SessionSettings panelTarget(const PanelSettings& p, const PanelSettings& applied,
                                     const replay::SessionSettings& now) {
   replay::SessionSettings t = now;
-  t.tool = p.displace ? replay::ReplayTool::kDisplace : replay::ReplayTool::kBrush;
+  t.tool = !p.displace ? replay::ReplayTool::kBrush
+           : p.tinSand ? replay::ReplayTool::kTinSand
+                       : replay::ReplayTool::kDisplace;
   t.brush.radius = p.brushRadiusKm * 1e3;
   t.brush.strength = p.strengthM;
   t.brush.sigma = p.sigma;

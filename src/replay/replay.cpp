@@ -10,6 +10,7 @@
 #include "edit/control_vertex.hpp"
 #include "edit/edit_pipeline.hpp"
 #include "replay/session_timeline.hpp"
+#include "sand/tin_sand_tool.hpp"
 #include "tracking/camera_motion.hpp"
 
 namespace ps::replay {
@@ -45,8 +46,10 @@ double msSince(std::chrono::steady_clock::time_point t0) {
 
 }  // namespace
 
-constexpr core::NameTable<ReplayTool, 2> kReplayTools{
-    "replay tool", {{{ReplayTool::kBrush, "brush"}, {ReplayTool::kDisplace, "displace"}}}};
+constexpr core::NameTable<ReplayTool, 3> kReplayTools{"replay tool",
+                                                      {{{ReplayTool::kBrush, "brush"},
+                                                        {ReplayTool::kDisplace, "displace"},
+                                                        {ReplayTool::kTinSand, "tin-sand"}}}};
 
 std::string toString(ReplayTool t) {
   return kReplayTools.nameOf(t);
@@ -92,13 +95,16 @@ struct FrameStepper::Parts {
   std::optional<edit::GaussianBrush> brush;
   std::optional<sand::Settler> settler;
   std::optional<sand::DisplacementTool> displacer;
+  std::optional<sand::TinSandTool> tinSand;
   // Boards: whether the camera stood still while the board is hidden (tracker.hpp).
   std::optional<tracking::CameraMotionJudge> motion;
   Parts(std::unique_ptr<tracking::Detector> d, const tracking::SceneConfig& sc,
         terrain::Terrain& planet)
       : detector(std::move(d)), scene(sc), pipeline(planet) {}
   const edit::Tool& tool(ReplayTool t) const {
-    return t == ReplayTool::kBrush ? static_cast<const edit::Tool&>(*brush) : *displacer;
+    if (t == ReplayTool::kBrush) return *brush;
+    if (t == ReplayTool::kTinSand) return *tinSand;
+    return *displacer;
   }
 };
 
@@ -154,6 +160,13 @@ void FrameStepper::rebuildTools() {
   if (wantSettler && !p_->settler) p_->settler.emplace(planet_, o_.displace.material, o_.settling);
   p_->displacer.emplace(planet_.chartPtr(), o_.displace, p_->settler ? &*p_->settler : nullptr);
   if (o_.tool == ReplayTool::kDisplace) p_->displacer->validate();
+  // Sand on a TIN: the displacement's radius, spacing and material; it erodes in its TIN.
+  sand::TinSandToolSettings tin;
+  tin.radius = o_.displace.radius;
+  tin.spacing = o_.displace.spacing;
+  tin.sand.material = o_.displace.material;
+  p_->tinSand.emplace(planet_.chartPtr(), tin);
+  if (o_.tool == ReplayTool::kTinSand) p_->tinSand->validate();
 }
 
 void FrameStepper::endStroke() {

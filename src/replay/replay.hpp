@@ -31,10 +31,13 @@ namespace ps::replay {
 //   displace: the sand core's displacement tool (sand/displacement.hpp), a sphere pressed
 //             `pressDepth` metres into the surface under the tip (its lowest point that far
 //             below the surface at the control vertex); the displaced sand then settles
-//             (thermal erosion to the material's talus angle) a budget of cell-steps per frame.
+//             (thermal erosion to the material's talus angle) a budget of cell-steps per frame;
+//   tin-sand: sand on a TIN (sand/tin_sand_tool.hpp, paper 000) with the displacement's radius,
+//             spacing, material and press depth: each stamp presses a disc into a TIN of the
+//             region, erodes it there and writes it back to the grid (no grid settling).
 // The tip's measured depth is not used as the press depth: a millimetre of marker jitter is
 // about 100 km on the planet.
-enum class ReplayTool { kBrush, kDisplace };
+enum class ReplayTool { kBrush, kDisplace, kTinSand };
 std::string toString(ReplayTool t);
 ReplayTool replayToolFromString(const std::string& s);  // throws core::InputError
 
