@@ -25,7 +25,15 @@ struct TinSandToolSettings {
   double regionRadius = 3.0;  // the TIN's region around the control vertex, x radius, [2.5, 8]
   double spacing = 0.25;      // between stamps of a stroke, x radius, (0, 1]
   int erosionSteps = 8;       // erosion iterations after each stamp, 0..1000
-  TinSandSettings sand;       // material, flat angle, removal
+  // Material, flat angle, removal. The removal is off: the TIN is made for one stamp and
+  // dropped, so thinning it gains nothing, and on a planet a vertex within theta_flat of its
+  // neighbours can still be tens of metres off the interpolated surface (tan 0.4 deg x a 20 km
+  // cell = 140 m), which writing back would flatten.
+  TinSandSettings sand = [] {
+    TinSandSettings s;
+    s.removeRedundant = false;
+    return s;
+  }();
 
   // Throws core::InputError naming the first bad field; with a chart, also checks the radius
   // against its grid (at least two cells) and the planet.

@@ -426,24 +426,23 @@ bool DynamicTin::remove(Vertex id, double* volumeChange) {
   m.freeNumbers.push_back(id);
   m.hint = link.front();
 
-  // The hole's new faces: from the face over the removed point, not across the rim.
-  const auto onRim = [&](const VertexHandle& a, const VertexHandle& b) {
-    for (std::size_t k = 0; k < link.size(); ++k) {
-      const VertexHandle &x = link[k], &y = link[(k + 1) % link.size()];
-      if ((x == a && y == b) || (x == b && y == a)) return true;
-    }
-    return false;
-  };
+  // The hole's new faces: from the face over the removed point, not across the rim (sets:
+  // after many removals a vertex's link can run to hundreds).
+  std::unordered_set<std::uint64_t> rim;
+  for (std::size_t k = 0; k < link.size(); ++k)
+    rim.insert(edgeKey(link[k]->info().index, link[(k + 1) % link.size()]->info().index));
   double after = 0;
-  std::vector<FaceHandle> hole, stack{m.cdt.locate(p, link.front()->face())};
+  std::unordered_set<const void*> seen;
+  std::vector<FaceHandle> stack{m.cdt.locate(p, link.front()->face())};
   while (!stack.empty()) {
     const FaceHandle g = stack.back();
     stack.pop_back();
-    if (m.cdt.is_infinite(g) || std::find(hole.begin(), hole.end(), g) != hole.end()) continue;
-    hole.push_back(g);
+    if (m.cdt.is_infinite(g) || !seen.insert(&*g).second) continue;
     after += faceVolume(g);
     for (int k = 0; k < 3; ++k)
-      if (!onRim(g->vertex(Cdt::ccw(k)), g->vertex(Cdt::cw(k)))) stack.push_back(g->neighbor(k));
+      if (!rim.count(edgeKey(g->vertex(Cdt::ccw(k))->info().index,
+                             g->vertex(Cdt::cw(k))->info().index)))
+        stack.push_back(g->neighbor(k));
   }
   const double change = after - before;
   if (volumeChange) *volumeChange = change;
