@@ -2,8 +2,11 @@
 
 #include <Eigen/Geometry>
 #include <cmath>
+#include <numbers>
+#include <unordered_set>
 #include <vector>
 
+#include "core/flat_chart.hpp"
 #include "core/input_error.hpp"
 #include "sand/displacement.hpp"
 #include "sand/sand_grid.hpp"
@@ -39,6 +42,19 @@ void TinSandToolSettings::validate(const core::Chart* chart) const {
                            " m) is over a quarter of the planet's radius, too curved for one "
                            "tangent plane");
 }
+
+namespace {
+
+// The smallest spacing between grid points at the equator (lat-long: a meridian step) or on a
+// flat grid.
+double smallestSpacing(const core::Chart& chart) {
+  if (chart.radius() > 0) return std::numbers::pi * chart.radius() / chart.grid().m();
+  if (const auto* flat = dynamic_cast<const core::FlatChart*>(&chart))
+    return std::min(flat->dx(), flat->dy());
+  return largestSpacing(chart);
+}
+
+}  // namespace
 
 TinSandTool::TinSandTool(std::shared_ptr<const core::Chart> chart, TinSandToolSettings settings)
     : chart_(std::move(chart)), settings_(std::move(settings)) {
@@ -82,11 +98,26 @@ terrain::GridRegion TinSandTool::apply(const edit::ToolContext& ctx,
       points.push_back({u, v, {p.dot(east), p.dot(north)}, double(heights[g.index(u, v)])});
     }
   });
+  // The TIN's points: at most one per cell of the chart's smallest spacing at the equator, so
+  // that the pole's crowded rows (thousands of points a few metres apart on a lat-long chart)
+  // do not crowd the TIN too; everywhere else that is every point.
+  const double cell = 0.99 * smallestSpacing(chart);
+  std::unordered_set<std::uint64_t> taken;
   std::vector<Eigen::Vector3d> xyz;
-  xyz.reserve(points.size());
-  for (const Point& p : points) xyz.emplace_back(p.xy.x(), p.xy.y(), p.h);
+  for (const Point& p : points) {
+    const auto ix = std::int64_t(std::floor(p.xy.x() / cell)) + (1 << 30);
+    const auto iy = std::int64_t(std::floor(p.xy.y() / cell)) + (1 << 30);
+    if (taken.insert((std::uint64_t(ix) << 32) | std::uint64_t(iy)).second)
+      xyz.emplace_back(p.xy.x(), p.xy.y(), p.h);
+  }
   TinSand sand(tin::DynamicTin(xyz), settings_.sand);
   stats_.gridVertices = points.size();
+  stats_.tinStartVertices = sand.tin().vertexCount();
+  // The TIN's surface before the stamp at every point (its own height where it is a vertex):
+  // each point then takes the change of the surface, so a point the TIN left out keeps its
+  // detail.
+  std::vector<double> before(points.size());
+  for (std::size_t k = 0; k < points.size(); ++k) before[k] = sand.tin().heightAt(points[k].xy);
 
   // The tool's bottom: the lowest point of its sphere, as the displacement tool presses.
   const double bottom = (ctx.input.position - origin).dot(up) - settings_.radius;
@@ -103,8 +134,10 @@ terrain::GridRegion TinSandTool::apply(const edit::ToolContext& ctx,
   std::vector<double> next(points.size());
   double change = 0, changedArea = 0;
   for (std::size_t k = 0; k < points.size(); ++k) {
-    next[k] = sand.tin().heightAt(points[k].xy);
-    if (std::isnan(next[k])) next[k] = points[k].h;  // on the region's hull, to rounding
+    const double after = sand.tin().heightAt(points[k].xy);
+    // Outside the TIN's hull (a left-out point at the region's edge, or one on it to rounding).
+    next[k] = std::isnan(after) || std::isnan(before[k]) ? points[k].h
+                                                         : points[k].h + (after - before[k]);
     if (next[k] != points[k].h) {
       change += cells.area(points[k].v) * (next[k] - points[k].h);
       changedArea += cells.area(points[k].v);

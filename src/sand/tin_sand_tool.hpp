@@ -6,9 +6,10 @@
 // the result back into the grid's heights, keeping the grid's volume. Through the edit pipeline
 // it gets what every tool gets: undo, the journal, saves, exports and the 4-8 mesh's bounds.
 //
-// The TIN holds every grid vertex of the region when it is made (the heights exactly, an error
-// of 0) and thins itself where the sand turns flat; the tool's imprint is crisp in the TIN and
-// reaches the grid at the grid's spacing.
+// The TIN holds the grid's points of the region (thinned to one per equatorial cell where a
+// lat-long chart crowds them near a pole) at their heights; every grid point then takes the
+// change of the TIN's surface, so points the TIN left out keep their own detail. The tool's
+// imprint is crisp in the TIN and reaches the grid at the grid's spacing.
 #include <memory>
 #include <string>
 
@@ -48,8 +49,9 @@ struct TinSandToolSettings {
 
 // What the last apply() did.
 struct TinSandToolStats {
-  std::size_t gridVertices = 0;  // distinct grid points in the region (the TIN's start)
-  std::size_t tinVertices = 0;   // after the stamp, erosion and removal
+  std::size_t gridVertices = 0;      // distinct grid points in the region
+  std::size_t tinStartVertices = 0;  // the TIN's points (thinned where the chart crowds them)
+  std::size_t tinVertices = 0;       // after the stamp, erosion and removal
   std::size_t tinTriangles = 0;
   std::size_t removed = 0;          // flat vertices removed
   double displacedVolume = 0;       // m^3 the stamp moved onto its rampart
