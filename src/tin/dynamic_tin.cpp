@@ -10,6 +10,8 @@
 #include "core/input_error.hpp"
 #include "tin/cdt.hpp"
 
+// Never refined: the sand TIN uses the triangulation without the mesher's bases (tin/cdt.hpp).
+
 namespace ps::tin {
 
 namespace {
@@ -26,7 +28,7 @@ double signedArea2(const Point& a, const Point& b, const Point& c) {
 }
 
 // The volume under one face: its area times its mean height.
-double faceVolume(const FaceHandle& f) {
+double faceVolume(const lean::FaceHandle& f) {
   const Point &a = f->vertex(0)->point(), &b = f->vertex(1)->point(), &c = f->vertex(2)->point();
   return 0.5 * signedArea2(a, b, c) *
          (f->vertex(0)->info().height + f->vertex(1)->info().height + f->vertex(2)->info().height) /
@@ -48,14 +50,14 @@ Eigen::Vector2d xyOf(const Point& p) {
 }  // namespace
 
 struct DynamicTin::Impl {
-  Cdt cdt;
-  std::vector<VertexHandle> handles;  // by vertex number; null for a free number
+  lean::Cdt cdt;
+  std::vector<lean::VertexHandle> handles;  // by vertex number; null for a free number
   std::vector<Vertex> freeNumbers;
   std::unordered_map<std::uint64_t, std::uint32_t> generations;  // constrained edges
-  mutable VertexHandle hint;  // a live vertex near the last operation
-  std::uint64_t epoch = 0;    // counts changes of the triangulation
+  mutable lean::VertexHandle hint;  // a live vertex near the last operation
+  std::uint64_t epoch = 0;          // counts changes of the triangulation
 
-  Vertex number(const VertexHandle& v) {
+  Vertex number(const lean::VertexHandle& v) {
     if (v->info().index != kUnnumbered) return v->info().index;
     Vertex id;
     if (!freeNumbers.empty()) {
@@ -70,26 +72,26 @@ struct DynamicTin::Impl {
     return id;
   }
 
-  const VertexHandle& handle(Vertex v) const {
-    if (v >= handles.size() || handles[v] == VertexHandle())
+  const lean::VertexHandle& handle(Vertex v) const {
+    if (v >= handles.size() || handles[v] == lean::VertexHandle())
       throw std::out_of_range("DynamicTin: vertex " + std::to_string(v) + " does not exist");
     return handles[v];
   }
 
   // Where point location starts walking: a live vertex, the last one an operation touched.
-  FaceHandle startFace() const { return hint->face(); }
+  lean::FaceHandle startFace() const { return hint->face(); }
 
   // The finite faces that come within `radius` of `centre`, by walking across edges from the
   // face there (a disc is convex: the faces it touches are connected).
   void facesTouching(const Eigen::Vector2d& centre, double radius,
-                     std::vector<FaceHandle>& out) const {
+                     std::vector<lean::FaceHandle>& out) const {
     out.clear();
-    const FaceHandle start = cdt.locate(Point(centre.x(), centre.y()), startFace());
+    const lean::FaceHandle start = cdt.locate(Point(centre.x(), centre.y()), startFace());
     if (cdt.is_infinite(start)) return;
-    std::vector<FaceHandle> stack{start};
+    std::vector<lean::FaceHandle> stack{start};
     std::unordered_set<const void*> seen;
     while (!stack.empty()) {
-      const FaceHandle f = stack.back();
+      const lean::FaceHandle f = stack.back();
       stack.pop_back();
       if (cdt.is_infinite(f) || !seen.insert(&*f).second) continue;
       if (!touches(f, centre, radius)) continue;
@@ -98,7 +100,7 @@ struct DynamicTin::Impl {
     }
   }
 
-  static bool touches(const FaceHandle& f, const Eigen::Vector2d& c, double radius) {
+  static bool touches(const lean::FaceHandle& f, const Eigen::Vector2d& c, double radius) {
     const Eigen::Vector2d a = xyOf(f->vertex(0)->point()), b = xyOf(f->vertex(1)->point()),
                           d = xyOf(f->vertex(2)->point());
     const auto side = [&](const Eigen::Vector2d& p, const Eigen::Vector2d& q) {
@@ -112,22 +114,22 @@ struct DynamicTin::Impl {
   // Tags the constrained path from a to b (split at the vertices on it, crossings included,
   // which lie on it only to rounding) with `generation`: from each vertex, the constrained edge
   // that gets closest to b.
-  void tagPath(const VertexHandle& a, const VertexHandle& b, std::uint32_t generation) {
-    VertexHandle at = a;
+  void tagPath(const lean::VertexHandle& a, const lean::VertexHandle& b, std::uint32_t generation) {
+    lean::VertexHandle at = a;
     const Eigen::Vector2d target = xyOf(b->point());
     for (std::size_t guard = 0; at != b && guard <= handles.size(); ++guard) {
-      VertexHandle next;
+      lean::VertexHandle next;
       double best = (xyOf(at->point()) - target).norm();
       auto f = cdt.incident_faces(at), done = f;
       do {
         const int i = f->index(at);
-        if (!f->is_constrained(Cdt::cw(i))) continue;  // the edge from at to vertex ccw(i)
-        const VertexHandle u = f->vertex(Cdt::ccw(i));
+        if (!f->is_constrained(lean::Cdt::cw(i))) continue;  // the edge from at to vertex ccw(i)
+        const lean::VertexHandle u = f->vertex(lean::Cdt::ccw(i));
         if (cdt.is_infinite(u)) continue;
         const double d = (xyOf(u->point()) - target).norm();
         if (d < best) best = d, next = u;
       } while (++f != done);
-      if (next == VertexHandle()) break;
+      if (next == lean::VertexHandle()) break;
       generations[edgeKey(number(at), number(next))] = generation;
       at = next;
     }
@@ -141,10 +143,10 @@ DynamicTin::DynamicTin(std::span<const Eigen::Vector3d> points) : impl_(std::mak
       throw core::InputError("TIN: point " + std::to_string(k) +
                              " has a coordinate that is not finite");
   }
-  FaceHandle hint;
+  lean::FaceHandle hint;
   for (const Eigen::Vector3d& p : points) {
     const std::size_t before = impl_->cdt.number_of_vertices();
-    const VertexHandle v = impl_->cdt.insert(Point(p.x(), p.y()), hint);
+    const lean::VertexHandle v = impl_->cdt.insert(Point(p.x(), p.y()), hint);
     if (impl_->cdt.number_of_vertices() > before) {
       v->info().index = kUnnumbered;
       impl_->number(v);
@@ -178,9 +180,9 @@ std::size_t DynamicTin::constrainedEdgeCount() const {
 
 std::size_t DynamicTin::memoryBytes() const {
   const auto& tds = impl_->cdt.tds();
-  return tds.vertices().capacity() * sizeof(Tds::Vertex) +
-         tds.faces().capacity() * sizeof(Tds::Face) +
-         impl_->handles.capacity() * sizeof(VertexHandle) +
+  return tds.vertices().capacity() * sizeof(lean::Tds::Vertex) +
+         tds.faces().capacity() * sizeof(lean::Tds::Face) +
+         impl_->handles.capacity() * sizeof(lean::VertexHandle) +
          impl_->freeNumbers.capacity() * sizeof(Vertex) +
          impl_->generations.size() *
              (sizeof(std::uint64_t) + sizeof(std::uint32_t) + 2 * sizeof(void*)) +
@@ -188,7 +190,7 @@ std::size_t DynamicTin::memoryBytes() const {
 }
 
 bool DynamicTin::alive(Vertex v) const {
-  return v < impl_->handles.size() && impl_->handles[v] != VertexHandle();
+  return v < impl_->handles.size() && impl_->handles[v] != lean::VertexHandle();
 }
 
 Eigen::Vector2d DynamicTin::position(Vertex v) const {
@@ -202,7 +204,7 @@ void DynamicTin::setHeight(Vertex v, double h) {
 }
 
 bool DynamicTin::onHull(Vertex v) const {
-  const VertexHandle& h = impl_->handle(v);
+  const lean::VertexHandle& h = impl_->handle(v);
   auto c = impl_->cdt.incident_vertices(h), done = c;
   do
     if (impl_->cdt.is_infinite(c)) return true;
@@ -232,18 +234,18 @@ std::vector<DynamicTin::Vertex> DynamicTin::vertices() const {
   std::vector<Vertex> out;
   out.reserve(vertexCount());
   for (Vertex v = 0; v < impl_->handles.size(); ++v)
-    if (impl_->handles[v] != VertexHandle()) out.push_back(v);
+    if (impl_->handles[v] != lean::VertexHandle()) out.push_back(v);
   return out;
 }
 
 void DynamicTin::verticesWithin(const Eigen::Vector2d& centre, double radius,
                                 std::vector<Vertex>& out) const {
   out.clear();
-  std::vector<FaceHandle> faces;
+  std::vector<lean::FaceHandle> faces;
   impl_->facesTouching(centre, radius, faces);
-  for (const FaceHandle& f : faces)
+  for (const lean::FaceHandle& f : faces)
     for (int k = 0; k < 3; ++k) {
-      const VertexHandle& v = f->vertex(k);
+      const lean::VertexHandle& v = f->vertex(k);
       if ((xyOf(v->point()) - centre).norm() <= radius) out.push_back(v->info().index);
     }
   std::sort(out.begin(), out.end());
@@ -251,14 +253,14 @@ void DynamicTin::verticesWithin(const Eigen::Vector2d& centre, double radius,
 }
 
 bool DynamicTin::contains(const Eigen::Vector2d& p) const {
-  Cdt::Locate_type lt;
+  lean::Cdt::Locate_type lt;
   int li = 0;
   impl_->cdt.locate(Point(p.x(), p.y()), lt, li, impl_->startFace());
-  return lt != Cdt::OUTSIDE_CONVEX_HULL && lt != Cdt::OUTSIDE_AFFINE_HULL;
+  return lt != lean::Cdt::OUTSIDE_CONVEX_HULL && lt != lean::Cdt::OUTSIDE_AFFINE_HULL;
 }
 
 double DynamicTin::depthInside(const Eigen::Vector2d& p) const {
-  const Cdt& cdt = impl_->cdt;
+  const lean::Cdt& cdt = impl_->cdt;
   double nearest = INFINITY;
   auto c = cdt.incident_vertices(cdt.infinite_vertex()), done = c;
   do {
@@ -270,12 +272,12 @@ double DynamicTin::depthInside(const Eigen::Vector2d& p) const {
 }
 
 double DynamicTin::heightAt(const Eigen::Vector2d& p) const {
-  Cdt::Locate_type lt;
+  lean::Cdt::Locate_type lt;
   int li = 0;
-  const FaceHandle f = impl_->cdt.locate(Point(p.x(), p.y()), lt, li, impl_->startFace());
-  if (lt == Cdt::OUTSIDE_CONVEX_HULL || lt == Cdt::OUTSIDE_AFFINE_HULL) return NAN;
+  const lean::FaceHandle f = impl_->cdt.locate(Point(p.x(), p.y()), lt, li, impl_->startFace());
+  if (lt == lean::Cdt::OUTSIDE_CONVEX_HULL || lt == lean::Cdt::OUTSIDE_AFFINE_HULL) return NAN;
   impl_->hint = f->vertex(0);
-  if (lt == Cdt::VERTEX) return f->vertex(li)->info().height;
+  if (lt == lean::Cdt::VERTEX) return f->vertex(li)->info().height;
   const Point q(p.x(), p.y());
   const Point &a = f->vertex(0)->point(), &b = f->vertex(1)->point(), &c = f->vertex(2)->point();
   const double area = signedArea2(a, b, c);
@@ -285,12 +287,12 @@ double DynamicTin::heightAt(const Eigen::Vector2d& p) const {
 }
 
 DynamicTin::Vertex DynamicTin::vertexNear(const Eigen::Vector2d& p, double radius) const {
-  const FaceHandle f = impl_->cdt.locate(Point(p.x(), p.y()), impl_->startFace());
+  const lean::FaceHandle f = impl_->cdt.locate(Point(p.x(), p.y()), impl_->startFace());
   Vertex best = kNoVertex;
   double nearest = radius;
-  const auto consider = [&](const FaceHandle& g) {
+  const auto consider = [&](const lean::FaceHandle& g) {
     for (int k = 0; k < 3; ++k) {
-      const VertexHandle& v = g->vertex(k);
+      const lean::VertexHandle& v = g->vertex(k);
       if (impl_->cdt.is_infinite(v)) continue;
       const double d = (xyOf(v->point()) - p).norm();
       if (d <= nearest) nearest = d, best = v->info().index;
@@ -306,17 +308,17 @@ DynamicTin::Vertex DynamicTin::insert(const Eigen::Vector2d& p, double h) {
     throw std::invalid_argument("DynamicTin: a vertex that is not finite");
   Impl& m = *impl_;
   const Point q(p.x(), p.y());
-  Cdt::Locate_type lt;
+  lean::Cdt::Locate_type lt;
   int li = 0;
-  const FaceHandle f = m.cdt.locate(q, lt, li, m.startFace());
-  if (lt == Cdt::OUTSIDE_CONVEX_HULL || lt == Cdt::OUTSIDE_AFFINE_HULL)
+  const lean::FaceHandle f = m.cdt.locate(q, lt, li, m.startFace());
+  if (lt == lean::Cdt::OUTSIDE_CONVEX_HULL || lt == lean::Cdt::OUTSIDE_AFFINE_HULL)
     throw std::invalid_argument("DynamicTin: a vertex outside the domain");
   // A constrained edge split by the new vertex: both halves keep its generation.
-  VertexHandle splitA, splitB;
+  lean::VertexHandle splitA, splitB;
   std::uint32_t splitGeneration = 0;
-  if (lt == Cdt::EDGE && f->is_constrained(li)) {
-    splitA = f->vertex(Cdt::ccw(li));
-    splitB = f->vertex(Cdt::cw(li));
+  if (lt == lean::Cdt::EDGE && f->is_constrained(li)) {
+    splitA = f->vertex(lean::Cdt::ccw(li));
+    splitB = f->vertex(lean::Cdt::cw(li));
     const auto it = m.generations.find(edgeKey(splitA->info().index, splitB->info().index));
     if (it != m.generations.end()) {
       splitGeneration = it->second;
@@ -324,12 +326,12 @@ DynamicTin::Vertex DynamicTin::insert(const Eigen::Vector2d& p, double h) {
     }
   }
   const std::size_t before = m.cdt.number_of_vertices();
-  const VertexHandle v = m.cdt.insert(q, lt, f, li);
+  const lean::VertexHandle v = m.cdt.insert(q, lt, f, li);
   ++m.epoch;
   if (m.cdt.number_of_vertices() > before) v->info().index = kUnnumbered;
   const Vertex id = m.number(v);
   v->info().height = h;
-  if (splitA != VertexHandle()) {
+  if (splitA != lean::VertexHandle()) {
     m.generations[edgeKey(splitA->info().index, id)] = splitGeneration;
     m.generations[edgeKey(id, splitB->info().index)] = splitGeneration;
   }
@@ -345,7 +347,7 @@ DynamicTin::Vertex DynamicTin::insertOnSurface(const Eigen::Vector2d& p) {
 
 void DynamicTin::constrain(Vertex a, Vertex b, std::uint32_t generation) {
   Impl& m = *impl_;
-  const VertexHandle va = m.handle(a), vb = m.handle(b);
+  const lean::VertexHandle va = m.handle(a), vb = m.handle(b);
   if (va == vb) return;
   const std::size_t before = m.cdt.number_of_vertices();
   m.cdt.insert_constraint(va, vb);
@@ -355,7 +357,7 @@ void DynamicTin::constrain(Vertex a, Vertex b, std::uint32_t generation) {
     // vertices of both, with the height of the new edge there.
     for (auto v = m.cdt.finite_vertices_begin(); v != m.cdt.finite_vertices_end(); ++v) {
       if (v->info().index != kUnnumbered && v->info().index < m.handles.size() &&
-          m.handles[v->info().index] == VertexHandle(v))
+          m.handles[v->info().index] == lean::VertexHandle(v))
         continue;
       v->info().index = kUnnumbered;
       m.number(v);
@@ -369,21 +371,21 @@ void DynamicTin::constrain(Vertex a, Vertex b, std::uint32_t generation) {
 
 std::size_t DynamicTin::freeConstraintsNear(const Eigen::Vector2d& centre, double radius) {
   Impl& m = *impl_;
-  std::vector<FaceHandle> faces;
+  std::vector<lean::FaceHandle> faces;
   m.facesTouching(centre, radius, faces);
-  std::vector<std::pair<VertexHandle, VertexHandle>> edges;
+  std::vector<std::pair<lean::VertexHandle, lean::VertexHandle>> edges;
   std::unordered_set<std::uint64_t> seen;
-  for (const FaceHandle& f : faces)
+  for (const lean::FaceHandle& f : faces)
     for (int k = 0; k < 3; ++k) {
       if (!f->is_constrained(k)) continue;
-      const VertexHandle a = f->vertex(Cdt::ccw(k)), b = f->vertex(Cdt::cw(k));
+      const lean::VertexHandle a = f->vertex(lean::Cdt::ccw(k)), b = f->vertex(lean::Cdt::cw(k));
       if (segmentDistance(centre, xyOf(a->point()), xyOf(b->point())) <= radius &&
           seen.insert(edgeKey(a->info().index, b->info().index)).second)
         edges.emplace_back(a, b);
     }
   std::size_t freed = 0;
   for (const auto& [a, b] : edges) {
-    FaceHandle f;
+    lean::FaceHandle f;
     int i = 0;
     if (!m.cdt.is_edge(a, b, f, i) || !f->is_constrained(i)) continue;
     m.cdt.remove_constrained_edge(f, i);
@@ -401,28 +403,28 @@ std::uint32_t DynamicTin::generation(Vertex a, Vertex b) const {
 
 bool DynamicTin::remove(Vertex id, double* volumeChange) {
   Impl& m = *impl_;
-  const VertexHandle v = m.handle(id);
+  const lean::VertexHandle v = m.handle(id);
   if (onHull(id)) return false;
-  std::vector<VertexHandle> link;
+  std::vector<lean::VertexHandle> link;
   double before = 0;
   auto f = m.cdt.incident_faces(v), fdone = f;
   do {
     const int i = f->index(v);
-    link.push_back(f->vertex(Cdt::ccw(i)));
+    link.push_back(f->vertex(lean::Cdt::ccw(i)));
     before += faceVolume(f);
     // Freed without flips: the edges at v leave with it, and the hole is re-filled
     // constrained-Delaunay, so nothing else changes.
-    if (f->is_constrained(Cdt::cw(i))) {
-      m.generations.erase(edgeKey(id, f->vertex(Cdt::ccw(i))->info().index));
-      f->set_constraint(Cdt::cw(i), false);
-      const FaceHandle g = f->neighbor(Cdt::cw(i));
+    if (f->is_constrained(lean::Cdt::cw(i))) {
+      m.generations.erase(edgeKey(id, f->vertex(lean::Cdt::ccw(i))->info().index));
+      f->set_constraint(lean::Cdt::cw(i), false);
+      const lean::FaceHandle g = f->neighbor(lean::Cdt::cw(i));
       g->set_constraint(g->index(f), false);
     }
   } while (++f != fdone);
   const Point p = v->point();
   m.cdt.remove(v);
   ++m.epoch;
-  m.handles[id] = VertexHandle();
+  m.handles[id] = lean::VertexHandle();
   m.freeNumbers.push_back(id);
   m.hint = link.front();
 
@@ -433,23 +435,23 @@ bool DynamicTin::remove(Vertex id, double* volumeChange) {
     rim.insert(edgeKey(link[k]->info().index, link[(k + 1) % link.size()]->info().index));
   double after = 0;
   std::unordered_set<const void*> seen;
-  std::vector<FaceHandle> stack{m.cdt.locate(p, link.front()->face())};
+  std::vector<lean::FaceHandle> stack{m.cdt.locate(p, link.front()->face())};
   while (!stack.empty()) {
-    const FaceHandle g = stack.back();
+    const lean::FaceHandle g = stack.back();
     stack.pop_back();
     if (m.cdt.is_infinite(g) || !seen.insert(&*g).second) continue;
     after += faceVolume(g);
     for (int k = 0; k < 3; ++k)
-      if (!rim.count(edgeKey(g->vertex(Cdt::ccw(k))->info().index,
-                             g->vertex(Cdt::cw(k))->info().index)))
+      if (!rim.count(edgeKey(g->vertex(lean::Cdt::ccw(k))->info().index,
+                             g->vertex(lean::Cdt::cw(k))->info().index)))
         stack.push_back(g->neighbor(k));
   }
   const double change = after - before;
   if (volumeChange) *volumeChange = change;
   double rimWeight = 0;
-  for (const VertexHandle& u : link) rimWeight += weight(u->info().index);
+  for (const lean::VertexHandle& u : link) rimWeight += weight(u->info().index);
   if (rimWeight > 0 && change != 0)
-    for (const VertexHandle& u : link) u->info().height -= change / rimWeight;
+    for (const lean::VertexHandle& u : link) u->info().height -= change / rimWeight;
   return true;
 }
 
@@ -470,7 +472,7 @@ std::string DynamicTin::validityProblem() const {
   for (auto v = m.cdt.finite_vertices_begin(); v != m.cdt.finite_vertices_end(); ++v) {
     if (!std::isfinite(v->info().height))
       return "vertex " + std::to_string(v->info().index) + " has a height that is not finite";
-    if (v->info().index >= m.handles.size() || m.handles[v->info().index] != VertexHandle(v))
+    if (v->info().index >= m.handles.size() || m.handles[v->info().index] != lean::VertexHandle(v))
       return "a vertex at (" + std::to_string(v->point().x()) + ", " +
              std::to_string(v->point().y()) + ") has no number";
   }
@@ -478,8 +480,8 @@ std::string DynamicTin::validityProblem() const {
   for (auto e = m.cdt.finite_edges_begin(); e != m.cdt.finite_edges_end(); ++e) {
     if (!m.cdt.is_constrained(*e)) continue;
     ++constrained;
-    const Vertex a = e->first->vertex(Cdt::ccw(e->second))->info().index;
-    const Vertex b = e->first->vertex(Cdt::cw(e->second))->info().index;
+    const Vertex a = e->first->vertex(lean::Cdt::ccw(e->second))->info().index;
+    const Vertex b = e->first->vertex(lean::Cdt::cw(e->second))->info().index;
     if (!m.generations.count(edgeKey(a, b)))
       return "constrained edge " + std::to_string(a) + "-" + std::to_string(b) +
              " has no generation";
@@ -494,7 +496,7 @@ Tin DynamicTin::toTin() const {
   Tin out;
   std::vector<std::uint32_t> index(impl_->handles.size(), kUnnumbered);
   for (Vertex v = 0; v < impl_->handles.size(); ++v) {
-    if (impl_->handles[v] == VertexHandle()) continue;
+    if (impl_->handles[v] == lean::VertexHandle()) continue;
     index[v] = std::uint32_t(out.xy.size());
     out.xy.push_back(position(v));
     out.h.push_back(height(v));
