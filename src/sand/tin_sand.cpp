@@ -6,6 +6,7 @@
 #include <numbers>
 
 #include "core/input_error.hpp"
+#include "tin/triangle_error.hpp"
 
 namespace ps::sand {
 
@@ -41,11 +42,8 @@ bool insidePolygon(const std::vector<Eigen::Vector2d>& poly, const Eigen::Vector
 
 double polygonDistance(const std::vector<Eigen::Vector2d>& poly, const Eigen::Vector2d& p) {
   double best = INFINITY;
-  for (std::size_t i = 0, j = poly.size() - 1; i < poly.size(); j = i++) {
-    const Eigen::Vector2d ab = poly[i] - poly[j];
-    const double t = std::clamp((p - poly[j]).dot(ab) / ab.squaredNorm(), 0.0, 1.0);
-    best = std::min(best, (poly[j] + t * ab - p).norm());
-  }
+  for (std::size_t i = 0, j = poly.size() - 1; i < poly.size(); j = i++)
+    best = std::min(best, tin::pointSegmentDistance(p, poly[j], poly[i]));
   return best;
 }
 

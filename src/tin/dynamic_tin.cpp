@@ -9,6 +9,7 @@
 
 #include "core/input_error.hpp"
 #include "tin/cdt.hpp"
+#include "tin/triangle_error.hpp"
 
 // Never refined: the sand TIN uses the triangulation without the mesher's bases (tin/cdt.hpp).
 
@@ -33,14 +34,6 @@ double faceVolume(const lean::FaceHandle& f) {
   return 0.5 * signedArea2(a, b, c) *
          (f->vertex(0)->info().height + f->vertex(1)->info().height + f->vertex(2)->info().height) /
          3.0;
-}
-
-double segmentDistance(const Eigen::Vector2d& p, const Eigen::Vector2d& a,
-                       const Eigen::Vector2d& b) {
-  const Eigen::Vector2d ab = b - a;
-  const double len2 = ab.squaredNorm();
-  const double t = len2 > 0 ? std::clamp((p - a).dot(ab) / len2, 0.0, 1.0) : 0.0;
-  return (a + t * ab - p).norm();
 }
 
 Eigen::Vector2d xyOf(const Point& p) {
@@ -107,8 +100,8 @@ struct DynamicTin::Impl {
       return (q - p).x() * (c - p).y() - (q - p).y() * (c - p).x();
     };
     if (side(a, b) >= 0 && side(b, d) >= 0 && side(d, a) >= 0) return true;
-    return std::min({segmentDistance(c, a, b), segmentDistance(c, b, d),
-                     segmentDistance(c, d, a)}) <= radius;
+    return std::min({pointSegmentDistance(c, a, b), pointSegmentDistance(c, b, d),
+                     pointSegmentDistance(c, d, a)}) <= radius;
   }
 
   // Tags the constrained path from a to b (split at the vertices on it, crossings included,
@@ -266,7 +259,7 @@ double DynamicTin::depthInside(const Eigen::Vector2d& p) const {
   do {
     auto next = c;
     ++next;
-    nearest = std::min(nearest, segmentDistance(p, xyOf(c->point()), xyOf(next->point())));
+    nearest = std::min(nearest, pointSegmentDistance(p, xyOf(c->point()), xyOf(next->point())));
   } while (++c != done);
   return contains(p) ? nearest : -nearest;
 }
@@ -379,7 +372,7 @@ std::size_t DynamicTin::freeConstraintsNear(const Eigen::Vector2d& centre, doubl
     for (int k = 0; k < 3; ++k) {
       if (!f->is_constrained(k)) continue;
       const lean::VertexHandle a = f->vertex(lean::Cdt::ccw(k)), b = f->vertex(lean::Cdt::cw(k));
-      if (segmentDistance(centre, xyOf(a->point()), xyOf(b->point())) <= radius &&
+      if (pointSegmentDistance(centre, xyOf(a->point()), xyOf(b->point())) <= radius &&
           seen.insert(edgeKey(a->info().index, b->info().index)).second)
         edges.emplace_back(a, b);
     }

@@ -40,6 +40,15 @@ inline bool isLatticePoint(const Point& p) {
          std::abs(p.y()) < kLimit;
 }
 
+// The in-circle determinant's sign for a, b, c (counter-clockwise) given relative to d, in an
+// integer type wide enough for its terms: 1 when d lies inside the circle, 0 on it, -1 outside.
+template <class Int>
+int inCircleSign(Int ax, Int ay, Int bx, Int by, Int cx, Int cy) {
+  const Int al = ax * ax + ay * ay, bl = bx * bx + by * by, cl = cx * cx + cy * cy;
+  const Int v = ax * (by * cl - cy * bl) - ay * (bx * cl - cx * bl) + al * (bx * cy - cx * by);
+  return v > 0 ? 1 : v < 0 ? -1 : 0;
+}
+
 // Where d lies against the circle through a, b, c (counter-clockwise): 1 inside, 0 on it, -1
 // outside.
 inline int inCircle(const Point& a, const Point& b, const Point& c, const Point& d) {
@@ -49,10 +58,7 @@ inline int inCircle(const Point& a, const Point& b, const Point& c, const Point&
     using Int = decltype(zero);
     const auto dx = [&](const Point& p) { return Int(std::int64_t(p.x()) - std::int64_t(d.x())); };
     const auto dy = [&](const Point& p) { return Int(std::int64_t(p.y()) - std::int64_t(d.y())); };
-    const Int ax = dx(a), ay = dy(a), bx = dx(b), by = dy(b), cx = dx(c), cy = dy(c);
-    const Int al = ax * ax + ay * ay, bl = bx * bx + by * by, cl = cx * cx + cy * cy;
-    const Int v = ax * (by * cl - cy * bl) - ay * (bx * cl - cx * bl) + al * (bx * cy - cx * by);
-    return v > 0 ? 1 : v < 0 ? -1 : 0;
+    return inCircleSign<Int>(dx(a), dy(a), dx(b), dy(b), dx(c), dy(c));
   };
   // Points within 2^15 of d (a vertex's neighbours, nearly always): every term stays < 2^61,
   // so 64-bit integers are exact.
@@ -202,12 +208,8 @@ class GreedyInserter {
   // In-circle and orientation on link vertices, exact in 64-bit integers.
   static int inCircleNear(const LinkVertex& a, const LinkVertex& b, const LinkVertex& c,
                           const LinkVertex& d) {
-    const std::int64_t ax = a.x - d.x, ay = a.y - d.y, bx = b.x - d.x, by = b.y - d.y,
-                       cx = c.x - d.x, cy = c.y - d.y;
-    const std::int64_t al = ax * ax + ay * ay, bl = bx * bx + by * by, cl = cx * cx + cy * cy;
-    const std::int64_t det =
-        ax * (by * cl - cy * bl) - ay * (bx * cl - cx * bl) + al * (bx * cy - cx * by);
-    return det > 0 ? 1 : det < 0 ? -1 : 0;
+    return inCircleSign<std::int64_t>(a.x - d.x, a.y - d.y, b.x - d.x, b.y - d.y, c.x - d.x,
+                                      c.y - d.y);
   }
   static std::int64_t turn(const LinkVertex& a, const LinkVertex& b, std::int64_t x,
                            std::int64_t y) {

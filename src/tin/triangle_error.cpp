@@ -7,14 +7,6 @@ namespace ps::tin {
 
 namespace {
 
-double pointSegmentDistance(const Eigen::Vector3d& p, const Eigen::Vector3d& a,
-                            const Eigen::Vector3d& b) {
-  const Eigen::Vector3d ab = b - a;
-  const double len2 = ab.squaredNorm();
-  const double s = len2 > 0 ? std::clamp((p - a).dot(ab) / len2, 0.0, 1.0) : 0.0;
-  return (p - (a + s * ab)).norm();
-}
-
 template <class Measure>
 void scan(const SampleField& field, const LatticeTriangle& t, WorstSample& worst,
           Measure&& measure) {

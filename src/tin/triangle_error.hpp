@@ -3,6 +3,7 @@
 // triangle (edges included) is measured, none skipped (paper 001 samples 1-40 per triangle; the
 // export guarantees its error on all of them).
 #include <Eigen/Core>
+#include <algorithm>
 #include <array>
 #include <cstdint>
 
@@ -32,6 +33,15 @@ inline constexpr double kCheckSlack = 1e-9;
 
 // The sample of `field` inside `t` whose error relative to its tolerance is largest.
 WorstSample worstSample(const SampleField& field, const LatticeTriangle& t);
+
+// Distance from p to the segment ab (2D or 3D Eigen vectors; a point when a == b).
+template <class V>
+double pointSegmentDistance(const V& p, const V& a, const V& b) {
+  const V ab = b - a;
+  const double len2 = ab.squaredNorm();
+  const double s = len2 > 0 ? std::clamp((p - a).dot(ab) / len2, 0.0, 1.0) : 0.0;
+  return (p - (a + s * ab)).norm();
+}
 
 // Closed-form distance from p to the triangle abc (degenerate triangles: to their edges).
 double pointTriangleDistance(const Eigen::Vector3d& p, const Eigen::Vector3d& a,
