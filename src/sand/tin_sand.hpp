@@ -55,6 +55,7 @@ struct TinSandSettings {
   // Whether the removal step runs (off: the TIN only grows).
   bool removeRedundant = true;
   void validate() const;
+  bool operator==(const TinSandSettings&) const = default;
 };
 
 struct TinStampStats {

@@ -57,9 +57,7 @@ double smallestSpacing(const core::Chart& chart) {
 }  // namespace
 
 TinSandTool::TinSandTool(std::shared_ptr<const core::Chart> chart, TinSandToolSettings settings)
-    : chart_(std::move(chart)), settings_(std::move(settings)) {
-  SandGrid check(chart_);  // refuses charts the sand core does not know
-}
+    : chart_(std::move(chart)), cells_(chart_), settings_(std::move(settings)) {}
 
 const edit::Region& TinSandTool::footprint(const edit::ToolContext& ctx) const {
   grower_.grow(ctx.field, settings_.regionRadius * settings_.radius, footprint_);
@@ -75,7 +73,6 @@ terrain::GridRegion TinSandTool::apply(const edit::ToolContext& ctx,
   const core::GridSize g = chart.grid();
   const int m = g.m();
   const bool sphere = chart.radius() > 0;
-  const SandGrid cells(chart_);
 
   // The local frame: the tangent plane at the control vertex on the reference surface.
   const Eigen::Vector3d origin = chart.position(ctx.control.u, ctx.control.v, 0.0);
@@ -139,8 +136,8 @@ terrain::GridRegion TinSandTool::apply(const edit::ToolContext& ctx,
     next[k] = std::isnan(after) || std::isnan(before[k]) ? points[k].h
                                                          : points[k].h + (after - before[k]);
     if (next[k] != points[k].h) {
-      change += cells.area(points[k].v) * (next[k] - points[k].h);
-      changedArea += cells.area(points[k].v);
+      change += cells_.area(points[k].v) * (next[k] - points[k].h);
+      changedArea += cells_.area(points[k].v);
       ++stats_.changed;
     }
   }
@@ -149,7 +146,7 @@ terrain::GridRegion TinSandTool::apply(const edit::ToolContext& ctx,
   double carry = 0;
   for (std::size_t k = 0; k < points.size(); ++k) {
     if (next[k] == points[k].h) continue;
-    const double area = cells.area(points[k].v);
+    const double area = cells_.area(points[k].v);
     const double exact = next[k] - change / changedArea;
     const double want = exact + carry / area;
     const float f = float(std::clamp(want, -limit, limit));

@@ -16,6 +16,7 @@
 #include "core/chart.hpp"
 #include "edit/region_growing.hpp"
 #include "edit/tool.hpp"
+#include "sand/sand_grid.hpp"
 #include "sand/tin_sand.hpp"
 
 namespace ps::sand {
@@ -39,12 +40,7 @@ struct TinSandToolSettings {
   // Throws core::InputError naming the first bad field; with a chart, also checks the radius
   // against its grid (at least two cells) and the planet.
   void validate(const core::Chart* chart = nullptr) const;
-  bool operator==(const TinSandToolSettings& o) const {
-    return radius == o.radius && segments == o.segments && regionRadius == o.regionRadius &&
-           spacing == o.spacing && erosionSteps == o.erosionSteps &&
-           sand.material == o.sand.material && sand.flatDeg == o.sand.flatDeg &&
-           sand.idleSteps == o.sand.idleSteps && sand.removeRedundant == o.sand.removeRedundant;
-  }
+  bool operator==(const TinSandToolSettings&) const = default;
 };
 
 // What the last apply() did.
@@ -76,6 +72,7 @@ class TinSandTool final : public edit::Tool {
 
  private:
   std::shared_ptr<const core::Chart> chart_;
+  SandGrid cells_;  // the grid's cell areas (and the refusal of charts the sand core lacks)
   TinSandToolSettings settings_;
   mutable edit::RegionGrower grower_;
   mutable edit::Region footprint_;
