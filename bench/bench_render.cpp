@@ -103,7 +103,12 @@ void benchRender(const BenchOptions& o, std::ostream& out) {
                               {"planet_pixels", full.pixels},
                               {"triangles", triangles},
                               {"ms", r3(ms)},
-                              {"texture_bytes", renderer.stats().heightTextureBytes},
+                              {"texture_bytes", shading == render::Shading::kPerPixel
+                                                    ? renderer.stats().heightTextureBytes
+                                                    : 0},
+                              {"height_tiles_needed", shading == render::Shading::kPerPixel
+                                                          ? renderer.stats().heightTilesNeeded
+                                                          : 0},
                               {"gl_renderer", gl->renderer()}}
                    .dump()
             << std::endl;

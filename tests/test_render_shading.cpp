@@ -1,12 +1,16 @@
-// Per-pixel shading (render/mesh_shaders.hpp, render/height_texture.hpp) on headless OpenGL
+// Per-pixel shading (render/mesh_shaders.hpp, render/height_tile_cache.hpp) on headless OpenGL
 // (skipped with a message where EGL is missing): a coarse mesh shaded per pixel looks like the
 // full-resolution surface, facets do not; an edit sends only the texels it changed, and the
-// image after it is the one a fresh renderer draws.
+// image after it is the one a fresh renderer draws; the tile cache keeps its budget, and a
+// budget too small draws facets with a note.
 #include <gtest/gtest.h>
 
 #include <atomic>
+#include <cmath>
 #include <cstdio>
 #include <memory>
+#include <opencv2/imgproc.hpp>
+#include <random>
 #include <vector>
 
 #include "core/latlong_chart.hpp"
@@ -104,8 +108,12 @@ TEST(RenderShading, AnEditSendsOnlyTheTexelsItChanged) {
   const auto& first = tess.tessellate(planet, cam, {});
   kept.renderAR({}, planet, first, cam, {});
   const std::size_t side = std::size_t(planet.grid().side());
-  EXPECT_EQ(kept.stats().heightTextureBytes, side * side * sizeof(float));
-  EXPECT_EQ(kept.stats().heightUploadBytes, side * side * sizeof(float));
+  // The view's tiles, whole (with their aprons), and the page table: the first frame's upload.
+  const std::size_t slot = 131 * 131 * sizeof(float);
+  EXPECT_GE(kept.stats().heightTilesHeld, 5u);
+  EXPECT_GE(kept.stats().heightUploadBytes, kept.stats().heightTilesHeld * slot);
+  EXPECT_LT(kept.stats().heightUploadBytes, kept.stats().heightTilesHeld * slot + 1000);
+  EXPECT_LE(kept.stats().heightTextureBytes, std::size_t(64) << 20);
   kept.renderAR({}, planet, tess.tessellate(planet, cam, {}), cam, {});
   EXPECT_EQ(kept.stats().heightUploadBytes, 0u);  // nothing changed: nothing sent
   edit::EditPipeline pipe(planet);
@@ -124,4 +132,107 @@ TEST(RenderShading, AnEditSendsOnlyTheTexelsItChanged) {
   EXPECT_EQ(cv::norm(after, expected, cv::NORM_INF), 0.0);
   std::printf("[ info ] a %zu-vertex edit sent %zu bytes of the %zu-byte height texture\n",
               result.modifiedVertices, sent, side * side * sizeof(float));
+}
+
+namespace {
+
+cv::Mat drawWith(render::PlanetRenderer& r, const terrain::Terrain& planet,
+                 const terrain::Camera& cam, render::Shading shading) {
+  terrain::Tessellator tess;
+  terrain::TessellationSettings ts;
+  ts.distMaxPx = 2;
+  ts.triangleBudget = 0;
+  render::RenderStyle style;
+  style.shading = shading;
+  return r.renderAR({}, planet, tess.tessellate(planet, cam, ts), cam, style);
+}
+
+// Views from orbit down to 30 km, at random places: near ones need full-resolution tiles in a
+// small area, far ones coarse tiles everywhere.
+std::vector<terrain::Camera> wanderingViews(double R, int count, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> unit(-1, 1), logAltitude(std::log(3e4), std::log(2 * R));
+  std::vector<terrain::Camera> views;
+  while (int(views.size()) < count) {
+    Eigen::Vector3d dir(unit(rng), unit(rng), 0.8 * unit(rng));
+    if (dir.norm() < 0.2) continue;
+    dir.normalize();
+    const double altitude = std::exp(logAltitude(rng));
+    Eigen::Vector3d ahead = dir.cross(Eigen::Vector3d::UnitZ());
+    if (ahead.norm() < 1e-3) ahead = Eigen::Vector3d::UnitX();
+    const Eigen::Vector3d target =
+        R * (dir + std::min(1.0, 2 * altitude / R) * ahead.normalized()).normalized();
+    views.push_back(terrain::Camera::lookAt((R + altitude) * dir, target, Eigen::Vector3d::UnitZ(),
+                                            320, 240, 60 * M_PI / 180));
+  }
+  return views;
+}
+
+}  // namespace
+
+// The cache never holds more than its budget; where the view needs more tiles than that, every
+// level goes coarser and the picture stays the surface's (SSIM >= 0.9 against an unbounded
+// cache), and the default budget holds far fewer tiles than the pyramid has.
+TEST(RenderShading, TheHeightTileCacheKeepsItsBudgetAndThePicture) {
+  SKIP_WITHOUT_GL();
+  const auto planet = reliefPlanet(11);  // 2049^2: 341 tiles of 128 cells in 5 levels
+  const double R = planet.chart().radius();
+  render::EglContext gl;
+  render::PlanetRenderer roomy, tight;
+  const std::size_t slot = 131 * 131 * sizeof(float);
+  tight.setHeightCacheBudget(12 * slot);
+  int coarsened = 0;
+  for (const auto& cam : wanderingViews(R, 8, 5)) {
+    const cv::Mat wide = drawWith(roomy, planet, cam, render::Shading::kPerPixel);
+    const cv::Mat narrow = drawWith(tight, planet, cam, render::Shading::kPerPixel);
+    ASSERT_TRUE(tight.stats().shadingNote.empty()) << tight.stats().shadingNote;
+    EXPECT_LE(tight.stats().heightTextureBytes, 12 * slot);
+    EXPECT_LE(tight.stats().heightTilesNeeded, 12u);
+    EXPECT_LT(roomy.stats().heightTilesNeeded, 341u / 2);
+    coarsened += tight.stats().heightLevelBias > 0;
+    const auto cmp =
+        render::compareImages(narrow, wide, render::drawnMask(narrow, wide, {0, 0, 0}));
+    if (cmp.pixels > 1000) {
+      EXPECT_GE(cmp.ssim, 0.9) << "altitude " << cam.eye.norm() - R;
+    }
+  }
+  EXPECT_GT(coarsened, 0);  // the small budget did make levels coarser
+}
+
+// Views that come and go (tiles evicted and sent again) draw what a fresh cache draws for the
+// same view: a cache's history may only hold finer tiles a pixel could use, never wrong ones.
+TEST(RenderShading, ACacheThatWasUsedDrawsWhatAFreshOneDraws) {
+  SKIP_WITHOUT_GL();
+  const auto planet = reliefPlanet(11);
+  render::EglContext gl;
+  render::PlanetRenderer used;
+  used.setHeightCacheBudget(40 * 131 * 131 * sizeof(float));
+  for (const auto& cam : wanderingViews(planet.chart().radius(), 10, 9)) {
+    const cv::Mat a = drawWith(used, planet, cam, render::Shading::kPerPixel);
+    render::PlanetRenderer fresh;
+    fresh.setHeightCacheBudget(40 * 131 * 131 * sizeof(float));
+    const cv::Mat b = drawWith(fresh, planet, cam, render::Shading::kPerPixel);
+    const auto cmp = render::compareImages(a, b, render::drawnMask(a, b, {0, 0, 0}));
+    EXPECT_LT(cmp.meanAbsDiff, 0.5);
+    EXPECT_GE(cmp.ssim, 0.98);
+  }
+}
+
+// A budget that cannot hold the coarsest levels: facets, the reason said, never a black planet.
+TEST(RenderShading, WithoutRoomForTheTilesItDrawsFacetsAndSaysWhy) {
+  SKIP_WITHOUT_GL();
+  const auto planet = reliefPlanet(10);
+  render::EglContext gl;
+  render::PlanetRenderer starved, faceted;
+  starved.setHeightCacheBudget(4096);
+  const auto cam = views(planet.chart().radius())[0].camera;
+  const cv::Mat image = drawWith(starved, planet, cam, render::Shading::kPerPixel);
+  EXPECT_NE(starved.stats().shadingNote.find("drawing facets"), std::string::npos)
+      << starved.stats().shadingNote;
+  EXPECT_EQ(starved.stats().heightTextureBytes, 0u);
+  const cv::Mat expected = drawWith(faceted, planet, cam, render::Shading::kFaceted);
+  EXPECT_EQ(cv::norm(image, expected, cv::NORM_INF), 0.0);
+  cv::Mat grey;
+  cv::cvtColor(image, grey, cv::COLOR_BGR2GRAY);
+  EXPECT_GT(cv::countNonZero(grey > 20), 10000);  // the planet is there, lit
 }

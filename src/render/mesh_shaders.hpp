@@ -1,13 +1,15 @@
 #pragma once
 // The planet mesh's shaders (render/planet_renderer.cpp). Two ways to shade a pixel:
 //   * per pixel (the default): height, normal, tint and contour lines from the full-resolution
-//     heights in a texture (render/height_texture.hpp), sampled at the pixel's grid coordinates,
-//     so a coarse mesh carries the silhouette and every pixel the relief;
+//     heights, sampled at the pixel's grid coordinates from the level of the height pyramid
+//     where its footprint spans one to two texels (render/height_tile_cache.hpp: a tile cache
+//     with a page table; where that level is not held, the nearest coarser one), so a coarse
+//     mesh carries the silhouette and every pixel the relief;
 //   * faceted: each triangle's own geometry (flat normals from screen-space derivatives, the
 //     height interpolated across it), so the tessellation shows, as in paper 003's figures.
 // The chart's frame comes per vertex (its up direction and the tangents along u and v, metres
-// per grid step), so the shader knows no chart's formulas; only whether u wraps and whether up
-// points away from a centre (a sphere's).
+// per grid step), so the shader knows no chart's formulas; only whether up points away from a
+// centre (a sphere's). A seam the chart wraps is in the tiles' aprons.
 
 namespace ps::render {
 
@@ -47,16 +49,36 @@ uniform vec3 cameraPosition;  // planet frame (only for the outward direction)
 uniform float contourInterval;  // 0: none
 uniform int wireOnly;
 uniform int perPixel;           // 1: shade from the height texture
-uniform sampler2D heights;      // R32F, texel (u, v) = grid vertex (u, v)
-uniform float gridM;            // the grid's last index m (side - 1)
-uniform int wrapsU;             // columns 0 and m are one (a seam)
+uniform sampler2DArray heightTiles;  // R32F tiles of the height pyramid, with a 1-texel apron
+uniform usampler2D pageTable;         // mip level L: per tile of pyramid level L, its layer + 1
+uniform float tileCells;              // cells per tile side
+uniform int coarsestLevel;            // the pyramid's level of one tile
+uniform float slotSide;               // texels per tile side (tileCells + 3)
 uniform float reliefScale;      // vertical exaggeration of the shading (as the previews')
 uniform int radialUp;           // up is the direction from the planet's centre (a sphere)
+uniform int showTileLevels;     // 1: colour by the level read; red where it is coarser than asked
 out vec4 colour;
 
-float heightAt(vec2 g) {
-  if (wrapsU == 1) g.x = mod(g.x, gridM);
-  return texture(heights, (g + 0.5) / (gridM + 1.0)).r;
+// The held tile for grid point g (level-0 grid coordinates) at `level` or the nearest coarser
+// level: its layer, its corner in that level's texels, and 2^level.
+void findTile(vec2 g, int level, out float layer, out vec2 corner, out float scale) {
+  for (int l = level; l <= coarsestLevel; ++l) {
+    scale = exp2(float(l));
+    int last = (1 << (coarsestLevel - l)) - 1;
+    ivec2 t = clamp(ivec2(floor(g / (scale * tileCells))), ivec2(0), ivec2(last));
+    uint entry = texelFetch(pageTable, t, l).r;
+    if (entry != 0u || l == coarsestLevel) {
+      layer = float(entry) - 1.0;
+      corner = vec2(t) * tileCells;
+      return;
+    }
+  }
+}
+
+// The height at `local` (texels of the tile's level from its corner; the apron holds -1 and
+// tileCells + 1), bilinear.
+float tileHeight(vec2 local, float layer) {
+  return texture(heightTiles, vec3((local + 1.5) / slotSide, layer)).r;
 }
 
 void main() {
@@ -64,19 +86,29 @@ void main() {
   vec3 n;
   float h;
   if (perPixel == 1) {
-    // Where a pixel spans many texels (a small planet far away), one sample per pixel would
-    // pick texels at random: the slope is taken over the pixel's footprint and the height is
-    // the mean of two samples across it, so the picture stays still as the mesh changes (at
-    // four fetches a pixel, one more than a magnified texture needs).
+    // The level where the pixel's footprint spans one to two texels (as a mip level would be
+    // chosen); there the slope is taken over one texel and the height as the mean of two
+    // samples across the footprint, so the picture stays still as the mesh changes.
     vec2 footprint = fwidth(grid);
-    float step = max(1.0, 0.5 * max(footprint.x, footprint.y));
-    float h0 = heightAt(grid);
-    h = step > 1.0 ? 0.5 * (h0 + heightAt(grid + 0.5 * footprint)) : h0;
-    // Differences on the grid (one step forward, for a normal half a step off), turned into the
-    // surface gradient with the chart's tangents (orthogonal on every chart here); where a
-    // tangent vanishes (a pole) its term does too.
-    float dhu = (heightAt(grid + vec2(step, 0.0)) - h0) / step;
-    float dhv = (heightAt(grid + vec2(0.0, step)) - h0) / step;
+    float widest = max(footprint.x, footprint.y);
+    int level = clamp(int(floor(log2(max(widest, 1.0)))), 0, coarsestLevel);
+    float layer, scale;
+    vec2 corner;
+    findTile(grid, level, layer, corner, scale);
+    if (showTileLevels == 1) {
+      float shade = 1.0 - float(level) / float(coarsestLevel + 1);
+      colour = scale > exp2(float(level)) ? vec4(1.0, 0.0, 0.0, 1.0) : vec4(0.0, shade, 1.0 - shade, 1.0);
+      return;
+    }
+    vec2 local = grid / scale - corner;
+    float h0 = tileHeight(local, layer);
+    h = widest > 2.0 ? 0.5 * (h0 + tileHeight(local + min(0.5 * footprint / scale, vec2(1.0)), layer))
+                     : h0;
+    // Differences on the grid (one texel of the level forward, for a normal half a texel off),
+    // per grid step, turned into the surface gradient with the chart's tangents (orthogonal on
+    // every chart here); where a tangent vanishes (a pole) its term does too.
+    float dhu = (tileHeight(local + vec2(1.0, 0.0), layer) - h0) / scale;
+    float dhv = (tileHeight(local + vec2(0.0, 1.0), layer) - h0) / scale;
     float uu = dot(tangentU, tangentU), vv = dot(tangentV, tangentV);
     vec3 gradient = (uu > 1e-6 ? dhu / uu * tangentU : vec3(0.0)) +
                     (vv > 1e-6 ? dhv / vv * tangentV : vec3(0.0));

@@ -10,6 +10,7 @@
 #include <cmath>
 #include <cstdint>
 #include <iostream>
+#include <memory>
 #include <numbers>
 #include <opencv2/imgproc.hpp>
 #include <stdexcept>
@@ -19,7 +20,7 @@
 
 #include "io/heightmap_export.hpp"
 #include "render/changed_ranges.hpp"
-#include "render/height_texture.hpp"
+#include "render/height_tile_cache.hpp"
 #include "render/mesh_shaders.hpp"
 #include "render/projection.hpp"
 
@@ -124,7 +125,7 @@ struct PlanetRenderer::Gl {
   GLuint meshVao = 0, positionBuffer = 0, heightBuffer = 0, indexBuffer = 0;
   GLuint gridBuffer = 0, frameBuffer = 0;                     // per vertex: (u, v); up, d/du, d/dv
   ShadowedBuffer positions, heights, indices, grids, frames;  // what the mesh buffers hold
-  HeightTexture heightTexture;  // holds a texture only while it is good to shade from
+  std::unique_ptr<HeightTileCache> heightTiles;  // holds tiles only while good to shade from
   GLuint lineVao = 0, lineBuffer = 0, emptyVao = 0;
   GLuint rampTexture = 0, imageTexture = 0;
   GLuint framebuffer = 0, colourBuffer = 0, depthBuffer = 0;
@@ -291,23 +292,35 @@ void PlanetRenderer::upload(const terrain::Terrain& planet, const terrain::Mesh&
   stats_.uploadedThisFrame = true;
 }
 
-void PlanetRenderer::syncHeights(const terrain::Terrain& planet, const RenderStyle& style) {
+void PlanetRenderer::syncHeights(const terrain::Terrain& planet, const terrain::Mesh& mesh,
+                                 const terrain::Camera& camera, const RenderStyle& style) {
   Gl& g = *gl_;
-  wrapsU_ = planet.chart().wrapsU();
   radialUp_ = planet.chart().radius() > 0;
   stats_.heightUploadBytes = 0;
   if (style.shading != Shading::kPerPixel) return;
-  if (g.heightTexture.side() == 0 && failedSide_ == planet.grid().side()) return;  // said once
+  if (!g.heightTiles && failedSide_ == planet.grid().side()) return;  // said once
+  if (!g.heightTiles) g.heightTiles = std::make_unique<HeightTileCache>(heightCacheBudget_);
   std::string why;
-  const bool ok = g.heightTexture.sync(planet, why);
-  stats_.heightUploadBytes = g.heightTexture.lastUploadBytes();
-  stats_.heightTextureBytes = ok ? g.heightTexture.bytes() : 0;
+  const bool ok = g.heightTiles->sync(planet, mesh, camera, why);
+  stats_.heightUploadBytes = g.heightTiles->lastUploadBytes();
+  stats_.heightTextureBytes = ok ? g.heightTiles->bytes() : 0;
+  stats_.heightTilesHeld = ok ? g.heightTiles->residentTiles() : 0;
+  stats_.heightTilesNeeded = ok ? g.heightTiles->neededTiles() : 0;
+  stats_.heightLevelBias = ok ? g.heightTiles->levelBias() : 0;
   if (!ok) {
     // Facets rather than a black planet, and the reason said once.
+    g.heightTiles.reset();
     failedSide_ = planet.grid().side();
     stats_.shadingNote = "per-pixel shading off (" + why + "): drawing facets";
     std::cerr << "renderer: " << stats_.shadingNote << "\n";
   }
+}
+
+void PlanetRenderer::setHeightCacheBudget(std::size_t bytes) {
+  heightCacheBudget_ = bytes;
+  gl_->heightTiles.reset();
+  failedSide_ = 0;
+  stats_.shadingNote.clear();
 }
 
 void PlanetRenderer::drawMesh(const terrain::Mesh& mesh, const terrain::Camera& camera,
@@ -334,14 +347,24 @@ void PlanetRenderer::drawMesh(const terrain::Mesh& mesh, const terrain::Camera& 
   glActiveTexture(GL_TEXTURE0);
   glBindTexture(GL_TEXTURE_1D, g.rampTexture);
   glUniform1i(glGetUniformLocation(g.meshProgram, "ramp"), 0);
-  const bool perPixel = style.shading == Shading::kPerPixel && g.heightTexture.texture() != 0;
+  const HeightTileCache* tiles = g.heightTiles.get();
+  const bool perPixel = style.shading == Shading::kPerPixel && tiles && tiles->tiles() != 0;
   glUniform1i(glGetUniformLocation(g.meshProgram, "perPixel"), perPixel ? 1 : 0);
   glActiveTexture(GL_TEXTURE1);
-  glBindTexture(GL_TEXTURE_2D, perPixel ? g.heightTexture.texture() : 0);
-  glUniform1i(glGetUniformLocation(g.meshProgram, "heights"), 1);
+  glBindTexture(GL_TEXTURE_2D_ARRAY, perPixel ? tiles->tiles() : 0);
+  glUniform1i(glGetUniformLocation(g.meshProgram, "heightTiles"), 1);
+  glActiveTexture(GL_TEXTURE2);
+  glBindTexture(GL_TEXTURE_2D, perPixel ? tiles->pageTable() : 0);
+  glUniform1i(glGetUniformLocation(g.meshProgram, "pageTable"), 2);
   glActiveTexture(GL_TEXTURE0);
-  glUniform1f(glGetUniformLocation(g.meshProgram, "gridM"), float(g.heightTexture.side() - 1));
-  glUniform1i(glGetUniformLocation(g.meshProgram, "wrapsU"), wrapsU_ ? 1 : 0);
+  if (perPixel) {
+    glUniform1f(glGetUniformLocation(g.meshProgram, "tileCells"),
+                float(tiles->pyramid().tileCells));
+    glUniform1i(glGetUniformLocation(g.meshProgram, "coarsestLevel"), tiles->pyramid().coarsest);
+    glUniform1f(glGetUniformLocation(g.meshProgram, "slotSide"), float(tiles->slotSide()));
+    glUniform1i(glGetUniformLocation(g.meshProgram, "showTileLevels"),
+                style.showTileLevels ? 1 : 0);
+  }
   glUniform1i(glGetUniformLocation(g.meshProgram, "radialUp"), radialUp_ ? 1 : 0);
   glUniform1f(glGetUniformLocation(g.meshProgram, "reliefScale"), float(style.reliefScale));
   glBindVertexArray(g.meshVao);
@@ -414,7 +437,7 @@ cv::Mat PlanetRenderer::renderAR(const cv::Mat& background, const terrain::Terra
   Gl& g = *gl_;
   target(camera.width, camera.height);
   upload(planet, mesh);
-  syncHeights(planet, style);
+  syncHeights(planet, mesh, camera, style);
   glClearColor(0, 0, 0, 1);
   glClearDepth(1.0);
   glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);

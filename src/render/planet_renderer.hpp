@@ -34,6 +34,10 @@ struct RenderStyle {
   bool contours = false;
   double contourIntervalM = 1000;
   Eigen::Vector3d sun = Eigen::Vector3d(1, 1, 1).normalized();  // planet frame, toward the sun
+  // Per-pixel shading's diagnostic: each pixel coloured by the pyramid level it reads (green
+  // full resolution to blue coarsest), red where that level is coarser than its footprint asks
+  // (the tile it wanted is not held).
+  bool showTileLevels = false;
 };
 
 // The edit cursor: the control vertex and the deformation radius r_d (planet metres).
@@ -51,8 +55,11 @@ struct RenderStats {
   std::size_t uploadedBytes = 0;  // bytes sent by the last upload (only its changed ranges)
   std::size_t meshBytes = 0;      // bytes of the last uploaded mesh (what a full upload sends)
   bool uploadedThisFrame = false;
-  std::size_t heightTextureBytes = 0;  // GPU memory of the height texture (0: none)
-  std::size_t heightUploadBytes = 0;   // height texels sent by the last frame (only changes)
+  std::size_t heightTextureBytes = 0;  // GPU memory of the height tile cache (0: none)
+  std::size_t heightUploadBytes = 0;   // height texels (and page table) sent by the last frame
+  std::size_t heightTilesHeld = 0;     // tiles of the height pyramid the cache holds
+  std::size_t heightTilesNeeded = 0;   // of which the last view needed
+  int heightLevelBias = 0;             // levels made coarser to fit the cache (0: none)
   std::string shadingNote;             // why per-pixel shading is off, when it is
 };
 
@@ -88,11 +95,16 @@ class PlanetRenderer {
   // On (the default), a changed mesh sends only its changed byte ranges; off sends it whole
   // (the baseline the frame benchmark and the tests compare with).
   void setPartialUploads(bool on) { partialUploads_ = on; }
+  // GPU memory for per-pixel shading's height tiles (render/height_tile_cache.hpp; 64 MiB by
+  // default, whatever the grid). A budget too small for the view's coarsest levels turns
+  // per-pixel shading off with a note (stats().shadingNote), and facets are drawn.
+  void setHeightCacheBudget(std::size_t bytes);
 
  private:
   struct Gl;
   void upload(const terrain::Terrain& planet, const terrain::Mesh& mesh);
-  void syncHeights(const terrain::Terrain& planet, const RenderStyle& style);
+  void syncHeights(const terrain::Terrain& planet, const terrain::Mesh& mesh,
+                   const terrain::Camera& camera, const RenderStyle& style);
   void target(int width, int height);
   void drawMesh(const terrain::Mesh& mesh, const terrain::Camera& camera,
                 const Eigen::Matrix4d& clip, const RenderStyle& style, bool wireOnly);
@@ -107,7 +119,8 @@ class PlanetRenderer {
   std::uint64_t uploadedGeneration_ = 0;
   std::size_t uploadedIndices_ = 0;
   bool partialUploads_ = true;
-  bool wrapsU_ = false, radialUp_ = false;
+  bool radialUp_ = false;
+  std::size_t heightCacheBudget_ = std::size_t(64) << 20;
   int failedSide_ = 0;  // a grid side the height texture could not hold
 };
 
