@@ -5,6 +5,7 @@
 #include <GL/glext.h>
 
 #include <algorithm>
+#include <functional>
 #include <limits>
 
 namespace ps::render {
@@ -58,14 +59,8 @@ bool HeightTileCache::allocate(const terrain::Terrain& planet, std::string& why)
   }
   while (glGetError() != GL_NO_ERROR) {
   }
-  glGenTextures(1, &tiles_);
-  glBindTexture(GL_TEXTURE_2D_ARRAY, tiles_);
-  glTexImage3D(GL_TEXTURE_2D_ARRAY, 0, GL_R32F, GLsizei(s), GLsizei(s), GLsizei(slots), 0, GL_RED,
-               GL_FLOAT, nullptr);
-  glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
-  glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
-  glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
-  glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+  maxSlots_ = int(slots);
+  planet_ = &planet;
   glGenTextures(1, &pageTable_);
   glBindTexture(GL_TEXTURE_2D, pageTable_);
   std::vector<std::uint16_t> zeros(std::size_t(pyramid_.tilesPerSide(0)) *
@@ -80,22 +75,52 @@ bool HeightTileCache::allocate(const terrain::Terrain& planet, std::string& why)
   glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST_MIPMAP_NEAREST);
   glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
   glBindTexture(GL_TEXTURE_2D, 0);
-  if (glGetError() != GL_NO_ERROR) {
+  slotOf_.assign(total, 0);
+  tileIn_.clear();
+  lastNeeded_.clear();
+  freeSlots_.clear();
+  // Room for a first view; grown (to the budget) when a view needs more.
+  if (glGetError() != GL_NO_ERROR || !reserve(std::min(slots, std::size_t(32)))) {
     release();
-    why = "no room for " + std::to_string(slots) + " float height tiles (" +
-          std::to_string(slots * slotBytes) + " B)";
+    why = "no room for float height tiles (" + std::to_string(pageBytes) + " B of page table)";
     return false;
   }
-  slots_ = int(slots);
-  slotOf_.assign(total, 0);
-  tileIn_.assign(slots, kNoTile);
-  lastNeeded_.assign(slots, 0);
-  freeSlots_.resize(slots);
-  for (std::size_t i = 0; i < slots; ++i) freeSlots_[i] = std::uint32_t(slots - 1 - i);
   stamp_.assign(total, 0);
   frame_ = 0;
-  planet_ = &planet;
   revision_ = planet.revision();
+  return true;
+}
+
+bool HeightTileCache::reserve(std::size_t slots) {
+  // A new array of `slots` layers; the held tiles are sent again into the same layers (GL 3.3
+  // has no copy between textures, and the heights are at hand).
+  const std::size_t s = std::size_t(slotSide());
+  GLuint grown = 0;
+  glGenTextures(1, &grown);
+  glBindTexture(GL_TEXTURE_2D_ARRAY, grown);
+  glTexImage3D(GL_TEXTURE_2D_ARRAY, 0, GL_R32F, GLsizei(s), GLsizei(s), GLsizei(slots), 0, GL_RED,
+               GL_FLOAT, nullptr);
+  glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
+  glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+  glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+  glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+  if (glGetError() != GL_NO_ERROR) {
+    glDeleteTextures(1, &grown);
+    return false;
+  }
+  if (tiles_) glDeleteTextures(1, &tiles_);
+  tiles_ = grown;
+  glPixelStorei(GL_UNPACK_ALIGNMENT, 4);
+  for (std::size_t slot = 0; slot < tileIn_.size(); ++slot)
+    if (tileIn_[slot] != kNoTile)
+      sendTile(*planet_, int(slot), pyramid_.key(tileIn_[slot]), 0, int(s) - 1, 0, int(s) - 1);
+  const std::size_t old = tileIn_.size();
+  tileIn_.resize(slots, kNoTile);
+  lastNeeded_.resize(slots, 0);
+  for (std::size_t i = slots; i-- > old;) freeSlots_.push_back(std::uint32_t(i));
+  // Free slots are taken from the back: the lowest first.
+  std::sort(freeSlots_.begin(), freeSlots_.end(), std::greater<>());
+  slots_ = int(slots);
   return true;
 }
 
@@ -178,8 +203,12 @@ void HeightTileCache::request(const terrain::Mesh& mesh, const terrain::Camera& 
         stamp_[i] = stampValue_;
         needed_.push_back(i);
       }
-    if (needed_.size() <= std::size_t(slots_) || bias_ >= pyramid_.coarsest) break;
+    if (needed_.size() <= std::size_t(maxSlots_) || bias_ >= pyramid_.coarsest) break;
   }
+  if (needed_.size() > std::size_t(slots_))
+    grew_ = reserve(
+        std::min(std::size_t(maxSlots_), std::max(needed_.size(), 2 * std::size_t(slots_))));
+  if (!grew_) return;
   for (std::uint32_t i : needed_)
     if (slotOf_[i]) lastNeeded_[slotOf_[i] - 1u] = frame_;
   glBindTexture(GL_TEXTURE_2D_ARRAY, tiles_);
@@ -235,6 +264,7 @@ void HeightTileCache::sendPageTable() {
 bool HeightTileCache::sync(const terrain::Terrain& planet, const terrain::Mesh& mesh,
                            const terrain::Camera& camera, std::string& why) {
   lastUpload_ = 0;
+  grew_ = true;
   bool viewChanged = &mesh != mesh_ || mesh.generation != meshGeneration_ || !(camera == camera_);
   if (!tiles_ || planet_ != &planet || pyramid_.m != planet.grid().m()) {
     if (!allocate(planet, why)) return false;
@@ -249,6 +279,7 @@ bool HeightTileCache::sync(const terrain::Terrain& planet, const terrain::Mesh& 
       std::fill(tileIn_.begin(), tileIn_.end(), kNoTile);
       freeSlots_.resize(std::size_t(slots_));
       for (int i = 0; i < slots_; ++i) freeSlots_[std::size_t(i)] = std::uint32_t(slots_ - 1 - i);
+      std::fill(lastNeeded_.begin(), lastNeeded_.end(), 0);
       pageTableDirty_ = true;
       viewChanged = true;
     }
@@ -261,7 +292,7 @@ bool HeightTileCache::sync(const terrain::Terrain& planet, const terrain::Mesh& 
     camera_ = camera;
   }
   if (pageTableDirty_) sendPageTable();
-  if (glGetError() != GL_NO_ERROR) {
+  if (!grew_ || glGetError() != GL_NO_ERROR) {
     release();
     why = "the height tiles could not be sent";
     return false;

@@ -55,6 +55,7 @@ class HeightTileCache {
  private:
   void release();
   bool allocate(const terrain::Terrain& planet, std::string& why);
+  bool reserve(std::size_t slots);
   void request(const terrain::Mesh& mesh, const terrain::Camera& camera, int side);
   void sendTile(const terrain::Terrain& planet, int slot, const TileKey& key, int i0, int i1,
                 int j0, int j1);
@@ -64,7 +65,8 @@ class HeightTileCache {
   std::size_t budget_;
   unsigned tiles_ = 0, pageTable_ = 0;
   TilePyramid pyramid_;
-  int slots_ = 0;
+  int slots_ = 0, maxSlots_ = 0;  // layers of the array now, and what the budget allows
+  bool grew_ = true;              // false when growing the array failed (out of memory)
   const terrain::Terrain* planet_ = nullptr;
   std::uint64_t revision_ = 0;
   std::size_t lastUpload_ = 0, resident_ = 0;
