@@ -7,10 +7,11 @@
 // 1) through which the shader finds, for each pixel, the level its footprint asks for or the
 // nearest coarser one held. The coarsest two levels are always held.
 //
-// Memory is the budget whatever the grid (64 MiB by default: 977 tiles; a 640x480 view of the
-// demo's 4097^2 planet holds 21-130), against 4 B per vertex for a whole float texture (64 MiB
-// at 4097^2, 256 MiB at 8193^2, 1 GiB at 16385^2). After an edit only the changed texels of the
-// resident tiles are sent (terrain::Terrain::changedSince); a tile that becomes needed is sent
+// Memory is at most the budget whatever the grid (64 MiB by default: 977 tiles; the array starts
+// at 32 tiles and doubles as views need more: bench render's views of the 4097^2 planet need
+// 5-62), against 4 B per vertex for a whole float texture (64 MiB at 4097^2, 256 MiB at 8193^2,
+// 1 GiB at 16385^2). After an edit only the changed texels of the held tiles are sent
+// (terrain::Terrain::changedSince); a tile that becomes needed is sent
 // whole. Needs a current OpenGL 3.3 context.
 #include <cstddef>
 #include <cstdint>

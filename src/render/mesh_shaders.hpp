@@ -48,7 +48,7 @@ uniform vec3 sun;             // planet frame
 uniform vec3 cameraPosition;  // planet frame (only for the outward direction)
 uniform float contourInterval;  // 0: none
 uniform int wireOnly;
-uniform int perPixel;           // 1: shade from the height texture
+uniform int perPixel;           // 1: shade from the height tiles
 uniform sampler2DArray heightTiles;  // R32F tiles of the height pyramid, with a 1-texel apron
 uniform usampler2D pageTable;         // mip level L: per tile of pyramid level L, its layer + 1
 uniform float tileCells;              // cells per tile side

@@ -121,7 +121,7 @@ class PlanetRenderer {
   bool partialUploads_ = true;
   bool radialUp_ = false;
   std::size_t heightCacheBudget_ = std::size_t(64) << 20;
-  int failedSide_ = 0;  // a grid side the height texture could not hold
+  int failedSide_ = 0;  // a grid side the height tile cache could not hold
 };
 
 }  // namespace ps::render
