@@ -3,10 +3,12 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <array>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <sstream>
 
@@ -21,6 +23,7 @@
 #include "terrain/error_mesher.hpp"
 #include "terrain/screen_error.hpp"
 #include "test_terrains.hpp"
+#include "tin/tin_check.hpp"
 
 using namespace ps;
 namespace fs = std::filesystem;
@@ -230,7 +233,9 @@ void checkWrittenMeshes(const terrain::Terrain& t, const std::vector<double>& er
       const std::string what =
           label + " " + io::toString(format) + " at " + std::to_string(maxErr) + " m";
       EXPECT_LE(rep.meshedErrorM, maxErr) << what;
-      EXPECT_EQ(rep.triangles, mesh.triangleCount());
+      const terrain::Mesh welded = io::weldMesh(t, mesh);
+      EXPECT_EQ(rep.triangles, welded.triangleCount());
+      EXPECT_EQ(rep.vertices, welded.gridIndex.size());
       // The mesh the error hierarchy chose, in double: within what it was asked for.
       EXPECT_LE(terrain::measureTrueError(t, mesh), rep.meshedErrorM) << what;
       EXPECT_EQ(t.chart().hasPoleRows() ? testkit::conformityDefect(t, mesh)
@@ -241,9 +246,56 @@ void checkWrittenMeshes(const terrain::Terrain& t, const std::vector<double>& er
       const ReadMesh r = format == io::MeshFormat::kObj   ? readObj(file)
                          : format == io::MeshFormat::kPly ? readPly(file)
                                                           : readGlb(file);
-      ASSERT_EQ(r.positions.size(), mesh.gridIndex.size()) << what;
-      ASSERT_EQ(r.indices, mesh.indices) << what;
-      EXPECT_LE(writtenMeshError(t, mesh, r.positions), maxErr) << what;
+      ASSERT_EQ(r.positions.size(), welded.gridIndex.size()) << what;
+      ASSERT_EQ(r.indices, welded.indices) << what;
+      // Each vertex of the mesh before welding takes its welded vertex's written position.
+      std::map<std::uint64_t, std::size_t> writtenAt;
+      for (std::size_t i = 0; i < welded.gridIndex.size(); ++i) writtenAt[welded.gridIndex[i]] = i;
+      std::vector<Eigen::Vector3d> perVertex;
+      const auto side = std::uint64_t(t.grid().side());
+      for (const std::uint64_t gi : mesh.gridIndex) {
+        const core::GridPoint p = t.chart().canonical(int(gi % side), int(gi / side));
+        perVertex.push_back(
+            r.positions[writtenAt.at(std::uint64_t(p.v) * side + std::uint64_t(p.u))]);
+      }
+      EXPECT_LE(writtenMeshError(t, mesh, perVertex), maxErr) << what;
+      // Welded: a planet is a closed 2-manifold (Euler 2); a flat map a disc whose border edges
+      // lie on the grid's border.
+      std::vector<std::array<std::uint32_t, 3>> triangles;
+      std::size_t noArea = 0;
+      for (std::size_t k = 0; k + 2 < r.indices.size(); k += 3) {
+        triangles.push_back({r.indices[k], r.indices[k + 1], r.indices[k + 2]});
+        const Eigen::Vector3d &a = r.positions[r.indices[k]], &b = r.positions[r.indices[k + 1]],
+                              &c = r.positions[r.indices[k + 2]];
+        noArea += !((b - a).cross(c - a).norm() > 0);
+      }
+      const tin::MeshTopology topo = tin::meshTopology(r.positions.size(), triangles);
+      EXPECT_EQ(topo.nonManifoldEdges, 0u) << what;
+      EXPECT_EQ(topo.degenerate, 0u) << what;
+      EXPECT_EQ(noArea, 0u) << what;
+      EXPECT_EQ(topo.euler(), t.chart().radius() > 0 ? 2 : 1) << what;
+      if (t.chart().radius() > 0) {
+        EXPECT_EQ(topo.borderEdges, 0u) << what;
+      } else {
+        // Every edge used once runs along the grid's border.
+        std::map<std::pair<std::uint32_t, std::uint32_t>, int> uses;
+        for (const auto& tri : triangles)
+          for (int e = 0; e < 3; ++e) {
+            const std::uint32_t a = tri[std::size_t(e)], b = tri[std::size_t((e + 1) % 3)];
+            ++uses[{std::min(a, b), std::max(a, b)}];
+          }
+        const int m = t.grid().m();
+        for (const auto& [edge, count] : uses) {
+          if (count != 1) continue;
+          const std::uint64_t ga = welded.gridIndex[edge.first], gb = welded.gridIndex[edge.second];
+          const int au = int(ga % side), av = int(ga / side), bu = int(gb % side),
+                    bv = int(gb / side);
+          const bool alongBorder =
+              (au == bu && (au == 0 || au == m)) || (av == bv && (av == 0 || av == m));
+          EXPECT_TRUE(alongBorder)
+              << what << ": (" << au << "," << av << ")-(" << bu << "," << bv << ")";
+        }
+      }
       for (const auto& n : r.normals) ASSERT_NEAR(n.norm(), 1.0, 1e-5) << what;
     }
   }
@@ -277,25 +329,31 @@ TEST(IoExport, ZeroErrorFlatMeshIsTheFullGridAndExact) {
   EXPECT_EQ(terrain::measureTrueError(t, mesh), 0.0);
 }
 
-TEST(IoExport, GlbNormalsPointOutwardAndSeamTwinsShareThem) {
+// Normals point outward, and the seam and each pole are one vertex each (one normal there: no
+// shading seam), as Chart::canonical says.
+TEST(IoExport, GlbNormalsPointOutwardAndTheSeamIsOneVertex) {
   const auto t = testkit::bumpyTerrain(6, 2, 3000.0);
   const fs::path dir = freshDir("glbnormals");
   terrain::Mesh mesh;
   io::exportMesh(t, 5000.0, io::MeshFormat::kGlb, dir / "p.glb", &mesh);
   const ReadMesh r = readGlb(dir / "p.glb");
+  const terrain::Mesh welded = io::weldMesh(t, mesh);  // what the file holds
+  ASSERT_EQ(r.normals.size(), welded.gridIndex.size());
   const auto side = std::uint64_t(t.grid().side());
   const int m = t.grid().m();
-  std::map<int, Eigen::Vector3d> seam;
+  int seamVertices = 0, poleVertices = 0;
   for (std::size_t i = 0; i < r.normals.size(); ++i) {
-    const int u = int(mesh.gridIndex[i] % side), v = int(mesh.gridIndex[i] / side);
+    const int u = int(welded.gridIndex[i] % side), v = int(welded.gridIndex[i] / side);
     EXPECT_GT(r.normals[i].dot(t.chart().up(u, v)), 0.3) << "(" << u << "," << v << ")";
-    if (u == 0 || u == m) {
-      auto [it, fresh] = seam.try_emplace(v, r.normals[i]);
-      if (!fresh) {
-        EXPECT_LT((it->second - r.normals[i]).norm(), 1e-6) << "seam row " << v;
-      }
+    EXPECT_NE(u, m) << "column m is column 0";
+    seamVertices += u == 0 && v > 0 && v < m;
+    if (v == 0 || v == m) {
+      ++poleVertices;
+      EXPECT_EQ(u, 0);
     }
   }
+  EXPECT_GT(seamVertices, 0);
+  EXPECT_EQ(poleVertices, 2);
   fs::remove_all(dir);
 }
 

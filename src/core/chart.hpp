@@ -60,6 +60,16 @@ class Chart {
   // Rows v = 0 and v = m each collapse to a single point (the poles) when hasPoleRows().
   virtual bool hasPoleRows() const = 0;
 
+  // The one grid vertex that stands for every grid vertex at the same surface point as (u, v)
+  // (the topology as data: welded meshes, one key per point): on a seam the chart wraps, column
+  // m is column 0; on a pole row, every vertex is (0, v). Itself elsewhere.
+  GridPoint canonical(int u, int v) const {
+    const int m = grid_.m();
+    if (hasPoleRows() && (v == 0 || v == m)) return {0, v};
+    if (wrapsU() && u == m) return {0, v};
+    return {u, v};
+  }
+
   // Reference radius heights are measured from (0 for a flat chart).
   virtual double radius() const = 0;
   // Heights beyond +-heightLimit() are refused on load and saturate in edits. A sphere's is a

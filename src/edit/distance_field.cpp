@@ -44,8 +44,7 @@ void DistanceField::setCentre(core::GridPoint c) {
     throw core::InputError("centre vertex (u=" + std::to_string(c.u) + ", v=" +
                            std::to_string(c.v) + ") lies outside the " + grid_.label() + " grid");
   }
-  if (chart_->wrapsU() && c.u == m_) c.u = 0;
-  if (chart_->hasPoleRows() && (c.v == 0 || c.v == m_)) c.u = 0;
+  c = chart_->canonical(c.u, c.v);
   centre_ = c;
   if (latLong_) {
     zc_ = z_[std::size_t(c.v)];
@@ -56,8 +55,8 @@ void DistanceField::setCentre(core::GridPoint c) {
 }
 
 double DistanceField::genericDistance2(int u, int v) const {
-  if (chart_->hasPoleRows() && (v == 0 || v == m_)) u = 0;  // a pole row is one point
-  return (chart_->position(u, v, 0.0) - pc_).squaredNorm();
+  const core::GridPoint p = chart_->canonical(u, v);  // a pole row is one point
+  return (chart_->position(p.u, p.v, 0.0) - pc_).squaredNorm();
 }
 
 }  // namespace ps::edit

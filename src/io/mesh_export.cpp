@@ -16,80 +16,70 @@
 
 namespace ps::io {
 
-namespace {
-
-Eigen::Vector3d gridPosition(const terrain::Terrain& t, std::uint64_t gi) {
+terrain::Mesh weldMesh(const terrain::Terrain& t, const terrain::Mesh& mesh) {
+  terrain::Mesh out;
+  out.eye = mesh.eye;
+  out.generation = terrain::nextMeshGeneration();
   const auto side = std::uint64_t(t.grid().side());
-  const int u = int(gi % side), v = int(gi / side);
-  return t.chart().position(u, v, t.height(u, v));
+  std::unordered_map<std::uint64_t, std::uint32_t> welded;  // canonical grid index -> vertex
+  welded.reserve(mesh.gridIndex.size());
+  std::vector<std::uint32_t> vertexOf(mesh.gridIndex.size());
+  for (std::size_t i = 0; i < mesh.gridIndex.size(); ++i) {
+    const std::uint64_t gi = mesh.gridIndex[i];
+    const core::GridPoint p = t.chart().canonical(int(gi % side), int(gi / side));
+    const std::uint64_t key = std::uint64_t(p.v) * side + std::uint64_t(p.u);
+    const auto [it, fresh] = welded.try_emplace(key, std::uint32_t(out.gridIndex.size()));
+    if (fresh) {
+      out.gridIndex.push_back(key);
+      out.positions.push_back(
+          (t.chart().position(p.u, p.v, t.height(p.u, p.v)) - mesh.eye).cast<float>());
+    }
+    vertexOf[i] = it->second;
+  }
+  out.indices.reserve(mesh.indices.size());
+  for (std::size_t k = 0; k + 2 < mesh.indices.size(); k += 3) {
+    const std::uint32_t a = vertexOf[mesh.indices[k]], b = vertexOf[mesh.indices[k + 1]],
+                        c = vertexOf[mesh.indices[k + 2]];
+    if (a == b || b == c || c == a) continue;  // two vertices of one pole row: no area
+    out.indices.insert(out.indices.end(), {a, b, c});
+  }
+  return out;
 }
 
-// Seam twins and pole rows are one surface point: one key each.
-std::uint64_t canonicalVertex(const terrain::Terrain& t, std::uint64_t gi) {
-  const auto side = std::uint64_t(t.grid().side());
-  const std::uint64_t m = side - 1;
-  std::uint64_t u = gi % side, v = gi / side;
-  if (t.chart().hasPoleRows() && (v == 0 || v == m)) u = 0;
-  if (t.chart().wrapsU() && u == m) u = 0;
-  return v * side + u;
-}
-
-MeshData meshData(const terrain::Terrain& t, const terrain::Mesh& mesh, bool withNormals,
-                  std::string description) {
+MeshData weldedMeshData(const terrain::Terrain& t, const terrain::Mesh& mesh, bool withNormals,
+                        std::string description) {
+  const terrain::Mesh welded = weldMesh(t, mesh);
   MeshData out;
-  out.positions.reserve(mesh.gridIndex.size());
-  for (const auto gi : mesh.gridIndex) out.positions.push_back(gridPosition(t, gi));
-  if (withNormals) out.normals = vertexNormals(t, mesh);
-  out.indices = mesh.indices;
+  const auto side = std::uint64_t(t.grid().side());
+  out.positions.reserve(welded.gridIndex.size());
+  for (const std::uint64_t gi : welded.gridIndex) {
+    const int u = int(gi % side), v = int(gi / side);
+    out.positions.push_back(t.chart().position(u, v, t.height(u, v)));
+  }
+  out.indices = welded.indices;
+  if (withNormals) out.normals = areaWeightedNormals(out);
   out.description = std::move(description);
   return out;
 }
 
-}  // namespace
-
 void writeObj(const terrain::Terrain& terrain, const terrain::Mesh& mesh,
               const std::filesystem::path& path) {
-  writeObjFile(
-      meshData(terrain, mesh, false,
-               "PlanetSculpt view mesh: " + std::to_string(mesh.gridIndex.size()) + " vertices, " +
-                   std::to_string(mesh.triangleCount()) + " triangles, metres, planet frame"),
-      path);
-}
-
-std::vector<Eigen::Vector3f> vertexNormals(const terrain::Terrain& t, const terrain::Mesh& mesh) {
-  std::unordered_map<std::uint64_t, Eigen::Vector3d> sum;
-  sum.reserve(mesh.gridIndex.size());
-  for (std::size_t k = 0; k < mesh.triangleCount(); ++k) {
-    const std::uint64_t g[3] = {mesh.gridIndex[mesh.indices[3 * k]],
-                                mesh.gridIndex[mesh.indices[3 * k + 1]],
-                                mesh.gridIndex[mesh.indices[3 * k + 2]]};
-    const Eigen::Vector3d a = gridPosition(t, g[0]), b = gridPosition(t, g[1]),
-                          c = gridPosition(t, g[2]);
-    const Eigen::Vector3d n = (b - a).cross(c - a);  // |n| = twice the area
-    for (const auto gi : g) {
-      auto [it, fresh] = sum.try_emplace(canonicalVertex(t, gi), Eigen::Vector3d::Zero());
-      it->second += n;
-    }
-  }
-  std::vector<Eigen::Vector3f> out(mesh.gridIndex.size());
-  const auto side = std::uint64_t(t.grid().side());
-  for (std::size_t i = 0; i < out.size(); ++i) {
-    const std::uint64_t gi = mesh.gridIndex[i];
-    Eigen::Vector3d n = sum[canonicalVertex(t, gi)];
-    if (!(n.norm() > 0)) n = t.chart().up(int(gi % side), int(gi / side));
-    out[i] = n.normalized().cast<float>();
-  }
-  return out;
+  MeshData data = weldedMeshData(terrain, mesh, false, "");
+  data.description = "PlanetSculpt view mesh: " + std::to_string(data.positions.size()) +
+                     " vertices, " + std::to_string(data.indices.size() / 3) +
+                     " triangles, metres, planet frame";
+  writeObjFile(data, path);
 }
 
 void writePly(const terrain::Terrain& t, const terrain::Mesh& mesh,
               const std::filesystem::path& path) {
-  writePlyFile(meshData(t, mesh, true, "PlanetSculpt mesh, metres, planet frame (z up)"), path);
+  writePlyFile(weldedMeshData(t, mesh, true, "PlanetSculpt mesh, metres, planet frame (z up)"),
+               path);
 }
 
 void writeGlb(const terrain::Terrain& t, const terrain::Mesh& mesh,
               const std::filesystem::path& path, const std::string& extrasJson) {
-  writeGlbFile(meshData(t, mesh, true, ""), path, extrasJson);
+  writeGlbFile(weldedMeshData(t, mesh, true, ""), path, extrasJson);
 }
 
 std::string toString(MeshFormat f) {
@@ -150,26 +140,21 @@ MeshExportReport exportMesh(const terrain::Terrain& t, double maxErrorM, MeshFor
   }
   rep.meshedErrorM = maxErrorM - rep.roundingM;
   terrain::Mesh mesh = terrain::meshToError(t, rep.meshedErrorM);
-  rep.vertices = mesh.gridIndex.size();
-  rep.triangles = mesh.triangleCount();
-  switch (format) {
-    case MeshFormat::kObj:
-      writeObj(t, mesh, path);
-      break;
-    case MeshFormat::kPly:
-      writePly(t, mesh, path);
-      break;
-    case MeshFormat::kGlb: {
-      const nlohmann::json extras = {
-          {"planetsculpt",
-           {{"chart", t.chart().name()},
-            {"max_error_m", maxErrorM},
-            {"units", "m"},
-            {"frame", "planet frame rotated to +Y up: (x, y, z) -> (x, z, -y)"}}}};
-      writeGlb(t, mesh, path, extras.dump());
-      break;
-    }
-  }
+  // Counted as written: welded by the chart's topology (the pole rows' triangles of no area gone).
+  const MeshData data = weldedMeshData(
+      t, mesh, format != MeshFormat::kObj,
+      format == MeshFormat::kObj
+          ? "PlanetSculpt mesh to " + std::to_string(maxErrorM) + " m, metres, planet frame"
+          : "PlanetSculpt mesh, metres, planet frame (z up)");
+  rep.vertices = data.positions.size();
+  rep.triangles = data.indices.size() / 3;
+  const nlohmann::json extras = {
+      {"planetsculpt",
+       {{"chart", t.chart().name()},
+        {"max_error_m", maxErrorM},
+        {"units", "m"},
+        {"frame", "planet frame rotated to +Y up: (x, y, z) -> (x, z, -y)"}}}};
+  writeMeshFile(data, format, path, format == MeshFormat::kGlb ? extras.dump() : "{}");
   if (meshOut) *meshOut = std::move(mesh);
   return rep;
 }

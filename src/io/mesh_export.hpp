@@ -15,10 +15,17 @@ namespace ps::io {
 void writeObj(const terrain::Terrain& terrain, const terrain::Mesh& mesh,
               const std::filesystem::path& path);
 
-// Unit normal per mesh vertex: the area-weighted sum of its triangles' normals, with seam twins
-// and each pole row counted as one vertex, so shading is continuous across the seam.
-std::vector<Eigen::Vector3f> vertexNormals(const terrain::Terrain& terrain,
-                                           const terrain::Mesh& mesh);
+// A tessellated mesh welded by the chart's topology, as every mesh file is written: the grid
+// vertices at one surface point (core::Chart::canonical: the seam's twins, a pole row) are one
+// vertex (its canonical grid index), and triangles that weld to a segment (two vertices of a
+// pole row) are dropped, so a whole planet is a closed 2-manifold (each edge in two triangles,
+// Euler characteristic 2).
+terrain::Mesh weldMesh(const terrain::Terrain& terrain, const terrain::Mesh& mesh);
+
+// weldMesh's result for the writers: positions in metres, planet frame, recomputed in double
+// from the grid; `withNormals`: unit, area-weighted, one per vertex.
+MeshData weldedMeshData(const terrain::Terrain& terrain, const terrain::Mesh& mesh,
+                        bool withNormals, std::string description);
 
 // Binary little-endian PLY: float x y z nx ny nz per vertex (metres, planet frame, z up) and
 // int triangles. Atomic.
@@ -54,7 +61,8 @@ struct MeshExportReport {
 // mesh is built by terrain::meshToError at (maxErrorM - rounding), so that after the format
 // rounds the coordinates every full-resolution vertex still lies within maxErrorM of the
 // written surface. Throws core::InputError when maxErrorM is not above the rounding.
-// `meshOut`, when given, receives the mesh that was written.
+// `meshOut`, when given, receives the mesh before welding (weldMesh of it is what was written;
+// the report counts the welded vertices and triangles).
 MeshExportReport exportMesh(const terrain::Terrain& terrain, double maxErrorM, MeshFormat format,
                             const std::filesystem::path& path, terrain::Mesh* meshOut = nullptr);
 
