@@ -12,6 +12,7 @@
 // terrain), and then only its changed 4 KiB chunks (render/changed_ranges.hpp).
 #include <Eigen/Core>
 #include <cstdint>
+#include <memory>
 #include <opencv2/core.hpp>
 #include <optional>
 #include <string>
@@ -34,6 +35,12 @@ struct RenderStyle {
   bool contours = false;
   double contourIntervalM = 1000;
   Eigen::Vector3d sun = Eigen::Vector3d(1, 1, 1).normalized();  // planet frame, toward the sun
+  // The AR view only, on a spherical planet (render/atmosphere_passes.hpp): the planet's soft
+  // shadow on the board it stands on (the plane p . boardUp = -R, boardUp a unit vector in the
+  // planet frame: +z unless the planet is turned on its board) and a thin atmosphere rim.
+  bool boardShadow = false;
+  bool atmosphere = false;
+  Eigen::Vector3d boardUp = Eigen::Vector3d::UnitZ();
 };
 
 // The edit cursor: the control vertex and the deformation radius r_d (planet metres).
@@ -55,6 +62,8 @@ struct RenderStats {
   std::size_t heightUploadBytes = 0;   // height texels sent by the last frame (only changes)
   std::string shadingNote;             // why per-pixel shading is off, when it is
 };
+
+class AtmospherePasses;
 
 class PlanetRenderer {
  public:
@@ -100,6 +109,9 @@ class PlanetRenderer {
                  const terrain::Camera& camera, const Eigen::Matrix4d& clip,
                  const Eigen::Vector3f& colour, bool depthTest);
   cv::Mat readBack() const;
+  // The board shadow and the atmosphere rim, when `style` asks for them (after the background,
+  // before the planet).
+  void drawBoardShadowAndRim(const terrain::Camera& camera, double R, const RenderStyle& style);
 
   Gl* gl_;
   RenderStats stats_;
@@ -108,7 +120,8 @@ class PlanetRenderer {
   std::size_t uploadedIndices_ = 0;
   bool partialUploads_ = true;
   bool wrapsU_ = false, radialUp_ = false;
-  int failedSide_ = 0;  // a grid side the height texture could not hold
+  int failedSide_ = 0;                            // a grid side the height texture could not hold
+  std::unique_ptr<AtmospherePasses> atmosphere_;  // made at the first frame that asks for it
 };
 
 }  // namespace ps::render
