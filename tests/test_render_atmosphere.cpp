@@ -138,8 +138,9 @@ TEST(RenderAtmosphere, TheBoardShadowFallsAwayFromTheSun) {
 // The camera 5 R from the centre, looking at it: the silhouette is a circle about the principal
 // point, and a pixel r from it along the image's x sees the ray whose distance from the centre
 // is b = 5 R sin(atan(r / fx)). With the sun to the camera's right, the pixel at b = 1.012 R
-// (about 3 px outside the silhouette, on the lit side) turns bluer and brighter; b = 1.12 R
-// (3 glow widths out) and b = 0.8 R (the planet) keep their colour exactly.
+// (about 3 px outside the silhouette, on the lit side) turns bluer and brighter, and fainter so
+// all round; b = 1.12 R (3 glow widths out) and b = 0.8 R (the planet) keep their colour
+// exactly.
 TEST(RenderAtmosphere, TheRimIsAThinGlowOutsideTheSilhouette) {
   SKIP_WITHOUT_GL();
   const auto planet = smoothPlanet(8);
@@ -176,6 +177,13 @@ TEST(RenderAtmosphere, TheRimIsAThinGlowOutsideTheSilhouette) {
     EXPECT_EQ(at(with, far), at(without, far)) << "side " << side;
     EXPECT_EQ(at(with, planetPx), at(without, planetPx)) << "side " << side;
     EXPECT_NE(at(without, planetPx), cv::Vec3b(128, 128, 128)) << "the planet is there";
+  }
+  // All round the silhouette, night side included, the glow is there (faint where unlit).
+  for (int k = 0; k < 16; ++k) {
+    const double phi = 2 * M_PI * k / 16, r = cam.fx * std::tan(std::asin(1.012 / distance));
+    const Eigen::Vector2d px(cam.cx + r * std::cos(phi), cam.cy + r * std::sin(phi));
+    EXPECT_GT(int(at(with, px)[0]), 128 + 4) << "at " << px.transpose();
+    EXPECT_EQ(at(without, px), cv::Vec3b(128, 128, 128)) << "at " << px.transpose();
   }
 }
 

@@ -61,6 +61,17 @@ std::array<float, 16> columnMajor(const Eigen::Matrix4d& m) {
   return a;
 }
 
+// Clip space for a pass's quad, whose corners lie between `nearest` and `farthest` along the
+// camera's axis (farthest > 0). Depth is neither tested nor written: the planes only need to
+// hold the quad's visible part, with room to spare (a far plane at the corners themselves would
+// clip them in float; near / far >= 1e-4 keeps the depth mapping well within float).
+Eigen::Matrix4d overlayClip(const terrain::Camera& camera, double nearest, double farthest) {
+  const double farZ = 2 * farthest;
+  const double nearZ = std::max(farZ * 1e-4, 0.5 * nearest);
+  return clipFromEyeRelative(clipFromCamera(camera, nearZ, farZ), camera.rotation,
+                             Eigen::Vector3d::Zero());
+}
+
 // Blending and depth as the passes need them, and back as renderAR keeps them.
 struct OverlayState {
   OverlayState(GLenum source, GLenum destination) {
@@ -95,7 +106,6 @@ AtmospherePasses::AtmospherePasses() {
   glVertexAttribPointer(1, 3, GL_FLOAT, GL_FALSE, 6 * sizeof(float),
                         reinterpret_cast<const void*>(3 * sizeof(float)));
   glEnableVertexAttribArray(1);
-  glGenVertexArrays(1, &emptyVao_);
   glBindVertexArray(0);
   if (glGetError() != GL_NO_ERROR) throw std::runtime_error("renderer: OpenGL setup failed");
 }
@@ -104,8 +114,7 @@ AtmospherePasses::~AtmospherePasses() {
   glDeleteProgram(shadowProgram_);
   glDeleteProgram(rimProgram_);
   glDeleteBuffers(1, &quadBuffer_);
-  const GLuint arrays[] = {quadVao_, emptyVao_};
-  glDeleteVertexArrays(2, arrays);
+  glDeleteVertexArrays(1, &quadVao_);
 }
 
 void AtmospherePasses::drawBoardShadow(const terrain::Camera& camera, double R,
@@ -140,11 +149,7 @@ void AtmospherePasses::drawBoardShadow(const terrain::Camera& camera, double R,
     }
   }
   if (!(farthest > 0)) return;  // the board's patch is behind the camera
-  // Depth is neither tested nor written: the planes only need to hold the quad's visible part.
-  const double farZ = 1.01 * farthest;
-  const double nearZ = std::max(farZ * 1e-6, 0.5 * nearest);
-  const Eigen::Matrix4d clip = clipFromEyeRelative(clipFromCamera(camera, nearZ, farZ),
-                                                   camera.rotation, Eigen::Vector3d::Zero());
+  const Eigen::Matrix4d clip = overlayClip(camera, nearest, farthest);
   const OverlayState state(GL_ZERO, GL_SRC_COLOR);  // video x (1 - strength * shadow)
   glUseProgram(shadowProgram_);
   const auto m = columnMajor(clip);
@@ -169,7 +174,26 @@ void AtmospherePasses::drawRim(const terrain::Camera& camera, double R, const Ei
                                const RimLook& look) {
   if (!(R > 0)) return;
   const Eigen::Vector3d eye = camera.eye / R;
-  if (!(eye.norm() > 1 + look.width)) return;  // inside the atmosphere: no rim to see
+  const double D = eye.norm(), outer = 1 + look.width;
+  if (!(D > outer)) return;  // inside the atmosphere: no rim to see
+  // The glow's silhouette cone from the eye (half-angle asin(outer / D)) cut by the plane through
+  // the centre across the view: a circle of radius D tan(angle), held by a square of that
+  // half-side. Only the pixels inside it run the fragment shader.
+  const Eigen::Vector3d axis = -eye / D;
+  const Eigen::Vector3d e1 = axis.unitOrthogonal(), e2 = axis.cross(e1);
+  const double half = 1.02 * D * outer / std::sqrt(D * D - outer * outer);
+  std::array<float, 24> vertices{};
+  double nearest = std::numeric_limits<double>::infinity(), farthest = 0;
+  for (std::size_t i = 0; i < 4; ++i) {
+    const double a = (i & 1) ? half : -half, b = (i & 2) ? half : -half;
+    const Eigen::Vector3d rel = R * (a * e1 + b * e2) - camera.eye;  // double, then float
+    const double z = (camera.rotation * rel).z();
+    nearest = std::min(nearest, z);
+    farthest = std::max(farthest, z);
+    for (int k = 0; k < 3; ++k) vertices[6 * i + std::size_t(k)] = float(rel[k]);
+  }
+  if (!(farthest > 0)) return;
+  const Eigen::Matrix4d clip = overlayClip(camera, nearest, farthest);
   Eigen::Matrix3d K = Eigen::Matrix3d::Identity();
   K(0, 0) = camera.fx;
   K(1, 1) = camera.fy;
@@ -181,6 +205,9 @@ void AtmospherePasses::drawRim(const terrain::Camera& camera, double R, const Ei
     for (int r = 0; r < 3; ++r) ray[std::size_t(3 * c + r)] = float(rayFromPixel(r, c));
   const OverlayState state(GL_SRC_ALPHA, GL_ONE_MINUS_SRC_ALPHA);
   glUseProgram(rimProgram_);
+  const auto m = columnMajor(clip);
+  glUniformMatrix4fv(glGetUniformLocation(rimProgram_, "clipFromEyeRelative"), 1, GL_FALSE,
+                     m.data());
   glUniformMatrix3fv(glGetUniformLocation(rimProgram_, "rayFromPixel"), 1, GL_FALSE, ray.data());
   glUniform3f(glGetUniformLocation(rimProgram_, "eye"), float(eye.x()), float(eye.y()),
               float(eye.z()));
@@ -191,8 +218,10 @@ void AtmospherePasses::drawRim(const terrain::Camera& camera, double R, const Ei
               look.colour.z());
   glUniform1f(glGetUniformLocation(rimProgram_, "peak"), float(look.peak));
   glUniform1f(glGetUniformLocation(rimProgram_, "width"), float(look.width));
-  glBindVertexArray(emptyVao_);
-  glDrawArrays(GL_TRIANGLES, 0, 3);
+  glBindVertexArray(quadVao_);
+  glBindBuffer(GL_ARRAY_BUFFER, quadBuffer_);
+  glBufferData(GL_ARRAY_BUFFER, GLsizeiptr(sizeof vertices), vertices.data(), GL_STREAM_DRAW);
+  glDrawArrays(GL_TRIANGLE_STRIP, 0, 4);
 }
 
 }  // namespace ps::render

@@ -43,7 +43,7 @@ class AtmospherePasses {
 
  private:
   unsigned shadowProgram_ = 0, rimProgram_ = 0;
-  unsigned quadVao_ = 0, quadBuffer_ = 0, emptyVao_ = 0;
+  unsigned quadVao_ = 0, quadBuffer_ = 0;  // the pass's quad: eye-relative, / R
 };
 
 }  // namespace ps::render

@@ -38,12 +38,12 @@ void main() {
 }
 )";
 
-// The atmosphere rim: one triangle over the screen.
+// The atmosphere rim: a square through the planet's centre, facing the eye, that covers the
+// glow's silhouette (positions relative to the camera eye); the pixels it covers say the rest.
 inline constexpr const char* kRimVertex = R"(#version 330 core
-void main() {
-  vec2 p = vec2(float((gl_VertexID & 1) << 2) - 1.0, float((gl_VertexID & 2) << 1) - 1.0);
-  gl_Position = vec4(p, 0.0, 1.0);
-}
+layout(location = 0) in vec3 position;
+uniform mat4 clipFromEyeRelative;
+void main() { gl_Position = clipFromEyeRelative * vec4(position, 1.0); }
 )";
 
 // For each pixel the view ray eye + t * d (planet frame, / R); b: its distance from the planet's
