@@ -441,6 +441,15 @@ def group_errors():
                        capture_output=True, text=True)
     if p.returncode <= 0:
         fail("a negative width was accepted")
+    # The AR frames' sun: two finite numbers AZ,EL with the elevation in -90..90, else a refusal
+    # that names the option, before anything is replayed.
+    for sun in ("45", "45,nan", "1,2,3", "north,30", "10,95", "10,-91"):
+        p = subprocess.run([EXE, "replay", os.path.join(SRC, "data", "demo.mkv"), "--calib", CALIB,
+                            "--sun", sun, "--out", out("sun")], capture_output=True, text=True)
+        if p.returncode <= 0 or "--sun" not in p.stderr:
+            fail(f"--sun {sun} was not refused by name: {p.returncode} {p.stderr}")
+    if os.path.exists(out("sun")):
+        fail("a refused --sun still wrote its output folder")
 
 
 if __name__ == "__main__":

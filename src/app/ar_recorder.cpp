@@ -52,6 +52,13 @@ void ArRecorder::onFrame(const replay::FrameContext& f, const Eigen::Vector3d& f
     const auto& mesh = tessellator_.tessellate(f.planet, cam, ts);
     render::RenderStyle style;
     style.wireframe = settings_.wireframe;
+    // The board's frame in the planet's: the planet frame is the board's turned by the user's
+    // spin and tilt (replay/replay.hpp), when a session sidecar turned it.
+    const Eigen::Matrix3d planetFromBoard = f.planetInCamera->R.transpose() * f.scene.planet.pose.R;
+    style.sun = planetFromBoard * settings_.sun.normalized();
+    style.boardUp = planetFromBoard.col(2);
+    style.boardShadow = settings_.boardShadow;
+    style.atmosphere = settings_.atmosphere;
     std::optional<render::Cursor> cursor;
     if (f.control) {
       cursor = render::Cursor{*f.control, f.toolRadius};

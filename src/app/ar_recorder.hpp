@@ -25,6 +25,10 @@ struct ArRecorderSettings {
   double distMaxPx = 1.0;
   std::size_t triangleBudget = 70000;
   bool wireframe = false;
+  // The sun in the board's frame (x, y on the board the planet stands on, z up from it), the
+  // planet's shadow on the board and the atmosphere rim (render/atmosphere_passes.hpp).
+  Eigen::Vector3d sun = Eigen::Vector3d(1, 1, 1).normalized();
+  bool boardShadow = true, atmosphere = true;
 };
 
 class ArRecorder {

@@ -6,6 +6,7 @@
 
 #include "core/grid.hpp"
 #include "core/input_error.hpp"
+#include "render/sun.hpp"
 #include "tracking/marker_layout.hpp"
 
 namespace ps::app {
@@ -72,6 +73,11 @@ void ReplayCli::addOptions(CLI::App* sub) {
   sub->add_flag("--no-settle", noSettle, "Displace: do not let the sand settle");
   sub->add_option("--max-frames", o.maxFrames, "Stop after this many frames (0: all)");
   sub->add_flag("--no-filter", noFilter, "Use raw poses (no One Euro filters)");
+  sub->add_option("--sun", sun,
+                  "AR frames: the sun's azimuth (from the board's +x toward +y) and elevation "
+                  "above the board, AZ,EL in degrees (default 45,35.26)");
+  sub->add_flag("--no-shadow", noShadow, "AR frames: no shadow of the planet on the board");
+  sub->add_flag("--no-atmosphere", noAtmosphere, "AR frames: no atmosphere rim");
 }
 
 void ReplayCli::apply() {
@@ -92,6 +98,9 @@ void ReplayCli::apply() {
   o.scene.useToolLayout(
       toolLayout == "flat" ? nullptr : layoutFrom(toolLayout, "cube", "markers/tool-cube.json"));
   job.gridLevel = core::GridSize::fromSide(grid).n();
+  if (!sun.empty()) job.sun = render::sunDirection(render::parseSunAngles(sun, "--sun"));
+  job.boardShadow = !noShadow;
+  job.atmosphere = !noAtmosphere;
   o.validate();
   // What a session sidecar replaces (app/replay_job.hpp), when typed.
   for (const char* name :

@@ -165,6 +165,9 @@ std::unique_ptr<ArRecorder> makeRecorder(const ReplayJob& job, std::string& noRe
   ArRecorderSettings rs;
   if (job.render) rs.frameDir = job.out / "ar";
   rs.every = job.renderEvery;
+  rs.sun = job.sun;
+  rs.boardShadow = job.boardShadow;
+  rs.atmosphere = job.atmosphere;
   rs.showcase = job.pictures;
   try {
     return std::make_unique<ArRecorder>(rs);

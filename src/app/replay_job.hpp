@@ -2,6 +2,7 @@
 // A replay from files to files, shared by `planetsculpt replay` and `planetsculpt demo`: loads
 // the video, calibration and planet (or makes the default one), replays (replay/replay.hpp), and
 // writes the sculpted planet, its heightmap, the logs, a summary and (optionally) pictures.
+#include <Eigen/Core>
 #include <cstdint>
 #include <filesystem>
 #include <nlohmann/json.hpp>
@@ -27,6 +28,11 @@ struct ReplayJob {
   // headless OpenGL; an error when there is none).
   bool render = false;
   int renderEvery = 1;
+  // The AR frames' light (render/atmosphere_passes.hpp): the sun in the board's frame (x, y on
+  // the board, z up from it; `--sun AZ,EL`), the planet's shadow on the board and the atmosphere
+  // rim (`--no-shadow`, `--no-atmosphere`).
+  Eigen::Vector3d sun = Eigen::Vector3d(1, 1, 1).normalized();
+  bool boardShadow = true, atmosphere = true;
   // The haptic force path run offline beside the replay (forces only: the tool's edits stay the
   // replay's): OUT/forces.csv, one row per 1 kHz tick (haptics/force_log.hpp).
   bool forces = true;

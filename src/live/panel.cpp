@@ -227,6 +227,9 @@ float drawPanel(PanelSettings& s, PanelActions& a, const PanelStatus& st) {
   ImGui::Checkbox("facets (F)", &s.facets);
   ImGui::SliderFloat("sun longitude", &s.sunLonDeg, -180, 180, "%.0f deg");
   ImGui::SliderFloat("sun latitude", &s.sunLatDeg, -90, 90, "%.0f deg");
+  ImGui::Checkbox("board shadow", &s.boardShadow);
+  ImGui::SameLine(ImGui::GetWindowWidth() * 0.5f);
+  ImGui::Checkbox("atmosphere", &s.atmosphere);
   ImGui::SliderFloat("spin (Left/Right)", &s.spinDeg, -180, 180, "%.0f deg");
   ImGui::SliderFloat("tilt (Up/Down)", &s.tiltDeg, -90, 90, "%.0f deg");
   if (ImGui::Button("reset")) s.spinDeg = s.tiltDeg = 0;

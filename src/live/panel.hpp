@@ -28,7 +28,8 @@ struct PanelSettings {
   // Where the light comes from, in the planet's frame (longitude, latitude of the sub-solar
   // point): 45, 35 is the renderer's default sun (1, 1, 1).
   float sunLonDeg = 45, sunLatDeg = 35.26f;
-  float planetSizeCm = 6;  // the planet's radius on its marker, scaled by hand
+  bool boardShadow = true, atmosphere = true;  // the planet's shadow on the board, the rim
+  float planetSizeCm = 6;                      // the planet's radius on its marker, scaled by hand
   bool operator==(const PanelSettings&) const = default;
 };
 

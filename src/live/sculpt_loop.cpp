@@ -204,6 +204,11 @@ class SculptLoop {
     const double lon = panel_.sunLonDeg * M_PI / 180, lat = panel_.sunLatDeg * M_PI / 180;
     style.sun = {std::cos(lat) * std::cos(lon), std::cos(lat) * std::sin(lon), std::sin(lat)};
     style.contours = panel_.contours;
+    // The board in the planet frame: the planet frame is the board's turned by the panel's spin
+    // and tilt (replay/replay.hpp, FrameStepper::setUserRotation).
+    style.boardUp = stepper_.userRotation().row(2).transpose();
+    style.boardShadow = panel_.boardShadow;
+    style.atmosphere = panel_.atmosphere;
     std::optional<terrain::Camera> cam;
     const terrain::Mesh* mesh = &empty_;
     if (pose_) {

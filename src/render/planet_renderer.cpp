@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "io/heightmap_export.hpp"
+#include "render/atmosphere_passes.hpp"
 #include "render/changed_ranges.hpp"
 #include "render/height_tile_cache.hpp"
 #include "render/mesh_shaders.hpp"
@@ -426,6 +427,15 @@ void PlanetRenderer::present(int x, int y, int width, int height) const {
   glBindFramebuffer(GL_FRAMEBUFFER, 0);
 }
 
+void PlanetRenderer::drawBoardShadowAndRim(const terrain::Camera& camera, double R,
+                                           const RenderStyle& style) {
+  if (!(style.boardShadow || style.atmosphere) || !(R > 0)) return;
+  if (!atmosphere_) atmosphere_ = std::make_unique<AtmospherePasses>();
+  const Eigen::Vector3d sun = style.sun.normalized(), up = style.boardUp.normalized();
+  if (style.boardShadow) atmosphere_->drawBoardShadow(camera, R, sun, up);
+  if (style.atmosphere) atmosphere_->drawRim(camera, R, sun);
+}
+
 cv::Mat PlanetRenderer::renderAR(const cv::Mat& background, const terrain::Terrain& planet,
                                  const terrain::Mesh& mesh, const terrain::Camera& camera,
                                  const RenderStyle& style, const std::optional<Cursor>& cursor) {
@@ -463,6 +473,7 @@ cv::Mat PlanetRenderer::renderAR(const cv::Mat& background, const terrain::Terra
     glDrawArrays(GL_TRIANGLES, 0, 3);
     glBindVertexArray(0);
   }
+  drawBoardShadowAndRim(camera, planet.chart().radius(), style);
   glEnable(GL_DEPTH_TEST);
   glDepthFunc(GL_LESS);
   glEnable(GL_CULL_FACE);

@@ -12,6 +12,7 @@
 // terrain), and then only its changed 4 KiB chunks (render/changed_ranges.hpp).
 #include <Eigen/Core>
 #include <cstdint>
+#include <memory>
 #include <opencv2/core.hpp>
 #include <optional>
 #include <string>
@@ -38,6 +39,12 @@ struct RenderStyle {
   // full resolution to blue coarsest), red where that level is coarser than its footprint asks
   // (the tile it wanted is not held).
   bool showTileLevels = false;
+  // The AR view only, on a spherical planet (render/atmosphere_passes.hpp): the planet's soft
+  // shadow on the board it stands on (the plane p . boardUp = -R, boardUp a unit vector in the
+  // planet frame: +z unless the planet is turned on its board) and a thin atmosphere rim.
+  bool boardShadow = false;
+  bool atmosphere = false;
+  Eigen::Vector3d boardUp = Eigen::Vector3d::UnitZ();
 };
 
 // The edit cursor: the control vertex and the deformation radius r_d (planet metres).
@@ -62,6 +69,8 @@ struct RenderStats {
   int heightLevelBias = 0;             // levels made coarser to fit the cache (0: none)
   std::string shadingNote;             // why per-pixel shading is off, when it is
 };
+
+class AtmospherePasses;
 
 class PlanetRenderer {
  public:
@@ -112,6 +121,9 @@ class PlanetRenderer {
                  const terrain::Camera& camera, const Eigen::Matrix4d& clip,
                  const Eigen::Vector3f& colour, bool depthTest);
   cv::Mat readBack() const;
+  // The board shadow and the atmosphere rim, when `style` asks for them (after the background,
+  // before the planet).
+  void drawBoardShadowAndRim(const terrain::Camera& camera, double R, const RenderStyle& style);
 
   Gl* gl_;
   RenderStats stats_;
@@ -121,7 +133,8 @@ class PlanetRenderer {
   bool partialUploads_ = true;
   bool radialUp_ = false;
   std::size_t heightCacheBudget_ = std::size_t(64) << 20;
-  int failedSide_ = 0;  // a grid side the height tile cache could not hold
+  int failedSide_ = 0;                            // a grid side the height tile cache could not hold
+  std::unique_ptr<AtmospherePasses> atmosphere_;  // made at the first frame that asks for it
 };
 
 }  // namespace ps::render
