@@ -16,12 +16,12 @@ inline std::string conformityDefect(const terrain::Terrain& t, const terrain::Me
   const auto g = t.grid();
   const auto side = std::uint64_t(g.side());
   const int m = g.m();
+  // One id per surface point, as the chart glues its grid (seam, pole rows, folded sides).
   auto id = [&](std::uint64_t gi) -> std::int64_t {
-    int u = int(gi % side), v = int(gi / side);
-    if (v == 0) return -1;
-    if (v == m) return -2;
-    if (u == m) u = 0;
-    return std::int64_t(v) * std::int64_t(side) + u;
+    const core::GridPoint p = t.chart().canonical(int(gi % side), int(gi / side));
+    if (t.chart().hasPoleRows() && p.v == 0) return -1;
+    if (t.chart().hasPoleRows() && p.v == m) return -2;
+    return std::int64_t(p.v) * std::int64_t(side) + p.u;
   };
   std::map<std::pair<std::int64_t, std::int64_t>, int> directed;
   for (std::size_t k = 0; k < mesh.triangleCount(); ++k) {

@@ -8,13 +8,14 @@
 #include <vector>
 
 #include "core/latlong_chart.hpp"
+#include "core/octahedral_chart.hpp"
 #include "terrain/terrain.hpp"
 
 namespace ps::testkit {
 
 inline constexpr double kEarthRadius = 6372790.0;
 
-inline std::vector<float> bumpyHeights(const core::LatLongChart& chart, std::uint32_t seed,
+inline std::vector<float> bumpyHeights(const core::Chart& chart, std::uint32_t seed,
                                        double amplitude, int bumps = 40) {
   std::mt19937 rng(seed);
   std::uniform_real_distribution<double> uni(-1.0, 1.0);
@@ -33,7 +34,7 @@ inline std::vector<float> bumpyHeights(const core::LatLongChart& chart, std::uin
   std::vector<float> h(g.count());
   for (int v = 0; v <= g.m(); ++v) {
     for (int u = 0; u <= g.m(); ++u) {
-      const Eigen::Vector3d d = chart.direction(u, v);
+      const Eigen::Vector3d d = chart.up(u, v);
       double x = 0.15 * amplitude * std::sin(23 * d.x() + 7) * std::cos(19 * d.y() - 3) *
                  std::sin(29 * d.z());
       for (const Bump& b : list)
@@ -52,6 +53,18 @@ inline terrain::Terrain bumpyTerrain(int n, std::uint32_t seed = 1, double ampli
                                      terrain::ErrorRule rule = terrain::ErrorRule::kHybridExact) {
   auto chart = earthChart(n);
   return terrain::Terrain(chart, bumpyHeights(*chart, seed, amplitude), rule);
+}
+
+inline std::shared_ptr<const core::OctahedralChart> octahedralChart(
+    int n, core::OctahedralChart::Mapping mapping = core::OctahedralChart::Mapping::kEqualArea) {
+  return std::make_shared<core::OctahedralChart>(core::GridSize(n), kEarthRadius, mapping);
+}
+
+inline terrain::Terrain bumpyOctahedralTerrain(
+    int n, std::uint32_t seed = 1, double amplitude = 8000.0,
+    core::OctahedralChart::Mapping mapping = core::OctahedralChart::Mapping::kEqualArea) {
+  auto chart = octahedralChart(n, mapping);
+  return terrain::Terrain(chart, bumpyHeights(*chart, seed, amplitude));
 }
 
 }  // namespace ps::testkit

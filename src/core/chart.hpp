@@ -62,13 +62,32 @@ class Chart {
 
   // The one grid vertex that stands for every grid vertex at the same surface point as (u, v)
   // (the topology as data: welded meshes, one key per point): on a seam the chart wraps, column
-  // m is column 0; on a pole row, every vertex is (0, v). Itself elsewhere.
-  GridPoint canonical(int u, int v) const {
+  // m is column 0; on a pole row, every vertex is (0, v); a chart that glues its sides another
+  // way (core/octahedral_chart.hpp) says so here. Itself elsewhere.
+  virtual GridPoint canonical(int u, int v) const {
     const int m = grid_.m();
     if (hasPoleRows() && (v == 0 || v == m)) return {0, v};
     if (wrapsU() && u == m) return {0, v};
     return {u, v};
   }
+
+  // The grid vertices at (u, v)'s surface point, itself included, into out (at most 4; the
+  // count is returned): seam twins, a folded side's mirror, a point's corners. A pole row (all
+  // m + 1 vertices of row 0 or m when hasPoleRows()) is the one case not listed here: it is one
+  // point, and canonical() says so.
+  virtual int twins(int u, int v, GridPoint out[4]) const {
+    const int m = grid_.m();
+    out[0] = {u, v};
+    if (wrapsU() && (u == 0 || u == m)) {
+      out[1] = {m - u, v};
+      return 2;
+    }
+    return 1;
+  }
+
+  // Whether the grid's sides are glued to themselves mirrored (twins() lists the pairs): then
+  // layers that keep per-vertex state combine it across each pair, as they do across a seam.
+  virtual bool foldsSides() const { return false; }
 
   // Reference radius heights are measured from (0 for a flat chart).
   virtual double radius() const = 0;

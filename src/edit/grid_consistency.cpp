@@ -11,8 +11,9 @@ void applyToVertex(const core::Chart& chart, std::span<float> heights, int u, in
     std::fill_n(heights.begin() + std::ptrdiff_t(g.index(0, v)), g.side(), h);
     return;
   }
-  heights[g.index(u, v)] = h;
-  if (chart.wrapsU() && (u == 0 || u == m)) heights[g.index(m - u, v)] = h;
+  core::GridPoint twins[4];
+  const int n = chart.twins(u, v, twins);
+  for (int k = 0; k < n; ++k) heights[g.index(twins[k].u, twins[k].v)] = h;
 }
 
 void enforceConsistency(const core::Chart& chart, std::span<float> heights,
@@ -34,6 +35,23 @@ void enforceConsistency(const core::Chart& chart, std::span<float> heights,
       const float h = heights[g.index(0, v)];
       std::fill_n(heights.begin() + std::ptrdiff_t(g.index(0, v)), g.side(), h);
     }
+  }
+  if (!chart.wrapsU() && !chart.hasPoleRows() && chart.radius() > 0) {
+    // A chart that folds its sides (core/octahedral_chart.hpp): the region's border vertices
+    // give their height to their twins.
+    auto copyToTwins = [&](int u, int v) {
+      core::GridPoint twins[4];
+      const int n = chart.twins(u, v, twins);
+      const float h = heights[g.index(u, v)];
+      for (int k = 1; k < n; ++k) heights[g.index(twins[k].u, twins[k].v)] = h;
+    };
+    const int u0 = std::max(0, region.uBegin), u1 = std::min(m, region.uEnd);
+    for (int v : {0, m})
+      if (v >= v0 && v <= v1)
+        for (int u = u0; u <= u1; ++u) copyToTwins(u, v);
+    for (int u : {0, m})
+      if (u >= u0 && u <= u1)
+        for (int v = v0; v <= v1; ++v) copyToTwins(u, v);
   }
 }
 

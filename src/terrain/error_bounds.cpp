@@ -7,6 +7,7 @@
 #include <cstdlib>
 #include <type_traits>
 #include <utility>
+#include <vector>
 
 #include "core/flat_chart.hpp"
 #include "core/input_error.hpp"
@@ -212,9 +213,42 @@ class LevelPass {
 
 }  // namespace
 
+// On a chart that folds its sides (core/octahedral_chart.hpp: (u, 0) is (m - u, 0), ...), a
+// side vertex's diamond has one half in the grid at each twin. Both halves are computed afresh
+// (either twin may lie outside the region) and both twins keep the larger codes, as the seam
+// twins do; the next level's vertices then read the combined codes. Returns the vertices
+// computed.
+template <class ChartT>
+std::size_t foldTwins(const ChartT& chart, const detail::VertexBounds<ChartT>& vertices,
+                      BoundCodes* codes, const LatticeCopy& lattice, int s, unsigned sides) {
+  const core::GridSize g = chart.grid();
+  const int m = g.m();
+  std::size_t count = 0;
+  for (int side = 0; side < 4; ++side) {
+    if (!(sides & (1u << side))) continue;
+    for (int k = s; k <= m / 2; k += 2 * s) {  // edge vertices of this level: k / s odd
+      const bool alongU = side < 2;            // sides v = 0 and v = m run along u
+      const int fixed = (side & 1) ? m : 0;
+      const GridPoint a = alongU ? GridPoint{k, fixed} : GridPoint{fixed, k};
+      GridPoint twins[4];
+      const int n = chart.twins(a.u, a.v, twins);
+      BoundCodes both{};
+      for (int t = 0; t < n; ++t) {
+        const std::uint16_t childError = vertices.compute(twins[t]);
+        if (lattice.active()) lattice(twins[t].u, twins[t].v, childError);
+        const BoundCodes& c = codes[g.index(twins[t].u, twins[t].v)];
+        both = {std::max(both.error, c.error), std::max(both.radius, c.radius)};
+      }
+      for (int t = 0; t < n; ++t) codes[g.index(twins[t].u, twins[t].v)] = both;
+      count += std::size_t(n);
+    }
+  }
+  return count;
+}
+
 template <class ChartT>
 void ErrorBounds::computeLevel(const ChartT& chart, std::span<const float> heights, int level,
-                               const GridRegion& region) {
+                               const GridRegion& region, unsigned foldSides) {
   static_assert(kExactMaxHalfSize < (1 << kLatticeShift),
                 "the row kernels' levels hold no lattice vertex: they do not copy to it");
   const core::GridSize g = chart.grid();
@@ -229,6 +263,8 @@ void ErrorBounds::computeLevel(const ChartT& chart, std::span<const float> heigh
   const LevelPass<ChartT> pass(chart, plan, vertices, kernels, codes, level, lattice);
   lastUpdateCount_ += pass.run();
   lastUpdateCount_ += pass.seamTwins(g, region);
+  if (foldSides && !plan.centre)
+    lastUpdateCount_ += foldTwins(chart, vertices, codes, lattice, plan.s, foldSides);
 }
 
 namespace {
@@ -299,9 +335,10 @@ void ErrorBounds::build(const core::Chart& chart, std::span<const float> heights
     lattice_ = Lattice{};
   }
   lastUpdateCount_ = 0;
+  const unsigned folds = chart.foldsSides() ? 0xFu : 0u;
   dispatchChart(chart, [&](const auto& c) {
     for (int level = 0; level < levelCount(g); ++level)
-      computeLevel(c, heights, level, GridRegion::all(g));
+      computeLevel(c, heights, level, GridRegion::all(g), folds);
   });
 }
 
@@ -310,12 +347,37 @@ void ErrorBounds::update(const core::Chart& chart, std::span<const float> height
   const core::GridSize g = chart.grid();
   lastUpdateCount_ = 0;
   if (dirty.empty()) return;
+  const bool folds = chart.foldsSides();
   dispatchChart(chart, [&](const auto& c) {
     GridRegion region = dirty;
     for (int level = 0; level < levelCount(g); ++level) {
       // A vertex of this level reads heights and children within its half-size s.
       region = region.grown(levelHalfSize(level), g, c.wrapsU());
-      computeLevel(c, heights, level, region);
+      if (!folds) {
+        computeLevel(c, heights, level, region);
+        continue;
+      }
+      // Where the region reaches a folded side, its twins' side of the fold changed too: the
+      // mirror images of the region (across the sides v = 0 and m: u -> m - u; across u = 0 and
+      // m: v -> m - v; both at a corner) are computed as well, and the touched sides' twins
+      // combined once, after all of them.
+      const int m = g.m();
+      const bool vSide = region.vBegin <= 0 || region.vEnd >= m;
+      const bool uSide = region.uBegin <= 0 || region.uEnd >= m;
+      const GridRegion flipU{m - region.uEnd, m - region.uBegin, region.vBegin, region.vEnd};
+      const GridRegion flipV{region.uBegin, region.uEnd, m - region.vEnd, m - region.vBegin};
+      const GridRegion flipUV{m - region.uEnd, m - region.uBegin, m - region.vEnd,
+                              m - region.vBegin};
+      std::vector<GridRegion> regions{region};
+      if (vSide) regions.push_back(flipU);
+      if (uSide) regions.push_back(flipV);
+      if (uSide && vSide) regions.push_back(flipUV);
+      unsigned sides = 0;
+      for (const GridRegion& r : regions)
+        sides |= (r.vBegin <= 0 ? 1u : 0u) | (r.vEnd >= m ? 2u : 0u) | (r.uBegin <= 0 ? 4u : 0u) |
+                 (r.uEnd >= m ? 8u : 0u);
+      for (std::size_t k = 0; k < regions.size(); ++k)
+        computeLevel(c, heights, level, regions[k], k + 1 == regions.size() ? sides : 0u);
     }
   });
 }

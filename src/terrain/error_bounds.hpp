@@ -114,9 +114,12 @@ class ErrorBounds {
   std::size_t lastUpdateVertexCount() const { return lastUpdateCount_; }
 
  private:
+  // `foldSides`: on a chart that folds its sides (core::Chart::foldsSides), the sides (bits 0-3:
+  // v = 0, v = m, u = 0, u = m) whose vertices of this level combine with their twins after
+  // the region's rows (0: none).
   template <class ChartT>
   void computeLevel(const ChartT& chart, std::span<const float> heights, int level,
-                    const GridRegion& region);
+                    const GridRegion& region, unsigned foldSides = 0);
 
   ErrorRule rule_ = ErrorRule::kHybridExact;
   BoundsContent content_ = BoundsContent::kErrorsAndRadii;

@@ -5,6 +5,7 @@
 #include <atomic>
 #include <cmath>
 #include <sstream>
+#include <utility>
 
 #include "core/input_error.hpp"
 
@@ -61,6 +62,18 @@ void Terrain::validateHeights(const core::Chart& chart, std::span<const float> h
                                  " is not one point: height at " + at(u, v) + " differs from " +
                                  at(0, v));
         }
+      }
+    }
+  }
+  // Whatever else the chart glues (core::Chart::canonical): the grid's border vertices hold
+  // their canonical vertex's height.
+  for (int k = 0; k <= m; ++k) {
+    for (const auto& [u, v] :
+         {std::pair{k, 0}, std::pair{k, m}, std::pair{0, k}, std::pair{m, k}}) {
+      const core::GridPoint c = chart.canonical(u, v);
+      if (h[g.index(u, v)] != h[g.index(c.u, c.v)]) {
+        throw core::InputError("grid vertices at one point differ: height at " + at(u, v) + " != " +
+                               at(c.u, c.v) + " (the " + chart.name() + " chart glues them)");
       }
     }
   }

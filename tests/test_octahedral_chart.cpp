@@ -1,0 +1,216 @@
+// The octahedral chart (core/octahedral_chart.hpp): its mapping and its inverse, the topology it
+// gives as data (canonical vertices, twins), and what holds for lat-long holding on it: nested
+// bounds equal to a full rebuild after random edits (across the folds too), crack-free
+// tessellations within dist_max, and welded meshes of Euler characteristic 2.
+#include <gtest/gtest.h>
+
+#include <array>
+#include <cmath>
+#include <random>
+#include <set>
+
+#include "core/octahedral_chart.hpp"
+#include "edit/grid_consistency.hpp"
+#include "io/mesh_export.hpp"
+#include "mesh_checks.hpp"
+#include "terrain/error_bounds.hpp"
+#include "terrain/error_mesher.hpp"
+#include "terrain/screen_error.hpp"
+#include "terrain/tessellator.hpp"
+#include "test_terrains.hpp"
+#include "tin/tin_check.hpp"
+
+using namespace ps;
+using Mapping = core::OctahedralChart::Mapping;
+
+namespace {
+
+const std::array<Mapping, 2> kMappings{Mapping::kEqualArea, Mapping::kCentral};
+
+}  // namespace
+
+// The centre is the north pole, the corners the south pole, the sides' midpoints the equator;
+// every grid vertex lands on the unit sphere and the inverse gives its grid coordinates back.
+TEST(OctahedralChart, MapsTheSquareOntoTheSphereAndBack) {
+  for (const Mapping mapping : kMappings) {
+    const core::OctahedralChart c(core::GridSize(6), 1000.0, mapping);
+    const int m = c.grid().m();
+    EXPECT_LT((c.up(m / 2, m / 2) - Eigen::Vector3d::UnitZ()).norm(), 1e-15);
+    for (const auto& [u, v] : {std::pair{0, 0}, std::pair{m, 0}, std::pair{0, m}, std::pair{m, m}})
+      EXPECT_LT((c.up(u, v) + Eigen::Vector3d::UnitZ()).norm(), 1e-15) << u << "," << v;
+    EXPECT_LT((c.up(m, m / 2) - Eigen::Vector3d::UnitX()).norm(), 1e-15);
+    EXPECT_LT((c.up(m / 2, m) - Eigen::Vector3d::UnitY()).norm(), 1e-15);
+    for (int v = 0; v <= m; ++v)
+      for (int u = 0; u <= m; ++u) {
+        const Eigen::Vector3d p = c.position(u, v, 0);
+        ASSERT_NEAR(p.norm(), 1000.0, 1e-9);
+        const auto back = c.inverse(p);
+        ASSERT_TRUE(back);
+        // On a folded side the inverse may give the twin's coordinates: the same point.
+        const Eigen::Vector3d again = c.positionAt(back->x(), back->y(), 0);
+        ASSERT_LT((again - p).norm(), 1e-6) << u << "," << v;
+      }
+    // Random points of the sphere: inverse, then forward, lands on the same point.
+    std::mt19937 rng(3);
+    std::normal_distribution<double> n01;
+    for (int i = 0; i < 2000; ++i) {
+      const Eigen::Vector3d d = Eigen::Vector3d(n01(rng), n01(rng), n01(rng)).normalized();
+      const auto uv = c.inverse(3 * d);
+      ASSERT_TRUE(uv);
+      ASSERT_LT((c.positionAt(uv->x(), uv->y(), 0) - 1000.0 * d).norm(), 1e-7) << d.transpose();
+    }
+    EXPECT_FALSE(c.inverse(Eigen::Vector3d::Zero()));
+  }
+}
+
+// The sides fold onto themselves: twins are one point bit for bit, share one canonical
+// vertex, and every vertex of the grid that is not on a side is its own.
+TEST(OctahedralChart, TwinsAreOnePointAndShareTheirCanonicalVertex) {
+  for (const Mapping mapping : kMappings) {
+    const core::OctahedralChart c(core::GridSize(5), 6.4e6, mapping);
+    const int m = c.grid().m();
+    std::set<std::pair<int, int>> canonicals;
+    for (int v = 0; v <= m; ++v)
+      for (int u = 0; u <= m; ++u) {
+        core::GridPoint t[4];
+        const int n = c.twins(u, v, t);
+        const bool side = u == 0 || u == m || v == 0 || v == m;
+        const bool corner = (u == 0 || u == m) && (v == 0 || v == m);
+        const bool midpoint = side && !corner && (2 * u == m || 2 * v == m);
+        ASSERT_EQ(n, corner ? 4 : (side && !midpoint ? 2 : 1)) << u << "," << v;
+        const core::GridPoint k = c.canonical(u, v);
+        canonicals.insert({k.u, k.v});
+        for (int i = 0; i < n; ++i) {
+          ASSERT_EQ(c.canonical(t[i].u, t[i].v), k);
+          ASSERT_EQ(c.position(t[i].u, t[i].v, 10.0), c.position(u, v, 10.0));  // bit for bit
+        }
+      }
+    // Points: (m - 1)^2 inside, the sides' 4(m - 1) vertices in pairs but their 4 midpoints,
+    // and the corners' one: m^2 + 2, as Euler's V - E + F = 2 with m^2 cells of two triangles.
+    EXPECT_EQ(canonicals.size(), std::size_t(m) * std::size_t(m) + 2);
+  }
+}
+
+// Equal area: every cell of the grid covers the same area of the sphere (to the chord
+// quadrilateral's approximation); the central projection's cells differ by about 5x.
+TEST(OctahedralChart, EqualAreaCellsAreEqualAndCentralOnesAreNot) {
+  for (const Mapping mapping : kMappings) {
+    const core::OctahedralChart c(core::GridSize(7), 1.0, mapping);
+    const int m = c.grid().m();
+    double lo = INFINITY, hi = 0;
+    for (int v = 0; v < m; ++v)
+      for (int u = 0; u < m; ++u) {
+        // The cell's area on the sphere, from 4 x 4 chord quadrilaterals (a cell that a
+        // diagonal crease crosses bends along it).
+        double area = 0;
+        for (int j = 0; j < 4; ++j)
+          for (int i = 0; i < 4; ++i) {
+            const double x = u + 0.25 * i, y = v + 0.25 * j;
+            const Eigen::Vector3d a = c.positionAt(x, y, 0), b = c.positionAt(x + 0.25, y, 0),
+                                  d = c.positionAt(x, y + 0.25, 0),
+                                  e = c.positionAt(x + 0.25, y + 0.25, 0);
+            area += 0.5 * (e - a).cross(d - b).norm();
+          }
+        lo = std::min(lo, area);
+        hi = std::max(hi, area);
+      }
+    if (mapping == Mapping::kEqualArea) {
+      EXPECT_LT(hi / lo, 1.05) << "equal area";
+    } else {
+      EXPECT_GT(hi / lo, 3.0) << "central";
+    }
+    RecordProperty(c.name() + "_cell_area_ratio", std::to_string(hi / lo));
+  }
+}
+
+// Random edits, across the folds and at the south pole's corners, then the bounds updated over
+// the edit's rectangle equal a full rebuild bit for bit (the update computes the rectangle's
+// mirror images where it reaches a side, and combines the twins).
+TEST(OctahedralChart, LocalBoundUpdatesEqualAFullRebuildBitForBit) {
+  for (const Mapping mapping : kMappings) {
+    auto t = testkit::bumpyOctahedralTerrain(7, 5, 4000.0, mapping);
+    const auto g = t.grid();
+    const int m = g.m();
+    std::mt19937 rng(17);
+    for (int trial = 0; trial < 16; ++trial) {
+      int u0 = int(rng() % std::uint32_t(m + 1)), v0 = int(rng() % std::uint32_t(m + 1));
+      const int w = 1 + int(rng() % 20), hgt = 1 + int(rng() % 20);
+      if (trial % 4 == 0) v0 = 0;                // on the side v = 0
+      if (trial % 4 == 1) u0 = m - w;            // on the side u = m
+      if (trial % 4 == 2) u0 = 0, v0 = m - hgt;  // at a corner: the south pole
+      u0 = std::clamp(u0, 0, m - w);
+      v0 = std::clamp(v0, 0, m - hgt);
+      const terrain::GridRegion region{u0, u0 + w, v0, v0 + hgt};
+      auto h = t.mutableHeights();
+      const float bump = float(50 + rng() % 400);
+      for (int v = region.vBegin; v <= region.vEnd; ++v)
+        for (int u = region.uBegin; u <= region.uEnd; ++u)
+          edit::applyToVertex(t.chart(), h, u, v, h[g.index(u, v)] + bump);
+      t.commitEdit(region);
+      terrain::ErrorBounds full;
+      full.build(t.chart(), t.heights(), terrain::ErrorRule::kHybridExact);
+      ASSERT_EQ(full.errorCodes(), t.bounds().errorCodes())
+          << t.chart().name() << " trial " << trial << " " << region.describe();
+      ASSERT_EQ(full.radiusCodes(), t.bounds().radiusCodes()) << "trial " << trial;
+      ASSERT_TRUE(full.lattice() == t.bounds().lattice()) << "trial " << trial;
+    }
+    // The terrain's own rule: its twins still agree (Terrain refuses heights where they do not).
+    EXPECT_NO_THROW(terrain::Terrain::validateHeights(t.chart(), t.heights()));
+  }
+}
+
+// Views over the north pole, the south pole (a corner of the grid), a side's fold and a crease:
+// the tessellation is crack-free across every fold and its measured screen error is never above
+// dist_max.
+TEST(OctahedralChart, TessellationsAreCrackFreeAndWithinDistMax) {
+  for (const Mapping mapping : kMappings) {
+    const auto t = testkit::bumpyOctahedralTerrain(8, 7, 6000.0, mapping);
+    const double R = t.chart().radius();
+    const std::array<Eigen::Vector3d, 5> looks{
+        Eigen::Vector3d(0, 0, 1), Eigen::Vector3d(0.05, 0.02, -1),
+        Eigen::Vector3d(0.7, 0.01, -0.7),  // the fold of side u = m, south of the equator
+        Eigen::Vector3d(0.5, 0.5, 0.05),   // a crease at the equator
+        Eigen::Vector3d(-0.3, 0.8, -0.5)};
+    for (const auto& dir : looks) {
+      const Eigen::Vector3d d = dir.normalized();
+      for (double altitude : {3e6, 3e5}) {
+        const auto cam = terrain::Camera::lookAt((R + altitude) * d, R * d, d.unitOrthogonal(), 320,
+                                                 240, 60 * M_PI / 180);
+        terrain::Tessellator tess;
+        terrain::TessellationSettings ts;
+        ts.distMaxPx = 2;
+        ts.triangleBudget = 0;
+        const auto& mesh = tess.tessellate(t, cam, ts);
+        ASSERT_GT(mesh.triangleCount(), 20u);
+        EXPECT_LE(terrain::measureScreenError(t, cam, mesh).maxPx, ts.distMaxPx + 1e-6)
+            << t.chart().name() << " " << d.transpose() << " at " << altitude;
+        // The whole planet (culling off) for the same view: no crack anywhere.
+        ts.cull = false;
+        terrain::Tessellator whole;
+        EXPECT_EQ(testkit::conformityDefect(t, whole.tessellate(t, cam, ts)), "")
+            << t.chart().name() << " " << d.transpose();
+      }
+    }
+  }
+}
+
+// A whole planet meshed to an error and welded by the chart: a closed 2-manifold, Euler 2, every
+// full-resolution vertex within the error.
+TEST(OctahedralChart, WholePlanetMeshesAreWeldedSpheres) {
+  for (const Mapping mapping : kMappings) {
+    const auto t = testkit::bumpyOctahedralTerrain(7, 2, 5000.0, mapping);
+    for (double error : {20000.0, 2000.0}) {
+      const terrain::Mesh mesh = terrain::meshToError(t, error);
+      EXPECT_LE(terrain::measureTrueError(t, mesh), error);
+      const terrain::Mesh welded = io::weldMesh(t, mesh);
+      std::vector<std::array<std::uint32_t, 3>> triangles;
+      for (std::size_t k = 0; k + 2 < welded.indices.size(); k += 3)
+        triangles.push_back({welded.indices[k], welded.indices[k + 1], welded.indices[k + 2]});
+      const tin::MeshTopology top = tin::meshTopology(welded.gridIndex.size(), triangles);
+      EXPECT_EQ(top.borderEdges, 0u) << t.chart().name() << " at " << error;
+      EXPECT_EQ(top.nonManifoldEdges, 0u);
+      EXPECT_EQ(top.degenerate, 0u);
+      EXPECT_EQ(top.euler(), 2) << t.chart().name() << " at " << error;
+    }
+  }
+}
