@@ -4,13 +4,18 @@
 // tessellations within dist_max, and welded meshes of Euler characteristic 2.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <random>
 #include <set>
 
 #include "core/octahedral_chart.hpp"
+#include "edit/brush.hpp"
+#include "edit/distance_field.hpp"
+#include "edit/edit_pipeline.hpp"
 #include "edit/grid_consistency.hpp"
+#include "edit/region_growing.hpp"
 #include "io/mesh_export.hpp"
 #include "mesh_checks.hpp"
 #include "terrain/error_bounds.hpp"
@@ -213,4 +218,94 @@ TEST(OctahedralChart, WholePlanetMeshesAreWeldedSpheres) {
       EXPECT_EQ(top.euler(), 2) << t.chart().name() << " at " << error;
     }
   }
+}
+
+// Region growing across the folds equals brute force (every vertex within the radius in 3D):
+// centres at the north pole, the south pole (the corners), on a side's fold, at a side's
+// midpoint (an octahedron vertex on the equator), near the midlines, anywhere; radii from a
+// cell to a quarter of the planet.
+TEST(OctahedralChart, RegionGrowingAcrossTheFoldsEqualsBruteForce) {
+  const auto chart = testkit::octahedralChart(7);
+  const int m = chart->grid().m();
+  edit::DistanceField field(chart);
+  edit::RegionGrower grower;
+  edit::Region region;
+  std::mt19937 rng(23);
+  std::vector<core::GridPoint> centres{
+      {m / 2, m / 2}, {0, 0},     {m, m},          {0, 40},     {m, 90},           {70, 0},
+      {m / 2, 0},     {m, m / 2}, {m / 2 - 1, 30}, {20, m / 2}, {m / 2 + 3, m - 5}};
+  for (int k = 0; k < 12; ++k)
+    centres.push_back({int(rng() % std::uint32_t(m + 1)), int(rng() % std::uint32_t(m + 1))});
+  const double R = chart->radius();
+  std::vector<std::uint8_t> mask;
+  for (const core::GridPoint& c : centres) {
+    for (double radius : {0.01 * R, 0.1 * R, 0.4 * R, 1.2 * R}) {
+      field.setCentre(c);
+      grower.grow(field, radius, region);
+      const std::size_t brute = edit::bruteForceRegion(field, radius, &mask);
+      ASSERT_EQ(region.vertexCount(), brute) << "centre " << c.u << "," << c.v << " r " << radius;
+      for (int v = 0; v <= m; ++v)
+        for (int u = 0; u <= m; ++u)
+          ASSERT_EQ(region.contains(u, v), mask[chart->grid().index(u, v)] != 0)
+              << "(" << u << "," << v << ") centre " << c.u << "," << c.v << " r " << radius;
+      // Every vertex lies in an image of the dirty box.
+      const auto images = terrain::foldImages(region.bounds(), chart->grid());
+      region.forEachSpan([&](int v, int a, int b) {
+        for (int u = a; u <= b; ++u) {
+          const bool inImage = std::any_of(images.begin(), images.end(), [&](const auto& r) {
+            return u >= r.uBegin && u <= r.uEnd && v >= r.vBegin && v <= r.vEnd;
+          });
+          ASSERT_TRUE(inImage) << "(" << u << "," << v << ") centre " << c.u << "," << c.v << " r "
+                               << radius << " box " << region.bounds().describe();
+        }
+      });
+    }
+  }
+}
+
+// Brush strokes anywhere, across the folds and over the south pole, through the edit pipeline:
+// the bounds equal a full rebuild bit for bit after each, twins stay one height, every vertex
+// that changed lies in an image of the reported dirty box, and undo gives the heights back.
+TEST(OctahedralChart, BrushEditsKeepBoundsTwinsAndUndo) {
+  auto t = testkit::bumpyOctahedralTerrain(7, 9, 3000.0);
+  const double R = t.chart().radius();
+  const auto g = t.grid();
+  const std::vector<float> original(t.heights().begin(), t.heights().end());
+  edit::EditPipeline pipe(t);
+  std::mt19937 rng(31);
+  std::normal_distribution<double> n01;
+  std::vector<Eigen::Vector3d> spots{Eigen::Vector3d(0, 0, -1), Eigen::Vector3d(0, 0, 1),
+                                     Eigen::Vector3d(-1, 0.001, -0.3), Eigen::Vector3d(1, 0, 0)};
+  for (int k = 0; k < 8; ++k) spots.emplace_back(n01(rng), n01(rng), n01(rng));
+  int edits = 0;
+  for (const auto& spot : spots) {
+    const std::vector<float> before(t.heights().begin(), t.heights().end());
+    edit::BrushSettings b;
+    b.radius = (0.05 + 0.3 * std::abs(n01(rng))) * R;
+    b.strength = 1500;
+    const auto rep = pipe.apply(edit::GaussianBrush(b), {R * spot.normalized(), 0.0});
+    ++edits;
+    ASSERT_GT(rep.modifiedVertices, 0u);
+    terrain::ErrorBounds full;
+    full.build(t.chart(), t.heights(), terrain::ErrorRule::kHybridExact);
+    ASSERT_EQ(full.errorCodes(), t.bounds().errorCodes()) << spot.transpose();
+    ASSERT_EQ(full.radiusCodes(), t.bounds().radiusCodes()) << spot.transpose();
+    ASSERT_NO_THROW(terrain::Terrain::validateHeights(t.chart(), t.heights()));
+    const auto images = terrain::foldImages(rep.dirty, g);
+    for (int v = 0; v <= g.m(); ++v)
+      for (int u = 0; u <= g.m(); ++u) {
+        if (before[g.index(u, v)] == t.heights()[g.index(u, v)]) continue;
+        ASSERT_TRUE(std::any_of(images.begin(), images.end(),
+                                [&](const auto& r) {
+                                  return u >= r.uBegin && u <= r.uEnd && v >= r.vBegin &&
+                                         v <= r.vEnd;
+                                }))
+            << "(" << u << "," << v << ") changed outside the dirty box's images";
+      }
+  }
+  for (int k = 0; k < edits; ++k) pipe.undo();
+  EXPECT_TRUE(std::equal(original.begin(), original.end(), t.heights().begin()));
+  terrain::ErrorBounds full;
+  full.build(t.chart(), t.heights(), terrain::ErrorRule::kHybridExact);
+  EXPECT_EQ(full.errorCodes(), t.bounds().errorCodes());
 }

@@ -204,6 +204,18 @@ bool Region::contains(int u, int v) const {
   return false;
 }
 
+void Region::clipBounds(const terrain::GridRegion& box) {
+  terrain::GridRegion b{box.uEnd + 1, box.uBegin - 1, box.vEnd + 1, box.vBegin - 1};
+  for (int v = std::max(vBegin_, box.vBegin); v <= std::min(vEnd_, box.vEnd); ++v)
+    for (const Span& s : row(v)) {
+      const int a = std::max(s.uBegin, box.uBegin), z = std::min(s.uEnd, box.uEnd);
+      if (a > z) continue;
+      b.uBegin = std::min(b.uBegin, a), b.uEnd = std::max(b.uEnd, z);
+      b.vBegin = std::min(b.vBegin, v), b.vEnd = std::max(b.vEnd, v);
+    }
+  bounds_ = b.uBegin <= b.uEnd ? b : terrain::GridRegion::none();
+}
+
 void Region::finish(const core::GridSize& g, bool wrapsU, bool hasPoleRows, bool symmetric,
                     int centreU) {
   const int m = g.m();
@@ -377,7 +389,45 @@ void RegionGrower::grow(const DistanceField& field, double radius, Region& out) 
   } else {
     const GenericOracle oracle{field, r2, m, wraps ? m : m + 1, wraps, poles, evaluations_};
     fill(oracle, g, wraps, seed);
+    if (chart.foldsSides()) fillAcrossFolds(oracle, chart);
     emit(g, wraps, poles, false, seed.u, out);
+    if (chart.foldsSides()) {
+      // The dirty box: the region's vertices in the centre's quadrant (closed); the terrain
+      // covers the rest by that box's images (terrain::foldImages).
+      const bool left = 2 * seed.u <= m, low = 2 * seed.v <= m;
+      out.clipBounds({left ? 0 : m / 2, left ? m / 2 : m, low ? 0 : m / 2, low ? m / 2 : m});
+    }
+  }
+}
+
+template <class Oracle>
+void RegionGrower::fillAcrossFolds(const Oracle& oracle, const core::Chart& chart) {
+  // The fill stops at the grid's sides; a side vertex it reached is also its twins, from which
+  // the fill goes on into the grid on the fold's other side, until no twin is left outside.
+  const int m = chart.grid().m(), cols = m + 1;
+  std::vector<core::GridPoint> seeds;
+  auto twinsOf = [&](int u, int v) {
+    core::GridPoint t[4];
+    const int n = chart.twins(u, v, t);
+    for (int k = 0; k < n; ++k)
+      if (!covered(rowSpans_[std::size_t(t[k].v)], t[k].u, cols)) seeds.push_back(t[k]);
+  };
+  for (bool more = true; more;) {
+    seeds.clear();
+    for (const int v : {0, m})
+      for (const ColumnRun& r : rowSpans_[std::size_t(v)])
+        for (int u = r.start; u < r.start + r.len; ++u) twinsOf(u, v);
+    for (const int v : std::vector<int>(touched_)) {
+      const auto& runs = rowSpans_[std::size_t(v)];
+      if (covered(runs, 0, cols)) twinsOf(0, v);
+      if (covered(runs, m, cols)) twinsOf(m, v);
+    }
+    more = false;
+    for (const core::GridPoint& p : seeds) {
+      if (covered(rowSpans_[std::size_t(p.v)], p.u, cols)) continue;
+      fill(oracle, chart.grid(), false, p);
+      more = true;
+    }
   }
 }
 

@@ -44,8 +44,12 @@ class Region {
   // Distinct points on the sphere (a twin pair and a pole row count once).
   std::size_t pointCount() const { return pointCount_; }
   bool contains(int u, int v) const;
-  // The smallest seam-wrapped rectangle holding every vertex (the edit's dirty region).
+  // The smallest seam-wrapped rectangle holding every vertex (the edit's dirty region). On a
+  // chart that folds its sides: the box of the vertices in the centre's quadrant of the grid,
+  // whose images (terrain::foldImages) hold the rest (RegionGrower::grow sets it).
   const terrain::GridRegion& bounds() const { return bounds_; }
+  // Makes bounds() the box of the region's vertices within `box`.
+  void clipBounds(const terrain::GridRegion& box);
 
   // Regions grown on the lat-long chart are symmetric about the centre column: row v holds
   // exactly the vertices whose folded column distance from centreU() is <= halfWidth(v)
@@ -112,6 +116,8 @@ class RegionGrower {
   void fill(const Oracle& oracle, const core::GridSize& g, bool wraps, core::GridPoint seed);
   void emit(const core::GridSize& g, bool wraps, bool poles, bool symmetric, int centreU,
             Region& out);
+  template <class Oracle>
+  void fillAcrossFolds(const Oracle& oracle, const core::Chart& chart);
 
   std::vector<std::vector<ColumnRun>> rowSpans_;
   std::vector<int> touched_;

@@ -5,6 +5,7 @@
 #include <bit>
 #include <cmath>
 #include <cstdlib>
+#include <tuple>
 #include <type_traits>
 #include <utility>
 #include <vector>
@@ -344,40 +345,57 @@ void ErrorBounds::build(const core::Chart& chart, std::span<const float> heights
 
 void ErrorBounds::update(const core::Chart& chart, std::span<const float> heights,
                          const GridRegion& dirty) {
+  update(chart, heights, std::span<const GridRegion>(&dirty, 1));
+}
+
+void ErrorBounds::update(const core::Chart& chart, std::span<const float> heights,
+                         std::span<const GridRegion> dirty) {
   const core::GridSize g = chart.grid();
   lastUpdateCount_ = 0;
-  if (dirty.empty()) return;
+  std::vector<GridRegion> regions;
+  for (const GridRegion& r : dirty)
+    if (!r.empty()) regions.push_back(r);
+  if (regions.empty()) return;
   const bool folds = chart.foldsSides();
+  const int m = g.m();
   dispatchChart(chart, [&](const auto& c) {
-    GridRegion region = dirty;
-    for (int level = 0; level < levelCount(g); ++level) {
+    std::vector<GridRegion> level;
+    for (int l = 0; l < levelCount(g); ++l) {
       // A vertex of this level reads heights and children within its half-size s.
-      region = region.grown(levelHalfSize(level), g, c.wrapsU());
+      for (GridRegion& r : regions) r = r.grown(levelHalfSize(l), g, c.wrapsU());
       if (!folds) {
-        computeLevel(c, heights, level, region);
+        for (const GridRegion& r : regions) computeLevel(c, heights, l, r);
         continue;
       }
-      // Where the region reaches a folded side, its twins' side of the fold changed too: the
-      // mirror images of the region (across the sides v = 0 and m: u -> m - u; across u = 0 and
-      // m: v -> m - v; both at a corner) are computed as well, and the touched sides' twins
+      // Where a region reaches a folded side, its twins' side of the fold changed too: the
+      // region's mirror images (across the sides v = 0 and m: u -> m - u; across u = 0 and m:
+      // v -> m - v; both at a corner) are computed as well, and the touched sides' twins
       // combined once, after all of them.
-      const int m = g.m();
-      const bool vSide = region.vBegin <= 0 || region.vEnd >= m;
-      const bool uSide = region.uBegin <= 0 || region.uEnd >= m;
-      const GridRegion flipU{m - region.uEnd, m - region.uBegin, region.vBegin, region.vEnd};
-      const GridRegion flipV{region.uBegin, region.uEnd, m - region.vEnd, m - region.vBegin};
-      const GridRegion flipUV{m - region.uEnd, m - region.uBegin, m - region.vEnd,
-                              m - region.vBegin};
-      std::vector<GridRegion> regions{region};
-      if (vSide) regions.push_back(flipU);
-      if (uSide) regions.push_back(flipV);
-      if (uSide && vSide) regions.push_back(flipUV);
+      level.clear();
+      for (const GridRegion& r : regions) {
+        const bool vSide = r.vBegin <= 0 || r.vEnd >= m;
+        const bool uSide = r.uBegin <= 0 || r.uEnd >= m;
+        level.push_back(r);
+        if (vSide) level.push_back({m - r.uEnd, m - r.uBegin, r.vBegin, r.vEnd});
+        if (uSide) level.push_back({r.uBegin, r.uEnd, m - r.vEnd, m - r.vBegin});
+        if (uSide && vSide) level.push_back({m - r.uEnd, m - r.uBegin, m - r.vEnd, m - r.vBegin});
+      }
+      std::sort(level.begin(), level.end(), [](const GridRegion& a, const GridRegion& b) {
+        return std::tie(a.vBegin, a.uBegin, a.vEnd, a.uEnd) <
+               std::tie(b.vBegin, b.uBegin, b.vEnd, b.uEnd);
+      });
+      level.erase(std::unique(level.begin(), level.end(),
+                              [](const GridRegion& a, const GridRegion& b) {
+                                return a.uBegin == b.uBegin && a.uEnd == b.uEnd &&
+                                       a.vBegin == b.vBegin && a.vEnd == b.vEnd;
+                              }),
+                  level.end());
       unsigned sides = 0;
-      for (const GridRegion& r : regions)
+      for (const GridRegion& r : level)
         sides |= (r.vBegin <= 0 ? 1u : 0u) | (r.vEnd >= m ? 2u : 0u) | (r.uBegin <= 0 ? 4u : 0u) |
                  (r.uEnd >= m ? 8u : 0u);
-      for (std::size_t k = 0; k < regions.size(); ++k)
-        computeLevel(c, heights, level, regions[k], k + 1 == regions.size() ? sides : 0u);
+      for (std::size_t k = 0; k < level.size(); ++k)
+        computeLevel(c, heights, l, level[k], k + 1 == level.size() ? sides : 0u);
     }
   });
 }

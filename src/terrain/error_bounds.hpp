@@ -72,6 +72,10 @@ class ErrorBounds {
   // Recomputes only the vertices whose bounds can depend on heights inside `dirty`, level by
   // level up to the root. Bit-for-bit equal to build() on the same heights.
   void update(const core::Chart& chart, std::span<const float> heights, const GridRegion& dirty);
+  // The same over several dirty rectangles at once (a chart that folds its sides: an edit's
+  // box and its images, terrain::foldImages).
+  void update(const core::Chart& chart, std::span<const float> heights,
+              std::span<const GridRegion> dirty);
 
   ErrorRule rule() const { return rule_; }
   bool hasRadii() const { return content_ == BoundsContent::kErrorsAndRadii; }

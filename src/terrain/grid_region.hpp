@@ -1,6 +1,7 @@
 #pragma once
 #include <algorithm>
 #include <string>
+#include <vector>
 
 #include "core/grid.hpp"
 
@@ -87,5 +88,26 @@ struct GridRegion {
     while (r.uBegin > m) r.uBegin -= m, r.uEnd -= m;
   }
 };
+
+// On a chart that folds its sides (core/octahedral_chart.hpp, where (u, 0) is (m - u, 0) and
+// (0, v) is (0, m - v)), the grid is symmetric under u -> m - u and v -> m - v (the sphere's
+// mirrors x -> -x and y -> -y), and a disc about a centre in one quadrant of the grid, met in
+// another quadrant across a fold or a midline, lies there inside a mirror image of its own
+// quadrant's part (a point and its mirror are nearer the centre on the centre's side). The
+// images that can hold such a part: the box itself, its image under u -> m - u where it
+// reaches a side v = 0 or m or the midline u = m/2, under v -> m - v where it reaches a side
+// u = 0 or m or the midline v = m/2, and under both where both hold. For a box that spans
+// quadrants the images only add work.
+inline std::vector<GridRegion> foldImages(const GridRegion& r, const core::GridSize& g) {
+  if (r.empty()) return {};
+  const int m = g.m();
+  const bool flipU = r.vBegin <= 0 || r.vEnd >= m || (r.uBegin <= m / 2 && r.uEnd >= m / 2);
+  const bool flipV = r.uBegin <= 0 || r.uEnd >= m || (r.vBegin <= m / 2 && r.vEnd >= m / 2);
+  std::vector<GridRegion> out{r};
+  if (flipU) out.push_back({m - r.uEnd, m - r.uBegin, r.vBegin, r.vEnd});
+  if (flipV) out.push_back({r.uBegin, r.uEnd, m - r.vEnd, m - r.vBegin});
+  if (flipU && flipV) out.push_back({m - r.uEnd, m - r.uBegin, m - r.vEnd, m - r.vBegin});
+  return out;
+}
 
 }  // namespace ps::terrain

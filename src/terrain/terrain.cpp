@@ -117,20 +117,25 @@ void Terrain::refreshHeightRange() {
 
 void Terrain::commitEdit(const GridRegion& changed) {
   if (changed.empty()) return;
-  bounds_.update(*chart_, heights_, changed);
+  // On a chart that folds its sides an edit's box stands for its images too (foldImages).
+  const std::vector<GridRegion> regions =
+      chart_->foldsSides() ? foldImages(changed, grid()) : std::vector<GridRegion>{changed};
+  bounds_.update(*chart_, heights_, regions);
   // The global range only widens cheaply; a full scan is O(N^2) and the range is only used as
   // a conservative occluder, so track it incrementally over the changed region.
-  changed.forEachColumnRange(grid(), [&](int uA, int uB) {
-    for (int v = changed.vBegin; v <= changed.vEnd; ++v) {
-      for (int u = uA; u <= uB; ++u) {
-        const float x = heights_[grid().index(u, v)];
-        minHeight_ = std::min(minHeight_, x);
-        maxHeight_ = std::max(maxHeight_, x);
+  for (const GridRegion& r : regions) {
+    r.forEachColumnRange(grid(), [&](int uA, int uB) {
+      for (int v = r.vBegin; v <= r.vEnd; ++v) {
+        for (int u = uA; u <= uB; ++u) {
+          const float x = heights_[grid().index(u, v)];
+          minHeight_ = std::min(minHeight_, x);
+          maxHeight_ = std::max(maxHeight_, x);
+        }
       }
-    }
-  });
+    });
+  }
   revision_ = nextRevision();
-  recordChange(changed);
+  for (const GridRegion& r : regions) recordChange(r);
 }
 
 void Terrain::rebuildBounds(ErrorRule rule, BoundsContent content) {
