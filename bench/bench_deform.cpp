@@ -19,11 +19,13 @@
 #include <map>
 #include <memory>
 #include <nlohmann/json.hpp>
+#include <string>
 #include <vector>
 
 #include "bench/bench.hpp"
 #include "bench/bench_util.hpp"
 #include "core/latlong_chart.hpp"
+#include "core/octahedral_chart.hpp"
 #include "edit/brush.hpp"
 #include "edit/edit_pipeline.hpp"
 #include "edit/region_growing.hpp"
@@ -73,15 +75,20 @@ const std::map<int, std::array<PaperRow, 7>>& paperTables() {
   return t;
 }
 
-// A cheap planet: a few sines of the vertex direction (seam twins and pole rows agree).
-std::unique_ptr<terrain::Terrain> benchPlanet(int n) {
-  auto chart = std::make_shared<core::LatLongChart>(core::GridSize(n), kPlanetRadius);
+// A cheap planet: a few sines of the vertex direction (seam twins, pole rows and folded twins
+// agree), on lat-long or the octahedral chart.
+std::unique_ptr<terrain::Terrain> benchPlanet(int n, bool octahedral) {
+  std::shared_ptr<const core::Chart> chart;
+  if (octahedral)
+    chart = std::make_shared<core::OctahedralChart>(core::GridSize(n), kPlanetRadius);
+  else
+    chart = std::make_shared<core::LatLongChart>(core::GridSize(n), kPlanetRadius);
   const core::GridSize g = chart->grid();
   std::vector<float> h(g.count());
 #pragma omp parallel for schedule(static)
   for (int v = 0; v <= g.m(); ++v) {
     for (int u = 0; u <= g.m(); ++u) {
-      const Eigen::Vector3d d = chart->direction(u, v);
+      const Eigen::Vector3d d = chart->up(u, v);
       h[g.index(u, v)] = float(2500.0 * std::sin(3.0 * d.x() + 1.0) * std::cos(2.0 * d.y() - 0.5) +
                                900.0 * std::sin(11.0 * d.z() + 4.0 * d.x()) +
                                150.0 * std::sin(40.0 * d.y()) * std::cos(37.0 * d.z()));
@@ -118,84 +125,108 @@ void benchDeform(const BenchOptions& options, std::ostream& out) {
   const int repeats = std::max(1, options.quick ? std::min(options.repeats, 5) : options.repeats);
   for (const int n : levels) {
     const int side = (1 << n) + 1, m = 1 << n;
-    std::cerr << "deform: building the " << side << "^2 planet ... " << std::flush;
-    std::unique_ptr<terrain::Terrain> planet;
-    const double buildMs = timeMs([&] { planet = benchPlanet(n); });
-    std::cerr << buildMs / 1000 << " s\n";
-    edit::EditPipeline pipe(*planet);
-    pipe.setUndoEnabled(false);
-    const auto& paper = paperTables().at(side);
-    for (const PaperRow& row : paper) {
-      const int v = int(std::lround(double(row.latitude) * m / 180.0));
-      const Eigen::Vector3d tool = planet->chart().position(0, v, 0.0);
-      for (std::size_t ri = 0; ri < kRadiiKm.size(); ++ri) {
-        edit::BrushSettings s;
-        s.radius = kRadiiKm[ri] * 1000.0;
-        s.sigma = 0.17;
-        s.mu = 1.0;
-        s.strength = 50.0;
-        edit::GaussianBrush brush(s);
-        pipe.apply(brush, {tool, 0.0});  // warm-up
-        std::vector<double> grow, heights, errors, total, growHeights;
-        edit::EditReport rep;
-        for (int k = 0; k < repeats; ++k) {
-          s.mode = (k % 2 == 0) ? edit::BrushMode::kLower : edit::BrushMode::kRaise;
-          brush.setSettings(s);
-          rep = pipe.apply(brush, {tool, 0.0});
-          grow.push_back(rep.growMs);
-          heights.push_back(rep.heightsMs);
-          errors.push_back(rep.errorsMs);
-          total.push_back(rep.totalMs);
-          growHeights.push_back(rep.growMs + rep.heightsMs);
+    // The worst cell of each chart in this run (issue 28: the octahedral chart's worst cell at
+    // most a quarter of lat-long's).
+    std::map<std::string, double> worstMs;
+    for (const bool octahedral : {false, true}) {
+      std::cerr << "deform: building the " << side << "^2 "
+                << (octahedral ? "octahedral" : "lat-long") << " planet ... " << std::flush;
+      std::unique_ptr<terrain::Terrain> planet;
+      const double buildMs = timeMs([&] { planet = benchPlanet(n, octahedral); });
+      std::cerr << buildMs / 1000 << " s\n";
+      edit::EditPipeline pipe(*planet);
+      pipe.setUndoEnabled(false);
+      const auto& paper = paperTables().at(side);
+      // The same points of the sphere on both charts: lat-long's cells on the u = 0 meridian
+      // (180 degrees W), from the south pole to the north pole; on the octahedral chart the
+      // southern half of that meridian is a folded side (x = -1) and the south pole its corners.
+      const core::LatLongChart latLong(core::GridSize(n), kPlanetRadius);
+      for (const PaperRow& row : paper) {
+        const int v = int(std::lround(double(row.latitude) * m / 180.0));
+        const Eigen::Vector3d tool = latLong.position(0, v, 0.0);
+        for (std::size_t ri = 0; ri < kRadiiKm.size(); ++ri) {
+          edit::BrushSettings s;
+          s.radius = kRadiiKm[ri] * 1000.0;
+          s.sigma = 0.17;
+          s.mu = 1.0;
+          s.strength = 50.0;
+          edit::GaussianBrush brush(s);
+          pipe.apply(brush, {tool, 0.0});  // warm-up
+          std::vector<double> grow, heights, errors, total, growHeights;
+          edit::EditReport rep;
+          for (int k = 0; k < repeats; ++k) {
+            s.mode = (k % 2 == 0) ? edit::BrushMode::kLower : edit::BrushMode::kRaise;
+            brush.setSettings(s);
+            rep = pipe.apply(brush, {tool, 0.0});
+            grow.push_back(rep.growMs);
+            heights.push_back(rep.heightsMs);
+            errors.push_back(rep.errorsMs);
+            total.push_back(rep.totalMs);
+            growHeights.push_back(rep.growMs + rep.heightsMs);
+          }
+          // The same Gaussian, the same vertices' distances, in one flat array.
+          const edit::Region& region = pipe.lastRegion();
+          std::vector<double> d2;
+          d2.reserve(region.vertexCount());
+          region.forEachSpan([&](int rv, int a, int b) {
+            for (int u = a; u <= b; ++u) d2.push_back(pipe.field().distance2(u, rv));
+          });
+          std::vector<float> flat(d2.size(), 100.0f);
+          const edit::GaussianProfile profile(s.radius, s.sigma, s.mu);
+          std::vector<double> brushOnly;
+          for (int k = 0; k < repeats; ++k) {
+            brushOnly.push_back(brushOnlyMs(profile, s.strength, d2, flat, planet->heightLimit()));
+          }
+          const std::size_t brute = edit::bruteForceRegion(pipe.field(), s.radius);
+          const double totalMs = median(total), brushMs = median(brushOnly),
+                       errorsMs = median(errors);
+          worstMs[planet->chart().name()] = std::max(worstMs[planet->chart().name()], totalMs);
+          nlohmann::json j = {
+              {"bench", "deform"},
+              {"chart", planet->chart().name()},
+              {"grid", side},
+              {"latitude", row.latitude},
+              {"r_km", kRadiiKm[ri]},
+              {"control_u", rep.control.u},
+              {"control_v", rep.control.v},
+              {"modified_vertices", rep.modifiedVertices},
+              {"distinct_points", rep.modifiedPoints},
+              {"bruteforce_vertices", brute},
+              {"paper_vertices", row.vertices[ri]},
+              {"grow_ms", median(grow)},
+              {"heights_ms", median(heights)},
+              {"errors_ms", errorsMs},
+              {"total_ms", totalMs},
+              {"brush_only_ms", brushMs},
+              {"ratio", brushMs > 0 ? totalMs / brushMs : 0.0},
+              {"grow_heights_ms", median(growHeights)},
+              {"ratio_without_errors", brushMs > 0 ? median(growHeights) / brushMs : 0.0},
+              {"errors_share", totalMs > 0 ? errorsMs / totalMs : 0.0},
+              {"bounds_vertices", rep.boundsVertices},
+              {"paper_frame_ms", 1000.0 * row.frameS[ri]},
+              {"repeats", repeats},
+              {"threads", omp_get_max_threads()},
+              {"error_rule", terrain::toString(planet->bounds().rule())}};
+          out << j.dump() << "\n" << std::flush;
+          std::cerr << "deform " << planet->chart().name() << " " << side << " lat " << row.latitude
+                    << " r " << kRadiiKm[ri] << " km: " << rep.modifiedVertices
+                    << " vertices (brute force " << brute << ", paper " << row.vertices[ri]
+                    << "), total " << totalMs << " ms (errors " << errorsMs << "), brush only "
+                    << brushMs << " ms\n";
         }
-        // The same Gaussian, the same vertices' distances, in one flat array.
-        const edit::Region& region = pipe.lastRegion();
-        std::vector<double> d2;
-        d2.reserve(region.vertexCount());
-        region.forEachSpan([&](int rv, int a, int b) {
-          for (int u = a; u <= b; ++u) d2.push_back(pipe.field().distance2(u, rv));
-        });
-        std::vector<float> flat(d2.size(), 100.0f);
-        const edit::GaussianProfile profile(s.radius, s.sigma, s.mu);
-        std::vector<double> brushOnly;
-        for (int k = 0; k < repeats; ++k) {
-          brushOnly.push_back(brushOnlyMs(profile, s.strength, d2, flat, planet->heightLimit()));
-        }
-        const std::size_t brute = edit::bruteForceRegion(pipe.field(), s.radius);
-        const double totalMs = median(total), brushMs = median(brushOnly),
-                     errorsMs = median(errors);
-        nlohmann::json j = {
-            {"bench", "deform"},
-            {"grid", side},
-            {"latitude", row.latitude},
-            {"r_km", kRadiiKm[ri]},
-            {"control_u", rep.control.u},
-            {"control_v", rep.control.v},
-            {"modified_vertices", rep.modifiedVertices},
-            {"distinct_points", rep.modifiedPoints},
-            {"bruteforce_vertices", brute},
-            {"paper_vertices", row.vertices[ri]},
-            {"grow_ms", median(grow)},
-            {"heights_ms", median(heights)},
-            {"errors_ms", errorsMs},
-            {"total_ms", totalMs},
-            {"brush_only_ms", brushMs},
-            {"ratio", brushMs > 0 ? totalMs / brushMs : 0.0},
-            {"grow_heights_ms", median(growHeights)},
-            {"ratio_without_errors", brushMs > 0 ? median(growHeights) / brushMs : 0.0},
-            {"errors_share", totalMs > 0 ? errorsMs / totalMs : 0.0},
-            {"bounds_vertices", rep.boundsVertices},
-            {"paper_frame_ms", 1000.0 * row.frameS[ri]},
-            {"repeats", repeats},
-            {"threads", omp_get_max_threads()},
-            {"error_rule", terrain::toString(planet->bounds().rule())}};
-        out << j.dump() << "\n" << std::flush;
-        std::cerr << "deform " << side << " lat " << row.latitude << " r " << kRadiiKm[ri]
-                  << " km: " << rep.modifiedVertices << " vertices (brute force " << brute
-                  << ", paper " << row.vertices[ri] << "), total " << totalMs << " ms (errors "
-                  << errorsMs << "), brush only " << brushMs << " ms\n";
       }
     }
+    out << nlohmann::json{{"bench", "deform"},
+                          {"case", "worst_cells"},
+                          {"grid", side},
+                          {"latlong_worst_ms", worstMs["latlong"]},
+                          {"octahedral_worst_ms", worstMs["octahedral"]},
+                          {"octahedral_over_latlong",
+                           worstMs["latlong"] > 0 ? worstMs["octahedral"] / worstMs["latlong"]
+                                                  : 0.0}}
+               .dump()
+        << "\n"
+        << std::flush;
   }
 }
 

@@ -228,9 +228,13 @@ terrain::GridRegion applyRows(const ToolContext& ctx, const GaussianProfile& pro
   if (field.latLong() && region.symmetric()) {
     return symmetricBounds(region.centreU(), kMax, first, last, g.m());
   }
+  // The rows that changed, within the region's box (on a chart that folds its sides the box
+  // holds only the centre's quadrant of the region: Region::bounds).
   terrain::GridRegion r = region.bounds();
-  r.vBegin = first;
-  r.vEnd = last;
+  if (std::max(r.vBegin, first) <= std::min(r.vEnd, last)) {
+    r.vBegin = std::max(r.vBegin, first);
+    r.vEnd = std::min(r.vEnd, last);
+  }
   return r;
 }
 

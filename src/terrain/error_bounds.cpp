@@ -14,6 +14,7 @@
 #include "core/input_error.hpp"
 #include "core/latlong_chart.hpp"
 #include "core/named_values.hpp"
+#include "core/octahedral_chart.hpp"
 #include "terrain/bound_kernels.hpp"
 #include "terrain/diamond.hpp"
 #include "terrain/level_plan.hpp"
@@ -215,22 +216,39 @@ class LevelPass {
 }  // namespace
 
 // On a chart that folds its sides (core/octahedral_chart.hpp: (u, 0) is (m - u, 0), ...), a
-// side vertex's diamond has one half in the grid at each twin. Both halves are computed afresh
-// (either twin may lie outside the region) and both twins keep the larger codes, as the seam
-// twins do; the next level's vertices then read the combined codes. Returns the vertices
-// computed.
+// side vertex's diamond has one half in the grid at each twin. For the side vertices of this
+// level within `regions`, both halves are computed afresh (a twin may lie outside them) and both
+// twins keep the larger codes, as the seam twins do; the next level's vertices then read the
+// combined codes. Returns the vertices computed.
 template <class ChartT>
 std::size_t foldTwins(const ChartT& chart, const detail::VertexBounds<ChartT>& vertices,
-                      BoundCodes* codes, const LatticeCopy& lattice, int s, unsigned sides) {
+                      BoundCodes* codes, const LatticeCopy& lattice, int s,
+                      const std::vector<GridRegion>& regions) {
   const core::GridSize g = chart.grid();
   const int m = g.m();
+  // Per side (v = 0, v = m, u = 0, u = m), the positions k along it (k / s odd) that a region
+  // reaches, each pair of twins once (by its k <= m / 2).
+  std::array<std::vector<int>, 4> along;
+  for (const GridRegion& r : regions) {
+    const int u0 = std::max(0, r.uBegin), u1 = std::min(m, r.uEnd);
+    const int v0 = std::max(0, r.vBegin), v1 = std::min(m, r.vEnd);
+    auto add = [&](int side, int a, int b) {
+      for (int k = ((a / s) | 1) * s; k <= b; k += 2 * s)
+        if (k > 0 && k < m) along[std::size_t(side)].push_back(std::min(k, m - k));
+    };
+    if (r.vBegin <= 0) add(0, u0, u1);
+    if (r.vEnd >= m) add(1, u0, u1);
+    if (r.uBegin <= 0) add(2, v0, v1);
+    if (r.uEnd >= m) add(3, v0, v1);
+  }
   std::size_t count = 0;
   for (int side = 0; side < 4; ++side) {
-    if (!(sides & (1u << side))) continue;
-    for (int k = s; k <= m / 2; k += 2 * s) {  // edge vertices of this level: k / s odd
-      const bool alongU = side < 2;            // sides v = 0 and v = m run along u
-      const int fixed = (side & 1) ? m : 0;
-      const GridPoint a = alongU ? GridPoint{k, fixed} : GridPoint{fixed, k};
+    auto& ks = along[std::size_t(side)];
+    std::sort(ks.begin(), ks.end());
+    ks.erase(std::unique(ks.begin(), ks.end()), ks.end());
+    const int fixed = (side & 1) ? m : 0;
+    for (const int k : ks) {
+      const GridPoint a = side < 2 ? GridPoint{k, fixed} : GridPoint{fixed, k};
       GridPoint twins[4];
       const int n = chart.twins(a.u, a.v, twins);
       BoundCodes both{};
@@ -249,7 +267,8 @@ std::size_t foldTwins(const ChartT& chart, const detail::VertexBounds<ChartT>& v
 
 template <class ChartT>
 void ErrorBounds::computeLevel(const ChartT& chart, std::span<const float> heights, int level,
-                               const GridRegion& region, unsigned foldSides) {
+                               const GridRegion& region,
+                               const std::vector<GridRegion>* foldRegions) {
   static_assert(kExactMaxHalfSize < (1 << kLatticeShift),
                 "the row kernels' levels hold no lattice vertex: they do not copy to it");
   const core::GridSize g = chart.grid();
@@ -264,8 +283,8 @@ void ErrorBounds::computeLevel(const ChartT& chart, std::span<const float> heigh
   const LevelPass<ChartT> pass(chart, plan, vertices, kernels, codes, level, lattice);
   lastUpdateCount_ += pass.run();
   lastUpdateCount_ += pass.seamTwins(g, region);
-  if (foldSides && !plan.centre)
-    lastUpdateCount_ += foldTwins(chart, vertices, codes, lattice, plan.s, foldSides);
+  if (foldRegions && !plan.centre)
+    lastUpdateCount_ += foldTwins(chart, vertices, codes, lattice, plan.s, *foldRegions);
 }
 
 namespace {
@@ -275,6 +294,7 @@ void dispatchChart(const core::Chart& chart, F&& f) {
   // inline them into the per-vertex loops (a virtual call per sample otherwise).
   if (auto* ll = dynamic_cast<const core::LatLongChart*>(&chart)) return f(*ll);
   if (auto* flat = dynamic_cast<const core::FlatChart*>(&chart)) return f(*flat);
+  if (auto* oct = dynamic_cast<const core::OctahedralChart*>(&chart)) return f(*oct);
   f(chart);
 }
 }  // namespace
@@ -336,7 +356,8 @@ void ErrorBounds::build(const core::Chart& chart, std::span<const float> heights
     lattice_ = Lattice{};
   }
   lastUpdateCount_ = 0;
-  const unsigned folds = chart.foldsSides() ? 0xFu : 0u;
+  const std::vector<GridRegion> all{GridRegion::all(g)};
+  const std::vector<GridRegion>* folds = chart.foldsSides() ? &all : nullptr;
   dispatchChart(chart, [&](const auto& c) {
     for (int level = 0; level < levelCount(g); ++level)
       computeLevel(c, heights, level, GridRegion::all(g), folds);
@@ -384,18 +405,24 @@ void ErrorBounds::update(const core::Chart& chart, std::span<const float> height
         return std::tie(a.vBegin, a.uBegin, a.vEnd, a.uEnd) <
                std::tie(b.vBegin, b.uBegin, b.vEnd, b.uEnd);
       });
-      level.erase(std::unique(level.begin(), level.end(),
-                              [](const GridRegion& a, const GridRegion& b) {
-                                return a.uBegin == b.uBegin && a.uEnd == b.uEnd &&
-                                       a.vBegin == b.vBegin && a.vEnd == b.vEnd;
-                              }),
-                  level.end());
-      unsigned sides = 0;
-      for (const GridRegion& r : level)
-        sides |= (r.vBegin <= 0 ? 1u : 0u) | (r.vEnd >= m ? 2u : 0u) | (r.uBegin <= 0 ? 4u : 0u) |
-                 (r.uEnd >= m ? 8u : 0u);
+      // Overlapping images (a corner's four, grown over the upper levels) become their box:
+      // one pass over the union instead of one per image.
+      for (bool merged = true; merged;) {
+        merged = false;
+        for (std::size_t i = 0; i < level.size() && !merged; ++i)
+          for (std::size_t j = i + 1; j < level.size() && !merged; ++j) {
+            const GridRegion &a = level[i], &b = level[j];
+            if (a.uBegin > b.uEnd + 1 || b.uBegin > a.uEnd + 1 || a.vBegin > b.vEnd + 1 ||
+                b.vBegin > a.vEnd + 1)
+              continue;
+            level[i] = {std::min(a.uBegin, b.uBegin), std::max(a.uEnd, b.uEnd),
+                        std::min(a.vBegin, b.vBegin), std::max(a.vEnd, b.vEnd)};
+            level.erase(level.begin() + std::ptrdiff_t(j));
+            merged = true;
+          }
+      }
       for (std::size_t k = 0; k < level.size(); ++k)
-        computeLevel(c, heights, l, level[k], k + 1 == level.size() ? sides : 0u);
+        computeLevel(c, heights, l, level[k], k + 1 == level.size() ? &level : nullptr);
     }
   });
 }

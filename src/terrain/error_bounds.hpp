@@ -118,12 +118,12 @@ class ErrorBounds {
   std::size_t lastUpdateVertexCount() const { return lastUpdateCount_; }
 
  private:
-  // `foldSides`: on a chart that folds its sides (core::Chart::foldsSides), the sides (bits 0-3:
-  // v = 0, v = m, u = 0, u = m) whose vertices of this level combine with their twins after
-  // the region's rows (0: none).
+  // `foldRegions`: on a chart that folds its sides (core::Chart::foldsSides), the level's
+  // regions whose side vertices combine with their twins after the region's rows (null: none).
   template <class ChartT>
   void computeLevel(const ChartT& chart, std::span<const float> heights, int level,
-                    const GridRegion& region, unsigned foldSides = 0);
+                    const GridRegion& region,
+                    const std::vector<GridRegion>* foldRegions = nullptr);
 
   ErrorRule rule_ = ErrorRule::kHybridExact;
   BoundsContent content_ = BoundsContent::kErrorsAndRadii;
