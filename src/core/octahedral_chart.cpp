@@ -47,6 +47,40 @@ int OctahedralChart::twins(int u, int v, GridPoint out[4]) const {
   return 1;
 }
 
+namespace {
+
+// sin and cos of (pi/2) t for t in [0, 1], without a libm call: the angle is folded to [0, pi/4]
+// (exactly: 1 - t is exact for t in [0.5, 1]) and evaluated by Cephes' minimax polynomials
+// (relative error about 1e-16). The grid vertices of one point reach it with the same t (their
+// canonical vertex's), so they get the same bits.
+inline void quarterTurnSinCos(double t, double& sine, double& cosine) {
+  const bool swap = t > 0.5;
+  const double x = (swap ? 1.0 - t : t) * (std::numbers::pi / 2), z = x * x;
+  const double s = x + x * z *
+                           (((((1.58962301576546568060e-10 * z - 2.50507477628578072866e-8) * z +
+                               2.75573136213857245213e-6) *
+                                  z -
+                              1.98412698295895385996e-4) *
+                                 z +
+                             8.33333333332211858878e-3) *
+                                z -
+                            1.66666666666666307295e-1);
+  const double c = 1.0 - 0.5 * z +
+                   z * z *
+                       (((((-1.13585365213876817300e-11 * z + 2.08757008419747316778e-9) * z -
+                           2.75573141792967388112e-7) *
+                              z +
+                          2.48015872888517045348e-5) *
+                             z -
+                         1.38888888888730564116e-3) *
+                            z +
+                        4.16666666666665929218e-2);
+  sine = swap ? c : s;
+  cosine = swap ? s : c;
+}
+
+}  // namespace
+
 Eigen::Vector3d OctahedralChart::directionOfSquare(double x, double y) const {
   const double ax = std::abs(x), ay = std::abs(y);
   const double sd = 1.0 - (ax + ay);  // >= 0: the northern hemisphere
@@ -57,11 +91,14 @@ Eigen::Vector3d OctahedralChart::directionOfSquare(double x, double y) const {
   }
   // Equal area: r is the distance from the hemisphere's pole in the square's L1 sense, phi the
   // angle round it; z = 1 - r^2 keeps areas (Clarberg 2008).
+  // phi = ((ay - ax) / r + 1) pi/4 = t pi/2 with t = ay / r in the north (r = ax + ay) and
+  // (1 - ax) / r in the south (r = 2 - ax - ay).
   const double r = 1.0 - std::abs(sd);
-  const double phi = r > 0 ? ((ay - ax) / r + 1.0) * (kPi / 4) : 0.0;
+  const double t = r > 0 ? (sd >= 0 ? ay : 1.0 - ax) / r : 0.0;
+  double sine, cosine;
+  quarterTurnSinCos(std::clamp(t, 0.0, 1.0), sine, cosine);
   const double s = r * std::sqrt(2.0 - r * r);
-  return {std::copysign(std::cos(phi) * s, x), std::copysign(std::sin(phi) * s, y),
-          std::copysign(1.0 - r * r, sd)};
+  return {std::copysign(cosine * s, x), std::copysign(sine * s, y), std::copysign(1.0 - r * r, sd)};
 }
 
 Eigen::Vector3d OctahedralChart::direction(int u, int v) const {
