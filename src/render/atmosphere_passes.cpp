@@ -13,53 +13,12 @@
 #include <string>
 
 #include "render/atmosphere_shaders.hpp"
+#include "render/gl_program.hpp"
 #include "render/projection.hpp"
 
 namespace ps::render {
 
 namespace {
-
-GLuint compileShader(GLenum type, const char* source) {
-  const GLuint s = glCreateShader(type);
-  glShaderSource(s, 1, &source, nullptr);
-  glCompileShader(s);
-  GLint ok = 0;
-  glGetShaderiv(s, GL_COMPILE_STATUS, &ok);
-  if (!ok) {
-    std::array<char, 4096> log{};
-    glGetShaderInfoLog(s, GLsizei(log.size()), nullptr, log.data());
-    glDeleteShader(s);
-    throw std::runtime_error(std::string("renderer: shader does not compile: ") + log.data());
-  }
-  return s;
-}
-
-GLuint linkProgram(const char* vertex, const char* fragment) {
-  const GLuint v = compileShader(GL_VERTEX_SHADER, vertex);
-  const GLuint f = compileShader(GL_FRAGMENT_SHADER, fragment);
-  const GLuint p = glCreateProgram();
-  glAttachShader(p, v);
-  glAttachShader(p, f);
-  glLinkProgram(p);
-  glDeleteShader(v);
-  glDeleteShader(f);
-  GLint ok = 0;
-  glGetProgramiv(p, GL_LINK_STATUS, &ok);
-  if (!ok) {
-    std::array<char, 4096> log{};
-    glGetProgramInfoLog(p, GLsizei(log.size()), nullptr, log.data());
-    glDeleteProgram(p);
-    throw std::runtime_error(std::string("renderer: program does not link: ") + log.data());
-  }
-  return p;
-}
-
-std::array<float, 16> columnMajor(const Eigen::Matrix4d& m) {
-  std::array<float, 16> a{};
-  for (int c = 0; c < 4; ++c)
-    for (int r = 0; r < 4; ++r) a[std::size_t(4 * c + r)] = float(m(r, c));
-  return a;
-}
 
 // Clip space for a pass's quad, whose corners lie between `nearest` and `farthest` along the
 // camera's axis (farthest > 0). Depth is neither tested nor written: the planes only need to

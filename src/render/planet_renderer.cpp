@@ -21,6 +21,7 @@
 #include "io/heightmap_export.hpp"
 #include "render/atmosphere_passes.hpp"
 #include "render/changed_ranges.hpp"
+#include "render/gl_program.hpp"
 #include "render/height_tile_cache.hpp"
 #include "render/mesh_shaders.hpp"
 #include "render/projection.hpp"
@@ -57,46 +58,6 @@ uniform sampler2D image;
 out vec4 colour;
 void main() { colour = vec4(texture(image, uv).rgb, 1.0); }
 )";
-
-GLuint compile(GLenum type, const char* source) {
-  const GLuint s = glCreateShader(type);
-  glShaderSource(s, 1, &source, nullptr);
-  glCompileShader(s);
-  GLint ok = 0;
-  glGetShaderiv(s, GL_COMPILE_STATUS, &ok);
-  if (!ok) {
-    std::array<char, 4096> log{};
-    glGetShaderInfoLog(s, GLsizei(log.size()), nullptr, log.data());
-    glDeleteShader(s);
-    throw std::runtime_error(std::string("renderer: shader does not compile: ") + log.data());
-  }
-  return s;
-}
-
-GLuint program(const char* vertex, const char* fragment) {
-  const GLuint v = compile(GL_VERTEX_SHADER, vertex), f = compile(GL_FRAGMENT_SHADER, fragment);
-  const GLuint p = glCreateProgram();
-  glAttachShader(p, v);
-  glAttachShader(p, f);
-  glLinkProgram(p);
-  glDeleteShader(v);
-  glDeleteShader(f);
-  GLint ok = 0;
-  glGetProgramiv(p, GL_LINK_STATUS, &ok);
-  if (!ok) {
-    std::array<char, 4096> log{};
-    glGetProgramInfoLog(p, GLsizei(log.size()), nullptr, log.data());
-    throw std::runtime_error(std::string("renderer: program does not link: ") + log.data());
-  }
-  return p;
-}
-
-std::array<float, 16> toGl(const Eigen::Matrix4d& m) {
-  std::array<float, 16> a{};
-  for (int c = 0; c < 4; ++c)
-    for (int r = 0; r < 4; ++r) a[std::size_t(4 * c + r)] = float(m(r, c));  // column-major
-  return a;
-}
 
 constexpr float kRampLow = -9000, kRampHigh = 9000;
 
@@ -135,9 +96,9 @@ struct PlanetRenderer::Gl {
 
 PlanetRenderer::PlanetRenderer() : gl_(new Gl) {
   Gl& g = *gl_;
-  g.meshProgram = program(kMeshVertex, kMeshFragment);
-  g.lineProgram = program(kLineVertex, kLineFragment);
-  g.backgroundProgram = program(kBackgroundVertex, kBackgroundFragment);
+  g.meshProgram = linkProgram(kMeshVertex, kMeshFragment);
+  g.lineProgram = linkProgram(kLineVertex, kLineFragment);
+  g.backgroundProgram = linkProgram(kBackgroundVertex, kBackgroundFragment);
   glGenVertexArrays(1, &g.meshVao);
   glGenBuffers(1, &g.positionBuffer);
   glGenBuffers(1, &g.heightBuffer);
@@ -330,7 +291,7 @@ void PlanetRenderer::drawMesh(const terrain::Mesh& mesh, const terrain::Camera& 
   Gl& g = *gl_;
   const Eigen::Vector3d offset = mesh.eye - camera.eye;
   glUseProgram(g.meshProgram);
-  const auto m = toGl(clipFromEyeRelative(clip, camera.rotation, offset));
+  const auto m = columnMajor(clipFromEyeRelative(clip, camera.rotation, offset));
   glUniformMatrix4fv(glGetUniformLocation(g.meshProgram, "clipFromEyeRelative"), 1, GL_FALSE,
                      m.data());
   glUniform3f(glGetUniformLocation(g.meshProgram, "offset"), float(offset.x()), float(offset.y()),
@@ -395,7 +356,7 @@ void PlanetRenderer::drawLines(const std::vector<Eigen::Vector3d>& points, bool 
   glBufferData(GL_ARRAY_BUFFER, GLsizeiptr(rel.size() * sizeof(Eigen::Vector3f)), rel.data(),
                GL_STREAM_DRAW);
   glUseProgram(g.lineProgram);
-  const auto m = toGl(clipFromEyeRelative(clip, camera.rotation, Eigen::Vector3d::Zero()));
+  const auto m = columnMajor(clipFromEyeRelative(clip, camera.rotation, Eigen::Vector3d::Zero()));
   glUniformMatrix4fv(glGetUniformLocation(g.lineProgram, "clipFromEyeRelative"), 1, GL_FALSE,
                      m.data());
   glUniform3f(glGetUniformLocation(g.lineProgram, "lineColour"), colour.x(), colour.y(),
