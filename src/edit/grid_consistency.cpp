@@ -36,7 +36,7 @@ void enforceConsistency(const core::Chart& chart, std::span<float> heights,
       std::fill_n(heights.begin() + std::ptrdiff_t(g.index(0, v)), g.side(), h);
     }
   }
-  if (!chart.wrapsU() && !chart.hasPoleRows() && chart.radius() > 0) {
+  if (chart.foldsSides()) {
     // A chart that folds its sides (core/octahedral_chart.hpp): the region's border vertices
     // give their height to their twins.
     auto copyToTwins = [&](int u, int v) {
