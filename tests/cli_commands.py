@@ -345,8 +345,8 @@ def finite_numbers(x, where):
         fail(f"{where} is {x}")
 
 
-BENCHES = ("bounds", "deform", "erosion", "export", "frame", "haptics", "render", "sand-tin", "tessellate",
-           "track")
+BENCHES = ("bounds", "charts", "deform", "erosion", "export", "frame", "haptics", "render", "sand-tin",
+           "tessellate", "track")
 
 
 def check_bench_row(r):
@@ -372,6 +372,12 @@ def check_bench_row(r):
         fail(f"export overlay: {r}")
     if b == "deform" and r.get("modified_vertices", 1) <= 0:
         fail(f"deform: no vertex modified in {r}")
+    if b == "deform" and "modified_vertices" in r and r["modified_vertices"] != r["bruteforce_vertices"]:
+        fail(f"deform: region growing is not brute force's set: {r}")
+    # The octahedral chart's equal-area cells (docs/CHARTS.md): within a few percent.
+    if b == "charts" and (r["cell_area_max_over_min"] < 1 or
+                          (r["chart"] == "octahedral" and r["cell_area_max_over_min"] > 1.1)):
+        fail(f"charts: cell areas {r}")
     if b == "sand-tin" and (r.get("model") not in ("tin", "grid") or abs(r["volume_drift"]) > 1e-6
                             or r["vertices"] <= 0 or r["memory_bytes"] <= 0 or r.get("valid", True) is not True):
         fail(f"sand-tin: {r}")
