@@ -7,8 +7,18 @@
 #include <opencv2/core.hpp>
 #include <set>
 
+#define GL_GLEXT_PROTOTYPES
+#include <GL/gl.h>
+#include <GL/glext.h>
+
+#include <optional>
+#include <string>
+
+#include "edit/brush.hpp"
+#include "edit/edit_pipeline.hpp"
 #include "gl_test.hpp"
 #include "render/egl_context.hpp"
+#include "render/height_tile_cache.hpp"
 #include "render/planet_renderer.hpp"
 #include "render/tile_requests.hpp"
 #include "terrain/relief.hpp"
@@ -132,4 +142,102 @@ TEST(TileRequests, PixelsFindTheLevelTheirFootprintAsksFor) {
                 altitude, missed, planetPixels, renderer.stats().heightTilesNeeded);
   }
   EXPECT_GE(starvedViews, 2);
+}
+
+// The tiles hold the heights they stand for, aprons included: across a seam the other side's
+// column, across a folded side of the octahedral chart the twin's side (the apron texel d steps
+// beyond a side vertex holds the vertex d steps inside from that vertex's twin, as Chart::twins
+// says), and after an edit near a fold the tiles across it are sent again.
+TEST(TileRequests, TilesAndTheirApronsHoldTheHeightsAcrossFoldsAndSeams) {
+  SKIP_WITHOUT_GL();
+  render::EglContext gl;
+  for (const bool octahedral : {true, false}) {
+    auto planet = octahedral ? testkit::bumpyOctahedralTerrain(9, 4, 5000.0)
+                             : testkit::bumpyTerrain(9, 4, 5000.0);
+    const core::Chart& chart = planet.chart();
+    const int m = planet.grid().m(), side = planet.grid().side();
+    const double R = chart.radius();
+    render::HeightTileCache cache;
+    std::string why;
+    // Expected height of level-0 position (u, v), one step outside the grid at most per axis.
+    auto expected = [&](int u, int v) -> std::optional<float> {
+      if (u >= 0 && u <= m && v >= 0 && v <= m) return planet.height(u, v);
+      if ((u < 0 || u > m) && (v < 0 || v > m)) return std::nullopt;  // a corner's diagonal
+      if (!octahedral) {
+        if (v < 0 || v > m) return planet.height(u, std::clamp(v, 0, m));  // clamped at a pole
+        return planet.height(((u % m) + m) % m, v);                        // the seam
+      }
+      // Beyond a folded side: from the side vertex, the twin, then as far inside.
+      const bool beyondV = v < 0 || v > m;
+      const int sideU = beyondV ? u : (u < 0 ? 0 : m), sideV = beyondV ? (v < 0 ? 0 : m) : v;
+      const int d = beyondV ? std::abs(v - sideV) : std::abs(u - sideU);
+      // Beyond a corner (the south pole, where four quadrants meet) no one neighbour is right.
+      if ((sideU == 0 || sideU == m) && (sideV == 0 || sideV == m)) return std::nullopt;
+      core::GridPoint t[4];
+      const int n = chart.twins(sideU, sideV, t);
+      for (int k = 0; k < n; ++k) {
+        if (t[k].u == sideU && t[k].v == sideV && n > 1) continue;
+        const int iu = beyondV ? t[k].u : (t[k].u == 0 ? d : m - d);
+        const int iv = beyondV ? (t[k].v == 0 ? d : m - d) : t[k].v;
+        return planet.height(iu, iv);
+      }
+      return planet.height(sideU, sideV);  // a side's midpoint is its own twin: mirrored in place
+    };
+    auto check = [&](const char* when) {
+      const auto& p = cache.pyramid();
+      const int S = cache.slotSide();
+      std::vector<float> texels(std::size_t(S) * std::size_t(S) * std::size_t(cache.layers()));
+      glBindTexture(GL_TEXTURE_2D_ARRAY, cache.tiles());
+      glPixelStorei(GL_PACK_ALIGNMENT, 4);
+      glGetTexImage(GL_TEXTURE_2D_ARRAY, 0, GL_RED, GL_FLOAT, texels.data());
+      int checked = 0, apron = 0;
+      for (std::size_t tile = 0; tile < p.tileCount(); ++tile) {
+        const int layer = cache.layerOf(tile);
+        if (layer < 0) continue;
+        const render::TileKey k = p.key(tile);
+        const int step = 1 << k.level;
+        for (int j = 0; j < S; ++j)
+          for (int i = 0; i < S; ++i) {
+            const int u = (k.tx * p.tileCells + i - 1) * step,
+                      v = (k.ty * p.tileCells + j - 1) * step;
+            const auto want = expected(u, v);
+            if (!want) continue;
+            const float got =
+                texels[(std::size_t(layer) * std::size_t(S) + std::size_t(j)) * std::size_t(S) +
+                       std::size_t(i)];
+            ASSERT_EQ(got, *want) << chart.name() << " " << when << ": tile " << k.level << "/"
+                                  << k.tx << "," << k.ty << " texel (" << i << "," << j
+                                  << ") = grid (" << u << "," << v << ")";
+            ++checked;
+            apron += u < 0 || u > m || v < 0 || v > m;
+          }
+      }
+      EXPECT_GT(apron, 100) << chart.name() << " " << when;
+      (void)checked;
+      (void)side;
+    };
+    // A view over the fold of side u = 0 south of the equator (lat-long: over the seam there).
+    const Eigen::Vector3d d = Eigen::Vector3d(-0.7, 0.01, -0.7).normalized();
+    const auto cam = terrain::Camera::lookAt((R + 1.5e6) * d, R * d, d.unitOrthogonal(), 320, 240,
+                                             70 * M_PI / 180);
+    terrain::Tessellator tess;
+    ASSERT_TRUE(cache.sync(planet, tess.tessellate(planet, cam, {}), cam, why)) << why;
+    check("first view");
+    // An edit on the fold, then the same view: the tiles across it follow.
+    edit::EditPipeline pipe(planet);
+    edit::BrushSettings b;
+    b.radius = 0.05 * R;
+    b.strength = 2500;
+    pipe.apply(edit::GaussianBrush(b), {R * d, 0.0});
+    ASSERT_TRUE(cache.sync(planet, tess.tessellate(planet, cam, {}), cam, why)) << why;
+    check("after an edit");
+    // One vertex just inside a side (no twin of its own): the apron beyond the side's mirror
+    // point, in the tiles across the fold, follows it too.
+    for (const auto& [u, v] : {std::pair{1, m / 2 + 37}, std::pair{m / 2 - 53, 1}}) {
+      planet.mutableHeights()[planet.grid().index(u, v)] += 700.0f;
+      planet.commitEdit(terrain::GridRegion{u, u, v, v});
+    }
+    ASSERT_TRUE(cache.sync(planet, tess.tessellate(planet, cam, {}), cam, why)) << why;
+    check("after single vertices beside the sides");
+  }
 }

@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <functional>
 #include <limits>
+#include <vector>
 
 namespace ps::render {
 
@@ -124,24 +125,54 @@ bool HeightTileCache::reserve(std::size_t slots) {
   return true;
 }
 
+namespace {
+
+// A level-0 grid position outside the grid, across a side that the chart folds (core::Chart::
+// foldsSides: each side glued to itself mirrored, as core/octahedral_chart.hpp): the grid vertex
+// that is there. Across v = 0, (u, -d) is (m - u, d); across u = 0, (-d, v) is (d, m - v); and
+// likewise at m.
+core::GridPoint acrossFold(int u, int v, int m) {
+  while (u < 0 || u > m || v < 0 || v > m) {
+    if (v < 0) {
+      u = m - u, v = -v;
+    } else if (v > m) {
+      u = m - u, v = 2 * m - v;
+    } else if (u < 0) {
+      u = -u, v = m - v;
+    } else {
+      u = 2 * m - u, v = m - v;
+    }
+  }
+  return {u, v};
+}
+
+}  // namespace
+
 void HeightTileCache::sendTile(const terrain::Terrain& planet, int slot, const TileKey& key, int i0,
                                int i1, int j0, int j1) {
   // Slot texel (i, j) is level texel (tx T + i - 1, ty T + j - 1): the apron repeats the
-  // neighbour across a seam the chart wraps, and the edge elsewhere (as clamping would).
+  // neighbour across a seam the chart wraps or a side it folds, and the edge elsewhere (as
+  // clamping would).
   const int T = pyramid_.tileCells, mL = pyramid_.levelCells(key.level),
-            side = planet.grid().side();
-  const bool wraps = planet.chart().wrapsU();
+            side = planet.grid().side(), m = planet.grid().m(), step = 1 << key.level;
+  const bool wraps = planet.chart().wrapsU(), folds = planet.chart().foldsSides();
   const float* h = planet.heights().data();
   const int w = i1 - i0 + 1, rows = j1 - j0 + 1;
   texels_.resize(std::size_t(w) * std::size_t(rows));
   for (int j = 0; j < rows; ++j) {
-    const int gv = std::clamp(key.ty * T + j0 + j - 1, 0, mL);
-    const std::size_t row = std::size_t(gv << key.level) * std::size_t(side);
+    const int gvRaw = key.ty * T + j0 + j - 1;
+    const int gv = std::clamp(gvRaw, 0, mL);
+    const std::size_t row = std::size_t(gv * step) * std::size_t(side);
     for (int i = 0; i < w; ++i) {
-      int gu = key.tx * T + i0 + i - 1;
-      gu = wraps ? ((gu % mL) + mL) % mL : std::clamp(gu, 0, mL);
-      texels_[std::size_t(j) * std::size_t(w) + std::size_t(i)] =
-          h[row + std::size_t(gu << key.level)];
+      const int guRaw = key.tx * T + i0 + i - 1;
+      float& texel = texels_[std::size_t(j) * std::size_t(w) + std::size_t(i)];
+      if (folds && (guRaw < 0 || guRaw > mL || gvRaw < 0 || gvRaw > mL)) {
+        const core::GridPoint p = acrossFold(guRaw * step, gvRaw * step, m);
+        texel = h[std::size_t(p.v) * std::size_t(side) + std::size_t(p.u)];
+        continue;
+      }
+      const int gu = wraps ? ((guRaw % mL) + mL) % mL : std::clamp(guRaw, 0, mL);
+      texel = h[row + std::size_t(gu * step)];
     }
   }
   glTexSubImage3D(GL_TEXTURE_2D_ARRAY, 0, i0, j0, slot, w, rows, 1, GL_RED, GL_FLOAT,
@@ -158,8 +189,27 @@ void HeightTileCache::sendChanges(const terrain::Terrain& planet) {
   };
   std::vector<Box> dirty(static_cast<std::size_t>(slots_));
   const bool wraps = planet.chart().wrapsU();
-  for (const terrain::GridRegion& r : changed_) {
-    r.forEachColumnRange(planet.grid(), [&](int u0, int u1) {
+  // On a chart that folds its sides, a changed vertex near a side is also the apron texel of
+  // the tiles across the fold: each changed region is looked at from there too, as the region
+  // it is beyond that side (acrossFold's mirrors, outside the grid).
+  std::vector<terrain::GridRegion> looked(changed_.begin(), changed_.end());
+  if (planet.chart().foldsSides()) {
+    const int m = planet.grid().m();
+    for (const terrain::GridRegion& r : changed_) {
+      looked.push_back({m - r.uEnd, m - r.uBegin, -r.vEnd, -r.vBegin});
+      looked.push_back({m - r.uEnd, m - r.uBegin, 2 * m - r.vEnd, 2 * m - r.vBegin});
+      looked.push_back({-r.uEnd, -r.uBegin, m - r.vEnd, m - r.vBegin});
+      looked.push_back({2 * m - r.uEnd, 2 * m - r.uBegin, m - r.vEnd, m - r.vBegin});
+    }
+  }
+  for (const terrain::GridRegion& r : looked) {
+    const auto columns = [&](auto&& f) {
+      if (r.uBegin < 0 || r.uEnd > planet.grid().m()) {
+        if (!planet.chart().wrapsU()) return f(r.uBegin, r.uEnd);  // beyond a fold: as is
+      }
+      r.forEachColumnRange(planet.grid(), f);
+    };
+    columns([&](int u0, int u1) {
       for (int slot = 0; slot < slots_; ++slot) {
         if (tileIn_[std::size_t(slot)] == kNoTile) continue;
         const TileKey k = pyramid_.key(tileIn_[std::size_t(slot)]);

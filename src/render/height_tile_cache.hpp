@@ -52,6 +52,11 @@ class HeightTileCache {
   std::size_t residentTiles() const { return resident_; }
   std::size_t neededTiles() const { return needed_.size(); }  // by the last view
   int levelBias() const { return bias_; }  // levels made coarser to fit the budget (0: none)
+  // The array layer that holds tile `tile` (TilePyramid::index), or -1 (for tests and tools).
+  int layerOf(std::size_t tile) const {
+    return tile < slotOf_.size() ? int(slotOf_[tile]) - 1 : -1;
+  }
+  int layers() const { return slots_; }
 
  private:
   void release();
