@@ -102,7 +102,8 @@ class Region {
 // R^2 (pi/m)^2, is ~1e7 times the rounding error). Tests check the equality for centres at the
 // poles, the seam and near the poles and for radii from below one cell to the planet's diameter.
 // On other charts the same fill scans vertex by vertex and returns the connected component of
-// the centre.
+// the centre; on a chart that folds its sides (core/octahedral_chart.hpp) it goes on from the
+// twins of the side vertices it reached, so the component is the sphere's, across the folds.
 class RegionGrower {
  public:
   // Throws core::InputError for a radius that is not finite and > 0.
