@@ -20,7 +20,6 @@
 #include "render/egl_context.hpp"
 #include "render/image_compare.hpp"
 #include "render/planet_renderer.hpp"
-#include "terrain/relief.hpp"
 #include "terrain/tessellator.hpp"
 #include "test_terrains.hpp"
 
@@ -29,10 +28,7 @@ using namespace ps;
 namespace {
 
 terrain::Terrain reliefPlanet(int n) {
-  auto chart = testkit::earthChart(n);
-  terrain::ReliefParams p;
-  p.seed = 3;
-  return terrain::Terrain(chart, terrain::generateRelief(*chart, p));
+  return testkit::reliefTerrain(n, 3);
 }
 
 struct View {

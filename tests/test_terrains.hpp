@@ -9,6 +9,7 @@
 
 #include "core/latlong_chart.hpp"
 #include "core/octahedral_chart.hpp"
+#include "terrain/relief.hpp"
 #include "terrain/terrain.hpp"
 
 namespace ps::testkit {
@@ -53,6 +54,14 @@ inline terrain::Terrain bumpyTerrain(int n, std::uint32_t seed = 1, double ampli
                                      terrain::ErrorRule rule = terrain::ErrorRule::kHybridExact) {
   auto chart = earthChart(n);
   return terrain::Terrain(chart, bumpyHeights(*chart, seed, amplitude), rule);
+}
+
+// The production relief (terrain/relief.hpp) on an Earth-sized lat-long planet.
+inline terrain::Terrain reliefTerrain(int n, std::uint64_t seed) {
+  auto chart = earthChart(n);
+  terrain::ReliefParams p;
+  p.seed = seed;
+  return terrain::Terrain(chart, terrain::generateRelief(*chart, p));
 }
 
 inline std::shared_ptr<const core::OctahedralChart> octahedralChart(

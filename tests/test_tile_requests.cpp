@@ -21,7 +21,6 @@
 #include "render/height_tile_cache.hpp"
 #include "render/planet_renderer.hpp"
 #include "render/tile_requests.hpp"
-#include "terrain/relief.hpp"
 #include "terrain/tessellator.hpp"
 #include "test_terrains.hpp"
 
@@ -30,10 +29,7 @@ using namespace ps;
 namespace {
 
 terrain::Terrain reliefPlanet(int n) {
-  auto chart = testkit::earthChart(n);
-  terrain::ReliefParams p;
-  p.seed = 11;
-  return terrain::Terrain(chart, terrain::generateRelief(*chart, p));
+  return testkit::reliefTerrain(n, 11);
 }
 
 terrain::Camera above(double R, double altitude, int width = 320, int height = 240) {
