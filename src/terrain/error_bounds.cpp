@@ -378,7 +378,6 @@ void ErrorBounds::update(const core::Chart& chart, std::span<const float> height
     if (!r.empty()) regions.push_back(r);
   if (regions.empty()) return;
   const bool folds = chart.foldsSides();
-  const int m = g.m();
   dispatchChart(chart, [&](const auto& c) {
     std::vector<GridRegion> level;
     for (int l = 0; l < levelCount(g); ++l) {
@@ -394,12 +393,8 @@ void ErrorBounds::update(const core::Chart& chart, std::span<const float> height
       // combined once, after all of them.
       level.clear();
       for (const GridRegion& r : regions) {
-        const bool vSide = r.vBegin <= 0 || r.vEnd >= m;
-        const bool uSide = r.uBegin <= 0 || r.uEnd >= m;
-        level.push_back(r);
-        if (vSide) level.push_back({m - r.uEnd, m - r.uBegin, r.vBegin, r.vEnd});
-        if (uSide) level.push_back({r.uBegin, r.uEnd, m - r.vEnd, m - r.vBegin});
-        if (uSide && vSide) level.push_back({m - r.uEnd, m - r.uBegin, m - r.vEnd, m - r.vBegin});
+        const std::vector<GridRegion> images = foldImages(r, g, false);
+        level.insert(level.end(), images.begin(), images.end());
       }
       std::sort(level.begin(), level.end(), [](const GridRegion& a, const GridRegion& b) {
         return std::tie(a.vBegin, a.uBegin, a.vEnd, a.uEnd) <

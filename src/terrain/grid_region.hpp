@@ -97,12 +97,16 @@ struct GridRegion {
 // images that can hold such a part: the box itself, its image under u -> m - u where it
 // reaches a side v = 0 or m or the midline u = m/2, under v -> m - v where it reaches a side
 // u = 0 or m or the midline v = m/2, and under both where both hold. For a box that spans
-// quadrants the images only add work.
-inline std::vector<GridRegion> foldImages(const GridRegion& r, const core::GridSize& g) {
+// quadrants the images only add work. `acrossMidlines` false: the images across the sides only
+// (a side vertex's twin; what the error bounds need level by level).
+inline std::vector<GridRegion> foldImages(const GridRegion& r, const core::GridSize& g,
+                                          bool acrossMidlines = true) {
   if (r.empty()) return {};
   const int m = g.m();
-  const bool flipU = r.vBegin <= 0 || r.vEnd >= m || (r.uBegin <= m / 2 && r.uEnd >= m / 2);
-  const bool flipV = r.uBegin <= 0 || r.uEnd >= m || (r.vBegin <= m / 2 && r.vEnd >= m / 2);
+  const bool flipU =
+      r.vBegin <= 0 || r.vEnd >= m || (acrossMidlines && r.uBegin <= m / 2 && r.uEnd >= m / 2);
+  const bool flipV =
+      r.uBegin <= 0 || r.uEnd >= m || (acrossMidlines && r.vBegin <= m / 2 && r.vEnd >= m / 2);
   std::vector<GridRegion> out{r};
   if (flipU) out.push_back({m - r.uEnd, m - r.uBegin, r.vBegin, r.vEnd});
   if (flipV) out.push_back({r.uBegin, r.uEnd, m - r.vEnd, m - r.vBegin});
