@@ -128,6 +128,63 @@ TEST(IoPlanetFile, FlatChartFieldsRoundTrip) {
   EXPECT_EQ(d.heights, h);
 }
 
+TEST(IoPlanetFile, OctahedralPlanetsRoundTripAsVersion2AndLatLongStaysVersion1) {
+  for (const auto mapping :
+       {core::OctahedralChart::Mapping::kEqualArea, core::OctahedralChart::Mapping::kCentral}) {
+    const auto t = testkit::bumpyOctahedralTerrain(6, 5, 9000.0, mapping);
+    const auto bytes = io::encodePlanet(t.chart(), t.heights(), t.bounds().rule());
+    std::uint32_t version = 0;
+    std::memcpy(&version, bytes.data() + 8, 4);
+    EXPECT_EQ(version, 2u);
+    EXPECT_EQ(std::string(reinterpret_cast<const char*>(bytes.data() + 16)), "octahedral");
+    const io::PlanetData d = io::parsePlanet(bytes, "octa.planet");
+    const auto* oct = dynamic_cast<const core::OctahedralChart*>(d.chart.get());
+    ASSERT_NE(oct, nullptr);
+    EXPECT_EQ(oct->mapping(), mapping);
+    EXPECT_EQ(oct->radius(), t.chart().radius());
+    EXPECT_EQ(oct->grid().side(), t.grid().side());
+    EXPECT_EQ(std::memcmp(d.heights.data(), t.heights().data(), t.heights().size() * 4), 0);
+    // The same planet through a save and a load: the same bytes again.
+    EXPECT_EQ(io::encodePlanet(*d.chart, d.heights, d.rule), bytes);
+  }
+  std::uint32_t version = 0;
+  const auto latlong = goodFile();
+  std::memcpy(&version, latlong.data() + 8, 4);
+  EXPECT_EQ(version, 1u) << "a planet version 1 holds must stay readable by older builds";
+}
+
+TEST(IoPlanetFile, OctahedralHeaderFieldsAndTwinsAreChecked) {
+  const auto t = testkit::bumpyOctahedralTerrain(5, 2, 5000.0);
+  const auto good = io::encodePlanet(t.chart(), t.heights(), t.bounds().rule());
+  auto edit = [&](std::size_t off, const void* value, std::size_t n) {
+    auto b = good;
+    std::memcpy(b.data() + off, value, n);
+    fixHeaderCrc(b);
+    return b;
+  };
+  const std::uint32_t one = 1, seven = 7;
+  const double spacing = 3.0;
+  expectRefused(edit(8, &one, 4), "chart 'octahedral' needs format version 2, the header says 1");
+  expectRefused(edit(100, &seven, 4),
+                "chart variant 7 is not one of the 2 that chart 'octahedral'");
+  expectRefused(edit(48, &spacing, 8), "an octahedral planet must store 0 in the flat spacing");
+  const unsigned char byte = 1;
+  expectRefused(edit(110, &byte, 1), "reserved header byte 110 is not zero");
+  // A lat-long file may not carry a variant in version 1's reserved bytes.
+  auto latlong = goodFile();
+  std::memcpy(latlong.data() + 100, &one, 4);
+  fixHeaderCrc(latlong);
+  expectRefused(latlong, "reserved header byte 100 is not zero");
+  // Heights that differ between the twins of a folded side: the grid does not fit its chart.
+  auto twisted = good;
+  const int m = t.grid().m();
+  const float other = t.heights()[t.grid().index(3, 0)] + 100.0f;
+  const std::size_t heightsAt = twisted.size() - t.heights().size() * 4;
+  std::memcpy(twisted.data() + heightsAt + std::size_t(t.grid().index(m - 3, 0)) * 4, &other, 4);
+  fixBodyCrc(twisted);
+  expectRefused(twisted, "grid vertices at one point differ");
+}
+
 TEST(IoPlanetFile, EmptyTruncatedAndWrongTypeFilesAreRefusedByName) {
   expectRefused({}, "empty file");
   const auto good = goodFile();
@@ -155,9 +212,10 @@ TEST(IoPlanetFile, EveryHeaderFieldIsChecked) {
     if (fixCrc) fixHeaderCrc(b);
     return b;
   };
-  const std::uint32_t two = 2, nine = 9, huge = 1000001, side1025 = 1025;
+  const std::uint32_t three = 3, zero = 0, nine = 9, huge = 1000001, side1025 = 1025;
   const double nan = std::nan(""), negative = -5.0, one = 1.0;
-  expectRefused(edit(8, &two, 4), "format version 2 is not supported");
+  expectRefused(edit(8, &three, 4), "format version 3 is not supported (this build reads 1 to 2)");
+  expectRefused(edit(8, &zero, 4), "format version 0 is not supported");
   expectRefused(edit(12, &nine, 4), "header size field is 9");
   expectRefused(edit(16, "sphere", 7), "unknown chart 'sphere'");
   expectRefused(edit(16, "latlongXXXXXXXXX", 16), "chart name is not NUL-terminated");

@@ -10,10 +10,10 @@
 #include <fstream>
 #include <sstream>
 
-#include "core/flat_chart.hpp"
+#include "core/chart_factory.hpp"
 #include "core/input_error.hpp"
-#include "core/latlong_chart.hpp"
 #include "core/named_values.hpp"
+#include "core/octahedral_chart.hpp"
 #include "io/atomic_file.hpp"
 
 namespace ps::io {
@@ -49,9 +49,23 @@ enum Offset : std::size_t {
   kOffMetadataBytes = 84,
   kOffHeightBytes = 88,
   kOffBodyCrc = 96,
-  kOffReserved = 100,
+  kOffReserved = 100,   // version 1: zero up to the header's CRC
+  kOffVariant = 100,    // version 2: the chart's variant (octahedral: 0 equal area, 1 central)
+  kOffReserved2 = 104,  // version 2: zero up to the header's CRC
   kOffHeaderCrc = 124,
 };
+
+// Version 1 knows lat-long and flat planets; version 2 adds the octahedral chart and its
+// variant. A planet version 1 holds is written as version 1, so older builds keep reading it.
+std::uint32_t versionFor(core::ChartShape s) {
+  return s == core::ChartShape::kLatLong || s == core::ChartShape::kFlat ? 1u : 2u;
+}
+
+// The chart's name in the header (the family) and its variant.
+std::pair<std::string, std::uint32_t> headerChart(core::ChartShape s) {
+  if (s == core::ChartShape::kOctahedralCentral) return {"octahedral", 1};
+  return {core::toString(s), 0};
+}
 
 std::uint32_t crc(std::uint32_t c, const unsigned char* p, std::size_t n) {
   // zlib's crc32 takes a uInt length: feed it in pieces.
@@ -137,25 +151,20 @@ std::array<unsigned char, kPlanetHeaderBytes> makeHeader(const core::Chart& char
                                                          std::uint32_t bodyCrc) {
   std::array<unsigned char, kPlanetHeaderBytes> h{};
   std::memcpy(h.data() + kOffMagic, kMagic, 8);
-  put<std::uint32_t>(h.data() + kOffVersion, kPlanetFileVersion);
+  const core::ChartShape shape = core::shapeOf(chart);
+  const std::uint32_t version = versionFor(shape);
+  put<std::uint32_t>(h.data() + kOffVersion, version);
   put<std::uint32_t>(h.data() + kOffHeaderBytes, std::uint32_t(kPlanetHeaderBytes));
-  const std::string name = chart.name();
+  const auto [name, variant] = headerChart(shape);
   if (name.size() >= kChartNameBytes) throw std::logic_error("chart name too long: " + name);
   std::memcpy(h.data() + kOffChart, name.data(), name.size());
   put<std::uint32_t>(h.data() + kOffSide, std::uint32_t(chart.grid().side()));
   put<std::uint32_t>(h.data() + kOffEncoding, std::uint32_t(enc));
-  double radius = 0, dx = 0, dy = 0;
-  if (auto* flat = dynamic_cast<const core::FlatChart*>(&chart)) {
-    dx = flat->dx();
-    dy = flat->dy();
-  } else if (dynamic_cast<const core::LatLongChart*>(&chart)) {
-    radius = chart.radius();
-  } else {
-    throw std::logic_error("planet files do not know the chart '" + name + "' yet");
-  }
-  put<double>(h.data() + kOffRadius, radius);
-  put<double>(h.data() + kOffDx, dx);
-  put<double>(h.data() + kOffDy, dy);
+  const core::ChartDims dims = core::dimsOf(chart);
+  put<double>(h.data() + kOffRadius, dims.radius);
+  put<double>(h.data() + kOffDx, dims.dx);
+  put<double>(h.data() + kOffDy, dims.dy);
+  if (version >= 2) put<std::uint32_t>(h.data() + kOffVariant, variant);
   put<double>(h.data() + kOffScale, scale);
   put<double>(h.data() + kOffOffset, offset);
   put<std::uint32_t>(h.data() + kOffRule, ruleCode(rule));
@@ -208,6 +217,8 @@ Prepared prepare(const core::Chart& chart, std::span<const float> heights, terra
 
 // The checked header fields.
 struct Header {
+  std::uint32_t version = 0;
+  core::ChartShape shape = core::ChartShape::kLatLong;
   std::string chart;
   int side = 0;
   HeightEncoding encoding = HeightEncoding::kFloat32;
@@ -234,15 +245,15 @@ Header parseHeader(const unsigned char* p, std::size_t available, const std::str
                    std::to_string(kPlanetHeaderBytes));
   }
   const std::uint32_t version = get<std::uint32_t>(p + kOffVersion);
-  if (version != kPlanetFileVersion) {
+  if (version < 1 || version > kPlanetFileVersion) {
     fail(name, "format version " + std::to_string(version) +
-                   " is not supported (this build reads " + std::to_string(kPlanetFileVersion) +
-                   ")");
+                   " is not supported (this build reads 1 to " +
+                   std::to_string(kPlanetFileVersion) + ")");
   }
   const std::uint32_t headerBytes = get<std::uint32_t>(p + kOffHeaderBytes);
   if (headerBytes != kPlanetHeaderBytes) {
-    fail(name, "header size field is " + std::to_string(headerBytes) + ", version 1 requires " +
-                   std::to_string(kPlanetHeaderBytes));
+    fail(name, "header size field is " + std::to_string(headerBytes) + ", version " +
+                   std::to_string(version) + " requires " + std::to_string(kPlanetHeaderBytes));
   }
   const std::uint32_t storedCrc = get<std::uint32_t>(p + kOffHeaderCrc);
   const std::uint32_t actualCrc = crc(0, p, kOffHeaderCrc);
@@ -253,6 +264,7 @@ Header parseHeader(const unsigned char* p, std::size_t available, const std::str
     fail(name, std::string(buf) + ": the header is corrupt");
   }
   Header h;
+  h.version = version;
   const char* chart = reinterpret_cast<const char*>(p + kOffChart);
   const std::size_t len = std::find(chart, chart + kChartNameBytes, '\0') - chart;
   if (len == kChartNameBytes) fail(name, "chart name is not NUL-terminated");
@@ -260,9 +272,26 @@ Header parseHeader(const unsigned char* p, std::size_t available, const std::str
   for (std::size_t i = len; i < kChartNameBytes; ++i) {
     if (chart[i] != '\0') fail(name, "chart name field has bytes after its terminating NUL");
   }
-  if (h.chart != "latlong" && h.chart != "flat") {
-    fail(name, "unknown chart '" + h.chart + "' (this build knows latlong and flat)");
+  const bool v1Chart = h.chart == "latlong" || h.chart == "flat";
+  if (!v1Chart && h.chart != "octahedral") {
+    fail(name, "unknown chart '" + h.chart + "' (this build knows latlong, flat and octahedral)");
   }
+  if (!v1Chart && version < 2) {
+    fail(name, "chart '" + h.chart + "' needs format version 2, the header says " +
+                   std::to_string(version));
+  }
+  std::uint32_t variant = 0;
+  if (version >= 2) {
+    variant = get<std::uint32_t>(p + kOffVariant);
+    const std::uint32_t variants = h.chart == "octahedral" ? 2 : 1;
+    if (variant >= variants) {
+      fail(name, "chart variant " + std::to_string(variant) + " is not one of the " +
+                     std::to_string(variants) + " that chart '" + h.chart + "' has" +
+                     (h.chart == "octahedral" ? " (0 = equal area, 1 = central)" : ""));
+    }
+  }
+  h.shape = h.chart == "octahedral" && variant == 1 ? core::ChartShape::kOctahedralCentral
+                                                    : core::chartShapeFromString(h.chart);
   const std::uint32_t side = get<std::uint32_t>(p + kOffSide);
   try {
     h.side = core::GridSize::fromSide(side).side();
@@ -278,12 +307,13 @@ Header parseHeader(const unsigned char* p, std::size_t available, const std::str
   h.radius = get<double>(p + kOffRadius);
   h.dx = get<double>(p + kOffDx);
   h.dy = get<double>(p + kOffDy);
-  if (h.chart == "latlong") {
+  if (core::isSphere(h.shape)) {
     if (!std::isfinite(h.radius) || h.radius <= 0) {
       fail(name, "radius " + num(h.radius) + " m must be positive and finite");
     }
     if (h.dx != 0 || h.dy != 0)
-      fail(name, "a latlong planet must store 0 in the flat spacing fields");
+      fail(name, (h.chart[0] == 'o' ? "an " : "a ") + h.chart +
+                     " planet must store 0 in the flat spacing fields");
   } else {
     if (!std::isfinite(h.dx) || h.dx <= 0 || !std::isfinite(h.dy) || h.dy <= 0) {
       fail(name,
@@ -315,7 +345,7 @@ Header parseHeader(const unsigned char* p, std::size_t available, const std::str
                    toString(h.encoding) + " needs " + std::to_string(want));
   }
   h.bodyCrc = get<std::uint32_t>(p + kOffBodyCrc);
-  for (std::size_t i = kOffReserved; i < kOffHeaderCrc; ++i) {
+  for (std::size_t i = version >= 2 ? kOffReserved2 : kOffReserved; i < kOffHeaderCrc; ++i) {
     if (p[i] != 0) fail(name, "reserved header byte " + std::to_string(i) + " is not zero");
   }
   return h;
@@ -354,11 +384,11 @@ PlanetData parseBody(const Header& h, const unsigned char* body, const std::stri
     d.metadata = std::move(meta);
   }
   const core::GridSize g = core::GridSize::fromSide(h.side);
-  if (h.chart == "latlong") {
-    d.chart = std::make_shared<core::LatLongChart>(g, h.radius);
-  } else {
-    d.chart = std::make_shared<core::FlatChart>(g, h.dx, h.dy);
-  }
+  core::ChartDims dims;
+  dims.radius = h.radius;
+  dims.dx = h.dx;
+  dims.dy = h.dy;
+  d.chart = core::makeChart(h.shape, g, dims);
   d.rule = h.rule;
   d.encoding = h.encoding;
   d.heightScale = h.scale;

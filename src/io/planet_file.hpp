@@ -1,5 +1,5 @@
 #pragma once
-// PlanetSculpt's own planet file (".planet"), format version 1; docs/PLANET-FILE.md is the
+// PlanetSculpt's own planet file (".planet"), format versions 1 and 2; docs/PLANET-FILE.md is the
 // specification. A fixed 128-byte little-endian header (magic, version, chart, grid, radius or
 // spacing, height encoding with scale and offset, error rule, section sizes, a CRC-32 of the
 // body and one of the header), then a UTF-8 JSON metadata block, then the heights row by row.
@@ -16,7 +16,9 @@
 
 namespace ps::io {
 
-inline constexpr std::uint32_t kPlanetFileVersion = 1;
+// The newest version this build reads and writes (it reads every older one; it writes the oldest
+// version that holds the planet's chart: 1 for lat-long and flat, 2 for octahedral).
+inline constexpr std::uint32_t kPlanetFileVersion = 2;
 inline constexpr std::size_t kPlanetHeaderBytes = 128;
 inline constexpr std::size_t kPlanetMaxMetadataBytes = 1 << 20;
 

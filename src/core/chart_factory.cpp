@@ -1,0 +1,46 @@
+#include "core/chart_factory.hpp"
+
+#include <stdexcept>
+
+#include "core/flat_chart.hpp"
+#include "core/latlong_chart.hpp"
+#include "core/octahedral_chart.hpp"
+
+namespace ps::core {
+
+bool isSphere(ChartShape s) {
+  return s == ChartShape::kLatLong || s == ChartShape::kOctahedral ||
+         s == ChartShape::kOctahedralCentral;
+}
+
+std::shared_ptr<const Chart> makeChart(ChartShape shape, GridSize grid, const ChartDims& dims) {
+  switch (shape) {
+    case ChartShape::kLatLong:
+      return std::make_shared<LatLongChart>(grid, dims.radius);
+    case ChartShape::kOctahedral:
+      return std::make_shared<OctahedralChart>(grid, dims.radius);
+    case ChartShape::kOctahedralCentral:
+      return std::make_shared<OctahedralChart>(grid, dims.radius,
+                                               OctahedralChart::Mapping::kCentral);
+    case ChartShape::kFlat:
+      return std::make_shared<FlatChart>(grid, dims.dx, dims.dy);
+  }
+  throw std::logic_error("makeChart: a chart shape without a class");
+}
+
+ChartShape shapeOf(const Chart& chart) {
+  return chartShapeFromString(chart.name());
+}
+
+ChartDims dimsOf(const Chart& chart) {
+  ChartDims d;
+  if (const auto* flat = dynamic_cast<const FlatChart*>(&chart)) {
+    d.dx = flat->dx();
+    d.dy = flat->dy();
+  } else {
+    d.radius = chart.radius();
+  }
+  return d;
+}
+
+}  // namespace ps::core
