@@ -191,6 +191,21 @@ def group_import_export():
     rms = math.sqrt(sum((a - b) ** 2 for a, b in zip(field, back)) / len(field))
     if not rms < 20.0:  # 0.5 % of the field's 4 km range
         fail(f"lat-long round trip rms {rms:.2f} m (over 20 m)")
+    # The same globe onto the octahedral chart: a version 2 planet file that names its chart,
+    # and the export reads it back through the chart's inverse.
+    said, _ = run("import", out("globe.raw"), "--chart", "octahedral", "--grid", "257", "--radius", "1737400",
+                  "--out", out("globe_octa.planet"))
+    if "octahedral planet" not in said:
+        fail(f"import --chart octahedral did not say it made an octahedral planet:\n{said}")
+    with open(out("globe_octa.planet"), "rb") as f:
+        head = f.read(32)
+    if struct.unpack("<I", head[8:12])[0] != 2 or not head[16:32].startswith(b"octahedral\0"):
+        fail(f"the octahedral planet file's header is {head!r}")
+    run("export", out("globe_octa.planet"), "--width", str(w), "--height", str(h), "--out", out("octa_back.raw"))
+    _, back = read_raw(out("octa_back.raw"))
+    rms = math.sqrt(sum((a - b) ** 2 for a, b in zip(field, back)) / len(field))
+    if not rms < 20.0:
+        fail(f"octahedral round trip rms {rms:.2f} m (over 20 m)")
     # GeoTIFFs that GIS tools read with the right CRS (gdalinfo, GDAL's own reader).
     run("export", out("globe.planet"), "--width", str(w), "--height", str(h), "--out", out("globe.tif"))
     info = gdalinfo(out("globe.tif"))
@@ -225,6 +240,14 @@ def group_import_export():
     _, err = run("import", out("N46W122.hgt"), "--chart", "flat", "--grid", "129", "--out", out("hgt.planet"))
     if "georeferencing in degrees, at latitude 46.5" not in err:
         fail(f"the .hgt tile was not read as a geographic SRTM tile:\n{err}")
+    # A regional tile cannot be stretched round a sphere: refused by name on either sphere chart.
+    for chart in ("latlong", "octahedral"):
+        p = subprocess.run([EXE, "import", out("N46W122.hgt"), "--chart", chart, "--out", out("hgt_globe.planet")],
+                           capture_output=True, text=True)
+        if p.returncode <= 0 or "N46W122.hgt" not in p.stderr or "--chart flat" not in p.stderr:
+            fail(f"a 1-degree tile onto the {chart} chart was not refused by name: {p.returncode} {p.stderr}")
+    if os.path.exists(out("hgt_globe.planet")):
+        fail("a refused import still wrote its planet file")
     # Meshes: OBJ vertices lie within the requested error of the surface's height range; PLY
     # and GLB carry their magic bytes.
     run("export", out("tile.planet"), "--max-error", "1", "--out", out("tile.obj"))

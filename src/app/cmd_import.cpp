@@ -65,10 +65,11 @@ const CommandRegistration kImport([](CLI::App& root, CLI::App*& sub) -> CommandA
       ->required();
   sub->add_option("--out", a->output, "Planet file to write (atomically)")->required();
   sub->add_option("--chart", a->chart,
-                  "latlong (a global equirectangular image) or flat (a terrain tile)")
+                  "latlong or octahedral (a global equirectangular image onto a sphere of that "
+                  "chart; docs/CHARTS.md) or flat (a terrain tile)")
       ->capture_default_str();
   sub->add_option("--radius", a->radius,
-                  "Planet radius in metres (latlong; default: the file's, else " +
+                  "Planet radius in metres (a sphere; default: the file's, else " +
                       std::to_string(int(io::kDefaultImportRadius)) + ")");
   sub->add_option("--scale", a->scale, "Height in metres = value * scale + offset");
   sub->add_option("--offset", a->offset, "Height in metres = value * scale + offset");

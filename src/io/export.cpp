@@ -4,6 +4,7 @@
 #include <cctype>
 #include <fstream>
 
+#include "core/chart_factory.hpp"
 #include "core/input_error.hpp"
 #include "core/named_values.hpp"
 #include "io/heightmap_export.hpp"
@@ -77,7 +78,7 @@ nlohmann::json exportTerrain(const terrain::Terrain& t, const std::filesystem::p
   }
   if (o.maxErrorM)
     throw core::InputError("--max-error applies to meshes (obj, ply, glb), not to heightmaps");
-  const bool flat = !t.chart().wrapsU() && !t.chart().hasPoleRows();
+  const bool flat = core::shapeOf(t.chart()) == core::ChartShape::kFlat;
   int w = o.width, h = o.height;
   if (w < 0 || h < 0) throw core::InputError("--width and --height must be positive");
   const int m = t.grid().m();

@@ -7,10 +7,12 @@
 #include <fstream>
 #include <memory>
 #include <nlohmann/json.hpp>
+#include <numbers>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <stdexcept>
 
+#include "core/chart_factory.hpp"
 #include "core/flat_chart.hpp"
 #include "io/atomic_file.hpp"
 #include "io/gdal_raster.hpp"
@@ -18,18 +20,63 @@
 
 namespace ps::io {
 
+namespace {
+
+// A grid vertex for integer coordinates up to two steps outside the grid of a chart that glues
+// each side to itself mirrored (core::OctahedralChart: (0, v) is (0, m - v), (u, 0) is
+// (m - u, 0)): the vertex across the fold, so interpolation near a side reads the surface's
+// neighbours there.
+std::pair<int, int> acrossFolds(int u, int v, int m) {
+  if (u < 0) u = -u, v = m - v;
+  if (u > m) u = 2 * m - u, v = m - v;
+  if (v < 0) v = -v, u = m - u;
+  if (v > m) v = 2 * m - v, u = m - u;
+  return {u, v};
+}
+
+// Any sphere chart other than lat-long: each pixel's direction goes through the chart's inverse
+// to grid coordinates, interpolated there (across the folds the chart glues).
+Raster resampleSphereChart(const terrain::Terrain& t, Raster r, Interpolation how) {
+  const core::Chart& chart = t.chart();
+  const int m = t.grid().m(), width = r.width, height = r.height;
+  const auto at = [&](int u, int v) {
+    const auto [cu, cv] = acrossFolds(u, v, m);
+    return double(t.height(cu, cv));
+  };
+#pragma omp parallel for schedule(static)
+  for (int y = 0; y < height; ++y) {
+    const double lat = std::numbers::pi * (0.5 - (y + 0.5) / height);
+    for (int x = 0; x < width; ++x) {
+      const double lon = std::numbers::pi * (2.0 * (x + 0.5) / width - 1.0);
+      const Eigen::Vector3d d(std::cos(lat) * std::cos(lon), std::cos(lat) * std::sin(lon),
+                              std::sin(lat));
+      const Eigen::Vector2d uv = *chart.inverse(chart.radius() * d);
+      // The interpolation stencil's own index arithmetic (floor, +-1, +2) stays within two
+      // steps of the grid: acrossFolds maps it back.
+      const double u = std::clamp(uv.x(), 0.0, double(m)), v = std::clamp(uv.y(), 0.0, double(m));
+      r.metres[std::size_t(y) * std::size_t(width) + std::size_t(x)] =
+          float(sampleUnclamped(at, u, v, how));
+    }
+  }
+  return r;
+}
+
+}  // namespace
+
 Raster resampleEquirectangular(const terrain::Terrain& t, int width, int height,
                                Interpolation how) {
   if (width <= 0 || height <= 0 || double(width) * height > 4e8) {
     throw std::invalid_argument("raster size " + std::to_string(width) + "x" +
                                 std::to_string(height) + " is empty or too large");
   }
-  if (!t.chart().wrapsU() || !t.chart().hasPoleRows()) {
-    throw std::invalid_argument("an equirectangular raster needs a lat-long planet, not a '" +
-                                t.chart().name() + "' chart");
+  const core::Chart& chart = t.chart();
+  if (!core::isSphere(core::shapeOf(chart))) {
+    throw std::invalid_argument("an equirectangular raster needs a spherical planet, not a '" +
+                                chart.name() + "' chart");
   }
   Raster r{width, height, std::vector<float>(std::size_t(width) * std::size_t(height))};
-  r.radiusMetres = t.chart().radius();
+  r.radiusMetres = chart.radius();
+  if (!chart.hasPoleRows()) return resampleSphereChart(t, std::move(r), how);
   const int m = t.grid().m();
   // Grid vertex (u, v) is sample (u, v): u wraps round the m columns (u = m is u = 0), v clamps
   // at the poles.

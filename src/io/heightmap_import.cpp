@@ -59,9 +59,7 @@ Interpolation interpolationFromString(const std::string& s) {
 }
 
 ChartKind chartKindFromString(const std::string& s) {
-  constexpr core::NameTable<ChartKind, 2> kCharts{
-      "chart", {{{ChartKind::kLatLong, "latlong"}, {ChartKind::kFlat, "flat"}}}};
-  return kCharts.parse(s);
+  return core::chartShapeFromString(s);
 }
 
 NoDataPolicy noDataPolicyFromString(const std::string& s) {
@@ -89,10 +87,11 @@ long long defaultGridSide(ChartKind chart, int width, int height) {
   // latlong: m cells span 360 deg of longitude and 180 deg of latitude; the grid is twice as fine
   // as the image both ways, so that a round trip through it (cubic both ways) comes back within
   // the image's own precision (docs/EXPORT.md: Mars at 1440x720, 4097^2: rms 1.85 m; at 2049^2,
-  // as fine as the image along the equator: 13.3 m). flat: the image's own samples.
-  const long long cells = chart == ChartKind::kLatLong
-                              ? std::max<long long>(2LL * width, 4LL * height)
-                              : std::max<long long>(width, height) - 1;
+  // as fine as the image along the equator: 13.3 m). The octahedral chart takes the same side:
+  // at 2049^2 its error per area is 11.4 m against lat-long's 15.5, at 4097^2 2.6 against 2.2
+  // (docs/CHARTS.md). flat: the image's own samples.
+  const long long cells = core::isSphere(chart) ? std::max<long long>(2LL * width, 4LL * height)
+                                                : std::max<long long>(width, height) - 1;
   return (1LL << levelFor(cells)) + 1;
 }
 
@@ -218,61 +217,129 @@ void radiiToHeights(std::vector<float>& v, const std::vector<std::uint8_t>& hole
                   " m), so the radius " + num(radius) + " m is subtracted");
 }
 
+// An equirectangular image ready to be sampled at any latitude and longitude: area-averaged
+// first where it is finer than `maxWidth` x `maxHeight`, then interpolated (o.interpolation).
+struct EquirectangularSource {
+  std::vector<float> values;
+  int width = 0, height = 0;
+  double west = -180.0;  // longitude of column 0's western edge, degrees
+  Interpolation how = Interpolation::kCubic;
+
+  double at(double latDeg, double lonDeg) const {
+    const double x = (lonDeg - west) / 360.0 * width - 0.5;
+    const double y = (90.0 - latDeg) / 180.0 * height - 0.5;
+    return sampleImage(values, width, height, x, y, true, how);
+  }
+};
+
+EquirectangularSource equirectangularSource(const HeightImage& img, const ImportOptions& o,
+                                            int maxWidth, int maxHeight, const std::string& name,
+                                            ImportResult& res, nlohmann::json& source) {
+  EquirectangularSource e;
+  const int w = img.width, h = img.height;
+  if (o.westLongitudeDeg) {
+    e.west = *o.westLongitudeDeg;
+  } else if (img.column0LongitudeDeg) {
+    e.west = *img.column0LongitudeDeg;
+  } else if (img.geo && img.geo->geographic) {
+    e.west = img.geo->originX;
+  }
+  if (!std::isfinite(e.west)) fail(name, "western longitude must be finite");
+  res.notes.push_back("equirectangular: column 0 starts at " + num(e.west) +
+                      " deg longitude, row 0 at 90 deg N");
+  source["column0_longitude_deg"] = e.west;
+  e.values = img.values;
+  e.width = w;
+  e.height = h;
+  e.how = o.interpolation;
+  if (w > maxWidth || h > maxHeight) {
+    e.width = std::min(w, maxWidth);
+    e.height = std::min(h, maxHeight);
+    cv::Mat in(h, w, CV_32F, const_cast<float*>(img.values.data())), out;  // read only
+    cv::resize(in, out, cv::Size(e.width, e.height), 0, 0, cv::INTER_AREA);
+    e.values.assign(out.begin<float>(), out.end<float>());
+  }
+  return e;
+}
+
+void noteRadius(double radius, const ImportOptions& o, const HeightImage& img, ImportResult& res) {
+  res.notes.push_back("radius " + num(radius) + " m, " +
+                      (o.radius           ? "as given"
+                       : img.radiusMetres ? "from the file"
+                                          : "the default (--radius sets it)"));
+}
+
 // The equirectangular image onto a lat-long grid: area-averaged first where the image is finer,
 // then interpolated (o.interpolation); pole rows one point each.
 void resampleLatLong(const HeightImage& img, const ImportOptions& o, double radius,
                      const core::GridSize& g, const std::string& name, std::vector<float>& heights,
                      ImportResult& res, nlohmann::json& source) {
-  const int w = img.width, h = img.height, m = g.m();
-  const std::vector<float>& v = img.values;
-  double west = -180.0;
-  if (o.westLongitudeDeg) {
-    west = *o.westLongitudeDeg;
-  } else if (img.column0LongitudeDeg) {
-    west = *img.column0LongitudeDeg;
-  } else if (img.geo && img.geo->geographic) {
-    west = img.geo->originX;
-  }
-  if (!std::isfinite(west)) fail(name, "western longitude must be finite");
-  res.notes.push_back("equirectangular: column 0 starts at " + num(west) +
-                      " deg longitude, row 0 at 90 deg N");
-  // Area-average first where the image is finer than the grid, then interpolate.
-  std::vector<float> src = v;
-  int sw = w, sh = h;
-  if (w > m || h > m) {
-    sw = std::min(w, m);
-    sh = std::min(h, m);
-    cv::Mat in(h, w, CV_32F, const_cast<float*>(v.data())), out;  // read only
-    cv::resize(in, out, cv::Size(sw, sh), 0, 0, cv::INTER_AREA);
-    src.assign(out.begin<float>(), out.end<float>());
-  }
+  const int m = g.m();
+  const EquirectangularSource e = equirectangularSource(img, o, m, m, name, res, source);
   for (int gv = 1; gv < m; ++gv) {
     const double lat = 180.0 * gv / m - 90.0;
-    const double y = (90.0 - lat) / 180.0 * sh - 0.5;
     for (int gu = 0; gu < m; ++gu) {
-      const double lon = 360.0 * gu / m - 180.0;
-      const double x = (lon - west) / 360.0 * sw - 0.5;
-      heights[g.index(gu, gv)] = float(sampleImage(src, sw, sh, x, y, true, o.interpolation));
+      heights[g.index(gu, gv)] = float(e.at(lat, 360.0 * gu / m - 180.0));
     }
     heights[g.index(m, gv)] = heights[g.index(0, gv)];
   }
   // Pole rows: one point each, the mean of the image's samples along the pole's edge.
   for (const int gv : {0, m}) {
-    const double y = gv == 0 ? double(sh - 1) : 0.0;
     double sum = 0;
-    for (int gu = 0; gu < m; ++gu) {
-      const double lon = 360.0 * gu / m - 180.0;
-      sum += sampleImage(src, sw, sh, (lon - west) / 360.0 * sw - 0.5, y, true, o.interpolation);
-    }
+    for (int gu = 0; gu < m; ++gu) sum += e.at(gv == 0 ? -90.0 : 90.0, 360.0 * gu / m - 180.0);
     const float pole = float(sum / m);
     for (int gu = 0; gu <= m; ++gu) heights[g.index(gu, gv)] = pole;
   }
   res.planet.chart = std::make_shared<core::LatLongChart>(g, radius);
-  res.notes.push_back("radius " + num(radius) + " m, " +
-                      (o.radius           ? "as given"
-                       : img.radiusMetres ? "from the file"
-                                          : "the default (--radius sets it)"));
-  source["column0_longitude_deg"] = west;
+  noteRadius(radius, o, img, res);
+}
+
+// The equirectangular image onto any other sphere chart (the octahedral one): each grid vertex
+// samples the image at its own direction's latitude and longitude. The grid vertices of one
+// point have bit-identical directions (core::Chart::canonical), so they get one height.
+void resampleSphere(const HeightImage& img, const ImportOptions& o, double radius,
+                    const core::GridSize& g, const std::string& name, std::vector<float>& heights,
+                    ImportResult& res, nlohmann::json& source) {
+  const int m = g.m();
+  core::ChartDims dims;
+  dims.radius = radius;
+  auto chart = core::makeChart(o.chart, g, dims);
+  // Area-averaged to about the grid's spacing (its m^2 cells cover the sphere: about 2m
+  // columns of m rows along the equator).
+  const EquirectangularSource e = equirectangularSource(img, o, 2 * m, m, name, res, source);
+  constexpr double kDeg = 180.0 / std::numbers::pi;
+#pragma omp parallel for schedule(static)
+  for (int gv = 0; gv <= m; ++gv) {
+    for (int gu = 0; gu <= m; ++gu) {
+      const Eigen::Vector3d d = chart->up(gu, gv);
+      const double lat = std::asin(std::clamp(d.z(), -1.0, 1.0)) * kDeg;
+      // At a pole every longitude is the pole: 0 there, so its twins agree.
+      const double lon = d.x() == 0 && d.y() == 0 ? 0.0 : std::atan2(d.y(), d.x()) * kDeg;
+      heights[g.index(gu, gv)] = float(e.at(lat, lon));
+    }
+  }
+  res.planet.chart = std::move(chart);
+  noteRadius(radius, o, img, res);
+}
+
+// A sphere chart takes a global equirectangular image (row 0 at 90 N, 360 x 180 degrees): an
+// image whose georeferencing says otherwise (a projected CRS, or a region of the globe) cannot
+// be resampled onto it and is refused, rather than stretched round the planet.
+void checkCoversTheGlobe(const HeightImage& img, core::ChartShape chart, const std::string& name) {
+  if (!img.geo) return;  // no georeferencing: the user says it is global by choosing the chart
+  const std::string onto = " cannot be resampled onto the " + core::toString(chart) +
+                           " chart, which needs a global equirectangular image (360 x 180 "
+                           "degrees); import a regional tile with --chart flat";
+  if (!img.geo->geographic)
+    fail(name, "its georeferencing is a projected CRS, not degrees: it" + onto);
+  const double spanX = img.width * img.geo->pixelScaleX;
+  const double spanY = img.height * std::abs(img.geo->pixelScaleY);
+  const double tolX = std::abs(img.geo->pixelScaleX), tolY = std::abs(img.geo->pixelScaleY);
+  if (std::abs(spanX - 360.0) > tolX || std::abs(spanY - 180.0) > tolY ||
+      std::abs(img.geo->originY - 90.0) > tolY) {
+    fail(name, "it covers " + num(spanX) + " x " + num(spanY) + " degrees from (" +
+                   num(img.geo->originX) + ", " + num(img.geo->originY) + "):" + onto);
+  }
 }
 
 struct MetresReport {
@@ -288,10 +355,10 @@ MetresReport toFilledMetres(HeightImage& img, const ImportOptions& o, double rad
   r.noData = scanNoData(img, o, name);
   std::tie(r.scale, r.offset) = toMetres(img, o, r.noData.hole, name, notes);
   std::vector<float>& v = img.values;
-  if (o.chart == ChartKind::kLatLong) radiiToHeights(v, r.noData.hole, radius, notes);
+  const bool sphere = core::isSphere(o.chart);
+  if (sphere) radiiToHeights(v, r.noData.hole, radius, notes);
   if (r.noData.holes > 0) {
-    const FillReport fr =
-        fillHoles(v, img.width, img.height, r.noData.hole, o.chart == ChartKind::kLatLong);
+    const FillReport fr = fillHoles(v, img.width, img.height, r.noData.hole, sphere);
     notes.push_back(
         std::to_string(r.noData.holes) + " no-data pixels (value " + num(*r.noData.value) + ", " +
         r.noData.source + ") filled by harmonic interpolation from the surrounding heights (" +
@@ -366,9 +433,10 @@ ImportResult importHeightImage(HeightImage img, const ImportOptions& o, const st
   const double radius = o.radius           ? *o.radius
                         : img.radiusMetres ? *img.radiusMetres
                                            : kDefaultImportRadius;
-  if (o.chart == ChartKind::kLatLong && (!std::isfinite(radius) || radius <= 0)) {
+  if (core::isSphere(o.chart) && (!std::isfinite(radius) || radius <= 0)) {
     fail(name, "radius " + num(radius) + " m must be positive and finite");
   }
+  if (core::isSphere(o.chart)) checkCoversTheGlobe(img, o.chart, name);
 
   // 1-3. No-data, metres, holes filled.
   const MetresReport metres = toFilledMetres(img, o, radius, name, res.notes);
@@ -401,14 +469,19 @@ ImportResult importHeightImage(HeightImage img, const ImportOptions& o, const st
 
   if (o.chart == ChartKind::kLatLong) {
     resampleLatLong(img, o, radius, g, name, heights, res, source);
+  } else if (core::isSphere(o.chart)) {
+    resampleSphere(img, o, radius, g, name, heights, res, source);
   } else {
     resampleFlat(img, o, g, name, heights, res, source);
   }
   if (side != (long long)(std::max(w, h))) {
-    res.notes.push_back(
-        "resampled " + std::to_string(w) + "x" + std::to_string(h) + " pixels onto the " +
-        g.label() + " grid (" + toString(o.interpolation) +
-        (o.chart == ChartKind::kLatLong && (w > m || h > m) ? ", area-averaged first" : "") + ")");
+    res.notes.push_back("resampled " + std::to_string(w) + "x" + std::to_string(h) +
+                        " pixels onto the " + g.label() + " grid (" + toString(o.interpolation) +
+                        (o.chart == ChartKind::kLatLong && (w > m || h > m)
+                             ? ", area-averaged first"
+                         : core::isSphere(o.chart) && (w > 2 * m || h > m) ? ", area-averaged first"
+                                                                           : "") +
+                        ")");
   }
   try {
     terrain::Terrain::validateHeights(*res.planet.chart, heights);

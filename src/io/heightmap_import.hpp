@@ -5,16 +5,19 @@
 #include <string>
 #include <vector>
 
+#include "core/chart_factory.hpp"
 #include "io/height_image.hpp"
 #include "io/planet_file.hpp"
 #include "io/resample.hpp"
 
 namespace ps::io {
 
-enum class ChartKind { kLatLong, kFlat };
+// The chart a heightmap is imported onto: a sphere (latlong, octahedral: from an equirectangular
+// image) or flat (a terrain tile).
+using ChartKind = core::ChartShape;
 enum class NoDataPolicy { kFill, kRefuse };
 
-ChartKind chartKindFromString(const std::string& s);        // "latlong" | "flat"; InputError
+ChartKind chartKindFromString(const std::string& s);        // core::kChartShapeNames; InputError
 NoDataPolicy noDataPolicyFromString(const std::string& s);  // "fill" | "refuse"; InputError
 double noDataValueFromString(const std::string& s);         // a number or "nan"; InputError
 
@@ -22,8 +25,8 @@ inline constexpr double kDefaultImportRadius = 6372790.0;  // paper 003's Earth
 
 struct ImportOptions {
   ChartKind chart = ChartKind::kLatLong;
-  // latlong: metres. Unset: the file's (a GeoTIFF's sphere, a sidecar's radius_m), else
-  // kDefaultImportRadius.
+  // a sphere (latlong, octahedral): metres. Unset: the file's (a GeoTIFF's sphere, a sidecar's
+  // radius_m), else kDefaultImportRadius.
   std::optional<double> radius;
   // metres = value * scale + offset. Unset: a PlanetSculpt 16-bit PNG's own range, the file's
   // own scale and offset (GDAL's), else 1 and 0.

@@ -8,6 +8,7 @@
 #include <stdexcept>
 #include <unordered_map>
 
+#include "core/chart_factory.hpp"
 #include "core/flat_chart.hpp"
 #include "core/input_error.hpp"
 #include "core/named_values.hpp"
@@ -111,7 +112,7 @@ double coordinateRoundingBound(const terrain::Terrain& t, MeshFormat format) {
   double bound;
   if (const auto* flat = dynamic_cast<const core::FlatChart*>(&t.chart())) {
     bound = std::max({flat->dx() * t.grid().m(), flat->dy() * t.grid().m(), hMax});
-  } else if (t.chart().radius() > 0 && t.chart().hasPoleRows()) {
+  } else if (core::isSphere(core::shapeOf(t.chart()))) {
     bound = t.chart().radius() + hMax;
   } else {
     bound = 0;

@@ -64,4 +64,27 @@ double sample(const At& at, int width, int height, double x, double y, bool wrap
   return sum;
 }
 
+// Samples at(xi, yi) at (x, y) with no clamping or wrapping: at() answers for every index the
+// stencil reads (floor(x) - 1 .. floor(x) + 2 for cubic, floor(x) .. floor(x) + 1 for bilinear),
+// e.g. a chart's grid read across its glued sides.
+template <class At>
+double sampleUnclamped(const At& at, double x, double y, Interpolation how) {
+  using namespace resample_detail;
+  const double xf = std::floor(x), yf = std::floor(y);
+  const int x0 = int(xf), y0 = int(yf);
+  const double fx = x - xf, fy = y - yf;
+  if (how == Interpolation::kBilinear) {
+    return (1 - fy) * ((1 - fx) * at(x0, y0) + fx * at(x0 + 1, y0)) +
+           fy * ((1 - fx) * at(x0, y0 + 1) + fx * at(x0 + 1, y0 + 1));
+  }
+  const auto wx = cubicWeights(fx), wy = cubicWeights(fy);
+  double sum = 0.0;
+  for (int j = 0; j < 4; ++j) {
+    double line = 0.0;
+    for (int i = 0; i < 4; ++i) line += wx[std::size_t(i)] * at(x0 - 1 + i, y0 - 1 + j);
+    sum += wy[std::size_t(j)] * line;
+  }
+  return sum;
+}
+
 }  // namespace ps::io
