@@ -308,6 +308,38 @@ def group_import_export():
         fail(f"a demo stroke overlaid on the globe: {r}")
 
 
+def group_charts():
+    # A new planet on the octahedral chart (`--chart`): the demo's first 90 frames replayed onto
+    # it twice give the same planet file bit for bit (a version 2 file that names its chart),
+    # the summary says which chart, and the brush sculpted it.
+    video = os.path.join(SRC, "data", "demo.mkv")
+    for k in ("a", "b"):
+        run("replay", video, "--calib", CALIB, "--chart", "octahedral", "--grid", "1025",
+            "--max-frames", "90", "--out", out(f"octa_{k}"))
+    with open(out("octa_a", "summary.json")) as f:
+        s = json.load(f)
+    if s["chart"] != "octahedral" or s["grid"] != "1025x1025" or s["modified_vertices"] <= 0 or s["strokes"] < 1:
+        fail(f"the octahedral replay: {s}")
+    a = open(out("octa_a", "planet.planet"), "rb").read()
+    if a != open(out("octa_b", "planet.planet"), "rb").read():
+        fail("two replays onto the octahedral planet wrote different planet files")
+    if struct.unpack("<I", a[8:12])[0] != 2 or not a[16:32].startswith(b"octahedral\0"):
+        fail(f"the octahedral planet file's header: {a[:32]!r}")
+    # Its heightmap export is the whole sphere (equirectangular through the chart's inverse).
+    meta = json.load(open(out("octa_a", "heightmap.png.json")))
+    if meta.get("projection", "").find("equirectangular") < 0:
+        fail(f"the octahedral replay's heightmap sidecar: {meta}")
+    # Refusals, named: an unknown chart, --chart with a planet file (it has its own), and the
+    # sand tool on a chart the sand core does not know yet.
+    for args, said in ((("--chart", "cube"), "chart 'cube' is not one of"),
+                       (("--chart", "octahedral", "--planet", out("octa_a", "planet.planet")), "has its own chart"),
+                       (("--chart", "octahedral", "--tool", "displace"), "not on 'octahedral'")):
+        p = subprocess.run([EXE, "replay", video, "--calib", CALIB, "--grid", "1025", "--max-frames", "5", *args,
+                            "--out", out("refused")], capture_output=True, text=True)
+        if p.returncode <= 0 or said not in p.stderr:
+            fail(f"replay {' '.join(args)} was not refused saying '{said}': {p.returncode} {p.stderr}")
+
+
 def group_synth_detect():
     # A rendered still scene: `detect` finds the tool marker where the ground truth put it.
     video = out("still.mkv")

@@ -86,9 +86,9 @@ const CommandRegistration kLive([](CLI::App& root, CLI::App*& sub) -> CommandAct
         a->camera >= 0 ? live::FrameInput::camera(a->camera) : live::FrameInput::video(a->video);
     const auto calib = tracking::loadCalibration(job.calibration);
     calib.forImageSize(input.size());  // refuses another aspect ratio, naming the file
-    std::unique_ptr<terrain::Terrain> planet = job.planetFile.empty()
-                                                   ? makeDefaultPlanet(job.gridLevel, job.seed)
-                                                   : io::loadPlanet(job.planetFile);
+    std::unique_ptr<terrain::Terrain> planet =
+        job.planetFile.empty() ? makeDefaultPlanet(job.gridLevel, job.seed, job.chart)
+                               : io::loadPlanet(job.planetFile);
     a->settings.options = job.options;
     a->settings.start = {job.planetFile.string(), job.seed, job.calibration.string()};
     a->settings.out = job.out;

@@ -1,14 +1,21 @@
 #include "app/default_planet.hpp"
 
 #include "app/progress.hpp"
-#include "core/latlong_chart.hpp"
+#include "core/input_error.hpp"
 #include "terrain/relief.hpp"
 
 namespace ps::app {
 
-std::unique_ptr<terrain::Terrain> makeDefaultPlanet(int gridLevel, std::uint64_t seed) {
-  auto chart =
-      std::make_shared<core::LatLongChart>(core::GridSize(gridLevel), kDefaultRadiusMetres);
+std::unique_ptr<terrain::Terrain> makeDefaultPlanet(int gridLevel, std::uint64_t seed,
+                                                    core::ChartShape shape) {
+  if (!core::isSphere(shape)) {
+    throw core::InputError("--chart " + core::toString(shape) +
+                           ": the default planet is a sphere (latlong, octahedral or "
+                           "octahedral-central)");
+  }
+  core::ChartDims dims;
+  dims.radius = kDefaultRadiusMetres;
+  auto chart = core::makeChart(shape, core::GridSize(gridLevel), dims);
   std::vector<float> heights;
   {
     Progress p("relief " + chart->grid().label());

@@ -32,6 +32,10 @@ void ReplayCli::addOptions(CLI::App* sub) {
   auto& o = job.options;
   sub->add_option("--planet", job.planetFile, "Sculpt this planet file instead of the default");
   sub->add_option("--grid", grid, "Default planet's grid side (2^n+1)")->capture_default_str();
+  sub->add_option("--chart", chart,
+                  "Default planet's chart: latlong (paper 003), octahedral (no poles, cells of "
+                  "equal area) or octahedral-central (docs/CHARTS.md)")
+      ->capture_default_str();
   sub->add_option("--seed", job.seed, "Default planet's relief seed")->capture_default_str();
   sub->add_option("--family", family, "Marker family")->capture_default_str();
   sub->add_option("--decimate", o.detector.decimate, "AprilTag search decimation")
@@ -98,16 +102,35 @@ void ReplayCli::apply() {
   o.scene.useToolLayout(
       toolLayout == "flat" ? nullptr : layoutFrom(toolLayout, "cube", "markers/tool-cube.json"));
   job.gridLevel = core::GridSize::fromSide(grid).n();
+  job.chart = core::chartShapeFromString(chart);
+  if (!job.planetFile.empty() && sub_ && sub_->get_option("--chart")->count() > 0)
+    throw core::InputError("--chart makes a new default planet; the planet file " +
+                           job.planetFile.string() + " has its own chart");
   if (!sun.empty()) job.sun = render::sunDirection(render::parseSunAngles(sun, "--sun"));
   job.boardShadow = !noShadow;
   job.atmosphere = !noAtmosphere;
   o.validate();
   // What a session sidecar replaces (app/replay_job.hpp), when typed.
-  for (const char* name :
-       {"--grid", "--seed", "--family", "--decimate", "--planet-id", "--planet-marker-size",
-        "--planet-radius", "--tool-id", "--tool-marker-size", "--tip", "--touch", "--tool",
-        "--brush-radius-km", "--strength-m", "--mode", "--displace-radius-km", "--press-m",
-        "--no-settle", "--no-filter"})
+  for (const char* name : {"--grid",
+                           "--chart",
+                           "--seed",
+                           "--family",
+                           "--decimate",
+                           "--planet-id",
+                           "--planet-marker-size",
+                           "--planet-radius",
+                           "--tool-id",
+                           "--tool-marker-size",
+                           "--tip",
+                           "--touch",
+                           "--tool",
+                           "--brush-radius-km",
+                           "--strength-m",
+                           "--mode",
+                           "--displace-radius-km",
+                           "--press-m",
+                           "--no-settle",
+                           "--no-filter"})
     if (sub_ && sub_->get_option(name)->count() > 0) job.givenOptions.push_back(name);
 }
 

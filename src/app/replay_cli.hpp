@@ -24,6 +24,7 @@ struct ReplayCli {
   // not lose them. A recording made with the single markers replays with `--board single
   // --tool-layout flat` (or by itself, when its session sidecar says so).
   std::string board = "board", toolLayout = "cube";
+  std::string chart = "latlong";  // the default planet's chart
 
   // Adds the shared options to `sub` (they write into this object, which must outlive it).
   void addOptions(CLI::App* sub);

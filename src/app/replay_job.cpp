@@ -21,6 +21,7 @@
 #include "io/planet_file.hpp"
 #include "replay/session_timeline.hpp"
 #include "replay/truth_check.hpp"
+#include "sand/displacement.hpp"
 #include "terrain/screen_error.hpp"
 #include "terrain/tessellator.hpp"
 
@@ -107,6 +108,7 @@ struct ReplayInputs {
   std::filesystem::path planetFile;
   int gridLevel = 0;
   std::uint64_t seed = 0;
+  core::ChartShape chart = core::ChartShape::kLatLong;
 };
 
 // The sidecar wins over the command line: it holds what the live session ran with.
@@ -119,6 +121,7 @@ ReplayInputs resolveInputs(const ReplayJob& job) {
   in.planetFile = job.planetFile;
   in.gridLevel = job.gridLevel;
   in.seed = job.seed;
+  in.chart = job.chart;
   if (!in.timeline) return in;
   const replay::SessionStart& st = in.timeline->start;
   st.applyTo(in.options);
@@ -142,6 +145,7 @@ ReplayInputs resolveInputs(const ReplayJob& job) {
   } else if (in.planetFile.empty()) {
     in.gridLevel = core::GridSize::fromSide(st.gridSide).n();
     in.seed = st.seed;
+    in.chart = core::chartShapeFromString(st.chart);
   }
   std::cerr << "replay: settings from the session sidecar " << in.sidecar.string() << " ("
             << in.timeline->entries.size() << " changes, undos and redos)\n";
@@ -283,9 +287,9 @@ nlohmann::json runReplayJob(const ReplayJob& job) {
   const std::optional<replay::SessionTimeline>& timeline = in.timeline;
   const std::filesystem::path& sidecar = in.sidecar;
   const replay::ReplayOptions& options = in.options;
-  std::unique_ptr<terrain::Terrain> planet = in.planetFile.empty()
-                                                 ? makeDefaultPlanet(in.gridLevel, in.seed)
-                                                 : io::loadPlanet(in.planetFile);
+  std::unique_ptr<terrain::Terrain> planet =
+      in.planetFile.empty() ? makeDefaultPlanet(in.gridLevel, in.seed, in.chart)
+                            : io::loadPlanet(in.planetFile);
   // Another start planet or calibration would sculpt another planet: refused before any edit.
   if (timeline) replay::checkSessionStart(*timeline, *planet, calib.forImageSize(source.size()));
   const std::vector<float> before(planet->heights().begin(), planet->heights().end());
@@ -306,7 +310,14 @@ nlohmann::json runReplayJob(const ReplayJob& job) {
   std::ofstream forces;
   double peakForce = 0;
   PlotSeries forceSeries;  // per frame: time, the largest force of its ticks
-  if (job.forces) {
+  // The force path presses with the sand core's displacement tool: none on a chart the sand
+  // core does not know yet (the octahedral one), and the summary says so.
+  const bool forcesHere = job.forces && sand::sandCoreKnows(planet->chart());
+  if (job.forces && !forcesHere)
+    std::cerr << "replay: no forces.csv: the haptic path's press tool (the sand core) does not "
+                 "work on the "
+              << planet->chart().name() << " chart yet\n";
+  if (forcesHere) {
     haptics::ForcePathConfig hc;
     hc.map.scale = planet->chart().radius() / options.scene.planetRadius;
     forces.open(out / "forces.csv.part");
@@ -360,7 +371,7 @@ nlohmann::json runReplayJob(const ReplayJob& job) {
 
   nlohmann::json files = {"heightmap.png", "heightmap.png.json", "planet.planet", "log.jsonl",
                           "timings.jsonl"};
-  if (job.forces) files.push_back("forces.csv");
+  if (forcesHere) files.push_back("forces.csv");
   const cv::Size heightmap = writeHeightmapAndPlanet(*planet, out);
   nlohmann::json summary = {
       {"video", job.video.string()},
@@ -387,6 +398,7 @@ nlohmann::json runReplayJob(const ReplayJob& job) {
       {"peak_force_n", peakForce},
       {"warnings", s.warnings},
       {"grid", planet->grid().label()},
+      {"chart", planet->chart().name()},
       {"radius_m", planet->chart().radius()},
       {"heightmap", {{"width", heightmap.width}, {"height", heightmap.height}}}};
   if (!truth.is_null()) summary["truth"] = truth;
@@ -406,7 +418,7 @@ nlohmann::json runReplayJob(const ReplayJob& job) {
     summary["ar_view_skipped"] = noRender;
     std::cerr << "replay: no AR pictures: " << noRender << "\n";
   }
-  if (job.pictures && job.forces && !forceSeries.x.empty()) {
+  if (job.pictures && forcesHere && !forceSeries.x.empty()) {
     writeForcePlot(forceSeries, out);
     files.push_back("forces.png");
   }

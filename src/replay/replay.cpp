@@ -156,6 +156,14 @@ double FrameStepper::toolRadius() const {
 void FrameStepper::rebuildTools() {
   endStroke();
   p_->brush.emplace(o_.brush);
+  // The sand tools on a chart the sand core does not know yet (the octahedral one) are refused
+  // when chosen, by SandGrid's message; the brush works there.
+  const bool sandChart = sand::sandCoreKnows(planet_.chart());
+  if (!sandChart && o_.tool == ReplayTool::kBrush) {
+    p_->displacer.reset();
+    p_->tinSand.reset();
+    return;
+  }
   const bool wantSettler = o_.tool == ReplayTool::kDisplace && o_.settle;
   if (wantSettler && !p_->settler) p_->settler.emplace(planet_, o_.displace.material, o_.settling);
   p_->displacer.emplace(planet_.chartPtr(), o_.displace, p_->settler ? &*p_->settler : nullptr);
@@ -185,8 +193,15 @@ void FrameStepper::setUserRotation(const Eigen::Matrix3d& rotation) {
 
 void FrameStepper::setTool(ReplayTool tool) {
   if (tool == o_.tool) return;
+  const ReplayTool before = o_.tool;
   o_.tool = tool;
-  rebuildTools();
+  try {
+    rebuildTools();
+  } catch (const core::InputError&) {  // a tool this planet cannot take: keep the one it had
+    o_.tool = before;
+    rebuildTools();
+    throw;
+  }
 }
 
 void FrameStepper::setPlanetSize(double planetRadiusM) {

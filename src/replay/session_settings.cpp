@@ -75,6 +75,7 @@ SessionStart SessionStart::of(const terrain::Terrain& planet, const std::string&
   s.planetFile = planetFile;
   s.gridSide = gridSide;
   s.seed = seed;
+  s.chart = planet.chart().name();
   s.radius = planet.chart().radius();
   s.heightsCrc = io::heightsChecksum(planet.heights());
   s.calibrationFile = calibrationFile;
@@ -119,6 +120,7 @@ nlohmann::json toJson(const SessionStart& s) {
                        {{"file", s.planetFile},
                         {"grid", s.gridSide},
                         {"seed", s.seed},
+                        {"chart", s.chart},
                         {"radius_m", s.radius},
                         {"heights_crc32", s.heightsCrc}}},
                       {"calibration",

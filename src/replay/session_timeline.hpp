@@ -50,6 +50,7 @@ struct SessionStart {
   std::string planetFile;  // "" : the default planet of (gridSide, seed)
   int gridSide = 0;
   std::uint64_t seed = 1;
+  std::string chart = "latlong";  // the start planet's chart (sidecars before it: lat-long)
   double radius = 0;
   std::uint32_t heightsCrc = 0;  // io::heightsChecksum of the heights at the first frame
   std::string calibrationFile;

@@ -10,6 +10,8 @@
 #include <type_traits>
 #include <utility>
 
+#include "core/chart_factory.hpp"
+
 #include "core/grid.hpp"
 #include "core/input_error.hpp"
 #include "io/stroke_journal.hpp"
@@ -128,6 +130,14 @@ SessionStart parseStart(const nlohmann::json& j, const std::filesystem::path& pa
     fail(path, line, std::string("\"grid\": ") + e.what());
   }
   s.seed = read<std::uint64_t>(planet, "seed", path, line);
+  if (planet.contains("chart")) {
+    s.chart = read<std::string>(planet, "chart", path, line);
+    try {
+      core::chartShapeFromString(s.chart);
+    } catch (const core::InputError& e) {
+      fail(path, line, std::string("\"chart\": ") + e.what());
+    }
+  }
   s.radius = read<double>(planet, "radius_m", path, line);
   s.heightsCrc = read<std::uint32_t>(planet, "heights_crc32", path, line);
   const auto& cal = member(j, "calibration", path, line);
@@ -295,13 +305,14 @@ void checkSessionStart(const SessionTimeline& t, const terrain::Terrain& planet,
   const std::string where = t.path.string() + ":1: ";
   const int side = planet.grid().side();
   const std::uint32_t crc = io::heightsChecksum(planet.heights());
-  if (side != s.gridSide || planet.chart().radius() != s.radius || crc != s.heightsCrc) {
-    char ours[160];
-    std::snprintf(ours, sizeof ours, "grid %d, radius %.17g m, heights CRC-32 %08x", side,
-                  planet.chart().radius(), unsigned(crc));
-    char theirs[160];
-    std::snprintf(theirs, sizeof theirs, "grid %d, radius %.17g m, heights CRC-32 %08x", s.gridSide,
-                  s.radius, unsigned(s.heightsCrc));
+  if (side != s.gridSide || planet.chart().name() != s.chart ||
+      planet.chart().radius() != s.radius || crc != s.heightsCrc) {
+    char ours[200];
+    std::snprintf(ours, sizeof ours, "%s grid %d, radius %.17g m, heights CRC-32 %08x",
+                  planet.chart().name().c_str(), side, planet.chart().radius(), unsigned(crc));
+    char theirs[200];
+    std::snprintf(theirs, sizeof theirs, "%s grid %d, radius %.17g m, heights CRC-32 %08x",
+                  s.chart.c_str(), s.gridSide, s.radius, unsigned(s.heightsCrc));
     throw core::InputError(
         where + "the recording starts from another planet (" + theirs +
         (s.planetFile.empty() ? ", the default planet of seed " + std::to_string(s.seed)

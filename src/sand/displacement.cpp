@@ -8,12 +8,21 @@
 #include "core/flat_chart.hpp"
 #include "core/input_error.hpp"
 #include "core/latlong_chart.hpp"
+#include "core/octahedral_chart.hpp"
 
 namespace ps::sand {
 
+bool sandCoreKnows(const core::Chart& chart) {
+  return dynamic_cast<const core::LatLongChart*>(&chart) ||
+         dynamic_cast<const core::FlatChart*>(&chart);
+}
+
 double largestSpacing(const core::Chart& chart) {
-  if (const auto* ll = dynamic_cast<const core::LatLongChart*>(&chart)) {
-    return 2.0 * std::numbers::pi * ll->radius() / chart.grid().m();
+  // A sphere's other charts space their vertices closer than lat-long's equator does (`bench
+  // charts` at 8193^2: octahedral at most 0.84x, its central projection 0.78x): the same bound.
+  if (dynamic_cast<const core::LatLongChart*>(&chart) ||
+      dynamic_cast<const core::OctahedralChart*>(&chart)) {
+    return 2.0 * std::numbers::pi * chart.radius() / chart.grid().m();
   }
   if (const auto* flat = dynamic_cast<const core::FlatChart*>(&chart)) {
     return std::max(flat->dx(), flat->dy());

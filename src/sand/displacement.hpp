@@ -86,8 +86,11 @@ class DisplacementTool final : public edit::Tool {
   mutable DisplacementStats stats_;
 };
 
-// The chart's largest distance between neighbouring vertices ("one cell"): 2 pi R / m on the
-// lat-long chart (the equator's), max(dx, dy) on a flat chart.
+// The chart's largest distance between neighbouring vertices ("one cell"), or a bound of it:
+// 2 pi R / m on the lat-long chart (the equator's) and on the octahedral one, max(dx, dy) on a
+// flat chart.
 double largestSpacing(const core::Chart& chart);
+// Whether the sand core's cells (SandGrid) are defined on this chart: lat-long and flat today.
+bool sandCoreKnows(const core::Chart& chart);
 
 }  // namespace ps::sand
