@@ -1,5 +1,7 @@
 // `planetsculpt bench tessellate`: view-dependent tessellation time against measured screen
-// error, on the default planet, from orbit, 1,000 km and 1 km up, at 1280x720. `ms` is the median
+// error, on the default planet, from orbit, 1,000 km and 1 km up, at 1280x720; then the same
+// relief on the lat-long and the octahedral chart (the same grid, so the same memory), 1,000 km
+// over the north pole and over the equator (rows `tessellate_chart`). `ms` is the median
 // of repeated full tessellations of the same view by one tessellator (as frame after frame: a
 // bound budget starts where the last call settled); `first_ms` / `first_passes` are the first,
 // from a fresh tessellator. `host_memory_probe_ms` is a fixed memory workload timed just before
@@ -24,6 +26,21 @@ struct View {
   std::string label;
   terrain::Camera camera;
 };
+
+// 1,000 km above the point of latitude `latDeg` on the 20 deg E meridian, looking 40 degrees
+// below the horizon toward the north-north-east (toward 20 deg E + 180 over the pole).
+View altitudeView(std::string label, double R, double latDeg) {
+  const double lat = latDeg * std::numbers::pi / 180, lon = 20 * std::numbers::pi / 180;
+  const Eigen::Vector3d up(std::cos(lon) * std::cos(lat), std::sin(lon) * std::cos(lat),
+                           std::sin(lat));
+  Eigen::Vector3d north(-std::cos(lon) * std::sin(lat), -std::sin(lon) * std::sin(lat),
+                        std::cos(lat));
+  const Eigen::Vector3d east = north.cross(up);
+  const Eigen::Vector3d heading = (north + 0.3 * east).normalized();
+  const Eigen::Vector3d eye = (R + 1.0e6) * up;
+  return {std::move(label), terrain::Camera::lookAt(eye, eye + heading - 0.84 * up, up, 1280, 720,
+                                                    60 * std::numbers::pi / 180)};
+}
 
 std::vector<View> standardViews(const terrain::Terrain& t) {
   const double R = t.chart().radius();
@@ -133,6 +150,52 @@ void benchTessellate(const BenchOptions& options, std::ostream& out) {
   }
 }
 
-static const BenchRegistration kRegistered("tessellate", benchTessellate);
+// The same relief (terrain/relief: a function of the direction) on both sphere charts at the
+// same grid: triangles and time against the measured screen error, over a pole (lat-long's
+// crowded rows; on the octahedral chart an ordinary place) and over the equator.
+void benchTessellateCharts(const BenchOptions& options, std::ostream& out) {
+  const int level = options.quick ? 11 : 13;
+  const std::vector<double> sweep =
+      options.quick ? std::vector<double>{1, 4} : std::vector<double>{0.5, 1, 2, 4, 8};
+  for (const core::ChartShape shape : {core::ChartShape::kLatLong, core::ChartShape::kOctahedral}) {
+    const auto planet = app::makeDefaultPlanet(level, 1, shape);
+    const double R = planet->chart().radius();
+    for (const View& view :
+         {altitudeView("pole_1000km", R, 89.0), altitudeView("equator_1000km", R, 0.0)}) {
+      for (const double distMax : sweep) {
+        terrain::TessellationSettings s;
+        s.distMaxPx = distMax;
+        s.triangleBudget = 0;  // the mesh the error asks for, however large
+        terrain::Tessellator tess;
+        std::vector<double> full;
+        for (int r = 0; r < options.repeats; ++r) {
+          tess.invalidate();
+          full.push_back(timeMs([&] { tess.tessellate(*planet, view.camera, s); }));
+        }
+        const auto st = tess.stats();
+        const auto err = terrain::measureScreenError(*planet, view.camera, tess.mesh());
+        out << nlohmann::json{{"bench", "tessellate_chart"},
+                              {"chart", planet->chart().name()},
+                              {"grid", planet->grid().label()},
+                              {"bytes", planet->bytes()},
+                              {"view", view.label},
+                              {"dist_max", distMax},
+                              {"triangles", st.triangles},
+                              {"ms", median(full)},
+                              {"max_screen_error_px", err.maxPx},
+                              {"vertices_checked", err.verticesChecked}}
+                   .dump()
+            << std::endl;
+      }
+    }
+  }
+}
+
+void benchTessellateAll(const BenchOptions& options, std::ostream& out) {
+  benchTessellate(options, out);
+  benchTessellateCharts(options, out);
+}
+
+static const BenchRegistration kRegistered("tessellate", benchTessellateAll);
 
 }  // namespace ps::bench

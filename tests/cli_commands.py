@@ -433,6 +433,10 @@ def check_bench_row(r):
     if b == "charts" and (r["cell_area_max_over_min"] < 1 or
                           (r["chart"] == "octahedral" and r["cell_area_max_over_min"] > 1.1)):
         fail(f"charts: cell areas {r}")
+    # The tessellator's guarantee on every chart: the measured error never above dist_max.
+    if b == "tessellate_chart" and (r["chart"] not in ("latlong", "octahedral") or r["triangles"] <= 0
+                                    or r["max_screen_error_px"] > r["dist_max"] * (1 + 1e-9)):
+        fail(f"tessellate_chart: {r}")
     if b == "sand-tin" and (r.get("model") not in ("tin", "grid") or abs(r["volume_drift"]) > 1e-6
                             or r["vertices"] <= 0 or r["memory_bytes"] <= 0 or r.get("valid", True) is not True):
         fail(f"sand-tin: {r}")

@@ -110,6 +110,30 @@ std::vector<std::filesystem::path> writeBenchPlots(const std::vector<nlohmann::j
     err.series.push_back(bound("bound: error = dist_max", lo, hi));
     save({time, err, tris}, "tessellate.png");
   }
+  const auto charts = groups(records, "tessellate_chart", [](const auto& r) {
+    return str(r, "chart") + " " + str(r, "view") + " " + str(r, "grid");
+  });
+  if (!charts.empty()) {
+    PlotPanel tris{"Triangles vs measured screen error, by chart",
+                   "measured max screen error (px)",
+                   "triangles",
+                   true,
+                   true,
+                   {}};
+    PlotPanel time{"Tessellation time vs measured screen error, by chart",
+                   "measured max screen error (px)",
+                   "ms",
+                   true,
+                   true,
+                   {}};
+    for (std::size_t i = 0; i < charts.size(); ++i) {
+      tris.series.push_back(
+          series(charts[i].first, charts[i].second, "max_screen_error_px", "triangles", i));
+      time.series.push_back(
+          series(charts[i].first, charts[i].second, "max_screen_error_px", "ms", i));
+    }
+    save({tris, time}, "tessellate_charts.png");
+  }
 
   const auto exp = groups(
       records, "export",
