@@ -13,10 +13,18 @@
 #include <nlohmann/json.hpp>
 #include <vector>
 
+#include <filesystem>
+#include <numbers>
+#include <opencv2/imgproc.hpp>
+
+#include "app/default_planet.hpp"
+#include "app/snapshot.hpp"
 #include "bench/bench.hpp"
 #include "bench/bench_util.hpp"
 #include "core/latlong_chart.hpp"
 #include "core/octahedral_chart.hpp"
+#include "io/heightmap_export.hpp"
+#include "terrain/tessellator.hpp"
 
 namespace ps::bench {
 
@@ -72,9 +80,39 @@ ChartStats measure(const core::Chart& chart) {
   return total;
 }
 
+// The two sphere charts' grids side by side (--out DIR: DIR/charts_grids.png): the same relief on
+// a 33^2 grid of each, every grid edge drawn, seen from 50 degrees N so that the north pole and
+// the equator are both in view. Lat-long's rows close into the pole; the octahedral grid's cells
+// keep one size, its creases (the octahedron's edges) showing as lines where the cells turn.
+void writeGridPictures(const std::string& dir) {
+  cv::Mat panels;
+  for (const core::ChartShape shape : {core::ChartShape::kLatLong, core::ChartShape::kOctahedral}) {
+    const auto planet = app::makeDefaultPlanet(5, 1, shape);
+    const double R = planet->chart().radius(), lat = 50 * std::numbers::pi / 180;
+    const Eigen::Vector3d eye = 4.0 * R * Eigen::Vector3d(std::cos(lat), 0.0, std::sin(lat));
+    const auto camera = terrain::Camera::lookAt(eye, Eigen::Vector3d::Zero(),
+                                                Eigen::Vector3d::UnitZ(), 640, 640, 0.6);
+    terrain::Tessellator tess;
+    terrain::TessellationSettings s;
+    s.distMaxPx = 1e-6;  // every grid vertex
+    s.triangleBudget = 0;
+    cv::Mat img = app::renderSnapshot(*planet, tess.tessellate(*planet, camera, s), camera, true);
+    cv::putText(img, planet->chart().name() + " " + planet->grid().label(), {16, 36},
+                cv::FONT_HERSHEY_SIMPLEX, 0.9, cv::Scalar(255, 255, 255), 2, cv::LINE_AA);
+    if (panels.empty()) {
+      panels = img;
+    } else {
+      cv::hconcat(panels, img, panels);
+    }
+  }
+  std::filesystem::create_directories(dir);
+  io::writePngAtomically(panels, std::filesystem::path(dir) / "charts_grids.png");
+}
+
 }  // namespace
 
 void benchCharts(const BenchOptions& o, std::ostream& out) {
+  if (!o.outDir.empty()) writeGridPictures(o.outDir);
   const int n = o.quick ? 10 : 13;
   const core::GridSize g(n);
   const double R = 6372790.0;
