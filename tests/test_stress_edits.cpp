@@ -12,6 +12,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <optional>
 #include <random>
 #include <set>
 #include <string>
@@ -81,11 +82,14 @@ std::vector<float> copyHeights(const terrain::Terrain& t) {
 
 class StressRig {
  public:
-  explicit StressRig(std::uint32_t seed)
-      : terrain_(testkit::bumpyTerrain(5, seed, 8000.0)),
+  // On the octahedral chart the sand core's tools are left out (the sand core knows lat-long and
+  // flat grids only: docs/CHARTS.md); the brush, undo, redo and bad input act there.
+  explicit StressRig(std::uint32_t seed, bool octahedral = false)
+      : terrain_(octahedral ? testkit::bumpyOctahedralTerrain(5, seed, 8000.0)
+                            : testkit::bumpyTerrain(5, seed, 8000.0)),
         pipe_(terrain_),
-        settler_(terrain_),
         rng_(seed) {
+    if (!octahedral) settler_.emplace(terrain_);
     pipe_.setUndoEnabled(true);
   }
 
@@ -96,7 +100,7 @@ class StressRig {
   std::string act() {
     const unsigned kind = rng_() % 20;
     if (kind < 6) return brushStamp();
-    if (kind < 10) return brushStroke();
+    if (kind < 10 || (!settler_ && kind < 16)) return brushStroke();
     if (kind < 13) return displace();
     if (kind < 16) return settle();
     if (kind < 18) return undoRedo();
@@ -105,13 +109,17 @@ class StressRig {
 
  private:
   double R() const { return terrain_.chart().radius(); }
+  // Tells the settler (when there is one) what an edit changed.
+  void edited(const terrain::GridRegion& region) {
+    if (settler_) settler_->edited(region, settler_->material());
+  }
   int m() const { return terrain_.grid().m(); }
 
   std::string brushStamp() {
     const auto s = randomBrush(rng_, R(), m(), terrain_.heightLimit());
     pipe_.apply(edit::GaussianBrush(s), {randomTip(rng_, terrain_), randomDt(rng_)});
     changedSinceStroke_ = false;
-    settler_.edited(pipe_.lastReport().dirty, settler_.material());
+    edited(pipe_.lastReport().dirty);
     return "brush stamp " + edit::toString(s.mode) + " r_d=" + std::to_string(s.radius) +
            " sigma=" + std::to_string(s.sigma) + " strength=" + std::to_string(s.strength);
   }
@@ -133,7 +141,7 @@ class StressRig {
     }
     pipe_.endStroke();
     changedSinceStroke_ = false;
-    settler_.edited(terrain::GridRegion::all(terrain_.grid()), settler_.material());
+    edited(terrain::GridRegion::all(terrain_.grid()));
     return "brush stroke of " + std::to_string(samples) +
            " samples, r_d=" + std::to_string(s.radius);
   }
@@ -144,7 +152,7 @@ class StressRig {
     ds.radius = logUniform(rng_, cell, R());
     ds.rampartWidth = uniform(rng_, 0.05, 4.0);
     ds.spacing = uniform(rng_, 0.05, 1.0);
-    sand::DisplacementTool tool(terrain_.chartPtr(), ds, &settler_);
+    sand::DisplacementTool tool(terrain_.chartPtr(), ds, &*settler_);
     // The sphere's centre somewhere from deep under the surface to above it.
     const core::GridPoint c = edittest::randomCentre(rng_, m());
     const double h = double(terrain_.heights()[terrain_.grid().index(c.u, c.v)]);
@@ -169,12 +177,12 @@ class StressRig {
     ss.cellBudget = std::size_t(1) << (4 + rng_() % 14);
     ss.maxStepsPerFrame = 1 + int(rng_() % 16);
     ss.diffusionDt = logUniform(rng_, 1e-3, 1e3);
-    settler_.setSettings(ss);
+    settler_->setSettings(ss);
     static const char* kMaterials[] = {"sand", "mud", "pebbles"};
-    settler_.setMaterial(sand::Material::preset(kMaterials[rng_() % 3]));
+    settler_->setMaterial(sand::Material::preset(kMaterials[rng_() % 3]));
     const int frames = 1 + int(rng_() % 3);
     for (int i = 0; i < frames; ++i) {
-      if (!settler_.frame().dirty.empty()) changedSinceStroke_ = true;
+      if (!settler_->frame().dirty.empty()) changedSinceStroke_ = true;
     }
     return "settle " + sand::toString(ss.method) + " dt=" + std::to_string(ss.diffusionDt);
   }
@@ -194,7 +202,7 @@ class StressRig {
       pipe_.undo();
       changedSinceStroke_ = true;  // the stroke now on top may have been settled after it
     }
-    settler_.edited(terrain::GridRegion::all(terrain_.grid()), settler_.material());
+    edited(terrain::GridRegion::all(terrain_.grid()));
     return "undo/redo";
   }
 
@@ -244,7 +252,7 @@ class StressRig {
   terrain::Terrain terrain_;
   bool changedSinceStroke_ = false;  // settling changed heights after the last journaled stroke
   edit::EditPipeline pipe_;
-  sand::Settler settler_;
+  std::optional<sand::Settler> settler_;  // none on a chart the sand core does not know
   std::mt19937 rng_;
 };
 
@@ -302,4 +310,76 @@ TEST(StressEdits, RandomActionsOfEveryToolKeepEveryInvariant) {
     if (::testing::Test::HasFailure()) FAIL() << "stopped at " << what;
   }
   ASSERT_TRUE(edittest::boundsEqualFullRebuild(rig.terrain()));
+}
+
+// The same on the octahedral chart (its folded sides and the south pole's four corners), with
+// the tools that work there: brush stamps and strokes, undo and redo, bad input.
+TEST(StressEdits, RandomBrushActionsOnTheOctahedralChartKeepEveryInvariant) {
+  const int actions = kStressActions / (testkit::underAsan() ? 16 : 4) * testkit::stressScale();
+  StressRig rig(20261127, true);
+  terrain::Tessellator tess;
+  std::mt19937 viewRng(11);
+  for (int i = 0; i < actions; ++i) {
+    const std::string what = "action " + std::to_string(i) + ": " + rig.act();
+    ASSERT_TRUE(edittest::consistentHeights(rig.terrain())) << what;
+    if (i % 97 == 0) {
+      ASSERT_TRUE(edittest::boundsEqualFullRebuild(rig.terrain())) << what;
+    }
+    if (i % 499 == 0) {
+      terrain::TessellationSettings ts;
+      ts.cull = false;
+      ts.triangleBudget = 0;
+      ts.distMaxPx = logUniform(viewRng, 0.5, 16.0);
+      const auto cam = randomCamera(viewRng, rig.terrain().chart().radius());
+      tess.tessellate(rig.terrain(), cam, ts);
+      ASSERT_EQ(testkit::conformityDefect(rig.terrain(), tess.mesh()), "") << what;
+    }
+    if (::testing::Test::HasFailure()) FAIL() << "stopped at " << what;
+  }
+  ASSERT_TRUE(edittest::boundsEqualFullRebuild(rig.terrain()));
+}
+
+// On the octahedral chart, brushes at every grid vertex of a 33^2 planet (every third under the
+// sanitizers) with radii from a few cells to beyond the planet's diameter, each followed by the
+// bounds against a full rebuild, bit for bit. (The stress test above found a brush whose dirty
+// box was narrowed to the rows whose floats changed, which breaks the box's mirror images.)
+TEST(StressEdits, OctahedralBrushesOfEveryRadiusAtEveryVertexKeepTheBounds) {
+  auto t = testkit::bumpyOctahedralTerrain(5, 3, 8000.0);
+  edit::EditPipeline pipe(t);
+  const double R = t.chart().radius();
+  const int m = t.grid().m(), step = testkit::underAsan() ? 3 : 1;
+  for (const double radius : {0.3 * R, 1.1 * R, 2.05 * R}) {
+    for (int v = 0; v <= m; v += step) {
+      for (int u = 0; u <= m; u += step) {
+        edit::BrushSettings s;
+        s.radius = radius;
+        s.sigma = 0.5;
+        s.strength = 50.0;
+        pipe.apply(edit::GaussianBrush(s), {t.chart().position(u, v, 0.0), 1.0});
+        ASSERT_TRUE(edittest::boundsEqualFullRebuild(t))
+            << "brush r_d = " << radius / R << " R at (" << u << ", " << v << ")";
+      }
+    }
+  }
+}
+
+// A local update of the bounds over any box of one quadrant (as an edit's dirty box is,
+// terrain::foldImages covering the rest), on heights that did not change, gives the bounds a full
+// build gives.
+TEST(StressEdits, OctahedralLocalUpdatesOverAnyQuadrantBoxEqualAFullRebuild) {
+  auto t = testkit::bumpyOctahedralTerrain(5, 4, 8000.0);
+  const int m = t.grid().m(), h = m / 2, step = testkit::underAsan() ? 5 : 2;
+  int boxes = 0;
+  for (int qu = 0; qu < 2; ++qu)
+    for (int qv = 0; qv < 2; ++qv)
+      for (int u0 = qu * h; u0 <= qu * h + h; u0 += step)
+        for (int u1 = u0; u1 <= qu * h + h; u1 += 3)
+          for (int v0 = qv * h; v0 <= qv * h + h; v0 += step)
+            for (int v1 = v0; v1 <= qv * h + h; v1 += 3) {
+              t.commitEdit({u0, u1, v0, v1});
+              ++boxes;
+              ASSERT_TRUE(edittest::boundsEqualFullRebuild(t))
+                  << "box [" << u0 << ", " << u1 << "] x [" << v0 << ", " << v1 << "]";
+            }
+  EXPECT_GT(boxes, testkit::underAsan() ? 400 : 2000);
 }

@@ -228,10 +228,13 @@ terrain::GridRegion applyRows(const ToolContext& ctx, const GaussianProfile& pro
   if (field.latLong() && region.symmetric()) {
     return symmetricBounds(region.centreU(), kMax, first, last, g.m());
   }
-  // The rows that changed, within the region's box (on a chart that folds its sides the box
-  // holds only the centre's quadrant of the region: Region::bounds).
+  // The rows that changed, within the region's box. On a chart that folds its sides the box
+  // holds only the centre's quadrant of the region (Region::bounds), whose mirror images hold
+  // the rest because the region is symmetric about the centre's side; whether a float changed
+  // is not (a small amount rounds away on a large height and not on a small one), so the box is
+  // kept whole there (found by StressEdits.RandomBrushActionsOnTheOctahedralChart...).
   terrain::GridRegion r = region.bounds();
-  if (std::max(r.vBegin, first) <= std::min(r.vEnd, last)) {
+  if (!ctx.terrain.chart().foldsSides() && std::max(r.vBegin, first) <= std::min(r.vEnd, last)) {
     r.vBegin = std::max(r.vBegin, first);
     r.vEnd = std::min(r.vEnd, last);
   }
