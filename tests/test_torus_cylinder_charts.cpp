@@ -149,7 +149,7 @@ std::size_t borderEdgesOffTheEnds(const terrain::Terrain& t, const terrain::Mesh
 // Every grid vertex lies on the surface (the torus: at the minor radius from the tube's centre
 // circle; the cylinder: at its radius from the axis), up() is the outward normal, and the
 // inverse gives a point back; random points of the surface go to the grid and back.
-TEST(TorusChart, MapsTheGridOntoTheSurfaceAndBack) {
+TEST(TorusAndCylinder, MapsTheGridOntoTheSurfaceAndBack) {
   for (const Case& k : kCases) {
     const auto chart = k.make(6);
     const core::Chart& c = *chart;
@@ -191,7 +191,7 @@ TEST(TorusChart, MapsTheGridOntoTheSurfaceAndBack) {
   EXPECT_FALSE(t.inverse(Eigen::Vector3d(kMajor, 0, 0)));  // the tube's centre circle
 }
 
-TEST(TorusChart, RefusesRadiiThatAreNoRingTorus) {
+TEST(TorusAndCylinder, RefusesRadiiThatAreNoRingTorus) {
   const core::GridSize g(5);
   const double inf = std::numeric_limits<double>::infinity(),
                nan = std::numeric_limits<double>::quiet_NaN();
@@ -213,7 +213,7 @@ TEST(TorusChart, RefusesRadiiThatAreNoRingTorus) {
 
 // Twins are one point bit for bit and share one canonical vertex; the torus has m^2 distinct
 // points (V - E + F = m^2 - 3 m^2 + 2 m^2 = 0), the cylinder m (m + 1) (an annulus: 0 too).
-TEST(TorusChart, TwinsAreOnePointAndShareTheirCanonicalVertex) {
+TEST(TorusAndCylinder, TwinsAreOnePointAndShareTheirCanonicalVertex) {
   for (const Case& k : kCases) {
     const auto chart = k.make(5);
     const core::Chart& c = *chart;
@@ -248,7 +248,7 @@ TEST(TorusChart, TwinsAreOnePointAndShareTheirCanonicalVertex) {
 }
 
 // The torus's v -> m - v is its z -> -z bit for bit (gluedImages' midline images rest on it).
-TEST(TorusChart, TheGridsMirrorIsTheTorussMirror) {
+TEST(TorusAndCylinder, TheGridsMirrorIsTheTorussMirror) {
   const auto c = torus(6);
   const int m = c->grid().m();
   for (int v = 0; v <= m; ++v)
@@ -269,7 +269,7 @@ TEST(TorusChart, TheGridsMirrorIsTheTorussMirror) {
 
 // Random edits, across both seams and at the torus's corner (the seams' crossing): the bounds
 // updated over the edit's rectangle equal a full rebuild bit for bit.
-TEST(TorusChart, LocalBoundUpdatesEqualAFullRebuildBitForBit) {
+TEST(TorusAndCylinder, LocalBoundUpdatesEqualAFullRebuildBitForBit) {
   for (const Case& k : kCases) {
     auto t = bumpy(k.make(7), 5, 4000.0);
     const auto g = t.grid();
@@ -303,13 +303,26 @@ TEST(TorusChart, LocalBoundUpdatesEqualAFullRebuildBitForBit) {
       ASSERT_EQ(full.radiusCodes(), t.bounds().radiusCodes()) << k.name << " trial " << trial;
       ASSERT_TRUE(full.lattice() == t.bounds().lattice()) << k.name << " trial " << trial;
     }
+    // Twins are one vertex of the surface's bintree: they hold one, combined, pair of codes (a
+    // rebuild equal to the update would not show that both skipped the combining).
+    const auto& codes = t.bounds().codes();
+    for (int v = 0; v <= m; ++v)
+      for (int u = 0; u <= m; ++u) {
+        core::GridPoint tw[4];
+        const int n = t.chart().twins(u, v, tw);
+        for (int i = 1; i < n; ++i) {
+          const auto &a = codes[g.index(u, v)], &b = codes[g.index(tw[i].u, tw[i].v)];
+          ASSERT_TRUE(a.error == b.error && a.radius == b.radius)
+              << k.name << " (" << u << "," << v << ") and (" << tw[i].u << "," << tw[i].v << ")";
+        }
+      }
   }
 }
 
 // Region growing equals brute force (every vertex within the radius in 3D): centres on the
 // seams, at the corner, at the torus's inner and outer equators and anywhere; radii from a cell
 // to across the hole. Every vertex lies in an image of the dirty box.
-TEST(TorusChart, RegionGrowingEqualsBruteForce) {
+TEST(TorusAndCylinder, RegionGrowingEqualsBruteForce) {
   for (const Case& k : kCases) {
     const auto chart = k.make(7);
     const int m = chart->grid().m();
@@ -355,7 +368,7 @@ TEST(TorusChart, RegionGrowingEqualsBruteForce) {
 // Views at the seams' crossing, on each seam, at the inner equator (the torus seen across the
 // hole) and elsewhere: the whole surface's mesh has no crack (welded by canonical; the
 // cylinder's ends are its only border), and the culled view's screen error is within dist_max.
-TEST(TorusChart, TessellationsAreCrackFreeAndWithinDistMax) {
+TEST(TorusAndCylinder, TessellationsAreCrackFreeAndWithinDistMax) {
   for (const Case& k : kCases) {
     const auto t = bumpy(k.make(8), 7, 6000.0);
     const core::Chart& c = t.chart();
@@ -387,7 +400,7 @@ TEST(TorusChart, TessellationsAreCrackFreeAndWithinDistMax) {
 // Whole surfaces meshed to an error and welded by the chart: the torus a closed 2-manifold, the
 // cylinder a manifold whose border edges all lie on its two ends; both Euler 0. OBJ and PLY
 // go through weldMesh: their vertex counts are the welded mesh's.
-TEST(TorusChart, WholeMeshesAreWeldedTorusAndTube) {
+TEST(TorusAndCylinder, WholeMeshesAreWeldedTorusAndTube) {
   const auto dir = std::filesystem::temp_directory_path() / "ps_torus_cylinder_meshes";
   std::filesystem::create_directories(dir);
   for (const Case& k : kCases) {
@@ -434,7 +447,7 @@ TEST(TorusChart, WholeMeshesAreWeldedTorusAndTube) {
 // pipeline: the bounds equal a full rebuild bit for bit after each, twins stay one height,
 // every vertex that changed lies in an image of the reported dirty box, and undo gives the
 // heights back bit for bit.
-TEST(TorusChart, BrushEditsKeepBoundsTwinsAndUndo) {
+TEST(TorusAndCylinder, BrushEditsKeepBoundsTwinsAndUndo) {
   for (const Case& k : kCases) {
     auto t = bumpy(k.make(7), 9, 3000.0);
     const core::Chart& c = t.chart();
