@@ -13,8 +13,11 @@
 #include <fstream>
 #include <random>
 
+#include "core/chart_factory.hpp"
+#include "core/cylinder_chart.hpp"
 #include "core/flat_chart.hpp"
 #include "core/input_error.hpp"
+#include "core/torus_chart.hpp"
 #include "fresh_dir.hpp"
 #include "io/planet_file.hpp"
 #include "test_terrains.hpp"
@@ -169,7 +172,7 @@ TEST(IoPlanetFile, OctahedralHeaderFieldsAndTwinsAreChecked) {
                 "chart variant 7 is not one of the 2 that chart 'octahedral'");
   expectRefused(edit(48, &spacing, 8), "an octahedral planet must store 0 in the flat spacing");
   const unsigned char byte = 1;
-  expectRefused(edit(110, &byte, 1), "reserved header byte 110 is not zero");
+  expectRefused(edit(116, &byte, 1), "reserved header byte 116 is not zero");
   // A lat-long file may not carry a variant in version 1's reserved bytes.
   auto latlong = goodFile();
   std::memcpy(latlong.data() + 100, &one, 4);
@@ -183,6 +186,44 @@ TEST(IoPlanetFile, OctahedralHeaderFieldsAndTwinsAreChecked) {
   std::memcpy(twisted.data() + heightsAt + std::size_t(t.grid().index(m - 3, 0)) * 4, &other, 4);
   fixBodyCrc(twisted);
   expectRefused(twisted, "grid vertices at one point differ");
+}
+
+TEST(IoPlanetFile, TorusAndCylinderPlanetsRoundTripWithTheirLengths) {
+  const core::GridSize g(5);
+  std::vector<std::shared_ptr<const core::Chart>> charts = {
+      std::make_shared<core::TorusChart>(g, 3000.0, 1000.0),
+      std::make_shared<core::CylinderChart>(g, 1000.0, 5000.0)};
+  for (const auto& chart : charts) {
+    std::vector<float> h(g.count());
+    for (int v = 0; v <= g.m(); ++v)
+      for (int u = 0; u <= g.m(); ++u) {
+        const core::GridPoint c = chart->canonical(u, v);
+        h[g.index(u, v)] = float(20.0 * std::sin(0.3 * c.u) * std::cos(0.2 * c.v));
+      }
+    const auto bytes = io::encodePlanet(*chart, h, terrain::ErrorRule::kHybridExact);
+    const io::PlanetData d = io::parsePlanet(bytes, chart->name() + ".planet");
+    EXPECT_EQ(d.chart->name(), chart->name());
+    EXPECT_EQ(core::dimsOf(*d.chart).radius, core::dimsOf(*chart).radius);
+    EXPECT_EQ(core::dimsOf(*d.chart).minorRadius, core::dimsOf(*chart).minorRadius);
+    EXPECT_EQ(core::dimsOf(*d.chart).length, core::dimsOf(*chart).length);
+    EXPECT_EQ(d.heights, h);
+    EXPECT_EQ(io::encodePlanet(*d.chart, d.heights, d.rule), bytes);
+  }
+  // Their second length is checked, and refused where another chart has none.
+  auto torus = io::encodePlanet(*charts[0], std::vector<float>(g.count(), 0.0f),
+                                terrain::ErrorRule::kHybridExact);
+  const double tooThick = 4000.0, none = 0.0;
+  std::memcpy(torus.data() + 104, &tooThick, 8);
+  fixHeaderCrc(torus);
+  expectRefused(torus, "minor radius 4000 m must be below the major radius 3000 m");
+  std::memcpy(torus.data() + 104, &none, 8);
+  fixHeaderCrc(torus);
+  expectRefused(torus, "minor radius 0 m must be positive and finite");
+  const auto octa = testkit::bumpyOctahedralTerrain(5, 2, 5000.0);
+  auto o = io::encodePlanet(octa.chart(), octa.heights(), octa.bounds().rule());
+  std::memcpy(o.data() + 104, &tooThick, 8);
+  fixHeaderCrc(o);
+  expectRefused(o, "an octahedral planet must store 0 in the second length field");
 }
 
 TEST(IoPlanetFile, EmptyTruncatedAndWrongTypeFilesAreRefusedByName) {

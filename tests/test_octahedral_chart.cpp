@@ -249,7 +249,7 @@ TEST(OctahedralChart, RegionGrowingAcrossTheFoldsEqualsBruteForce) {
           ASSERT_EQ(region.contains(u, v), mask[chart->grid().index(u, v)] != 0)
               << "(" << u << "," << v << ") centre " << c.u << "," << c.v << " r " << radius;
       // Every vertex lies in an image of the dirty box.
-      const auto images = terrain::foldImages(region.bounds(), chart->grid());
+      const auto images = terrain::gluedImages(*chart, region.bounds());
       region.forEachSpan([&](int v, int a, int b) {
         for (int u = a; u <= b; ++u) {
           const bool inImage = std::any_of(images.begin(), images.end(), [&](const auto& r) {
@@ -291,7 +291,7 @@ TEST(OctahedralChart, BrushEditsKeepBoundsTwinsAndUndo) {
     ASSERT_EQ(full.errorCodes(), t.bounds().errorCodes()) << spot.transpose();
     ASSERT_EQ(full.radiusCodes(), t.bounds().radiusCodes()) << spot.transpose();
     ASSERT_NO_THROW(terrain::Terrain::validateHeights(t.chart(), t.heights()));
-    const auto images = terrain::foldImages(rep.dirty, g);
+    const auto images = terrain::gluedImages(t.chart(), rep.dirty);
     for (int v = 0; v <= g.m(); ++v)
       for (int u = 0; u <= g.m(); ++u) {
         if (before[g.index(u, v)] == t.heights()[g.index(u, v)]) continue;

@@ -14,6 +14,8 @@
 #include <optional>
 #include <string>
 
+#include "core/cylinder_chart.hpp"
+#include "core/torus_chart.hpp"
 #include "edit/brush.hpp"
 #include "edit/edit_pipeline.hpp"
 #include "gl_test.hpp"
@@ -230,6 +232,79 @@ TEST(TileRequests, TilesAndTheirApronsHoldTheHeightsAcrossFoldsAndSeams) {
     // One vertex just inside a side (no twin of its own): the apron beyond the side's mirror
     // point, in the tiles across the fold, follows it too.
     for (const auto& [u, v] : {std::pair{1, m / 2 + 37}, std::pair{m / 2 - 53, 1}}) {
+      planet.mutableHeights()[planet.grid().index(u, v)] += 700.0f;
+      planet.commitEdit(terrain::GridRegion{u, u, v, v});
+    }
+    ASSERT_TRUE(cache.sync(planet, tess.tessellate(planet, cam, {}), cam, why)) << why;
+    check("after single vertices beside the sides");
+  }
+}
+
+// The torus's tiles wrap both ways (its v seam through core::Chart::continued), the cylinder's
+// round the axis and clamp at its open ends: every texel, apron included, holds the grid
+// vertex there, after the first view, an edit at the seams' crossing and single vertices just
+// inside the sides.
+TEST(TileRequests, TorusAndCylinderApronsWrapAcrossTheirSeams) {
+  SKIP_WITHOUT_GL();
+  render::EglContext gl;
+  for (const bool torus : {true, false}) {
+    std::shared_ptr<const core::Chart> chart;
+    if (torus)
+      chart = std::make_shared<core::TorusChart>(core::GridSize(9), 4.0e6, 1.5e6);
+    else
+      chart = std::make_shared<core::CylinderChart>(core::GridSize(9), 2.0e6, 8.0e6);
+    terrain::Terrain planet(chart, testkit::bumpyHeights(*chart, 4, 5000.0));
+    const int m = planet.grid().m();
+    render::HeightTileCache cache;
+    std::string why;
+    auto expected = [&](int u, int v) -> float {
+      const int w = ((u % m) + m) % m;  // both seam round the u axis
+      if (torus) return planet.height(w, ((v % m) + m) % m);
+      return planet.height(w, std::clamp(v, 0, m));  // the open ends clamp
+    };
+    auto check = [&](const char* when) {
+      const auto& p = cache.pyramid();
+      const int S = cache.slotSide();
+      std::vector<float> texels(std::size_t(S) * std::size_t(S) * std::size_t(cache.layers()));
+      glBindTexture(GL_TEXTURE_2D_ARRAY, cache.tiles());
+      glPixelStorei(GL_PACK_ALIGNMENT, 4);
+      glGetTexImage(GL_TEXTURE_2D_ARRAY, 0, GL_RED, GL_FLOAT, texels.data());
+      int apronV = 0;
+      for (std::size_t tile = 0; tile < p.tileCount(); ++tile) {
+        const int layer = cache.layerOf(tile);
+        if (layer < 0) continue;
+        const render::TileKey k = p.key(tile);
+        const int step = 1 << k.level;
+        for (int j = 0; j < S; ++j)
+          for (int i = 0; i < S; ++i) {
+            const int u = (k.tx * p.tileCells + i - 1) * step,
+                      v = (k.ty * p.tileCells + j - 1) * step;
+            const float got =
+                texels[(std::size_t(layer) * std::size_t(S) + std::size_t(j)) * std::size_t(S) +
+                       std::size_t(i)];
+            ASSERT_EQ(got, expected(u, v))
+                << chart->name() << " " << when << ": tile " << k.level << "/" << k.tx << ","
+                << k.ty << " texel (" << i << "," << j << ") = grid (" << u << "," << v << ")";
+            apronV += v < 0 || v > m;
+          }
+      }
+      EXPECT_GT(apronV, 100) << chart->name() << " " << when;
+    };
+    // Over the seams' crossing (the torus's corner; the cylinder's seam at its end v = 0).
+    const Eigen::Vector3d target = chart->position(0, 0, 0), n = chart->up(0, 0);
+    const auto cam = terrain::Camera::lookAt(target + 1.5e6 * n, target, n.unitOrthogonal(), 320,
+                                             240, 70 * M_PI / 180);
+    terrain::Tessellator tess;
+    ASSERT_TRUE(cache.sync(planet, tess.tessellate(planet, cam, {}), cam, why)) << why;
+    check("first view");
+    edit::EditPipeline pipe(planet);
+    edit::BrushSettings b;
+    b.radius = 3.0e5;
+    b.strength = 2500;
+    pipe.apply(edit::GaussianBrush(b), {target, 0.0});
+    ASSERT_TRUE(cache.sync(planet, tess.tessellate(planet, cam, {}), cam, why)) << why;
+    check("after an edit");
+    for (const auto& [u, v] : {std::pair{1, 3}, std::pair{3, 1}, std::pair{m - 1, m - 2}}) {
       planet.mutableHeights()[planet.grid().index(u, v)] += 700.0f;
       planet.commitEdit(terrain::GridRegion{u, u, v, v});
     }

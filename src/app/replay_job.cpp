@@ -290,6 +290,14 @@ nlohmann::json runReplayJob(const ReplayJob& job) {
   std::unique_ptr<terrain::Terrain> planet =
       in.planetFile.empty() ? makeDefaultPlanet(in.gridLevel, in.seed, in.chart)
                             : io::loadPlanet(in.planetFile);
+  const core::ChartShape shape = core::shapeOf(planet->chart());
+  if (shape == core::ChartShape::kTorus || shape == core::ChartShape::kCylinder) {
+    throw core::InputError(
+        (in.planetFile.empty() ? std::string("the planet") : in.planetFile.string()) + ": a " +
+        planet->chart().name() +
+        " planet cannot stand on the planet board yet (the AR scene places a "
+        "sphere); sculpt it through its planet file and export it as a mesh");
+  }
   // Another start planet or calibration would sculpt another planet: refused before any edit.
   if (timeline) replay::checkSessionStart(*timeline, *planet, calib.forImageSize(source.size()));
   const std::vector<float> before(planet->heights().begin(), planet->heights().end());

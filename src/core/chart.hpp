@@ -1,5 +1,6 @@
 #pragma once
 #include <Eigen/Core>
+#include <algorithm>
 #include <cstddef>
 #include <cstdint>
 #include <optional>
@@ -8,6 +9,28 @@
 #include "core/grid.hpp"
 
 namespace ps::core {
+
+// How a pair of opposite sides of the grid is glued: the surface's topology, as data that the
+// layers ask for instead of knowing a chart's shape.
+enum class SideGluing : std::uint8_t {
+  kOpen,    // a border of the surface (the flat chart; the cylinder's ends)
+  kSeam,    // each side glued to the opposite one by translation: (0, v) is (m, v), or (u, 0)
+            // is (u, m) (lat-long's meridian, the torus's and the cylinder's seams)
+  kMirror,  // each side glued to itself mirrored at its midpoint: (u, 0) is (m - u, 0)
+            // (the octahedral chart)
+  kPoint,   // each side is one point (lat-long's pole rows)
+};
+struct Gluing {
+  SideGluing uSides;  // the sides u = 0 and u = m
+  SideGluing vSides;  // the sides v = 0 and v = m
+};
+
+// An inclusive box of grid vertices; u may be unwrapped across a u seam (terrain::GridRegion's
+// convention: uBegin < 0 or uEnd > m continue on the other side).
+struct GridBox {
+  int uBegin = 0, uEnd = -1, vBegin = 0, vEnd = -1;
+  friend bool operator==(const GridBox&, const GridBox&) = default;
+};
 
 // A parametrization of the planet's surface by a (2^n+1)^2 grid. Everything that needs to know
 // where a vertex is in R^3, which grid vertices are the same point, or how to go from a point in
@@ -85,11 +108,99 @@ class Chart {
     return 1;
   }
 
-  // Whether the grid's sides are glued to themselves mirrored (twins() lists the pairs): then
-  // layers that keep per-vertex state combine it across each pair, as they do across a seam.
-  virtual bool foldsSides() const { return false; }
+  // How the grid's sides are glued. The default follows wrapsU() and hasPoleRows() (lat-long,
+  // flat, the cylinder); charts that glue their sides otherwise say so.
+  virtual Gluing gluing() const {
+    return {wrapsU() ? SideGluing::kSeam : SideGluing::kOpen,
+            hasPoleRows() ? SideGluing::kPoint : SideGluing::kOpen};
+  }
+  // Whether some side is glued in a way the seam and pole-row fast paths do not cover (a
+  // mirrored side, a seam between the rows v = 0 and v = m): then layers that keep per-vertex
+  // state combine it across each pair of twins() on those sides, and an edit's box stands for
+  // its gluedImages() too.
+  bool gluesSidesBeyondSeam() const {
+    const Gluing gl = gluing();
+    return gl.uSides == SideGluing::kMirror || gl.vSides == SideGluing::kMirror ||
+           gl.vSides == SideGluing::kSeam;
+  }
+  // Whether a side is glued to itself mirrored (the octahedral chart).
+  bool foldsSides() const {
+    const Gluing gl = gluing();
+    return gl.uSides == SideGluing::kMirror || gl.vSides == SideGluing::kMirror;
+  }
+  // The flips of the grid that gluedImages() uses: u -> m - u (flipU), v -> m - v (flipV).
+  struct Flips {
+    bool u = false, v = false;
+  };
+  Flips imageFlips() const {
+    const Gluing gl = gluing();
+    return {gl.vSides == SideGluing::kMirror,
+            gl.uSides == SideGluing::kMirror || gl.vSides == SideGluing::kSeam};
+  }
+  // The images of `box` across the glued sides that a u seam does not cover, box first, into
+  // out (at most 4; the count is returned). Across a mirrored side v = 0 or m, the grid
+  // continues at u -> m - u (a side's mirror); across a seam between v = 0 and v = m at
+  // v -> m - v (a box that reaches v = 0 from inside, grown by d, continues in rows m - d .. m,
+  // which its reflection holds). `acrossMidlines`: also where the box reaches the flip's
+  // midline (u = m/2 for u -> m - u, v = m/2 for v -> m - v). That is geometry: the octahedral
+  // chart's sphere and the torus are symmetric under the flips (x -> -x, y -> -y; z -> -z), and
+  // of a point and its mirror the one on a centre's side is nearer it, so a disc about a centre
+  // in one part of the grid, met across a glued side or a midline, lies there inside a mirror
+  // image of the centre's part (the edit's dirty box, edit::RegionGrower). Without
+  // acrossMidlines (the error bounds, level by level) only the topology is used.
+  int gluedImages(const GridBox& box, bool acrossMidlines, GridBox out[4]) const {
+    if (box.uBegin > box.uEnd || box.vBegin > box.vEnd) return 0;
+    const int m = grid_.m();
+    const Gluing gl = gluing();
+    const Flips f = imageFlips();
+    const bool reachesV = box.vBegin <= 0 || box.vEnd >= m;
+    const bool reachesU = box.uBegin <= 0 || box.uEnd >= m;
+    const bool uMid = box.uBegin <= m / 2 && box.uEnd >= m / 2;
+    const bool vMid = box.vBegin <= m / 2 && box.vEnd >= m / 2;
+    const bool flipU = f.u && (reachesV || (acrossMidlines && uMid));
+    const bool flipV =
+        f.v && ((gl.uSides == SideGluing::kMirror && reachesU) ||
+                (gl.vSides == SideGluing::kSeam && reachesV) || (acrossMidlines && vMid));
+    int n = 0;
+    out[n++] = box;
+    if (flipU) out[n++] = {m - box.uEnd, m - box.uBegin, box.vBegin, box.vEnd};
+    if (flipV) out[n++] = {box.uBegin, box.uEnd, m - box.vEnd, m - box.vBegin};
+    if (flipU && flipV) out[n++] = {m - box.uEnd, m - box.uBegin, m - box.vEnd, m - box.vBegin};
+    return n;
+  }
+  // The grid vertex at grid position (u, v) when the grid is continued across its sides, for
+  // positions outside it (a tile's apron): across a seam the other side, across a mirrored side
+  // its mirror ((u, -d) is (m - u, d) across v = 0), across an open side or a pole row the
+  // nearest vertex on the side (clamped).
+  GridPoint continued(int u, int v) const {
+    const int m = grid_.m();
+    const Gluing gl = gluing();
+    for (int guard = 0; guard < 8 && (u < 0 || u > m || v < 0 || v > m); ++guard) {
+      if (v < 0 || v > m) {
+        if (gl.vSides == SideGluing::kSeam) {
+          v = ((v % m) + m) % m;
+        } else if (gl.vSides == SideGluing::kMirror) {
+          u = m - u, v = v < 0 ? -v : 2 * m - v;
+        } else {
+          v = std::clamp(v, 0, m);
+        }
+      } else if (gl.uSides == SideGluing::kSeam) {
+        u = ((u % m) + m) % m;
+      } else if (gl.uSides == SideGluing::kMirror) {
+        v = m - v, u = u < 0 ? -u : 2 * m - u;
+      } else {
+        u = std::clamp(u, 0, m);
+      }
+    }
+    return {std::clamp(u, 0, m), std::clamp(v, 0, m)};
+  }
 
-  // Reference radius heights are measured from (0 for a flat chart).
+  // The radius of the sphere about the origin that the surface is at height 0, heights measured
+  // from it; 0 where the surface is no such sphere (the flat chart, the torus, the cylinder).
+  // Layers read radius() > 0 as "a sphere about the origin": the tessellator's horizon occluder
+  // (a solid ball of radius() + the lowest height), great-circle stroke paths, radial up in the
+  // renderer, the planet's shadow; a torus or an open tube has no such ball, so they say 0 and
+  // give their own lengths (TorusChart::minorRadius, CylinderChart::tubeRadius).
   virtual double radius() const = 0;
   // Heights beyond +-heightLimit() are refused on load and saturate in edits. A sphere's is a
   // quarter of its radius (relief beyond that is not terrain); charts without a radius override.

@@ -2,9 +2,11 @@
 
 #include <stdexcept>
 
+#include "core/cylinder_chart.hpp"
 #include "core/flat_chart.hpp"
 #include "core/latlong_chart.hpp"
 #include "core/octahedral_chart.hpp"
+#include "core/torus_chart.hpp"
 
 namespace ps::core {
 
@@ -22,6 +24,10 @@ std::shared_ptr<const Chart> makeChart(ChartShape shape, GridSize grid, const Ch
     case ChartShape::kOctahedralCentral:
       return std::make_shared<OctahedralChart>(grid, dims.radius,
                                                OctahedralChart::Mapping::kCentral);
+    case ChartShape::kTorus:
+      return std::make_shared<TorusChart>(grid, dims.radius, dims.minorRadius);
+    case ChartShape::kCylinder:
+      return std::make_shared<CylinderChart>(grid, dims.radius, dims.length);
     case ChartShape::kFlat:
       return std::make_shared<FlatChart>(grid, dims.dx, dims.dy);
   }
@@ -37,6 +43,12 @@ ChartDims dimsOf(const Chart& chart) {
   if (const auto* flat = dynamic_cast<const FlatChart*>(&chart)) {
     d.dx = flat->dx();
     d.dy = flat->dy();
+  } else if (const auto* torus = dynamic_cast<const TorusChart*>(&chart)) {
+    d.radius = torus->majorRadius();
+    d.minorRadius = torus->minorRadius();
+  } else if (const auto* tube = dynamic_cast<const CylinderChart*>(&chart)) {
+    d.radius = tube->tubeRadius();
+    d.length = tube->length();
   } else {
     d.radius = chart.radius();
   }

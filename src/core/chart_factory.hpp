@@ -10,14 +10,16 @@
 
 namespace ps::core {
 
-enum class ChartShape { kLatLong, kOctahedral, kOctahedralCentral, kFlat };
+enum class ChartShape { kLatLong, kOctahedral, kOctahedralCentral, kTorus, kCylinder, kFlat };
 
 // The names used on the command line, in planet files (Chart::name()) and in logs.
-inline constexpr NameTable<ChartShape, 4> kChartShapeNames{
+inline constexpr NameTable<ChartShape, 6> kChartShapeNames{
     "chart",
     {{{ChartShape::kLatLong, "latlong"},
       {ChartShape::kOctahedral, "octahedral"},
       {ChartShape::kOctahedralCentral, "octahedral-central"},
+      {ChartShape::kTorus, "torus"},
+      {ChartShape::kCylinder, "cylinder"},
       {ChartShape::kFlat, "flat"}}}};
 
 inline ChartShape chartShapeFromString(const std::string& s) {
@@ -31,9 +33,12 @@ inline std::string toString(ChartShape s) {
 // map onto it and its heights are measured from that radius.
 bool isSphere(ChartShape s);
 
-// The dimensions a shape needs: a sphere its radius, a flat grid its spacing.
+// The dimensions a shape needs: a sphere its radius; a torus its major (radius) and minor
+// radius; a cylinder its radius and length; a flat grid its spacing.
 struct ChartDims {
   double radius = 0;
+  double minorRadius = 0;  // torus
+  double length = 0;       // cylinder
   double dx = 0, dy = 0;
 };
 

@@ -52,7 +52,7 @@ class OctahedralChart final : public Chart {
   std::optional<Eigen::Vector2d> inverse(const Eigen::Vector3d& p) const override;
   bool wrapsU() const override { return false; }
   bool hasPoleRows() const override { return false; }
-  bool foldsSides() const override { return true; }
+  Gluing gluing() const override { return {SideGluing::kMirror, SideGluing::kMirror}; }
   GridPoint canonical(int u, int v) const override;
   int twins(int u, int v, GridPoint out[4]) const override;
   double radius() const override { return radius_; }

@@ -228,13 +228,15 @@ terrain::GridRegion applyRows(const ToolContext& ctx, const GaussianProfile& pro
   if (field.latLong() && region.symmetric()) {
     return symmetricBounds(region.centreU(), kMax, first, last, g.m());
   }
-  // The rows that changed, within the region's box. On a chart that folds its sides the box
-  // holds only the centre's quadrant of the region (Region::bounds), whose mirror images hold
-  // the rest because the region is symmetric about the centre's side; whether a float changed
-  // is not (a small amount rounds away on a large height and not on a small one), so the box is
-  // kept whole there (found by StressEdits.RandomBrushActionsOnTheOctahedralChart...).
+  // The rows that changed, within the region's box. On a chart whose dirty box is a part of the
+  // region that the box's images across the glued sides complete (the octahedral chart's
+  // quadrant, the torus's half: core::Chart::gluedImages), the region is symmetric and so is the
+  // box; whether a float changed is not (a small amount rounds away on a large height and not
+  // on a small one), so the box is kept whole there (found by StressEdits.RandomBrushActions
+  // OnTheOctahedralChartKeepEveryInvariant).
   terrain::GridRegion r = region.bounds();
-  if (!ctx.terrain.chart().foldsSides() && std::max(r.vBegin, first) <= std::min(r.vEnd, last)) {
+  if (!ctx.terrain.chart().gluesSidesBeyondSeam() &&
+      std::max(r.vBegin, first) <= std::min(r.vEnd, last)) {
     r.vBegin = std::max(r.vBegin, first);
     r.vEnd = std::min(r.vEnd, last);
   }

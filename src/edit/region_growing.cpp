@@ -204,6 +204,17 @@ bool Region::contains(int u, int v) const {
   return false;
 }
 
+void Region::clipRows(int vFirst, int vLast) {
+  int a = vLast + 1, z = vFirst - 1;
+  for (int v = std::max(vBegin_, vFirst); v <= std::min(vEnd_, vLast); ++v)
+    if (!row(v).empty()) a = std::min(a, v), z = std::max(z, v);
+  if (a > z) {
+    bounds_ = terrain::GridRegion::none();
+    return;
+  }
+  bounds_.vBegin = a, bounds_.vEnd = z;
+}
+
 void Region::clipBounds(const terrain::GridRegion& box) {
   terrain::GridRegion b{box.uEnd + 1, box.uBegin - 1, box.vEnd + 1, box.vBegin - 1};
   for (int v = std::max(vBegin_, box.vBegin); v <= std::min(vEnd_, box.vEnd); ++v)
@@ -389,43 +400,58 @@ void RegionGrower::grow(const DistanceField& field, double radius, Region& out) 
   } else {
     const GenericOracle oracle{field, r2, m, wraps ? m : m + 1, wraps, poles, evaluations_};
     fill(oracle, g, wraps, seed);
-    if (chart.foldsSides()) fillAcrossFolds(oracle, chart);
+    const bool glued = chart.gluesSidesBeyondSeam();
+    if (glued) fillAcrossGluedSides(oracle, chart);
     emit(g, wraps, poles, false, seed.u, out);
-    if (chart.foldsSides()) {
-      // The dirty box: the region's vertices in the centre's quadrant (closed); the terrain
-      // covers the rest by that box's images (terrain::foldImages).
+    if (glued) {
+      // The dirty box: the region's vertices in the centre's part of the grid (closed; a half
+      // for each flip the chart's images use); the terrain covers the rest by that box's images
+      // (terrain::gluedImages). A u seam's columns stay as emit() wrapped them.
+      const core::Chart::Flips f = chart.imageFlips();
       const bool left = 2 * seed.u <= m, low = 2 * seed.v <= m;
-      out.clipBounds({left ? 0 : m / 2, left ? m / 2 : m, low ? 0 : m / 2, low ? m / 2 : m});
+      const int v0 = f.v ? (low ? 0 : m / 2) : 0, v1 = f.v ? (low ? m / 2 : m) : m;
+      if (f.u) {
+        out.clipBounds({left ? 0 : m / 2, left ? m / 2 : m, v0, v1});
+      } else {
+        out.clipRows(v0, v1);
+      }
     }
   }
 }
 
 template <class Oracle>
-void RegionGrower::fillAcrossFolds(const Oracle& oracle, const core::Chart& chart) {
-  // The fill stops at the grid's sides; a side vertex it reached is also its twins, from which
-  // the fill goes on into the grid on the fold's other side, until no twin is left outside.
-  const int m = chart.grid().m(), cols = m + 1;
+void RegionGrower::fillAcrossGluedSides(const Oracle& oracle, const core::Chart& chart) {
+  // The fill stops at the grid's sides (a u seam it crosses itself); a side vertex it reached
+  // is also its twins, from which the fill goes on into the grid beyond the side (a mirrored
+  // side's other half, the torus's other end of the v seam), until no twin is left outside.
+  const int m = chart.grid().m();
+  const bool wraps = chart.wrapsU();
+  const int cols = wraps ? m : m + 1;  // on a u seam, column m is column 0
   std::vector<core::GridPoint> seeds;
   auto twinsOf = [&](int u, int v) {
     core::GridPoint t[4];
     const int n = chart.twins(u, v, t);
-    for (int k = 0; k < n; ++k)
-      if (!covered(rowSpans_[std::size_t(t[k].v)], t[k].u, cols)) seeds.push_back(t[k]);
+    for (int k = 0; k < n; ++k) {
+      const int c = wraps && t[k].u == m ? 0 : t[k].u;
+      if (!covered(rowSpans_[std::size_t(t[k].v)], c, cols)) seeds.push_back({c, t[k].v});
+    }
   };
   for (bool more = true; more;) {
     seeds.clear();
     for (const int v : {0, m})
       for (const ColumnRun& r : rowSpans_[std::size_t(v)])
-        for (int u = r.start; u < r.start + r.len; ++u) twinsOf(u, v);
-    for (const int v : std::vector<int>(touched_)) {
-      const auto& runs = rowSpans_[std::size_t(v)];
-      if (covered(runs, 0, cols)) twinsOf(0, v);
-      if (covered(runs, m, cols)) twinsOf(m, v);
+        for (int k = 0; k < r.len; ++k) twinsOf((r.start + k) % cols, v);
+    if (!wraps) {
+      for (const int v : std::vector<int>(touched_)) {
+        const auto& runs = rowSpans_[std::size_t(v)];
+        if (covered(runs, 0, cols)) twinsOf(0, v);
+        if (covered(runs, m, cols)) twinsOf(m, v);
+      }
     }
     more = false;
     for (const core::GridPoint& p : seeds) {
       if (covered(rowSpans_[std::size_t(p.v)], p.u, cols)) continue;
-      fill(oracle, chart.grid(), false, p);
+      fill(oracle, chart.grid(), wraps, p);
       more = true;
     }
   }

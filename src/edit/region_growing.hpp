@@ -45,11 +45,15 @@ class Region {
   std::size_t pointCount() const { return pointCount_; }
   bool contains(int u, int v) const;
   // The smallest seam-wrapped rectangle holding every vertex (the edit's dirty region). On a
-  // chart that folds its sides: the box of the vertices in the centre's quadrant of the grid,
-  // whose images (terrain::foldImages) hold the rest (RegionGrower::grow sets it).
+  // chart that glues its sides beyond a u seam: the box of the vertices in the centre's part of
+  // the grid (the octahedral chart's quadrant, the torus's half in v), whose images
+  // (terrain::gluedImages) hold the rest (RegionGrower::grow sets it).
   const terrain::GridRegion& bounds() const { return bounds_; }
   // Makes bounds() the box of the region's vertices within `box`.
   void clipBounds(const terrain::GridRegion& box);
+  // Keeps bounds()' columns (seam-wrapped) and makes its rows those of the region's rows within
+  // [vFirst, vLast] that hold vertices.
+  void clipRows(int vFirst, int vLast);
 
   // Regions grown on the lat-long chart are symmetric about the centre column: row v holds
   // exactly the vertices whose folded column distance from centreU() is <= halfWidth(v)
@@ -102,8 +106,9 @@ class Region {
 // R^2 (pi/m)^2, is ~1e7 times the rounding error). Tests check the equality for centres at the
 // poles, the seam and near the poles and for radii from below one cell to the planet's diameter.
 // On other charts the same fill scans vertex by vertex and returns the connected component of
-// the centre; on a chart that folds its sides (core/octahedral_chart.hpp) it goes on from the
-// twins of the side vertices it reached, so the component is the sphere's, across the folds.
+// the centre; on a chart that glues its sides beyond a u seam (the octahedral chart's folds, the
+// torus's v seam) it goes on from the twins of the side vertices it reached, so the component
+// is the surface's, across the glued sides.
 class RegionGrower {
  public:
   // Throws core::InputError for a radius that is not finite and > 0.
@@ -118,7 +123,7 @@ class RegionGrower {
   void emit(const core::GridSize& g, bool wraps, bool poles, bool symmetric, int centreU,
             Region& out);
   template <class Oracle>
-  void fillAcrossFolds(const Oracle& oracle, const core::Chart& chart);
+  void fillAcrossGluedSides(const Oracle& oracle, const core::Chart& chart);
 
   std::vector<std::vector<ColumnRun>> rowSpans_;
   std::vector<int> touched_;

@@ -78,7 +78,14 @@ nlohmann::json exportTerrain(const terrain::Terrain& t, const std::filesystem::p
   }
   if (o.maxErrorM)
     throw core::InputError("--max-error applies to meshes (obj, ply, glb), not to heightmaps");
-  const bool flat = core::shapeOf(t.chart()) == core::ChartShape::kFlat;
+  const core::ChartShape shape = core::shapeOf(t.chart());
+  const bool flat = shape == core::ChartShape::kFlat;
+  if (!flat && !core::isSphere(shape)) {
+    throw core::InputError(
+        "heightmaps are written from spheres (equirectangular) and flat grids; "
+        "a " +
+        t.chart().name() + " planet exports as a mesh (.obj, .ply, .glb)");
+  }
   int w = o.width, h = o.height;
   if (w < 0 || h < 0) throw core::InputError("--width and --height must be positive");
   const int m = t.grid().m();

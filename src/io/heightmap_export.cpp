@@ -22,26 +22,15 @@ namespace ps::io {
 
 namespace {
 
-// A grid vertex for integer coordinates up to two steps outside the grid of a chart that glues
-// each side to itself mirrored (core::OctahedralChart: (0, v) is (0, m - v), (u, 0) is
-// (m - u, 0)): the vertex across the fold, so interpolation near a side reads the surface's
-// neighbours there.
-std::pair<int, int> acrossFolds(int u, int v, int m) {
-  if (u < 0) u = -u, v = m - v;
-  if (u > m) u = 2 * m - u, v = m - v;
-  if (v < 0) v = -v, u = m - u;
-  if (v > m) v = 2 * m - v, u = m - u;
-  return {u, v};
-}
-
 // Any sphere chart other than lat-long: each pixel's direction goes through the chart's inverse
-// to grid coordinates, interpolated there (across the folds the chart glues).
+// to grid coordinates, interpolated there (the stencil reads across the sides the chart glues:
+// core::Chart::continued).
 Raster resampleSphereChart(const terrain::Terrain& t, Raster r, Interpolation how) {
   const core::Chart& chart = t.chart();
   const int m = t.grid().m(), width = r.width, height = r.height;
   const auto at = [&](int u, int v) {
-    const auto [cu, cv] = acrossFolds(u, v, m);
-    return double(t.height(cu, cv));
+    const core::GridPoint c = chart.continued(u, v);
+    return double(t.height(c.u, c.v));
   };
 #pragma omp parallel for schedule(static)
   for (int y = 0; y < height; ++y) {
@@ -51,8 +40,8 @@ Raster resampleSphereChart(const terrain::Terrain& t, Raster r, Interpolation ho
       const Eigen::Vector3d d(std::cos(lat) * std::cos(lon), std::cos(lat) * std::sin(lon),
                               std::sin(lat));
       const Eigen::Vector2d uv = *chart.inverse(chart.radius() * d);
-      // The interpolation stencil's own index arithmetic (floor, +-1, +2) stays within two
-      // steps of the grid: acrossFolds maps it back.
+      // The interpolation stencil reads up to two steps beyond the grid: continued() maps
+      // them back.
       const double u = std::clamp(uv.x(), 0.0, double(m)), v = std::clamp(uv.y(), 0.0, double(m));
       r.metres[std::size_t(y) * std::size_t(width) + std::size_t(x)] =
           float(sampleUnclamped(at, u, v, how));

@@ -51,12 +51,15 @@ enum Offset : std::size_t {
   kOffBodyCrc = 96,
   kOffReserved = 100,   // version 1: zero up to the header's CRC
   kOffVariant = 100,    // version 2: the chart's variant (octahedral: 0 equal area, 1 central)
-  kOffReserved2 = 104,  // version 2: zero up to the header's CRC
+  kOffSecond = 104,     // version 2: the chart's second length (torus: minor radius; cylinder:
+                        // length; others 0)
+  kOffReserved2 = 112,  // version 2: zero up to the header's CRC
   kOffHeaderCrc = 124,
 };
 
 // Version 1 knows lat-long and flat planets; version 2 adds the octahedral chart and its
-// variant. A planet version 1 holds is written as version 1, so older builds keep reading it.
+// variant, the torus and the cylinder and their second length. A planet version 1 holds is written
+// as version 1, so older builds keep reading it.
 std::uint32_t versionFor(core::ChartShape s) {
   return s == core::ChartShape::kLatLong || s == core::ChartShape::kFlat ? 1u : 2u;
 }
@@ -164,7 +167,12 @@ std::array<unsigned char, kPlanetHeaderBytes> makeHeader(const core::Chart& char
   put<double>(h.data() + kOffRadius, dims.radius);
   put<double>(h.data() + kOffDx, dims.dx);
   put<double>(h.data() + kOffDy, dims.dy);
-  if (version >= 2) put<std::uint32_t>(h.data() + kOffVariant, variant);
+  if (version >= 2) {
+    put<std::uint32_t>(h.data() + kOffVariant, variant);
+    put<double>(h.data() + kOffSecond, shape == core::ChartShape::kTorus      ? dims.minorRadius
+                                       : shape == core::ChartShape::kCylinder ? dims.length
+                                                                              : 0.0);
+  }
   put<double>(h.data() + kOffScale, scale);
   put<double>(h.data() + kOffOffset, offset);
   put<std::uint32_t>(h.data() + kOffRule, ruleCode(rule));
@@ -222,7 +230,7 @@ struct Header {
   std::string chart;
   int side = 0;
   HeightEncoding encoding = HeightEncoding::kFloat32;
-  double radius = 0, dx = 0, dy = 0, scale = 1, offset = 0;
+  double radius = 0, second = 0, dx = 0, dy = 0, scale = 1, offset = 0;
   terrain::ErrorRule rule = terrain::ErrorRule::kHybridExact;
   std::uint32_t metadataBytes = 0;
   std::uint64_t heightBytes = 0;
@@ -273,8 +281,9 @@ Header parseHeader(const unsigned char* p, std::size_t available, const std::str
     if (chart[i] != '\0') fail(name, "chart name field has bytes after its terminating NUL");
   }
   const bool v1Chart = h.chart == "latlong" || h.chart == "flat";
-  if (!v1Chart && h.chart != "octahedral") {
-    fail(name, "unknown chart '" + h.chart + "' (this build knows latlong, flat and octahedral)");
+  if (!v1Chart && h.chart != "octahedral" && h.chart != "torus" && h.chart != "cylinder") {
+    fail(name, "unknown chart '" + h.chart +
+                   "' (this build knows latlong, flat, octahedral, torus and cylinder)");
   }
   if (!v1Chart && version < 2) {
     fail(name, "chart '" + h.chart + "' needs format version 2, the header says " +
@@ -307,7 +316,24 @@ Header parseHeader(const unsigned char* p, std::size_t available, const std::str
   h.radius = get<double>(p + kOffRadius);
   h.dx = get<double>(p + kOffDx);
   h.dy = get<double>(p + kOffDy);
-  if (core::isSphere(h.shape)) {
+  if (version >= 2) h.second = get<double>(p + kOffSecond);
+  const bool torus = h.shape == core::ChartShape::kTorus,
+             tube = h.shape == core::ChartShape::kCylinder;
+  if (h.second != 0 && !torus && !tube)
+    fail(name, (h.chart[0] == 'o' ? "an " : "a ") + h.chart +
+                   " planet must store 0 in the second length field");
+  if (torus || tube) {
+    if (!std::isfinite(h.radius) || h.radius <= 0)
+      fail(name, "radius " + num(h.radius) + " m must be positive and finite");
+    if (!std::isfinite(h.second) || h.second <= 0)
+      fail(name, std::string(torus ? "minor radius " : "length ") + num(h.second) +
+                     " m must be positive and finite");
+    if (torus && h.second >= h.radius)
+      fail(name, "minor radius " + num(h.second) + " m must be below the major radius " +
+                     num(h.radius) + " m");
+    if (h.dx != 0 || h.dy != 0)
+      fail(name, "a " + h.chart + " planet must store 0 in the flat spacing fields");
+  } else if (core::isSphere(h.shape)) {
     if (!std::isfinite(h.radius) || h.radius <= 0) {
       fail(name, "radius " + num(h.radius) + " m must be positive and finite");
     }
@@ -386,9 +412,15 @@ PlanetData parseBody(const Header& h, const unsigned char* body, const std::stri
   const core::GridSize g = core::GridSize::fromSide(h.side);
   core::ChartDims dims;
   dims.radius = h.radius;
+  dims.minorRadius = h.shape == core::ChartShape::kTorus ? h.second : 0.0;
+  dims.length = h.shape == core::ChartShape::kCylinder ? h.second : 0.0;
   dims.dx = h.dx;
   dims.dy = h.dy;
-  d.chart = core::makeChart(h.shape, g, dims);
+  try {
+    d.chart = core::makeChart(h.shape, g, dims);
+  } catch (const core::InputError& e) {
+    fail(name, e.what());
+  }
   d.rule = h.rule;
   d.encoding = h.encoding;
   d.heightScale = h.scale;

@@ -125,37 +125,14 @@ bool HeightTileCache::reserve(std::size_t slots) {
   return true;
 }
 
-namespace {
-
-// A level-0 grid position outside the grid, across a side that the chart folds (core::Chart::
-// foldsSides: each side glued to itself mirrored, as core/octahedral_chart.hpp): the grid vertex
-// that is there. Across v = 0, (u, -d) is (m - u, d); across u = 0, (-d, v) is (d, m - v); and
-// likewise at m.
-core::GridPoint acrossFold(int u, int v, int m) {
-  while (u < 0 || u > m || v < 0 || v > m) {
-    if (v < 0) {
-      u = m - u, v = -v;
-    } else if (v > m) {
-      u = m - u, v = 2 * m - v;
-    } else if (u < 0) {
-      u = -u, v = m - v;
-    } else {
-      u = 2 * m - u, v = m - v;
-    }
-  }
-  return {u, v};
-}
-
-}  // namespace
-
 void HeightTileCache::sendTile(const terrain::Terrain& planet, int slot, const TileKey& key, int i0,
                                int i1, int j0, int j1) {
   // Slot texel (i, j) is level texel (tx T + i - 1, ty T + j - 1): the apron repeats the
   // neighbour across a seam the chart wraps or a side it folds, and the edge elsewhere (as
   // clamping would).
   const int T = pyramid_.tileCells, mL = pyramid_.levelCells(key.level),
-            side = planet.grid().side(), m = planet.grid().m(), step = 1 << key.level;
-  const bool wraps = planet.chart().wrapsU(), folds = planet.chart().foldsSides();
+            side = planet.grid().side(), step = 1 << key.level;
+  const bool wraps = planet.chart().wrapsU(), glued = planet.chart().gluesSidesBeyondSeam();
   const float* h = planet.heights().data();
   const int w = i1 - i0 + 1, rows = j1 - j0 + 1;
   texels_.resize(std::size_t(w) * std::size_t(rows));
@@ -166,8 +143,10 @@ void HeightTileCache::sendTile(const terrain::Terrain& planet, int slot, const T
     for (int i = 0; i < w; ++i) {
       const int guRaw = key.tx * T + i0 + i - 1;
       float& texel = texels_[std::size_t(j) * std::size_t(w) + std::size_t(i)];
-      if (folds && (guRaw < 0 || guRaw > mL || gvRaw < 0 || gvRaw > mL)) {
-        const core::GridPoint p = acrossFold(guRaw * step, gvRaw * step, m);
+      if (glued && (guRaw < 0 || guRaw > mL || gvRaw < 0 || gvRaw > mL)) {
+        // Beyond a glued side (core::Chart::continued: a mirrored side's mirror, the torus's
+        // other end of its v seam).
+        const core::GridPoint p = planet.chart().continued(guRaw * step, gvRaw * step);
         texel = h[std::size_t(p.v) * std::size_t(side) + std::size_t(p.u)];
         continue;
       }
@@ -189,15 +168,21 @@ void HeightTileCache::sendChanges(const terrain::Terrain& planet) {
   };
   std::vector<Box> dirty(static_cast<std::size_t>(slots_));
   const bool wraps = planet.chart().wrapsU();
-  // On a chart that folds its sides, a changed vertex near a side is also the apron texel of
-  // the tiles across the fold: each changed region is looked at from there too, as the region
-  // it is beyond that side (acrossFold's mirrors, outside the grid).
+  // On a chart that glues its sides beyond a u seam, a changed vertex near a side is also the
+  // apron texel of the tiles across it: each changed region is looked at from there too, as the
+  // region it is beyond that side (outside the grid; core::Chart::continued maps it back).
   std::vector<terrain::GridRegion> looked(changed_.begin(), changed_.end());
-  if (planet.chart().foldsSides()) {
-    const int m = planet.grid().m();
-    for (const terrain::GridRegion& r : changed_) {
+  const core::Gluing gl = planet.chart().gluing();
+  const int m = planet.grid().m();
+  for (const terrain::GridRegion& r : changed_) {
+    if (gl.vSides == core::SideGluing::kMirror) {
       looked.push_back({m - r.uEnd, m - r.uBegin, -r.vEnd, -r.vBegin});
       looked.push_back({m - r.uEnd, m - r.uBegin, 2 * m - r.vEnd, 2 * m - r.vBegin});
+    } else if (gl.vSides == core::SideGluing::kSeam) {
+      looked.push_back({r.uBegin, r.uEnd, r.vBegin - m, r.vEnd - m});
+      looked.push_back({r.uBegin, r.uEnd, r.vBegin + m, r.vEnd + m});
+    }
+    if (gl.uSides == core::SideGluing::kMirror) {
       looked.push_back({-r.uEnd, -r.uBegin, m - r.vEnd, m - r.vBegin});
       looked.push_back({2 * m - r.uEnd, 2 * m - r.uBegin, m - r.vEnd, m - r.vBegin});
     }

@@ -62,10 +62,10 @@ void main() { colour = vec4(texture(image, uv).rgb, 1.0); }
 constexpr float kRampLow = -9000, kRampHigh = 9000;
 
 // d position / d u and d v at grid vertex (u, v), per grid step, on the reference surface:
-// central differences of the neighbours (one-sided at an edge the chart does not wrap; the
-// seam's columns 0 and m are one point). Positions at grid vertices are table look-ups on every
-// chart; positionAt between them costs trigonometry, 5 ms for a dense view's 25,000 vertices
-// on every upload.
+// central differences of the neighbours (one-sided at an edge the chart does not wrap; a
+// seam's columns 0 and m, or rows 0 and m, are one point). Positions at grid vertices are table
+// look-ups on every chart; positionAt between them costs trigonometry, 5 ms for a dense view's
+// 25,000 vertices on every upload.
 std::pair<Eigen::Vector3d, Eigen::Vector3d> gridTangents(const core::Chart& chart, int u, int v) {
   const int m = chart.grid().m();
   auto at = [&](int uu, int vv) { return chart.position(uu, vv, 0); };
@@ -76,6 +76,8 @@ std::pair<Eigen::Vector3d, Eigen::Vector3d> gridTangents(const core::Chart& char
     const int u0 = std::max(u - 1, 0), u1 = std::min(u + 1, m);
     du = (at(u1, v) - at(u0, v)) / double(u1 - u0);
   }
+  if (chart.gluing().vSides == core::SideGluing::kSeam)  // the torus: rows 0 and m are one
+    return {du, 0.5 * (at(u, v == m ? 1 : v + 1) - at(u, v == 0 ? m - 1 : v - 1))};
   const int v0 = std::max(v - 1, 0), v1 = std::min(v + 1, m);
   return {du, (at(u, v1) - at(u, v0)) / double(v1 - v0)};
 }

@@ -215,52 +215,60 @@ class LevelPass {
 
 }  // namespace
 
-// On a chart that folds its sides (core/octahedral_chart.hpp: (u, 0) is (m - u, 0), ...), a
-// side vertex's diamond has one half in the grid at each twin. For the side vertices of this
-// level within `regions`, both halves are computed afresh (a twin may lie outside them) and both
-// twins keep the larger codes, as the seam twins do; the next level's vertices then read the
-// combined codes. Returns the vertices computed.
+// On a chart that glues its sides beyond a u seam (core::Chart::gluesSidesBeyondSeam: the
+// octahedral chart's mirrored sides, the torus's seam between v = 0 and v = m), a side vertex's
+// diamond has one half in the grid at each twin. For the side vertices of this level within
+// `regions`, on the sides glued so (a u seam's are seamTwins'), both halves are computed afresh
+// (a twin may lie outside the regions) and both twins keep the larger codes; the next level's
+// vertices then read the combined codes. Returns the vertices computed.
 template <class ChartT>
-std::size_t foldTwins(const ChartT& chart, const detail::VertexBounds<ChartT>& vertices,
-                      BoundCodes* codes, const LatticeCopy& lattice, int s,
-                      const std::vector<GridRegion>& regions) {
+std::size_t gluedTwins(const ChartT& chart, const detail::VertexBounds<ChartT>& vertices,
+                       BoundCodes* codes, const LatticeCopy& lattice, int s,
+                       const std::vector<GridRegion>& regions) {
   const core::GridSize g = chart.grid();
   const int m = g.m();
-  // Per side (v = 0, v = m, u = 0, u = m), the positions k along it (k / s odd) that a region
-  // reaches, each pair of twins once (by its k <= m / 2).
-  std::array<std::vector<int>, 4> along;
+  const core::Gluing gl = chart.gluing();
+  const bool vSides =
+      gl.vSides == core::SideGluing::kMirror || gl.vSides == core::SideGluing::kSeam;
+  const bool uSides = gl.uSides == core::SideGluing::kMirror;
+  // The level's side vertices (k / s odd along the side) that a region reaches, each point once
+  // (by its canonical vertex).
+  std::vector<std::pair<int, int>> points;  // (v, u) of the canonical vertex
   for (const GridRegion& r : regions) {
-    const int u0 = std::max(0, r.uBegin), u1 = std::min(m, r.uEnd);
-    const int v0 = std::max(0, r.vBegin), v1 = std::min(m, r.vEnd);
-    auto add = [&](int side, int a, int b) {
-      for (int k = ((a / s) | 1) * s; k <= b; k += 2 * s)
-        if (k > 0 && k < m) along[std::size_t(side)].push_back(std::min(k, m - k));
-    };
-    if (r.vBegin <= 0) add(0, u0, u1);
-    if (r.vEnd >= m) add(1, u0, u1);
-    if (r.uBegin <= 0) add(2, v0, v1);
-    if (r.uEnd >= m) add(3, v0, v1);
-  }
-  std::size_t count = 0;
-  for (int side = 0; side < 4; ++side) {
-    auto& ks = along[std::size_t(side)];
-    std::sort(ks.begin(), ks.end());
-    ks.erase(std::unique(ks.begin(), ks.end()), ks.end());
-    const int fixed = (side & 1) ? m : 0;
-    for (const int k : ks) {
-      const GridPoint a = side < 2 ? GridPoint{k, fixed} : GridPoint{fixed, k};
-      GridPoint twins[4];
-      const int n = chart.twins(a.u, a.v, twins);
-      BoundCodes both{};
-      for (int t = 0; t < n; ++t) {
-        const std::uint16_t childError = vertices.compute(twins[t]);
-        if (lattice.active()) lattice(twins[t].u, twins[t].v, childError);
-        const BoundCodes& c = codes[g.index(twins[t].u, twins[t].v)];
-        both = {std::max(both.error, c.error), std::max(both.radius, c.radius)};
+    auto add = [&](bool alongU, int fixed, int a, int b) {
+      a = std::max(0, a), b = std::min(m, b);
+      for (int k = ((a / s) | 1) * s; k <= b; k += 2 * s) {
+        if (k <= 0 || k >= m) continue;
+        const GridPoint c = alongU ? chart.canonical(k, fixed) : chart.canonical(fixed, k);
+        points.emplace_back(c.v, c.u);
       }
-      for (int t = 0; t < n; ++t) codes[g.index(twins[t].u, twins[t].v)] = both;
-      count += std::size_t(n);
+    };
+    if (vSides) {
+      r.forEachColumnRange(g, [&](int uA, int uB) {
+        if (r.vBegin <= 0) add(true, 0, uA, uB);
+        if (r.vEnd >= m) add(true, m, uA, uB);
+      });
     }
+    if (uSides) {
+      if (r.uBegin <= 0) add(false, 0, r.vBegin, r.vEnd);
+      if (r.uEnd >= m) add(false, m, r.vBegin, r.vEnd);
+    }
+  }
+  std::sort(points.begin(), points.end());
+  points.erase(std::unique(points.begin(), points.end()), points.end());
+  std::size_t count = 0;
+  for (const auto& [v, u] : points) {
+    GridPoint twins[4];
+    const int n = chart.twins(u, v, twins);
+    BoundCodes both{};
+    for (int t = 0; t < n; ++t) {
+      const std::uint16_t childError = vertices.compute(twins[t]);
+      if (lattice.active()) lattice(twins[t].u, twins[t].v, childError);
+      const BoundCodes& c = codes[g.index(twins[t].u, twins[t].v)];
+      both = {std::max(both.error, c.error), std::max(both.radius, c.radius)};
+    }
+    for (int t = 0; t < n; ++t) codes[g.index(twins[t].u, twins[t].v)] = both;
+    count += std::size_t(n);
   }
   return count;
 }
@@ -268,7 +276,7 @@ std::size_t foldTwins(const ChartT& chart, const detail::VertexBounds<ChartT>& v
 template <class ChartT>
 void ErrorBounds::computeLevel(const ChartT& chart, std::span<const float> heights, int level,
                                const GridRegion& region,
-                               const std::vector<GridRegion>* foldRegions) {
+                               const std::vector<GridRegion>* gluedRegions) {
   static_assert(kExactMaxHalfSize < (1 << kLatticeShift),
                 "the row kernels' levels hold no lattice vertex: they do not copy to it");
   const core::GridSize g = chart.grid();
@@ -283,8 +291,8 @@ void ErrorBounds::computeLevel(const ChartT& chart, std::span<const float> heigh
   const LevelPass<ChartT> pass(chart, plan, vertices, kernels, codes, level, lattice);
   lastUpdateCount_ += pass.run();
   lastUpdateCount_ += pass.seamTwins(g, region);
-  if (foldRegions && !plan.centre)
-    lastUpdateCount_ += foldTwins(chart, vertices, codes, lattice, plan.s, *foldRegions);
+  if (gluedRegions && !plan.centre)
+    lastUpdateCount_ += gluedTwins(chart, vertices, codes, lattice, plan.s, *gluedRegions);
 }
 
 namespace {
@@ -357,10 +365,10 @@ void ErrorBounds::build(const core::Chart& chart, std::span<const float> heights
   }
   lastUpdateCount_ = 0;
   const std::vector<GridRegion> all{GridRegion::all(g)};
-  const std::vector<GridRegion>* folds = chart.foldsSides() ? &all : nullptr;
+  const std::vector<GridRegion>* glued = chart.gluesSidesBeyondSeam() ? &all : nullptr;
   dispatchChart(chart, [&](const auto& c) {
     for (int level = 0; level < levelCount(g); ++level)
-      computeLevel(c, heights, level, GridRegion::all(g), folds);
+      computeLevel(c, heights, level, GridRegion::all(g), glued);
   });
 }
 
@@ -377,23 +385,23 @@ void ErrorBounds::update(const core::Chart& chart, std::span<const float> height
   for (const GridRegion& r : dirty)
     if (!r.empty()) regions.push_back(r);
   if (regions.empty()) return;
-  const bool folds = chart.foldsSides();
+  const bool glued = chart.gluesSidesBeyondSeam();
   dispatchChart(chart, [&](const auto& c) {
     std::vector<GridRegion> level;
     for (int l = 0; l < levelCount(g); ++l) {
       // A vertex of this level reads heights and children within its half-size s.
       for (GridRegion& r : regions) r = r.grown(levelHalfSize(l), g, c.wrapsU());
-      if (!folds) {
+      if (!glued) {
         for (const GridRegion& r : regions) computeLevel(c, heights, l, r);
         continue;
       }
-      // Where a region reaches a folded side, its twins' side of the fold changed too: the
-      // region's mirror images (across the sides v = 0 and m: u -> m - u; across u = 0 and m:
-      // v -> m - v; both at a corner) are computed as well, and the touched sides' twins
-      // combined once, after all of them.
+      // Where a region reaches a glued side, the grid beyond it changed too: the region's
+      // images across the sides (core::Chart::gluedImages: the octahedral chart's mirrors, the
+      // torus's v -> m - v) are computed as well, and the touched sides' twins combined once,
+      // after all of them.
       level.clear();
       for (const GridRegion& r : regions) {
-        const std::vector<GridRegion> images = foldImages(r, g, false);
+        const std::vector<GridRegion> images = gluedImages(c, r, false);
         level.insert(level.end(), images.begin(), images.end());
       }
       std::sort(level.begin(), level.end(), [](const GridRegion& a, const GridRegion& b) {

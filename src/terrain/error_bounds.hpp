@@ -73,7 +73,7 @@ class ErrorBounds {
   // level up to the root. Bit-for-bit equal to build() on the same heights.
   void update(const core::Chart& chart, std::span<const float> heights, const GridRegion& dirty);
   // The same over several dirty rectangles at once (a chart that folds its sides: an edit's
-  // box and its images, terrain::foldImages).
+  // box and its images, terrain::gluedImages).
   void update(const core::Chart& chart, std::span<const float> heights,
               std::span<const GridRegion> dirty);
 
@@ -118,12 +118,13 @@ class ErrorBounds {
   std::size_t lastUpdateVertexCount() const { return lastUpdateCount_; }
 
  private:
-  // `foldRegions`: on a chart that folds its sides (core::Chart::foldsSides), the level's
-  // regions whose side vertices combine with their twins after the region's rows (null: none).
+  // `gluedRegions`: on a chart that glues its sides beyond a u seam (core::Chart::
+  // gluesSidesBeyondSeam), the level's regions whose side vertices combine with their twins
+  // after the region's rows (null: none).
   template <class ChartT>
   void computeLevel(const ChartT& chart, std::span<const float> heights, int level,
                     const GridRegion& region,
-                    const std::vector<GridRegion>* foldRegions = nullptr);
+                    const std::vector<GridRegion>* gluedRegions = nullptr);
 
   ErrorRule rule_ = ErrorRule::kHybridExact;
   BoundsContent content_ = BoundsContent::kErrorsAndRadii;

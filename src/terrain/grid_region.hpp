@@ -3,6 +3,7 @@
 #include <string>
 #include <vector>
 
+#include "core/chart.hpp"
 #include "core/grid.hpp"
 
 namespace ps::terrain {
@@ -89,28 +90,20 @@ struct GridRegion {
   }
 };
 
-// On a chart that folds its sides (core/octahedral_chart.hpp, where (u, 0) is (m - u, 0) and
-// (0, v) is (0, m - v)), the grid is symmetric under u -> m - u and v -> m - v (the sphere's
-// mirrors x -> -x and y -> -y), and a disc about a centre in one quadrant of the grid, met in
-// another quadrant across a fold or a midline, lies there inside a mirror image of its own
-// quadrant's part (a point and its mirror are nearer the centre on the centre's side). The
-// images that can hold such a part: the box itself, its image under u -> m - u where it
-// reaches a side v = 0 or m or the midline u = m/2, under v -> m - v where it reaches a side
-// u = 0 or m or the midline v = m/2, and under both where both hold. For a box that spans
-// quadrants the images only add work. `acrossMidlines` false: the images across the sides only
-// (a side vertex's twin; what the error bounds need level by level).
-inline std::vector<GridRegion> foldImages(const GridRegion& r, const core::GridSize& g,
-                                          bool acrossMidlines = true) {
+// The region and its images across the chart's glued sides (core::Chart::gluedImages: mirrored
+// sides, a seam between the rows v = 0 and v = m): on the octahedral chart and the torus an
+// edit's dirty box stands for its images too, and the error bounds compute a level's regions'
+// images where they reach such a side (`acrossMidlines` false). On other charts: the region.
+inline std::vector<GridRegion> gluedImages(const core::Chart& chart, const GridRegion& r,
+                                           bool acrossMidlines = true) {
   if (r.empty()) return {};
-  const int m = g.m();
-  const bool flipU =
-      r.vBegin <= 0 || r.vEnd >= m || (acrossMidlines && r.uBegin <= m / 2 && r.uEnd >= m / 2);
-  const bool flipV =
-      r.uBegin <= 0 || r.uEnd >= m || (acrossMidlines && r.vBegin <= m / 2 && r.vEnd >= m / 2);
-  std::vector<GridRegion> out{r};
-  if (flipU) out.push_back({m - r.uEnd, m - r.uBegin, r.vBegin, r.vEnd});
-  if (flipV) out.push_back({r.uBegin, r.uEnd, m - r.vEnd, m - r.vBegin});
-  if (flipU && flipV) out.push_back({m - r.uEnd, m - r.uBegin, m - r.vEnd, m - r.vBegin});
+  if (!chart.gluesSidesBeyondSeam()) return {r};
+  core::GridBox boxes[4];
+  const int n = chart.gluedImages({r.uBegin, r.uEnd, r.vBegin, r.vEnd}, acrossMidlines, boxes);
+  std::vector<GridRegion> out;
+  out.reserve(std::size_t(n));
+  for (int k = 0; k < n; ++k)
+    out.push_back({boxes[k].uBegin, boxes[k].uEnd, boxes[k].vBegin, boxes[k].vEnd});
   return out;
 }
 

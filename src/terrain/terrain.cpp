@@ -117,9 +117,8 @@ void Terrain::refreshHeightRange() {
 
 void Terrain::commitEdit(const GridRegion& changed) {
   if (changed.empty()) return;
-  // On a chart that folds its sides an edit's box stands for its images too (foldImages).
-  const std::vector<GridRegion> regions =
-      chart_->foldsSides() ? foldImages(changed, grid()) : std::vector<GridRegion>{changed};
+  // On a chart that glues its sides beyond a u seam an edit's box stands for its images too.
+  const std::vector<GridRegion> regions = gluedImages(*chart_, changed);
   bounds_.update(*chart_, heights_, regions);
   // The global range only widens cheaply; a full scan is O(N^2) and the range is only used as
   // a conservative occluder, so track it incrementally over the changed region.

@@ -177,7 +177,10 @@ bool Tessellator::pass(const ChartT& chart, const Terrain& terrain, const Camera
   const float* h = terrain.heights().data();
   const BoundCodes* codes = terrain.bounds().codes().data();
   const ErrorBounds& bounds = terrain.bounds();
-  const ViewGeometry view = makeView(camera, chart.radius() + terrain.minHeight(), distMax);
+  // The occluder is the ball under the lowest height of a sphere about the origin; a chart
+  // that is no such sphere (radius() 0: flat, torus, cylinder) has none, whatever its heights.
+  const double occluder = chart.radius() > 0 ? chart.radius() + terrain.minHeight() : 0.0;
+  const ViewGeometry view = makeView(camera, occluder, distMax);
   const Eigen::Matrix3d& R = camera.rotation;
   const Eigen::Vector3d forward = R.row(2).transpose();
   const Eigen::Vector3d eye = camera.eye;
