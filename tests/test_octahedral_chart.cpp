@@ -9,6 +9,7 @@
 #include <bit>
 #include <cmath>
 #include <cstdint>
+#include <memory>
 #include <random>
 #include <set>
 #include <utility>
@@ -268,6 +269,31 @@ TEST(OctahedralChart, WholePlanetMeshesAreWeldedSpheres) {
       EXPECT_EQ(top.nonManifoldEdges, 0u);
       EXPECT_EQ(top.degenerate, 0u);
       EXPECT_EQ(top.euler(), 2) << t.chart().name() << " at " << error;
+    }
+  }
+}
+
+// Region growing and the brush take a row's distances at once (DistanceField::rowDistances2,
+// by the chart's row positions): they must be distance2()'s bit for bit, or the region would
+// differ from brute force at its rim. Whole rows and pieces, the sides and corners included.
+TEST(OctahedralChart, RowDistancesAreBitwiseDistances) {
+  for (const Mapping mapping : kMappings) {
+    const auto chart = std::make_shared<core::OctahedralChart>(core::GridSize(6), 6.4e6, mapping);
+    const int m = chart->grid().m();
+    edit::DistanceField field(chart);
+    std::vector<double> d(std::size_t(m) + 1);
+    for (const core::GridPoint c : {core::GridPoint{m / 2, m / 2}, core::GridPoint{0, 0},
+                                    core::GridPoint{m, 17}, core::GridPoint{23, 41}}) {
+      field.setCentre(c);
+      for (int v = 0; v <= m; ++v)
+        for (const auto& [uFirst, uLast] :
+             {std::pair{0, m}, std::pair{0, 0}, std::pair{m, m}, std::pair{5, 50}}) {
+          field.rowDistances2(v, uFirst, uLast, d.data());
+          for (int u = uFirst; u <= uLast; ++u)
+            ASSERT_EQ(std::bit_cast<std::uint64_t>(d[std::size_t(u - uFirst)]),
+                      std::bit_cast<std::uint64_t>(field.distance2(u, v)))
+                << chart->name() << " (" << u << ", " << v << ") centre " << c.u << "," << c.v;
+        }
     }
   }
 }
