@@ -32,6 +32,34 @@ namespace ps::terrain::detail {
 // touches its parent's from inside.
 constexpr double kRadiusMargin = 1.0 + 1e-7;
 
+// Positions of boxes of the grid, computed once for an update of the bounds (ErrorBounds::update
+// on the octahedral chart, whose positions cost a division, a square root and two polynomials
+// each, not a look-up): the row kernels of every level read rows of them instead of computing
+// their rows afresh, level after level (six levels, each reading its region's every row).
+// Positions are rowPositions', so the codes are the same whichever the kernels read.
+struct PositionBoxes {
+  struct Box {
+    GridRegion area;  // within the grid
+    const double *x, *y, *z;
+  };
+  std::vector<Box> boxes;
+  // Row v's positions from column uLo on (column u at [u - uLo]), when a box holds columns
+  // uLo .. uHi of it; x is null otherwise.
+  struct Row {
+    const double *x = nullptr, *y = nullptr, *z = nullptr;
+  };
+  Row row(int v, int uLo, int uHi) const {
+    for (const Box& b : boxes) {
+      const GridRegion& a = b.area;
+      if (v < a.vBegin || v > a.vEnd || uLo < a.uBegin || uHi > a.uEnd) continue;
+      const std::size_t i = std::size_t(v - a.vBegin) * std::size_t(a.uEnd - a.uBegin + 1) +
+                            std::size_t(uLo - a.uBegin);
+      return {b.x + i, b.y + i, b.z + i};
+    }
+    return {};
+  }
+};
+
 template <class ChartT>
 class BoundKernels {
   // On a flat chart x and y are linear in (u, v), so a scanned deviation is the height's alone
@@ -39,9 +67,11 @@ class BoundKernels {
   static constexpr bool kFlat = std::is_same_v<ChartT, core::FlatChart>;
 
  public:
+  // boxes: positions computed beforehand (null: none).
   BoundKernels(const ChartT& chart, const float* heights, BoundCodes* codes, int level,
-               ErrorRule rule, bool withRadii)
+               ErrorRule rule, bool withRadii, const PositionBoxes* boxes = nullptr)
       : chart_(chart),
+        boxes_(boxes),
         g_(chart.grid()),
         heights_(heights),
         codes_(codes),
@@ -89,6 +119,10 @@ class BoundKernels {
 
   // Row v's positions over columns uLo .. uHi (within the grid), computed unless kept.
   Positions row(int v, int uLo, int uHi) const {
+    if (boxes_) {
+      const PositionBoxes::Row r = boxes_->row(v, uLo, uHi);
+      if (r.x) return {r.x, r.y, r.z};
+    }
     Strip& strip = scratch().rows[std::size_t(v) & 15];
     if (strip.v != v || strip.uLo > uLo || strip.uHi < uHi) {
       // One column more on each side: level 0's rows of the other parity ask one column
@@ -142,6 +176,7 @@ class BoundKernels {
                   int uLo) const;
 
   const ChartT& chart_;
+  const PositionBoxes* boxes_;
   core::GridSize g_;
   const float* heights_;
   BoundCodes* codes_;
