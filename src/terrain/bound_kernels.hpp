@@ -24,6 +24,7 @@
 #include "terrain/bound_code.hpp"
 #include "terrain/diamond.hpp"
 #include "terrain/error_bounds.hpp"
+#include "terrain/position_boxes.hpp"
 
 namespace ps::terrain::detail {
 
@@ -31,34 +32,6 @@ namespace ps::terrain::detail {
 // is evaluated in floating point, stays monotone from child to parent even when a child's ball
 // touches its parent's from inside.
 constexpr double kRadiusMargin = 1.0 + 1e-7;
-
-// Positions of boxes of the grid, computed once for an update of the bounds (ErrorBounds::update
-// on the octahedral chart, whose positions cost a division, a square root and two polynomials
-// each, not a look-up): the row kernels of every level read rows of them instead of computing
-// their rows afresh, level after level (six levels, each reading its region's every row).
-// Positions are rowPositions', so the codes are the same whichever the kernels read.
-struct PositionBoxes {
-  struct Box {
-    GridRegion area;  // within the grid
-    const double *x, *y, *z;
-  };
-  std::vector<Box> boxes;
-  // Row v's positions from column uLo on (column u at [u - uLo]), when a box holds columns
-  // uLo .. uHi of it; x is null otherwise.
-  struct Row {
-    const double *x = nullptr, *y = nullptr, *z = nullptr;
-  };
-  Row row(int v, int uLo, int uHi) const {
-    for (const Box& b : boxes) {
-      const GridRegion& a = b.area;
-      if (v < a.vBegin || v > a.vEnd || uLo < a.uBegin || uHi > a.uEnd) continue;
-      const std::size_t i = std::size_t(v - a.vBegin) * std::size_t(a.uEnd - a.uBegin + 1) +
-                            std::size_t(uLo - a.uBegin);
-      return {b.x + i, b.y + i, b.z + i};
-    }
-    return {};
-  }
-};
 
 template <class ChartT>
 class BoundKernels {

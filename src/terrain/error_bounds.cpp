@@ -364,7 +364,7 @@ void ErrorBounds::computeLevel(const ChartT& chart, std::span<const float> heigh
   const detail::LevelPlan plan(g, level, region);
   BoundCodes* codes = codes_.data();
   const detail::VertexBounds<ChartT> vertices(chart, heights.data(), codes, level, rule_,
-                                              hasRadii());
+                                              hasRadii(), boxes);
   const detail::BoundKernels<ChartT> kernels(chart, heights.data(), codes, level, rule_, hasRadii(),
                                              boxes);
   const bool onLattice = !lattice_.empty() && plan.s >= (1 << kLatticeShift);
@@ -468,7 +468,7 @@ void ErrorBounds::update(const core::Chart& chart, std::span<const float> height
   if (regions.empty()) return;
   const bool folds = chart.foldsSides();
   dispatchChart(chart, [&](const auto& c) {
-    // The octahedral chart's positions once for all the row kernels' levels (lat-long's and the
+    // The octahedral chart's positions once for all the levels (lat-long's and the
     // flat chart's are look-ups: as cheap as reading them back).
     detail::PositionBoxes boxes;
     if constexpr (std::is_same_v<std::decay_t<decltype(c)>, core::OctahedralChart>)
@@ -478,7 +478,6 @@ void ErrorBounds::update(const core::Chart& chart, std::span<const float> height
     for (int l = 0; l < levelCount(g); ++l) {
       // A vertex of this level reads heights and children within its half-size s.
       for (GridRegion& r : regions) r = r.grown(levelHalfSize(l), g, c.wrapsU());
-      if (levelHalfSize(l) > kExactMaxHalfSize) kernelBoxes = nullptr;
       if (!folds) {
         for (const GridRegion& r : regions) computeLevel(c, heights, l, r, nullptr, kernelBoxes);
         continue;

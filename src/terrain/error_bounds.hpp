@@ -124,7 +124,7 @@ class ErrorBounds {
  private:
   // `foldRegions`: on a chart that folds its sides (core::Chart::foldsSides), the level's
   // regions whose side vertices combine with their twins after the region's rows (null: none).
-  // `boxes`: positions the row kernels read instead of computing them (null: none).
+  // `boxes`: positions computed ahead, read instead of computing them (null: none).
   template <class ChartT>
   void computeLevel(const ChartT& chart, std::span<const float> heights, int level,
                     const GridRegion& region, const std::vector<GridRegion>* foldRegions = nullptr,
