@@ -6,9 +6,14 @@
 
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <cmath>
+#include <cstdint>
+#include <memory>
 #include <random>
 #include <set>
+#include <utility>
+#include <vector>
 
 #include "core/octahedral_chart.hpp"
 #include "edit/brush.hpp"
@@ -93,6 +98,54 @@ TEST(OctahedralChart, TwinsAreOnePointAndShareTheirCanonicalVertex) {
     // Points: (m - 1)^2 inside, the sides' 4(m - 1) vertices in pairs but their 4 midpoints,
     // and the corners' one: m^2 + 2, as Euler's V - E + F = 2 with m^2 cells of two triangles.
     EXPECT_EQ(canonicals.size(), std::size_t(m) * std::size_t(m) + 2);
+  }
+}
+
+// The error bounds and the tessellator take positions by rows and in scattered batches
+// (vectorised loops, cloned for AVX2 and AVX-512): they must be position()'s bit for bit, the
+// folded sides' vertices (computed at their canonical vertex in another row) included, or twins
+// would differ and the bounds with the machine. Every row whole and in pieces that start and end
+// on the sides and inside; every vertex scattered, in an order that mixes rows.
+TEST(OctahedralChart, RowAndScatteredPositionsAreBitwisePositions) {
+  auto bits = [](double x) { return std::bit_cast<std::uint64_t>(x); };
+  for (const Mapping mapping : kMappings) {
+    const core::OctahedralChart c(core::GridSize(6), 6372790.0, mapping);
+    const int m = c.grid().m();
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<float> height(-8000.0f, 8000.0f);
+    std::vector<float> h(c.grid().count());
+    for (float& x : h) x = height(rng);
+    auto expectAt = [&](int u, int v, double x, double y, double z) {
+      const Eigen::Vector3d p = c.position(u, v, double(h[c.grid().index(u, v)]));
+      ASSERT_TRUE(bits(x) == bits(p.x()) && bits(y) == bits(p.y()) && bits(z) == bits(p.z()))
+          << c.name() << " vertex (" << u << ", " << v << ")";
+    };
+    std::vector<double> x(std::size_t(m) + 1), y(x.size()), z(x.size());
+    for (int v = 0; v <= m; ++v) {
+      for (const auto& [uFirst, uLast] :
+           {std::pair{0, m}, std::pair{0, 0}, std::pair{m, m}, std::pair{1, m - 1},
+            std::pair{3, 40}, std::pair{0, 7}, std::pair{m - 9, m}}) {
+        c.rowPositions(v, uFirst, uLast, h.data() + c.grid().index(0, v),
+                       {x.data(), y.data(), z.data()});
+        for (int u = uFirst; u <= uLast; ++u) {
+          const std::size_t k = std::size_t(u - uFirst);
+          expectAt(u, v, x[k], y[k], z[k]);
+        }
+      }
+    }
+    std::vector<std::int32_t> us, vs;
+    std::vector<float> hs;
+    for (int v = 0; v <= m; ++v)
+      for (int u = 0; u <= m; ++u) {
+        us.push_back(u), vs.push_back(v), hs.push_back(h[c.grid().index(u, v)]);
+      }
+    std::shuffle(us.begin(), us.end(), std::mt19937(3));
+    std::shuffle(vs.begin(), vs.end(), std::mt19937(3));  // the same permutation
+    std::shuffle(hs.begin(), hs.end(), std::mt19937(3));
+    const std::size_t n = us.size() - 3;  // a remainder after any vector width
+    std::vector<double> sx(n), sy(n), sz(n);
+    c.scatteredPositions(us.data(), vs.data(), hs.data(), n, {sx.data(), sy.data(), sz.data()});
+    for (std::size_t k = 0; k < n; ++k) expectAt(us[k], vs[k], sx[k], sy[k], sz[k]);
   }
 }
 
@@ -216,6 +269,31 @@ TEST(OctahedralChart, WholePlanetMeshesAreWeldedSpheres) {
       EXPECT_EQ(top.nonManifoldEdges, 0u);
       EXPECT_EQ(top.degenerate, 0u);
       EXPECT_EQ(top.euler(), 2) << t.chart().name() << " at " << error;
+    }
+  }
+}
+
+// Region growing and the brush take a row's distances at once (DistanceField::rowDistances2,
+// by the chart's row positions): they must be distance2()'s bit for bit, or the region would
+// differ from brute force at its rim. Whole rows and pieces, the sides and corners included.
+TEST(OctahedralChart, RowDistancesAreBitwiseDistances) {
+  for (const Mapping mapping : kMappings) {
+    const auto chart = std::make_shared<core::OctahedralChart>(core::GridSize(6), 6.4e6, mapping);
+    const int m = chart->grid().m();
+    edit::DistanceField field(chart);
+    std::vector<double> d(std::size_t(m) + 1);
+    for (const core::GridPoint c : {core::GridPoint{m / 2, m / 2}, core::GridPoint{0, 0},
+                                    core::GridPoint{m, 17}, core::GridPoint{23, 41}}) {
+      field.setCentre(c);
+      for (int v = 0; v <= m; ++v)
+        for (const auto& [uFirst, uLast] :
+             {std::pair{0, m}, std::pair{0, 0}, std::pair{m, m}, std::pair{5, 50}}) {
+          field.rowDistances2(v, uFirst, uLast, d.data());
+          for (int u = uFirst; u <= uLast; ++u)
+            ASSERT_EQ(std::bit_cast<std::uint64_t>(d[std::size_t(u - uFirst)]),
+                      std::bit_cast<std::uint64_t>(field.distance2(u, v)))
+                << chart->name() << " (" << u << ", " << v << ") centre " << c.u << "," << c.v;
+        }
     }
   }
 }

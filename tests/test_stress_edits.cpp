@@ -364,7 +364,7 @@ TEST(StressEdits, OctahedralBrushesOfEveryRadiusAtEveryVertexKeepTheBounds) {
 }
 
 // A local update of the bounds over any box of one quadrant (as an edit's dirty box is,
-// terrain::foldImages covering the rest), on heights that did not change, gives the bounds a full
+// terrain::gluedImages covering the rest), on heights that did not change, gives the bounds a full
 // build gives.
 TEST(StressEdits, OctahedralLocalUpdatesOverAnyQuadrantBoxEqualAFullRebuild) {
   auto t = testkit::bumpyOctahedralTerrain(5, 4, 8000.0);

@@ -27,7 +27,9 @@ namespace ps::edit {
 // those with k <= K_v. Seam twins get the same k, every vertex of a pole row the same value
 // (rho = 0 there), so twins and pole rows always agree.
 //
-// On any other chart it is (chart.position(u, v, 0) - chart.position(uc, vc, 0)).squaredNorm().
+// On any other chart it is (chart.position(u, v, 0) - chart.position(uc, vc, 0)).squaredNorm(),
+// summed as dx^2 + dy^2 + dz^2; rowDistances2 computes whole runs of a row with the chart's row
+// positions, bit for bit the same.
 class DistanceField {
  public:
   // Tables are built once per chart (O(m)); setCentre() is O(1).
@@ -48,6 +50,11 @@ class DistanceField {
     if (latLong_) return distance2(row(v), fold(u));
     return genericDistance2(u, v);
   }
+
+  // distance2(u, v) of row v's vertices u = uFirst .. uLast into out[u - uFirst], bit for bit:
+  // region growing and the brush take a row's distances at once (on the octahedral chart by
+  // its vectorised row positions instead of a position per vertex).
+  void rowDistances2(int v, int uFirst, int uLast, double* out) const;
 
   // Lat-long fast path: per-row terms and the folded column distance.
   struct Row {
@@ -75,6 +82,7 @@ class DistanceField {
   int m_ = 0;
   double radius_ = 0, r2_ = 0;
   std::vector<double> z_, rho_, s_;  // per row; per folded column distance
+  std::vector<float> zeroHeights_;   // generic path: a row of heights 0 for rowPositions
   core::GridPoint centre_;
   double zc_ = 0, rhoc_ = 0;
   Eigen::Vector3d pc_ = Eigen::Vector3d::Zero();  // generic path

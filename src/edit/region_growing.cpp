@@ -110,19 +110,16 @@ struct LatLongOracle {
   }
 };
 
-// Any chart: vertex-by-vertex scans.
+// Any chart: vertex-by-vertex scans of the predicate's values, computed by blocks of a row.
 struct GenericOracle {
   const DistanceField& f;
   double r2;
   int m, cols;
   bool wraps, poles;
-  std::size_t& evaluations;
+  RowDistanceBlocks& blocks;
 
   bool pole(int v) const { return poles && (v == 0 || v == m); }
-  bool inside(int v, int c) const {
-    ++evaluations;
-    return f.distance2(pole(v) ? 0 : c, v) <= r2;
-  }
+  bool inside(int v, int c) const { return blocks.at(f, v, pole(v) ? 0 : c) <= r2; }
   ColumnRun span(int v, int c) const {
     if (pole(v)) return {0, cols};
     int start = c, len = 1;
@@ -165,6 +162,27 @@ struct GenericOracle {
 };
 
 }  // namespace
+
+// ---------------------------------------------------------------------------------------------
+// RowDistanceBlocks
+
+void RowDistanceBlocks::reset(int rows, int cols) {
+  for (const int v : rows_) slots_[std::size_t(v)].clear();
+  rows_.clear();
+  if (slots_.size() != std::size_t(rows)) slots_.assign(std::size_t(rows), {});
+  cols_ = cols;
+  values_.clear();
+  computed_ = 0;
+}
+
+std::int32_t RowDistanceBlocks::compute(const DistanceField& f, int v, int block) {
+  const std::int32_t slot = std::int32_t(values_.size() / kBlock);
+  const int a = block * kBlock, b = std::min(cols_ - 1, a + kBlock - 1);
+  values_.resize(values_.size() + kBlock);
+  f.rowDistances2(v, a, b, values_.data() + values_.size() - kBlock);
+  computed_ += std::size_t(b - a + 1);
+  return slot;
+}
 
 // ---------------------------------------------------------------------------------------------
 // Region
@@ -398,10 +416,13 @@ void RegionGrower::grow(const DistanceField& field, double radius, Region& out) 
     fill(oracle, g, true, seed);
     emit(g, true, true, true, seed.u, out);
   } else {
-    const GenericOracle oracle{field, r2, m, wraps ? m : m + 1, wraps, poles, evaluations_};
+    const int cols = wraps ? m : m + 1;
+    blocks_.reset(m + 1, cols);
+    const GenericOracle oracle{field, r2, m, cols, wraps, poles, blocks_};
     fill(oracle, g, wraps, seed);
     const bool glued = chart.gluesSidesBeyondSeam();
     if (glued) fillAcrossGluedSides(oracle, chart);
+    evaluations_ = blocks_.computed();
     emit(g, wraps, poles, false, seed.u, out);
     if (glued) {
       // The dirty box: the region's vertices in the centre's part of the grid (closed; a half

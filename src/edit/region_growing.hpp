@@ -90,6 +90,38 @@ class Region {
   int centreU_ = 0;
 };
 
+// The distance predicate's values by blocks of a row, each block computed once (with
+// DistanceField::rowDistances2, the chart's vectorised row positions) until reset(): the fill
+// on charts other than lat-long asks for a vertex several times (its span, then the seeds of
+// the rows above and below).
+class RowDistanceBlocks {
+ public:
+  static constexpr int kBlock = 64;
+  // Forgets every block; rows 0 .. rows - 1, columns 0 .. cols - 1.
+  void reset(int rows, int cols);
+  double at(const DistanceField& f, int v, int c) {
+    std::vector<std::int32_t>& slots = slots_[std::size_t(v)];
+    if (slots.empty()) {
+      slots.assign(std::size_t((cols_ + kBlock - 1) / kBlock), -1);
+      rows_.push_back(v);
+    }
+    std::int32_t& slot = slots[std::size_t(c / kBlock)];
+    if (slot < 0) slot = compute(f, v, c / kBlock);
+    return values_[std::size_t(slot) * kBlock + std::size_t(c % kBlock)];
+  }
+  // Distances computed since reset().
+  std::size_t computed() const { return computed_; }
+
+ private:
+  std::int32_t compute(const DistanceField& f, int v, int block);
+
+  int cols_ = 0;
+  std::vector<std::vector<std::int32_t>> slots_;  // per row, per block: its index in values_
+  std::vector<int> rows_;                         // the rows with slots
+  std::vector<double> values_;
+  std::size_t computed_ = 0;
+};
+
 // Region growing (paper 003, section 6.3) as a scanline flood fill: starting from the centre
 // vertex of `field`, a row's maximal run of vertices with distance2 <= radius^2 becomes a span,
 // and the columns under a span widened by one on each side (its 4-8 neighbourhood) are scanned
@@ -105,16 +137,18 @@ class Region {
 // meridian d^2 grows strictly with the latitude difference (the row-to-row increment, at least
 // R^2 (pi/m)^2, is ~1e7 times the rounding error). Tests check the equality for centres at the
 // poles, the seam and near the poles and for radii from below one cell to the planet's diameter.
-// On other charts the same fill scans vertex by vertex and returns the connected component of
-// the centre; on a chart that glues its sides beyond a u seam (the octahedral chart's folds, the
-// torus's v seam) it goes on from the twins of the side vertices it reached, so the component
-// is the surface's, across the glued sides.
+// On other charts the same fill scans vertex by vertex (the predicate's values by blocks of a
+// row: RowDistanceBlocks) and returns the connected component of the centre; on a chart that
+// glues its sides beyond a u seam (the octahedral chart's folds, the torus's v seam) it goes on
+// from the twins of the side vertices it reached, so the component is the surface's, across the
+// glued sides.
 class RegionGrower {
  public:
   // Throws core::InputError for a radius that is not finite and > 0.
   void grow(const DistanceField& field, double radius, Region& out);
 
-  // Predicate evaluations of the last grow() (work measure for tests and benchmarks).
+  // Predicate evaluations of the last grow() (work measure for tests and benchmarks; on charts
+  // other than lat-long the distances computed, whole blocks of a row).
   std::size_t lastEvaluations() const { return evaluations_; }
 
  private:
@@ -130,6 +164,7 @@ class RegionGrower {
   std::vector<std::pair<int, int>> stack_;
   std::vector<int> halfWidth_;  // lat-long: per row, -2 = not computed yet
   std::vector<Span> scratch_;
+  RowDistanceBlocks blocks_;  // other charts
   std::size_t evaluations_ = 0;
 };
 

@@ -24,6 +24,7 @@
 #include "terrain/bound_code.hpp"
 #include "terrain/diamond.hpp"
 #include "terrain/error_bounds.hpp"
+#include "terrain/position_boxes.hpp"
 
 namespace ps::terrain::detail {
 
@@ -39,9 +40,11 @@ class BoundKernels {
   static constexpr bool kFlat = std::is_same_v<ChartT, core::FlatChart>;
 
  public:
+  // boxes: positions computed beforehand (null: none).
   BoundKernels(const ChartT& chart, const float* heights, BoundCodes* codes, int level,
-               ErrorRule rule, bool withRadii)
+               ErrorRule rule, bool withRadii, const PositionBoxes* boxes = nullptr)
       : chart_(chart),
+        boxes_(boxes),
         g_(chart.grid()),
         heights_(heights),
         codes_(codes),
@@ -89,6 +92,10 @@ class BoundKernels {
 
   // Row v's positions over columns uLo .. uHi (within the grid), computed unless kept.
   Positions row(int v, int uLo, int uHi) const {
+    if (boxes_) {
+      const PositionBoxes::Row r = boxes_->row(v, uLo, uHi);
+      if (r.x) return {r.x, r.y, r.z};
+    }
     Strip& strip = scratch().rows[std::size_t(v) & 15];
     if (strip.v != v || strip.uLo > uLo || strip.uHi < uHi) {
       // One column more on each side: level 0's rows of the other parity ask one column
@@ -142,6 +149,7 @@ class BoundKernels {
                   int uLo) const;
 
   const ChartT& chart_;
+  const PositionBoxes* boxes_;
   core::GridSize g_;
   const float* heights_;
   BoundCodes* codes_;

@@ -273,19 +273,109 @@ std::size_t gluedTwins(const ChartT& chart, const detail::VertexBounds<ChartT>& 
   return count;
 }
 
+namespace {
+
+// Sorts boxes and replaces overlapping or touching ones by the box around both, until none
+// overlap: one pass over their union instead of one per box (a corner's four images, grown
+// over the upper levels).
+void mergeBoxes(std::vector<GridRegion>& boxes) {
+  std::sort(boxes.begin(), boxes.end(), [](const GridRegion& a, const GridRegion& b) {
+    return std::tie(a.vBegin, a.uBegin, a.vEnd, a.uEnd) <
+           std::tie(b.vBegin, b.uBegin, b.vEnd, b.uEnd);
+  });
+  for (bool merged = true; merged;) {
+    merged = false;
+    for (std::size_t i = 0; i < boxes.size() && !merged; ++i)
+      for (std::size_t j = i + 1; j < boxes.size() && !merged; ++j) {
+        const GridRegion &a = boxes[i], &b = boxes[j];
+        if (a.uBegin > b.uEnd + 1 || b.uBegin > a.uEnd + 1 || a.vBegin > b.vEnd + 1 ||
+            b.vBegin > a.vEnd + 1)
+          continue;
+        boxes[i] = {std::min(a.uBegin, b.uBegin), std::max(a.uEnd, b.uEnd),
+                    std::min(a.vBegin, b.vBegin), std::max(a.vEnd, b.vEnd)};
+        boxes.erase(boxes.begin() + std::ptrdiff_t(j));
+        merged = true;
+      }
+  }
+}
+
+// The positions the row kernels' levels read in an update of the `dirty` regions, computed
+// once: each region grown as the levels grow it and by the rows and columns a vertex of theirs
+// reads, with its images across glued sides (update() computes those), merged as update()
+// merges them. A row the boxes do not hold (the kernels' regions merged beyond them) is
+// computed as before. None for a larger edit (the buffer stays with the thread).
+template <class ChartT>
+detail::PositionBoxes positionBoxes(const ChartT& chart, std::span<const float> heights,
+                                    const std::vector<GridRegion>& dirty) {
+  constexpr std::size_t kMaxVertices = std::size_t(1) << 22;  // 96 MB of positions
+  const core::GridSize g = chart.grid();
+  int reach = ErrorBounds::kExactMaxHalfSize + 1;
+  for (int l = 0; levelHalfSize(l) <= ErrorBounds::kExactMaxHalfSize; ++l)
+    reach += levelHalfSize(l);
+  std::vector<GridRegion> areas;
+  for (const GridRegion& r : dirty) {
+    const GridRegion grown = r.grown(reach, g, false);
+    if (!chart.gluesSidesBeyondSeam()) {
+      areas.push_back(grown);
+      continue;
+    }
+    const std::vector<GridRegion> images = gluedImages(chart, grown, false);
+    areas.insert(areas.end(), images.begin(), images.end());
+  }
+  mergeBoxes(areas);
+  std::size_t total = 0;
+  std::vector<std::pair<std::size_t, int>> rows;  // (box, v)
+  for (std::size_t b = 0; b < areas.size(); ++b) {
+    total += std::size_t(areas[b].uEnd - areas[b].uBegin + 1) *
+             std::size_t(areas[b].vEnd - areas[b].vBegin + 1);
+    for (int v = areas[b].vBegin; v <= areas[b].vEnd; ++v) rows.push_back({b, v});
+  }
+  if (total > kMaxVertices) return {};
+  thread_local std::vector<double> storage;
+  if (storage.size() < 3 * total) storage.resize(3 * total);
+  double* const x = storage.data();  // this thread's (the team's threads have their own)
+  detail::PositionBoxes out;
+  std::vector<std::size_t> offset;
+  std::size_t at = 0;
+  for (const GridRegion& a : areas) {
+    out.boxes.push_back({a, x + at, x + total + at, x + 2 * total + at});
+    offset.push_back(at);
+    at += std::size_t(a.uEnd - a.uBegin + 1) * std::size_t(a.vEnd - a.vBegin + 1);
+  }
+  auto fill = [&](std::size_t i) {
+    const auto [b, v] = rows[i];
+    const GridRegion& a = areas[b];
+    const std::size_t k =
+        offset[b] + std::size_t(v - a.vBegin) * std::size_t(a.uEnd - a.uBegin + 1);
+    chart.rowPositions(v, a.uBegin, a.uEnd, heights.data() + g.index(0, v),
+                       {x + k, x + total + k, x + 2 * total + k});
+  };
+  const std::size_t n = rows.size();
+  if (total > 32768) {
+#pragma omp parallel for schedule(dynamic, 8)
+    for (std::size_t i = 0; i < n; ++i) fill(i);
+  } else {
+    for (std::size_t i = 0; i < n; ++i) fill(i);
+  }
+  return out;
+}
+
+}  // namespace
+
 template <class ChartT>
 void ErrorBounds::computeLevel(const ChartT& chart, std::span<const float> heights, int level,
                                const GridRegion& region,
-                               const std::vector<GridRegion>* gluedRegions) {
+                               const std::vector<GridRegion>* gluedRegions,
+                               const detail::PositionBoxes* boxes) {
   static_assert(kExactMaxHalfSize < (1 << kLatticeShift),
                 "the row kernels' levels hold no lattice vertex: they do not copy to it");
   const core::GridSize g = chart.grid();
   const detail::LevelPlan plan(g, level, region);
   BoundCodes* codes = codes_.data();
   const detail::VertexBounds<ChartT> vertices(chart, heights.data(), codes, level, rule_,
-                                              hasRadii());
-  const detail::BoundKernels<ChartT> kernels(chart, heights.data(), codes, level, rule_,
-                                             hasRadii());
+                                              hasRadii(), boxes);
+  const detail::BoundKernels<ChartT> kernels(chart, heights.data(), codes, level, rule_, hasRadii(),
+                                             boxes);
   const bool onLattice = !lattice_.empty() && plan.s >= (1 << kLatticeShift);
   const LatticeCopy lattice{onLattice ? this : nullptr, lattice_.data(), heights, codes, g};
   const LevelPass<ChartT> pass(chart, plan, vertices, kernels, codes, level, lattice);
@@ -387,12 +477,18 @@ void ErrorBounds::update(const core::Chart& chart, std::span<const float> height
   if (regions.empty()) return;
   const bool glued = chart.gluesSidesBeyondSeam();
   dispatchChart(chart, [&](const auto& c) {
+    // The octahedral chart's positions once for all the levels (lat-long's and the
+    // flat chart's are look-ups: as cheap as reading them back).
+    detail::PositionBoxes boxes;
+    if constexpr (std::is_same_v<std::decay_t<decltype(c)>, core::OctahedralChart>)
+      boxes = positionBoxes(c, heights, regions);
+    const detail::PositionBoxes* kernelBoxes = boxes.boxes.empty() ? nullptr : &boxes;
     std::vector<GridRegion> level;
     for (int l = 0; l < levelCount(g); ++l) {
       // A vertex of this level reads heights and children within its half-size s.
       for (GridRegion& r : regions) r = r.grown(levelHalfSize(l), g, c.wrapsU());
       if (!glued) {
-        for (const GridRegion& r : regions) computeLevel(c, heights, l, r);
+        for (const GridRegion& r : regions) computeLevel(c, heights, l, r, nullptr, kernelBoxes);
         continue;
       }
       // Where a region reaches a glued side, the grid beyond it changed too: the region's
@@ -404,28 +500,10 @@ void ErrorBounds::update(const core::Chart& chart, std::span<const float> height
         const std::vector<GridRegion> images = gluedImages(c, r, false);
         level.insert(level.end(), images.begin(), images.end());
       }
-      std::sort(level.begin(), level.end(), [](const GridRegion& a, const GridRegion& b) {
-        return std::tie(a.vBegin, a.uBegin, a.vEnd, a.uEnd) <
-               std::tie(b.vBegin, b.uBegin, b.vEnd, b.uEnd);
-      });
-      // Overlapping images (a corner's four, grown over the upper levels) become their box:
-      // one pass over the union instead of one per image.
-      for (bool merged = true; merged;) {
-        merged = false;
-        for (std::size_t i = 0; i < level.size() && !merged; ++i)
-          for (std::size_t j = i + 1; j < level.size() && !merged; ++j) {
-            const GridRegion &a = level[i], &b = level[j];
-            if (a.uBegin > b.uEnd + 1 || b.uBegin > a.uEnd + 1 || a.vBegin > b.vEnd + 1 ||
-                b.vBegin > a.vEnd + 1)
-              continue;
-            level[i] = {std::min(a.uBegin, b.uBegin), std::max(a.uEnd, b.uEnd),
-                        std::min(a.vBegin, b.vBegin), std::max(a.vEnd, b.vEnd)};
-            level.erase(level.begin() + std::ptrdiff_t(j));
-            merged = true;
-          }
-      }
+      mergeBoxes(level);
       for (std::size_t k = 0; k < level.size(); ++k)
-        computeLevel(c, heights, l, level[k], k + 1 == level.size() ? &level : nullptr);
+        computeLevel(c, heights, l, level[k], k + 1 == level.size() ? &level : nullptr,
+                     kernelBoxes);
     }
   });
 }

@@ -12,6 +12,10 @@
 
 namespace ps::terrain {
 
+namespace detail {
+struct PositionBoxes;
+}
+
 // How the nested per-vertex error is derived (docs/ERROR-BOUNDS.md compares them).
 enum class ErrorRule {
   // Paper 003 / ROAM: eps(v) = max over children eps(c) + |P(v) - (P(b0) + P(b1)) / 2|, with the
@@ -120,11 +124,12 @@ class ErrorBounds {
  private:
   // `gluedRegions`: on a chart that glues its sides beyond a u seam (core::Chart::
   // gluesSidesBeyondSeam), the level's regions whose side vertices combine with their twins
-  // after the region's rows (null: none).
+  // after the region's rows (null: none). `boxes`: positions computed ahead, read instead of
+  // computing them (null: none).
   template <class ChartT>
   void computeLevel(const ChartT& chart, std::span<const float> heights, int level,
-                    const GridRegion& region,
-                    const std::vector<GridRegion>* gluedRegions = nullptr);
+                    const GridRegion& region, const std::vector<GridRegion>* gluedRegions = nullptr,
+                    const detail::PositionBoxes* boxes = nullptr);
 
   ErrorRule rule_ = ErrorRule::kHybridExact;
   BoundsContent content_ = BoundsContent::kErrorsAndRadii;

@@ -11,16 +11,23 @@
 #include "core/flat_chart.hpp"
 #include "core/grid.hpp"
 #include "terrain/diamond.hpp"
+#include "terrain/position_boxes.hpp"
 
 namespace ps::terrain::detail {
 
-// A chart's surface point of grid point p, from the heights.
+// A chart's surface point of grid point p, from the heights (or from positions computed ahead,
+// the same bits).
 template <class ChartT>
 struct Sampler {
   const ChartT& chart;
   const float* h;
   core::GridSize g;
+  const PositionBoxes* boxes = nullptr;
   Eigen::Vector3d pos(GridPoint p) const {
+    if (boxes) {
+      const PositionBoxes::Row r = boxes->row(p.v, p.u, p.u);
+      if (r.x) return {*r.x, *r.y, *r.z};
+    }
     return chart.position(p.u, p.v, double(h[g.index(p.u, p.v)]));
   }
 };

@@ -21,9 +21,10 @@ namespace ps::terrain::detail {
 template <class ChartT>
 class VertexBounds {
  public:
+  // boxes: positions computed ahead (null: none).
   VertexBounds(const ChartT& chart, const float* heights, BoundCodes* codes, int level,
-               ErrorRule rule, bool withRadii)
-      : sampler_{chart, heights, chart.grid()},
+               ErrorRule rule, bool withRadii, const PositionBoxes* boxes = nullptr)
+      : sampler_{chart, heights, chart.grid(), boxes},
         g_(chart.grid()),
         codes_(codes),
         level_(level),
