@@ -240,6 +240,13 @@ def group_import_export():
     _, err = run("import", out("N46W122.hgt"), "--chart", "flat", "--grid", "129", "--out", out("hgt.planet"))
     if "georeferencing in degrees, at latitude 46.5" not in err:
         fail(f"the .hgt tile was not read as a geographic SRTM tile:\n{err}")
+    # Import onto a torus is not there yet: refused by name, nothing written.
+    p = subprocess.run([EXE, "import", out("globe.raw"), "--chart", "torus", "--out", out("torus.planet")],
+                       capture_output=True, text=True)
+    if p.returncode <= 0 or "globe.raw" not in p.stderr or "torus chart is not supported" not in p.stderr:
+        fail(f"import --chart torus was not refused by name: {p.returncode} {p.stderr}")
+    if os.path.exists(out("torus.planet")):
+        fail("a refused import still wrote its planet file")
     # A regional tile cannot be stretched round a sphere: refused by name on either sphere chart.
     for chart in ("latlong", "octahedral"):
         p = subprocess.run([EXE, "import", out("N46W122.hgt"), "--chart", chart, "--out", out("hgt_globe.planet")],

@@ -430,6 +430,11 @@ ImportResult importHeightImage(HeightImage img, const ImportOptions& o, const st
   const int w = img.width, h = img.height;
   const std::size_t n = img.values.size();
   if (w <= 0 || h <= 0 || n != std::size_t(w) * std::size_t(h)) fail(name, "image has no pixels");
+  if (!core::isSphere(o.chart) && o.chart != ChartKind::kFlat) {
+    fail(name, "import onto the " + core::toString(o.chart) +
+                   " chart is not supported yet (a sphere: latlong or octahedral; a terrain "
+                   "tile: flat)");
+  }
   const double radius = o.radius           ? *o.radius
                         : img.radiusMetres ? *img.radiusMetres
                                            : kDefaultImportRadius;
