@@ -30,6 +30,32 @@ using namespace ps;
 
 namespace {
 
+// Every texel of the tiles the cache holds, apron included, with the level-0 grid position it
+// stands for: f(tile key, i, j, u, v, texel). Stops at the first fatal failure f records.
+template <class F>
+void forEachHeldTexel(const render::HeightTileCache& cache, F&& f) {
+  const auto& p = cache.pyramid();
+  const int S = cache.slotSide();
+  std::vector<float> texels(std::size_t(S) * std::size_t(S) * std::size_t(cache.layers()));
+  glBindTexture(GL_TEXTURE_2D_ARRAY, cache.tiles());
+  glPixelStorei(GL_PACK_ALIGNMENT, 4);
+  glGetTexImage(GL_TEXTURE_2D_ARRAY, 0, GL_RED, GL_FLOAT, texels.data());
+  for (std::size_t tile = 0; tile < p.tileCount(); ++tile) {
+    const int layer = cache.layerOf(tile);
+    if (layer < 0) continue;
+    const render::TileKey k = p.key(tile);
+    const int step = 1 << k.level;
+    for (int j = 0; j < S; ++j)
+      for (int i = 0; i < S; ++i) {
+        const int u = (k.tx * p.tileCells + i - 1) * step, v = (k.ty * p.tileCells + j - 1) * step;
+        f(k, i, j, u, v,
+          texels[(std::size_t(layer) * std::size_t(S) + std::size_t(j)) * std::size_t(S) +
+                 std::size_t(i)]);
+        if (::testing::Test::HasFatalFailure()) return;
+      }
+  }
+}
+
 terrain::Terrain reliefPlanet(int n) {
   return testkit::reliefTerrain(n, 11);
 }
@@ -153,7 +179,7 @@ TEST(TileRequests, TilesAndTheirApronsHoldTheHeightsAcrossFoldsAndSeams) {
     auto planet = octahedral ? testkit::bumpyOctahedralTerrain(9, 4, 5000.0)
                              : testkit::bumpyTerrain(9, 4, 5000.0);
     const core::Chart& chart = planet.chart();
-    const int m = planet.grid().m(), side = planet.grid().side();
+    const int m = planet.grid().m();
     const double R = chart.radius();
     render::HeightTileCache cache;
     std::string why;
@@ -182,37 +208,16 @@ TEST(TileRequests, TilesAndTheirApronsHoldTheHeightsAcrossFoldsAndSeams) {
       return planet.height(sideU, sideV);  // a side's midpoint is its own twin: mirrored in place
     };
     auto check = [&](const char* when) {
-      const auto& p = cache.pyramid();
-      const int S = cache.slotSide();
-      std::vector<float> texels(std::size_t(S) * std::size_t(S) * std::size_t(cache.layers()));
-      glBindTexture(GL_TEXTURE_2D_ARRAY, cache.tiles());
-      glPixelStorei(GL_PACK_ALIGNMENT, 4);
-      glGetTexImage(GL_TEXTURE_2D_ARRAY, 0, GL_RED, GL_FLOAT, texels.data());
-      int checked = 0, apron = 0;
-      for (std::size_t tile = 0; tile < p.tileCount(); ++tile) {
-        const int layer = cache.layerOf(tile);
-        if (layer < 0) continue;
-        const render::TileKey k = p.key(tile);
-        const int step = 1 << k.level;
-        for (int j = 0; j < S; ++j)
-          for (int i = 0; i < S; ++i) {
-            const int u = (k.tx * p.tileCells + i - 1) * step,
-                      v = (k.ty * p.tileCells + j - 1) * step;
-            const auto want = expected(u, v);
-            if (!want) continue;
-            const float got =
-                texels[(std::size_t(layer) * std::size_t(S) + std::size_t(j)) * std::size_t(S) +
-                       std::size_t(i)];
-            ASSERT_EQ(got, *want) << chart.name() << " " << when << ": tile " << k.level << "/"
-                                  << k.tx << "," << k.ty << " texel (" << i << "," << j
-                                  << ") = grid (" << u << "," << v << ")";
-            ++checked;
-            apron += u < 0 || u > m || v < 0 || v > m;
-          }
-      }
+      int apron = 0;
+      forEachHeldTexel(cache, [&](const render::TileKey& k, int i, int j, int u, int v, float got) {
+        const auto want = expected(u, v);
+        if (!want) return;
+        ASSERT_EQ(got, *want) << chart.name() << " " << when << ": tile " << k.level << "/" << k.tx
+                              << "," << k.ty << " texel (" << i << "," << j << ") = grid (" << u
+                              << "," << v << ")";
+        apron += u < 0 || u > m || v < 0 || v > m;
+      });
       EXPECT_GT(apron, 100) << chart.name() << " " << when;
-      (void)checked;
-      (void)side;
     };
     // A view over the fold of side u = 0 south of the equator (lat-long: over the seam there).
     const Eigen::Vector3d d = Eigen::Vector3d(-0.7, 0.01, -0.7).normalized();
@@ -263,31 +268,13 @@ TEST(TileRequests, TorusAndCylinderApronsWrapAcrossTheirSeams) {
       return planet.height(w, std::clamp(v, 0, m));  // the open ends clamp
     };
     auto check = [&](const char* when) {
-      const auto& p = cache.pyramid();
-      const int S = cache.slotSide();
-      std::vector<float> texels(std::size_t(S) * std::size_t(S) * std::size_t(cache.layers()));
-      glBindTexture(GL_TEXTURE_2D_ARRAY, cache.tiles());
-      glPixelStorei(GL_PACK_ALIGNMENT, 4);
-      glGetTexImage(GL_TEXTURE_2D_ARRAY, 0, GL_RED, GL_FLOAT, texels.data());
       int apronV = 0;
-      for (std::size_t tile = 0; tile < p.tileCount(); ++tile) {
-        const int layer = cache.layerOf(tile);
-        if (layer < 0) continue;
-        const render::TileKey k = p.key(tile);
-        const int step = 1 << k.level;
-        for (int j = 0; j < S; ++j)
-          for (int i = 0; i < S; ++i) {
-            const int u = (k.tx * p.tileCells + i - 1) * step,
-                      v = (k.ty * p.tileCells + j - 1) * step;
-            const float got =
-                texels[(std::size_t(layer) * std::size_t(S) + std::size_t(j)) * std::size_t(S) +
-                       std::size_t(i)];
-            ASSERT_EQ(got, expected(u, v))
-                << chart->name() << " " << when << ": tile " << k.level << "/" << k.tx << ","
-                << k.ty << " texel (" << i << "," << j << ") = grid (" << u << "," << v << ")";
-            apronV += v < 0 || v > m;
-          }
-      }
+      forEachHeldTexel(cache, [&](const render::TileKey& k, int i, int j, int u, int v, float got) {
+        ASSERT_EQ(got, expected(u, v))
+            << chart->name() << " " << when << ": tile " << k.level << "/" << k.tx << "," << k.ty
+            << " texel (" << i << "," << j << ") = grid (" << u << "," << v << ")";
+        apronV += v < 0 || v > m;
+      });
       EXPECT_GT(apronV, 100) << chart->name() << " " << when;
     };
     // Over the seams' crossing (the torus's corner; the cylinder's seam at its end v = 0).

@@ -232,9 +232,17 @@ struct EquirectangularSource {
   }
 };
 
-EquirectangularSource equirectangularSource(const HeightImage& img, const ImportOptions& o,
-                                            int maxWidth, int maxHeight, const std::string& name,
-                                            ImportResult& res, nlohmann::json& source) {
+// The largest equirectangular image a sphere chart's grid samples as it is (a finer one is
+// area-averaged down to it first): lat-long m x m, a pixel per cell; the octahedral chart 2m x m,
+// about its spacing (its m^2 cells of one area cover the sphere: 2m columns along the equator).
+std::pair<int, int> averagedSize(ChartKind chart, int m) {
+  return {chart == ChartKind::kLatLong ? m : 2 * m, m};
+}
+
+EquirectangularSource equirectangularSource(const HeightImage& img, const ImportOptions& o, int m,
+                                            const std::string& name, ImportResult& res,
+                                            nlohmann::json& source) {
+  const auto [maxWidth, maxHeight] = averagedSize(o.chart, m);
   EquirectangularSource e;
   const int w = img.width, h = img.height;
   if (o.westLongitudeDeg) {
@@ -275,7 +283,7 @@ void resampleLatLong(const HeightImage& img, const ImportOptions& o, double radi
                      const core::GridSize& g, const std::string& name, std::vector<float>& heights,
                      ImportResult& res, nlohmann::json& source) {
   const int m = g.m();
-  const EquirectangularSource e = equirectangularSource(img, o, m, m, name, res, source);
+  const EquirectangularSource e = equirectangularSource(img, o, m, name, res, source);
   for (int gv = 1; gv < m; ++gv) {
     const double lat = 180.0 * gv / m - 90.0;
     for (int gu = 0; gu < m; ++gu) {
@@ -304,9 +312,7 @@ void resampleSphere(const HeightImage& img, const ImportOptions& o, double radiu
   core::ChartDims dims;
   dims.radius = radius;
   auto chart = core::makeChart(o.chart, g, dims);
-  // Area-averaged to about the grid's spacing (its m^2 cells cover the sphere: about 2m
-  // columns of m rows along the equator).
-  const EquirectangularSource e = equirectangularSource(img, o, 2 * m, m, name, res, source);
+  const EquirectangularSource e = equirectangularSource(img, o, m, name, res, source);
   constexpr double kDeg = 180.0 / std::numbers::pi;
 #pragma omp parallel for schedule(static)
   for (int gv = 0; gv <= m; ++gv) {
@@ -482,10 +488,10 @@ ImportResult importHeightImage(HeightImage img, const ImportOptions& o, const st
   if (side != (long long)(std::max(w, h))) {
     res.notes.push_back("resampled " + std::to_string(w) + "x" + std::to_string(h) +
                         " pixels onto the " + g.label() + " grid (" + toString(o.interpolation) +
-                        (o.chart == ChartKind::kLatLong && (w > m || h > m)
+                        (core::isSphere(o.chart) && (w > averagedSize(o.chart, m).first ||
+                                                     h > averagedSize(o.chart, m).second)
                              ? ", area-averaged first"
-                         : core::isSphere(o.chart) && (w > 2 * m || h > m) ? ", area-averaged first"
-                                                                           : "") +
+                             : "") +
                         ")");
   }
   try {

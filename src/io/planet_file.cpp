@@ -112,6 +112,11 @@ std::size_t sampleBytes(HeightEncoding e) {
   throw core::InputError(name + ": " + what);
 }
 
+// "a latlong", "an octahedral": a chart's name as a message puts it before "planet".
+std::string withArticle(const std::string& chart) {
+  return (chart.rfind('o', 0) == 0 ? "an " : "a ") + chart;
+}
+
 std::string num(double x) {
   std::ostringstream os;
   os.precision(17);
@@ -320,8 +325,7 @@ Header parseHeader(const unsigned char* p, std::size_t available, const std::str
   const bool torus = h.shape == core::ChartShape::kTorus,
              tube = h.shape == core::ChartShape::kCylinder;
   if (h.second != 0 && !torus && !tube)
-    fail(name, (h.chart[0] == 'o' ? "an " : "a ") + h.chart +
-                   " planet must store 0 in the second length field");
+    fail(name, withArticle(h.chart) + " planet must store 0 in the second length field");
   if (torus || tube) {
     if (!std::isfinite(h.radius) || h.radius <= 0)
       fail(name, "radius " + num(h.radius) + " m must be positive and finite");
@@ -332,14 +336,13 @@ Header parseHeader(const unsigned char* p, std::size_t available, const std::str
       fail(name, "minor radius " + num(h.second) + " m must be below the major radius " +
                      num(h.radius) + " m");
     if (h.dx != 0 || h.dy != 0)
-      fail(name, "a " + h.chart + " planet must store 0 in the flat spacing fields");
+      fail(name, withArticle(h.chart) + " planet must store 0 in the flat spacing fields");
   } else if (core::isSphere(h.shape)) {
     if (!std::isfinite(h.radius) || h.radius <= 0) {
       fail(name, "radius " + num(h.radius) + " m must be positive and finite");
     }
     if (h.dx != 0 || h.dy != 0)
-      fail(name, (h.chart[0] == 'o' ? "an " : "a ") + h.chart +
-                     " planet must store 0 in the flat spacing fields");
+      fail(name, withArticle(h.chart) + " planet must store 0 in the flat spacing fields");
   } else {
     if (!std::isfinite(h.dx) || h.dx <= 0 || !std::isfinite(h.dy) || h.dy <= 0) {
       fail(name,

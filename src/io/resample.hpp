@@ -31,39 +31,6 @@ inline std::array<double, 4> cubicWeights(double f) {
 
 }  // namespace resample_detail
 
-// Samples at(xi, yi) (xi in [0, width), yi in [0, height)) at (x, y).
-template <class At>
-double sample(const At& at, int width, int height, double x, double y, bool wrapX,
-              Interpolation how) {
-  using namespace resample_detail;
-  y = std::clamp(y, 0.0, double(height - 1));
-  if (wrapX) {
-    x = std::fmod(x, double(width));  // any finite x (a file's far-off western longitude)
-    if (x < 0) x += width;
-  } else {
-    x = std::clamp(x, 0.0, double(width - 1));
-  }
-  const double xf = std::floor(x), yf = std::floor(y);
-  const int x0 = int(xf), y0 = int(yf);
-  const double fx = x - xf, fy = y - yf;
-  auto column = [&](int xi) { return wrapX ? wrapIndex(xi, width) : std::clamp(xi, 0, width - 1); };
-  auto row = [&](int yi) { return std::clamp(yi, 0, height - 1); };
-  if (how == Interpolation::kBilinear) {
-    const int xa = column(x0), xb = column(x0 + 1), ya = row(y0), yb = row(y0 + 1);
-    return (1 - fy) * ((1 - fx) * at(xa, ya) + fx * at(xb, ya)) +
-           fy * ((1 - fx) * at(xa, yb) + fx * at(xb, yb));
-  }
-  const auto wx = cubicWeights(fx), wy = cubicWeights(fy);
-  double sum = 0.0;
-  for (int j = 0; j < 4; ++j) {
-    const int yi = row(y0 - 1 + j);
-    double line = 0.0;
-    for (int i = 0; i < 4; ++i) line += wx[std::size_t(i)] * at(column(x0 - 1 + i), yi);
-    sum += wy[std::size_t(j)] * line;
-  }
-  return sum;
-}
-
 // Samples at(xi, yi) at (x, y) with no clamping or wrapping: at() answers for every index the
 // stencil reads (floor(x) - 1 .. floor(x) + 2 for cubic, floor(x) .. floor(x) + 1 for bilinear),
 // e.g. a chart's grid read across its glued sides.
@@ -85,6 +52,26 @@ double sampleUnclamped(const At& at, double x, double y, Interpolation how) {
     sum += wy[std::size_t(j)] * line;
   }
   return sum;
+}
+
+// Samples at(xi, yi) (xi in [0, width), yi in [0, height)) at (x, y).
+template <class At>
+double sample(const At& at, int width, int height, double x, double y, bool wrapX,
+              Interpolation how) {
+  using namespace resample_detail;
+  y = std::clamp(y, 0.0, double(height - 1));
+  if (wrapX) {
+    x = std::fmod(x, double(width));  // any finite x (a file's far-off western longitude)
+    if (x < 0) x += width;
+  } else {
+    x = std::clamp(x, 0.0, double(width - 1));
+  }
+  return sampleUnclamped(
+      [&](int xi, int yi) {
+        return at(wrapX ? wrapIndex(xi, width) : std::clamp(xi, 0, width - 1),
+                  std::clamp(yi, 0, height - 1));
+      },
+      x, y, how);
 }
 
 }  // namespace ps::io
