@@ -15,9 +15,11 @@
 
 #include <array>
 #include <cmath>
+#include <cstdlib>
 #include <iostream>
 #include <map>
 #include <memory>
+#include <sstream>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
@@ -123,12 +125,27 @@ void benchDeform(const BenchOptions& options, std::ostream& out) {
   const std::vector<int> levels =
       options.quick ? std::vector<int>{11} : std::vector<int>{11, 12, 13};
   const int repeats = std::max(1, options.quick ? std::min(options.repeats, 5) : options.repeats);
+  // PS_DEFORM_ONLY=CHART:SIDE[:LATITUDE] (e.g. octahedral:8193:0) runs that chart's cells of that
+  // grid alone: for profiling one cell (with --repeats).
+  std::string onlyChart;
+  int onlySide = 0, onlyLatitude = -1;
+  if (const char* only = std::getenv("PS_DEFORM_ONLY")) {
+    std::istringstream in(only);
+    std::string side, latitude;
+    std::getline(in, onlyChart, ':');
+    std::getline(in, side, ':');
+    std::getline(in, latitude, ':');
+    onlySide = side.empty() ? 0 : std::stoi(side);
+    onlyLatitude = latitude.empty() ? -1 : std::stoi(latitude);
+  }
   for (const int n : levels) {
     const int side = (1 << n) + 1, m = 1 << n;
     // The worst cell of each chart in this run (issue 28: the octahedral chart's worst cell at
     // most a quarter of lat-long's).
     std::map<std::string, double> worstMs;
+    if (onlySide != 0 && onlySide != side) continue;
     for (const bool octahedral : {false, true}) {
+      if (!onlyChart.empty() && onlyChart != (octahedral ? "octahedral" : "latlong")) continue;
       std::cerr << "deform: building the " << side << "^2 "
                 << (octahedral ? "octahedral" : "lat-long") << " planet ... " << std::flush;
       std::unique_ptr<terrain::Terrain> planet;
@@ -142,6 +159,7 @@ void benchDeform(const BenchOptions& options, std::ostream& out) {
       // southern half of that meridian is a folded side (x = -1) and the south pole its corners.
       const core::LatLongChart latLong(core::GridSize(n), kPlanetRadius);
       for (const PaperRow& row : paper) {
+        if (onlyLatitude >= 0 && row.latitude != onlyLatitude) continue;
         const int v = int(std::lround(double(row.latitude) * m / 180.0));
         const Eigen::Vector3d tool = latLong.position(0, v, 0.0);
         for (std::size_t ri = 0; ri < kRadiiKm.size(); ++ri) {

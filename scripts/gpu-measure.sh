@@ -10,7 +10,8 @@
 #   .gl/*.deb           glvnd's loaders (libEGL, libOpenGL, libGLX...), which dispatch to the
 #                       NVIDIA driver; unpacked onto / (GPU_MEASURE_SKIP_GL=1 skips that, for a
 #                       trial run on a machine that has its own)
-# Writes $OUT/render.jsonl and $OUT/frame.jsonl (the benches' JSON lines) and $OUT/log.txt.
+# Writes $OUT/NAME.jsonl for each bench (the benches' JSON lines; render and frame unless
+# GPU_MEASURE_BENCHES names others, see below) and $OUT/log.txt.
 set -u
 cd "$(dirname "$0")/.."
 : "${OUT:?set OUT to the folder for the results}"
@@ -74,16 +75,23 @@ measure() {
 
   # The tree's data (data/demo.mkv, calib/, markers/) from this copy, not the build's path.
   export PLANETSCULPT_SOURCE_DIR=$PWD
-  for b in render:90 frame:200; do
-    echo "== bench ${b%:*}"
-    timeout "${b#*:}" "$bin" bench "${b%:*}" >"$OUT/${b%:*}.jsonl"
-    echo "rc $? ($(wc -l <"$OUT/${b%:*}.jsonl") lines)"
+  # Each entry NAME:SECONDS[:VAR=VALUE,...]: `bench NAME` under that limit and those variables
+  # (e.g. deform:300:OMP_NUM_THREADS=2 for a CPU bench on the machine's quiet cores).
+  local b name limit vars
+  for b in ${GPU_MEASURE_BENCHES:-render:90 frame:200}; do
+    IFS=: read -r name limit vars <<<"$b"
+    echo "== bench $name (limit ${limit}s${vars:+, $vars})"
+    env ${vars//,/ } timeout "$limit" "$bin" bench "$name" >"$OUT/$name.jsonl"
+    echo "rc $? ($(wc -l <"$OUT/$name.jsonl") lines)"
   done
   nvidia-smi --query-gpu=clocks.sm,clocks.mem --format=csv,noheader
   echo "== summary"
   python3 - "$OUT" <<'EOF'
 import json, sys
+import os
 for name in ("render", "frame"):
+    if not os.path.exists(f"{sys.argv[1]}/{name}.jsonl"):
+        continue
     for line in open(f"{sys.argv[1]}/{name}.jsonl"):
         r = json.loads(line)
         keys = ("view", "case", "dist_max_px", "shading", "skipped", "reason", "ms", "ssim", "triangles",
