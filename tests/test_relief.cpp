@@ -11,6 +11,8 @@
 
 #include "core/input_error.hpp"
 #include "core/latlong_chart.hpp"
+#include "core/octahedral_chart.hpp"
+#include "core/torus_chart.hpp"
 #include "terrain/relief.hpp"
 
 #include <omp.h>
@@ -183,6 +185,31 @@ TEST(Relief, GenericChartPathGivesTheSameHeights) {
   const WrappedChart wrapped(chart);
   const ReliefParams p;
   EXPECT_EQ(countDifferentBits(generateRelief(chart, p), generateRelief(wrapped, p)), 0u);
+}
+
+// Charts without a shared z per row evaluate a row's directions together, each with its own z:
+// every vertex must still be reliefAt's value for its up direction, bit for bit.
+TEST(Relief, RowsWithoutASharedZAreEachDirectionsRelief) {
+  const ps::core::OctahedralChart octahedral(GridSize(7), kRadius);
+  const ps::core::TorusChart torus(GridSize(7), kRadius, 0.3 * kRadius);
+  ReliefParams p;
+  p.seed = 7;
+  for (const Chart* chart :
+       {static_cast<const Chart*>(&octahedral), static_cast<const Chart*>(&torus)}) {
+    const std::vector<float> h = generateRelief(*chart, p);
+    const int octaves = reliefOctaves(chart->grid(), p);
+    const GridSize& g = chart->grid();
+    std::size_t checked = 0, different = 0;
+    for (int v = 0; v <= g.m(); v += 3) {
+      for (int u = 0; u <= g.m(); u += 5) {
+        const float at = static_cast<float>(reliefAt(chart->up(u, v), p, octaves));
+        different += sameBits(at, h[g.index(u, v)]) ? 0 : 1;
+        ++checked;
+      }
+    }
+    EXPECT_EQ(different, 0u) << chart->name() << ": of " << checked;
+    EXPECT_GT(checked, 1000u);
+  }
 }
 
 TEST(Relief, IsSmoothAcrossTheSeam) {

@@ -214,6 +214,52 @@ __attribute__((target_clones("avx2", "default"))) void noiseBatch(const Octave& 
   }
 }
 
+// noiseBatch for points that each have their own z (charts whose rows do not share one: the
+// octahedral chart, the torus): the same lane arithmetic as noiseBatch's uncached path, so a
+// point gets the same bits either way (the generic-chart test compares them with lat-long's).
+__attribute__((target_clones("avx2", "default"))) void noiseBatchXYZ(
+    const Octave& o, const double* x, const double* y, const double* z, int count, double* out,
+    double scale, bool accumulate) {
+  for (int i = 0; i < count; i += kLanes) {
+    VecD px, py, pz;
+    std::memcpy(&px, x + i, sizeof px);
+    std::memcpy(&py, y + i, sizeof py);
+    std::memcpy(&pz, z + i, sizeof pz);
+    const VecD xx = px * o.freq + o.ox;
+    const VecD yy = py * o.freq + o.oy;
+    const VecD zz = pz * o.freq + o.oz;
+    const VecI ix = floor4(xx), iy = floor4(yy), iz = floor4(zz);
+    const VecD fx[2] = {xx - __builtin_convertvector(ix, VecD), fx[0] - 1.0};
+    const VecD fy[2] = {yy - __builtin_convertvector(iy, VecD), fy[0] - 1.0};
+    const VecD fz[2] = {zz - __builtin_convertvector(iz, VecD), fz[0] - 1.0};
+    const VecD wx = fx[0] * fx[0] * fx[0] * (fx[0] * (fx[0] * 6.0 - 15.0) + 10.0);
+    const VecD wy = fy[0] * fy[0] * fy[0] * (fy[0] * (fy[0] * 6.0 - 15.0) + 10.0);
+    const VecD wz = fz[0] * fz[0] * fz[0] * (fz[0] * (fz[0] * 6.0 - 15.0) + 10.0);
+    const VecU hz = o.seed + reinterpret_cast<const VecU&>(iz) * kPz;
+    const VecU h[2] = {hz, hz + kPz};
+    const VecU bx = reinterpret_cast<const VecU&>(ix) * kPx;
+    const VecU b00 = bx + reinterpret_cast<const VecU&>(iy) * kPy;
+    const VecU b[4] = {b00, b00 + kPx, b00 + kPy, b00 + (kPx + kPy)};
+    VecD n[8];
+#pragma GCC unroll 8
+    for (int c = 0; c < 8; ++c) {
+      VecL g;
+      gradientCode(h[c >> 2] + b[c & 3], g);
+      gradDot(g, fx[c & 1], fy[c >> 1 & 1], fz[c >> 2], n[c]);
+    }
+    const VecD n00 = n[0] + wx * (n[1] - n[0]), n10 = n[2] + wx * (n[3] - n[2]);
+    const VecD n01 = n[4] + wx * (n[5] - n[4]), n11 = n[6] + wx * (n[7] - n[6]);
+    const VecD n0 = n00 + wy * (n10 - n00), n1 = n01 + wy * (n11 - n01);
+    VecD result = scale * (n0 + wz * (n1 - n0));
+    if (accumulate) {
+      VecD previous;
+      std::memcpy(&previous, out + i, sizeof previous);
+      result = previous + result;
+    }
+    std::memcpy(out + i, &result, sizeof result);
+  }
+}
+
 // ---- Shaping -----------------------------------------------------------------------------------
 // Elevations here are in units of the amplitude (1 = 8 km by default). The per-vertex stages are
 // free of branches (clamps are written with fabs, which GCC's vectoriser takes where it refuses
@@ -314,11 +360,11 @@ constexpr std::size_t padded(int count) {
 
 // Per-thread buffers for one row.
 struct Scratch {
-  std::vector<double> noise, cont, detail, belt, base, mask, ridge, cx, cy, cr, cw;
+  std::vector<double> noise, cont, detail, belt, base, mask, ridge, cx, cy, cz, cr, cw;
   std::vector<int> active;
   explicit Scratch(int count) {
     const std::size_t n = padded(count);
-    for (auto* v : {&noise, &cont, &detail, &belt, &base, &mask, &ridge, &cx, &cy, &cr, &cw}) {
+    for (auto* v : {&noise, &cont, &detail, &belt, &base, &mask, &ridge, &cx, &cy, &cz, &cr, &cw}) {
       v->resize(n);
     }
     active.resize(n);
@@ -340,20 +386,28 @@ class ReliefField {
     belt_ = makeOctave(params.seed, 3, 0, kBeltFreq);
   }
 
-  // Heights in metres for the `count` directions (x[i], y[i], z); x and y padded as noiseBatch
-  // requires.
-  void evalRow(const double* x, const double* y, double z, int count, double* out,
-               Scratch& s) const {
+  // Heights in metres for the `count` directions (x[i], y[i], z), or (x[i], y[i], zs[i]) where
+  // zs is not null; x, y (and zs) padded as noiseBatch requires.
+  void evalRow(const double* x, const double* y, double z, int count, double* out, Scratch& s,
+               const double* zs = nullptr) const {
+    auto noise = [&](const Octave& o, const double* px, const double* py, const double* pz, int n,
+                     double* dst, double scale, bool accumulate) {
+      if (zs) {
+        noiseBatchXYZ(o, px, py, pz, n, dst, scale, accumulate);
+      } else {
+        noiseBatch(o, z, px, py, n, dst, scale, accumulate);
+      }
+    };
     double amp = 1.0;
     for (std::size_t k = 0; k < fbm_.size(); ++k, amp *= 0.5) {
       const bool coarse = static_cast<int>(k) < kCoarseOctaves;
       const bool first = k == 0 || static_cast<int>(k) == kCoarseOctaves;
-      noiseBatch(fbm_[k], z, x, y, count, (coarse ? s.cont : s.detail).data(), amp, !first);
+      noise(fbm_[k], x, y, zs, count, (coarse ? s.cont : s.detail).data(), amp, !first);
     }
     if (static_cast<int>(fbm_.size()) <= kCoarseOctaves) {
       std::fill(s.detail.begin(), s.detail.end(), 0.0);
     }
-    noiseBatch(belt_, z, x, y, count, s.belt.data(), 1.0, false);
+    noise(belt_, x, y, zs, count, s.belt.data(), 1.0, false);
     shapeStage(count, s.cont.data(), s.detail.data(), s.belt.data(), s.base.data(), s.mask.data());
 
     std::fill(s.ridge.begin(), s.ridge.end(), 0.0);
@@ -363,6 +417,7 @@ class ReliefField {
         s.active[nActive] = i;
         s.cx[nActive] = x[i];
         s.cy[nActive] = y[i];
+        if (zs) s.cz[nActive] = zs[i];
         s.cr[nActive] = 0.0;
         s.cw[nActive] = 1.0;
         ++nActive;
@@ -378,8 +433,10 @@ class ReliefField {
       for (std::size_t j = nActive; j < padded(int(nActive)); ++j) {
         s.cx[j] = s.cx[j - 1];
         s.cy[j] = s.cy[j - 1];
+        s.cz[j] = s.cz[j - 1];
       }
-      noiseBatch(ridged_[k], z, s.cx.data(), s.cy.data(), int(nActive), s.noise.data(), 1.0, false);
+      noise(ridged_[k], s.cx.data(), s.cy.data(), s.cz.data(), int(nActive), s.noise.data(), 1.0,
+            false);
       std::size_t nNext = 0;
       for (std::size_t j = 0; j < nActive; ++j) {
         double signal = 1.0 - std::abs(s.noise[j]);
@@ -391,6 +448,7 @@ class ReliefField {
           s.active[nNext] = s.active[j];
           s.cx[nNext] = s.cx[j];
           s.cy[nNext] = s.cy[j];
+          s.cz[nNext] = s.cz[j];
           s.cr[nNext] = r;
           s.cw[nNext] = w;
           ++nNext;
@@ -477,7 +535,7 @@ std::vector<float> generateRelief(const core::Chart& chart, const ReliefParams& 
   {
     Scratch s(side);
     const std::size_t n = padded(side);
-    std::vector<double> x(n), y(n), out(n);
+    std::vector<double> x(n), y(n), z(n), out(n);
 #pragma omp for schedule(dynamic, 4)
     for (int v = 0; v < side; ++v) {
       if (stop.load(std::memory_order_relaxed)) continue;
@@ -493,15 +551,20 @@ std::vector<float> generateRelief(const core::Chart& chart, const ReliefParams& 
         field.evalRow(x.data(), y.data(), latLong->direction(0, v).z(), side, out.data(), s);
         for (int u = 0; u < side; ++u) row[u] = static_cast<float>(out[std::size_t(u)]);
       } else {
-        // Any other chart: no shared z per row, so one direction at a time.
+        // Any other chart: no shared z per row, so each direction brings its own.
         for (int u = 0; u < side; ++u) {
           const Eigen::Vector3d d = chart.up(u, v);
-          double dx[kLanes], dy[kLanes], h[kLanes];
-          std::fill_n(dx, kLanes, d.x());
-          std::fill_n(dy, kLanes, d.y());
-          field.evalRow(dx, dy, d.z(), 1, h, s);
-          row[u] = static_cast<float>(h[0]);
+          x[std::size_t(u)] = d.x();
+          y[std::size_t(u)] = d.y();
+          z[std::size_t(u)] = d.z();
         }
+        for (std::size_t k = std::size_t(side); k < n; ++k) {
+          x[k] = x[k - 1];
+          y[k] = y[k - 1];
+          z[k] = z[k - 1];
+        }
+        field.evalRow(x.data(), y.data(), 0.0, side, out.data(), s, z.data());
+        for (int u = 0; u < side; ++u) row[u] = static_cast<float>(out[std::size_t(u)]);
       }
       const int done = rowsDone.fetch_add(1, std::memory_order_relaxed) + 1;
 #ifdef _OPENMP
