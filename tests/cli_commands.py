@@ -240,13 +240,31 @@ def group_import_export():
     _, err = run("import", out("N46W122.hgt"), "--chart", "flat", "--grid", "129", "--out", out("hgt.planet"))
     if "georeferencing in degrees, at latitude 46.5" not in err:
         fail(f"the .hgt tile was not read as a geographic SRTM tile:\n{err}")
-    # Import onto a torus is not there yet: refused by name, nothing written.
-    p = subprocess.run([EXE, "import", out("globe.raw"), "--chart", "torus", "--out", out("torus.planet")],
-                       capture_output=True, text=True)
-    if p.returncode <= 0 or "globe.raw" not in p.stderr or "torus chart is not supported" not in p.stderr:
-        fail(f"import --chart torus was not refused by name: {p.returncode} {p.stderr}")
+    # A globe's equirectangular image does not go onto a torus: refused by name, nothing written.
+    p = subprocess.run([EXE, "import", out("octa_back.raw"), "--chart", "torus", "--radius", "3000",
+                        "--minor-radius", "1000", "--out", out("torus.planet")], capture_output=True, text=True)
+    if p.returncode <= 0 or "octa_back.raw" not in p.stderr or "equirectangular" not in p.stderr:
+        fail(f"an equirectangular image onto a torus was not refused by name: {p.returncode} {p.stderr}")
     if os.path.exists(out("torus.planet")):
         fail("a refused import still wrote its planet file")
+    # A torus from an image of its (u, v) grid (64 x 64, both ways periodic): the dimensions from
+    # the command line; exported at its grid's size, the same image comes back, value for value.
+    tube = [60.0 * math.sin(2 * math.pi * x / 64) * math.cos(2 * math.pi * y / 64) for y in range(64) for x in range(64)]
+    write_raw(out("tube.raw"), 64, 64, tube)
+    p = subprocess.run([EXE, "import", out("tube.raw"), "--chart", "torus", "--radius", "3000",
+                        "--out", out("torus.planet")], capture_output=True, text=True)
+    if p.returncode <= 0 or "tube.raw" not in p.stderr or "--minor-radius" not in p.stderr:
+        fail(f"a torus without its tube's radius was not refused by name: {p.returncode} {p.stderr}")
+    run("import", out("tube.raw"), "--chart", "torus", "--radius", "3000", "--minor-radius", "1000",
+        "--out", out("torus.planet"))
+    run("export", out("torus.planet"), "--out", out("torus_back.raw"))
+    meta, back = read_raw(out("torus_back.raw"))
+    if (meta.get("projection") != "torus" or meta.get("minor_radius_m") != 1000.0 or
+            [meta["width"], meta["height"]] != [64, 64]):
+        fail(f"the torus's heightmap sidecar is {meta}")
+    stored = struct.unpack(f"<{len(tube)}f", struct.pack(f"<{len(tube)}f", *tube))
+    if max(abs(a - b) for a, b in zip(stored, back)) != 0.0:
+        fail("the torus's heightmap did not come back value for value")
     # A regional tile cannot be stretched round a sphere: refused by name on either sphere chart.
     for chart in ("latlong", "octahedral"):
         p = subprocess.run([EXE, "import", out("N46W122.hgt"), "--chart", chart, "--out", out("hgt_globe.planet")],

@@ -12,6 +12,7 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
+#include "core/chart_factory.hpp"
 #include "core/flat_chart.hpp"
 #include "core/input_error.hpp"
 #include "core/octahedral_chart.hpp"
@@ -490,6 +491,83 @@ TEST(IoExport, OctahedralPlanetsExportAndReimportEquirectangular) {
       worst = std::max(worst, std::abs(double(back.planet.heights[i]) - h[i]));
     EXPECT_LT(worst, 60.0) << chart->name();
     std::printf("%s export and import: worst %.2f m\n", chart->name().c_str(), worst);
+    fs::remove_all(dir);
+  }
+}
+
+// A torus and a cylinder export their own (u, v) grid: at the grid's size every pixel is one
+// vertex and the image comes back onto the same grid bit for bit (raw and TIFF), its dimensions
+// from the raw sidecar; at another size it is a periodic resampling that stays close to a smooth
+// field; a file that maps one surface is refused onto another.
+TEST(IoExport, TorusAndCylinderHeightmapsAreTheirGridAndComeBackExactly) {
+  const core::GridSize g(6);
+  const int m = g.m();
+  for (const core::ChartShape shape : {core::ChartShape::kTorus, core::ChartShape::kCylinder}) {
+    const bool torus = shape == core::ChartShape::kTorus;
+    core::ChartDims dims;
+    dims.radius = 3000.0;
+    dims.minorRadius = torus ? 1000.0 : 0.0;
+    dims.length = torus ? 0.0 : 5000.0;
+    const auto chart = core::makeChart(shape, g, dims);
+    // Smooth and periodic round the axis (and round the tube on the torus): whole waves in u, v.
+    const auto field = [&](double u, double v) {
+      const double a = 2 * M_PI * u / m, b = (torus ? 2 * M_PI : M_PI) * v / m;
+      return 120.0 * std::sin(a) * std::cos(b) + 50.0 * std::cos(3 * a + (torus ? b : 0.0));
+    };
+    std::vector<float> h(g.count());
+    for (int v = 0; v <= m; ++v)
+      for (int u = 0; u <= m; ++u) {
+        const core::GridPoint c = chart->canonical(u, v);
+        h[g.index(u, v)] = float(field(c.u, c.v));
+      }
+    const terrain::Terrain t(chart, h);
+    const fs::path dir = freshDir(std::string("tube_") + chart->name());
+    for (const char* ext : {"raw", "tif"}) {
+      const fs::path file = dir / (std::string("h.") + ext);
+      const auto summary = io::exportTerrain(t, file, {});
+      EXPECT_EQ(summary["width"], m) << ext;
+      EXPECT_EQ(summary["height"], torus ? m : m + 1) << ext;
+      io::ImportOptions o;
+      o.chart = shape;
+      if (std::string(ext) == "tif") {  // a TIFF names no dimensions: the user does
+        o.radius = dims.radius;
+        if (torus) o.minorRadius = dims.minorRadius;
+        if (!torus) o.length = dims.length;
+      }
+      const auto r = io::importHeightmap(file, o);
+      ASSERT_EQ(r.planet.chart->name(), chart->name()) << ext;
+      EXPECT_EQ(core::dimsOf(*r.planet.chart).radius, dims.radius);
+      EXPECT_EQ(core::dimsOf(*r.planet.chart).minorRadius, dims.minorRadius);
+      EXPECT_EQ(core::dimsOf(*r.planet.chart).length, dims.length);
+      ASSERT_EQ(r.planet.heights.size(), h.size());
+      std::size_t different = 0;
+      for (std::size_t i = 0; i < h.size(); ++i) different += r.planet.heights[i] != h[i];
+      EXPECT_EQ(different, 0u) << chart->name() << " " << ext;
+    }
+    // Another size: resampled both ways (periodically), close to the field.
+    io::ExportOptions eo;
+    eo.width = 3 * m / 2;
+    io::exportTerrain(t, dir / "big.raw", eo);
+    io::ImportOptions o;
+    o.chart = shape;
+    o.gridSide = m + 1;
+    const auto back = io::importHeightmap(dir / "big.raw", o);
+    EXPECT_NO_THROW(terrain::Terrain::validateHeights(*back.planet.chart, back.planet.heights));
+    double worst = 0;
+    for (std::size_t i = 0; i < h.size(); ++i)
+      worst = std::max(worst, std::abs(double(back.planet.heights[i]) - h[i]));
+    EXPECT_LT(worst, 0.05) << chart->name();  // of +-170 m, 64 cells a wave: 0.008, 0.011
+    std::printf("%s: through a %d-column image and back, worst %.3f m\n", chart->name().c_str(),
+                eo.width, worst);
+    // A file that maps this surface goes onto this chart only, and needs its dimensions.
+    io::ImportOptions sphere;
+    EXPECT_THROW(io::importHeightmap(dir / "h.raw", sphere), core::InputError);
+    io::ImportOptions other;
+    other.chart = torus ? core::ChartShape::kCylinder : core::ChartShape::kTorus;
+    EXPECT_THROW(io::importHeightmap(dir / "h.raw", other), core::InputError);
+    io::ImportOptions bare;
+    bare.chart = shape;
+    EXPECT_THROW(io::importHeightmap(dir / "h.tif", bare), core::InputError);  // no radius
     fs::remove_all(dir);
   }
 }

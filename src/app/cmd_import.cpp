@@ -16,7 +16,7 @@ namespace {
 struct ImportArgs {
   std::string input, output, chart = "latlong", noData = "fill", noDataValue, encoding = "stored",
                              store = "f32", rule = "hybrid-exact", interpolation = "cubic";
-  std::optional<double> radius, scale, offset, westLon, spacing;
+  std::optional<double> radius, minorRadius, length, scale, offset, westLon, spacing;
   long long grid = 0;
 };
 
@@ -24,6 +24,8 @@ int runImport(const ImportArgs& a) {
   io::ImportOptions o;
   o.chart = io::chartKindFromString(a.chart);
   o.radius = a.radius;
+  o.minorRadius = a.minorRadius;
+  o.length = a.length;
   o.scale = a.scale;
   o.offset = a.offset;
   o.gridSide = a.grid;
@@ -66,11 +68,16 @@ const CommandRegistration kImport([](CLI::App& root, CLI::App*& sub) -> CommandA
   sub->add_option("--out", a->output, "Planet file to write (atomically)")->required();
   sub->add_option("--chart", a->chart,
                   "latlong or octahedral (a global equirectangular image onto a sphere of that "
-                  "chart; docs/CHARTS.md) or flat (a terrain tile)")
+                  "chart; docs/CHARTS.md), flat (a terrain tile), torus or cylinder (an image "
+                  "of its (u, v) grid, as export writes it: docs/EXPORT.md)")
       ->capture_default_str();
   sub->add_option("--radius", a->radius,
                   "Planet radius in metres (a sphere; default: the file's, else " +
-                      std::to_string(int(io::kDefaultImportRadius)) + ")");
+                      std::to_string(int(io::kDefaultImportRadius)) +
+                      "; a torus's major radius or a cylinder's radius: required)");
+  sub->add_option("--minor-radius", a->minorRadius,
+                  "torus: the tube's radius in metres (below --radius)");
+  sub->add_option("--length", a->length, "cylinder: its length in metres");
   sub->add_option("--scale", a->scale, "Height in metres = value * scale + offset");
   sub->add_option("--offset", a->offset, "Height in metres = value * scale + offset");
   sub->add_option("--grid", a->grid,

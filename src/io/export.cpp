@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cmath>
 #include <fstream>
 
 #include "core/chart_factory.hpp"
@@ -80,12 +81,7 @@ nlohmann::json exportTerrain(const terrain::Terrain& t, const std::filesystem::p
     throw core::InputError("--max-error applies to meshes (obj, ply, glb), not to heightmaps");
   const core::ChartShape shape = core::shapeOf(t.chart());
   const bool flat = shape == core::ChartShape::kFlat;
-  if (!flat && !core::isSphere(shape)) {
-    throw core::InputError(
-        "heightmaps are written from spheres (equirectangular) and flat grids; "
-        "a " +
-        t.chart().name() + " planet exports as a mesh (.obj, .ply, .glb)");
-  }
+  const bool tube = shape == core::ChartShape::kTorus || shape == core::ChartShape::kCylinder;
   int w = o.width, h = o.height;
   if (w < 0 || h < 0) throw core::InputError("--width and --height must be positive");
   const int m = t.grid().m();
@@ -93,6 +89,12 @@ nlohmann::json exportTerrain(const terrain::Terrain& t, const std::filesystem::p
     if (w == 0 && h == 0) w = h = m + 1;
     if (w == 0) w = h;
     if (h == 0) h = w;
+  } else if (tube) {
+    // The grid's own size: every vertex one pixel (a cylinder's ends both rows).
+    const int rows = shape == core::ChartShape::kTorus ? m : m + 1;
+    if (w == 0 && h == 0) w = m, h = rows;
+    if (w == 0) w = std::max(1, int(std::lround(double(h) * m / rows)));
+    if (h == 0) h = std::max(1, int(std::lround(double(w) * rows / m)));
   } else {
     if (w == 0 && h == 0) h = std::min(m, 8192);
     if (w == 0) w = 2 * h;
@@ -102,8 +104,9 @@ nlohmann::json exportTerrain(const terrain::Terrain& t, const std::filesystem::p
     throw core::InputError("heightmap size " + std::to_string(w) + "x" + std::to_string(h) +
                            " is too large");
   }
-  const Raster raster = flat ? resampleFlat(t, w, h, o.interpolation)
-                             : resampleEquirectangular(t, w, h, o.interpolation);
+  const Raster raster = flat   ? resampleFlat(t, w, h, o.interpolation)
+                        : tube ? resampleTube(t, w, h, o.interpolation)
+                               : resampleEquirectangular(t, w, h, o.interpolation);
   switch (format) {
     case ExportFormat::kPng16:
       writeHeightPng16(raster, out);

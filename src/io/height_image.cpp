@@ -147,7 +147,10 @@ HeightImage decodePng(std::span<const unsigned char> b, const std::string& name,
     if (key == "planetsculpt:min_m" && ok && std::isfinite(x)) img.value0Metres = x;
     if (key == "planetsculpt:max_m" && ok && std::isfinite(x)) img.value65535Metres = x;
     if (key == "planetsculpt:projection") {
-      img.projection = value.rfind("flat", 0) == 0 ? "flat" : "equirectangular";
+      img.projection = value.rfind("flat", 0) == 0       ? "flat"
+                       : value.rfind("torus", 0) == 0    ? "torus"
+                       : value.rfind("cylinder", 0) == 0 ? "cylinder"
+                                                         : "equirectangular";
     }
     if (key == "planetsculpt:pixel_spacing_m") {
       double sx = 0, sy = 0;
@@ -266,13 +269,21 @@ RawSidecar parseRawSidecar(std::string_view text, const std::string& name) {
   if (j.contains("projection")) {
     if (!j["projection"].is_string()) fail(name, "sidecar \"projection\" must be a string");
     s.projection = j["projection"].get<std::string>();
-    if (s.projection != "equirectangular" && s.projection != "flat") {
-      fail(name, "sidecar projection '" + s.projection + "' is unknown (equirectangular or flat)");
+    if (s.projection != "equirectangular" && s.projection != "flat" && s.projection != "torus" &&
+        s.projection != "cylinder") {
+      fail(name, "sidecar projection '" + s.projection +
+                     "' is unknown (equirectangular, flat, torus or cylinder)");
     }
   }
   if (j.contains("radius_m")) {
     s.radiusMetres = numberField(j, "radius_m", name);
     if (!(*s.radiusMetres > 0)) fail(name, "sidecar \"radius_m\" must be positive");
+  }
+  for (const auto& [key, field] : {std::pair{"minor_radius_m", &s.minorRadiusMetres},
+                                   std::pair{"length_m", &s.lengthMetres}}) {
+    if (!j.contains(key)) continue;
+    *field = numberField(j, key, name);
+    if (!(**field > 0)) fail(name, std::string("sidecar \"") + key + "\" must be positive");
   }
   if (j.contains("pixel_spacing_m")) {
     const auto& v = j["pixel_spacing_m"];
@@ -316,6 +327,8 @@ HeightImage decodeRaw(std::span<const unsigned char> bytes, const RawSidecar& s,
   img.pixelSpacingX = s.pixelSpacingX;
   img.pixelSpacingY = s.pixelSpacingY;
   img.radiusMetres = s.radiusMetres;
+  img.minorRadiusMetres = s.minorRadiusMetres;
+  img.lengthMetres = s.lengthMetres;
   return img;
 }
 

@@ -37,14 +37,17 @@ struct HeightImage {
   std::optional<double> value0Metres, value65535Metres;
   // Longitude of the western edge, when a sidecar says so.
   std::optional<double> column0LongitudeDeg;
-  // "equirectangular" or "flat" when the file says which (our own exports do).
+  // "equirectangular", "flat", "torus" or "cylinder" when the file says which (our own exports
+  // do).
   std::string projection;
   // Flat exports' sidecars: metres between pixel centres.
   std::optional<double> pixelSpacingX, pixelSpacingY;
   std::optional<GeoReference> geo;
   // The sphere's radius, when the file names one (a GeoTIFF's user-defined ellipsoid with equal
-  // axes, a raw sidecar's "radius_m").
+  // axes, a raw sidecar's "radius_m"; a torus's major radius, a cylinder's radius).
   std::optional<double> radiusMetres;
+  // A raw sidecar's "minor_radius_m" (a torus) and "length_m" (a cylinder).
+  std::optional<double> minorRadiusMetres, lengthMetres;
 
   std::uint64_t pixelCount() const { return std::uint64_t(width) * std::uint64_t(height); }
   float at(int x, int y) const {
@@ -81,7 +84,7 @@ struct RawSidecar {
   std::optional<double> column0LongitudeDeg;
   std::string projection;
   std::optional<double> pixelSpacingX, pixelSpacingY;
-  std::optional<double> radiusMetres;
+  std::optional<double> radiusMetres, minorRadiusMetres, lengthMetres;
 };
 RawSidecar parseRawSidecar(std::string_view json, const std::string& name);
 HeightImage decodeRaw(std::span<const unsigned char> bytes, const RawSidecar& sidecar,

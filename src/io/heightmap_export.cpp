@@ -92,6 +92,9 @@ std::string decimal(double x) {
 
 std::string projectionText(const Raster& r) {
   if (r.layout == Raster::Layout::kFlat) return "flat, pixel is point, row 0 at v = m";
+  if (r.layout == Raster::Layout::kTorus) return "torus, (u, v) grid, both ways periodic";
+  if (r.layout == Raster::Layout::kCylinder)
+    return "cylinder, (u, v) grid, u periodic, rows 0 and last its ends";
   return "equirectangular, row 0 north, column 0 at -180 deg";
 }
 
@@ -115,6 +118,17 @@ nlohmann::json describe(const Raster& r, const std::filesystem::path& path,
     j["pixel_is"] = "point";
     j["row0"] = "v = m (north)";
     j["pixel_spacing_m"] = {r.pixelWidthM, r.pixelHeightM};
+  } else if (r.layout == Raster::Layout::kTorus || r.layout == Raster::Layout::kCylinder) {
+    const bool torus = r.layout == Raster::Layout::kTorus;
+    j["projection"] = torus ? "torus" : "cylinder";
+    j["column0"] = "u = 0";
+    j["row0"] = torus ? "v = m - m / height" : "v = m";
+    j["radius_m"] = r.radiusMetres;
+    if (torus) {
+      j["minor_radius_m"] = r.minorRadiusM;
+    } else {
+      j["length_m"] = r.lengthM;
+    }
   } else {
     j["projection"] = "equirectangular";
     j["pixel_is"] = "area";
@@ -160,6 +174,41 @@ Raster resampleFlat(const terrain::Terrain& t, int width, int height, Interpolat
     for (int x = 0; x < width; ++x)
       r.metres[std::size_t(y) * std::size_t(width) + std::size_t(x)] =
           float(sample(at, m + 1, m + 1, x * kx, v, false, how));
+  }
+  return r;
+}
+
+Raster resampleTube(const terrain::Terrain& t, int width, int height, Interpolation how) {
+  const core::ChartShape shape = core::shapeOf(t.chart());
+  const bool torus = shape == core::ChartShape::kTorus;
+  if (!torus && shape != core::ChartShape::kCylinder)
+    throw std::invalid_argument("resampleTube needs a torus or a cylinder, not '" +
+                                t.chart().name() + "'");
+  if (width <= 0 || height <= 0 || double(width) * height > 4e8) {
+    throw std::invalid_argument("raster size " + std::to_string(width) + "x" +
+                                std::to_string(height) + " is empty or too large");
+  }
+  Raster r{width, height, std::vector<float>(std::size_t(width) * std::size_t(height))};
+  r.layout = torus ? Raster::Layout::kTorus : Raster::Layout::kCylinder;
+  const core::ChartDims dims = core::dimsOf(t.chart());
+  r.radiusMetres = dims.radius;
+  r.minorRadiusM = dims.minorRadius;
+  r.lengthM = dims.length;
+  const int m = t.grid().m();
+  // u wraps round the m columns (u = m is u = 0); a torus's v likewise, a cylinder's clamps.
+  const auto at = [&](int u, int v) {
+    u = ((u % m) + m) % m;
+    v = torus ? ((v % m) + m) % m : std::clamp(v, 0, m);
+    return double(t.height(u, v));
+  };
+  const double ku = double(m) / width;
+  const double kv = torus ? double(m) / height : height > 1 ? double(m) / (height - 1) : 0.0;
+#pragma omp parallel for schedule(static)
+  for (int y = 0; y < height; ++y) {
+    const double v = (height - 1 - y) * kv;
+    for (int x = 0; x < width; ++x)
+      r.metres[std::size_t(y) * std::size_t(width) + std::size_t(x)] =
+          float(sampleUnclamped(at, x * ku, v, how));
   }
   return r;
 }

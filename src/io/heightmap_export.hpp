@@ -19,10 +19,13 @@ struct Raster {
   enum class Layout {
     kEquirectangular,  // pixel-is-area, row 0 north, column 0 at -180 deg (resampleEquirectangular)
     kFlat,             // pixel-is-point over a flat chart, row 0 at v = m (resampleFlat)
+    kTorus,            // a torus's (u, v) grid, both ways periodic (resampleTube)
+    kCylinder,         // a cylinder's (u, v) grid, u periodic, rows 0 and height-1 its ends
   };
   Layout layout = Layout::kEquirectangular;
   double radiusMetres = 0;                   // equirectangular: the sphere (0: unknown)
   double pixelWidthM = 0, pixelHeightM = 0;  // flat: metres between pixel centres
+  double minorRadiusM = 0, lengthM = 0;      // torus, cylinder (radiusMetres: the major/tube)
 };
 
 // Bilinear in (u, v) between grid vertices; across the seam the grid wraps.
@@ -34,6 +37,15 @@ Raster resampleEquirectangular(const terrain::Terrain& terrain, int width, int h
 // exactly. Bilinear in between. Row 0 is the v = m edge. Throws std::invalid_argument unless
 // the terrain's chart is a core::FlatChart.
 Raster resampleFlat(const terrain::Terrain& terrain, int width, int height,
+                    Interpolation how = Interpolation::kCubic);
+
+// A torus's or a cylinder's heights as its own (u, v) grid: column x at u = x m / width, round the
+// axis (u wraps); a torus's row y at v = (height - 1 - y) m / height (v wraps too), a cylinder's
+// at v = (height - 1 - y) m / (height - 1) (rows 0 and height - 1 are its ends, v = m and 0).
+// At the grid's own size (m x m, a cylinder m x (m + 1)) every pixel is one vertex, exactly, and
+// io::importHeightmap takes the image back onto the same grid bit for bit. Throws
+// std::invalid_argument for another chart.
+Raster resampleTube(const terrain::Terrain& terrain, int width, int height,
                     Interpolation how = Interpolation::kCubic);
 
 // 32-bit float TIFF (one band, metres; strips, uncompressed) readable by GDAL/QGIS: for an

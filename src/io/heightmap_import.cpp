@@ -90,8 +90,12 @@ long long defaultGridSide(ChartKind chart, int width, int height) {
   // as fine as the image along the equator: 13.3 m). The octahedral chart takes the same side:
   // at 2049^2 its error per area is 11.4 m against lat-long's 15.5, at 4097^2 2.6 against 2.2
   // (docs/CHARTS.md). flat: the image's own samples.
+  // torus and cylinder: the image's own columns (and a torus's rows) as cells, so that an image
+  // of the grid's own size (io::resampleTube) comes back onto the same grid.
   const long long cells = core::isSphere(chart) ? std::max<long long>(2LL * width, 4LL * height)
-                                                : std::max<long long>(width, height) - 1;
+                          : chart == ChartKind::kTorus    ? std::max<long long>(width, height)
+                          : chart == ChartKind::kCylinder ? std::max<long long>(width, height - 1LL)
+                                                          : std::max<long long>(width, height) - 1;
   return (1LL << levelFor(cells)) + 1;
 }
 
@@ -429,6 +433,53 @@ void resampleFlat(const HeightImage& img, const ImportOptions& o, const core::Gr
   source["pixel_spacing_m"] = {sx, sy};
 }
 
+// An image of a torus's or a cylinder's (u, v) grid (io::resampleTube's layout) onto that chart:
+// column x at u = x m / w round the axis; a torus's row y at v = (h - 1 - y) m / h, both ways
+// periodic; a cylinder's at v = (h - 1 - y) m / (h - 1), its ends rows 0 and h - 1.
+void resampleTubeImage(const HeightImage& img, const ImportOptions& o, double radius,
+                       const core::GridSize& g, const std::string& name,
+                       std::vector<float>& heights, ImportResult& res, nlohmann::json& source) {
+  const bool torus = o.chart == ChartKind::kTorus;
+  core::ChartDims dims;
+  dims.radius = radius;
+  // The user's dimensions, else the file's (a raw export's sidecar names them).
+  const std::optional<double> minor = o.minorRadius ? o.minorRadius : img.minorRadiusMetres;
+  const std::optional<double> length = o.length ? o.length : img.lengthMetres;
+  if (torus) {
+    if (!minor) fail(name, "a torus needs its tube's radius: --minor-radius METRES");
+    dims.minorRadius = *minor;
+  } else {
+    if (!length) fail(name, "a cylinder needs its length: --length METRES");
+    dims.length = *length;
+  }
+  try {
+    res.planet.chart = core::makeChart(o.chart, g, dims);
+  } catch (const core::InputError& e) {
+    fail(name, e.what());
+  }
+  const int w = img.width, h = img.height, m = g.m();
+  const std::vector<float>& v = img.values;
+  const auto at = [&](int x, int y) {
+    x = ((x % w) + w) % w;
+    y = torus ? ((y % h) + h) % h : std::clamp(y, 0, h - 1);
+    return double(v[std::size_t(y) * std::size_t(w) + std::size_t(x)]);
+  };
+  const double kx = double(w) / m;
+  const double ky = torus ? double(h) / m : double(h - 1) / m;
+  for (int gv = 0; gv <= m; ++gv) {
+    // The torus's v = m is v = 0 (row h - 1 - h = -1 wraps to h - 1): the twins get one value.
+    const double y = torus ? (h - 1) - gv * ky : (m - gv) * ky;
+    for (int gu = 0; gu <= m; ++gu)
+      heights[g.index(gu, gv)] = float(sampleUnclamped(at, gu * kx, y, o.interpolation));
+  }
+  res.notes.push_back(
+      std::string(torus ? "torus" : "cylinder") +
+      ": image column 0 at u = 0, row 0 at the largest v; " +
+      (torus ? "both ways periodic"
+             : "periodic round the axis, rows 0 and " + std::to_string(h - 1) + " its ends"));
+  source["projection"] = torus ? "torus" : "cylinder";
+}
+
 }  // namespace
 
 ImportResult importHeightImage(HeightImage img, const ImportOptions& o, const std::string& name) {
@@ -436,15 +487,25 @@ ImportResult importHeightImage(HeightImage img, const ImportOptions& o, const st
   const int w = img.width, h = img.height;
   const std::size_t n = img.values.size();
   if (w <= 0 || h <= 0 || n != std::size_t(w) * std::size_t(h)) fail(name, "image has no pixels");
-  if (!core::isSphere(o.chart) && o.chart != ChartKind::kFlat) {
-    fail(name, "import onto the " + core::toString(o.chart) +
-                   " chart is not supported yet (a sphere: latlong or octahedral; a terrain "
-                   "tile: flat)");
+  const bool tube = o.chart == ChartKind::kTorus || o.chart == ChartKind::kCylinder;
+  // A file that says which surface it maps goes onto that one only (an image of a torus's grid
+  // stretched round a sphere would be a silent wrong result).
+  const bool declaresTube = img.projection == "torus" || img.projection == "cylinder";
+  if ((declaresTube || tube) && !img.projection.empty() &&
+      img.projection != core::toString(o.chart)) {
+    fail(name, "its metadata says it is a " + img.projection +
+                   " heightmap; it cannot be imported onto the " + core::toString(o.chart) +
+                   " chart" + (declaresTube ? " (--chart " + img.projection + ")" : ""));
   }
+  if (!tube && (o.minorRadius || o.length))
+    fail(name, "--minor-radius and --length apply to --chart torus and cylinder");
   const double radius = o.radius           ? *o.radius
                         : img.radiusMetres ? *img.radiusMetres
                                            : kDefaultImportRadius;
-  if (core::isSphere(o.chart) && (!std::isfinite(radius) || radius <= 0)) {
+  if (tube && !o.radius && !img.radiusMetres)
+    fail(name, std::string("a ") + (o.chart == ChartKind::kTorus ? "torus" : "cylinder") +
+                   " needs its radius: --radius METRES");
+  if ((core::isSphere(o.chart) || tube) && (!std::isfinite(radius) || radius <= 0)) {
     fail(name, "radius " + num(radius) + " m must be positive and finite");
   }
   if (core::isSphere(o.chart)) checkCoversTheGlobe(img, o.chart, name);
@@ -482,6 +543,8 @@ ImportResult importHeightImage(HeightImage img, const ImportOptions& o, const st
     resampleLatLong(img, o, radius, g, name, heights, res, source);
   } else if (core::isSphere(o.chart)) {
     resampleSphere(img, o, radius, g, name, heights, res, source);
+  } else if (tube) {
+    resampleTubeImage(img, o, radius, g, name, heights, res, source);
   } else {
     resampleFlat(img, o, g, name, heights, res, source);
   }

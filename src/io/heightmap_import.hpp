@@ -13,7 +13,8 @@
 namespace ps::io {
 
 // The chart a heightmap is imported onto: a sphere (latlong, octahedral: from an equirectangular
-// image) or flat (a terrain tile).
+// image), flat (a terrain tile), or a torus or cylinder (from an image of its own (u, v) grid, as
+// io::resampleTube writes it: periodic round the axis, a torus's rows too).
 using ChartKind = core::ChartShape;
 enum class NoDataPolicy { kFill, kRefuse };
 
@@ -28,6 +29,9 @@ struct ImportOptions {
   // a sphere (latlong, octahedral): metres. Unset: the file's (a GeoTIFF's sphere, a sidecar's
   // radius_m), else kDefaultImportRadius.
   std::optional<double> radius;
+  // torus: the tube's radius (required); cylinder: its length (required); metres. The radius
+  // above is then the torus's major radius, the cylinder's radius (required for both).
+  std::optional<double> minorRadius, length;
   // metres = value * scale + offset. Unset: a PlanetSculpt 16-bit PNG's own range, the file's
   // own scale and offset (GDAL's), else 1 and 0.
   std::optional<double> scale, offset;
