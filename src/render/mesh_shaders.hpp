@@ -55,9 +55,22 @@ uniform float tileCells;              // cells per tile side
 uniform int coarsestLevel;            // the pyramid's level of one tile
 uniform float slotSide;               // texels per tile side (tileCells + 3)
 uniform float reliefScale;      // vertical exaggeration of the shading (as the previews')
-uniform int radialUp;           // up is the direction from the planet's centre (a sphere)
+uniform int upKind;             // 0: each vertex's up; 1: a sphere about the origin; 2: a torus
+                                // about z (tube centres at majorRadius); 3: a cylinder about z
+uniform float majorRadius;      // the torus's
 uniform int showTileLevels;     // 1: colour by the level read; red where it is coarser than asked
 out vec4 colour;
+
+// The outward direction of the reference surface at planet-frame point p (upKind 1-3; with 0,
+// the direction from the origin, as for a sphere).
+vec3 outwardAt(vec3 p) {
+  if (upKind == 2) {
+    float l = length(p.xy);
+    return normalize(l > 0.0 ? p - vec3(p.xy * (majorRadius / l), 0.0) : p);
+  }
+  if (upKind == 3) return normalize(vec3(p.xy, 0.0));
+  return normalize(p);
+}
 
 // The held tile for grid point g (level-0 grid coordinates) at `level` or the nearest coarser
 // level: its layer, its corner in that level's texels, and 2^level.
@@ -112,16 +125,17 @@ void main() {
     float uu = dot(tangentU, tangentU), vv = dot(tangentV, tangentV);
     vec3 gradient = (uu > 1e-6 ? dhu / uu * tangentU : vec3(0.0)) +
                     (vv > 1e-6 ? dhv / vv * tangentV : vec3(0.0));
-    // A sphere's up from the pixel's own position: interpolating the vertices' up across a
-    // coarse triangle would bend the light at its edges (Mach bands along the mesh).
-    vec3 u = radialUp == 1 ? normalize(eyeRelative + cameraPosition) : normalize(upDir);
+    // A sphere's, a torus's or a cylinder's up from the pixel's own position: interpolating the
+    // vertices' up across a coarse triangle would bend the light at its edges (Mach bands along
+    // the mesh).
+    vec3 u = upKind != 0 ? outwardAt(eyeRelative + cameraPosition) : normalize(upDir);
     n = normalize(u - reliefScale * (gradient - dot(gradient, u) * u));
   } else {
     h = metres;
     // Flat normals from screen-space derivatives: the facets of the tessellation show, as in
     // paper 003's figures.
     n = normalize(cross(dFdx(eyeRelative), dFdy(eyeRelative)));
-    if (dot(n, normalize(eyeRelative + cameraPosition)) < 0.0) n = -n;
+    if (dot(n, outwardAt(eyeRelative + cameraPosition)) < 0.0) n = -n;
   }
   float light = 0.3 + 0.7 * max(dot(n, sun), 0.0);
   vec3 c = texture(ramp, clamp((h - rampLow) / (rampHigh - rampLow), 0.0, 1.0)).rgb;

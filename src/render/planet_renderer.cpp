@@ -18,6 +18,7 @@
 #include <utility>
 #include <vector>
 
+#include "core/chart_factory.hpp"
 #include "io/heightmap_export.hpp"
 #include "render/atmosphere_passes.hpp"
 #include "render/changed_ranges.hpp"
@@ -259,7 +260,13 @@ void PlanetRenderer::upload(const terrain::Terrain& planet, const terrain::Mesh&
 void PlanetRenderer::syncHeights(const terrain::Terrain& planet, const terrain::Mesh& mesh,
                                  const terrain::Camera& camera, const RenderStyle& style) {
   Gl& g = *gl_;
-  radialUp_ = planet.chart().radius() > 0;
+  // The shader's up: a sphere's, a torus's and a cylinder's from each pixel's position.
+  const core::ChartShape shape = core::shapeOf(planet.chart());
+  upKind_ = planet.chart().radius() > 0            ? 1
+            : shape == core::ChartShape::kTorus    ? 2
+            : shape == core::ChartShape::kCylinder ? 3
+                                                   : 0;
+  majorRadius_ = shape == core::ChartShape::kTorus ? core::dimsOf(planet.chart()).radius : 0.0;
   stats_.heightUploadBytes = 0;
   if (style.shading != Shading::kPerPixel) return;
   if (!g.heightTiles && failedSide_ == planet.grid().side()) return;  // said once
@@ -329,7 +336,8 @@ void PlanetRenderer::drawMesh(const terrain::Mesh& mesh, const terrain::Camera& 
     glUniform1i(glGetUniformLocation(g.meshProgram, "showTileLevels"),
                 style.showTileLevels ? 1 : 0);
   }
-  glUniform1i(glGetUniformLocation(g.meshProgram, "radialUp"), radialUp_ ? 1 : 0);
+  glUniform1i(glGetUniformLocation(g.meshProgram, "upKind"), upKind_);
+  glUniform1f(glGetUniformLocation(g.meshProgram, "majorRadius"), float(majorRadius_));
   glUniform1f(glGetUniformLocation(g.meshProgram, "reliefScale"), float(style.reliefScale));
   glBindVertexArray(g.meshVao);
   if (wireOnly) {

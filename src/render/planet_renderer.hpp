@@ -131,9 +131,10 @@ class PlanetRenderer {
   std::uint64_t uploadedGeneration_ = 0;
   std::size_t uploadedIndices_ = 0;
   bool partialUploads_ = true;
-  bool radialUp_ = false;
+  int upKind_ = 0;  // the mesh shader's (mesh_shaders.hpp)
+  double majorRadius_ = 0;
   std::size_t heightCacheBudget_ = std::size_t(64) << 20;
-  int failedSide_ = 0;                            // a grid side the height tile cache could not hold
+  int failedSide_ = 0;  // a grid side the height tile cache could not hold
   std::unique_ptr<AtmospherePasses> atmosphere_;  // made at the first frame that asks for it
 };
 

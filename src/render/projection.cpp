@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "core/chart_factory.hpp"
+
 namespace ps::render {
 
 Eigen::Matrix4d clipFromCamera(const terrain::Camera& c, double n, double f) {
@@ -40,7 +42,43 @@ std::optional<Eigen::Vector2d> pixelThroughFloatPath(const Eigen::Matrix4d& m,
   return Eigen::Vector2d(0.5 * (x + 1) * width - 0.5, 0.5 * (1 - y) * height - 0.5);
 }
 
+namespace {
+
+// A torus or a cylinder (no sphere about the origin holds its surface at one radius): far at the
+// far side of the sphere about the origin that holds every point of it, near at half the
+// distance to that sphere, or, from inside it, at a quarter of the distance to the surface point
+// under the eye (the chart's inverse), which no surface point is nearer than by more than the
+// relief allows.
+DepthRange tubeDepthRange(const terrain::Camera& camera, const terrain::Terrain& planet,
+                          core::ChartShape shape) {
+  const core::ChartDims dims = core::dimsOf(planet.chart());
+  const double hi = std::max({0.0, double(planet.maxHeight()), -double(planet.minHeight())});
+  const double outer = shape == core::ChartShape::kTorus
+                           ? dims.radius + dims.minorRadius + hi
+                           : std::hypot(dims.radius + hi, 0.5 * dims.length);
+  const double d = camera.eye.norm();
+  DepthRange r;
+  r.farZ = d + outer;
+  if (d > outer) {
+    r.nearZ = 0.5 * (d - outer);
+  } else if (const auto uv = planet.chart().inverse(camera.eye)) {
+    const int side = planet.grid().side();
+    const int u = std::clamp(int(std::lround((*uv)(0))), 0, side - 1);
+    const int v = std::clamp(int(std::lround((*uv)(1))), 0, side - 1);
+    const Eigen::Vector3d ground = planet.chart().position(u, v, planet.height(u, v));
+    r.nearZ = 0.25 * std::max((camera.eye - ground).norm() - hi, 0.0);
+  }
+  r.nearZ = std::max({r.nearZ, r.farZ * 1e-7, 1e-3});
+  r.farZ = std::max(r.farZ, 2 * r.nearZ);
+  return r;
+}
+
+}  // namespace
+
 DepthRange depthRangeFor(const terrain::Camera& camera, const terrain::Terrain& planet) {
+  const core::ChartShape shape = core::shapeOf(planet.chart());
+  if (shape == core::ChartShape::kTorus || shape == core::ChartShape::kCylinder)
+    return tubeDepthRange(camera, planet, shape);
   const double R = planet.chart().radius();
   const double hi = std::max(0.0, double(planet.maxHeight()));
   const double lo = std::min(0.0, double(planet.minHeight()));
