@@ -27,10 +27,12 @@
 #include "edit/grid_consistency.hpp"
 #include "edit/region_growing.hpp"
 #include "io/mesh_export.hpp"
+#include "stress_util.hpp"
 #include "terrain/error_bounds.hpp"
 #include "terrain/error_mesher.hpp"
 #include "terrain/screen_error.hpp"
 #include "terrain/tessellator.hpp"
+#include "test_edit_util.hpp"
 #include "tin/tin_check.hpp"
 
 using namespace ps;
@@ -492,5 +494,87 @@ TEST(TorusAndCylinder, BrushEditsKeepBoundsTwinsAndUndo) {
     terrain::ErrorBounds full;
     full.build(c, t.heights(), terrain::ErrorRule::kHybridExact);
     EXPECT_EQ(full.errorCodes(), t.bounds().errorCodes()) << k.name;
+  }
+}
+
+// Random actions, as the stress suite runs them on lat-long and the octahedral chart: brush
+// stamps and strokes with radii from a hundredth to three times the tube's radius, at random
+// vertices biased to the seams and the torus's corner, raise, lower and set, undo and redo, and
+// bad input (refused, nothing changed). After each action every twin holds its point's height,
+// finite and within the limit; every 23 the bounds equal a full rebuild bit for bit; every 61 a
+// tessellation from a random view is crack-free; undoing everything gives back the first
+// heights bit for bit.
+TEST(StressTubeEdits, RandomBrushActionsKeepEveryInvariant) {
+  const int actions = (testkit::underAsan() ? 60 : 240) * testkit::stressScale();
+  for (const Case& k : kCases) {
+    auto t = bumpy(k.make(6), 17, 3000.0);
+    const core::Chart& c = t.chart();
+    const int m = t.grid().m();
+    const double tube = isTorus(c) ? kMinor : kTubeRadius;
+    const double extent = isTorus(c) ? kMajor + kMinor : std::hypot(kTubeRadius, 0.5 * kLength);
+    const std::vector<float> original(t.heights().begin(), t.heights().end());
+    edit::EditPipeline pipe(t);
+    std::mt19937 rng(20261127);
+    std::uniform_real_distribution<double> unit(0.0, 1.0);
+    terrain::Tessellator tess;
+    for (int i = 0; i < actions; ++i) {
+      edit::BrushSettings b;
+      b.radius = tube * std::exp(std::log(0.01) + unit(rng) * std::log(300.0));
+      b.sigma = (rng() & 1) ? 0.17 : 0.75;
+      b.mode = edit::BrushMode(rng() % 3);
+      b.strength = 100.0 + 2400.0 * unit(rng);
+      b.target = 600.0 * (unit(rng) - 0.5);
+      const edit::GaussianBrush brush(b);
+      const core::GridPoint s = edittest::randomCentre(rng, m);
+      const Eigen::Vector3d p = c.position(s.u, s.v, t.height(s.u, s.v));
+      const unsigned kind = rng() % 10;
+      std::string what = std::string(k.name) + " action " + std::to_string(i) + " at (" +
+                         std::to_string(s.u) + "," + std::to_string(s.v) + ") r " +
+                         std::to_string(b.radius) + ": ";
+      if (kind < 4) {
+        what += "stamp";
+        pipe.apply(brush, {p, 0.0});
+      } else if (kind < 7) {
+        what += "stroke";
+        pipe.beginStroke(brush, {p, 0.0});
+        Eigen::Vector3d q = p;
+        for (int step = 0; step < 4; ++step) {
+          // Small steps in any direction (onto the surface's nearest vertex), now and then a jump.
+          q += (rng() % 5 == 0 ? extent : b.radius) * Eigen::Vector3d::Random();
+          pipe.moveTo({q, 0.05});
+        }
+        pipe.endStroke();
+      } else if (kind < 9) {
+        what += kind == 7 ? "undo" : "redo";
+        if (kind == 7 && pipe.journal().undoCount() > 0) pipe.undo();
+        if (kind == 8 && pipe.journal().redoCount() > 0) pipe.redo();
+      } else {
+        what += "bad input";
+        const std::vector<float> before(t.heights().begin(), t.heights().end());
+        edit::BrushSettings bad = b;
+        bad.radius = std::numeric_limits<double>::quiet_NaN();
+        EXPECT_THROW(pipe.apply(edit::GaussianBrush(bad), {p, 0.0}), core::InputError) << what;
+        const Eigen::Vector3d nowhere(std::numeric_limits<double>::infinity(), 0, 0);
+        EXPECT_THROW(pipe.apply(brush, {nowhere, 0.0}), core::InputError) << what;
+        ASSERT_TRUE(std::equal(before.begin(), before.end(), t.heights().begin())) << what;
+      }
+      ASSERT_TRUE(edittest::consistentHeights(t)) << what;
+      if (i % 23 == 0) {
+        ASSERT_TRUE(edittest::boundsEqualFullRebuild(t)) << what;
+      }
+      if (i % 61 == 0) {
+        const Eigen::Vector3d dir = Eigen::Vector3d::Random().normalized();
+        const auto cam = terrain::Camera::lookAt((1.5 + 8.0 * unit(rng)) * extent * dir,
+                                                 Eigen::Vector3d::Zero(), {0, 0, 1}, 320, 240, 1.0);
+        terrain::TessellationSettings ts;
+        ts.cull = false;
+        ts.triangleBudget = 0;
+        ts.distMaxPx = 0.5 + 8.0 * unit(rng);
+        ASSERT_EQ(conformityDefect(t, tess.tessellate(t, cam, ts)), "") << what;
+      }
+    }
+    while (pipe.journal().undoCount() > 0) pipe.undo();
+    EXPECT_TRUE(std::equal(original.begin(), original.end(), t.heights().begin())) << k.name;
+    EXPECT_TRUE(edittest::boundsEqualFullRebuild(t)) << k.name;
   }
 }
