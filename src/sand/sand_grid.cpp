@@ -1,17 +1,37 @@
 #include "sand/sand_grid.hpp"
 
+#include <Eigen/Geometry>
+
+#include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numbers>
 
 #include "core/flat_chart.hpp"
 #include "core/input_error.hpp"
 #include "core/latlong_chart.hpp"
+#include "core/octahedral_chart.hpp"
 
 namespace ps::sand {
 
 namespace {
 constexpr double kPi = std::numbers::pi;
+
+// |a - b| with a fixed order of operations: the same bits for (a, b) and (b, a).
+double chordOf(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+  const double dx = a.x() - b.x(), dy = a.y() - b.y(), dz = a.z() - b.z();
+  return std::sqrt((dx * dx + dy * dy) + dz * dz);
 }
+
+// Area of the spherical triangle of unit vectors a, b, c (its excess; Van Oosterom and
+// Strackee's formula, the triple product through differences for small triangles).
+double sphericalTriangle(const Eigen::Vector3d& a, const Eigen::Vector3d& b,
+                         const Eigen::Vector3d& c) {
+  const double det = std::abs(a.dot((b - a).cross(c - a)));
+  const double den = 1.0 + a.dot(b) + b.dot(c) + c.dot(a);
+  return 2.0 * std::atan2(det, den);
+}
+}  // namespace
 
 SandGrid::SandGrid(std::shared_ptr<const core::Chart> chart)
     : chart_(std::move(chart)), grid_(chart_ ? chart_->grid() : core::GridSize(5)) {
@@ -75,8 +95,105 @@ SandGrid::SandGrid(std::shared_ptr<const core::Chart> chart)
     }
     return;
   }
-  throw core::InputError("the sand core works on the lat-long and flat charts, not on '" +
-                         chart_->name() + "'");
+  if (const auto* oct = dynamic_cast<const core::OctahedralChart*>(chart_.get())) {
+    buildGlued(oct->radius());
+    return;
+  }
+  throw core::InputError(
+      "the sand core works on the lat-long, flat and octahedral charts, not on '" + chart_->name() +
+      "'");
+}
+
+void SandGrid::buildGlued(double R) {
+  glued_ = true;
+  radius_ = R;
+  columns_ = m_ + 1;
+  // The mean cell's side: m^2 + 2 points share 4 pi R^2.
+  cellSize_ = R * std::sqrt(4.0 * kPi) / m_;
+  const std::size_t count = grid_.count();
+  px_.assign(count, 0.0);
+  py_.assign(count, 0.0);
+  pz_.assign(count, 0.0);
+  const std::vector<float> zeros(std::size_t(m_) + 1, 0.0f);
+  for (int v = 0; v <= m_; ++v) {
+    const std::size_t i = grid_.index(0, v);
+    chart_->rowPositions(v, 0, m_, zeros.data(), {px_.data() + i, py_.data() + i, pz_.data() + i});
+  }
+  // A quarter of every spherical grid quad to each of its corners' points.
+  cellArea_.assign(count, 0.0);
+  const double invR = 1.0 / R;
+  for (int v = 0; v < m_; ++v) {
+    for (int u = 0; u < m_; ++u) {
+      const Eigen::Vector3d a = point(u, v) * invR, b = point(u + 1, v) * invR,
+                            c = point(u + 1, v + 1) * invR, d = point(u, v + 1) * invR;
+      const double quarter =
+          0.25 * R * R * (sphericalTriangle(a, b, c) + sphericalTriangle(a, c, d));
+      const int cu[4] = {u, u + 1, u + 1, u}, cv[4] = {v, v, v + 1, v + 1};
+      for (int k = 0; k < 4; ++k) {
+        const core::GridPoint p = chart_->canonical(cu[k], cv[k]);
+        cellArea_[grid_.index(p.u, p.v)] += quarter;
+      }
+    }
+  }
+  // Twins read their point's area.
+  for (int v = 0; v <= m_; ++v) {
+    for (int u = 0; u <= m_; ++u) {
+      const core::GridPoint p = chart_->canonical(u, v);
+      cellArea_[grid_.index(u, v)] = cellArea_[grid_.index(p.u, p.v)];
+    }
+  }
+}
+
+unsigned SandGrid::coneDrops(int u, int v) const {
+  if (!glued_) return 0;
+  const int h = m_ / 2;
+  // Pairs of directions that reach one neighbour (the side's half turn about the point): keep
+  // one of each pair (W E, S N, SW NE, SE NW).
+  constexpr unsigned W = 1, E = 2, S = 4, N = 8, SW = 16, SE = 32, NW = 64, NE = 128;
+  if (u == h && v == 0) return E | S | SW | SE;
+  if (u == h && v == m_) return E | N | NW | NE;
+  if (u == 0 && v == h) return W | N | SW | NW;
+  if (u == m_ && v == h) return E | N | SE | NE;
+  return 0;
+}
+
+core::GridPoint SandGrid::neighbour(int u, int v, int k) const {
+  if ((coneDrops(u, v) >> k) & 1u) return {-1, -1};
+  const core::GridPoint p = chart_->continued(u + kDu[k], v + kDv[k]);
+  return chart_->canonical(p.u, p.v);
+}
+
+double SandGrid::chord(int u, int v, int k) const {
+  const core::GridPoint n = neighbour(u, v, k);
+  if (n.u < 0) return std::numeric_limits<double>::infinity();
+  return chordOf(point(u, v), point(n.u, n.v));
+}
+
+Eigen::Vector3d SandGrid::quadCentre(int u, int v) const {
+  std::size_t idx[4];
+  const int cu[4] = {u, u + 1, u + 1, u}, cv[4] = {v, v, v + 1, v + 1};
+  for (int k = 0; k < 4; ++k) {
+    const core::GridPoint c = chart_->continued(cu[k], cv[k]);
+    const core::GridPoint p = chart_->canonical(c.u, c.v);
+    idx[k] = grid_.index(p.u, p.v);
+  }
+  std::sort(idx, idx + 4);  // the same sum from every side
+  Eigen::Vector3d s(0, 0, 0);
+  for (std::size_t i : idx) s += Eigen::Vector3d(px_[i], py_[i], pz_[i]);
+  const double len = std::sqrt((s.x() * s.x() + s.y() * s.y()) + s.z() * s.z());
+  return s * (radius_ / len);
+}
+
+double SandGrid::face(int u, int v, int k) const {
+  if (k >= 4 || neighbour(u, v, k).u < 0) return 0.0;
+  const int du = kDu[k], dv = kDv[k];
+  const int nu = -dv, nv = du;  // the link's normal in the grid
+  // The quads beside the link: corners {p, p + d, p + n, p + d + n} and the same with -n.
+  auto lowerLeft = [&](int su, int sv) {
+    return core::GridPoint{u + std::min({0, du, su, du + su}), v + std::min({0, dv, sv, dv + sv})};
+  };
+  const core::GridPoint q1 = lowerLeft(nu, nv), q2 = lowerLeft(-nu, -nv);
+  return chordOf(quadCentre(q1.u, q1.v), quadCentre(q2.u, q2.v));
 }
 
 template <class T>
@@ -86,6 +203,17 @@ double SandGrid::sum(std::span<const T> h, bool absolute) const {
                            grid_.label() + " grid");
   }
   CompensatedSum total;
+  if (glued_) {
+    for (int v = 0; v <= m_; ++v) {
+      const T* p = h.data() + grid_.index(0, v);
+      for (int u = 0; u <= m_; ++u) {
+        if ((u == 0 || u == m_ || v == 0 || v == m_) && !isCell(u, v)) continue;
+        total.add(cellArea_[grid_.index(u, v)] *
+                  (absolute ? std::abs(double(p[u])) : double(p[u])));
+      }
+    }
+    return total.value();
+  }
   for (int v = 0; v <= m_; ++v) {
     CompensatedSum row;
     const T* p = h.data() + grid_.index(0, v);

@@ -1,0 +1,330 @@
+// The sand field on a chart whose sides are glued to themselves (the octahedral chart, both
+// mappings): per-cell geometry instead of per-row tables, a one-cell halo read across the folds
+// through the chart's gluing, no poles (docs/SAND.md, "The octahedral chart").
+//
+// Each cell is a distinct point at its canonical grid vertex; its 8 links are the grid continued
+// across the glued sides (SandGrid::neighbour; a cone point, a side's midpoint, has 4). A link's
+// constants (chord, face) are symmetric functions of its two points, and every flux is one
+// expression of the two cells' values, so both cells of a link compute it bit for bit alike.
+// Thermal erosion runs in two passes over the tiles (the outflow scale s of every cell, then the
+// heights), since a cell's s seen across a fold would otherwise be summed in another order.
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "core/input_error.hpp"
+#include "sand/sand_field_parts.hpp"
+
+namespace ps::sand {
+
+namespace {
+constexpr int kNK = 8;
+constexpr int kDuG[8] = {-1, 1, 0, 0, -1, 1, -1, 1};
+constexpr int kDvG[8] = {0, 0, -1, 1, -1, -1, 1, 1};
+constexpr std::size_t kCells = std::size_t(kT) * kT;
+}  // namespace
+
+void SandField::loadGeometry(Tile& tile, int t) {
+  if (tile.geo) return;
+  tile.geo = std::make_unique<double[]>(std::size_t(kGeoPlanes) * kCells);
+  double* geo = tile.geo.get();
+  const int tu = t % tilesU_, tv = t / tilesU_;
+  const double inf = std::numeric_limits<double>::infinity();
+  double bound = inf;
+  for (int lv = 0; lv < kT; ++lv) {
+    for (int lu = 0; lu < kT; ++lu) {
+      const int u = tu * kT + lu, v = tv * kT + lv;
+      const std::size_t i = std::size_t(lv * kT + lu);
+      const bool cell = cellExists(u, v);
+      double g = 0.0;
+      for (int k = 0; k < kNK; ++k) {
+        const double d = cell ? grid_.chord(u, v, k) : inf;
+        geo[std::size_t(kGeoChord + k) * kCells + i] = d;
+        if (k < 4) {
+          const double L = cell ? grid_.face(u, v, k) : 0.0;
+          geo[std::size_t(kGeoFace + k) * kCells + i] = L;
+          if (std::isfinite(d)) g += L / d;
+        }
+      }
+      if (cell && g > 0.0) bound = std::min(bound, grid_.cellArea(u, v) / g);
+    }
+  }
+  tile.boundFactor = bound;
+}
+
+bool SandField::gluedBorderTile(int tu, int tv) const {
+  return tu == 0 || tv == 0 || (tu + 1) * kT >= m_ || (tv + 1) * kT >= m_;
+}
+
+bool SandField::gluedSource(int tu, int tv, int r, int c, int& tile, int& local) const {
+  int u = tu * kT + c - 2, v = tv * kT + r - 2;
+  if (u < -1 || u > m_ + 1 || v < -1 || v > m_ + 1) return false;
+  if (u <= 0 || u >= m_ || v <= 0 || v >= m_) {
+    const core::Chart& chart = grid_.chart();
+    const core::GridPoint p = chart.continued(u, v);
+    const core::GridPoint q = chart.canonical(p.u, p.v);
+    u = q.u, v = q.v;
+  }
+  tile = tileIndex(u / kT, v / kT);
+  if (!inP_[std::size_t(tile)]) return false;
+  local = (v % kT) * kT + (u % kT);
+  return true;
+}
+
+// The tile's heights (hs), thermal outflow scales (ss, optional) and receiver caps (caps,
+// optional) with a one-cell halo, in the kW x kW scratch layout (the tile at offset 2): cells
+// outside P read as walls (kWall, s = 0).
+void SandField::gatherGlued(int tu, int tv, double* hs, double* ss, double* caps) const {
+  const int own = tileIndex(tu, tv);
+  std::fill_n(hs, kW * kW, kWall);
+  if (ss) std::fill_n(ss, kW * kW, 0.0);
+  if (caps) std::fill_n(caps, kW * kW, 0.0);
+  for (int r = 1; r < kW - 1; ++r) {
+    for (int c = 1; c < kW - 1; ++c) {
+      int tile = 0, local = 0;
+      if (!gluedSource(tu, tv, r, c, tile, local)) continue;
+      const Tile& src = *tiles_[std::size_t(tile)];
+      const std::size_t at = std::size_t(r * kW + c);
+      hs[at] = tile == own ? src.cur[std::size_t(local)] : src.edgeAt(local % kT, local / kT);
+      if (ss) ss[at] = src.s[std::size_t(local)];
+      if (caps) {
+        const int u = (tile % tilesU_) * kT + local % kT, v = (tile / tilesU_) * kT + local / kT;
+        caps[at] = grid_.cellArea(u, v) * (grid_.linkCount(u, v) == 4 ? 0.25 : 0.125);
+      }
+    }
+  }
+}
+
+double SandField::gluedTileBound(int t) const {
+  if (const Tile* tile = tiles_[std::size_t(t)].get(); tile && tile->geo) return tile->boundFactor;
+  const int tu = t % tilesU_, tv = t / tilesU_;
+  double bound = std::numeric_limits<double>::infinity();
+  for (int lv = 0; lv < kT; ++lv) {
+    for (int lu = 0; lu < kT; ++lu) {
+      const int u = tu * kT + lu, v = tv * kT + lv;
+      if (!cellExists(u, v)) continue;
+      double g = 0.0;
+      for (int k = 0; k < 4; ++k) {
+        const double d = grid_.chord(u, v, k);
+        if (std::isfinite(d)) g += grid_.face(u, v, k) / d;
+      }
+      if (g > 0.0) bound = std::min(bound, grid_.cellArea(u, v) / g);
+    }
+  }
+  return bound;
+}
+
+double SandField::gluedBound(const Material& material, bool wholeGrid, bool visited) const {
+  const double D = material.diffusion;
+  if (!(D > 0.0)) return std::numeric_limits<double>::infinity();
+  double factor = std::numeric_limits<double>::infinity();
+  if (visited) {
+    for (int t : tileList_) factor = std::min(factor, gluedTileBound(t));
+  } else {
+    for (std::size_t t = 0; t < tiles_.size(); ++t) {
+      if (wholeGrid || busy_[t] || marked_[t]) factor = std::min(factor, gluedTileBound(int(t)));
+    }
+  }
+  const double l2 = grid_.cellSize() * grid_.cellSize();
+  return factor / (D * l2);
+}
+
+bool SandField::gluedLinkActive(Predicate pred, int u, int v, int k,
+                                const Material& material) const {
+  const core::GridPoint n = grid_.neighbour(u, v, k);
+  if (n.u < 0) return false;
+  const double dist = grid_.chord(u, v, k);
+  const double d = value(u, v) - value(n.u, n.v);
+  if (pred == Predicate::kThermal) {
+    const double T = material.tanTalus();
+    return std::abs(d) - (T * dist + material.cohesion) > material.talusTolerance * T * dist;
+  }
+  return kernels::weight(std::abs(d), 1.0 / dist, kernels::Repose::of(material)) > 0.0;
+}
+
+// The links of tile t's cells to cells of tiles outside P; an active one pulls that tile in.
+// Border tiles check every cell (a cell beside a fold links to tiles across the grid), the
+// others their outer rows and columns.
+void SandField::gluedActiveSetLinks(int t, Predicate pred, const Material& material,
+                                    const std::function<void(int)>& add) {
+  const int tu = t % tilesU_, tv = t / tilesU_;
+  const bool border = gluedBorderTile(tu, tv);
+  const int nDirs = pred == Predicate::kThermal ? 8 : 4;
+  for (int lv = 0; lv < kT; ++lv) {
+    const bool edgeRow = border || lv == 0 || lv == kT - 1;
+    for (int lu = 0; lu < kT; lu += (edgeRow ? 1 : kT - 1)) {
+      const int u = tu * kT + lu, v = tv * kT + lv;
+      if (!cellExists(u, v)) continue;
+      for (int k = 0; k < nDirs; ++k) {
+        const core::GridPoint n = grid_.neighbour(u, v, k);
+        if (n.u < 0) continue;
+        const int tn = tileIndex(n.u / kT, n.v / kT);
+        if (tn == t || inP_[std::size_t(tn)]) continue;
+        if (gluedLinkActive(pred, u, v, k, material)) add(tn);
+      }
+    }
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Thermal erosion (the same rule as sand_thermal.cpp's kernels, per cell)
+
+void SandField::thermalGluedPass1(int t, const Material& material, double* hs) {
+  const int tu = t % tilesU_, tv = t / tilesU_;
+  gatherGlued(tu, tv, hs, nullptr, nullptr);
+  Tile& tile = *tiles_[std::size_t(t)];
+  if (!tile.s) tile.s = std::make_unique<double[]>(kCells);
+  double* s = tile.s.get();
+  const double* geo = tile.geo.get();
+  const double T = material.tanTalus(), coh = material.cohesion, eta = material.talusTolerance;
+  const double halfRate = 0.5 * material.erosionRate;
+  for (int lv = 0; lv < kT; ++lv) {
+    for (int lu = 0; lu < kT; ++lu) {
+      const std::size_t i = std::size_t(lv * kT + lu);
+      const int u = tu * kT + lu, v = tv * kT + lv;
+      s[i] = 0.0;
+      if (!cellExists(u, v)) continue;
+      const double h = hs[(lv + 2) * kW + lu + 2];
+      double e[kNK];
+      for (int k = 0; k < kNK; ++k) {
+        const double d = geo[std::size_t(kGeoChord + k) * kCells + i];
+        const double hn = hs[(lv + 2 + kDvG[k]) * kW + lu + 2 + kDuG[k]];
+        e[k] = kernels::act(h - hn - (T * d + coh), eta * T * d);
+      }
+      const double E = ((e[0] + e[1]) + (e[2] + e[3])) + ((e[4] + e[7]) + (e[5] + e[6]));
+      const double mx = std::max(std::max(std::max(e[0], e[1]), std::max(e[2], e[3])),
+                                 std::max(std::max(e[4], e[7]), std::max(e[5], e[6])));
+      s[i] = E > 0.0 ? (halfRate * grid_.cellArea(u, v)) * mx / E : 0.0;
+    }
+  }
+}
+
+void SandField::thermalGluedPass2(int t, const Material& material, double* hs, double* ss,
+                                  double* cs, std::uint8_t& busy) {
+  const int tu = t % tilesU_, tv = t / tilesU_;
+  gatherGlued(tu, tv, hs, ss, cs);
+  Tile& tile = *tiles_[std::size_t(t)];
+  const double* geo = tile.geo.get();
+  const double T = material.tanTalus(), coh = material.cohesion, eta = material.talusTolerance;
+  // As kernels::thermalPass2's link: act(|d| - t) times min(s_sender, cap_receiver), signed by
+  // which side is higher.
+  auto link = [](double d, double th, double e, double sOther, double capOther, double sSelf,
+                 double capSelf) {
+    const double a = kernels::act(std::abs(d) - th, e);
+    const double coef = d > 0.0 ? -std::min(sSelf, capOther) : std::min(sOther, capSelf);
+    return coef * a;
+  };
+  unsigned any = 0;
+  for (int lv = 0; lv < kT; ++lv) {
+    for (int lu = 0; lu < kT; ++lu) {
+      const std::size_t i = std::size_t(lv * kT + lu);
+      const int u = tu * kT + lu, v = tv * kT + lv;
+      if (!cellExists(u, v)) continue;
+      const int at = (lv + 2) * kW + lu + 2;
+      const double h = hs[at], si = ss[at], capSelf = cs[at];
+      double n[kNK];
+      for (int k = 0; k < kNK; ++k) {
+        const double d = geo[std::size_t(kGeoChord + k) * kCells + i];
+        const int nb = at + kDvG[k] * kW + kDuG[k];
+        n[k] = link(h - hs[nb], T * d + coh, eta * T * d, ss[nb], cs[nb], si, capSelf);
+        any |= unsigned(std::isfinite(d) && ss[nb] > 0.0);
+      }
+      any |= unsigned(si > 0.0);
+      const double net = ((n[0] + n[1]) + (n[2] + n[3])) + ((n[4] + n[7]) + (n[5] + n[6]));
+      tile.cur[i] = h + net * (1.0 / grid_.cellArea(u, v));
+    }
+  }
+  busy = any ? 1 : 0;
+}
+
+StepReport SandField::thermalStepGlued(const Material& material) {
+  StepReport rep;
+  if (atRest()) return rep;
+  buildActiveSet(Predicate::kThermal, material);
+  std::vector<std::uint8_t> busyOut(tileList_.size(), 0);
+  const int n = int(tileList_.size());
+#pragma omp parallel if (n >= kParallelTiles)
+  {
+    std::vector<double> hs(std::size_t(kW) * kW), ss(std::size_t(kW) * kW),
+        cs(std::size_t(kW) * kW);
+#pragma omp for schedule(static)
+    for (int j = 0; j < n; ++j) tiles_[std::size_t(tileList_[std::size_t(j)])]->snapshot();
+      // (barrier: every tile's edge holds the heights before the step)
+#pragma omp for schedule(dynamic, 1)
+    for (int j = 0; j < n; ++j) thermalGluedPass1(tileList_[std::size_t(j)], material, hs.data());
+      // (barrier: every cell's s is known)
+#pragma omp for schedule(dynamic, 1)
+    for (int j = 0; j < n; ++j) {
+      thermalGluedPass2(tileList_[std::size_t(j)], material, hs.data(), ss.data(), cs.data(),
+                        busyOut[std::size_t(j)]);
+    }
+  }
+  for (int j = 0; j < n; ++j)
+    busy_[std::size_t(tileList_[std::size_t(j)])] = busyOut[std::size_t(j)];
+  finishStep(rep);
+  return rep;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Explicit drift-diffusion (kernels::diffusionRow's rule, per cell)
+
+void SandField::diffusionGluedTile(int t, const DiffusionTables& tb, double dt,
+                                   const PushForce* force, double* hs, std::uint8_t& busy) {
+  const int tu = t % tilesU_, tv = t / tilesU_;
+  gatherGlued(tu, tv, hs, nullptr, nullptr);
+  Tile& tile = *tiles_[std::size_t(t)];
+  const double* geo = tile.geo.get();
+  const double Dl2 = diffusionMaterial_.diffusion * grid_.cellSize() * grid_.cellSize();
+  unsigned any = 0;
+  for (int lv = 0; lv < kT; ++lv) {
+    for (int lu = 0; lu < kT; ++lu) {
+      const std::size_t i = std::size_t(lv * kT + lu);
+      const int u = tu * kT + lu, v = tv * kT + lv;
+      if (!cellExists(u, v)) continue;
+      const int at = (lv + 2) * kW + lu + 2;
+      const double h = hs[at];
+      double f[4];
+      for (int k = 0; k < 4; ++k) {
+        const double d = geo[std::size_t(kGeoChord + k) * kCells + i];
+        const double L = geo[std::size_t(kGeoFace + k) * kCells + i];
+        const double g = std::isfinite(d) ? Dl2 * L / d : 0.0;
+        const double inv = std::isfinite(d) ? 1.0 / d : 0.0;
+        f[k] = kernels::faceFlux(h, hs[at + kDvG[k] * kW + kDuG[k]], g, inv, tb.repose);
+      }
+      const double net = (f[0] + f[1]) + (f[2] + f[3]);
+      const double dtInvA = dt * (1.0 / grid_.cellArea(u, v));
+      double out = h - dtInvA * net;
+      any |=
+          unsigned(((std::abs(f[0]) + std::abs(f[1])) + (std::abs(f[2]) + std::abs(f[3]))) > 0.0);
+      if (force) {
+        const double fd = netDriftFluxGlued(*force, tb.zetaInv, u, v);
+        if (fd != 0.0) {
+          out -= dt * fd * (1.0 / grid_.cellArea(u, v));
+          any = 1;
+        }
+      }
+      tile.cur[i] = out;
+    }
+  }
+  busy = any ? 1 : 0;
+}
+
+// The force's drift out of cell (u, v) through its axis faces; each face's flux from the
+// endpoint with the smaller grid index, so both cells get it bit for bit.
+double SandField::netDriftFluxGlued(const PushForce& force, double zetaInv, int u, int v) const {
+  const core::GridSize& g = grid_.grid();
+  double f = 0.0;
+  for (int k = 0; k < 4; ++k) {
+    const core::GridPoint n = grid_.neighbour(u, v, k);
+    if (n.u < 0) continue;
+    const bool swap = g.index(n.u, n.v) < g.index(u, v);
+    const Eigen::Vector3d a = grid_.point(u, v), b = grid_.point(n.u, n.v);
+    const double L = grid_.face(u, v, k);
+    const double flux =
+        swap ? driftBetween(force, zetaInv, b, a, L) : driftBetween(force, zetaInv, a, b, L);
+    f += swap ? -flux : flux;
+  }
+  return f;
+}
+
+}  // namespace ps::sand
