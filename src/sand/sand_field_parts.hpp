@@ -40,8 +40,9 @@ struct SandField::Tile {
   bool unwritten = false;  // cur may differ from the floats
   // Glued charts (sand_glued.cpp): the per-cell geometry, loaded with the tile: the chords of
   // the 8 links (kGeoChord + k, +inf where there is none) and the faces of the 4 axis links
-  // (kGeoFace + k), each detail::kT^2 by cell; min over its cells of A / sum_f (L_f / d_f) (the
-  // explicit bound times D l^2); and the thermal outflow scale s of the step (pass 1).
+  // (kGeoFace + k), the area and receiver cap, each detail::kT^2 by cell; min over its cells of A /
+  // sum_f (L_f / d_f) (the explicit bound times D l^2); and the thermal outflow scale s of the step
+  // (pass 1).
   std::unique_ptr<double[]> geo, s;
   double boundFactor = 0.0;
 
@@ -89,9 +90,13 @@ struct SandField::DiffusionTables {
   double zetaInv = 0;
 };
 
-inline constexpr int kGeoChord = 0;  // Tile::geo: 8 chords, then 4 faces, kT^2 each
+// Tile::geo: 8 chords, 4 faces, the cell's area (0 where no cell) and its receiver cap (A / its
+// link count), kT^2 each.
+inline constexpr int kGeoChord = 0;
 inline constexpr int kGeoFace = 8;
-inline constexpr int kGeoPlanes = 12;
+inline constexpr int kGeoArea = 12;
+inline constexpr int kGeoCap = 13;
+inline constexpr int kGeoPlanes = 14;
 
 template <class F>
 void SandField::forEachCellOf(int t, F&& f) const {

@@ -46,7 +46,10 @@ void SandField::loadGeometry(Tile& tile, int t) {
           if (std::isfinite(d)) g += L / d;
         }
       }
-      if (cell && g > 0.0) bound = std::min(bound, grid_.cellArea(u, v) / g);
+      const double A = cell ? grid_.cellArea(u, v) : 0.0;
+      geo[std::size_t(kGeoArea) * kCells + i] = A;
+      geo[std::size_t(kGeoCap) * kCells + i] = A * (grid_.linkCount(u, v) == 4 ? 0.25 : 0.125);
+      if (cell && g > 0.0) bound = std::min(bound, A / g);
     }
   }
   tile.boundFactor = bound;
@@ -87,10 +90,7 @@ void SandField::gatherGlued(int tu, int tv, double* hs, double* ss, double* caps
       const std::size_t at = std::size_t(r * kW + c);
       hs[at] = tile == own ? src.cur[std::size_t(local)] : src.edgeAt(local % kT, local / kT);
       if (ss) ss[at] = src.s[std::size_t(local)];
-      if (caps) {
-        const int u = (tile % tilesU_) * kT + local % kT, v = (tile / tilesU_) * kT + local / kT;
-        caps[at] = grid_.cellArea(u, v) * (grid_.linkCount(u, v) == 4 ? 0.25 : 0.125);
-      }
+      if (caps) caps[at] = src.geo[std::size_t(kGeoCap) * kCells + std::size_t(local)];
     }
   }
 }
@@ -133,7 +133,10 @@ bool SandField::gluedLinkActive(Predicate pred, int u, int v, int k,
                                 const Material& material) const {
   const core::GridPoint n = grid_.neighbour(u, v, k);
   if (n.u < 0) return false;
-  const double dist = grid_.chord(u, v, k);
+  // The chord the step uses: the tile's cached one (bit for bit grid_.chord).
+  const Tile& tile = *tiles_[std::size_t(tileIndex(u / kT, v / kT))];
+  const double dist =
+      tile.geo[std::size_t(kGeoChord + k) * kCells + std::size_t((v % kT) * kT + u % kT)];
   const double d = value(u, v) - value(n.u, n.v);
   if (pred == Predicate::kThermal) {
     const double T = material.tanTalus();
@@ -181,9 +184,9 @@ void SandField::thermalGluedPass1(int t, const Material& material, double* hs) {
   for (int lv = 0; lv < kT; ++lv) {
     for (int lu = 0; lu < kT; ++lu) {
       const std::size_t i = std::size_t(lv * kT + lu);
-      const int u = tu * kT + lu, v = tv * kT + lv;
       s[i] = 0.0;
-      if (!cellExists(u, v)) continue;
+      const double A = geo[std::size_t(kGeoArea) * kCells + i];
+      if (!(A > 0.0)) continue;  // no cell: a twin, or beyond the grid
       const double h = hs[(lv + 2) * kW + lu + 2];
       double e[kNK];
       for (int k = 0; k < kNK; ++k) {
@@ -194,7 +197,7 @@ void SandField::thermalGluedPass1(int t, const Material& material, double* hs) {
       const double E = ((e[0] + e[1]) + (e[2] + e[3])) + ((e[4] + e[7]) + (e[5] + e[6]));
       const double mx = std::max(std::max(std::max(e[0], e[1]), std::max(e[2], e[3])),
                                  std::max(std::max(e[4], e[7]), std::max(e[5], e[6])));
-      s[i] = E > 0.0 ? (halfRate * grid_.cellArea(u, v)) * mx / E : 0.0;
+      s[i] = E > 0.0 ? (halfRate * A) * mx / E : 0.0;
     }
   }
 }
@@ -218,8 +221,8 @@ void SandField::thermalGluedPass2(int t, const Material& material, double* hs, d
   for (int lv = 0; lv < kT; ++lv) {
     for (int lu = 0; lu < kT; ++lu) {
       const std::size_t i = std::size_t(lv * kT + lu);
-      const int u = tu * kT + lu, v = tv * kT + lv;
-      if (!cellExists(u, v)) continue;
+      const double A = geo[std::size_t(kGeoArea) * kCells + i];
+      if (!(A > 0.0)) continue;
       const int at = (lv + 2) * kW + lu + 2;
       const double h = hs[at], si = ss[at], capSelf = cs[at];
       double n[kNK];
@@ -231,7 +234,7 @@ void SandField::thermalGluedPass2(int t, const Material& material, double* hs, d
       }
       any |= unsigned(si > 0.0);
       const double net = ((n[0] + n[1]) + (n[2] + n[3])) + ((n[4] + n[7]) + (n[5] + n[6]));
-      tile.cur[i] = h + net * (1.0 / grid_.cellArea(u, v));
+      tile.cur[i] = h + net * (1.0 / A);
     }
   }
   busy = any ? 1 : 0;
@@ -279,8 +282,9 @@ void SandField::diffusionGluedTile(int t, const DiffusionTables& tb, double dt,
   for (int lv = 0; lv < kT; ++lv) {
     for (int lu = 0; lu < kT; ++lu) {
       const std::size_t i = std::size_t(lv * kT + lu);
+      const double A = geo[std::size_t(kGeoArea) * kCells + i];
+      if (!(A > 0.0)) continue;
       const int u = tu * kT + lu, v = tv * kT + lv;
-      if (!cellExists(u, v)) continue;
       const int at = (lv + 2) * kW + lu + 2;
       const double h = hs[at];
       double f[4];
@@ -292,14 +296,14 @@ void SandField::diffusionGluedTile(int t, const DiffusionTables& tb, double dt,
         f[k] = kernels::faceFlux(h, hs[at + kDvG[k] * kW + kDuG[k]], g, inv, tb.repose);
       }
       const double net = (f[0] + f[1]) + (f[2] + f[3]);
-      const double dtInvA = dt * (1.0 / grid_.cellArea(u, v));
+      const double dtInvA = dt * (1.0 / A);
       double out = h - dtInvA * net;
       any |=
           unsigned(((std::abs(f[0]) + std::abs(f[1])) + (std::abs(f[2]) + std::abs(f[3]))) > 0.0);
       if (force) {
         const double fd = netDriftFluxGlued(*force, tb.zetaInv, u, v);
         if (fd != 0.0) {
-          out -= dt * fd * (1.0 / grid_.cellArea(u, v));
+          out -= dt * fd * (1.0 / A);
           any = 1;
         }
       }

@@ -3,6 +3,7 @@
 #include <Eigen/Geometry>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <limits>
 #include <numbers>
@@ -104,44 +105,78 @@ SandGrid::SandGrid(std::shared_ptr<const core::Chart> chart)
       "'");
 }
 
+struct SandGrid::AreaCache {
+  static constexpr int kB = 32;
+  std::vector<std::atomic<double*>> blocks;
+  explicit AreaCache(std::size_t n) : blocks(n) {
+    for (auto& b : blocks) b.store(nullptr, std::memory_order_relaxed);
+  }
+  ~AreaCache() {
+    for (auto& b : blocks) delete[] b.load(std::memory_order_relaxed);
+  }
+  AreaCache(const AreaCache&) = delete;
+  AreaCache& operator=(const AreaCache&) = delete;
+};
+
 void SandGrid::buildGlued(double R) {
   glued_ = true;
   radius_ = R;
   columns_ = m_ + 1;
   // The mean cell's side: m^2 + 2 points share 4 pi R^2.
   cellSize_ = R * std::sqrt(4.0 * kPi) / m_;
-  const std::size_t count = grid_.count();
-  px_.assign(count, 0.0);
-  py_.assign(count, 0.0);
-  pz_.assign(count, 0.0);
-  const std::vector<float> zeros(std::size_t(m_) + 1, 0.0f);
-  for (int v = 0; v <= m_; ++v) {
-    const std::size_t i = grid_.index(0, v);
-    chart_->rowPositions(v, 0, m_, zeros.data(), {px_.data() + i, py_.data() + i, pz_.data() + i});
-  }
-  // A quarter of every spherical grid quad to each of its corners' points.
-  cellArea_.assign(count, 0.0);
-  const double invR = 1.0 / R;
-  for (int v = 0; v < m_; ++v) {
-    for (int u = 0; u < m_; ++u) {
-      const Eigen::Vector3d a = point(u, v) * invR, b = point(u + 1, v) * invR,
-                            c = point(u + 1, v + 1) * invR, d = point(u, v + 1) * invR;
-      const double quarter =
-          0.25 * R * R * (sphericalTriangle(a, b, c) + sphericalTriangle(a, c, d));
-      const int cu[4] = {u, u + 1, u + 1, u}, cv[4] = {v, v, v + 1, v + 1};
-      for (int k = 0; k < 4; ++k) {
-        const core::GridPoint p = chart_->canonical(cu[k], cv[k]);
-        cellArea_[grid_.index(p.u, p.v)] += quarter;
+  areaBlocksU_ = (m_ + AreaCache::kB) / AreaCache::kB;
+  areas_ = std::make_shared<AreaCache>(std::size_t(areaBlocksU_) * std::size_t(areaBlocksU_));
+}
+
+double SandGrid::quadArea(int u, int v) const {
+  const double invR = 1.0 / radius_;
+  const Eigen::Vector3d a = point(u, v) * invR, b = point(u + 1, v) * invR,
+                        c = point(u + 1, v + 1) * invR, d = point(u, v + 1) * invR;
+  return radius_ * radius_ * (sphericalTriangle(a, b, c) + sphericalTriangle(a, c, d));
+}
+
+// A quarter of every grid quad beside each of the point's twins: every quad gives a quarter to
+// each of its corners, so the areas sum to the quads', 4 pi R^2.
+double SandGrid::computeCellArea(int u, int v) const {
+  core::GridPoint tw[4];
+  const int n = chart_->twins(u, v, tw);
+  double area = 0.0;
+  for (int k = 0; k < n; ++k) {
+    for (int qv = tw[k].v - 1; qv <= tw[k].v; ++qv) {
+      for (int qu = tw[k].u - 1; qu <= tw[k].u; ++qu) {
+        if (qu < 0 || qv < 0 || qu >= m_ || qv >= m_) continue;
+        area += 0.25 * quadArea(qu, qv);
       }
     }
   }
-  // Twins read their point's area.
-  for (int v = 0; v <= m_; ++v) {
-    for (int u = 0; u <= m_; ++u) {
-      const core::GridPoint p = chart_->canonical(u, v);
-      cellArea_[grid_.index(u, v)] = cellArea_[grid_.index(p.u, p.v)];
+  return area;
+}
+
+double SandGrid::gluedArea(int u, int v) const {
+  if (u <= 0 || u >= m_ || v <= 0 || v >= m_) {
+    const core::GridPoint c = chart_->canonical(u, v);
+    u = c.u, v = c.v;
+  }
+  constexpr int kB = AreaCache::kB;
+  std::atomic<double*>& slot = areas_->blocks[std::size_t((v / kB) * areaBlocksU_ + u / kB)];
+  const double* block = slot.load(std::memory_order_acquire);
+  if (!block) {
+    auto fresh = std::make_unique<double[]>(std::size_t(kB) * kB);
+    for (int lv = 0; lv < kB; ++lv) {
+      for (int lu = 0; lu < kB; ++lu) {
+        const int bu = (u / kB) * kB + lu, bv = (v / kB) * kB + lv;
+        fresh[std::size_t(lv * kB + lu)] =
+            (bu <= m_ && bv <= m_ && isCell(bu, bv)) ? computeCellArea(bu, bv) : 0.0;
+      }
+    }
+    double* expected = nullptr;
+    if (slot.compare_exchange_strong(expected, fresh.get(), std::memory_order_acq_rel)) {
+      block = fresh.release();
+    } else {
+      block = expected;  // another thread filled it first (the same values)
     }
   }
+  return block[std::size_t((v % kB) * kB + u % kB)];
 }
 
 unsigned SandGrid::coneDrops(int u, int v) const {
@@ -158,6 +193,7 @@ unsigned SandGrid::coneDrops(int u, int v) const {
 }
 
 core::GridPoint SandGrid::neighbour(int u, int v, int k) const {
+  if (u > 1 && u < m_ - 1 && v > 1 && v < m_ - 1) return {u + kDu[k], v + kDv[k]};  // inside
   if ((coneDrops(u, v) >> k) & 1u) return {-1, -1};
   const core::GridPoint p = chart_->continued(u + kDu[k], v + kDv[k]);
   return chart_->canonical(p.u, p.v);
@@ -179,7 +215,10 @@ Eigen::Vector3d SandGrid::quadCentre(int u, int v) const {
   }
   std::sort(idx, idx + 4);  // the same sum from every side
   Eigen::Vector3d s(0, 0, 0);
-  for (std::size_t i : idx) s += Eigen::Vector3d(px_[i], py_[i], pz_[i]);
+  for (std::size_t i : idx) {
+    const int pu = int(i % std::size_t(m_ + 1)), pv = int(i / std::size_t(m_ + 1));
+    s += point(pu, pv);
+  }
   const double len = std::sqrt((s.x() * s.x() + s.y() * s.y()) + s.z() * s.z());
   return s * (radius_ / len);
 }
@@ -208,8 +247,7 @@ double SandGrid::sum(std::span<const T> h, bool absolute) const {
       const T* p = h.data() + grid_.index(0, v);
       for (int u = 0; u <= m_; ++u) {
         if ((u == 0 || u == m_ || v == 0 || v == m_) && !isCell(u, v)) continue;
-        total.add(cellArea_[grid_.index(u, v)] *
-                  (absolute ? std::abs(double(p[u])) : double(p[u])));
+        total.add(gluedArea(u, v) * (absolute ? std::abs(double(p[u])) : double(p[u])));
       }
     }
     return total.value();

@@ -59,9 +59,7 @@ class SandGrid {
   // flat only (the per-row tables; on a glued chart use cellArea).
   double area(int v) const { return area_[std::size_t(v)]; }
   // Area (m^2) of the cell of grid vertex (u, v) on any chart (a twin gives its point's).
-  double cellArea(int u, int v) const {
-    return glued_ ? cellArea_[grid_.index(u, v)] : area_[std::size_t(v)];
-  }
+  double cellArea(int u, int v) const { return glued_ ? gluedArea(u, v) : area_[std::size_t(v)]; }
   // Whether grid vertex (u, v) owns a cell: on a glued chart its point's canonical vertex.
   bool isCell(int u, int v) const {
     if (!glued_ || (u > 0 && u < m_ && v > 0 && v < m_)) return true;
@@ -86,11 +84,8 @@ class SandGrid {
   // between the centres of the two grid quads beside the link, bit for bit the same from both
   // cells.
   double face(int u, int v, int k) const;
-  // Reference position (m) of grid vertex (u, v) (glued charts).
-  Eigen::Vector3d point(int u, int v) const {
-    const std::size_t i = grid_.index(u, v);
-    return {px_[i], py_[i], pz_[i]};
-  }
+  // Reference position (m) of grid vertex (u, v) (twins: bit for bit one point).
+  Eigen::Vector3d point(int u, int v) const { return chart_->position(u, v, 0.0); }
   // Chord (m) from (u, v) to (u + 1, v).
   double horizontal(int v) const { return horizontal_[std::size_t(v)]; }
   // Chord (m) from (u, v) to (u, v + 1), 0 <= v < m (on the sphere v = 0 and v = m - 1 are the
@@ -118,6 +113,9 @@ class SandGrid {
   template <class T>
   double sum(std::span<const T> heights, bool absolute) const;
   void buildGlued(double R);
+  double gluedArea(int u, int v) const;
+  double quadArea(int u, int v) const;         // the grid quad (u..u+1, v..v+1) on the sphere
+  double computeCellArea(int u, int v) const;  // of canonical (u, v), from its quads
   // The directions a cone point leaves out (a bit per k), 0 elsewhere.
   unsigned coneDrops(int u, int v) const;
   Eigen::Vector3d quadCentre(int u, int v) const;  // the quad (u..u+1, v..v+1), continued
@@ -131,7 +129,11 @@ class SandGrid {
   int columns_ = 0;
   double cellSize_ = 0;
   std::vector<double> area_, horizontal_, vertical_, diagonal_, horizontalFace_, verticalFace_;
-  std::vector<double> cellArea_, px_, py_, pz_;  // glued: per grid vertex
+  // Glued charts: cell areas in 32 x 32 blocks computed when first asked for (a planet's grid
+  // may be 8193^2, and the brush never asks), shared by copies; safe to fill from any thread.
+  struct AreaCache;
+  std::shared_ptr<AreaCache> areas_;
+  int areaBlocksU_ = 0;
 };
 
 // Compensated (Neumaier) summation.
