@@ -45,6 +45,7 @@ struct SandField::Tile {
   // (pass 1).
   std::unique_ptr<double[]> geo, s;
   double boundFactor = 0.0;
+  std::vector<int> linked;  // glued: the other tiles its cells have links to
 
   void snapshot() {
     double* e = edge.get();

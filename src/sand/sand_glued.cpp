@@ -8,6 +8,11 @@
 // expression of the two cells' values, so both cells of a link compute it bit for bit alike.
 // Thermal erosion runs in two passes over the tiles (the outflow scale s of every cell, then the
 // heights), since a cell's s seen across a fold would otherwise be summed in another order.
+// No trapping math lets GCC if-convert the per-cell loops (the same IEEE operations; as
+// kernels.cpp).
+#if defined(__GNUC__) && !defined(__clang__)
+#pragma GCC optimize("no-trapping-math")
+#endif
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -53,6 +58,21 @@ void SandField::loadGeometry(Tile& tile, int t) {
     }
   }
   tile.boundFactor = bound;
+  // The tiles its cells link to (other than itself).
+  tile.linked.clear();
+  for (int lv = 0; lv < kT; ++lv) {
+    for (int lu = 0; lu < kT; ++lu) {
+      const int u = tu * kT + lu, v = tv * kT + lv;
+      if (!cellExists(u, v)) continue;
+      for (int k = 0; k < kNK; ++k) {
+        const core::GridPoint n = grid_.neighbour(u, v, k);
+        if (n.u < 0) continue;
+        const int tn = tileIndex(n.u / kT, n.v / kT);
+        if (tn != t && std::find(tile.linked.begin(), tile.linked.end(), tn) == tile.linked.end())
+          tile.linked.push_back(tn);
+      }
+    }
+  }
 }
 
 bool SandField::gluedBorderTile(int tu, int tv) const {
@@ -79,6 +99,29 @@ bool SandField::gluedSource(int tu, int tv, int r, int c, int& tile, int& local)
 // outside P read as walls (kWall, s = 0).
 void SandField::gatherGlued(int tu, int tv, double* hs, double* ss, double* caps) const {
   const int own = tileIndex(tu, tv);
+  if (!gluedBorderTile(tu, tv)) {
+    // Inside the grid: no twin within the halo, the lat-long gather's row copies (a two-cell
+    // halo, of which the kernels read one), then s and the caps from the neighbours' arrays.
+    gather(tu, tv, hs);
+    for (int r = 1; r < kW - 1; ++r) {
+      const int v = tv * kT + r - 2, tvr = v / kT, lv = v % kT;
+      for (int piece = 0; piece < 3; ++piece) {
+        const int tn = tileIndex(tu - 1 + piece, tvr);
+        const int c0 = piece == 0 ? 1 : (piece == 1 ? 2 : kT + 2);
+        const int c1 = piece == 0 ? 2 : (piece == 1 ? kT + 2 : kT + 3);
+        const int lu0 = piece == 0 ? kT - 1 : 0;
+        const Tile* src = inP_[std::size_t(tn)] ? tiles_[std::size_t(tn)].get() : nullptr;
+        double* srow = ss ? ss + r * kW : nullptr;
+        double* crow = caps ? caps + r * kW : nullptr;
+        for (int c = c0; c < c1; ++c) {
+          const std::size_t l = std::size_t(lv * kT + lu0 + (c - c0));
+          if (srow) srow[c] = src ? src->s[l] : 0.0;
+          if (crow) crow[c] = src ? src->geo[std::size_t(kGeoCap) * kCells + l] : 0.0;
+        }
+      }
+    }
+    return;
+  }
   std::fill_n(hs, kW * kW, kWall);
   if (ss) std::fill_n(ss, kW * kW, 0.0);
   if (caps) std::fill_n(caps, kW * kW, 0.0);
@@ -153,6 +196,12 @@ void SandField::gluedActiveSetLinks(int t, Predicate pred, const Material& mater
   const int tu = t % tilesU_, tv = t / tilesU_;
   const bool border = gluedBorderTile(tu, tv);
   const int nDirs = pred == Predicate::kThermal ? 8 : 4;
+  // Quick exit: every tile its cells link to is in P already.
+  const Tile& tile = *tiles_[std::size_t(t)];
+  if (std::all_of(tile.linked.begin(), tile.linked.end(),
+                  [&](int tn) { return inP_[std::size_t(tn)] != 0; })) {
+    return;
+  }
   for (int lv = 0; lv < kT; ++lv) {
     const bool edgeRow = border || lv == 0 || lv == kT - 1;
     for (int lu = 0; lu < kT; lu += (edgeRow ? 1 : kT - 1)) {
