@@ -483,6 +483,11 @@ def group_bench():
         fail(f"bench {name} --quick wrote no {name} row")
     for r in rows:
         check_bench_row(r)
+    # The sand core on the octahedral chart beside lat-long's in the same run (docs/SAND.md).
+    if name == "erosion":
+        for method in ("thermal", "diffusion-explicit", "crater-settle"):
+            if not any(r.get("method") == method and r.get("chart") == "octahedral" for r in rows):
+                fail(f"bench erosion wrote no octahedral {method} row")
     # Per-pixel shading's claim (docs/RENDERING.md): a 4 px mesh shaded per pixel is closer to
     # the full-resolution surface than a 1 px mesh in facets, in every view.
     rendered = [r for r in rows if r.get("bench") == "render" and not r.get("skipped")]
