@@ -221,32 +221,45 @@ void SandField::gluedActiveSetLinks(int t, Predicate pred, const Material& mater
 // ---------------------------------------------------------------------------------------------
 // Thermal erosion (the same rule as sand_thermal.cpp's kernels, per cell)
 
+// The per-cell loops run along a tile's rows without branches (cells that are none, twins or
+// beyond the grid, are computed and then left as they were), so the compiler vectorises them.
 void SandField::thermalGluedPass1(int t, const Material& material, double* hs) {
   const int tu = t % tilesU_, tv = t / tilesU_;
   gatherGlued(tu, tv, hs, nullptr, nullptr);
   Tile& tile = *tiles_[std::size_t(t)];
   if (!tile.s) tile.s = std::make_unique<double[]>(kCells);
-  double* s = tile.s.get();
   const double* geo = tile.geo.get();
   const double T = material.tanTalus(), coh = material.cohesion, eta = material.talusTolerance;
   const double halfRate = 0.5 * material.erosionRate;
   for (int lv = 0; lv < kT; ++lv) {
-    for (int lu = 0; lu < kT; ++lu) {
-      const std::size_t i = std::size_t(lv * kT + lu);
-      s[i] = 0.0;
-      const double A = geo[std::size_t(kGeoArea) * kCells + i];
-      if (!(A > 0.0)) continue;  // no cell: a twin, or beyond the grid
-      const double h = hs[(lv + 2) * kW + lu + 2];
-      double e[kNK];
-      for (int k = 0; k < kNK; ++k) {
-        const double d = geo[std::size_t(kGeoChord + k) * kCells + i];
-        const double hn = hs[(lv + 2 + kDvG[k]) * kW + lu + 2 + kDuG[k]];
-        e[k] = kernels::act(h - hn - (T * d + coh), eta * T * d);
-      }
-      const double E = ((e[0] + e[1]) + (e[2] + e[3])) + ((e[4] + e[7]) + (e[5] + e[6]));
-      const double mx = std::max(std::max(std::max(e[0], e[1]), std::max(e[2], e[3])),
-                                 std::max(std::max(e[4], e[7]), std::max(e[5], e[6])));
-      s[i] = E > 0.0 ? (halfRate * A) * mx / E : 0.0;
+    const std::size_t row = std::size_t(lv * kT);
+    const double* h0 = hs + (lv + 2) * kW + 2;
+    const double* hm = h0 - kW;
+    const double* hp = h0 + kW;
+    const double* dW = geo + std::size_t(kGeoChord + 0) * kCells + row;
+    const double* dE = geo + std::size_t(kGeoChord + 1) * kCells + row;
+    const double* dS = geo + std::size_t(kGeoChord + 2) * kCells + row;
+    const double* dN = geo + std::size_t(kGeoChord + 3) * kCells + row;
+    const double* dSW = geo + std::size_t(kGeoChord + 4) * kCells + row;
+    const double* dSE = geo + std::size_t(kGeoChord + 5) * kCells + row;
+    const double* dNW = geo + std::size_t(kGeoChord + 6) * kCells + row;
+    const double* dNE = geo + std::size_t(kGeoChord + 7) * kCells + row;
+    const double* area = geo + std::size_t(kGeoArea) * kCells + row;
+    double* s = tile.s.get() + row;
+    auto ex = [&](double h, double hn, double d) {
+      return kernels::act(h - hn - (T * d + coh), eta * T * d);
+    };
+    for (int c = 0; c < kT; ++c) {
+      const double h = h0[c];
+      const double eW = ex(h, h0[c - 1], dW[c]), eE = ex(h, h0[c + 1], dE[c]);
+      const double eS = ex(h, hm[c], dS[c]), eN = ex(h, hp[c], dN[c]);
+      const double eSW = ex(h, hm[c - 1], dSW[c]), eSE = ex(h, hm[c + 1], dSE[c]);
+      const double eNW = ex(h, hp[c - 1], dNW[c]), eNE = ex(h, hp[c + 1], dNE[c]);
+      const double E = ((eW + eE) + (eS + eN)) + ((eSW + eNE) + (eSE + eNW));
+      const double mx = std::max(std::max(std::max(eW, eE), std::max(eS, eN)),
+                                 std::max(std::max(eSW, eNE), std::max(eSE, eNW)));
+      const double q = (halfRate * area[c]) * mx / (E > 0.0 ? E : 1.0);
+      s[c] = ((E > 0.0) & (area[c] > 0.0)) ? q : 0.0;
     }
   }
 }
@@ -260,30 +273,54 @@ void SandField::thermalGluedPass2(int t, const Material& material, double* hs, d
   const double T = material.tanTalus(), coh = material.cohesion, eta = material.talusTolerance;
   // As kernels::thermalPass2's link: act(|d| - t) times min(s_sender, cap_receiver), signed by
   // which side is higher.
-  auto link = [](double d, double th, double e, double sOther, double capOther, double sSelf,
-                 double capSelf) {
-    const double a = kernels::act(std::abs(d) - th, e);
+  auto link = [&](double h, double hn, double dist, double sOther, double capOther, double sSelf,
+                  double capSelf) {
+    const double d = h - hn;
+    const double a = kernels::act(std::abs(d) - (T * dist + coh), eta * T * dist);
     const double coef = d > 0.0 ? -std::min(sSelf, capOther) : std::min(sOther, capSelf);
     return coef * a;
   };
+  // Busy: some cell of the tile or of its halo sends (every halo cell is linked to the tile).
   unsigned any = 0;
+  for (int r = 1; r < kW - 1; ++r) {
+    for (int c = 1; c < kW - 1; ++c) any |= unsigned(ss[r * kW + c] > 0.0);
+  }
   for (int lv = 0; lv < kT; ++lv) {
-    for (int lu = 0; lu < kT; ++lu) {
-      const std::size_t i = std::size_t(lv * kT + lu);
-      const double A = geo[std::size_t(kGeoArea) * kCells + i];
-      if (!(A > 0.0)) continue;
-      const int at = (lv + 2) * kW + lu + 2;
-      const double h = hs[at], si = ss[at], capSelf = cs[at];
-      double n[kNK];
-      for (int k = 0; k < kNK; ++k) {
-        const double d = geo[std::size_t(kGeoChord + k) * kCells + i];
-        const int nb = at + kDvG[k] * kW + kDuG[k];
-        n[k] = link(h - hs[nb], T * d + coh, eta * T * d, ss[nb], cs[nb], si, capSelf);
-        any |= unsigned(std::isfinite(d) && ss[nb] > 0.0);
-      }
-      any |= unsigned(si > 0.0);
-      const double net = ((n[0] + n[1]) + (n[2] + n[3])) + ((n[4] + n[7]) + (n[5] + n[6]));
-      tile.cur[i] = h + net * (1.0 / A);
+    const std::size_t row = std::size_t(lv * kT);
+    const int at = (lv + 2) * kW + 2;
+    const double* h0 = hs + at;
+    const double* hm = h0 - kW;
+    const double* hp = h0 + kW;
+    const double* s0 = ss + at;
+    const double* sm = s0 - kW;
+    const double* sp = s0 + kW;
+    const double* c0 = cs + at;
+    const double* cm = c0 - kW;
+    const double* cp = c0 + kW;
+    const double* dW = geo + std::size_t(kGeoChord + 0) * kCells + row;
+    const double* dE = geo + std::size_t(kGeoChord + 1) * kCells + row;
+    const double* dS = geo + std::size_t(kGeoChord + 2) * kCells + row;
+    const double* dN = geo + std::size_t(kGeoChord + 3) * kCells + row;
+    const double* dSW = geo + std::size_t(kGeoChord + 4) * kCells + row;
+    const double* dSE = geo + std::size_t(kGeoChord + 5) * kCells + row;
+    const double* dNW = geo + std::size_t(kGeoChord + 6) * kCells + row;
+    const double* dNE = geo + std::size_t(kGeoChord + 7) * kCells + row;
+    const double* area = geo + std::size_t(kGeoArea) * kCells + row;
+    double* out = tile.cur.get() + row;
+    for (int c = 0; c < kT; ++c) {
+      const double h = h0[c], si = s0[c], capSelf = c0[c];
+      const double nW = link(h, h0[c - 1], dW[c], s0[c - 1], c0[c - 1], si, capSelf);
+      const double nE = link(h, h0[c + 1], dE[c], s0[c + 1], c0[c + 1], si, capSelf);
+      const double nS = link(h, hm[c], dS[c], sm[c], cm[c], si, capSelf);
+      const double nN = link(h, hp[c], dN[c], sp[c], cp[c], si, capSelf);
+      const double nSW = link(h, hm[c - 1], dSW[c], sm[c - 1], cm[c - 1], si, capSelf);
+      const double nSE = link(h, hm[c + 1], dSE[c], sm[c + 1], cm[c + 1], si, capSelf);
+      const double nNW = link(h, hp[c - 1], dNW[c], sp[c - 1], cp[c - 1], si, capSelf);
+      const double nNE = link(h, hp[c + 1], dNE[c], sp[c + 1], cp[c + 1], si, capSelf);
+      const double net = ((nW + nE) + (nS + nN)) + ((nSW + nNE) + (nSE + nNW));
+      const double A = area[c];
+      const double next = h + net * (1.0 / (A > 0.0 ? A : 1.0));
+      out[c] = A > 0.0 ? next : out[c];
     }
   }
   busy = any ? 1 : 0;
@@ -327,36 +364,51 @@ void SandField::diffusionGluedTile(int t, const DiffusionTables& tb, double dt,
   Tile& tile = *tiles_[std::size_t(t)];
   const double* geo = tile.geo.get();
   const double Dl2 = diffusionMaterial_.diffusion * grid_.cellSize() * grid_.cellSize();
+  const kernels::Repose rr = tb.repose;
+  // The face's conductance D l^2 L / d and 1 / d (0 where there is no link: d = +inf).
+  auto flux = [&](double h, double hn, double d, double L) {
+    const bool link = d < std::numeric_limits<double>::infinity();
+    const double dd = link ? d : 1.0;
+    return kernels::faceFlux(h, hn, link ? Dl2 * L / dd : 0.0, link ? 1.0 / dd : 0.0, rr);
+  };
   unsigned any = 0;
   for (int lv = 0; lv < kT; ++lv) {
-    for (int lu = 0; lu < kT; ++lu) {
-      const std::size_t i = std::size_t(lv * kT + lu);
-      const double A = geo[std::size_t(kGeoArea) * kCells + i];
-      if (!(A > 0.0)) continue;
-      const int u = tu * kT + lu, v = tv * kT + lv;
-      const int at = (lv + 2) * kW + lu + 2;
-      const double h = hs[at];
-      double f[4];
-      for (int k = 0; k < 4; ++k) {
-        const double d = geo[std::size_t(kGeoChord + k) * kCells + i];
-        const double L = geo[std::size_t(kGeoFace + k) * kCells + i];
-        const double g = std::isfinite(d) ? Dl2 * L / d : 0.0;
-        const double inv = std::isfinite(d) ? 1.0 / d : 0.0;
-        f[k] = kernels::faceFlux(h, hs[at + kDvG[k] * kW + kDuG[k]], g, inv, tb.repose);
-      }
-      const double net = (f[0] + f[1]) + (f[2] + f[3]);
-      const double dtInvA = dt * (1.0 / A);
-      double out = h - dtInvA * net;
-      any |=
-          unsigned(((std::abs(f[0]) + std::abs(f[1])) + (std::abs(f[2]) + std::abs(f[3]))) > 0.0);
-      if (force) {
-        const double fd = netDriftFluxGlued(*force, tb.zetaInv, u, v);
+    const std::size_t row = std::size_t(lv * kT);
+    const double* h0 = hs + (lv + 2) * kW + 2;
+    const double* hm = h0 - kW;
+    const double* hp = h0 + kW;
+    const double* dW = geo + std::size_t(kGeoChord + 0) * kCells + row;
+    const double* dE = geo + std::size_t(kGeoChord + 1) * kCells + row;
+    const double* dS = geo + std::size_t(kGeoChord + 2) * kCells + row;
+    const double* dN = geo + std::size_t(kGeoChord + 3) * kCells + row;
+    const double* LW = geo + std::size_t(kGeoFace + 0) * kCells + row;
+    const double* LE = geo + std::size_t(kGeoFace + 1) * kCells + row;
+    const double* LS = geo + std::size_t(kGeoFace + 2) * kCells + row;
+    const double* LN = geo + std::size_t(kGeoFace + 3) * kCells + row;
+    const double* area = geo + std::size_t(kGeoArea) * kCells + row;
+    double* out = tile.cur.get() + row;
+    for (int c = 0; c < kT; ++c) {
+      const double h = h0[c];
+      const double fW = flux(h, h0[c - 1], dW[c], LW[c]);
+      const double fE = flux(h, h0[c + 1], dE[c], LE[c]);
+      const double fS = flux(h, hm[c], dS[c], LS[c]);
+      const double fN = flux(h, hp[c], dN[c], LN[c]);
+      const double net = (fW + fE) + (fS + fN);
+      const double A = area[c];
+      const double dtInvA = dt * (1.0 / (A > 0.0 ? A : 1.0));
+      out[c] = A > 0.0 ? h - dtInvA * net : out[c];
+      any |= unsigned(((std::abs(fW) + std::abs(fE)) + (std::abs(fS) + std::abs(fN))) > 0.0);
+    }
+    if (force) {
+      for (int c = 0; c < kT; ++c) {
+        const double A = area[c];
+        if (!(A > 0.0)) continue;
+        const double fd = netDriftFluxGlued(*force, tb.zetaInv, tu * kT + c, tv * kT + lv);
         if (fd != 0.0) {
-          out -= dt * fd * (1.0 / A);
+          out[c] -= dt * fd * (1.0 / A);
           any = 1;
         }
       }
-      tile.cur[i] = out;
     }
   }
   busy = any ? 1 : 0;
