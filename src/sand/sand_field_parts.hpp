@@ -38,11 +38,10 @@ struct SandField::Tile {
   // detail::kT-1 (4 x detail::kT, by row)
   std::unique_ptr<double[]> edge;
   bool unwritten = false;  // cur may differ from the floats
-  // Glued charts (sand_glued.cpp): the per-cell geometry, loaded with the tile: the chords of
-  // the 8 links (kGeoChord + k, +inf where there is none) and the faces of the 4 axis links
-  // (kGeoFace + k), the area and receiver cap, each detail::kT^2 by cell; min over its cells of A /
-  // sum_f (L_f / d_f) (the explicit bound times D l^2); and the thermal outflow scale s of the step
-  // (pass 1).
+  // Glued charts (sand_glued.cpp): the per-cell geometry, loaded with the tile (the planes
+  // below: chords, faces over chords, areas, caps), each detail::kT^2 by cell; min over its cells
+  // of A / sum_f (L_f / d_f) (the explicit bound times D l^2); and the thermal outflow scale s of
+  // the step (pass 1).
   std::unique_ptr<double[]> geo, s;
   double boundFactor = 0.0;
   std::vector<int> linked;  // glued: the other tiles its cells have links to
@@ -91,13 +90,15 @@ struct SandField::DiffusionTables {
   double zetaInv = 0;
 };
 
-// Tile::geo: 8 chords, 4 faces, the cell's area (0 where no cell) and its receiver cap (A / its
+// Tile::geo: the 8 links' chords d (+inf where none), the 4 axis links' face over chord L / d
+// and 1 / d (0 where none), the cell's area (0 where no cell) and its receiver cap (A / its
 // link count), kT^2 each.
 inline constexpr int kGeoChord = 0;
-inline constexpr int kGeoFace = 8;
-inline constexpr int kGeoArea = 12;
-inline constexpr int kGeoCap = 13;
-inline constexpr int kGeoPlanes = 14;
+inline constexpr int kGeoRatio = 8;
+inline constexpr int kGeoInv = 12;
+inline constexpr int kGeoArea = 16;
+inline constexpr int kGeoCap = 17;
+inline constexpr int kGeoPlanes = 18;
 
 template <class F>
 void SandField::forEachCellOf(int t, F&& f) const {

@@ -35,26 +35,79 @@ void SandField::loadGeometry(Tile& tile, int t) {
   double* geo = tile.geo.get();
   const int tu = t % tilesU_, tv = t / tilesU_;
   const double inf = std::numeric_limits<double>::infinity();
+  const core::Chart& chart = grid_.chart();
+  const core::GridSize& g = grid_.grid();
+  // The points of grid positions -1 .. kT from the tile's first vertex, the grid continued
+  // across the glued sides (each at its canonical vertex, with its grid index), and the centres
+  // of the quads with lower-left corners -1 .. kT - 1: what SandGrid::chord and face compute, from
+  // the same points in the same order, so the same bits, once per tile.
+  constexpr int kP = kT + 2, kQ = kT + 1;
+  const int u0 = tu * kT - 1, v0 = tv * kT - 1;
+  std::vector<Eigen::Vector3d> pts(std::size_t(kP) * kP);
+  std::vector<std::size_t> idx(std::size_t(kP) * kP, std::size_t(-1));
+  for (int b = 0; b < kP; ++b) {
+    for (int a = 0; a < kP; ++a) {
+      const int u = u0 + a, v = v0 + b;
+      if (u < -1 || u > m_ + 1 || v < -1 || v > m_ + 1) continue;
+      const core::GridPoint p = chart.continued(u, v);
+      const core::GridPoint c = chart.canonical(p.u, p.v);
+      pts[std::size_t(b * kP + a)] = grid_.point(c.u, c.v);
+      idx[std::size_t(b * kP + a)] = g.index(c.u, c.v);
+    }
+  }
+  std::vector<Eigen::Vector3d> centres(std::size_t(kQ) * kQ);
+  for (int b = 0; b < kQ; ++b) {
+    for (int a = 0; a < kQ; ++a) {
+      std::pair<std::size_t, int> corner[4] = {
+          {idx[std::size_t(b * kP + a)], b * kP + a},
+          {idx[std::size_t(b * kP + a + 1)], b * kP + a + 1},
+          {idx[std::size_t((b + 1) * kP + a + 1)], (b + 1) * kP + a + 1},
+          {idx[std::size_t((b + 1) * kP + a)], (b + 1) * kP + a}};
+      if (corner[0].first == std::size_t(-1) || corner[1].first == std::size_t(-1) ||
+          corner[2].first == std::size_t(-1) || corner[3].first == std::size_t(-1))
+        continue;
+      std::sort(corner, corner + 4);
+      const Eigen::Vector3d sorted[4] = {
+          pts[std::size_t(corner[0].second)], pts[std::size_t(corner[1].second)],
+          pts[std::size_t(corner[2].second)], pts[std::size_t(corner[3].second)]};
+      centres[std::size_t(b * kQ + a)] = grid_.centreOf(sorted);
+    }
+  }
   double bound = inf;
   for (int lv = 0; lv < kT; ++lv) {
     for (int lu = 0; lu < kT; ++lu) {
       const int u = tu * kT + lu, v = tv * kT + lv;
       const std::size_t i = std::size_t(lv * kT + lu);
       const bool cell = cellExists(u, v);
-      double g = 0.0;
+      const int a = lu + 1, b = lv + 1;  // the cell in pts
+      double ratios = 0.0;
       for (int k = 0; k < kNK; ++k) {
-        const double d = cell ? grid_.chord(u, v, k) : inf;
+        const bool link = cell && grid_.neighbour(u, v, k).u >= 0;
+        const double d =
+            link ? SandGrid::chordBetween(pts[std::size_t(b * kP + a)],
+                                          pts[std::size_t((b + kDvG[k]) * kP + a + kDuG[k])])
+                 : inf;
         geo[std::size_t(kGeoChord + k) * kCells + i] = d;
         if (k < 4) {
-          const double L = cell ? grid_.face(u, v, k) : 0.0;
-          geo[std::size_t(kGeoFace + k) * kCells + i] = L;
-          if (std::isfinite(d)) g += L / d;
+          // The quads beside the link (SandGrid::face): corners {p, p + d, p + n, p + d + n}
+          // and the same with -n, n the link's normal.
+          const int du = kDuG[k], dv = kDvG[k], nu = -dv, nv = du;
+          auto quad = [&](int su, int sv) -> const Eigen::Vector3d& {
+            const int qa = a + std::min({0, du, su, du + su}),
+                      qb = b + std::min({0, dv, sv, dv + sv});
+            return centres[std::size_t(qb * kQ + qa)];
+          };
+          const double L = link ? SandGrid::chordBetween(quad(nu, nv), quad(-nu, -nv)) : 0.0;
+          const double ratio = link ? L / d : 0.0;
+          geo[std::size_t(kGeoRatio + k) * kCells + i] = ratio;
+          geo[std::size_t(kGeoInv + k) * kCells + i] = link ? 1.0 / d : 0.0;
+          ratios += ratio;
         }
       }
       const double A = cell ? grid_.cellArea(u, v) : 0.0;
       geo[std::size_t(kGeoArea) * kCells + i] = A;
       geo[std::size_t(kGeoCap) * kCells + i] = A * (grid_.linkCount(u, v) == 4 ? 0.25 : 0.125);
-      if (cell && g > 0.0) bound = std::min(bound, A / g);
+      if (cell && ratios > 0.0) bound = std::min(bound, A / ratios);
     }
   }
   tile.boundFactor = bound;
@@ -365,11 +418,9 @@ void SandField::diffusionGluedTile(int t, const DiffusionTables& tb, double dt,
   const double* geo = tile.geo.get();
   const double Dl2 = diffusionMaterial_.diffusion * grid_.cellSize() * grid_.cellSize();
   const kernels::Repose rr = tb.repose;
-  // The face's conductance D l^2 L / d and 1 / d (0 where there is no link: d = +inf).
-  auto flux = [&](double h, double hn, double d, double L) {
-    const bool link = d < std::numeric_limits<double>::infinity();
-    const double dd = link ? d : 1.0;
-    return kernels::faceFlux(h, hn, link ? Dl2 * L / dd : 0.0, link ? 1.0 / dd : 0.0, rr);
+  // The face's conductance D l^2 (L / d) and 1 / d (both 0 where there is no link).
+  auto flux = [&](double h, double hn, double ratio, double inv) {
+    return kernels::faceFlux(h, hn, Dl2 * ratio, inv, rr);
   };
   unsigned any = 0;
   for (int lv = 0; lv < kT; ++lv) {
@@ -377,22 +428,22 @@ void SandField::diffusionGluedTile(int t, const DiffusionTables& tb, double dt,
     const double* h0 = hs + (lv + 2) * kW + 2;
     const double* hm = h0 - kW;
     const double* hp = h0 + kW;
-    const double* dW = geo + std::size_t(kGeoChord + 0) * kCells + row;
-    const double* dE = geo + std::size_t(kGeoChord + 1) * kCells + row;
-    const double* dS = geo + std::size_t(kGeoChord + 2) * kCells + row;
-    const double* dN = geo + std::size_t(kGeoChord + 3) * kCells + row;
-    const double* LW = geo + std::size_t(kGeoFace + 0) * kCells + row;
-    const double* LE = geo + std::size_t(kGeoFace + 1) * kCells + row;
-    const double* LS = geo + std::size_t(kGeoFace + 2) * kCells + row;
-    const double* LN = geo + std::size_t(kGeoFace + 3) * kCells + row;
+    const double* dW = geo + std::size_t(kGeoInv + 0) * kCells + row;
+    const double* dE = geo + std::size_t(kGeoInv + 1) * kCells + row;
+    const double* dS = geo + std::size_t(kGeoInv + 2) * kCells + row;
+    const double* dN = geo + std::size_t(kGeoInv + 3) * kCells + row;
+    const double* LW = geo + std::size_t(kGeoRatio + 0) * kCells + row;
+    const double* LE = geo + std::size_t(kGeoRatio + 1) * kCells + row;
+    const double* LS = geo + std::size_t(kGeoRatio + 2) * kCells + row;
+    const double* LN = geo + std::size_t(kGeoRatio + 3) * kCells + row;
     const double* area = geo + std::size_t(kGeoArea) * kCells + row;
     double* out = tile.cur.get() + row;
     for (int c = 0; c < kT; ++c) {
       const double h = h0[c];
-      const double fW = flux(h, h0[c - 1], dW[c], LW[c]);
-      const double fE = flux(h, h0[c + 1], dE[c], LE[c]);
-      const double fS = flux(h, hm[c], dS[c], LS[c]);
-      const double fN = flux(h, hp[c], dN[c], LN[c]);
+      const double fW = flux(h, h0[c - 1], LW[c], dW[c]);
+      const double fE = flux(h, h0[c + 1], LE[c], dE[c]);
+      const double fS = flux(h, hm[c], LS[c], dS[c]);
+      const double fN = flux(h, hp[c], LN[c], dN[c]);
       const double net = (fW + fE) + (fS + fN);
       const double A = area[c];
       const double dtInvA = dt * (1.0 / (A > 0.0 ? A : 1.0));

@@ -128,11 +128,19 @@ void SandGrid::buildGlued(double R) {
   areas_ = std::make_shared<AreaCache>(std::size_t(areaBlocksU_) * std::size_t(areaBlocksU_));
 }
 
-double SandGrid::quadArea(int u, int v) const {
+double SandGrid::chordBetween(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+  return chordOf(a, b);
+}
+
+double SandGrid::quadAreaOf(const Eigen::Vector3d& pa, const Eigen::Vector3d& pb,
+                            const Eigen::Vector3d& pc, const Eigen::Vector3d& pd) const {
   const double invR = 1.0 / radius_;
-  const Eigen::Vector3d a = point(u, v) * invR, b = point(u + 1, v) * invR,
-                        c = point(u + 1, v + 1) * invR, d = point(u, v + 1) * invR;
+  const Eigen::Vector3d a = pa * invR, b = pb * invR, c = pc * invR, d = pd * invR;
   return radius_ * radius_ * (sphericalTriangle(a, b, c) + sphericalTriangle(a, c, d));
+}
+
+double SandGrid::quadArea(int u, int v) const {
+  return quadAreaOf(point(u, v), point(u + 1, v), point(u + 1, v + 1), point(u, v + 1));
 }
 
 // A quarter of every grid quad beside each of the point's twins: every quad gives a quarter to
@@ -162,11 +170,40 @@ double SandGrid::gluedArea(int u, int v) const {
   const double* block = slot.load(std::memory_order_acquire);
   if (!block) {
     auto fresh = std::make_unique<double[]>(std::size_t(kB) * kB);
+    // The block's quads (lower-left corners -1 .. kB - 1 from its first vertex) from its
+    // points, once each; a cell inside the grid takes a quarter of its four (the sum in
+    // computeCellArea's order); a cell on a glued side, whose quads lie at its twins too, asks
+    // computeCellArea.
+    constexpr int kP = kB + 2, kQ = kB + 1;
+    const int u0 = (u / kB) * kB - 1, v0 = (v / kB) * kB - 1;
+    std::vector<Eigen::Vector3d> pts(std::size_t(kP) * kP);
+    for (int b = 0; b < kP; ++b) {
+      for (int a = 0; a < kP; ++a) {
+        const int pu = std::clamp(u0 + a, 0, m_), pv = std::clamp(v0 + b, 0, m_);
+        pts[std::size_t(b * kP + a)] = point(pu, pv);
+      }
+    }
+    std::vector<double> quads(std::size_t(kQ) * kQ);
+    for (int b = 0; b < kQ; ++b) {
+      for (int a = 0; a < kQ; ++a) {
+        auto at = [&](int da, int db) -> const Eigen::Vector3d& {
+          return pts[std::size_t((b + db) * kP + a + da)];
+        };
+        quads[std::size_t(b * kQ + a)] = quadAreaOf(at(0, 0), at(1, 0), at(1, 1), at(0, 1));
+      }
+    }
     for (int lv = 0; lv < kB; ++lv) {
       for (int lu = 0; lu < kB; ++lu) {
         const int bu = (u / kB) * kB + lu, bv = (v / kB) * kB + lv;
-        fresh[std::size_t(lv * kB + lu)] =
-            (bu <= m_ && bv <= m_ && isCell(bu, bv)) ? computeCellArea(bu, bv) : 0.0;
+        double area = 0.0;
+        if (bu > 0 && bu < m_ && bv > 0 && bv < m_) {
+          for (int qv = lv; qv <= lv + 1; ++qv) {
+            for (int qu = lu; qu <= lu + 1; ++qu) area += 0.25 * quads[std::size_t(qv * kQ + qu)];
+          }
+        } else if (bu <= m_ && bv <= m_ && isCell(bu, bv)) {
+          area = computeCellArea(bu, bv);
+        }
+        fresh[std::size_t(lv * kB + lu)] = area;
       }
     }
     double* expected = nullptr;
@@ -214,11 +251,16 @@ Eigen::Vector3d SandGrid::quadCentre(int u, int v) const {
     idx[k] = grid_.index(p.u, p.v);
   }
   std::sort(idx, idx + 4);  // the same sum from every side
-  Eigen::Vector3d s(0, 0, 0);
-  for (std::size_t i : idx) {
-    const int pu = int(i % std::size_t(m_ + 1)), pv = int(i / std::size_t(m_ + 1));
-    s += point(pu, pv);
+  Eigen::Vector3d corners[4];
+  for (int k = 0; k < 4; ++k) {
+    corners[k] = point(int(idx[k] % std::size_t(m_ + 1)), int(idx[k] / std::size_t(m_ + 1)));
   }
+  return centreOf(corners);
+}
+
+Eigen::Vector3d SandGrid::centreOf(const Eigen::Vector3d sortedCorners[4]) const {
+  Eigen::Vector3d s(0, 0, 0);
+  for (int k = 0; k < 4; ++k) s += sortedCorners[k];
   const double len = std::sqrt((s.x() * s.x() + s.y() * s.y()) + s.z() * s.z());
   return s * (radius_ / len);
 }

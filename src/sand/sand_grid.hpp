@@ -84,6 +84,15 @@ class SandGrid {
   // between the centres of the two grid quads beside the link, bit for bit the same from both
   // cells.
   double face(int u, int v, int k) const;
+  // |a - b| with a fixed order of operations: the same bits for (a, b) and (b, a) (chord()).
+  static double chordBetween(const Eigen::Vector3d& a, const Eigen::Vector3d& b);
+  // A grid quad's centre on the sphere from its corners' points, given in the order of their
+  // canonical grid indices (face()).
+  Eigen::Vector3d centreOf(const Eigen::Vector3d sortedCorners[4]) const;
+  // Area of the spherical quadrilateral of four reference points, in grid order (a quad's
+  // corners (u, v), (u + 1, v), (u + 1, v + 1), (u, v + 1)).
+  double quadAreaOf(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c,
+                    const Eigen::Vector3d& d) const;
   // Reference position (m) of grid vertex (u, v) (twins: bit for bit one point).
   Eigen::Vector3d point(int u, int v) const { return chart_->position(u, v, 0.0); }
   // Chord (m) from (u, v) to (u + 1, v).
