@@ -289,6 +289,44 @@ TEST(SandOctahedral, ExplicitDiffusionKeepsVolumeAndTheActiveSetStepEqualsTheWho
   }
 }
 
+TEST(SandOctahedral, APushForceAcrossAFoldKeepsVolumeAndTheActiveSetEqualsTheWholeGrid) {
+  // Paper 002's drift under a tool on a fold and on the south pole: the rut reaches both sides of
+  // the fold, the volume is kept, and stepping the marked tiles equals stepping every tile.
+  const sand::Material mat = sand::Material::sand();
+  for (Mapping mapping : kMappings) {
+    auto chart = octa(6, 1000.0, mapping);
+    const int m = chart->grid().m();
+    for (const core::GridPoint p : {core::GridPoint{0, m / 4}, core::GridPoint{0, 0}}) {
+      std::vector<float> h(chart->grid().count(), 10.0f), h2 = h;
+      sand::SandField a(chart, h), b(chart, h2);
+      const double v0 = a.volume();
+      const sand::PushForce force{chart->position(p.u, p.v, 10.0), 220.0, 2e4};
+      for (int i = 0; i < 20; ++i) {
+        b.markAll();
+        a.diffusionStep(mat, 0.2, sand::DiffusionScheme::kExplicit, sand::StepPolicy::kClamp,
+                        &force);
+        b.diffusionStep(mat, 0.2, sand::DiffusionScheme::kExplicit, sand::StepPolicy::kClamp,
+                        &force);
+      }
+      std::vector<double> ha, hb;
+      a.copyHeights(ha);
+      b.copyHeights(hb);
+      EXPECT_TRUE(sameDoubles(ha, hb)) << nameOf(mapping) << " " << p.u << "," << p.v;
+      EXPECT_TRUE(sandtest::allFinite(a));
+      EXPECT_LE(std::abs(a.volume() - v0) / v0, 1e-13) << nameOf(mapping);
+      EXPECT_LT(a.height(p.u, p.v), 10.0 - 0.5) << nameOf(mapping);  // the rut under the tool
+      // Both sides of the fold moved: (1, v) and, across it, (1, m - v) (at the corner: (1, 0)
+      // and (1, m), beside the twins (0, 0) and (0, m)).
+      EXPECT_NE(a.height(1, p.v), 10.0);
+      EXPECT_NE(a.height(1, m - p.v), 10.0);
+      // The north pole, far away, untouched (before the drift was kept to the tool's hemisphere,
+      // a ghost of the force pushed at its antipode in whole-grid steps).
+      EXPECT_EQ(b.height(m / 2, m / 2), 10.0);
+      EXPECT_EQ(b.height(3 * m / 4, m / 2), 10.0);
+    }
+  }
+}
+
 TEST(SandOctahedral, MaterialCrossesTheFoldsAndAPileOnAMirrorSettlesSymmetrically) {
   const sand::Material mat = sand::Material::sand();
   for (Mapping mapping : kMappings) {

@@ -127,6 +127,9 @@ double SandField::driftBetween(const PushForce& force, double zetaInv, const Eig
   } else {
     foot.z() = 0.0;
   }
+  // On a sphere only the hemisphere about the tool: at its antipode the tangent projection of
+  // mid - foot vanishes too, and a ghost of the force pushed there.
+  if (sphere && !(mid.dot(foot) > 0.0)) return 0.0;
   Eigen::Vector3d radial = mid - foot;
   if (sphere) {
     const Eigen::Vector3d up = mid.normalized();
