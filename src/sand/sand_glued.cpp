@@ -18,6 +18,7 @@
 #include <limits>
 
 #include "core/input_error.hpp"
+#include "sand/kernels.hpp"
 #include "sand/sand_field_parts.hpp"
 
 namespace ps::sand {
@@ -27,6 +28,7 @@ constexpr int kNK = 8;
 constexpr int kDuG[8] = {-1, 1, 0, 0, -1, 1, -1, 1};
 constexpr int kDvG[8] = {0, 0, -1, 1, -1, -1, 1, 1};
 constexpr std::size_t kCells = std::size_t(kT) * kT;
+static_assert(kernels::kGluedRow == kT);
 }  // namespace
 
 void SandField::loadGeometry(Tile& tile, int t) {
@@ -276,44 +278,35 @@ void SandField::gluedActiveSetLinks(int t, Predicate pred, const Material& mater
 
 // The per-cell loops run along a tile's rows without branches (cells that are none, twins or
 // beyond the grid, are computed and then left as they were), so the compiler vectorises them.
+// A tile row's per-cell constants (kernels::GluedRow).
+namespace {
+kernels::GluedRow rowOf(const double* geo, int lv) {
+  const std::size_t row = std::size_t(lv * kT);
+  kernels::GluedRow g{};
+  for (int k = 0; k < 8; ++k) g.d[k] = geo + std::size_t(kGeoChord + k) * kCells + row;
+  for (int k = 0; k < 4; ++k) {
+    g.ratio[k] = geo + std::size_t(kGeoRatio + k) * kCells + row;
+    g.inv[k] = geo + std::size_t(kGeoInv + k) * kCells + row;
+  }
+  g.area = geo + std::size_t(kGeoArea) * kCells + row;
+  return g;
+}
+}  // namespace
+
+// The per-cell loops (kernels.cpp, cloned for AVX2 like lat-long's rows) run along a tile's rows
+// without branches: cells that are none (twins, positions beyond the grid) are computed and then
+// left as they were.
 void SandField::thermalGluedPass1(int t, const Material& material, double* hs) {
   const int tu = t % tilesU_, tv = t / tilesU_;
   gatherGlued(tu, tv, hs, nullptr, nullptr);
   Tile& tile = *tiles_[std::size_t(t)];
   if (!tile.s) tile.s = std::make_unique<double[]>(kCells);
   const double* geo = tile.geo.get();
-  const double T = material.tanTalus(), coh = material.cohesion, eta = material.talusTolerance;
-  const double halfRate = 0.5 * material.erosionRate;
   for (int lv = 0; lv < kT; ++lv) {
-    const std::size_t row = std::size_t(lv * kT);
     const double* h0 = hs + (lv + 2) * kW + 2;
-    const double* hm = h0 - kW;
-    const double* hp = h0 + kW;
-    const double* dW = geo + std::size_t(kGeoChord + 0) * kCells + row;
-    const double* dE = geo + std::size_t(kGeoChord + 1) * kCells + row;
-    const double* dS = geo + std::size_t(kGeoChord + 2) * kCells + row;
-    const double* dN = geo + std::size_t(kGeoChord + 3) * kCells + row;
-    const double* dSW = geo + std::size_t(kGeoChord + 4) * kCells + row;
-    const double* dSE = geo + std::size_t(kGeoChord + 5) * kCells + row;
-    const double* dNW = geo + std::size_t(kGeoChord + 6) * kCells + row;
-    const double* dNE = geo + std::size_t(kGeoChord + 7) * kCells + row;
-    const double* area = geo + std::size_t(kGeoArea) * kCells + row;
-    double* s = tile.s.get() + row;
-    auto ex = [&](double h, double hn, double d) {
-      return kernels::act(h - hn - (T * d + coh), eta * T * d);
-    };
-    for (int c = 0; c < kT; ++c) {
-      const double h = h0[c];
-      const double eW = ex(h, h0[c - 1], dW[c]), eE = ex(h, h0[c + 1], dE[c]);
-      const double eS = ex(h, hm[c], dS[c]), eN = ex(h, hp[c], dN[c]);
-      const double eSW = ex(h, hm[c - 1], dSW[c]), eSE = ex(h, hm[c + 1], dSE[c]);
-      const double eNW = ex(h, hp[c - 1], dNW[c]), eNE = ex(h, hp[c + 1], dNE[c]);
-      const double E = ((eW + eE) + (eS + eN)) + ((eSW + eNE) + (eSE + eNW));
-      const double mx = std::max(std::max(std::max(eW, eE), std::max(eS, eN)),
-                                 std::max(std::max(eSW, eNE), std::max(eSE, eNW)));
-      const double q = (halfRate * area[c]) * mx / (E > 0.0 ? E : 1.0);
-      s[c] = ((E > 0.0) & (area[c] > 0.0)) ? q : 0.0;
-    }
+    kernels::gluedThermalPass1(h0 - kW, h0, h0 + kW, tile.s.get() + lv * kT, rowOf(geo, lv),
+                               material.tanTalus(), material.cohesion, material.talusTolerance,
+                               0.5 * material.erosionRate);
   }
 }
 
@@ -323,58 +316,17 @@ void SandField::thermalGluedPass2(int t, const Material& material, double* hs, d
   gatherGlued(tu, tv, hs, ss, cs);
   Tile& tile = *tiles_[std::size_t(t)];
   const double* geo = tile.geo.get();
-  const double T = material.tanTalus(), coh = material.cohesion, eta = material.talusTolerance;
-  // As kernels::thermalPass2's link: act(|d| - t) times min(s_sender, cap_receiver), signed by
-  // which side is higher.
-  auto link = [&](double h, double hn, double dist, double sOther, double capOther, double sSelf,
-                  double capSelf) {
-    const double d = h - hn;
-    const double a = kernels::act(std::abs(d) - (T * dist + coh), eta * T * dist);
-    const double coef = d > 0.0 ? -std::min(sSelf, capOther) : std::min(sOther, capSelf);
-    return coef * a;
-  };
   // Busy: some cell of the tile or of its halo sends (every halo cell is linked to the tile).
   unsigned any = 0;
   for (int r = 1; r < kW - 1; ++r) {
     for (int c = 1; c < kW - 1; ++c) any |= unsigned(ss[r * kW + c] > 0.0);
   }
   for (int lv = 0; lv < kT; ++lv) {
-    const std::size_t row = std::size_t(lv * kT);
     const int at = (lv + 2) * kW + 2;
-    const double* h0 = hs + at;
-    const double* hm = h0 - kW;
-    const double* hp = h0 + kW;
-    const double* s0 = ss + at;
-    const double* sm = s0 - kW;
-    const double* sp = s0 + kW;
-    const double* c0 = cs + at;
-    const double* cm = c0 - kW;
-    const double* cp = c0 + kW;
-    const double* dW = geo + std::size_t(kGeoChord + 0) * kCells + row;
-    const double* dE = geo + std::size_t(kGeoChord + 1) * kCells + row;
-    const double* dS = geo + std::size_t(kGeoChord + 2) * kCells + row;
-    const double* dN = geo + std::size_t(kGeoChord + 3) * kCells + row;
-    const double* dSW = geo + std::size_t(kGeoChord + 4) * kCells + row;
-    const double* dSE = geo + std::size_t(kGeoChord + 5) * kCells + row;
-    const double* dNW = geo + std::size_t(kGeoChord + 6) * kCells + row;
-    const double* dNE = geo + std::size_t(kGeoChord + 7) * kCells + row;
-    const double* area = geo + std::size_t(kGeoArea) * kCells + row;
-    double* out = tile.cur.get() + row;
-    for (int c = 0; c < kT; ++c) {
-      const double h = h0[c], si = s0[c], capSelf = c0[c];
-      const double nW = link(h, h0[c - 1], dW[c], s0[c - 1], c0[c - 1], si, capSelf);
-      const double nE = link(h, h0[c + 1], dE[c], s0[c + 1], c0[c + 1], si, capSelf);
-      const double nS = link(h, hm[c], dS[c], sm[c], cm[c], si, capSelf);
-      const double nN = link(h, hp[c], dN[c], sp[c], cp[c], si, capSelf);
-      const double nSW = link(h, hm[c - 1], dSW[c], sm[c - 1], cm[c - 1], si, capSelf);
-      const double nSE = link(h, hm[c + 1], dSE[c], sm[c + 1], cm[c + 1], si, capSelf);
-      const double nNW = link(h, hp[c - 1], dNW[c], sp[c - 1], cp[c - 1], si, capSelf);
-      const double nNE = link(h, hp[c + 1], dNE[c], sp[c + 1], cp[c + 1], si, capSelf);
-      const double net = ((nW + nE) + (nS + nN)) + ((nSW + nNE) + (nSE + nNW));
-      const double A = area[c];
-      const double next = h + net * (1.0 / (A > 0.0 ? A : 1.0));
-      out[c] = A > 0.0 ? next : out[c];
-    }
+    kernels::gluedThermalPass2(hs + at - kW, hs + at, hs + at + kW, ss + at - kW, ss + at,
+                               ss + at + kW, cs + at - kW, cs + at, cs + at + kW,
+                               tile.cur.get() + lv * kT, rowOf(geo, lv), material.tanTalus(),
+                               material.cohesion, material.talusTolerance);
   }
   busy = any ? 1 : 0;
 }
@@ -417,42 +369,15 @@ void SandField::diffusionGluedTile(int t, const DiffusionTables& tb, double dt,
   Tile& tile = *tiles_[std::size_t(t)];
   const double* geo = tile.geo.get();
   const double Dl2 = diffusionMaterial_.diffusion * grid_.cellSize() * grid_.cellSize();
-  const kernels::Repose rr = tb.repose;
-  // The face's conductance D l^2 (L / d) and 1 / d (both 0 where there is no link).
-  auto flux = [&](double h, double hn, double ratio, double inv) {
-    return kernels::faceFlux(h, hn, Dl2 * ratio, inv, rr);
-  };
   unsigned any = 0;
   for (int lv = 0; lv < kT; ++lv) {
-    const std::size_t row = std::size_t(lv * kT);
     const double* h0 = hs + (lv + 2) * kW + 2;
-    const double* hm = h0 - kW;
-    const double* hp = h0 + kW;
-    const double* dW = geo + std::size_t(kGeoInv + 0) * kCells + row;
-    const double* dE = geo + std::size_t(kGeoInv + 1) * kCells + row;
-    const double* dS = geo + std::size_t(kGeoInv + 2) * kCells + row;
-    const double* dN = geo + std::size_t(kGeoInv + 3) * kCells + row;
-    const double* LW = geo + std::size_t(kGeoRatio + 0) * kCells + row;
-    const double* LE = geo + std::size_t(kGeoRatio + 1) * kCells + row;
-    const double* LS = geo + std::size_t(kGeoRatio + 2) * kCells + row;
-    const double* LN = geo + std::size_t(kGeoRatio + 3) * kCells + row;
-    const double* area = geo + std::size_t(kGeoArea) * kCells + row;
-    double* out = tile.cur.get() + row;
-    for (int c = 0; c < kT; ++c) {
-      const double h = h0[c];
-      const double fW = flux(h, h0[c - 1], LW[c], dW[c]);
-      const double fE = flux(h, h0[c + 1], LE[c], dE[c]);
-      const double fS = flux(h, hm[c], LS[c], dS[c]);
-      const double fN = flux(h, hp[c], LN[c], dN[c]);
-      const double net = (fW + fE) + (fS + fN);
-      const double A = area[c];
-      const double dtInvA = dt * (1.0 / (A > 0.0 ? A : 1.0));
-      out[c] = A > 0.0 ? h - dtInvA * net : out[c];
-      any |= unsigned(((std::abs(fW) + std::abs(fE)) + (std::abs(fS) + std::abs(fN))) > 0.0);
-    }
+    double* out = tile.cur.get() + lv * kT;
+    const kernels::GluedRow g = rowOf(geo, lv);
+    any |= kernels::gluedDiffusionRow(h0 - kW, h0, h0 + kW, out, g, Dl2, dt, tb.repose);
     if (force) {
       for (int c = 0; c < kT; ++c) {
-        const double A = area[c];
+        const double A = g.area[c];
         if (!(A > 0.0)) continue;
         const double fd = netDriftFluxGlued(*force, tb.zetaInv, tu * kT + c, tv * kT + lv);
         if (fd != 0.0) {
