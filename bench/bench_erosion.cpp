@@ -20,6 +20,11 @@
 // Reports frames, steps and cell-steps to rest, per-frame milliseconds (median and max; bounds
 // update included) and the volume drift of the float heights.
 //
+// Sphere throughput (issue 28): the same on a planet of radius m / pi m (lat-long's meridian
+// spacing 1 m) at 1025^2 (--quick: 257^2), on lat-long and on the octahedral chart in the same
+// run (`chart`), noise +-10 m per distinct point; thermal and explicit diffusion (the
+// semi-implicit scheme is lat-long's only). The planet crater runs on both charts too.
+//
 // The machine this was written on is shared with other builds: timings are noisy; compare runs
 // taken back to back.
 #include <omp.h>
@@ -29,6 +34,7 @@
 #include <iostream>
 #include <memory>
 #include <nlohmann/json.hpp>
+#include <numbers>
 #include <numeric>
 #include <random>
 #include <vector>
@@ -37,6 +43,7 @@
 #include "bench/bench_util.hpp"
 #include "core/flat_chart.hpp"
 #include "core/latlong_chart.hpp"
+#include "core/octahedral_chart.hpp"
 #include "edit/edit_pipeline.hpp"
 #include "sand/displacement.hpp"
 #include "sand/sand_field.hpp"
@@ -112,6 +119,7 @@ void throughput(int n, Method method, int threads, int repeats, std::ostream& ou
   const double drift = std::abs(field.volume() - v0) / scale;
   nlohmann::json j = {{"bench", "erosion"},
                       {"method", methodName(method)},
+                      {"chart", "flat"},
                       {"grid", g.label()},
                       {"threads", threads},
                       {"steps", repeats},
@@ -131,10 +139,80 @@ void throughput(int n, Method method, int threads, int repeats, std::ostream& ou
             << drift << "\n";
 }
 
-void crater(bool sphere, bool quick, int threads, std::ostream& out) {
+// Throughput on a sphere chart: noise per distinct point (twins, seam and pole rows one height).
+void sphereThroughput(int n, bool octahedral, Method method, int threads, int repeats,
+                      std::ostream& out) {
+  const core::GridSize g(n);
+  const double R = g.m() / std::numbers::pi;  // lat-long's meridian spacing: 1 m
+  std::shared_ptr<const core::Chart> chart;
+  if (octahedral) {
+    chart = std::make_shared<core::OctahedralChart>(g, R);
+  } else {
+    chart = std::make_shared<core::LatLongChart>(g, R);
+  }
+  std::vector<float> h(g.count());
+  for (int v = 0; v <= g.m(); ++v) {
+    for (int u = 0; u <= g.m(); ++u) {
+      const core::GridPoint c = chart->canonical(u, v);
+      std::mt19937 rng(std::uint32_t(g.index(c.u, c.v) * 2654435761u + 1234u));
+      h[g.index(u, v)] = 100.0f + std::uniform_real_distribution<float>(-10.0f, 10.0f)(rng);
+    }
+  }
+  const sand::SandGrid grid(chart);
+  const double scale = grid.absVolume(h);
+  sand::SandField field(chart, h);
+  const sand::Material mat = sand::Material::sand();
+  omp_set_num_threads(threads);
+  field.markAll();
+  const double dt = field.explicitBound(mat);
+  auto step = [&] {
+    return method == Method::kThermal
+               ? field.thermalStep(mat)
+               : field.diffusionStep(mat, dt, sand::DiffusionScheme::kExplicit,
+                                     sand::StepPolicy::kRefuse);
+  };
+  const double loadMs = timeMs([&] { step(); });  // loads every tile (and its geometry)
+  const double v0 = field.volume();
+  std::vector<double> rates;
+  std::size_t cells = 0;
+  double totalMs = 0;
+  for (int k = 0; k < repeats; ++k) {
+    sand::StepReport r;
+    const double t = timeMs([&] { r = step(); });
+    rates.push_back(double(r.cells) / (t * 1e-3));
+    cells += r.cells;
+    totalMs += t;
+  }
+  const double drift = std::abs(field.volume() - v0) / scale;
+  nlohmann::json j = {{"bench", "erosion"},
+                      {"method", methodName(method)},
+                      {"chart", chart->name()},
+                      {"grid", g.label()},
+                      {"threads", threads},
+                      {"steps", repeats},
+                      {"dt", method == Method::kThermal ? 0.0 : dt},
+                      {"cells_per_step", cells / std::size_t(std::max(1, repeats))},
+                      {"cell_steps_per_s", median(rates)},
+                      {"ms_per_step", totalMs / repeats},
+                      {"first_step_ms", loadMs},
+                      {"volume_drift", drift},
+                      {"resident_mb", double(field.residentBytes()) / (1 << 20)},
+                      {"note", "planet radius m/pi m; shared machine: timings are noisy"}};
+  out << j.dump() << "\n" << std::flush;
+  std::cerr << "erosion " << methodName(method) << " " << chart->name() << " " << g.label()
+            << " threads " << threads << ": " << median(rates) / 1e6 << " M cell-steps/s, "
+            << totalMs / repeats << " ms a step, drift " << drift << "\n";
+}
+
+void crater(bool sphere, bool quick, int threads, std::ostream& out, bool octahedral = false) {
   std::shared_ptr<const core::Chart> chart;
   double r, depth, base;
-  if (sphere) {
+  if (sphere && octahedral) {
+    chart = std::make_shared<core::OctahedralChart>(core::GridSize(quick ? 9 : 11), 6372790.0);
+    r = 200e3;
+    depth = 80e3;
+    base = 0.0;
+  } else if (sphere) {
     chart = std::make_shared<core::LatLongChart>(core::GridSize(quick ? 9 : 11), 6372790.0);
     r = 200e3;
     depth = 80e3;
@@ -179,7 +257,7 @@ void crater(bool sphere, bool quick, int threads, std::ostream& out) {
   nlohmann::json j = {
       {"bench", "erosion"},
       {"method", "crater-settle"},
-      {"chart", sphere ? "latlong" : "flat"},
+      {"chart", chart->name()},
       {"grid", g.label()},
       {"threads", threads},
       {"tool_radius_m", r},
@@ -198,9 +276,9 @@ void crater(bool sphere, bool quick, int threads, std::ostream& out) {
       {"volume_drift", drift},
       {"note", "volume_drift of the float heights; shared machine: timings are noisy"}};
   out << j.dump() << "\n" << std::flush;
-  std::cerr << "erosion crater " << (sphere ? "sphere " : "flat ") << g.label() << " threads "
-            << threads << ": " << frames << " frames, " << steps << " steps, median frame "
-            << median(frameMs) << " ms\n";
+  std::cerr << "erosion crater " << chart->name() << " " << g.label() << " threads " << threads
+            << ": " << frames << " frames, " << steps << " steps, median frame " << median(frameMs)
+            << " ms\n";
 }
 
 }  // namespace
@@ -216,6 +294,15 @@ void benchErosion(const BenchOptions& options, std::ostream& out) {
   for (bool sphere : {false, true}) {
     for (int threads : {1, 2}) crater(sphere, options.quick, threads, out);
   }
+  // The sphere: lat-long and octahedral side by side, same run.
+  const int ns = options.quick ? 8 : 10;
+  for (Method method : {Method::kThermal, Method::kExplicit}) {
+    for (int threads : {1, 2}) {
+      for (bool octahedral : {false, true})
+        sphereThroughput(ns, octahedral, method, threads, repeats, out);
+    }
+  }
+  for (int threads : {1, 2}) crater(true, options.quick, threads, out, true);
   omp_set_num_threads(saved);
 }
 

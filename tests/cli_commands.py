@@ -354,11 +354,23 @@ def group_charts():
     meta = json.load(open(out("octa_a", "heightmap.png.json")))
     if meta.get("projection", "").find("equirectangular") < 0:
         fail(f"the octahedral replay's heightmap sidecar: {meta}")
+    # The sand tool (displacement, the settler after it) and the haptic force path work on the
+    # octahedral chart: the same planet twice, sand displaced and settled, forces written.
+    for k in ("a", "b"):
+        run("replay", video, "--calib", CALIB, "--chart", "octahedral", "--grid", "1025",
+            "--max-frames", "90", "--tool", "displace", "--out", out(f"octa_sand_{k}"))
+    with open(out("octa_sand_a", "summary.json")) as f:
+        s = json.load(f)
+    if (s["chart"] != "octahedral" or s["tool"] != "displace" or s["stamps"] <= 0 or s["settle_cell_steps"] <= 0
+            or s.get("force_ticks", 0) <= 0 or "forces.csv" not in s["files"]):
+        fail(f"the octahedral sand replay: {s}")
+    if open(out("octa_sand_a", "planet.planet"), "rb").read() != open(out("octa_sand_b", "planet.planet"), "rb").read():
+        fail("two sand replays onto the octahedral planet wrote different planet files")
     # Refusals, named: an unknown chart, --chart with a planet file (it has its own), and the
-    # sand tool on a chart the sand core does not know yet.
+    # TIN sand tool, which does not handle the octahedral chart's folds yet.
     for args, said in ((("--chart", "cube"), "chart 'cube' is not one of"),
                        (("--chart", "octahedral", "--planet", out("octa_a", "planet.planet")), "has its own chart"),
-                       (("--chart", "octahedral", "--tool", "displace"), "not on 'octahedral'")):
+                       (("--chart", "octahedral", "--tool", "tin-sand"), "not on 'octahedral'")):
         p = subprocess.run([EXE, "replay", video, "--calib", CALIB, "--grid", "1025", "--max-frames", "5", *args,
                             "--out", out("refused")], capture_output=True, text=True)
         if p.returncode <= 0 or said not in p.stderr:
@@ -489,6 +501,11 @@ def group_bench():
         fail(f"bench {name} --quick wrote no {name} row")
     for r in rows:
         check_bench_row(r)
+    # The sand core on the octahedral chart beside lat-long's in the same run (docs/SAND.md).
+    if name == "erosion":
+        for method in ("thermal", "diffusion-explicit", "crater-settle"):
+            if not any(r.get("method") == method and r.get("chart") == "octahedral" for r in rows):
+                fail(f"bench erosion wrote no octahedral {method} row")
     # Per-pixel shading's claim (docs/RENDERING.md): a 4 px mesh shaded per pixel is closer to
     # the full-resolution surface than a 1 px mesh in facets, in every view.
     rendered = [r for r in rows if r.get("bench") == "render" and not r.get("skipped")]

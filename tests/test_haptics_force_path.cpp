@@ -7,10 +7,12 @@
 #include <sstream>
 
 #include "core/input_error.hpp"
+#include "core/octahedral_chart.hpp"
 #include "edit/edit_pipeline.hpp"
 #include "haptics/force_path.hpp"
 #include "sand/sand_grid.hpp"
 #include "terrain/terrain.hpp"
+#include "test_edit_util.hpp"
 #include "test_haptics_util.hpp"
 #include "test_sand_util.hpp"
 
@@ -117,6 +119,69 @@ TEST(HapticsForcePath, ReplayStrokeIsLoggedDeterministicallyAndSculptsThroughThe
   const StrokeRun b = runStroke(0.0015);
   EXPECT_EQ(a.log, b.log);
   EXPECT_EQ(a.heights, b.heights);
+}
+
+TEST(HapticsForcePath, PressesAcrossAFoldOfTheOctahedralChart) {
+  // The demo-like stroke dragged across the fold u = 0 of an octahedral planet (513^2, 2 km of
+  // sand): forces felt, sand displaced on both sides of the fold, the volume kept, twins one
+  // height, the same log and planet twice.
+  auto chart = std::make_shared<core::OctahedralChart>(core::GridSize(9), kR);
+  const int m = chart->grid().m();
+  const Eigen::Vector3d c = chart->up(0, m / 4);
+  const Eigen::Vector3d across = (chart->up(1, m / 4) - chart->up(1, m - m / 4)).normalized();
+  auto run = [&] {
+    terrain::Terrain t(chart, std::vector<float>(chart->grid().count(), 2000.0f));
+    edit::EditPipeline pipe(t);
+    pipe.setUndoEnabled(false);
+    ForcePath s(t, &pipe, globeConfig());
+    std::ostringstream log;
+    s.setLog(&log);
+    const double scale = kR / kGlobe, above = 0.003 * scale, below = -0.0015 * scale;
+    for (int f = 0; f <= 90; ++f) {
+      const double time = f / 30.0;
+      double alt, x = -1.0;
+      if (time < 1) {
+        alt = above + (below - above) * time;
+      } else if (time < 2) {
+        alt = below, x = -1.0 + 2.0 * (time - 1);
+      } else {
+        alt = below + (above - below) * std::min(1.0, time - 2), x = 1.0;
+      }
+      const Eigen::Vector3d dir = (c + 0.03 * x * across).normalized();  // +-1.7 degrees
+      s.onFrame(dir * (kR + 2000.0 + alt), time);
+    }
+    EXPECT_GT(s.totalStamps(), 3u);
+    EXPECT_TRUE(edittest::consistentHeights(t));
+    EXPECT_TRUE(edittest::boundsEqualFullRebuild(t));
+    return std::pair{log.str(), std::vector<float>(t.heights().begin(), t.heights().end())};
+  };
+  const auto [logA, heightsA] = run();
+  std::istringstream in(logA);
+  const std::vector<ForceRecord> rs = readForceLog(in);
+  int touching = 0;
+  double maxF = 0;
+  for (const ForceRecord& r : rs) {
+    touching += r.touching;
+    maxF = std::max(maxF, r.force.norm());
+  }
+  EXPECT_GT(touching, 1000);
+  EXPECT_GT(maxF, 1.0);
+  const sand::SandGrid grid(chart);
+  const std::vector<float> before(chart->grid().count(), 2000.0f);
+  EXPECT_LT(std::abs(grid.volume(heightsA) - grid.volume(before)) / grid.absVolume(before), 1e-6);
+  const core::GridSize g = chart->grid();
+  auto changedNear = [&](int u0, int v0) {
+    int n = 0;
+    for (int v = v0 - 8; v <= v0 + 8; ++v) {
+      for (int u = u0; u <= u0 + 8; ++u) n += heightsA[g.index(u, v)] != 2000.0f;
+    }
+    return n;
+  };
+  EXPECT_GT(changedNear(1, m / 4), 0);      // this side of the fold
+  EXPECT_GT(changedNear(1, m - m / 4), 0);  // across it
+  const auto [logB, heightsB] = run();
+  EXPECT_EQ(logA, logB);
+  EXPECT_EQ(heightsA, heightsB);
 }
 
 TEST(HapticsForcePath, DeeperPushesMoveMoreSand) {

@@ -2,6 +2,8 @@
 // force log.
 #include <gtest/gtest.h>
 
+#include <Eigen/Geometry>
+
 #include <cmath>
 #include <limits>
 #include <memory>
@@ -12,6 +14,7 @@
 #include "core/flat_chart.hpp"
 #include "core/input_error.hpp"
 #include "core/latlong_chart.hpp"
+#include "core/octahedral_chart.hpp"
 #include "haptics/device.hpp"
 #include "haptics/force_log.hpp"
 #include "haptics/haptic_core.hpp"
@@ -21,6 +24,7 @@
 #include "terrain/terrain.hpp"
 #include "test_haptics_util.hpp"
 #include "test_sand_util.hpp"
+#include "test_terrains.hpp"
 
 using namespace ps;
 using namespace ps::haptics;
@@ -94,6 +98,44 @@ TEST(HapticsPatch, ProbeIsRadialDepthAndContinuousAcrossTheSeamAndPoles) {
   ASSERT_TRUE(p.capture(t, latLon(89.5, 10, kR), 4));
   EXPECT_EQ(p.cols(), t.grid().side());
   for (double lon = -180; lon <= 180; lon += 7) EXPECT_TRUE(p.probe(latLon(89.6, lon, kR)));
+}
+
+TEST(HapticsPatch, OctahedralPatchesReachAcrossTheFolds) {
+  // A tool by a fold, at the south pole (the four corners) and at a side's midpoint: foot points
+  // on the other side of the fold (the inverse puts them elsewhere in the square) are in the
+  // patch, at the full terrain's bilinear depth.
+  const terrain::Terrain t = testkit::bumpyOctahedralTerrain(7, 3, 2000.0);
+  const core::Chart& chart = t.chart();
+  const int m = t.grid().m();
+  auto fullDepth = [&](const Eigen::Vector3d& p) {
+    const auto uv = chart.inverse(p);
+    const double u = (*uv)(0), v = (*uv)(1);
+    const int iu = std::min(int(u), m - 1), iv = std::min(int(v), m - 1);
+    const double a = u - iu, b = v - iv;
+    const double h = (1 - b) * ((1 - a) * t.height(iu, iv) + a * t.height(iu + 1, iv)) +
+                     b * ((1 - a) * t.height(iu, iv + 1) + a * t.height(iu + 1, iv + 1));
+    return kR + h - p.norm();
+  };
+  for (const core::GridPoint at : {core::GridPoint{0, m / 4}, core::GridPoint{0, 0},
+                                   core::GridPoint{m / 2, 0}, core::GridPoint{m / 3, m}}) {
+    const Eigen::Vector3d c = chart.up(at.u, at.v);
+    TerrainPatch p;
+    ASSERT_TRUE(p.capture(t, c * kR, 6));
+    EXPECT_GT(p.images(), 0);
+    // A ring of points about the tool, 3 cells away: half of it lies across the fold.
+    const Eigen::Vector3d e1 = c.unitOrthogonal(), e2 = c.cross(e1);
+    const double ang = 3.0 * 2.0 * std::numbers::pi / (4.0 * m);
+    for (int k = 0; k < 16; ++k) {
+      const double phi = 2 * std::numbers::pi * k / 16;
+      const Eigen::Vector3d d =
+          (std::cos(ang) * c + std::sin(ang) * (std::cos(phi) * e1 + std::sin(phi) * e2))
+              .normalized();
+      const auto s = p.probe(d * (kR + 100.0));
+      ASSERT_TRUE(s) << at.u << "," << at.v << " k " << k;
+      EXPECT_NEAR(s->depth, fullDepth(d * (kR + 100.0)), 1e-6 * kR * 1e-3)
+          << at.u << "," << at.v << " k " << k;
+    }
+  }
 }
 
 TEST(HapticsPatch, FlatChartDepthIsHeightMinusZ) {

@@ -57,6 +57,18 @@ inline double worstTalusExcess(const sand::SandField& f, const sand::Material& m
     const double e = std::abs(a - b) - (T * dist + mat.cohesion);
     worst = std::max(worst, e / (T * dist));
   };
+  if (g.glued()) {  // every link of every cell, across the folds
+    for (int v = 0; v <= m; ++v) {
+      for (int u = 0; u <= m; ++u) {
+        if (!g.isCell(u, v)) continue;
+        for (int k = 0; k < 8; ++k) {
+          const core::GridPoint n = g.neighbour(u, v, k);
+          if (n.u >= 0) link(f.height(u, v), f.height(n.u, n.v), g.chord(u, v, k));
+        }
+      }
+    }
+    return worst;
+  }
   for (int v = 0; v <= m; ++v) {
     if (!g.ordinaryRow(v)) continue;
     for (int u = 0; u < g.columns(); ++u) {

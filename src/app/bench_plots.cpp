@@ -165,7 +165,14 @@ std::vector<std::filesystem::path> writeBenchPlots(const std::vector<nlohmann::j
   }
 
   const auto ero = groups(
-      records, "erosion", [](const auto& r) { return str(r, "method") + " " + str(r, "grid"); },
+      records, "erosion",
+      [](const auto& r) {
+        // Lat-long and octahedral rows share a method and a grid: the chart tells them apart
+        // (rows written before it had one name none).
+        const std::string chart = str(r, "chart");
+        return str(r, "method") + " " + (chart.empty() || chart == "flat" ? "" : chart + " ") +
+               str(r, "grid");
+      },
       [](const auto& r) { return str(r, "method") != "crater-settle"; });
   if (!ero.empty()) {
     PlotPanel rate{"Erosion throughput", "threads", "M cell-steps/s", false, false, {}};

@@ -319,12 +319,12 @@ nlohmann::json runReplayJob(const ReplayJob& job) {
   double peakForce = 0;
   PlotSeries forceSeries;  // per frame: time, the largest force of its ticks
   // The force path presses with the sand core's displacement tool: none on a chart the sand
-  // core does not know yet (the octahedral one), and the summary says so.
+  // core does not know, and the summary says so.
   const bool forcesHere = job.forces && sand::sandCoreKnows(planet->chart());
   if (job.forces && !forcesHere)
     std::cerr << "replay: no forces.csv: the haptic path's press tool (the sand core) does not "
                  "work on the "
-              << planet->chart().name() << " chart yet\n";
+              << planet->chart().name() << " chart\n";
   if (forcesHere) {
     haptics::ForcePathConfig hc;
     hc.map.scale = planet->chart().radius() / options.scene.planetRadius;

@@ -65,6 +65,27 @@ bool TerrainPatch::capture(const terrain::Terrain& terrain, const Eigen::Vector3
       }
     }
   }
+  // The box's images across glued sides (the octahedral chart's folds), after it in heights_.
+  images_ = 0;
+  if (!wraps_ && chart.gluesSidesBeyondSeam()) {
+    core::GridBox out[4];
+    const int n = chart.gluedImages({u0_, u0_ + cols_ - 1, v0_, v0_ + rows_ - 1}, false, out);
+    std::size_t offset = heights_.size();
+    for (int i = 1; i < n; ++i) {
+      Image& b = image_[images_++];
+      b = {out[i].uBegin, out[i].vBegin, out[i].uEnd - out[i].uBegin + 1,
+           out[i].vEnd - out[i].vBegin + 1, offset};
+      offset += std::size_t(b.cols) * std::size_t(b.rows);
+    }
+    heights_.resize(offset);
+    for (int i = 0; i < images_; ++i) {
+      const Image& b = image_[i];
+      for (int r = 0; r < b.rows; ++r) {
+        std::copy_n(h.data() + g.index(b.u0, b.v0 + r), b.cols,
+                    heights_.data() + b.offset + std::size_t(r) * std::size_t(b.cols));
+      }
+    }
+  }
   static std::atomic<std::uint64_t> captures{0};
   serial_ = captures.fetch_add(1, std::memory_order_relaxed) + 1;
   valid_ = true;
@@ -84,10 +105,30 @@ std::optional<double> TerrainPatch::heightAt(double u, double v) const {
   // Points on the last row/column use the cell before it.
   if (c == cols_ - 1 && fu <= cols_ - 1) c = cols_ - 2;
   if (r == rows_ - 1 && fv <= rows_ - 1) r = rows_ - 2;
-  if (c < 0 || r < 0 || c + 1 >= cols_ || r + 1 >= rows_) return std::nullopt;
+  if (c < 0 || r < 0 || c + 1 >= cols_ || r + 1 >= rows_) {
+    for (int i = 0; i < images_; ++i) {
+      if (const auto x = heightInImage(image_[i], u, v)) return x;
+    }
+    return std::nullopt;
+  }
   const double a = fu - c, b = fv - r;
   const double h0 = (1 - a) * at(c, r) + a * at(c + 1, r);
   const double h1 = (1 - a) * at(c, r + 1) + a * at(c + 1, r + 1);
+  return (1 - b) * h0 + b * h1;
+}
+
+std::optional<double> TerrainPatch::heightInImage(const Image& im, double u, double v) const {
+  const double fu = u - im.u0, fv = v - im.v0;
+  int c = int(std::floor(fu)), r = int(std::floor(fv));
+  if (c == im.cols - 1 && fu <= im.cols - 1) c = im.cols - 2;
+  if (r == im.rows - 1 && fv <= im.rows - 1) r = im.rows - 2;
+  if (c < 0 || r < 0 || c + 1 >= im.cols || r + 1 >= im.rows) return std::nullopt;
+  auto q = [&](int cc, int rr) {
+    return double(heights_[im.offset + std::size_t(rr) * std::size_t(im.cols) + std::size_t(cc)]);
+  };
+  const double a = fu - c, b = fv - r;
+  const double h0 = (1 - a) * q(c, r) + a * q(c + 1, r);
+  const double h1 = (1 - a) * q(c, r + 1) + a * q(c + 1, r + 1);
   return (1 - b) * h0 + b * h1;
 }
 

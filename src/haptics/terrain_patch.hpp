@@ -21,7 +21,10 @@ struct SurfaceProbe {
 };
 
 // Heights of grid rows v0 .. v0+rows-1 and columns u0 .. u0+cols-1 (columns taken modulo m on a
-// wrapping chart, so u0 may be negative). Next to a pole row the patch holds whole rows.
+// wrapping chart, so u0 may be negative). Next to a pole row the patch holds whole rows. On a
+// chart that glues its sides beyond a seam (the octahedral chart's folds) a box that reaches a
+// side also holds its images across it (Chart::gluedImages), so that a foot point across a fold
+// from the tool (the inverse puts it on the other side of the square) is in the patch too.
 // Reading is const, allocation-free and thread-compatible; capture() reuses its buffer.
 class TerrainPatch {
  public:
@@ -43,6 +46,9 @@ class TerrainPatch {
   int rows() const { return rows_; }
   std::size_t capacity() const { return heights_.capacity(); }
 
+  // The boxes of grid vertices beyond the first one (the images across glued sides).
+  int images() const { return images_; }
+
   // Bilinear height at grid coordinates (u, v); nullopt outside the patch.
   std::optional<double> heightAt(double u, double v) const;
   // Depth of `p` (planet frame) below the bilinear surface, radial on the chart; nullopt when
@@ -51,6 +57,12 @@ class TerrainPatch {
 
  private:
   float at(int col, int row) const { return heights_[std::size_t(row) * cols_ + col]; }
+  // An image box: its first vertex, size, and where its heights start in heights_.
+  struct Image {
+    int u0 = 0, v0 = 0, cols = 0, rows = 0;
+    std::size_t offset = 0;
+  };
+  std::optional<double> heightInImage(const Image& b, double u, double v) const;
 
   const core::Chart* chart_ = nullptr;
   bool valid_ = false;
@@ -58,6 +70,8 @@ class TerrainPatch {
   int u0_ = 0, v0_ = 0, cols_ = 0, rows_ = 0, m_ = 0;
   bool wraps_ = false;
   std::vector<float> heights_;
+  Image image_[3];
+  int images_ = 0;
 };
 
 }  // namespace ps::haptics

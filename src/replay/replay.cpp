@@ -156,8 +156,9 @@ double FrameStepper::toolRadius() const {
 void FrameStepper::rebuildTools() {
   endStroke();
   p_->brush.emplace(o_.brush);
-  // The sand tools on a chart the sand core does not know yet (the octahedral one) are refused
-  // when chosen, by SandGrid's message; the brush works there.
+  // The sand tools on a chart the sand core does not know are refused when chosen, by
+  // SandGrid's message (the TIN sand tool refuses the octahedral chart by its own); the brush
+  // works there.
   const bool sandChart = sand::sandCoreKnows(planet_.chart());
   if (!sandChart && o_.tool == ReplayTool::kBrush) {
     p_->displacer.reset();

@@ -14,7 +14,8 @@ namespace ps::sand {
 
 bool sandCoreKnows(const core::Chart& chart) {
   return dynamic_cast<const core::LatLongChart*>(&chart) ||
-         dynamic_cast<const core::FlatChart*>(&chart);
+         dynamic_cast<const core::FlatChart*>(&chart) ||
+         dynamic_cast<const core::OctahedralChart*>(&chart);
 }
 
 double largestSpacing(const core::Chart& chart) {
@@ -27,8 +28,9 @@ double largestSpacing(const core::Chart& chart) {
   if (const auto* flat = dynamic_cast<const core::FlatChart*>(&chart)) {
     return std::max(flat->dx(), flat->dy());
   }
-  throw core::InputError("the sand core works on the lat-long and flat charts, not on '" +
-                         chart.name() + "'");
+  throw core::InputError(
+      "the sand core works on the lat-long, flat and octahedral charts, not on '" + chart.name() +
+      "'");
 }
 
 void DisplacementSettings::validate(const core::Chart* chart) const {
@@ -111,6 +113,7 @@ terrain::GridRegion DisplacementTool::apply(const edit::ToolContext& ctx,
   const core::GridSize g = chart.grid();
   const int m = g.m();
   const bool sphere = grid_.sphere();
+  const bool glued = grid_.glued();  // the octahedral chart: a point once, at its canonical vertex
   const Eigen::Vector3d c = ctx.input.position;
   const double r = settings_.radius;
   const double r2 = r * r;
@@ -128,6 +131,7 @@ terrain::GridRegion DisplacementTool::apply(const edit::ToolContext& ctx,
   F.forEachSpan([&](int v, int ub, int ue) {
     for (int u = ub; u <= ue; ++u) {
       if (sphere && (u == m || ((v == 0 || v == m) && u != 0))) continue;  // one entry a point
+      if (glued && !grid_.isCell(u, v)) continue;  // the region holds every twin of its points
       const double h = double(heights[g.index(u, v)]);
       const Eigen::Vector3d base = chart.position(u, v, 0.0);
       const Eigen::Vector3d n = chart.up(u, v);
@@ -144,7 +148,7 @@ terrain::GridRegion DisplacementTool::apply(const edit::ToolContext& ctx,
       const double d = std::sqrt(ctx.field.distance2(u, v));
       entries.push_back({u, v, dh, d});
       if (dh > 0.0) {
-        removed.add(grid_.area(v) * dh);
+        removed.add(grid_.cellArea(u, v) * dh);
         a = std::max(a, d);
         ++stats_.lowered;
       }
@@ -161,7 +165,7 @@ terrain::GridRegion DisplacementTool::apply(const edit::ToolContext& ctx,
     return 1.0 - t * t * (3.0 - 2.0 * t);
   };
   CompensatedSum weights;
-  for (const Entry& e : entries) weights.add(grid_.area(e.v) * profile(e));
+  for (const Entry& e : entries) weights.add(grid_.cellArea(e.u, e.v) * profile(e));
   const double S = weights.value();
   if (!(S > 0.0)) return terrain::GridRegion::none();  // nowhere to put it (the whole planet)
   const double k = V / S;
@@ -172,23 +176,33 @@ terrain::GridRegion DisplacementTool::apply(const edit::ToolContext& ctx,
   // floats' volume then differs from the exact one by one vertex's rounding, not a random walk
   // over every vertex the stamp touched.
   double carry = 0.0;
-  int vFirst = m + 1, vLast = -1;
+  int vFirst = m + 1, vLast = -1, uFirst = m + 1, uLast = -1;
   for (const Entry& e : entries) {
     const double p = profile(e);
     if (!(e.dh > 0.0) && !(p > 0.0)) continue;
     const double add = e.dh > 0.0 ? -e.dh : k * p;
     if (add > 0.0) {
-      deposited.add(grid_.area(e.v) * add);
+      deposited.add(grid_.cellArea(e.u, e.v) * add);
       ++stats_.raised;
     }
     const float old = heights[g.index(e.u, e.v)];
-    const double area = grid_.area(e.v), exact = double(old) + add;
+    const double area = grid_.cellArea(e.u, e.v), exact = double(old) + add;
     const double want = exact + carry / area;
     const float f = static_cast<float>(std::clamp(want, -limit, limit));
     if (std::abs(want) < limit) carry += area * (exact - double(f));
-    floatChange.add(grid_.area(e.v) * (double(f) - double(old)));
+    floatChange.add(area * (double(f) - double(old)));
     if (sphere && (e.v == 0 || e.v == m)) {
       std::fill_n(heights.begin() + std::ptrdiff_t(g.index(0, e.v)), g.side(), f);
+    } else if (glued) {
+      core::GridPoint tw[4];
+      const int nt = chart.twins(e.u, e.v, tw);
+      for (int j = 0; j < nt; ++j) {
+        heights[g.index(tw[j].u, tw[j].v)] = f;
+        vFirst = std::min(vFirst, tw[j].v);
+        vLast = std::max(vLast, tw[j].v);
+        uFirst = std::min(uFirst, tw[j].u);
+        uLast = std::max(uLast, tw[j].u);
+      }
     } else {
       heights[g.index(e.u, e.v)] = f;
       if (sphere && e.u == 0) heights[g.index(m, e.v)] = f;
@@ -203,6 +217,10 @@ terrain::GridRegion DisplacementTool::apply(const edit::ToolContext& ctx,
   terrain::GridRegion dirty = F.bounds();
   dirty.vBegin = vFirst;
   dirty.vEnd = vLast;
+  if (glued) {  // the box of every vertex written, twins across the folds included
+    dirty.uBegin = uFirst;
+    dirty.uEnd = uLast;
+  }
   if (listener_) listener_->edited(dirty, settings_.material);
   return dirty;
 }

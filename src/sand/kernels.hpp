@@ -98,6 +98,32 @@ struct DiffusionRow {
 unsigned diffusionRow(const double* hm, const double* h0, const double* hp, double* out,
                       const DiffusionRow& k, const Repose& r);
 
+// The octahedral chart's rows (sand_glued.cpp): kGluedRow cells from h0[0] (scratch rows, so
+// h0[-1] and h0[kGluedRow] are the halo), each with its own constants (a tile's planes): the
+// chords of the links W E S N SW SE NW NE (+inf where there is none), L / d and 1 / d of the
+// axis links (0 where none), the area (0 where no cell: left as it was).
+inline constexpr int kGluedRow = 32;
+struct GluedRow {
+  const double* d[8];
+  const double* ratio[4];
+  const double* inv[4];
+  const double* area;
+};
+// s of each cell, as thermalPass1 (0 where no cell).
+void gluedThermalPass1(const double* hm, const double* h0, const double* hp, double* s,
+                       const GluedRow& g, double tanTalus, double cohesion, double tolerance,
+                       double halfRate);
+// The new heights, as thermalPass2 with every neighbour's receiver cap from c* (the caps'
+// scratch rows).
+void gluedThermalPass2(const double* hm, const double* h0, const double* hp, const double* sm,
+                       const double* s0, const double* sp, const double* cm, const double* c0,
+                       const double* cp, double* out, const GluedRow& g, double tanTalus,
+                       double cohesion, double tolerance);
+// Explicit diffusion, as diffusionRow with the conductance D l^2 (L / d) per face. Returns
+// non-zero when a face moved material.
+unsigned gluedDiffusionRow(const double* hm, const double* h0, const double* hp, double* out,
+                           const GluedRow& g, double Dl2, double dt, const Repose& r);
+
 // Implicit Euler along one row of equal-area cells: (1 + k_{i-1} + k_i) x_i - k_{i-1} x_{i-1} -
 // k_i x_{i+1} = b_i, with k[i] the scaled conductance of the face between i and i + 1 (and, when
 // `circle`, k[n-1] the face between n - 1 and 0). x holds b on entry and the solution on return.

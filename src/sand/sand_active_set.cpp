@@ -10,6 +10,22 @@ namespace ps::sand {
 
 void SandField::mark(const terrain::GridRegion& region) {
   if (region.empty()) return;
+  if (grid_.glued()) {
+    // A change at a twin on a glued side is a change at its point: the region's images across
+    // the sides hold every twin of the vertices in it.
+    const core::GridBox box{std::max(0, region.uBegin), std::min(m_, region.uEnd),
+                            std::max(0, region.vBegin), std::min(m_, region.vEnd)};
+    core::GridBox out[4];
+    const int n = grid_.chart().gluedImages(box, false, out);
+    for (int i = 0; i < n; ++i)
+      markRegion({out[i].uBegin, out[i].uEnd, out[i].vBegin, out[i].vEnd});
+    return;
+  }
+  markRegion(region);
+}
+
+void SandField::markRegion(const terrain::GridRegion& region) {
+  if (region.empty()) return;
   const core::GridSize& g = grid_.grid();
   const int v0 = std::max(0, region.vBegin), v1 = std::min(m_, region.vEnd);
   if (v0 > v1) return;
@@ -36,6 +52,7 @@ void SandField::mark(const terrain::GridRegion& region) {
         for (int v = va; v <= vb; ++v) {
           if (!grid_.ordinaryRow(v)) continue;
           for (int u = ua; u <= ub; ++u) {
+            if (!grid_.isCell(u, v)) continue;  // a glued side's twin: its point is marked
             double& x = tile->cur[std::size_t((v - tv * kT) * kT + (u - tu * kT))];
             const float f = heights_[g.index(u, v)];
             if (static_cast<float>(x) != f) x = double(f);
@@ -48,7 +65,7 @@ void SandField::mark(const terrain::GridRegion& region) {
   if (grid_.sphere()) {
     bool seam = false;
     region.forEachColumnRange(g, [&](int a, int b) { seam |= (b == m_ || a == m_); });
-    if (seam) mark(terrain::GridRegion{0, 0, v0, v1});
+    if (seam) markRegion(terrain::GridRegion{0, 0, v0, v1});
   }
 }
 
@@ -167,6 +184,15 @@ void SandField::buildActiveSet(Predicate pred, const Material& material) {
   const int nDirs = pred == Predicate::kThermal ? 8 : 4;
   static constexpr int kDu[8] = {-1, 1, 0, 0, -1, 1, -1, 1};
   static constexpr int kDv[8] = {0, 0, -1, 1, -1, -1, 1, 1};
+  if (grid_.glued()) {
+    const std::function<void(int)> addTile = add;
+    while (!work.empty()) {
+      const int t = work.back();
+      work.pop_back();
+      gluedActiveSetLinks(t, pred, material, addTile);
+    }
+    return;
+  }
   while (!work.empty() || !poleWork.empty()) {
     if (!work.empty()) {
       const int t = work.back();

@@ -1,5 +1,6 @@
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 
 #include "core/input_error.hpp"
 #include "sand/sand_field_parts.hpp"
@@ -11,6 +12,7 @@ namespace ps::sand {
 
 double SandField::explicitBound(const Material& material, bool wholeGrid) const {
   material.validate();
+  if (grid_.glued()) return gluedBound(material, wholeGrid, false);
   std::vector<std::uint8_t> rowUsed(std::size_t(m_) + 1, wholeGrid ? 1 : 0);
   bool polesUsed[2] = {wholeGrid, wholeGrid};
   if (!wholeGrid) {
@@ -108,15 +110,28 @@ double SandField::driftFlux(const PushForce& force, double zetaInv, int ua, int 
   }
   const core::Chart& chart = grid_.chart();
   const Eigen::Vector3d pa = chart.position(ua, va, 0.0), pb = chart.position(ub, vb, 0.0);
+  const double faceLength = va == vb ? grid_.horizontalFace(va) : grid_.verticalFace(va);
+  const double flux = driftBetween(force, zetaInv, pa, pb, faceLength);
+  return swap ? -flux : flux;
+}
+
+// The drift flux from pa to pb across a face of that length.
+double SandField::driftBetween(const PushForce& force, double zetaInv, const Eigen::Vector3d& pa,
+                               const Eigen::Vector3d& pb, double faceLength) const {
+  const core::Chart& chart = grid_.chart();
+  const bool sphere = chart.radius() > 0.0;
   const Eigen::Vector3d mid = 0.5 * (pa + pb);
   Eigen::Vector3d foot = force.centre;
-  if (grid_.sphere()) {
+  if (sphere) {
     foot = chart.radius() * force.centre.normalized();
   } else {
     foot.z() = 0.0;
   }
+  // On a sphere only the hemisphere about the tool: at its antipode the tangent projection of
+  // mid - foot vanishes too, and a ghost of the force pushed there.
+  if (sphere && !(mid.dot(foot) > 0.0)) return 0.0;
   Eigen::Vector3d radial = mid - foot;
-  if (grid_.sphere()) {
+  if (sphere) {
     const Eigen::Vector3d up = mid.normalized();
     radial -= radial.dot(up) * up;
   }
@@ -126,9 +141,7 @@ double SandField::driftFlux(const PushForce& force, double zetaInv, int ua, int 
   const double t = rho / force.radius;
   const double prof = (1.0 - t * t) * (1.0 - t * t);
   const double fn = force.strength * prof * radial.dot(n) / rho;
-  const double faceLength = va == vb ? grid_.horizontalFace(va) : grid_.verticalFace(va);
-  const double flux = zetaInv * fn * grid_.cellSize() * faceLength;
-  return swap ? -flux : flux;
+  return zetaInv * fn * grid_.cellSize() * faceLength;
 }
 
 double SandField::netDriftFlux(const PushForce& force, double zetaInv, int u, int v) const {
@@ -149,6 +162,20 @@ void SandField::markForce(const PushForce& force) {
   const core::Chart& chart = grid_.chart();
   const auto foot = chart.inverse(force.centre);
   if (!foot) return;
+  if (grid_.glued()) {
+    // A box about the foot at a quarter of lat-long's equatorial spacing (the octahedral
+    // charts' smallest is above 0.3 of it), and its images across the folds and midlines
+    // (mark() adds the folds'; the midlines' hold the disc's parts in other quadrants).
+    const double spacing = 0.25 * 2.0 * std::numbers::pi * chart.radius() / m_;
+    const int d = int(std::min(double(m_), std::ceil(force.radius / spacing))) + 2;
+    const int uc = int(std::lround((*foot)(0))), vc = int(std::lround((*foot)(1)));
+    const core::GridBox box{std::max(0, uc - d), std::min(m_, uc + d), std::max(0, vc - d),
+                            std::min(m_, vc + d)};
+    core::GridBox out[4];
+    const int n = chart.gluedImages(box, true, out);
+    for (int i = 0; i < n; ++i) mark({out[i].uBegin, out[i].uEnd, out[i].vBegin, out[i].vEnd});
+    return;
+  }
   const double spacingV = grid_.sphere() ? grid_.vertical(m_ / 2) : grid_.vertical(0);
   const int dv = int(std::ceil(force.radius / spacingV)) + 2;
   const int vc = int(std::lround((*foot)(1))), uc = int(std::lround((*foot)(0)));
@@ -203,6 +230,11 @@ const SandField::DiffusionTables& SandField::diffusionTables(const Material& mat
 StepReport SandField::diffusionStep(const Material& material, double dt, DiffusionScheme scheme,
                                     StepPolicy policy, const PushForce* force) {
   material.validate();
+  if (grid_.glued() && scheme == DiffusionScheme::kSemiImplicit) {
+    throw core::InputError(
+        "semi-implicit (LOD) diffusion solves along the grid's rows and columns, which the " +
+        grid_.chart().name() + " chart's folds break: use the explicit scheme there");
+  }
   if (!std::isfinite(dt) || !(dt > 0.0)) {
     throw core::InputError("diffusion time step dt = " + core::exactNumber(dt) +
                            " must be finite and > 0");
@@ -226,7 +258,8 @@ StepReport SandField::diffusionStep(const Material& material, double dt, Diffusi
       for (int v = tv * kT; v < std::min(m_ + 1, tv * kT + kT); ++v) rowUsed[std::size_t(v)] = 1;
     }
     const bool polesUsed[2] = {grid_.sphere() && poles_[0].inP, grid_.sphere() && poles_[1].inP};
-    const double bound = boundOverRows(material, rowUsed, polesUsed);
+    const double bound = grid_.glued() ? gluedBound(material, false, true)
+                                       : boundOverRows(material, rowUsed, polesUsed);
     if (dt > bound) {
       if (policy == StepPolicy::kRefuse) {
         // Nothing has moved: forget the set this step would have visited.
@@ -259,7 +292,12 @@ StepReport SandField::diffusionStep(const Material& material, double dt, Diffusi
 #pragma omp for schedule(dynamic, 1)
       for (int j = 0; j < n; ++j) {
         const int t = tileList_[std::size_t(j)];
-        diffusionTile(t % tilesU_, t / tilesU_, tb, dt, force, hs.data(), busyOut[std::size_t(j)]);
+        if (grid_.glued()) {
+          diffusionGluedTile(t, tb, dt, force, hs.data(), busyOut[std::size_t(j)]);
+        } else {
+          diffusionTile(t % tilesU_, t / tilesU_, tb, dt, force, hs.data(),
+                        busyOut[std::size_t(j)]);
+        }
       }
     }
     for (int j = 0; j < n; ++j)

@@ -35,7 +35,7 @@ SandField::SandField(std::shared_ptr<const core::Chart> chart, std::span<float> 
 SandField::~SandField() = default;
 
 bool SandField::cellExists(int u, int v) const {
-  return u >= 0 && u < cols_ && grid_.ordinaryRow(v);
+  return u >= 0 && u < cols_ && grid_.ordinaryRow(v) && grid_.isCell(u, v);
 }
 
 int SandField::wrapTileU(int tu) const {
@@ -60,6 +60,7 @@ SandField::Tile& SandField::loadTile(int t) {
           cellExists(u, v) ? double(heights_[g.index(u, v)]) : kWall;
     }
   }
+  if (grid_.glued()) loadGeometry(*ptr, t);
   return *ptr;
 }
 
@@ -93,6 +94,10 @@ double SandField::height(int u, int v) const {
     if (v == m_) return poleValue(1);
     if (u == m_) u = 0;
   }
+  if (grid_.glued()) {
+    const core::GridPoint c = grid_.chart().canonical(u, v);
+    return value(c.u, c.v);
+  }
   return value(u, v);
 }
 
@@ -106,6 +111,14 @@ void SandField::copyHeights(std::vector<double>& out) const {
 
 double SandField::volume() const {
   CompensatedSum total;
+  if (grid_.glued()) {
+    for (int v = 0; v <= m_; ++v) {
+      for (int u = 0; u <= m_; ++u) {
+        if (grid_.isCell(u, v)) total.add(grid_.cellArea(u, v) * value(u, v));
+      }
+    }
+    return total.value();
+  }
   for (int v = 0; v <= m_; ++v) {
     CompensatedSum row;
     if (grid_.sphere() && (v == 0 || v == m_)) {
@@ -123,6 +136,8 @@ std::size_t SandField::residentBytes() const {
   for (const auto& t : tiles_) {
     if (!t) continue;
     bytes += (std::size_t(kT) * kT * (t->next ? 2 : 1) + std::size_t(8) * kT) * sizeof(double);
+    if (t->geo) bytes += std::size_t(kGeoPlanes) * kT * kT * sizeof(double);
+    if (t->s) bytes += std::size_t(kT) * kT * sizeof(double);
   }
   return bytes;
 }
@@ -178,7 +193,7 @@ void SandField::gather(int tu, int tv, double* hs) const {
 
 terrain::GridRegion SandField::writeBack(double limit) {
   const core::GridSize& g = grid_.grid();
-  const bool sphere = grid_.sphere();
+  const bool sphere = grid_.sphere(), glued = grid_.glued();
   terrain::GridRegion dirty = terrain::GridRegion::none();
   // Each height is rounded to float with the volume its rounding loses carried to the next one
   // (error diffusion, carry_ kept from one write-back to the next): the floats' volume then
@@ -189,7 +204,7 @@ terrain::GridRegion SandField::writeBack(double limit) {
   auto round = [&](int u, int v, double x) {
     const float old = heights_[g.index(u, v)];
     if (double(old) == x) return old;
-    const double area = grid_.area(v), want = x + carry_ / area;
+    const double area = grid_.cellArea(u, v), want = x + carry_ / area;
     const float f = static_cast<float>(std::clamp(want, -limit, limit));
     if (std::abs(want) < limit) carry_ += area * (x - double(f));
     return f;
@@ -209,6 +224,13 @@ terrain::GridRegion SandField::writeBack(double limit) {
       const float f = round(u, v, tile->cur[i]);
       bool changed = store(u, v, f);
       if (sphere && u == 0) changed |= store(m_, v, f);
+      if (glued && (u == 0 || u == m_ || v == 0 || v == m_)) {
+        // Its twins across the folds; the box names the canonical vertex only, whose images
+        // (Terrain::commitEdit's gluedImages) hold them.
+        core::GridPoint tw[4];
+        const int n = grid_.chart().twins(u, v, tw);
+        for (int k = 1; k < n; ++k) changed |= store(tw[k].u, tw[k].v, f);
+      }
       if (changed) {
         ua = std::min(ua, u);
         ub = std::max(ub, u);

@@ -3,6 +3,7 @@
 #include <atomic>
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <span>
 #include <utility>
@@ -165,6 +166,31 @@ class SandField {
   double driftFlux(const PushForce& force, double zetaInv, int ua, int va, int ub, int vb) const;
   // The force's drift out of cell (u, v) through its four faces.
   double netDriftFlux(const PushForce& force, double zetaInv, int u, int v) const;
+
+  // The octahedral chart (sand_glued.cpp): per-cell geometry, a one-cell halo read across the
+  // glued sides through the chart's gluing, the thermal step in two passes over the tiles.
+  void markRegion(const terrain::GridRegion& region);
+  void loadGeometry(Tile& tile, int t);
+  // The source of scratch position (r, c) of tile (tu, tv) (a one-cell halo, the grid continued
+  // across the glued sides to the canonical vertex): its tile and index there, or false
+  // (outside the grid or not in P).
+  bool gluedSource(int tu, int tv, int r, int c, int& tile, int& local) const;
+  void gatherGlued(int tu, int tv, double* hs, double* ss, double* caps) const;
+  bool gluedBorderTile(int tu, int tv) const;
+  double gluedTileBound(int t) const;  // min A / sum_f (L_f / d_f) over tile t's cells
+  double gluedBound(const Material& material, bool wholeGrid, bool visited) const;
+  bool gluedLinkActive(Predicate pred, int u, int v, int k, const Material& material) const;
+  void gluedActiveSetLinks(int t, Predicate pred, const Material& material,
+                           const std::function<void(int)>& add);
+  StepReport thermalStepGlued(const Material& material);
+  void thermalGluedPass1(int t, const Material& material, double* hs);
+  void thermalGluedPass2(int t, const Material& material, double* hs, double* ss, double* cs,
+                         std::uint8_t& busy);
+  void diffusionGluedTile(int t, const DiffusionTables& tb, double dt, const PushForce* force,
+                          double* hs, std::uint8_t& busy);
+  double netDriftFluxGlued(const PushForce& force, double zetaInv, int u, int v) const;
+  double driftBetween(const PushForce& force, double zetaInv, const Eigen::Vector3d& pa,
+                      const Eigen::Vector3d& pb, double faceLength) const;
 
   // The semi-implicit step (sand_semi_implicit.cpp) and its parts, in order: next = cur, the
   // force's drift (explicit), the rows' implicit solves, the columns', the polar caps'.

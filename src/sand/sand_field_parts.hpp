@@ -38,6 +38,13 @@ struct SandField::Tile {
   // detail::kT-1 (4 x detail::kT, by row)
   std::unique_ptr<double[]> edge;
   bool unwritten = false;  // cur may differ from the floats
+  // Glued charts (sand_glued.cpp): the per-cell geometry, loaded with the tile (the planes
+  // below: chords, faces over chords, areas, caps), each detail::kT^2 by cell; min over its cells
+  // of A / sum_f (L_f / d_f) (the explicit bound times D l^2); and the thermal outflow scale s of
+  // the step (pass 1).
+  std::unique_ptr<double[]> geo, s;
+  double boundFactor = 0.0;
+  std::vector<int> linked;  // glued: the other tiles its cells have links to
 
   void snapshot() {
     double* e = edge.get();
@@ -83,15 +90,27 @@ struct SandField::DiffusionTables {
   double zetaInv = 0;
 };
 
+// Tile::geo: the 8 links' chords d (+inf where none), the 4 axis links' face over chord L / d
+// and 1 / d (0 where none), the cell's area (0 where no cell) and its receiver cap (A / its
+// link count), kT^2 each.
+inline constexpr int kGeoChord = 0;
+inline constexpr int kGeoRatio = 8;
+inline constexpr int kGeoInv = 12;
+inline constexpr int kGeoArea = 16;
+inline constexpr int kGeoCap = 17;
+inline constexpr int kGeoPlanes = 18;
+
 template <class F>
 void SandField::forEachCellOf(int t, F&& f) const {
   const int tu = t % tilesU_, tv = t / tilesU_;
+  const bool glued = grid_.glued();
   for (int lv = 0; lv < kT; ++lv) {
     const int v = tv * kT + lv;
     if (!grid_.ordinaryRow(v)) continue;
     for (int lu = 0; lu < kT; ++lu) {
       const int u = tu * kT + lu;
       if (u >= cols_) break;
+      if (glued && !grid_.isCell(u, v)) continue;  // a twin on the glued border
       f(u, v, std::size_t(lv * kT + lu));
     }
   }

@@ -1,4 +1,5 @@
 #pragma once
+#include <Eigen/Core>
 #include <memory>
 #include <span>
 #include <vector>
@@ -19,6 +20,15 @@ namespace ps::sand {
 //       A_pole = 4 pi R^2 sin^2(dlat/4),
 //   and neighbours each of the m distinct vertices of the next row. The areas sum to 4 pi R^2.
 // * Flat (FlatChart): every vertex owns a dx * dy cell; the border is closed (no flux out).
+// * Octahedral (OctahedralChart, both mappings; `glued()`): the square folded onto the sphere,
+//   every side glued to itself mirrored. Each distinct point (twins on the glued border are one
+//   point, kept at the chart's canonical vertex) owns a quarter of every grid quad it is a corner
+//   of, at each of its twins; a quad's area is that of the spherical quadrilateral through its
+//   four corners (two geodesic triangles), so the areas sum to 4 pi R^2. Links (8 per cell, the
+//   grid continued across the folds) and faces are per cell, not per row: a link's chord is
+//   |P_i - P_j|, an axis link's face the chord between the centres of the two quads beside it.
+//   The four side midpoints are cone points (180 degrees of the square around them): there the
+//   continued grid reaches each neighbour twice, and only one of each pair is a link (4 links).
 //
 // "Volume" is sum_i A_i h_i over distinct points: the volume between the reference surface and the
 // terrain to first order in h / R (the shell's exact volume differs by a factor 1 + h/R +
@@ -28,21 +38,63 @@ namespace ps::sand {
 // Distances between neighbours are chords between their positions on the reference surface.
 class SandGrid {
  public:
-  // Throws core::InputError for a chart that is neither a LatLongChart nor a FlatChart.
+  // Throws core::InputError for a chart that is not a LatLongChart, FlatChart or
+  // OctahedralChart.
   explicit SandGrid(std::shared_ptr<const core::Chart> chart);
 
   const core::Chart& chart() const { return *chart_; }
   std::shared_ptr<const core::Chart> chartPtr() const { return chart_; }
   const core::GridSize& grid() const { return grid_; }
   int m() const { return m_; }
+  // Lat-long: the sphere with poles and a seam (the per-row tables below).
   bool sphere() const { return sphere_; }
-  // Distinct columns: m on the sphere (u = m is u = 0), m + 1 on a flat grid.
+  // The octahedral chart: per-cell geometry (cellArea, neighbour, chord, face), no poles.
+  bool glued() const { return glued_; }
+  // Distinct columns: m on the sphere (u = m is u = 0), m + 1 on a flat or glued grid.
   int columns() const { return columns_; }
   // Rows whose vertices are ordinary cells (all rows on a flat grid; 1 .. m-1 on the sphere).
   bool ordinaryRow(int v) const { return v >= 0 && v <= m_ && (!sphere_ || (v > 0 && v < m_)); }
 
-  // Area (m^2) of the cell of a vertex of row v; pole rows give the polar cap.
+  // Area (m^2) of the cell of a vertex of row v; pole rows give the polar cap. Lat-long and
+  // flat only (the per-row tables; on a glued chart use cellArea).
   double area(int v) const { return area_[std::size_t(v)]; }
+  // Area (m^2) of the cell of grid vertex (u, v) on any chart (a twin gives its point's).
+  double cellArea(int u, int v) const { return glued_ ? gluedArea(u, v) : area_[std::size_t(v)]; }
+  // Whether grid vertex (u, v) owns a cell: on a glued chart its point's canonical vertex.
+  bool isCell(int u, int v) const {
+    if (!glued_ || (u > 0 && u < m_ && v > 0 && v < m_)) return true;
+    const core::GridPoint c = chart_->canonical(u, v);
+    return c.u == u && c.v == v;
+  }
+
+  // Glued charts: the directions of a cell's links, W E S N SW SE NW NE (the first four are the
+  // axis links diffusion uses; opposite pairs 0-1, 2-3, 4-7, 5-6).
+  static constexpr int kDu[8] = {-1, 1, 0, 0, -1, 1, -1, 1};
+  static constexpr int kDv[8] = {0, 0, -1, 1, -1, -1, 1, 1};
+  // The canonical vertex of the neighbour of cell (u, v) in direction k, the grid continued
+  // across the glued sides; {-1, -1} where a cone point leaves that direction out (it reaches
+  // the same neighbour in the opposite direction).
+  core::GridPoint neighbour(int u, int v, int k) const;
+  // Links of the cell (u, v): 8, 4 at a cone point.
+  int linkCount(int u, int v) const { return coneDrops(u, v) ? 4 : 8; }
+  // Chord (m) of cell (u, v)'s link k; +inf where there is none. A symmetric function of the
+  // two points: both cells of a link get it bit for bit.
+  double chord(int u, int v, int k) const;
+  // Length (m) of the face of cell (u, v)'s axis link k < 4 (0 where there is none): the chord
+  // between the centres of the two grid quads beside the link, bit for bit the same from both
+  // cells.
+  double face(int u, int v, int k) const;
+  // |a - b| with a fixed order of operations: the same bits for (a, b) and (b, a) (chord()).
+  static double chordBetween(const Eigen::Vector3d& a, const Eigen::Vector3d& b);
+  // A grid quad's centre on the sphere from its corners' points, given in the order of their
+  // canonical grid indices (face()).
+  Eigen::Vector3d centreOf(const Eigen::Vector3d sortedCorners[4]) const;
+  // Area of the spherical quadrilateral of four reference points, in grid order (a quad's
+  // corners (u, v), (u + 1, v), (u + 1, v + 1), (u, v + 1)).
+  double quadAreaOf(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c,
+                    const Eigen::Vector3d& d) const;
+  // Reference position (m) of grid vertex (u, v) (twins: bit for bit one point).
+  Eigen::Vector3d point(int u, int v) const { return chart_->position(u, v, 0.0); }
   // Chord (m) from (u, v) to (u + 1, v).
   double horizontal(int v) const { return horizontal_[std::size_t(v)]; }
   // Chord (m) from (u, v) to (u, v + 1), 0 <= v < m (on the sphere v = 0 and v = m - 1 are the
@@ -69,14 +121,28 @@ class SandGrid {
  private:
   template <class T>
   double sum(std::span<const T> heights, bool absolute) const;
+  void buildGlued(double R);
+  double gluedArea(int u, int v) const;
+  double quadArea(int u, int v) const;         // the grid quad (u..u+1, v..v+1) on the sphere
+  double computeCellArea(int u, int v) const;  // of canonical (u, v), from its quads
+  // The directions a cone point leaves out (a bit per k), 0 elsewhere.
+  unsigned coneDrops(int u, int v) const;
+  Eigen::Vector3d quadCentre(int u, int v) const;  // the quad (u..u+1, v..v+1), continued
 
   std::shared_ptr<const core::Chart> chart_;
   core::GridSize grid_;
   int m_ = 0;
   bool sphere_ = false;
+  bool glued_ = false;
+  double radius_ = 0;
   int columns_ = 0;
   double cellSize_ = 0;
   std::vector<double> area_, horizontal_, vertical_, diagonal_, horizontalFace_, verticalFace_;
+  // Glued charts: cell areas in 32 x 32 blocks computed when first asked for (a planet's grid
+  // may be 8193^2, and the brush never asks), shared by copies; safe to fill from any thread.
+  struct AreaCache;
+  std::shared_ptr<AreaCache> areas_;
+  int areaBlocksU_ = 0;
 };
 
 // Compensated (Neumaier) summation.

@@ -128,6 +128,7 @@ const SandField::ThermalTables& SandField::thermalTables(const Material& materia
 
 StepReport SandField::thermalStep(const Material& material) {
   material.validate();
+  if (grid_.glued()) return thermalStepGlued(material);
   StepReport rep;
   if (atRest()) return rep;
   buildActiveSet(Predicate::kThermal, material);
