@@ -122,14 +122,14 @@ TinSand::TinSand(tin::DynamicTin tin, TinSandSettings settings)
   tanFlat_ = std::tan(settings_.flatDeg * std::numbers::pi / 180.0);
 }
 
-void TinSand::activate(Vertex v) {
+void TinSand::activate(Vertex v, bool changed) {
   if (v >= inLe_.size()) {
     inLe_.resize(std::size_t(v) + 1, 0);
     idle_.resize(std::size_t(v) + 1, 0);
   }
   idle_[v] = 0;
   if (!inLe_[v]) inLe_[v] = 1, le_.push_back(v);
-  markFlatCandidate(v);
+  if (changed) markFlatCandidate(v);
 }
 
 void TinSand::markFlatCandidate(Vertex v) {
@@ -255,15 +255,15 @@ std::size_t TinSand::erode() {
     if (!tin_.alive(k) || !inLe_[k]) continue;
     const double hk = tin_.height(k);
     const Eigen::Vector2d pk = tin_.position(k);
-    tin_.neighbours(k, neighbours_);
+    tin_.neighbourhood(k, ring_);
     shares.clear();
     double excessSum = 0;
-    for (const Vertex j : neighbours_) {
-      const double d = (tin_.position(j) - pk).norm();
-      const double gap = hk - tin_.height(j);
+    for (const tin::DynamicTin::Neighbour& j : ring_) {
+      const double d = (j.p - pk).norm();
+      const double gap = hk - j.h;
       const double excess = gap - (tanTalus_ * d + cohesion);
       if (excess > restTolerance * d) {
-        shares.push_back({j, weight(j), excess, gap});
+        shares.push_back({j.v, weight(j.v), excess, gap});
         excessSum += excess;
       }
     }
@@ -291,11 +291,13 @@ std::size_t TinSand::erode() {
       const double m = lambda * s.amount;
       tin_.setHeight(s.v, tin_.height(s.v) + m / s.weight);
       given += m;
+      markFlatCandidate(s.v);
     }
     tin_.setHeight(k, hk - given / wk);
     markFlatCandidate(k);
-    // The receivers rose and k sank: a higher neighbour may now be steeper than the talus.
-    for (const Vertex j : neighbours_) activate(j);
+    // The receivers rose and k sank: a higher neighbour may now be steeper than the talus. Lr
+    // takes only the vertices whose height changed (the paper's step 2d); the others are woken.
+    for (const tin::DynamicTin::Neighbour& j : ring_) activate(j.v, false);
   }
   // Vertices that went idle leave the list.
   le_.erase(
@@ -316,9 +318,9 @@ double TinSand::weight(Vertex v) {
 bool TinSand::isFlat(Vertex v) {
   const double h = tin_.height(v);
   const Eigen::Vector2d p = tin_.position(v);
-  tin_.neighbours(v, neighbours_);
-  for (const Vertex u : neighbours_)
-    if (std::abs(tin_.height(u) - h) > tanFlat_ * (tin_.position(u) - p).norm()) return false;
+  tin_.neighbourhood(v, ring_);
+  for (const tin::DynamicTin::Neighbour& u : ring_)
+    if (std::abs(u.h - h) > tanFlat_ * (u.p - p).norm()) return false;
   return true;
 }
 

@@ -94,7 +94,8 @@ class TinSand {
   const Timing& timing() const { return timing_; }
 
  private:
-  void activate(Vertex v);
+  // Into Le (woken); also into Lr when its height changed.
+  void activate(Vertex v, bool changed = true);
   void markFlatCandidate(Vertex v);
   bool isFlat(Vertex v);
   // tin_.weight(v), cached until the triangulation changes (erosion asks for it many times).
@@ -108,6 +109,7 @@ class TinSand {
   std::vector<std::uint8_t> inLe_, inLr_;  // by vertex number
   std::vector<std::uint8_t> idle_;         // iterations without a transfer, by vertex number
   std::vector<Vertex> scratch_, neighbours_;
+  std::vector<tin::DynamicTin::Neighbour> ring_;
   std::vector<double> weight_;
   std::vector<std::uint64_t> weightEpoch_;  // epoch + 1 of each cached weight (0: none)
   Timing timing_;

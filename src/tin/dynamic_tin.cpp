@@ -213,6 +213,15 @@ void DynamicTin::neighbours(Vertex v, std::vector<Vertex>& out) const {
   while (++c != done);
 }
 
+void DynamicTin::neighbourhood(Vertex v, std::vector<Neighbour>& out) const {
+  out.clear();
+  auto c = impl_->cdt.incident_vertices(impl_->handle(v)), done = c;
+  do
+    if (!impl_->cdt.is_infinite(c))
+      out.push_back({c->info().index, xyOf(c->point()), c->info().height});
+  while (++c != done);
+}
+
 double DynamicTin::weight(Vertex v) const {
   double area2 = 0;
   auto f = impl_->cdt.incident_faces(impl_->handle(v)), done = f;

@@ -51,6 +51,14 @@ class DynamicTin {
   bool onHull(Vertex v) const;
   // v's neighbours, counter-clockwise.
   void neighbours(Vertex v, std::vector<Vertex>& out) const;
+  // The same with each neighbour's position and height, in one walk around v (erosion's inner
+  // loop: no lookup by number per neighbour).
+  struct Neighbour {
+    Vertex v;
+    Eigen::Vector2d p;
+    double h;
+  };
+  void neighbourhood(Vertex v, std::vector<Neighbour>& out) const;
   // w_v: the volume a metre of height at v adds (a third of the area of its triangles).
   double weight(Vertex v) const;
   // Every live vertex, in number order.
