@@ -182,7 +182,7 @@ TinStampStats TinSand::stamp(const Eigen::Vector2d& centre, double bottom,
   // Rings halfway across the rampart and at its edge, so that the material pushed aside lands
   // in the rampart's profile however coarse the TIN is there (and not beyond its edge).
   for (const double across : {0.5, 1.0})
-    for (std::size_t k = 0; k < n; ++k) {
+    for (std::size_t k = 0; k < n && tool.pushAside; ++k) {
       const Eigen::Vector2d& q = tool.outline[k];
       place(centre + q * (1.0 + (tool.rim + across * tool.rampartWidth) / q.norm()), INFINITY);
     }
@@ -210,9 +210,50 @@ TinStampStats TinSand::stamp(const Eigen::Vector2d& centre, double bottom,
     if (tin_.remove(v)) ++stats.removedInside;
   }
 
+  // Older vertices between the contours (on the tool's wall) standing on or above the wall, the
+  // line across the rim from the inner contour to the outer one along their ray, carry nothing
+  // the contours do not: removed, the wall is the contours' own triangles. Those under it (an
+  // older, deeper imprint) stay. The volume this changes is in the stamp's own account below.
+  for (const Vertex v : scratch_) {
+    if (!tin_.alive(v) || tin_.onHull(v) ||
+        std::find(innerIds.begin(), innerIds.end(), v) != innerIds.end() ||
+        std::find(outerIds.begin(), outerIds.end(), v) != outerIds.end())
+      continue;
+    const Eigen::Vector2d d = tin_.position(v) - centre;
+    for (std::size_t k = 0; k < n; ++k) {
+      const std::size_t l = (k + 1) % n;
+      if (cross(tool.outline[k], d) < 0 || cross(d, tool.outline[l]) <= 0) continue;
+      // Where v's ray crosses the inner and the outer contour's edge k (at lambda * d), and the
+      // heights there.
+      const auto crossing = [&](Vertex a, Vertex b, double& lambda, double& h) {
+        const Eigen::Vector2d pa = tin_.position(a) - centre, pb = tin_.position(b) - centre;
+        const double den = cross(d, pb - pa);
+        if (den == 0) return false;
+        lambda = cross(pa, pb - pa) / den;
+        const double u =
+            std::clamp((lambda * d - pa).dot(pb - pa) / (pb - pa).squaredNorm(), 0.0, 1.0);
+        h = (1 - u) * tin_.height(a) + u * tin_.height(b);
+        return true;
+      };
+      double lIn = 0, hIn = 0, lOut = 0, hOut = 0;
+      if (!crossing(innerIds[k], innerIds[l], lIn, hIn) ||
+          !crossing(outerIds[k], outerIds[l], lOut, hOut) || !(lIn < 1 && 1 < lOut))
+        break;
+      const double t = (1 - lIn) / (lOut - lIn);
+      if (t > 0.02 && t < 0.98 && tin_.height(v) >= hIn + t * (hOut - hIn) &&
+          tin_.remove(v, nullptr, false))
+        ++stats.removedWall;
+      break;
+    }
+  }
+
   // What the stamp changed goes onto the rampart, weighted by its profile.
   const double displaced = before - tin_.volume();
   stats.displacedVolume = displaced;
+  if (!tool.pushAside) {
+    timing_.stampMs += msSince(t0);
+    return stats;
+  }
   tin_.verticesWithin(centre, tool.reach(), scratch_);
   std::vector<std::pair<Vertex, double>> rampart;
   double weighted = 0;

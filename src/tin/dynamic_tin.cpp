@@ -182,6 +182,12 @@ std::size_t DynamicTin::memoryBytes() const {
          impl_->generations.bucket_count() * sizeof(void*);
 }
 
+DynamicTin::Slots DynamicTin::slots() const {
+  const auto& tds = impl_->cdt.tds();
+  return {tds.vertices().capacity(), tds.vertices().size(), tds.faces().capacity(),
+          tds.faces().size()};
+}
+
 bool DynamicTin::alive(Vertex v) const {
   return v < impl_->handles.size() && impl_->handles[v] != lean::VertexHandle();
 }
@@ -403,7 +409,7 @@ std::uint32_t DynamicTin::generation(Vertex a, Vertex b) const {
   return it == impl_->generations.end() ? kNoVertex : it->second;
 }
 
-bool DynamicTin::remove(Vertex id, double* volumeChange) {
+bool DynamicTin::remove(Vertex id, double* volumeChange, bool restoreVolume) {
   Impl& m = *impl_;
   const lean::VertexHandle v = m.handle(id);
   if (onHull(id)) return false;
@@ -450,6 +456,7 @@ bool DynamicTin::remove(Vertex id, double* volumeChange) {
   }
   const double change = after - before;
   if (volumeChange) *volumeChange = change;
+  if (!restoreVolume) return true;
   double rimWeight = 0;
   for (const lean::VertexHandle& u : link) rimWeight += weight(u->info().index);
   if (rimWeight > 0 && change != 0)

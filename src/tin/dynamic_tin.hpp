@@ -43,6 +43,12 @@ class DynamicTin {
   std::uint64_t topologyEpoch() const;
   // Bytes the triangulation holds (its vertex and face containers' capacity, and the id table).
   std::size_t memoryBytes() const;
+  // The vertex and face containers' slots (capacity: live elements, freed ones kept for reuse,
+  // and the growth reserve) and their live elements (the infinite vertex and its faces included).
+  struct Slots {
+    std::size_t vertexSlots = 0, vertices = 0, faceSlots = 0, faces = 0;
+  };
+  Slots slots() const;
 
   bool alive(Vertex v) const;
   Eigen::Vector2d position(Vertex v) const;
@@ -95,9 +101,10 @@ class DynamicTin {
 
   // Removes v (freeing its constrained edges first) and re-fills the hole with Delaunay
   // triangles; false (nothing changed) for a hull vertex. The volume re-filling changed is put
-  // back by raising the hole's rim vertices alike (so V is kept to rounding); the change
-  // before that is returned in *volumeChange.
-  bool remove(Vertex v, double* volumeChange = nullptr);
+  // back by raising the hole's rim vertices alike (so V is kept to rounding; not when
+  // restoreVolume is false: a caller that measures V itself); the change before that is
+  // returned in *volumeChange.
+  bool remove(Vertex v, double* volumeChange = nullptr, bool restoreVolume = true);
 
   // V (see above), summed over the triangles in long double.
   double volume() const;
