@@ -160,7 +160,8 @@ TinStampStats TinSand::stamp(const Eigen::Vector2d& centre, double bottom,
   // Contour points may snap to vertices up to `snap` outside the outer contour: free what
   // their edges could cross too.
   const double snap = 0.25 * tool.rim;
-  stats.freedConstraints = tin_.freeConstraintsNear(centre, tool.outerRadius() + 2 * snap);
+  std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>> freed;
+  stats.freedConstraints = tin_.freeConstraintsNear(centre, tool.outerRadius() + 2 * snap, &freed);
 
   // Outer contour first: it follows the terrain. Then the inner one, pressed. A contour point
   // next to a vertex already there (an earlier stamp's) takes that vertex instead of making a
@@ -171,14 +172,60 @@ TinStampStats TinSand::stamp(const Eigen::Vector2d& centre, double bottom,
     tin_.setHeight(near, std::min(tin_.height(near), cap));
     return near;
   };
+  // Where a contour edge crosses an older contour's (freed) edge, a vertex at the older edge's
+  // height there (capped): the crease where the two imprints meet stays in the TIN (the freed
+  // edge's line is the surface before this stamp along it), and the wall is not cut across.
+  std::vector<std::pair<double, Eigen::Vector3d>> crossings;
+  const auto constrainEdge = [&](Vertex from, Vertex to, double cap, std::vector<Vertex>& path) {
+    const Eigen::Vector2d p = tin_.position(from), q = tin_.position(to);
+    const double length = (q - p).norm();
+    crossings.clear();
+    for (const auto& [a3, b3] : freed) {
+      const Eigen::Vector2d a = a3.head<2>(), b = b3.head<2>();
+      if (!segmentsCross(p, q, a, b)) continue;
+      const double den = cross(q - p, b - a);
+      const double s = cross(a - p, b - a) / den, u = cross(a - p, q - p) / den;
+      if (s * length < snap || (1 - s) * length < snap) continue;
+      crossings.emplace_back(s, Eigen::Vector3d(p.x() + s * (q - p).x(), p.y() + s * (q - p).y(),
+                                                (1 - u) * a3.z() + u * b3.z()));
+    }
+    std::sort(crossings.begin(), crossings.end(),
+              [](const auto& x, const auto& y) { return x.first < y.first; });
+    Vertex at = from;
+    double last = 0;
+    for (const auto& [s, x] : crossings) {
+      if ((s - last) * length < snap) continue;
+      const Eigen::Vector2d xy = x.head<2>();
+      Vertex v = tin_.vertexNear(xy, snap);
+      if (v == tin::DynamicTin::kNoVertex)
+        v = tin_.insert(xy, std::min(x.z(), cap));
+      else
+        tin_.setHeight(v, std::min(tin_.height(v), cap));
+      if (v == at || v == to) continue;
+      tin_.constrain(at, v, generation_);
+      path.push_back(v);
+      at = v, last = s;
+    }
+    if (at != to) tin_.constrain(at, to, generation_);
+  };
   const std::size_t countBefore = tin_.vertexCount();
-  std::vector<Vertex> outerIds(n), innerIds(n);
+  std::vector<Vertex> outerIds(n), innerIds(n), outerPath, innerPath;
   for (std::size_t k = 0; k < n; ++k) outerIds[k] = place(outer[k], INFINITY);
   for (std::size_t k = 0; k < n; ++k)
-    tin_.constrain(outerIds[k], outerIds[(k + 1) % n], generation_);
+    constrainEdge(outerIds[k], outerIds[(k + 1) % n], INFINITY, outerPath);
   for (std::size_t k = 0; k < n; ++k) innerIds[k] = place(inner[k], bottom);
   for (std::size_t k = 0; k < n; ++k)
-    tin_.constrain(innerIds[k], innerIds[(k + 1) % n], generation_);
+    constrainEdge(innerIds[k], innerIds[(k + 1) % n], bottom, innerPath);
+  const auto onContour = [&](Vertex v) {
+    const auto has = [v](const std::vector<Vertex>& ids) {
+      return std::find(ids.begin(), ids.end(), v) != ids.end();
+    };
+    return has(innerIds) || has(outerIds) || has(innerPath) || has(outerPath);
+  };
+  const auto onInner = [&](Vertex v) {
+    return std::find(innerIds.begin(), innerIds.end(), v) != innerIds.end() ||
+           std::find(innerPath.begin(), innerPath.end(), v) != innerPath.end();
+  };
   // Rings halfway across the rampart and at its edge, so that the material pushed aside lands
   // in the rampart's profile however coarse the TIN is there (and not beyond its edge).
   for (const double across : {0.5, 1.0})
@@ -198,10 +245,12 @@ TinStampStats TinSand::stamp(const Eigen::Vector2d& centre, double bottom,
   }
   for (const Vertex v : inside) activate(v);
   for (const Vertex v : outerIds) activate(v);
+  for (const Vertex v : outerPath) activate(v);
+  for (const Vertex v : innerPath) activate(v);
 
   // Inner vertices on the bottom with no deeper neighbour carry nothing the contour does not.
   for (const Vertex v : inside) {
-    if (std::find(innerIds.begin(), innerIds.end(), v) != innerIds.end()) continue;
+    if (onContour(v)) continue;
     if (tin_.height(v) != bottom) continue;
     tin_.neighbours(v, neighbours_);
     if (std::any_of(neighbours_.begin(), neighbours_.end(),
@@ -215,10 +264,7 @@ TinStampStats TinSand::stamp(const Eigen::Vector2d& centre, double bottom,
   // the contours do not: removed, the wall is the contours' own triangles. Those under it (an
   // older, deeper imprint) stay. The volume this changes is in the stamp's own account below.
   for (const Vertex v : scratch_) {
-    if (!tin_.alive(v) || tin_.onHull(v) ||
-        std::find(innerIds.begin(), innerIds.end(), v) != innerIds.end() ||
-        std::find(outerIds.begin(), outerIds.end(), v) != outerIds.end())
-      continue;
+    if (!tin_.alive(v) || tin_.onHull(v) || onContour(v)) continue;
     const Eigen::Vector2d d = tin_.position(v) - centre;
     for (std::size_t k = 0; k < n; ++k) {
       const std::size_t l = (k + 1) % n;
@@ -260,9 +306,7 @@ TinStampStats TinSand::stamp(const Eigen::Vector2d& centre, double bottom,
   for (const Vertex v : scratch_) {
     const Eigen::Vector2d p = tin_.position(v);
     // The inner contour's vertices lie on the polygon, where the inside test may go either way.
-    if (insidePolygon(inner, p) || tin_.onHull(v) ||
-        std::find(innerIds.begin(), innerIds.end(), v) != innerIds.end())
-      continue;
+    if (insidePolygon(inner, p) || tin_.onHull(v) || onInner(v)) continue;
     const double t = insidePolygon(outer, p) ? 0.0 : polygonDistance(outer, p) / tool.rampartWidth;
     const double profile = rampartProfile(t);
     if (profile <= 0) continue;

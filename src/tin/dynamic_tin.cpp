@@ -377,7 +377,9 @@ void DynamicTin::constrain(Vertex a, Vertex b, std::uint32_t generation) {
   m.tagPath(va, vb, generation);
 }
 
-std::size_t DynamicTin::freeConstraintsNear(const Eigen::Vector2d& centre, double radius) {
+std::size_t DynamicTin::freeConstraintsNear(
+    const Eigen::Vector2d& centre, double radius,
+    std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>>* freed) {
   Impl& m = *impl_;
   std::vector<lean::FaceHandle> faces;
   m.facesTouching(centre, radius, faces);
@@ -391,17 +393,20 @@ std::size_t DynamicTin::freeConstraintsNear(const Eigen::Vector2d& centre, doubl
           seen.insert(edgeKey(a->info().index, b->info().index)).second)
         edges.emplace_back(a, b);
     }
-  std::size_t freed = 0;
+  std::size_t count = 0;
   for (const auto& [a, b] : edges) {
     lean::FaceHandle f;
     int i = 0;
     if (!m.cdt.is_edge(a, b, f, i) || !f->is_constrained(i)) continue;
+    if (freed)
+      freed->emplace_back(Eigen::Vector3d(a->point().x(), a->point().y(), a->info().height),
+                          Eigen::Vector3d(b->point().x(), b->point().y(), b->info().height));
     m.cdt.remove_constrained_edge(f, i);
     ++m.epoch;
     m.generations.erase(edgeKey(a->info().index, b->info().index));
-    ++freed;
+    ++count;
   }
-  return freed;
+  return count;
 }
 
 std::uint32_t DynamicTin::generation(Vertex a, Vertex b) const {

@@ -95,7 +95,10 @@ class DynamicTin {
   void constrain(Vertex a, Vertex b, std::uint32_t generation);
   // Constrained edges with a point within `radius` of `centre` become free (the triangulation
   // is made Delaunay again there). Returns how many.
-  std::size_t freeConstraintsNear(const Eigen::Vector2d& centre, double radius);
+  // The freed edges' ends (x, y, height) go to *freed when given.
+  std::size_t freeConstraintsNear(
+      const Eigen::Vector2d& centre, double radius,
+      std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>>* freed = nullptr);
   // The generation of the constrained edge a-b; kNoVertex when it is not constrained.
   std::uint32_t generation(Vertex a, Vertex b) const;
 
