@@ -5,7 +5,9 @@
 // PS_STRESS_SCALE=k runs k times as many.
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <cmath>
+#include <iostream>
 #include <random>
 
 #include "core/input_error.hpp"
@@ -121,6 +123,7 @@ TEST(StressTinSand, ToolOnAPlanetAtThePolesTheSeamAndRandomPoints) {
   std::uniform_real_distribution<double> uni(0.0, 1.0);
   const int stamps = 40 * ps::testkit::stressScale();
   double worstDrift = 0;
+  const auto start = std::chrono::steady_clock::now();
   for (int k = 0; k < stamps; ++k) {
     double lat = 0, lon = 0;
     switch (k % 4) {
@@ -145,6 +148,10 @@ TEST(StressTinSand, ToolOnAPlanetAtThePolesTheSeamAndRandomPoints) {
     const double drift = std::abs(grid.volume(t.heights()) - vBefore) / grid.absVolume(t.heights());
     worstDrift = std::max(worstDrift, drift);
     ASSERT_LE(drift, 1e-9) << "stamp " << k << " at " << lat << ", " << lon;
+    if (stamps >= 10000 && (k + 1) % (stamps / 20) == 0)
+      std::cerr << "planet stress: " << k + 1 << " of " << stamps << " stamps, "
+                << std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count()
+                << " s\n";
     if (k % 50 == 0 || k + 1 == stamps) {
       for (const float h : t.heights()) ASSERT_TRUE(std::isfinite(h)) << "after stamp " << k;
       ASSERT_TRUE(ps::edittest::consistentHeights(t)) << "after stamp " << k;
