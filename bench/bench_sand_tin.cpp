@@ -16,6 +16,12 @@
 //     513^2) over that grid's vertices (surface_error_max_m the largest: a wall one cell off
 //     makes it the tool's depth whatever the model); steepest_slope the steepest edge (the
 //     TIN) or link (the grid): how sharp an imprint each holds.
+//   experiment compare-exact: the same stroke as a press only (no rampart, no erosion) on the
+//     TIN and on grids of 129^2 .. 8193^2 holding the exact shape at their vertices, each
+//     measured against the exact stamped shape (the minimum over the stamps of the tool's shape)
+//     on a 16384^2 lattice near the stroke and 1024^2 elsewhere: RMS over the box and largest.
+//   Every comparison's TIN row: the grids' memory at the TIN's error (log-log between the grids
+//     either side) and the ratio TIN / that (issue 27's target: at most 1/5).
 //   experiment drift: one deep stamp into a 10,000-vertex TIN, then 10^4 erosion iterations
 //     with the removal on (--quick: 10^3): the relative volume drift.
 // Every row: "model" ("tin" or "grid"), vertices, memory_bytes (the TIN: its triangulation's
