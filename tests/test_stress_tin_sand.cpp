@@ -45,6 +45,7 @@ TEST(StressTinSand, RandomStampsKeepTheTriangulationValidAndTheVolume) {
   std::uniform_real_distribution<double> uni(0.0, 1.0);
   const int stamps = 600 / (ps::testkit::underAsan() ? 4 : 1) * ps::testkit::stressScale();
   std::size_t done = 0, refused = 0, most = 0;
+  const auto start = std::chrono::steady_clock::now();
   for (int k = 0; k < stamps; ++k) {
     const double r = 0.05 * std::pow(60.0, uni(rng));  // 0.05 .. 3 m, log-uniform
     const TinStampTool tool = TinStampTool::disc(r, 3 + int(uni(rng) * 40));
@@ -61,6 +62,11 @@ TEST(StressTinSand, RandomStampsKeepTheTriangulationValidAndTheVolume) {
     for (int s = 0; s < 2; ++s) sand.erode();
     sand.removeRedundant();
     most = std::max(most, sand.tin().vertexCount());
+    if (stamps >= 5000 && (k + 1) % (stamps / 20) == 0)
+      std::cerr << "flat stress: " << k + 1 << " of " << stamps << " stamps, "
+                << std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count()
+                << " s, " << sand.tin().vertexCount() << " vertices, " << sand.activeCount()
+                << " in Le\n";
     if (k % 100 == 0) {
       ASSERT_EQ(sand.tin().validityProblem(), "") << "after stamp " << k;
     }
