@@ -15,6 +15,9 @@
 
 namespace ps::tin {
 
+static_assert(sizeof(lean::Tds::Face) == 56,
+              "the lean face: three vertices, three neighbours, three constraint flags");
+
 namespace {
 
 constexpr std::uint32_t kUnnumbered = ~std::uint32_t(0);
