@@ -485,7 +485,33 @@ bool DynamicTin::isValid() const {
 
 std::string DynamicTin::validityProblem() const {
   const Impl& m = *impl_;
-  if (!m.cdt.is_valid()) return "CGAL's check of the triangulation failed";
+  if (!m.cdt.is_valid()) {
+    // Which part: the data structure, a face's orientation, or the Delaunay property of an
+    // edge that is not constrained (what the constrained Delaunay triangulation's check adds).
+    if (!m.cdt.tds().is_valid())
+      return "CGAL's check of the triangulation failed: the data structure";
+    for (auto f = m.cdt.finite_faces_begin(); f != m.cdt.finite_faces_end(); ++f)
+      if (CGAL::orientation(f->vertex(0)->point(), f->vertex(1)->point(), f->vertex(2)->point()) !=
+          CGAL::LEFT_TURN)
+        return "CGAL's check of the triangulation failed: a face not counter-clockwise at (" +
+               std::to_string(f->vertex(0)->point().x()) + ", " +
+               std::to_string(f->vertex(0)->point().y()) + ")";
+    for (auto e = m.cdt.finite_edges_begin(); e != m.cdt.finite_edges_end(); ++e) {
+      if (m.cdt.is_constrained(*e)) continue;
+      const lean::FaceHandle f = e->first, g = f->neighbor(e->second);
+      if (m.cdt.is_infinite(f) || m.cdt.is_infinite(g)) continue;
+      const lean::VertexHandle opposite = g->vertex(m.cdt.mirror_index(f, e->second));
+      if (m.cdt.side_of_oriented_circle(f, opposite->point(), true) == CGAL::ON_POSITIVE_SIDE) {
+        const Point a = f->vertex(lean::Cdt::ccw(e->second))->point(),
+                    b = f->vertex(lean::Cdt::cw(e->second))->point();
+        return "CGAL's check of the triangulation failed: edge (" + std::to_string(a.x()) + ", " +
+               std::to_string(a.y()) + ")-(" + std::to_string(b.x()) + ", " +
+               std::to_string(b.y()) + ") is free and not Delaunay, length " +
+               std::to_string(std::hypot(a.x() - b.x(), a.y() - b.y()));
+      }
+    }
+    return "CGAL's check of the triangulation failed";
+  }
   for (auto v = m.cdt.finite_vertices_begin(); v != m.cdt.finite_vertices_end(); ++v) {
     if (!std::isfinite(v->info().height))
       return "vertex " + std::to_string(v->info().index) + " has a height that is not finite";
