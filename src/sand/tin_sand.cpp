@@ -253,8 +253,11 @@ TinStampStats TinSand::stamp(const Eigen::Vector2d& centre, double bottom,
     if (onContour(v)) continue;
     if (tin_.height(v) != bottom) continue;
     tin_.neighbours(v, neighbours_);
-    if (std::any_of(neighbours_.begin(), neighbours_.end(),
-                    [&](Vertex u) { return tin_.height(u) < bottom; }))
+    // A vertex on a constrained edge (where this stamp's contour crossed one) stays: it carries
+    // the contour.
+    if (std::any_of(neighbours_.begin(), neighbours_.end(), [&](Vertex u) {
+          return tin_.height(u) < bottom || tin_.generation(v, u) != tin::DynamicTin::kNoVertex;
+        }))
       continue;
     if (tin_.remove(v)) ++stats.removedInside;
   }
