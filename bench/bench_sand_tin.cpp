@@ -16,12 +16,19 @@
 //     513^2) over that grid's vertices (surface_error_max_m the largest: a wall one cell off
 //     makes it the tool's depth whatever the model); steepest_slope the steepest edge (the
 //     TIN) or link (the grid): how sharp an imprint each holds.
+//   experiment compare-exact: the same stroke as a press only (no rampart, no erosion) on the
+//     TIN and on grids of 129^2 .. 8193^2 holding the exact shape at their vertices, each
+//     measured against the exact stamped shape (the minimum over the stamps of the tool's shape)
+//     on a 16384^2 lattice near the stroke and 1024^2 elsewhere: RMS over the box and largest.
+//   Every comparison's TIN row: the grids' memory at the TIN's error (log-log between the grids
+//     either side) and the ratio TIN / that (issue 27's target: at most 1/5).
 //   experiment drift: one deep stamp into a 10,000-vertex TIN, then 10^4 erosion iterations
 //     with the removal on (--quick: 10^3): the relative volume drift.
 // Every row: "model" ("tin" or "grid"), vertices, memory_bytes (the TIN: its triangulation's
 // containers; the grid: its float heights and the sand field's resident tiles), surface_error_m,
 // volume_drift (|V_end - V_start| / V_start, each model's own V), ms.
 #include <cmath>
+#include <cstdlib>
 #include <iostream>
 #include <memory>
 #include <nlohmann/json.hpp>
@@ -32,8 +39,10 @@
 #include "bench/bench.hpp"
 #include "bench/bench_util.hpp"
 #include "core/flat_chart.hpp"
+#include "core/input_error.hpp"
 #include "sand/sand_field.hpp"
 #include "sand/tin_sand.hpp"
+#include "tin/triangle_error.hpp"
 
 namespace ps::bench {
 
@@ -79,11 +88,12 @@ struct TinRun {
   std::size_t stamps = 0, erosionSteps = 0, removed = 0;
 };
 
-TinRun runTin(const Scene& scene, int n, double trace, bool erosion) {
+TinRun runTin(const Scene& scene, int n, double trace, bool erosion, bool pushAside = true) {
   TinRun run;
   run.sand = std::make_unique<sand::TinSand>(flatTin(scene, n));
   const double v0 = run.sand->tin().volume();
-  const sand::TinStampTool tool = sand::TinStampTool::disc(scene.radius);
+  sand::TinStampTool tool = sand::TinStampTool::disc(scene.radius);
+  tool.pushAside = pushAside;
   run.ms = timeMs([&] {
     for (const Eigen::Vector2d& c : scene.stroke(trace)) {
       run.sand->stamp(c, scene.bottom(), tool);
@@ -250,6 +260,9 @@ nlohmann::json tinRow(const std::string& experiment, const TinRun& r, double tra
           {"constrained_edges", t.constrainedEdgeCount()},
           {"removed_vertices", r.removed},
           {"memory_bytes", t.memoryBytes()},
+          {"bytes_per_vertex", double(t.memoryBytes()) / double(t.vertexCount())},
+          {"vertex_slots", t.slots().vertexSlots},
+          {"face_slots", t.slots().faceSlots},
           {"volume_drift", r.drift},
           {"stamp_ms", timing.stampMs},
           {"erosion_ms", timing.erodeMs},
@@ -281,6 +294,223 @@ void sizeAndTrace(const BenchOptions& options, const Scene& scene, std::ostream&
     rows.push_back(row);
     out << row.dump() << std::endl;
   }
+}
+
+// A grid's memory at a given surface error: log-log interpolation between the two grids whose
+// errors lie on either side (extrapolated from the nearest two when none do). `grids`: (error,
+// memory) pairs in order of growing memory.
+struct AtError {
+  double memory = NAN;
+  bool extrapolated = false;
+  std::string between;
+};
+AtError gridMemoryAt(const std::vector<std::pair<double, double>>& grids, double error,
+                     const std::vector<std::string>& names) {
+  AtError out;
+  if (grids.size() < 2 || !(error > 0)) return out;
+  std::size_t i = grids.size() - 2;  // below every grid's error: the finest two
+  bool found = false;
+  for (std::size_t k = 0; k + 1 < grids.size() && !found; ++k)
+    if (grids[k].first >= error && error >= grids[k + 1].first) i = k, found = true;
+  if (!found && error > grids.front().first) i = 0;
+  out.extrapolated = !found;
+  const double e0 = std::log(grids[i].first), e1 = std::log(grids[i + 1].first);
+  const double m0 = std::log(grids[i].second), m1 = std::log(grids[i + 1].second);
+  const double t = (std::log(error) - e0) / (e1 - e0);
+  out.memory = std::exp(m0 + t * (m1 - m0));
+  out.between = names[i] + " and " + names[i + 1];
+  return out;
+}
+
+// Adds the TIN's memory against the grids' at its error to the TIN row of one experiment.
+void equalErrorRatio(nlohmann::json& tinRowJson, const std::vector<nlohmann::json>& rows,
+                     const std::string& experiment, const char* errorKey) {
+  std::vector<std::pair<double, double>> grids;
+  std::vector<std::string> names;
+  for (const auto& r : rows)
+    if (r["experiment"] == experiment && r["model"] == "grid" && r["reference"] != "itself")
+      grids.emplace_back(r[errorKey].get<double>(), r["memory_bytes"].get<double>()),
+          names.push_back(r["grid"].get<std::string>());
+  const AtError at = gridMemoryAt(grids, tinRowJson[errorKey].get<double>(), names);
+  const std::string suffix = std::string(errorKey) == "surface_error_m" ? "" : "_by_max";
+  tinRowJson["grid_memory_at_equal_error_bytes" + suffix] = at.memory;
+  tinRowJson["memory_ratio_at_equal_error" + suffix] =
+      tinRowJson["memory_bytes"].get<double>() / at.memory;
+  tinRowJson["equal_error_between" + suffix] = at.between;
+  tinRowJson["equal_error_extrapolated" + suffix] = at.extrapolated;
+}
+
+// The exact surface a press-only stroke leaves on the flat sand: the minimum over its stamps of
+// the tool's shape (the regular polygon at the bottom, its wall rising linearly across the rim to
+// the sand's surface, as the TIN's contours make it), capped by the sand's surface.
+struct ExactStroke {
+  double sand = 0, bottom = 0, apothem = 0, rimFraction = 0, outerRadius = 0, step = 0;
+  std::vector<Eigen::Vector2d> centres, normals;
+  Eigen::Vector2d dir;
+
+  ExactStroke(const Scene& scene, const sand::TinStampTool& tool, double trace)
+      : sand(scene.sand), bottom(scene.bottom()), centres(scene.stroke(trace)) {
+    const std::size_t n = tool.outline.size();
+    for (std::size_t k = 0; k < n; ++k) {
+      const Eigen::Vector2d e = tool.outline[(k + 1) % n] - tool.outline[k];
+      normals.emplace_back(e.y() / e.norm(), -e.x() / e.norm());
+    }
+    apothem = tool.outline[0].dot(normals[0]);
+    rimFraction = tool.rim / tool.outline[0].norm();
+    outerRadius = tool.outerRadius();
+    step = scene.spacing * scene.radius;
+    dir = Eigen::Vector2d(1, 1).normalized();
+  }
+  // One stamp's shape at x (the polygon's gauge: a regular polygon's outer contour is the
+  // outline scaled by 1 + rim / radius).
+  double tool(const Eigen::Vector2d& c, const Eigen::Vector2d& x) const {
+    const Eigen::Vector2d d = x - c;
+    if (d.squaredNorm() > outerRadius * outerRadius) return sand;
+    double g = -INFINITY;
+    for (const Eigen::Vector2d& nrm : normals) g = std::max(g, d.dot(nrm));
+    const double t = std::clamp((g / apothem - 1.0) / rimFraction, 0.0, 1.0);
+    return bottom + (sand - bottom) * t;
+  }
+  double at(const Eigen::Vector2d& x) const {
+    const double s = (x - centres.front()).dot(dir) / step;
+    const double reach = outerRadius / step + 1;
+    const long k0 = std::max(0L, long(std::floor(s - reach)));
+    const long k1 = std::min(long(centres.size()) - 1, long(std::ceil(s + reach)));
+    double h = sand;
+    for (long k = k0; k <= k1; ++k) h = std::min(h, tool(centres[std::size_t(k)], x));
+    return h;
+  }
+  double distanceToStroke(const Eigen::Vector2d& x) const {
+    return tin::pointSegmentDistance(x, centres.front(), centres.back());
+  }
+};
+
+// A grid holding the exact stamped shape at its vertices (a float each), bilinear between.
+struct ExactGrid {
+  int side = 0;
+  double d = 0;
+  std::vector<float> h;
+  double at(double x, double y) const {
+    const double u = std::clamp(x / d, 0.0, double(side - 1)),
+                 v = std::clamp(y / d, 0.0, double(side - 1));
+    const int i = std::min(int(u), side - 2), j = std::min(int(v), side - 2);
+    const double fu = u - i, fv = v - j;
+    const auto g = [&](int a, int b) { return double(h[std::size_t(b) * side + a]); };
+    return (1 - fv) * ((1 - fu) * g(i, j) + fu * g(i + 1, j)) +
+           fv * ((1 - fu) * g(i, j + 1) + fu * g(i + 1, j + 1));
+  }
+};
+
+ExactGrid exactGrid(const Scene& scene, const ExactStroke& exact, int n) {
+  ExactGrid g;
+  g.side = core::GridSize(n).side();
+  g.d = scene.side / (g.side - 1);
+  g.h.assign(std::size_t(g.side) * g.side, float(scene.sand));
+  for (const Eigen::Vector2d& c : exact.centres) {
+    const int i0 = std::max(0, int((c.x() - exact.outerRadius) / g.d)),
+              i1 = std::min(g.side - 1, int((c.x() + exact.outerRadius) / g.d) + 1);
+    const int j0 = std::max(0, int((c.y() - exact.outerRadius) / g.d)),
+              j1 = std::min(g.side - 1, int((c.y() + exact.outerRadius) / g.d) + 1);
+    for (int j = j0; j <= j1; ++j)
+      for (int i = i0; i <= i1; ++i) {
+        float& h = g.h[std::size_t(j) * g.side + i];
+        h = std::min(h, float(exact.tool(c, {i * g.d, j * g.d})));
+      }
+  }
+  return g;
+}
+
+// The press-only stroke (no rampart, no erosion) on the TIN and on grids of 129^2 .. 8193^2
+// (--quick: .. 2049^2), each measured against the exact shape over a lattice 16384^2 across the
+// box (--quick: 8192^2) within a band about the stroke (where the surfaces can differ) and a
+// 1024^2 lattice over the rest of the box; RMS over the box's area and the largest difference.
+void compareExact(const BenchOptions& options, const Scene& scene, std::ostream& out,
+                  std::vector<nlohmann::json>& rows) {
+  std::cerr << "sand-tin: compare against the exact shape (press only)\n";
+  const double trace = 0.55;
+  sand::TinStampTool tool = sand::TinStampTool::disc(scene.radius);
+  tool.pushAside = false;
+  const ExactStroke exact(scene, tool, trace);
+  const TinRun t = runTin(scene, 5, trace, false, false);
+  std::vector<ExactGrid> grids;
+  std::vector<double> gridMs;
+  const int finest = options.quick ? 11 : 13;
+  for (int n = 7; n <= finest; ++n) {
+    gridMs.push_back(timeMs([&] { grids.push_back(exactGrid(scene, exact, n)); }));
+  }
+  const std::size_t models = grids.size() + 1;  // the TIN last
+  std::vector<double> sum2(models, 0.0), worst(models, 0.0), worstOutside(models, 0.0);
+  const auto modelAt = [&](std::size_t m, double x, double y) {
+    return m < grids.size() ? grids[m].at(x, y) : t.sand->tin().heightAt({x, y});
+  };
+  // The band: where a grid's cell or the TIN's triangles can meet a stamp.
+  const double band = exact.outerRadius + 2.0 * grids.front().d;
+  const int fine = options.quick ? 8192 : 16384, coarse = 1024;
+  std::size_t bandSamples = 0;
+  const double ms = timeMs([&] {
+    const double s = scene.side / fine;
+    for (int j = 0; j < fine; ++j)
+      for (int i = 0; i < fine; ++i) {
+        const Eigen::Vector2d x((i + 0.5) * s, (j + 0.5) * s);
+        if (exact.distanceToStroke(x) > band) continue;
+        ++bandSamples;
+        const double e = exact.at(x);
+        for (std::size_t m = 0; m < models; ++m) {
+          const double diff = modelAt(m, x.x(), x.y()) - e;
+          sum2[m] += diff * diff * s * s;
+          worst[m] = std::max(worst[m], std::abs(diff));
+        }
+      }
+    const double c = scene.side / coarse;
+    for (int j = 0; j < coarse; ++j)
+      for (int i = 0; i < coarse; ++i) {
+        const Eigen::Vector2d x((i + 0.5) * c, (j + 0.5) * c);
+        if (exact.distanceToStroke(x) <= band) continue;
+        const double e = exact.at(x);
+        for (std::size_t m = 0; m < models; ++m) {
+          const double diff = modelAt(m, x.x(), x.y()) - e;
+          sum2[m] += diff * diff * c * c;
+          worstOutside[m] = std::max(worstOutside[m], std::abs(diff));
+        }
+      }
+  });
+  const double area = scene.side * scene.side;
+  const std::string reference =
+      "exact stamped shape (press only: no rampart, no erosion), lattice " + std::to_string(fine) +
+      "^2 within " + core::exactNumber(band) + " m of the stroke, " + std::to_string(coarse) +
+      "^2 elsewhere";
+  for (std::size_t m = 0; m < grids.size(); ++m) {
+    const ExactGrid& g = grids[m];
+    nlohmann::json row = {{"bench", "sand-tin"},
+                          {"model", "grid"},
+                          {"experiment", "compare-exact"},
+                          {"grid", std::to_string(g.side) + "x" + std::to_string(g.side)},
+                          {"vertices", std::size_t(g.side) * g.side},
+                          {"memory_bytes", g.h.size() * sizeof(float)},
+                          {"surface_error_m", std::sqrt(sum2[m] / area)},
+                          {"surface_error_max_m", std::max(worst[m], worstOutside[m])},
+                          {"surface_error_max_outside_band_m", worstOutside[m]},
+                          {"reference", reference},
+                          {"volume_drift", nullptr},
+                          {"steepest_slope", nullptr},
+                          {"ms", gridMs[m]}};
+    rows.push_back(row);
+    out << row.dump() << std::endl;
+  }
+  nlohmann::json row = tinRow("compare-exact", t, trace, 5);
+  const std::size_t m = grids.size();
+  row["surface_error_m"] = std::sqrt(sum2[m] / area);
+  row["surface_error_max_m"] = std::max(worst[m], worstOutside[m]);
+  row["surface_error_max_outside_band_m"] = worstOutside[m];
+  row["reference"] = reference;
+  row["volume_drift"] = nullptr;  // a press only: the volume is not kept
+  row["steepest_slope"] = maxEdgeSlope(t.sand->tin());
+  row["band_samples"] = bandSamples;
+  row["measure_ms"] = ms;
+  equalErrorRatio(row, rows, "compare-exact", "surface_error_m");
+  equalErrorRatio(row, rows, "compare-exact", "surface_error_max_m");
+  rows.push_back(row);
+  out << row.dump() << std::endl;
 }
 
 void compare(const BenchOptions& options, const Scene& scene, std::ostream& out,
@@ -325,6 +555,7 @@ void compare(const BenchOptions& options, const Scene& scene, std::ostream& out,
     row["ms_per_stamp"] = t.sand->timing().stampMs / double(t.stamps);
     row["ms_per_erosion_step"] =
         t.erosionSteps ? t.sand->timing().erodeMs / double(t.erosionSteps) : 0.0;
+    equalErrorRatio(row, rows, experiment, "surface_error_m");
     rows.push_back(row);
     out << row.dump() << std::endl;
   }
@@ -405,11 +636,13 @@ void plots(const std::vector<nlohmann::json>& rows, const std::string& outDir) {
   const auto modelSeries = [&](const char* x, const char* y, bool skipReference) {
     std::vector<app::PlotSeries> out;
     std::size_t colour = 0;
-    for (const char* experiment : {"compare-imprint", "compare-eroded"})
+    for (const char* experiment : {"compare-imprint", "compare-eroded", "compare-exact"})
       for (const char* model : {"grid", "tin"}) {
         app::PlotSeries s;
-        s.label = std::string(model) +
-                  (experiment == std::string("compare-imprint") ? ", imprint" : ", eroded");
+        const std::string e = experiment;
+        s.label = std::string(model) + (e == "compare-imprint"  ? ", imprint"
+                                        : e == "compare-eroded" ? ", eroded"
+                                                                : ", press vs exact");
         s.colour = app::seriesColour(colour++);
         s.lines = std::string(model) == "grid";
         for (const auto& r : rows)
@@ -421,8 +654,8 @@ void plots(const std::vector<nlohmann::json>& rows, const std::string& outDir) {
     return out;
   };
   const std::vector<app::PlotPanel> memory = {
-      {"memory against surface error", "RMS difference from the finest grid (m)", "memory (bytes)",
-       true, true, modelSeries("surface_error_m", "memory_bytes", true)},
+      {"memory against surface error", "RMS difference from the finest grid or exact shape (m)",
+       "memory (bytes)", true, true, modelSeries("surface_error_m", "memory_bytes", true)},
       {"steepest wall against memory", "memory (bytes)", "steepest slope (rise / run)", true, true,
        modelSeries("memory_bytes", "steepest_slope", false)}};
   cv::Mat image;
@@ -437,9 +670,16 @@ void plots(const std::vector<nlohmann::json>& rows, const std::string& outDir) {
 void benchSandTin(const BenchOptions& options, std::ostream& out) {
   const Scene scene;
   std::vector<nlohmann::json> rows;
-  sizeAndTrace(options, scene, out, rows);
-  compare(options, scene, out, rows);
-  drift(options, scene, out);
+  // PS_SAND_TIN_ONLY=PART[,PART]: only those experiments (size, compare, exact, drift).
+  const char* onlyEnv = std::getenv("PS_SAND_TIN_ONLY");
+  const std::string only = onlyEnv ? std::string(",") + onlyEnv + "," : "";
+  const auto runs = [&](const char* part) {
+    return only.empty() || only.find(std::string(",") + part + ",") != std::string::npos;
+  };
+  if (runs("size")) sizeAndTrace(options, scene, out, rows);
+  if (runs("compare")) compare(options, scene, out, rows);
+  if (runs("exact")) compareExact(options, scene, out, rows);
+  if (runs("drift")) drift(options, scene, out);
   if (!options.outDir.empty()) plots(rows, options.outDir);
 }
 

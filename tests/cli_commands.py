@@ -474,9 +474,17 @@ def check_bench_row(r):
     if b == "tessellate_chart" and (r["chart"] not in ("latlong", "octahedral") or r["triangles"] <= 0
                                     or r["max_screen_error_px"] > r["dist_max"] * (1 + 1e-9)):
         fail(f"tessellate_chart: {r}")
-    if b == "sand-tin" and (r.get("model") not in ("tin", "grid") or abs(r["volume_drift"]) > 1e-6
+    # The press-only stroke (compare-exact) keeps no volume: its drift is null.
+    exact = b == "sand-tin" and r.get("experiment") == "compare-exact"
+    if b == "sand-tin" and (r.get("model") not in ("tin", "grid")
+                            or (not exact and abs(r["volume_drift"]) > 1e-6)
                             or r["vertices"] <= 0 or r["memory_bytes"] <= 0 or r.get("valid", True) is not True):
         fail(f"sand-tin: {r}")
+    # Against the exact shape: nothing differs away from the stroke, and the TIN's row carries
+    # the grids' memory at its error.
+    if exact and (r["surface_error_max_outside_band_m"] > 1e-9 or not r["surface_error_m"] > 0
+                  or (r["model"] == "tin" and not 0 < r["memory_ratio_at_equal_error"] < 1e3)):
+        fail(f"sand-tin compare-exact: {r}")
     if b == "erosion" and abs(r.get("volume_drift", 0.0)) > 1e-6:
         fail(f"erosion: volume drift {r['volume_drift']}")
     for key in ("planet_detected", "control_vertex_within_3mm"):

@@ -109,13 +109,36 @@ TEST(TinSand, AStampPressesItsBottomKeepsTheVolumeAndLeavesACrispWall) {
   const TinStampTool tool = TinStampTool::disc(1.5);
   const auto stats = sand.stamp({5.0, 5.0}, 0.6, tool);
   EXPECT_GT(stats.pressed, 0u);
-  EXPECT_NEAR(stats.displacedVolume, 0.4 * M_PI * 1.5 * 1.5, 0.1) << "about a 0.4 m deep disc";
+  // A 0.4 m deep 24-gon and its wall (the older vertices on it removed, the wall is the
+  // contours' triangles: half the rim's ring of the depth).
+  const double polygon = 12 * 1.5 * 1.5 * std::sin(2 * M_PI / 24);
+  const double wall = 0.5 * (polygon * (1.05 * 1.05 - 1.0));
+  EXPECT_NEAR(stats.displacedVolume, 0.4 * (polygon + wall), 0.01) << "a 0.4 m deep 24-gon";
+  EXPECT_GT(stats.removedWall, 0u) << "the grid's vertices on the wall";
   EXPECT_LE(relative(sand.tin().volume(), v0), 1e-12);
   EXPECT_DOUBLE_EQ(sand.tin().heightAt({5.0, 5.0}), 0.6);
   EXPECT_DOUBLE_EQ(sand.tin().heightAt({5.0 + 1.4, 5.0}), 0.6);
   // The wall: from the bottom to above the old surface within the rim (5 % of the radius).
   EXPECT_GT(sand.tin().heightAt({5.0 + 1.5 + 0.075, 5.0}), 1.0);
   EXPECT_GT(maxEdgeSlope(sand.tin()), 3.0) << "a wall far steeper than the talus";
+  EXPECT_TRUE(sand.tin().isValid());
+}
+
+TEST(TinSand, APressOnlyStampLeavesTheToolsShapeAndPushesNothingAside) {
+  TinSand sand(gridTin(41, 0.25, [](double, double) { return 1.0; }));
+  const double v0 = sand.tin().volume();
+  TinStampTool tool = TinStampTool::disc(1.5);
+  tool.pushAside = false;
+  const auto stats = sand.stamp({5.0, 5.0}, 0.6, tool);
+  EXPECT_LE(stats.inserted, 2 * tool.outline.size()) << "the two contours, no rampart rings";
+  EXPECT_NEAR(sand.tin().volume(), v0 - stats.displacedVolume, 1e-12 * v0);
+  EXPECT_GT(stats.displacedVolume, 0.4 * 12 * 1.5 * 1.5 * std::sin(2 * M_PI / 24));
+  EXPECT_DOUBLE_EQ(sand.tin().heightAt({5.0, 5.0}), 0.6);
+  // Beyond the outer contour the sand is as it was: nothing pushed aside.
+  for (const double dx : {1.6, 2.0, 3.0})
+    EXPECT_DOUBLE_EQ(sand.tin().heightAt({5.0 + dx, 5.0}), 1.0);
+  // On the wall, halfway across the rim (a corner's ray), half the depth.
+  EXPECT_NEAR(sand.tin().heightAt({5.0 + 1.5 * 1.025, 5.0}), 0.8, 1e-9);
   EXPECT_TRUE(sand.tin().isValid());
 }
 

@@ -122,14 +122,14 @@ TinSand::TinSand(tin::DynamicTin tin, TinSandSettings settings)
   tanFlat_ = std::tan(settings_.flatDeg * std::numbers::pi / 180.0);
 }
 
-void TinSand::activate(Vertex v) {
+void TinSand::activate(Vertex v, bool changed) {
   if (v >= inLe_.size()) {
     inLe_.resize(std::size_t(v) + 1, 0);
     idle_.resize(std::size_t(v) + 1, 0);
   }
   idle_[v] = 0;
   if (!inLe_[v]) inLe_[v] = 1, le_.push_back(v);
-  markFlatCandidate(v);
+  if (changed) markFlatCandidate(v);
 }
 
 void TinSand::markFlatCandidate(Vertex v) {
@@ -160,7 +160,8 @@ TinStampStats TinSand::stamp(const Eigen::Vector2d& centre, double bottom,
   // Contour points may snap to vertices up to `snap` outside the outer contour: free what
   // their edges could cross too.
   const double snap = 0.25 * tool.rim;
-  stats.freedConstraints = tin_.freeConstraintsNear(centre, tool.outerRadius() + 2 * snap);
+  std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>> freed;
+  stats.freedConstraints = tin_.freeConstraintsNear(centre, tool.outerRadius() + 2 * snap, &freed);
 
   // Outer contour first: it follows the terrain. Then the inner one, pressed. A contour point
   // next to a vertex already there (an earlier stamp's) takes that vertex instead of making a
@@ -171,18 +172,64 @@ TinStampStats TinSand::stamp(const Eigen::Vector2d& centre, double bottom,
     tin_.setHeight(near, std::min(tin_.height(near), cap));
     return near;
   };
+  // Where a contour edge crosses an older contour's (freed) edge, a vertex at the older edge's
+  // height there (capped): the crease where the two imprints meet stays in the TIN (the freed
+  // edge's line is the surface before this stamp along it), and the wall is not cut across.
+  std::vector<std::pair<double, Eigen::Vector3d>> crossings;
+  const auto constrainEdge = [&](Vertex from, Vertex to, double cap, std::vector<Vertex>& path) {
+    const Eigen::Vector2d p = tin_.position(from), q = tin_.position(to);
+    const double length = (q - p).norm();
+    crossings.clear();
+    for (const auto& [a3, b3] : freed) {
+      const Eigen::Vector2d a = a3.head<2>(), b = b3.head<2>();
+      if (!segmentsCross(p, q, a, b)) continue;
+      const double den = cross(q - p, b - a);
+      const double s = cross(a - p, b - a) / den, u = cross(a - p, q - p) / den;
+      if (s * length < snap || (1 - s) * length < snap) continue;
+      crossings.emplace_back(s, Eigen::Vector3d(p.x() + s * (q - p).x(), p.y() + s * (q - p).y(),
+                                                (1 - u) * a3.z() + u * b3.z()));
+    }
+    std::sort(crossings.begin(), crossings.end(),
+              [](const auto& x, const auto& y) { return x.first < y.first; });
+    Vertex at = from;
+    double last = 0;
+    for (const auto& [s, x] : crossings) {
+      if ((s - last) * length < snap) continue;
+      const Eigen::Vector2d xy = x.head<2>();
+      Vertex v = tin_.vertexNear(xy, snap);
+      if (v == tin::DynamicTin::kNoVertex)
+        v = tin_.insert(xy, std::min(x.z(), cap));
+      else
+        tin_.setHeight(v, std::min(tin_.height(v), cap));
+      if (v == at || v == to) continue;
+      tin_.constrain(at, v, generation_);
+      path.push_back(v);
+      at = v, last = s;
+    }
+    if (at != to) tin_.constrain(at, to, generation_);
+  };
   const std::size_t countBefore = tin_.vertexCount();
-  std::vector<Vertex> outerIds(n), innerIds(n);
+  std::vector<Vertex> outerIds(n), innerIds(n), outerPath, innerPath;
   for (std::size_t k = 0; k < n; ++k) outerIds[k] = place(outer[k], INFINITY);
   for (std::size_t k = 0; k < n; ++k)
-    tin_.constrain(outerIds[k], outerIds[(k + 1) % n], generation_);
+    constrainEdge(outerIds[k], outerIds[(k + 1) % n], INFINITY, outerPath);
   for (std::size_t k = 0; k < n; ++k) innerIds[k] = place(inner[k], bottom);
   for (std::size_t k = 0; k < n; ++k)
-    tin_.constrain(innerIds[k], innerIds[(k + 1) % n], generation_);
+    constrainEdge(innerIds[k], innerIds[(k + 1) % n], bottom, innerPath);
+  const auto onContour = [&](Vertex v) {
+    const auto has = [v](const std::vector<Vertex>& ids) {
+      return std::find(ids.begin(), ids.end(), v) != ids.end();
+    };
+    return has(innerIds) || has(outerIds) || has(innerPath) || has(outerPath);
+  };
+  const auto onInner = [&](Vertex v) {
+    return std::find(innerIds.begin(), innerIds.end(), v) != innerIds.end() ||
+           std::find(innerPath.begin(), innerPath.end(), v) != innerPath.end();
+  };
   // Rings halfway across the rampart and at its edge, so that the material pushed aside lands
   // in the rampart's profile however coarse the TIN is there (and not beyond its edge).
   for (const double across : {0.5, 1.0})
-    for (std::size_t k = 0; k < n; ++k) {
+    for (std::size_t k = 0; k < n && tool.pushAside; ++k) {
       const Eigen::Vector2d& q = tool.outline[k];
       place(centre + q * (1.0 + (tool.rim + across * tool.rampartWidth) / q.norm()), INFINITY);
     }
@@ -198,30 +245,71 @@ TinStampStats TinSand::stamp(const Eigen::Vector2d& centre, double bottom,
   }
   for (const Vertex v : inside) activate(v);
   for (const Vertex v : outerIds) activate(v);
+  for (const Vertex v : outerPath) activate(v);
+  for (const Vertex v : innerPath) activate(v);
 
   // Inner vertices on the bottom with no deeper neighbour carry nothing the contour does not.
   for (const Vertex v : inside) {
-    if (std::find(innerIds.begin(), innerIds.end(), v) != innerIds.end()) continue;
+    if (onContour(v)) continue;
     if (tin_.height(v) != bottom) continue;
     tin_.neighbours(v, neighbours_);
-    if (std::any_of(neighbours_.begin(), neighbours_.end(),
-                    [&](Vertex u) { return tin_.height(u) < bottom; }))
+    // A vertex on a constrained edge (where this stamp's contour crossed one) stays: it carries
+    // the contour.
+    if (std::any_of(neighbours_.begin(), neighbours_.end(), [&](Vertex u) {
+          return tin_.height(u) < bottom || tin_.generation(v, u) != tin::DynamicTin::kNoVertex;
+        }))
       continue;
     if (tin_.remove(v)) ++stats.removedInside;
+  }
+
+  // Older vertices between the contours (on the tool's wall) standing on or above the wall, the
+  // line across the rim from the inner contour to the outer one along their ray, carry nothing
+  // the contours do not: removed, the wall is the contours' own triangles. Those under it (an
+  // older, deeper imprint) stay. The volume this changes is in the stamp's own account below.
+  for (const Vertex v : scratch_) {
+    if (!tin_.alive(v) || tin_.onHull(v) || onContour(v)) continue;
+    const Eigen::Vector2d d = tin_.position(v) - centre;
+    for (std::size_t k = 0; k < n; ++k) {
+      const std::size_t l = (k + 1) % n;
+      if (cross(tool.outline[k], d) < 0 || cross(d, tool.outline[l]) <= 0) continue;
+      // Where v's ray crosses the inner and the outer contour's edge k (at lambda * d), and the
+      // heights there.
+      const auto crossing = [&](Vertex a, Vertex b, double& lambda, double& h) {
+        const Eigen::Vector2d pa = tin_.position(a) - centre, pb = tin_.position(b) - centre;
+        const double den = cross(d, pb - pa);
+        if (den == 0) return false;
+        lambda = cross(pa, pb - pa) / den;
+        const double u =
+            std::clamp((lambda * d - pa).dot(pb - pa) / (pb - pa).squaredNorm(), 0.0, 1.0);
+        h = (1 - u) * tin_.height(a) + u * tin_.height(b);
+        return true;
+      };
+      double lIn = 0, hIn = 0, lOut = 0, hOut = 0;
+      if (!crossing(innerIds[k], innerIds[l], lIn, hIn) ||
+          !crossing(outerIds[k], outerIds[l], lOut, hOut) || !(lIn < 1 && 1 < lOut))
+        break;
+      const double t = (1 - lIn) / (lOut - lIn);
+      if (t > 0.02 && t < 0.98 && tin_.height(v) >= hIn + t * (hOut - hIn) &&
+          tin_.remove(v, nullptr, false))
+        ++stats.removedWall;
+      break;
+    }
   }
 
   // What the stamp changed goes onto the rampart, weighted by its profile.
   const double displaced = before - tin_.volume();
   stats.displacedVolume = displaced;
+  if (!tool.pushAside) {
+    timing_.stampMs += msSince(t0);
+    return stats;
+  }
   tin_.verticesWithin(centre, tool.reach(), scratch_);
   std::vector<std::pair<Vertex, double>> rampart;
   double weighted = 0;
   for (const Vertex v : scratch_) {
     const Eigen::Vector2d p = tin_.position(v);
     // The inner contour's vertices lie on the polygon, where the inside test may go either way.
-    if (insidePolygon(inner, p) || tin_.onHull(v) ||
-        std::find(innerIds.begin(), innerIds.end(), v) != innerIds.end())
-      continue;
+    if (insidePolygon(inner, p) || tin_.onHull(v) || onInner(v)) continue;
     const double t = insidePolygon(outer, p) ? 0.0 : polygonDistance(outer, p) / tool.rampartWidth;
     const double profile = rampartProfile(t);
     if (profile <= 0) continue;
@@ -255,15 +343,15 @@ std::size_t TinSand::erode() {
     if (!tin_.alive(k) || !inLe_[k]) continue;
     const double hk = tin_.height(k);
     const Eigen::Vector2d pk = tin_.position(k);
-    tin_.neighbours(k, neighbours_);
+    tin_.neighbourhood(k, ring_);
     shares.clear();
     double excessSum = 0;
-    for (const Vertex j : neighbours_) {
-      const double d = (tin_.position(j) - pk).norm();
-      const double gap = hk - tin_.height(j);
+    for (const tin::DynamicTin::Neighbour& j : ring_) {
+      const double d = (j.p - pk).norm();
+      const double gap = hk - j.h;
       const double excess = gap - (tanTalus_ * d + cohesion);
       if (excess > restTolerance * d) {
-        shares.push_back({j, weight(j), excess, gap});
+        shares.push_back({j.v, weight(j.v), excess, gap});
         excessSum += excess;
       }
     }
@@ -291,11 +379,13 @@ std::size_t TinSand::erode() {
       const double m = lambda * s.amount;
       tin_.setHeight(s.v, tin_.height(s.v) + m / s.weight);
       given += m;
+      markFlatCandidate(s.v);
     }
     tin_.setHeight(k, hk - given / wk);
     markFlatCandidate(k);
-    // The receivers rose and k sank: a higher neighbour may now be steeper than the talus.
-    for (const Vertex j : neighbours_) activate(j);
+    // The receivers rose and k sank: a higher neighbour may now be steeper than the talus. Lr
+    // takes only the vertices whose height changed (the paper's step 2d); the others are woken.
+    for (const tin::DynamicTin::Neighbour& j : ring_) activate(j.v, false);
   }
   // Vertices that went idle leave the list.
   le_.erase(
@@ -316,9 +406,9 @@ double TinSand::weight(Vertex v) {
 bool TinSand::isFlat(Vertex v) {
   const double h = tin_.height(v);
   const Eigen::Vector2d p = tin_.position(v);
-  tin_.neighbours(v, neighbours_);
-  for (const Vertex u : neighbours_)
-    if (std::abs(tin_.height(u) - h) > tanFlat_ * (tin_.position(u) - p).norm()) return false;
+  tin_.neighbourhood(v, ring_);
+  for (const tin::DynamicTin::Neighbour& u : ring_)
+    if (std::abs(u.h - h) > tanFlat_ * (u.p - p).norm()) return false;
   return true;
 }
 

@@ -33,6 +33,10 @@ struct TinStampTool {
   std::vector<Eigen::Vector2d> outline;  // metres, relative to the centre
   double rim = 0;                        // metres, > 0
   double rampartWidth = 0;               // metres beyond the outer contour, > 0
+  // Whether what the tool presses out goes onto a rampart (the volume kept). Off: a press only,
+  // the surface left is the tool's shape and no more (the volume is not kept; bench sand-tin's
+  // exact-shape comparison, where the surface a stroke must leave is known exactly).
+  bool pushAside = true;
 
   // A regular polygon of `segments` corners on a circle; rim 5 % and rampart 100 % of radius.
   static TinStampTool disc(double radius, int segments = 24);
@@ -62,6 +66,7 @@ struct TinStampStats {
   std::size_t inserted = 0;          // contour and rampart vertices added
   std::size_t pressed = 0;           // vertices lowered to the tool's bottom
   std::size_t removedInside = 0;     // redundant inner vertices removed
+  std::size_t removedWall = 0;       // older vertices on or above the tool's wall removed
   std::size_t freedConstraints = 0;  // older constrained edges inside the stamp
   double displacedVolume = 0;        // m^3 the stamp moved onto its rampart
 };
@@ -94,7 +99,8 @@ class TinSand {
   const Timing& timing() const { return timing_; }
 
  private:
-  void activate(Vertex v);
+  // Into Le (woken); also into Lr when its height changed.
+  void activate(Vertex v, bool changed = true);
   void markFlatCandidate(Vertex v);
   bool isFlat(Vertex v);
   // tin_.weight(v), cached until the triangulation changes (erosion asks for it many times).
@@ -108,6 +114,7 @@ class TinSand {
   std::vector<std::uint8_t> inLe_, inLr_;  // by vertex number
   std::vector<std::uint8_t> idle_;         // iterations without a transfer, by vertex number
   std::vector<Vertex> scratch_, neighbours_;
+  std::vector<tin::DynamicTin::Neighbour> ring_;
   std::vector<double> weight_;
   std::vector<std::uint64_t> weightEpoch_;  // epoch + 1 of each cached weight (0: none)
   Timing timing_;

@@ -6,6 +6,7 @@
 // templates are slow to compile, and nothing outside this layer needs to see them.
 #include <CGAL/Constrained_Delaunay_triangulation_2.h>
 #include <CGAL/Constrained_Delaunay_triangulation_face_base_2.h>
+#include <CGAL/Constrained_triangulation_face_base_2.h>
 #include <CGAL/Delaunay_mesh_face_base_2.h>
 #include <CGAL/Delaunay_mesh_vertex_base_2.h>
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
@@ -33,10 +34,12 @@ using VertexHandle = Cdt::Vertex_handle;
 using FaceHandle = Cdt::Face_handle;
 
 // The same triangulation without the mesher's bases, for TINs that are never refined (the sand
-// TIN, tin/dynamic_tin): 40-byte vertices and 72-byte faces instead of 48 and 88.
+// TIN, tin/dynamic_tin): 40-byte vertices and 56-byte faces instead of 48 and 88. The face is
+// the plain constrained one (CGAL's default for a constrained Delaunay triangulation): the
+// Delaunay face base's blinding edge and flag (24 bytes) serve only the mesher's visibility.
 namespace lean {
 using VertexBase = CGAL::Triangulation_vertex_base_with_info_2<VertexData, Kernel>;
-using FaceBase = CGAL::Constrained_Delaunay_triangulation_face_base_2<Kernel>;
+using FaceBase = CGAL::Constrained_triangulation_face_base_2<Kernel>;
 using Tds = CGAL::Triangulation_data_structure_2<VertexBase, FaceBase>;
 using Cdt = CGAL::Constrained_Delaunay_triangulation_2<Kernel, Tds, CGAL::Exact_predicates_tag>;
 using VertexHandle = Cdt::Vertex_handle;

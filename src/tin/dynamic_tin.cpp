@@ -15,6 +15,9 @@
 
 namespace ps::tin {
 
+static_assert(sizeof(lean::Tds::Face) == 56,
+              "the lean face: three vertices, three neighbours, three constraint flags");
+
 namespace {
 
 constexpr std::uint32_t kUnnumbered = ~std::uint32_t(0);
@@ -182,6 +185,12 @@ std::size_t DynamicTin::memoryBytes() const {
          impl_->generations.bucket_count() * sizeof(void*);
 }
 
+DynamicTin::Slots DynamicTin::slots() const {
+  const auto& tds = impl_->cdt.tds();
+  return {tds.vertices().capacity(), tds.vertices().size(), tds.faces().capacity(),
+          tds.faces().size()};
+}
+
 bool DynamicTin::alive(Vertex v) const {
   return v < impl_->handles.size() && impl_->handles[v] != lean::VertexHandle();
 }
@@ -210,6 +219,15 @@ void DynamicTin::neighbours(Vertex v, std::vector<Vertex>& out) const {
   auto c = impl_->cdt.incident_vertices(impl_->handle(v)), done = c;
   do
     if (!impl_->cdt.is_infinite(c)) out.push_back(c->info().index);
+  while (++c != done);
+}
+
+void DynamicTin::neighbourhood(Vertex v, std::vector<Neighbour>& out) const {
+  out.clear();
+  auto c = impl_->cdt.incident_vertices(impl_->handle(v)), done = c;
+  do
+    if (!impl_->cdt.is_infinite(c))
+      out.push_back({c->info().index, xyOf(c->point()), c->info().height});
   while (++c != done);
 }
 
@@ -362,7 +380,9 @@ void DynamicTin::constrain(Vertex a, Vertex b, std::uint32_t generation) {
   m.tagPath(va, vb, generation);
 }
 
-std::size_t DynamicTin::freeConstraintsNear(const Eigen::Vector2d& centre, double radius) {
+std::size_t DynamicTin::freeConstraintsNear(
+    const Eigen::Vector2d& centre, double radius,
+    std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>>* freed) {
   Impl& m = *impl_;
   std::vector<lean::FaceHandle> faces;
   m.facesTouching(centre, radius, faces);
@@ -376,17 +396,20 @@ std::size_t DynamicTin::freeConstraintsNear(const Eigen::Vector2d& centre, doubl
           seen.insert(edgeKey(a->info().index, b->info().index)).second)
         edges.emplace_back(a, b);
     }
-  std::size_t freed = 0;
+  std::size_t count = 0;
   for (const auto& [a, b] : edges) {
     lean::FaceHandle f;
     int i = 0;
     if (!m.cdt.is_edge(a, b, f, i) || !f->is_constrained(i)) continue;
+    if (freed)
+      freed->emplace_back(Eigen::Vector3d(a->point().x(), a->point().y(), a->info().height),
+                          Eigen::Vector3d(b->point().x(), b->point().y(), b->info().height));
     m.cdt.remove_constrained_edge(f, i);
     ++m.epoch;
     m.generations.erase(edgeKey(a->info().index, b->info().index));
-    ++freed;
+    ++count;
   }
-  return freed;
+  return count;
 }
 
 std::uint32_t DynamicTin::generation(Vertex a, Vertex b) const {
@@ -394,7 +417,7 @@ std::uint32_t DynamicTin::generation(Vertex a, Vertex b) const {
   return it == impl_->generations.end() ? kNoVertex : it->second;
 }
 
-bool DynamicTin::remove(Vertex id, double* volumeChange) {
+bool DynamicTin::remove(Vertex id, double* volumeChange, bool restoreVolume) {
   Impl& m = *impl_;
   const lean::VertexHandle v = m.handle(id);
   if (onHull(id)) return false;
@@ -441,6 +464,7 @@ bool DynamicTin::remove(Vertex id, double* volumeChange) {
   }
   const double change = after - before;
   if (volumeChange) *volumeChange = change;
+  if (!restoreVolume) return true;
   double rimWeight = 0;
   for (const lean::VertexHandle& u : link) rimWeight += weight(u->info().index);
   if (rimWeight > 0 && change != 0)
@@ -461,7 +485,33 @@ bool DynamicTin::isValid() const {
 
 std::string DynamicTin::validityProblem() const {
   const Impl& m = *impl_;
-  if (!m.cdt.is_valid()) return "CGAL's check of the triangulation failed";
+  if (!m.cdt.is_valid()) {
+    // Which part: the data structure, a face's orientation, or the Delaunay property of an
+    // edge that is not constrained (what the constrained Delaunay triangulation's check adds).
+    if (!m.cdt.tds().is_valid())
+      return "CGAL's check of the triangulation failed: the data structure";
+    for (auto f = m.cdt.finite_faces_begin(); f != m.cdt.finite_faces_end(); ++f)
+      if (CGAL::orientation(f->vertex(0)->point(), f->vertex(1)->point(), f->vertex(2)->point()) !=
+          CGAL::LEFT_TURN)
+        return "CGAL's check of the triangulation failed: a face not counter-clockwise at (" +
+               std::to_string(f->vertex(0)->point().x()) + ", " +
+               std::to_string(f->vertex(0)->point().y()) + ")";
+    for (auto e = m.cdt.finite_edges_begin(); e != m.cdt.finite_edges_end(); ++e) {
+      if (m.cdt.is_constrained(*e)) continue;
+      const lean::FaceHandle f = e->first, g = f->neighbor(e->second);
+      if (m.cdt.is_infinite(f) || m.cdt.is_infinite(g)) continue;
+      const lean::VertexHandle opposite = g->vertex(m.cdt.mirror_index(f, e->second));
+      if (m.cdt.side_of_oriented_circle(f, opposite->point(), true) == CGAL::ON_POSITIVE_SIDE) {
+        const Point a = f->vertex(lean::Cdt::ccw(e->second))->point(),
+                    b = f->vertex(lean::Cdt::cw(e->second))->point();
+        return "CGAL's check of the triangulation failed: edge (" + std::to_string(a.x()) + ", " +
+               std::to_string(a.y()) + ")-(" + std::to_string(b.x()) + ", " +
+               std::to_string(b.y()) + ") is free and not Delaunay, length " +
+               std::to_string(std::hypot(a.x() - b.x(), a.y() - b.y()));
+      }
+    }
+    return "CGAL's check of the triangulation failed";
+  }
   for (auto v = m.cdt.finite_vertices_begin(); v != m.cdt.finite_vertices_end(); ++v) {
     if (!std::isfinite(v->info().height))
       return "vertex " + std::to_string(v->info().index) + " has a height that is not finite";

@@ -43,6 +43,12 @@ class DynamicTin {
   std::uint64_t topologyEpoch() const;
   // Bytes the triangulation holds (its vertex and face containers' capacity, and the id table).
   std::size_t memoryBytes() const;
+  // The vertex and face containers' slots (capacity: live elements, freed ones kept for reuse,
+  // and the growth reserve) and their live elements (the infinite vertex and its faces included).
+  struct Slots {
+    std::size_t vertexSlots = 0, vertices = 0, faceSlots = 0, faces = 0;
+  };
+  Slots slots() const;
 
   bool alive(Vertex v) const;
   Eigen::Vector2d position(Vertex v) const;
@@ -51,6 +57,14 @@ class DynamicTin {
   bool onHull(Vertex v) const;
   // v's neighbours, counter-clockwise.
   void neighbours(Vertex v, std::vector<Vertex>& out) const;
+  // The same with each neighbour's position and height, in one walk around v (erosion's inner
+  // loop: no lookup by number per neighbour).
+  struct Neighbour {
+    Vertex v;
+    Eigen::Vector2d p;
+    double h;
+  };
+  void neighbourhood(Vertex v, std::vector<Neighbour>& out) const;
   // w_v: the volume a metre of height at v adds (a third of the area of its triangles).
   double weight(Vertex v) const;
   // Every live vertex, in number order.
@@ -81,15 +95,19 @@ class DynamicTin {
   void constrain(Vertex a, Vertex b, std::uint32_t generation);
   // Constrained edges with a point within `radius` of `centre` become free (the triangulation
   // is made Delaunay again there). Returns how many.
-  std::size_t freeConstraintsNear(const Eigen::Vector2d& centre, double radius);
+  // The freed edges' ends (x, y, height) go to *freed when given.
+  std::size_t freeConstraintsNear(
+      const Eigen::Vector2d& centre, double radius,
+      std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>>* freed = nullptr);
   // The generation of the constrained edge a-b; kNoVertex when it is not constrained.
   std::uint32_t generation(Vertex a, Vertex b) const;
 
   // Removes v (freeing its constrained edges first) and re-fills the hole with Delaunay
   // triangles; false (nothing changed) for a hull vertex. The volume re-filling changed is put
-  // back by raising the hole's rim vertices alike (so V is kept to rounding); the change
-  // before that is returned in *volumeChange.
-  bool remove(Vertex v, double* volumeChange = nullptr);
+  // back by raising the hole's rim vertices alike (so V is kept to rounding; not when
+  // restoreVolume is false: a caller that measures V itself); the change before that is
+  // returned in *volumeChange.
+  bool remove(Vertex v, double* volumeChange = nullptr, bool restoreVolume = true);
 
   // V (see above), summed over the triangles in long double.
   double volume() const;
