@@ -96,7 +96,7 @@ CameraMotion CameraMotionJudge::judge(const cv::Mat& image) {
   if (now.size() != reference_.size()) return m;
   // Pyramids built once per image: the reference's is kept for every frame it is judged
   // against, and each frame's serves both directions.
-  const cv::Size window(15, 15);
+  const cv::Size window(11, 11);
   constexpr int kLevels = 3;
   if (referencePyramid_.empty())
     cv::buildOpticalFlowPyramid(reference_, referencePyramid_, window, kLevels);
