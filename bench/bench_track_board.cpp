@@ -9,7 +9,11 @@
 //   * the tool tip's error and flips while the cube turns; touching frames sculpted;
 //   * detection + tracking time per frame (one thread), against the single-marker default
 //     detector's on the sweep measured in the same run (target <= 1.5x).
+#include <algorithm>
 #include <cmath>
+#include <cstdlib>
+#include <fstream>
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <opencv2/core/utility.hpp>
 
@@ -21,6 +25,7 @@
 #include "edit/control_vertex.hpp"
 #include "replay/replay.hpp"
 #include "terrain/relief.hpp"
+#include "tracking/body_pose.hpp"
 #include "tracking/synth.hpp"
 
 namespace ps::bench {
@@ -59,9 +64,95 @@ void evaluateScene(const std::string& scene, bool quick, double singleMarkerMs, 
   bool seen = false;
   const int frames = quick ? std::min(renderer.frames(), 120) : renderer.frames();
   app::Progress progress("track " + scene);
+  // PS_TRACK_DUMP=DIR: one JSON line per frame (DIR/SCENE.jsonl) with the tool's truth, what
+  // was detected of it and the tracker's answer, to find out why a frame is bad.
+  const char* dumpDir = std::getenv("PS_TRACK_DUMP");
+  std::ofstream dump;
+  std::unique_ptr<tracking::Detector> dumpDetector;
+  if (dumpDir) {
+    dump.open(std::string(dumpDir) + "/" + scene + ".jsonl");
+    tracking::DetectorConfig dc = o.detector;
+    dc.ids = script.board->ids();
+    for (int id : script.toolLayout->ids()) dc.ids.push_back(id);
+    dc.sets = {script.board->ids(), script.toolLayout->ids()};
+    dumpDetector = tracking::makeDetector(dc);
+  }
   for (int f = 0; f < frames; ++f) {
     const auto truth = renderer.truth(f);
-    const auto step = stepper.step(renderer.render(f), f, truth.time);
+    const cv::Mat image = renderer.render(f);
+    const auto step = stepper.step(image, f, truth.time);
+    if (dumpDetector) {
+      const auto found = dumpDetector->detect(image);
+      const auto& sf = step.scene;
+      const auto& L = *script.toolLayout;
+      const auto truePx = tracking::projectLayout(L, truth.tool, script.camera);
+      nlohmann::json faces = nlohmann::json::array();
+      for (std::size_t i = 0; i < L.markers.size(); ++i) {
+        const tracking::Pose inCam = truth.tool * L.markers[i].inBody();
+        const double tilt =
+            std::acos(std::clamp(inCam.R.col(2).dot(-inCam.t.normalized()), -1.0, 1.0)) * 180 /
+            M_PI;
+        nlohmann::json fj = {{"id", L.markers[i].id}, {"tilt", r3(tilt)}};
+        double area = 0;
+        for (std::size_t k = 0; k < 4; ++k) area += truePx[i][k].cross(truePx[i][(k + 1) % 4]);
+        fj["area_px"] = r3(0.5 * std::abs(area));
+        for (const auto& d : found)
+          if (d.id == L.markers[i].id) {
+            double e = 0;
+            for (std::size_t k = 0; k < 4; ++k)
+              e = std::max(e, cv::norm(d.corners[k] - truePx[i][k]));
+            fj["corner_err_px"] = r3(e);
+            nlohmann::json v = nlohmann::json::array();
+            for (std::size_t k = 0; k < 4; ++k)
+              v.push_back(
+                  {r3(d.corners[k].x - truePx[i][k].x), r3(d.corners[k].y - truePx[i][k].y)});
+            fj["corner_err"] = v;
+          }
+        faces.push_back(fj);
+      }
+      nlohmann::json dj = {
+          {"frame", f},
+          {"tool_visible", truth.toolVisible},
+          {"tool_occluded", truth.toolOccluded},
+          {"faces", faces},
+          {"state", tracking::toString(sf.tool.state)},
+          {"measured", sf.tool.measured},
+          {"ids", sf.tool.ids},
+          {"rms", r3(sf.tool.rms)},
+          {"ratio", r3(sf.tool.ratio)},
+          {"by_continuity", sf.tool.byContinuity},
+          {"dist_m", r3(truth.tool.t.norm())},
+          {"planet_valid", sf.planetCentreValid},
+          {"time", truth.time},
+          {"truth_touch", truth.tipHeight <= kTouch && truth.toolVisible},
+          {"step_touch", step.touching},
+          {"truth_tip_cam", {truth.tipCamera.x(), truth.tipCamera.y(), truth.tipCamera.z()}}};
+      const Eigen::Quaterniond tq(truth.tool.R);
+      dj["truth_q"] = {tq.w(), tq.x(), tq.y(), tq.z()};
+      if (sf.tool.measured) {
+        const Eigen::Vector3d rt = sf.tool.raw.apply(*L.tip);
+        const Eigen::Quaterniond rq(sf.tool.raw.R);
+        dj["raw_tip_cam"] = {rt.x(), rt.y(), rt.z()};
+        dj["raw_q"] = {rq.w(), rq.x(), rq.y(), rq.z()};
+      }
+      if (sf.tool.usable()) {
+        const Eigen::Quaterniond fq(sf.tool.pose.R);
+        dj["q"] = {fq.w(), fq.x(), fq.y(), fq.z()};
+        dj["t"] = {sf.tool.pose.t.x(), sf.tool.pose.t.y(), sf.tool.pose.t.z()};
+      }
+      if (sf.tipValid) dj["tip_cam"] = {sf.tipCamera.x(), sf.tipCamera.y(), sf.tipCamera.z()};
+      if (sf.tool.measured)
+        dj["raw_rot_err"] = r3(tracking::rotationAngle(sf.tool.raw.R, truth.tool.R) * 180 / M_PI);
+      if (sf.tool.usable())
+        dj["rot_err"] = r3(tracking::rotationAngle(sf.tool.pose.R, truth.tool.R) * 180 / M_PI);
+      if (sf.tipValid) {
+        dj["tip_err_mm"] = r3(1e3 * (sf.tipPlanet - truth.tipPlanet).norm());
+        if (sf.tool.measured)
+          dj["raw_tip_err_mm"] =
+              r3(1e3 * (sf.tool.raw.apply(*L.tip) - truth.tool.apply(*L.tip)).norm());
+      }
+      dump << dj.dump() << "\n";
+    }
     ms.push_back(step.times.detectMs + step.times.trackMs);
     detectMs.push_back(step.times.detectMs);
     trackMs.push_back(step.times.trackMs);
@@ -147,8 +238,10 @@ void evaluateScene(const std::string& scene, bool quick, double singleMarkerMs, 
 }  // namespace
 
 void benchTrackBoards(const BenchOptions& o, double singleMarkerMs, std::ostream& out) {
+  // PS_TRACK_BOARD=SCENE runs that one of them only.
+  const char* only = std::getenv("PS_TRACK_BOARD");
   for (const char* scene : {"board-sweep", "board-hand", "board-hidden", "cube-spin", "board-demo"})
-    if (!o.quick || std::string(scene) != "board-demo")
+    if ((!o.quick || std::string(scene) != "board-demo") && (!only || scene == std::string(only)))
       evaluateScene(scene, o.quick, singleMarkerMs, out);
 }
 

@@ -101,13 +101,50 @@ TEST(TrackingOcclusion, CameraMotionJudgeAccumulatesASlowPan) {
   EXPECT_LE(firstMoved, 7);  // 2.1 px: moved
 }
 
+// The judge tracks its 40 strongest corners first and stops there when the camera is clearly
+// still (half of them back, median <= 0.5 px): the same verdicts as tracking all 150, frame by
+// frame, through a still stretch, a slow pan and a hand over a third of the image.
+TEST(TrackingOcclusion, CameraMotionJudgeDecidesClearlyStillFramesOnItsFirstCorners) {
+  const cv::Mat ref = texture({640, 480}, 4);
+  tracking::CameraMotionConfig all;
+  all.firstBatch = 0;
+  tracking::CameraMotionJudge cheap, full(all);
+  cheap.setReference(ref, {});
+  full.setReference(ref, {});
+  int early = 0, frames = 0;
+  for (int f = 0; f < 24; ++f) {
+    // Still for 6 frames, then panning 0.3 px a frame; a hand over the left third throughout.
+    cv::Mat now = shifted(ref, f < 6 ? 0.0 : 0.3 * (f - 5), 0);
+    cv::Mat hand = texture({640, 480}, 200 + unsigned(f));
+    cv::Mat mask(now.size(), CV_8U, cv::Scalar(0));
+    cv::circle(mask, {60 + 10 * f, 240}, 110, cv::Scalar(255), cv::FILLED);
+    hand.copyTo(now, mask);
+    const auto a = cheap.judge(now), b = full.judge(now);
+    ASSERT_TRUE(a.judged && b.judged);
+    EXPECT_EQ(a.still, b.still) << "frame " << f << ": " << a.medianShiftPx << " against "
+                                << b.medianShiftPx << " px";
+    EXPECT_FALSE(b.early);
+    if (a.early) {
+      ++early;
+      EXPECT_LE(b.medianShiftPx, 0.75) << "frame " << f;
+      EXPECT_LE(a.tracked, 40);
+    }
+    ++frames;
+  }
+  EXPECT_GE(early, 6) << "the still frames end on the first corners";
+  EXPECT_LT(early, frames) << "a pan past 0.5 px tracks them all";
+}
+
 namespace {
 
 struct OcclusionRun {
   int halfVisible = 0, halfVisibleWithPose = 0;
   int hiddenStill = 0, hiddenStillWithPose = 0;
   int hiddenMoved = 0, falseHolds = 0;  // held with the planet centre > 5 mm off
-  std::vector<double> centreErr;        // frames with a board marker at least half visible
+  // Frames without the board in which the camera was judged, with the planet held or lost after
+  // the frame before (once lost, there is nothing for the camera's stillness to keep).
+  int judgedWhileHeld = 0, judgedAfterLoss = 0;
+  std::vector<double> centreErr;  // frames with a board marker at least half visible
 };
 
 // Replays a built-in board scene through the frame stepper (the pipeline `replay` and `live`
@@ -125,11 +162,14 @@ OcclusionRun replayBoardScene(const std::string& name, int step) {
   replay::FrameStepper stepper(script.camera, planet, o);
   OcclusionRun r;
   tracking::Pose lastSeenCamera;
-  bool seen = false;
+  bool seen = false, hadPose = false;
   for (int f = 0; f < renderer.frames(); f += step) {
     const auto truth = renderer.truth(f);
     const auto result = stepper.step(renderer.render(f), f, truth.time);
     const auto& sf = result.scene;
+    if (result.logLine.find("camera_shift_px") != std::string::npos)
+      ++(hadPose ? r.judgedWhileHeld : r.judgedAfterLoss);
+    hadPose = sf.planet.usable();
     const double err = sf.planetCentreValid
                            ? (sf.planetCentreCamera - truth.planetCentreCamera).norm()
                            : std::numeric_limits<double>::infinity();
@@ -189,6 +229,8 @@ TEST(TrackingOcclusion, BoardHiddenIsHeldWhileTheCameraStandsAndLostWhenItMoves)
   EXPECT_LE(r.halfVisible - r.halfVisibleWithPose, kReacquireFrames);
   EXPECT_LT(quantile(r.centreErr, 0.5), 1e-3);
   EXPECT_LT(quantile(r.centreErr, 0.95), 3e-3);
+  EXPECT_GE(r.judgedWhileHeld, r.hiddenStill) << "every held frame judged";
+  EXPECT_EQ(r.judgedAfterLoss, 0) << "nothing to keep once lost";
 }
 
 // A hand over half the board, then over all of it: the planet stays, where it is.

@@ -98,6 +98,9 @@ struct FrameStepper::Parts {
   std::optional<sand::TinSandTool> tinSand;
   // Boards: whether the camera stood still while the board is hidden (tracker.hpp).
   std::optional<tracking::CameraMotionJudge> motion;
+  // The planet had a pose after the last frame: only then can the camera's stillness keep it
+  // (once lost, it waits for the board; judging the camera then was work thrown away).
+  bool planetHadPose = false;
   Parts(std::unique_ptr<tracking::Detector> d, const tracking::SceneConfig& sc,
         terrain::Terrain& planet)
       : detector(std::move(d)), scene(sc), pipeline(planet) {}
@@ -265,7 +268,7 @@ StepResult FrameStepper::step(const cv::Mat& image, int frame, double time) {
   if (p_->motion) {
     const bool boardSeen = std::any_of(found.begin(), found.end(),
                                        [&](const auto& d) { return o_.scene.planet.owns(d.id); });
-    if (!boardSeen && p_->motion->hasReference()) {
+    if (!boardSeen && p_->planetHadPose && p_->motion->hasReference()) {
       const tracking::CameraMotion m = p_->motion->judge(image);
       cameraStill = m.still;
       if (m.judged)
@@ -275,6 +278,7 @@ StepResult FrameStepper::step(const cv::Mat& image, int frame, double time) {
     }
   }
   out.scene = p_->scene.update(found, calib_, frame, time, cameraStill);
+  p_->planetHadPose = out.scene.planet.usable();
   if (p_->motion && out.scene.planet.measured) {
     std::vector<std::array<cv::Point2d, 4>> quads;
     for (const auto& d : found) quads.push_back(d.corners);

@@ -21,6 +21,7 @@ void CameraMotionConfig::validate() const {
     bad("min tracked fraction not in [0, 1]");
   if (!(maskMargin >= 0) || !std::isfinite(maskMargin)) bad("mask margin is not >= 0");
   if (downscale < 1 || downscale > 8) bad("downscale is not in 1..8");
+  if (firstBatch < 0) bad("first batch is not >= 0");
 }
 
 CameraMotionJudge::CameraMotionJudge(CameraMotionConfig config) : config_(config) {
@@ -93,27 +94,51 @@ CameraMotion CameraMotionJudge::judge(const cv::Mat& image) {
   if (features_.size() < std::size_t(config_.minTracked)) return m;
   const cv::Mat now = toWorkingGrey(image);
   if (now.size() != reference_.size()) return m;
-  std::vector<cv::Point2f> found, back;
-  std::vector<unsigned char> status, backStatus;
-  std::vector<float> err;
   // Pyramids built once per image: the reference's is kept for every frame it is judged
   // against, and each frame's serves both directions.
-  const cv::Size window(15, 15);
+  const cv::Size window(11, 11);
   constexpr int kLevels = 3;
   if (referencePyramid_.empty())
     cv::buildOpticalFlowPyramid(reference_, referencePyramid_, window, kLevels);
   std::vector<cv::Mat> nowPyramid;
   cv::buildOpticalFlowPyramid(now, nowPyramid, window, kLevels);
-  cv::calcOpticalFlowPyrLK(referencePyramid_, nowPyramid, features_, found, status, err, window,
-                           kLevels);
-  // Forward-backward check: a corner under a hand or the tool now does not track back to where
-  // it was, and is left out (what is left is the background that can still be seen).
-  cv::calcOpticalFlowPyrLK(nowPyramid, referencePyramid_, found, back, backStatus, err, window,
-                           kLevels);
   std::vector<double> shifts;
-  for (std::size_t i = 0; i < features_.size(); ++i)
-    if (status[i] && backStatus[i] && cv::norm(back[i] - features_[i]) < 0.5)
-      shifts.push_back(cv::norm(found[i] - features_[i]) * config_.downscale);
+  // Corners [begin, end) tracked there and back; the shifts of those that came back go to
+  // `shifts` (full-resolution px).
+  auto track = [&](std::size_t begin, std::size_t end) {
+    const std::vector<cv::Point2f> from(features_.begin() + std::ptrdiff_t(begin),
+                                        features_.begin() + std::ptrdiff_t(end));
+    std::vector<cv::Point2f> found, back;
+    std::vector<unsigned char> status, backStatus;
+    std::vector<float> err;
+    cv::calcOpticalFlowPyrLK(referencePyramid_, nowPyramid, from, found, status, err, window,
+                             kLevels);
+    // Forward-backward check: a corner under a hand or the tool now does not track back to
+    // where it was, and is left out (what is left is the background that can still be seen).
+    cv::calcOpticalFlowPyrLK(nowPyramid, referencePyramid_, found, back, backStatus, err, window,
+                             kLevels);
+    for (std::size_t i = 0; i < from.size(); ++i)
+      if (status[i] && backStatus[i] && cv::norm(back[i] - from[i]) < 0.5)
+        shifts.push_back(cv::norm(found[i] - from[i]) * config_.downscale);
+  };
+  auto median = [](std::vector<double> v) {
+    std::nth_element(v.begin(), v.begin() + std::ptrdiff_t(v.size() / 2), v.end());
+    return v[v.size() / 2];
+  };
+  const std::size_t batch = config_.firstBatch > 0
+                                ? std::min(features_.size(), std::size_t(config_.firstBatch))
+                                : features_.size();
+  track(0, batch);
+  if (batch < features_.size()) {
+    if (shifts.size() >= std::max(std::size_t(config_.minTracked), (batch + 1) / 2) &&
+        median(shifts) <= config_.maxShiftPx / 3) {
+      m.tracked = int(shifts.size());
+      m.judged = m.still = m.early = true;
+      m.medianShiftPx = median(shifts);
+      return m;
+    }
+    track(batch, features_.size());
+  }
   m.tracked = int(shifts.size());
   m.judged = true;
   if (m.tracked < config_.minTracked ||
@@ -121,9 +146,7 @@ CameraMotion CameraMotionJudge::judge(const cv::Mat& image) {
     m.medianShiftPx = std::numeric_limits<double>::infinity();
     return m;
   }
-  std::nth_element(shifts.begin(), shifts.begin() + std::ptrdiff_t(shifts.size() / 2),
-                   shifts.end());
-  m.medianShiftPx = shifts[shifts.size() / 2];
+  m.medianShiftPx = median(shifts);
   m.still = m.medianShiftPx <= config_.maxShiftPx;
   return m;
 }

@@ -24,6 +24,11 @@ struct CameraMotionConfig {
   // than this fraction of those picked, and the camera is not judged still.
   int minTracked = 10;
   double minTrackedFraction = 0.1;
+  // The strongest firstBatch corners are tracked first: when at least half of them come back
+  // and their median shift is at most a third of maxShiftPx the camera is still and the rest
+  // are not tracked (most frames of a hold); otherwise every corner decides, as before.
+  // 0: every corner, every frame.
+  int firstBatch = 40;
   double maskMargin = 0.35;  // marker quads grown by this fraction of their size
   int downscale = 2;         // work on an image this many times smaller
   void validate() const;     // InputError naming the field
@@ -34,6 +39,7 @@ struct CameraMotion {
   bool still = false;
   double medianShiftPx = 0;
   int features = 0, tracked = 0;
+  bool early = false;  // decided on the first batch of corners
 };
 
 class CameraMotionJudge {

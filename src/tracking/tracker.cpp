@@ -12,6 +12,14 @@
 namespace ps::tracking {
 
 namespace {
+// Rigid sets (boards, tool solids): a measurement more than 50 mm from the last pose (1.5 m/s
+// at 30 frames a second) or turned more than 8 degrees from it (240 degrees/s) is a new shot,
+// not motion (the sweep's cuts turn the board 10.4-40 degrees).
+constexpr double kRigidSetRestartJump = 0.05;
+constexpr double kRigidSetRestartTurn = 8.0 * M_PI / 180.0;
+// A tool solid's hold ends once its tip would have drifted 5 mm at the speed it last had.
+constexpr double kToolHoldMaxDrift = 0.005;
+
 std::string num(double v) {
   std::ostringstream s;
   s.precision(6);
@@ -49,6 +57,12 @@ void MarkerTrackerConfig::validate() const {
   if (!(ambiguityRatio >= 1))
     throw core::InputError("ambiguity ratio = " + num(ambiguityRatio) + " is not >= 1");
   checkPositive(maxReprojectionPx, "max reprojection error (px)");
+  for (const auto& [v, what] :
+       {std::pair{restartJump, "filter restart jump (m)"},
+        std::pair{restartTurn, "filter restart turn (rad)"},
+        std::pair{holdMaxDrift, "hold max drift (m)"}, std::pair{driftRadius, "drift radius (m)"}})
+    if (!(v >= 0) || !std::isfinite(v))
+      throw core::InputError(std::string(what) + " = " + num(v) + " is not >= 0");
   if (layout && layout->markers.empty())
     throw core::InputError(layout->source + ": the layout has no markers");
 }
@@ -64,11 +78,17 @@ std::string MarkerTrackerConfig::name() const {
 void SceneConfig::useBoard(std::shared_ptr<const MarkerLayout> board) {
   planet.layout = std::move(board);
   planet.holdWhileStill = planet.layout != nullptr;
+  planet.restartJump = planet.layout ? kRigidSetRestartJump : 0.0;
+  planet.restartTurn = planet.layout ? kRigidSetRestartTurn : 0.0;
 }
 
 void SceneConfig::useToolLayout(std::shared_ptr<const MarkerLayout> layout) {
   tool.layout = std::move(layout);
   if (tool.layout && tool.layout->tip) tipOffset = *tool.layout->tip;
+  tool.restartJump = tool.layout ? kRigidSetRestartJump : 0.0;
+  tool.restartTurn = tool.layout ? kRigidSetRestartTurn : 0.0;
+  tool.holdMaxDrift = tool.layout ? kToolHoldMaxDrift : 0.0;
+  tool.driftRadius = tool.layout ? tipOffset.norm() : 0.0;
 }
 
 MarkerTracker::MarkerTracker(MarkerTrackerConfig config)
@@ -80,6 +100,8 @@ void MarkerTracker::reset() {
   tFilter_.reset();
   rFilter_.reset();
   have_ = false;
+  measuredLast_ = false;
+  speed_ = -1;
 }
 
 bool MarkerTracker::measure(std::span<const Detection> detections, const CameraCalibration& calib,
@@ -154,9 +176,14 @@ MarkerEstimate MarkerTracker::update(std::span<const Detection> detections,
   lastTime_ = time;
   e.measured = config_.layout ? measureBody(detections, calib, e) : measure(detections, calib, e);
   if (e.measured) {
-    // Filters restart after a loss (a held pose is no base to filter from).
-    const double fdt = have_ ? dt : 0.0;
-    if (!have_) {
+    // Filters restart after a loss (a held pose is no base to filter from), and on a jump.
+    e.restarted =
+        have_ &&
+        ((config_.restartJump > 0 && (e.raw.t - last_.t).norm() > config_.restartJump) ||
+         (config_.restartTurn > 0 && rotationAngle(e.raw.R, last_.R) > config_.restartTurn));
+    const bool restart = !have_ || e.restarted;
+    const double fdt = restart ? 0.0 : dt;
+    if (restart) {
       tFilter_.reset();
       rFilter_.reset();
     }
@@ -165,19 +192,29 @@ MarkerEstimate MarkerTracker::update(std::span<const Detection> detections,
       p.t = tFilter_.filter(e.raw.t, fdt);
       p.R = rFilter_.filter(Eigen::Quaterniond(e.raw.R), fdt).toRotationMatrix();
     }
+    if (config_.holdMaxDrift > 0)
+      speed_ =
+          have_ && measuredLast_ && dt > 0
+              ? ((p.t - last_.t).norm() + rotationAngle(p.R, last_.R) * config_.driftRadius) / dt
+              : -1;
     e.pose = p;
     e.state = TrackState::kTracked;
     last_ = p;
     have_ = true;
+    measuredLast_ = true;
     lastSeen_ = lastStill_ = time;
     return e;
   }
+  measuredLast_ = false;
   if (have_ && config_.holdWhileStill && cameraStill) {
     lastStill_ = time;
     e.heldStill = true;
   }
-  // The short hold counts from the last frame seen, or judged still.
-  if (have_ &&
+  // The short hold counts from the last frame seen, or judged still; it ends early once the
+  // pose would have drifted too far at its last speed.
+  const bool drifted =
+      config_.holdMaxDrift > 0 && speed_ >= 0 && speed_ * (time - lastSeen_) > config_.holdMaxDrift;
+  if (have_ && !drifted &&
       (e.heldStill || time - std::max(lastSeen_, lastStill_) <= config_.holdSeconds + 1e-9)) {
     e.state = TrackState::kHeld;
     e.pose = last_;
@@ -265,8 +302,13 @@ SceneFrame SceneTracker::update(const std::vector<Detection>& detections,
   for (int id : others)
     f.notes.push_back("id " + std::to_string(id) + " is neither planet nor tool");
   if (f.tool.measured && config_.filterTip) {
+    const Eigen::Vector3d tip = tipFromMarker(f.tool.raw);
+    // The tip's filter restarts with the tool's (a jump) and when the tip alone jumps.
+    if (tipHave_ && config_.tool.restartJump > 0 &&
+        (f.tool.restarted || (tip - tipFilter_.value()).norm() > config_.tool.restartJump))
+      tipFilter_.reset();
     const double dt = tipHave_ ? time - lastTipTime_ : 0.0;
-    tipFilter_.filter(tipFromMarker(f.tool.raw), dt);
+    tipFilter_.filter(tip, dt);
     tipHave_ = true;
     lastTipTime_ = time;
   } else if (!f.tool.usable()) {

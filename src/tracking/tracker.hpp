@@ -50,6 +50,19 @@ struct MarkerTrackerConfig {
   // While nothing is seen and the camera is judged still, hold the pose (boards); once the
   // camera moves, the usual hold of holdSeconds, then lost.
   bool holdWhileStill = false;
+  // A measurement whose position is more than restartJump (m) from the last pose, or turned
+  // more than restartTurn (rad) from it, restarts the filters (a cut in the video, a body
+  // found again far from where it was held): a One Euro filter would otherwise leave a few
+  // percent of the jump behind for a frame or two. 0: never (the single marker's classic path).
+  double restartJump = 0;
+  double restartTurn = 0;
+  // The hold ends early once the pose, moving on at the speed it had when last seen, would have
+  // drifted more than this (m) at `driftRadius` from the body's origin (a tool's tip): a tool
+  // spun too fast to be read is not held where it was. The speed is that of the filtered pose
+  // between the last two frames in a row that measured it (unknown: the plain hold). 0: hold
+  // for holdSeconds.
+  double holdMaxDrift = 0;
+  double driftRadius = 0;
   static MarkerTrackerConfig single(int id, double size) {
     MarkerTrackerConfig c;
     c.id = id;
@@ -73,6 +86,7 @@ struct MarkerEstimate {
   int candidate = 0;
   bool byContinuity = false;
   double sinceSeen = 0;    // seconds since the last measurement
+  bool restarted = false;  // the filters restarted on a jump (restartJump)
   bool heldStill = false;  // held because the camera was judged still
   std::vector<int> ids;    // markers whose corners gave this frame's measurement
   std::string note;        // why a detection was not used, if one was not
@@ -102,6 +116,8 @@ class MarkerTracker {
   bool have_ = false;  // a pose to hold or continue from
   Pose last_;
   double lastSeen_ = 0, lastTime_ = 0, lastStill_ = 0;
+  bool measuredLast_ = false;  // the previous update measured the pose
+  double speed_ = -1;          // drift speed (m/s) when last seen; < 0: unknown
 };
 
 struct SceneConfig {
