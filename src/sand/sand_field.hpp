@@ -171,6 +171,8 @@ class SandField {
   // glued sides through the chart's gluing, the thermal step in two passes over the tiles.
   void markRegion(const terrain::GridRegion& region);
   void loadGeometry(Tile& tile, int t);
+  // Fills the kGeoPlanes planes of tile t's cells into geo; returns min A / sum_f (L_f / d_f).
+  double computeGeometry(int t, double* geo) const;
   // The source of scratch position (r, c) of tile (tu, tv) (a one-cell halo, the grid continued
   // across the glued sides to the canonical vertex): its tile and index there, or false
   // (outside the grid or not in P).

@@ -34,7 +34,26 @@ static_assert(kernels::kGluedRow == kT);
 void SandField::loadGeometry(Tile& tile, int t) {
   if (tile.geo) return;
   tile.geo = std::make_unique<double[]>(std::size_t(kGeoPlanes) * kCells);
-  double* geo = tile.geo.get();
+  tile.boundFactor = computeGeometry(t, tile.geo.get());
+  // The tiles its cells link to (other than itself).
+  tile.linked.clear();
+  const int tu = t % tilesU_, tv = t / tilesU_;
+  for (int lv = 0; lv < kT; ++lv) {
+    for (int lu = 0; lu < kT; ++lu) {
+      const int u = tu * kT + lu, v = tv * kT + lv;
+      if (!cellExists(u, v)) continue;
+      for (int k = 0; k < kNK; ++k) {
+        const core::GridPoint n = grid_.neighbour(u, v, k);
+        if (n.u < 0) continue;
+        const int tn = tileIndex(n.u / kT, n.v / kT);
+        if (tn != t && std::find(tile.linked.begin(), tile.linked.end(), tn) == tile.linked.end())
+          tile.linked.push_back(tn);
+      }
+    }
+  }
+}
+
+double SandField::computeGeometry(int t, double* geo) const {
   const int tu = t % tilesU_, tv = t / tilesU_;
   const double inf = std::numeric_limits<double>::infinity();
   const core::Chart& chart = grid_.chart();
@@ -112,22 +131,7 @@ void SandField::loadGeometry(Tile& tile, int t) {
       if (cell && ratios > 0.0) bound = std::min(bound, A / ratios);
     }
   }
-  tile.boundFactor = bound;
-  // The tiles its cells link to (other than itself).
-  tile.linked.clear();
-  for (int lv = 0; lv < kT; ++lv) {
-    for (int lu = 0; lu < kT; ++lu) {
-      const int u = tu * kT + lu, v = tv * kT + lv;
-      if (!cellExists(u, v)) continue;
-      for (int k = 0; k < kNK; ++k) {
-        const core::GridPoint n = grid_.neighbour(u, v, k);
-        if (n.u < 0) continue;
-        const int tn = tileIndex(n.u / kT, n.v / kT);
-        if (tn != t && std::find(tile.linked.begin(), tile.linked.end(), tn) == tile.linked.end())
-          tile.linked.push_back(tn);
-      }
-    }
-  }
+  return bound;
 }
 
 bool SandField::gluedBorderTile(int tu, int tv) const {
@@ -195,21 +199,8 @@ void SandField::gatherGlued(int tu, int tv, double* hs, double* ss, double* caps
 
 double SandField::gluedTileBound(int t) const {
   if (const Tile* tile = tiles_[std::size_t(t)].get(); tile && tile->geo) return tile->boundFactor;
-  const int tu = t % tilesU_, tv = t / tilesU_;
-  double bound = std::numeric_limits<double>::infinity();
-  for (int lv = 0; lv < kT; ++lv) {
-    for (int lu = 0; lu < kT; ++lu) {
-      const int u = tu * kT + lu, v = tv * kT + lv;
-      if (!cellExists(u, v)) continue;
-      double g = 0.0;
-      for (int k = 0; k < 4; ++k) {
-        const double d = grid_.chord(u, v, k);
-        if (std::isfinite(d)) g += grid_.face(u, v, k) / d;
-      }
-      if (g > 0.0) bound = std::min(bound, grid_.cellArea(u, v) / g);
-    }
-  }
-  return bound;
+  std::vector<double> geo(std::size_t(kGeoPlanes) * kCells);  // a tile not loaded: computed
+  return computeGeometry(t, geo.data());
 }
 
 double SandField::gluedBound(const Material& material, bool wholeGrid, bool visited) const {
