@@ -86,7 +86,7 @@ struct MarkerEstimate {
   int candidate = 0;
   bool byContinuity = false;
   double sinceSeen = 0;    // seconds since the last measurement
-  bool restarted = false;  // the filters restarted on a jump (restartJump)
+  bool restarted = false;  // the filters restarted on a jump (restartJump, restartTurn)
   bool heldStill = false;  // held because the camera was judged still
   std::vector<int> ids;    // markers whose corners gave this frame's measurement
   std::string note;        // why a detection was not used, if one was not
