@@ -19,8 +19,8 @@
 #include <iostream>
 #include <map>
 #include <memory>
-#include <sstream>
 #include <nlohmann/json.hpp>
+#include <sstream>
 #include <string>
 #include <vector>
 
