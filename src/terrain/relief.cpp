@@ -134,6 +134,38 @@ Octave makeOctave(std::uint64_t seed, std::uint64_t layer, int k, double freq) {
   return o;
 }
 
+// The lane helpers both noiseBatch forms share, so that they give a point the same bits.
+// Perlin's fade 6t^5 - 15t^4 + 10t^3, the scalar fade()'s arithmetic in each lane.
+[[gnu::always_inline]] inline void fade4(const VecD& t, VecD& out) {
+  out = t * t * t * (t * (t * 6.0 - 15.0) + 10.0);
+}
+// The hash inputs of the four (x, y) corners of each lane's lattice cell: (ix, iy), (ix + 1, iy),
+// (ix, iy + 1), (ix + 1, iy + 1).
+[[gnu::always_inline]] inline void cornerCodesXY(const VecI& ix, const VecI& iy, VecU b[4]) {
+  const VecU b00 =
+      reinterpret_cast<const VecU&>(ix) * kPx + reinterpret_cast<const VecU&>(iy) * kPy;
+  b[0] = b00;
+  b[1] = b00 + kPx;
+  b[2] = b00 + kPy;
+  b[3] = b00 + (kPx + kPy);
+}
+// Trilinear blend of the eight corners' values with the faded weights (x, then y, then z), times
+// `scale`, stored into out[0 .. kLanes) or added to it.
+[[gnu::always_inline]] inline void blendInto(const VecD n[8], const VecD& wx, const VecD& wy,
+                                             const VecD& wz, double scale, bool accumulate,
+                                             double* out) {
+  const VecD n00 = n[0] + wx * (n[1] - n[0]), n10 = n[2] + wx * (n[3] - n[2]);
+  const VecD n01 = n[4] + wx * (n[5] - n[4]), n11 = n[6] + wx * (n[7] - n[6]);
+  const VecD n0 = n00 + wy * (n10 - n00), n1 = n01 + wy * (n11 - n01);
+  VecD result = scale * (n0 + wz * (n1 - n0));
+  if (accumulate) {
+    VecD previous;
+    std::memcpy(&previous, out, sizeof previous);
+    result = previous + result;
+  }
+  std::memcpy(out, &result, sizeof result);
+}
+
 // Noise of octave `o` (range about [-1, 1]) at the points (x[i], y[i], z), i < count, times
 // `scale`, stored into out[i] or, with `accumulate`, added to it. The arrays must be readable and
 // writable up to count rounded up to kLanes.
@@ -169,8 +201,9 @@ __attribute__((target_clones("avx2", "default"))) void noiseBatch(const Octave& 
     const VecI ix = floor4(xx), iy = floor4(yy);
     const VecD fx[2] = {xx - __builtin_convertvector(ix, VecD), fx[0] - 1.0};
     const VecD fy[2] = {yy - __builtin_convertvector(iy, VecD), fy[0] - 1.0};
-    const VecD wx = fx[0] * fx[0] * fx[0] * (fx[0] * (fx[0] * 6.0 - 15.0) + 10.0);
-    const VecD wy = fy[0] * fy[0] * fy[0] * (fy[0] * (fy[0] * 6.0 - 15.0) + 10.0);
+    VecD wx, wy;
+    fade4(fx[0], wx);
+    fade4(fy[0], wy);
 
     // Corner c is (ix + (c & 1), iy + (c >> 1 & 1), iz + (c >> 2)).
     VecD n[8];
@@ -181,9 +214,8 @@ __attribute__((target_clones("avx2", "default"))) void noiseBatch(const Octave& 
 #pragma GCC unroll 8
       for (int c = 0; c < 8; ++c) n[c] = cgx[c] * fx[c & 1] + cgy[c] * fy[c >> 1 & 1] + cgz[c];
     } else {
-      const VecU bx = reinterpret_cast<const VecU&>(ix) * kPx;
-      const VecU b00 = bx + reinterpret_cast<const VecU&>(iy) * kPy;
-      const VecU b[4] = {b00, b00 + kPx, b00 + kPy, b00 + (kPx + kPy)};
+      VecU b[4];
+      cornerCodesXY(ix, iy, b);
       VecL g[8];
 #pragma GCC unroll 8
       for (int c = 0; c < 8; ++c) {
@@ -200,17 +232,7 @@ __attribute__((target_clones("avx2", "default"))) void noiseBatch(const Octave& 
         cgz[c] = grad.z * fzs[c >> 2];
       }
     }
-    // Trilinear blend with the faded weights: x, then y, then z.
-    const VecD n00 = n[0] + wx * (n[1] - n[0]), n10 = n[2] + wx * (n[3] - n[2]);
-    const VecD n01 = n[4] + wx * (n[5] - n[4]), n11 = n[6] + wx * (n[7] - n[6]);
-    const VecD n0 = n00 + wy * (n10 - n00), n1 = n01 + wy * (n11 - n01);
-    VecD result = scale * (n0 + wz * (n1 - n0));
-    if (accumulate) {
-      VecD previous;
-      std::memcpy(&previous, out + i, sizeof previous);
-      result = previous + result;
-    }
-    std::memcpy(out + i, &result, sizeof result);
+    blendInto(n, wx, wy, wz, scale, accumulate, out + i);
   }
 }
 
@@ -232,14 +254,15 @@ __attribute__((target_clones("avx2", "default"))) void noiseBatchXYZ(
     const VecD fx[2] = {xx - __builtin_convertvector(ix, VecD), fx[0] - 1.0};
     const VecD fy[2] = {yy - __builtin_convertvector(iy, VecD), fy[0] - 1.0};
     const VecD fz[2] = {zz - __builtin_convertvector(iz, VecD), fz[0] - 1.0};
-    const VecD wx = fx[0] * fx[0] * fx[0] * (fx[0] * (fx[0] * 6.0 - 15.0) + 10.0);
-    const VecD wy = fy[0] * fy[0] * fy[0] * (fy[0] * (fy[0] * 6.0 - 15.0) + 10.0);
-    const VecD wz = fz[0] * fz[0] * fz[0] * (fz[0] * (fz[0] * 6.0 - 15.0) + 10.0);
+    VecD wx, wy;
+    fade4(fx[0], wx);
+    fade4(fy[0], wy);
+    VecD wz;
+    fade4(fz[0], wz);
     const VecU hz = o.seed + reinterpret_cast<const VecU&>(iz) * kPz;
     const VecU h[2] = {hz, hz + kPz};
-    const VecU bx = reinterpret_cast<const VecU&>(ix) * kPx;
-    const VecU b00 = bx + reinterpret_cast<const VecU&>(iy) * kPy;
-    const VecU b[4] = {b00, b00 + kPx, b00 + kPy, b00 + (kPx + kPy)};
+    VecU b[4];
+    cornerCodesXY(ix, iy, b);
     VecD n[8];
 #pragma GCC unroll 8
     for (int c = 0; c < 8; ++c) {
@@ -247,16 +270,7 @@ __attribute__((target_clones("avx2", "default"))) void noiseBatchXYZ(
       gradientCode(h[c >> 2] + b[c & 3], g);
       gradDot(g, fx[c & 1], fy[c >> 1 & 1], fz[c >> 2], n[c]);
     }
-    const VecD n00 = n[0] + wx * (n[1] - n[0]), n10 = n[2] + wx * (n[3] - n[2]);
-    const VecD n01 = n[4] + wx * (n[5] - n[4]), n11 = n[6] + wx * (n[7] - n[6]);
-    const VecD n0 = n00 + wy * (n10 - n00), n1 = n01 + wy * (n11 - n01);
-    VecD result = scale * (n0 + wz * (n1 - n0));
-    if (accumulate) {
-      VecD previous;
-      std::memcpy(&previous, out + i, sizeof previous);
-      result = previous + result;
-    }
-    std::memcpy(out + i, &result, sizeof result);
+    blendInto(n, wx, wy, wz, scale, accumulate, out + i);
   }
 }
 
