@@ -71,6 +71,11 @@ struct DetectorConfig {
   // poses need. coarseRegionPx 0: always full resolution.
   double coarseRegionPx = 20;
   int coarseRegionMarkers = 4;
+  // A rigid set of which one marker alone is found (a tool cube showing one face) gets that
+  // marker's corners refined by aligning its canonical image with the frame (corner_refine.hpp):
+  // a lone face seen nearly head-on turns by degrees for a tenth of a pixel at its corners,
+  // where several faces hold each other's tilt. Markers outside the sets are untouched.
+  bool refineLoneSetMarkers = true;
 
   // Throws core::InputError naming the bad field.
   void validate() const;

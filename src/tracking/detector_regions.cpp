@@ -3,6 +3,7 @@
 #include <cmath>
 #include <map>
 
+#include "tracking/corner_refine.hpp"
 #include "tracking/detector.hpp"
 
 namespace ps::tracking {
@@ -101,6 +102,7 @@ class RegionDetector final : public Detector {
     for (const auto& d : found) ++count[d.id];
     for (const auto& d : found)
       if (count[d.id] == 1) last_[d.id] = d;  // an id seen twice is not followed
+    if (config_.refineLoneSetMarkers) refineLoneMarkers(grey, count, found);
     return found;
   }
 
@@ -171,6 +173,22 @@ class RegionDetector final : public Detector {
     for (auto d : search.detect(grey(r))) {
       for (auto& c : d.corners) c += cv::Point2d(r.x, r.y);
       if (wanted(d.id) && !known(found, d)) found.push_back(d);
+    }
+  }
+
+  // The region boxes follow the detector's own corners (last_); only what is returned is refined.
+  void refineLoneMarkers(const cv::Mat& grey, std::map<int, int>& count,
+                         std::vector<Detection>& found) const {
+    for (const auto& set : config_.sets) {
+      Detection* lone = nullptr;
+      int seenInSet = 0;
+      for (auto& d : found)
+        if (std::find(set.begin(), set.end(), d.id) != set.end()) {
+          ++seenInSet;
+          lone = &d;
+        }
+      if (seenInSet == 1 && count[lone->id] == 1)
+        refineCornersByTemplate(grey, config_.family, *lone);
     }
   }
 
