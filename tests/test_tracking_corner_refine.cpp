@@ -103,7 +103,7 @@ TEST(TrackingCornerRefine, AlignedCornersBeatTheEdgeFitOnRandomFaces) {
 }
 
 // What cannot be matched is left as the detector gave it: corners far from the marker, a marker
-// at the image's border, an image without the marker.
+// at the image's border, one too small for the template, an image without the marker.
 TEST(TrackingCornerRefine, LeavesCornersAloneWhereNothingMatches) {
   std::mt19937 rng(11);
   const Quad truth = randomFace(rng, 50, 0);
@@ -122,6 +122,14 @@ TEST(TrackingCornerRefine, LeavesCornersAloneWhereNothingMatches) {
   d.corners = edge;
   EXPECT_FALSE(tracking::refineCornersByTemplate(image, "tag36h11", d));
   EXPECT_EQ(d.corners, edge);
+  // Fewer pixels a cell than the template has (28 px across: 3.5 px a cell against 4).
+  const Quad small = randomFace(rng, 28, 0);
+  const cv::Mat smallImage = drawFace(22, small, 0.4, 1.5, rng);
+  d.id = 22;
+  d.corners = small;
+  EXPECT_FALSE(tracking::refineCornersByTemplate(smallImage, "tag36h11", d));
+  EXPECT_EQ(d.corners, small);
+  d.id = 21;
   // Flat grey where the marker should be.
   const cv::Mat flat(240, 320, CV_8U, cv::Scalar(128));
   d.corners = truth;

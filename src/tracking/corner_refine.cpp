@@ -39,6 +39,13 @@ bool refineCornersByTemplate(const cv::Mat& grey, const std::string& family, Det
     x1 = std::max(x1, c.x);
     y1 = std::max(y1, c.y);
   }
+  // Shorter than the template's cells in the image, the image would be sampled finer than it
+  // holds detail, and the alignment comes out worse than the edge fit (the board sweep's faces
+  // under 32 px: 0.10 px against 0.07 px, median worst corner).
+  double shortest = 1e300;
+  for (std::size_t k = 0; k < 4; ++k)
+    shortest = std::min(shortest, cv::norm(detection.corners[k] - detection.corners[(k + 1) % 4]));
+  if (shortest < info.edgeCells * p) return false;
   const double cellPx = std::max(x1 - x0, y1 - y0) / info.edgeCells;
   const double margin = q * cellPx + config.maxShiftPx + config.gaussianSize + 2;
   const cv::Rect roi(cv::Point(int(std::floor(x0 - margin)), int(std::floor(y0 - margin))),

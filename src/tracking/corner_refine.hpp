@@ -16,7 +16,8 @@
 namespace ps::tracking {
 
 struct TemplateRefineConfig {
-  // Pixels per marker cell in the template: the work per iteration goes with its square.
+  // Pixels per marker cell in the template: the work per iteration goes with its square. A
+  // marker whose shortest edge spans fewer pixels a cell in the image is not refined.
   int cellPixels = 4;
   // How much of the white quiet zone around the black border the template holds, in cells:
   // half of the one cell every family's canonical image has, so a neighbouring face or marker
@@ -31,8 +32,8 @@ struct TemplateRefineConfig {
 };
 
 // Refines `detection`'s corners in place; false (and the corners unchanged) when the marker is
-// too close to the image's border, the alignment does not converge or moves a corner more than
-// maxShiftPx. `grey` is 8-bit, one channel.
+// too small (cellPixels) or too close to the image's border, the alignment does not converge or
+// moves a corner more than maxShiftPx. `grey` is 8-bit, one channel.
 bool refineCornersByTemplate(const cv::Mat& grey, const std::string& family, Detection& detection,
                              const TemplateRefineConfig& config = {});
 
