@@ -8,21 +8,16 @@
 // between the marker's cells carries the same information; aligning the canonical image with the
 // image by a homography (enhanced correlation coefficient, OpenCV's findTransformECC: invariant
 // to the marker's brightness and contrast) uses them all.
+#include <map>
 #include <opencv2/core.hpp>
 #include <string>
 
 #include "tracking/detector.hpp"
+#include "tracking/marker_family.hpp"
 
 namespace ps::tracking {
 
 struct TemplateRefineConfig {
-  // Pixels per marker cell in the template: the work per iteration goes with its square. A
-  // marker whose shortest edge spans fewer pixels a cell in the image is not refined.
-  int cellPixels = 4;
-  // How much of the white quiet zone around the black border the template holds, in cells:
-  // half of the one cell every family's canonical image has, so a neighbouring face or marker
-  // close to the border is not part of what is matched.
-  double quietCells = 0.5;
   int maxIterations = 30;
   double epsilon = 1e-4;  // ECC's stop on the change of the correlation
   // The refined corners are kept only if none moved further than this from the detector's
@@ -31,9 +26,27 @@ struct TemplateRefineConfig {
   int gaussianSize = 3;  // ECC's smoothing of template and image (odd, or 0 for none)
 };
 
-// Refines `detection`'s corners in place; false (and the corners unchanged) when the marker is
-// too small (cellPixels) or too close to the image's border, the alignment does not converge or
-// moves a corner more than maxShiftPx. `grey` is 8-bit, one channel.
+// Refines detections of one family, keeping each id's template (the canonical image cut to its
+// border and half a cell of the quiet zone, 4 pixels a cell) once made: making it costs more
+// than the alignment.
+class CornerRefiner {
+ public:
+  explicit CornerRefiner(std::string family, TemplateRefineConfig config = {});
+  // Refines `detection`'s corners in place; false (and the corners unchanged) when the marker
+  // spans fewer than 4 pixels a cell (the template's scale: a finer template than the image
+  // aligns worse than the edge fit), lies too close to the image's border, the alignment does
+  // not converge or moves a corner more than maxShiftPx. `grey` is 8-bit, one channel.
+  bool refine(const cv::Mat& grey, Detection& detection);
+
+ private:
+  const cv::Mat& markerTemplate(int id);
+  std::string family_;
+  FamilyInfo info_;  // throws for an unknown family at construction, not at the first frame
+  TemplateRefineConfig config_;
+  std::map<int, cv::Mat> templates_;
+};
+
+// One detection with a refiner made for it (tests, still images).
 bool refineCornersByTemplate(const cv::Mat& grey, const std::string& family, Detection& detection,
                              const TemplateRefineConfig& config = {});
 

@@ -14,6 +14,21 @@ cv::Point2d centre(const Detection& d) {
   return 0.25 * (d.corners[0] + d.corners[1] + d.corners[2] + d.corners[3]);
 }
 
+// How far a square marker looks turned out of the image plane, from its quad alone: the ratio
+// of the singular values of the map taking the square's two mid-lines to the quad's is the
+// cosine of the tilt (perspective aside).
+double apparentTiltDeg(const Detection& d) {
+  const auto& c = d.corners;
+  const cv::Point2d u = 0.5 * ((c[1] + c[2]) - (c[0] + c[3]));
+  const cv::Point2d v = 0.5 * ((c[3] + c[2]) - (c[0] + c[1]));
+  // Singular values of [u v] from the trace and determinant of its Gram matrix.
+  const double a = u.dot(u), b = u.dot(v), e = v.dot(v);
+  const double mean = 0.5 * (a + e), root = std::sqrt(0.25 * (a - e) * (a - e) + b * b);
+  const double big = mean + root, small = std::max(mean - root, 0.0);
+  if (big <= 0) return 90.0;
+  return std::acos(std::clamp(std::sqrt(small / big), 0.0, 1.0)) * 180.0 / M_PI;
+}
+
 class RegionDetector final : public Detector {
  public:
   explicit RegionDetector(const DetectorConfig& c) : config_(c) {
@@ -178,7 +193,7 @@ class RegionDetector final : public Detector {
 
   // The region boxes follow the detector's own corners (last_); only what is returned is refined.
   void refineLoneMarkers(const cv::Mat& grey, std::map<int, int>& count,
-                         std::vector<Detection>& found) const {
+                         std::vector<Detection>& found) {
     for (const auto& set : config_.sets) {
       Detection* lone = nullptr;
       int seenInSet = 0;
@@ -187,12 +202,14 @@ class RegionDetector final : public Detector {
           ++seenInSet;
           lone = &d;
         }
-      if (seenInSet == 1 && count[lone->id] == 1)
-        refineCornersByTemplate(grey, config_.family, *lone);
+      if (seenInSet == 1 && count[lone->id] == 1 &&
+          apparentTiltDeg(*lone) <= config_.refineLoneMaxTiltDeg)
+        cornerRefiner_.refine(grey, *lone);
     }
   }
 
   DetectorConfig config_;
+  CornerRefiner cornerRefiner_{config_.family};
   std::unique_ptr<Detector> finder_, refiner_, coarseRefiner_;
   std::map<int, Detection> last_, previous_;
   cv::Size lastSize_;
