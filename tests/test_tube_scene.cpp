@@ -25,6 +25,7 @@
 #include "render/egl_context.hpp"
 #include "render/planet_renderer.hpp"
 #include "replay/replay.hpp"
+#include "replay/session_timeline.hpp"
 #include "short_scene.hpp"
 #include "terrain/relief.hpp"
 #include "terrain/tessellator.hpp"
@@ -286,5 +287,46 @@ TEST(TubeScene, OverviewAndCursorDrawTorusAndCylinder) {
       }
     EXPECT_GT(changed, 60) << "the cursor drew nothing";
     EXPECT_EQ(far, 0) << "cursor pixels away from the control vertex";
+  }
+}
+
+// A live recording's sidecar keeps a torus's minor radius and a cylinder's length (a sphere's
+// header has neither key, as before), reads them back, and a planet of other dimensions is
+// refused as another start planet.
+TEST(TubeScene, SessionSidecarsKeepTheDimensions) {
+  const auto dir = testkit::shortSceneDir();
+  const auto calib = testkit::shortSceneCamera();
+  const auto options = testkit::shortSceneOptions();
+  auto sidecarOf = [&](const terrain::Terrain& t, const std::string& name) {
+    const auto path = dir / (name + ".session.jsonl");
+    replay::TimelineWriter w;
+    w.open(path,
+           replay::SessionStart::of(t, "", int(t.grid().side()), 7, calib, "synthetic", options, 30,
+                                    0),
+           replay::SessionSettings::of(options));
+    w.close();
+    return path;
+  };
+  const terrain::Terrain sphere =
+      withRelief(std::make_shared<core::LatLongChart>(core::GridSize(5), 6372790.0));
+  const auto sphereHeader =
+      replay::toJson(replay::readSessionTimeline(sidecarOf(sphere, "s")).start);
+  EXPECT_FALSE(sphereHeader["planet"].contains("minor_radius_m"));
+  EXPECT_FALSE(sphereHeader["planet"].contains("length_m"));
+  for (const auto& tube : tubes(5)) {
+    SCOPED_TRACE(tube.name);
+    const terrain::Terrain t = withRelief(tube.chart);
+    const replay::SessionTimeline tl = replay::readSessionTimeline(sidecarOf(t, tube.name));
+    const core::ChartDims dims = core::dimsOf(t.chart());
+    EXPECT_EQ(tl.start.radius, dims.radius);
+    EXPECT_EQ(tl.start.minorRadius, dims.minorRadius);
+    EXPECT_EQ(tl.start.length, dims.length);
+    EXPECT_NO_THROW(replay::checkSessionStart(tl, t, calib));
+    // The same shape with the other dimension changed: another planet.
+    core::ChartDims other = dims;
+    (other.minorRadius > 0 ? other.minorRadius : other.length) *= 0.5;
+    const terrain::Terrain different(core::makeChart(core::shapeOf(t.chart()), t.grid(), other),
+                                     std::vector<float>(t.heights().begin(), t.heights().end()));
+    EXPECT_THROW(replay::checkSessionStart(tl, different, calib), core::InputError);
   }
 }
