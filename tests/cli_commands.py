@@ -377,6 +377,62 @@ def group_charts():
             fail(f"replay {' '.join(args)} was not refused saying '{said}': {p.returncode} {p.stderr}")
 
 
+def group_tube_charts():
+    # A torus and a cylinder planet stand on the planet board (issue 28): the demo's frames
+    # through its second stroke (frames 160-225, over the default sphere's 5-15 degrees N, where
+    # the default torus's outer equator and the default cylinder's band are) replayed onto each
+    # sculpt it; the planet file keeps its dimensions, the heightmap is its own (u, v) grid
+    # (import takes it back), the pictures are written. Twice onto the torus: the same file.
+    video = os.path.join(SRC, "data", "demo.mkv")
+    for name, args in (("torus_a", ("--chart", "torus")), ("torus_b", ("--chart", "torus")),
+                       ("tube", ("--chart", "cylinder", "--radius", "6000000", "--length", "4000000"))):
+        extra = ("--pictures",) if name != "torus_b" else ()
+        run("replay", video, "--calib", CALIB, *args, "--grid", "257", "--max-frames", "230",
+            *extra, "--out", out(name))
+    for name, chart in (("torus_a", "torus"), ("tube", "cylinder")):
+        with open(out(name, "summary.json")) as f:
+            s = json.load(f)
+        if (s["chart"] != chart or s["strokes"] < 1 or s["modified_vertices"] <= 0
+                or s["touching_frames"] < 20 or s["skipped_frames"] != 0):
+            fail(f"the {chart} replay did not sculpt its planet: {s}")
+        if chart == "torus" and (s["radius_m"] != 4.5e6 or s["minor_radius_m"] != 1.8e6):
+            fail(f"the default torus's dimensions: {s}")
+        if chart == "cylinder" and (s["radius_m"] != 6e6 or s["length_m"] != 4e6):
+            fail(f"the cylinder's dimensions: {s}")
+        for f in ("relief.png", "closeup.png", "view.png", "heightmap.png"):
+            if f not in s["files"] or not is_png(out(name, f)):
+                fail(f"the {chart} replay did not write {f}: {s['files']}")
+        if "renderer" in s and ("ar_view.png" not in s["files"] or "overview.png" not in s["files"]):
+            fail(f"the {chart} replay rendered no AR view or overview: {s['files']}")
+        meta = json.load(open(out(name, "heightmap.png.json")))
+        if meta.get("projection") != chart:
+            fail(f"the {chart} replay's heightmap sidecar: {meta}")
+        planet = open(out(name, "planet.planet"), "rb").read()
+        if not planet[16:32].startswith(chart.encode() + b"\0"):
+            fail(f"the {chart} planet file's header: {planet[:32]!r}")
+    if open(out("torus_a", "planet.planet"), "rb").read() != open(out("torus_b", "planet.planet"), "rb").read():
+        fail("two replays onto the torus wrote different planet files")
+    # The sculpted torus's heightmap goes back onto a torus of the same dimensions, and its mesh
+    # export is a closed surface of Euler characteristic 0.
+    run("import", out("torus_a", "heightmap.png"), "--chart", "torus", "--radius", "4500000",
+        "--minor-radius", "1800000", "--out", out("torus_back.planet"))
+    # Impossible or misplaced dimensions, refused naming the option; nothing replayed.
+    for args, said in ((("--chart", "torus", "--radius", "1500000"), "--minor-radius 1800000 m must be below --radius 1500000 m"),
+                       (("--chart", "torus", "--minor-radius", "5e6", "--radius", "5e6"), "--minor-radius"),
+                       (("--chart", "cylinder", "--length", "-1"), "--length -1 m"),
+                       (("--chart", "cylinder", "--radius", "0"), "--radius 0 m"),
+                       (("--chart", "latlong", "--length", "5"), "--length is a cylinder's"),
+                       (("--chart", "torus", "--length", "5"), "--length is a cylinder's"),
+                       (("--chart", "cylinder", "--minor-radius", "5"), "--minor-radius is a torus's"),
+                       (("--radius", "5e6", "--planet", out("torus_a", "planet.planet")), "has its own dimensions")):
+        p = subprocess.run([EXE, "replay", video, "--calib", CALIB, "--grid", "129", "--max-frames", "5", *args,
+                            "--out", out("refused")], capture_output=True, text=True)
+        if p.returncode <= 0 or said not in p.stderr:
+            fail(f"replay {' '.join(args)} was not refused saying '{said}': {p.returncode} {p.stderr}")
+    if os.path.exists(out("refused")):
+        fail("a refused replay wrote its output folder")
+
+
 def group_synth_detect():
     # A rendered still scene: `detect` finds the tool marker where the ground truth put it.
     video = out("still.mkv")

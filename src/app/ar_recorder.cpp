@@ -4,6 +4,7 @@
 #include <cstdio>
 #include <opencv2/imgproc.hpp>
 
+#include "core/chart_factory.hpp"
 #include "io/heightmap_export.hpp"
 #include "render/projection.hpp"
 
@@ -65,7 +66,7 @@ void ArRecorder::onFrame(const replay::FrameContext& f, const Eigen::Vector3d& f
       // 8 N (the haptic force clamp) draws as a quarter of the planet's radius.
       if (force.allFinite() && force.norm() > 1e-6) {
         cursor->arrowFrom = forceTip;
-        cursor->arrow = force * (0.25 * f.planet.chart().radius() / 8.0);
+        cursor->arrow = force * (0.25 * core::boundingRadius(f.planet.chart()) / 8.0);
       }
     }
     view = renderer_.renderAR(image, f.planet, mesh, cam, style, cursor);

@@ -87,7 +87,7 @@ const CommandRegistration kLive([](CLI::App& root, CLI::App*& sub) -> CommandAct
     const auto calib = tracking::loadCalibration(job.calibration);
     calib.forImageSize(input.size());  // refuses another aspect ratio, naming the file
     std::unique_ptr<terrain::Terrain> planet =
-        job.planetFile.empty() ? makeDefaultPlanet(job.gridLevel, job.seed, job.chart)
+        job.planetFile.empty() ? makeDefaultPlanet(job.gridLevel, job.seed, job.chart, job.dims)
                                : io::loadPlanet(job.planetFile);
     a->settings.options = job.options;
     a->settings.start = {job.planetFile.string(), job.seed, job.calibration.string()};

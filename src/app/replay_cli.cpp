@@ -34,8 +34,14 @@ void ReplayCli::addOptions(CLI::App* sub) {
   sub->add_option("--grid", grid, "Default planet's grid side (2^n+1)")->capture_default_str();
   sub->add_option("--chart", chart,
                   "Default planet's chart: latlong (paper 003), octahedral (no poles, cells of "
-                  "equal area) or octahedral-central (docs/CHARTS.md)")
+                  "equal area), octahedral-central, torus or cylinder (docs/CHARTS.md)")
       ->capture_default_str();
+  sub->add_option("--radius", radius,
+                  "Default planet's radius in metres: a sphere's (default 6372790), a torus's "
+                  "major radius (default 4500000), a cylinder's (default 6000000)");
+  sub->add_option("--minor-radius", minorRadius,
+                  "Default torus's tube radius in metres, below --radius (default 1800000)");
+  sub->add_option("--length", length, "Default cylinder's length in metres (default 4000000)");
   sub->add_option("--seed", job.seed, "Default planet's relief seed")->capture_default_str();
   sub->add_option("--family", family, "Marker family")->capture_default_str();
   sub->add_option("--decimate", o.detector.decimate, "AprilTag search decimation")
@@ -106,6 +112,14 @@ void ReplayCli::apply() {
   if (!job.planetFile.empty() && sub_ && sub_->get_option("--chart")->count() > 0)
     throw core::InputError("--chart makes a new default planet; the planet file " +
                            job.planetFile.string() + " has its own chart");
+  job.dims = {radius, minorRadius, length};
+  if (!job.planetFile.empty() && (radius || minorRadius || length))
+    throw core::InputError(std::string(radius        ? "--radius"
+                                       : minorRadius ? "--minor-radius"
+                                                     : "--length") +
+                           " sizes a new default planet; the planet file " +
+                           job.planetFile.string() + " has its own dimensions");
+  if (job.planetFile.empty()) (void)resolveDims(job.chart, job.dims);  // names a bad option now
   if (!sun.empty()) job.sun = render::sunDirection(render::parseSunAngles(sun, "--sun"));
   job.boardShadow = !noShadow;
   job.atmosphere = !noAtmosphere;
@@ -113,6 +127,9 @@ void ReplayCli::apply() {
   // What a session sidecar replaces (app/replay_job.hpp), when typed.
   for (const char* name : {"--grid",
                            "--chart",
+                           "--radius",
+                           "--minor-radius",
+                           "--length",
                            "--seed",
                            "--family",
                            "--decimate",

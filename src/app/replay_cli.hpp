@@ -1,6 +1,7 @@
 #pragma once
 // The command-line options that `replay` and `demo` share: the markers, the tracker, the tool.
 #include <CLI/CLI.hpp>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -25,6 +26,8 @@ struct ReplayCli {
   // --tool-layout flat` (or by itself, when its session sidecar says so).
   std::string board = "board", toolLayout = "cube";
   std::string chart = "latlong";  // the default planet's chart
+  // Its dimensions (as `import` takes them): unset, the chart's defaults (app/default_planet.hpp).
+  std::optional<double> radius, minorRadius, length;
 
   // Adds the shared options to `sub` (they write into this object, which must outlive it).
   void addOptions(CLI::App* sub);

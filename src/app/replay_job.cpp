@@ -72,10 +72,23 @@ terrain::Camera viewOf(const terrain::Terrain& t, int u, int v) {
   east.normalize();
   const Eigen::Vector3d north = up.cross(east);
   const double R = t.chart().radius();
+  if (!(R > 0)) {  // a torus or a cylinder: the same view about the vertex's own normal
+    const Eigen::Vector3d target = t.chart().position(u, v, t.height(u, v));
+    const Eigen::Vector3d eye =
+        t.chart().position(u, v, 3.5e5) - 9e5 * (0.8 * north + 0.6 * east).normalized();
+    return terrain::Camera::lookAt(eye, target, up, 1280, 720, 60 * std::numbers::pi / 180);
+  }
   const Eigen::Vector3d target = (R + t.height(u, v)) * up;
   const Eigen::Vector3d eye = (R + 3.5e5) * up - 9e5 * (0.8 * north + 0.6 * east).normalized();
   return terrain::Camera::lookAt(eye, target, eye.normalized(), 1280, 720,
                                  60 * std::numbers::pi / 180);
+}
+
+// The planet's heights as a picture's raster: a sphere's equirectangular, a torus's or a
+// cylinder's own (u, v) grid (io::resampleTube; the relief and the close-up read it alike).
+io::Raster pictureRaster(const terrain::Terrain& planet, int w, int h) {
+  return planet.chart().radius() > 0 ? io::resampleEquirectangular(planet, w, h)
+                                     : io::resampleTube(planet, w, h);
 }
 
 cv::Mat labelled(cv::Mat img, const std::string& text) {
@@ -109,6 +122,7 @@ struct ReplayInputs {
   int gridLevel = 0;
   std::uint64_t seed = 0;
   core::ChartShape chart = core::ChartShape::kLatLong;
+  PlanetDims dims;
 };
 
 // The sidecar wins over the command line: it holds what the live session ran with.
@@ -122,6 +136,7 @@ ReplayInputs resolveInputs(const ReplayJob& job) {
   in.gridLevel = job.gridLevel;
   in.seed = job.seed;
   in.chart = job.chart;
+  in.dims = job.dims;
   if (!in.timeline) return in;
   const replay::SessionStart& st = in.timeline->start;
   st.applyTo(in.options);
@@ -146,6 +161,10 @@ ReplayInputs resolveInputs(const ReplayJob& job) {
     in.gridLevel = core::GridSize::fromSide(st.gridSide).n();
     in.seed = st.seed;
     in.chart = core::chartShapeFromString(st.chart);
+    in.dims = {};
+    if (st.radius > 0) in.dims.radius = st.radius;
+    if (st.minorRadius > 0) in.dims.minorRadius = st.minorRadius;
+    if (st.length > 0) in.dims.length = st.length;
   }
   std::cerr << "replay: settings from the session sidecar " << in.sidecar.string() << " ("
             << in.timeline->entries.size() << " changes, undos and redos)\n";
@@ -185,8 +204,17 @@ std::unique_ptr<ArRecorder> makeRecorder(const ReplayJob& job, std::string& noRe
 // The sculpted planet as a 16-bit heightmap and a planet file; returns the heightmap's size.
 cv::Size writeHeightmapAndPlanet(const terrain::Terrain& planet, const std::filesystem::path& out) {
   Progress p("heightmap");
-  const int hmH = std::min(planet.grid().m(), 4096), hmW = 2 * hmH;
-  io::writeHeightPng16(io::resampleEquirectangular(planet, hmW, hmH), out / "heightmap.png");
+  int hmH = std::min(planet.grid().m(), 4096), hmW = 2 * hmH;
+  const core::ChartShape shape = core::shapeOf(planet.chart());
+  if (shape == core::ChartShape::kTorus || shape == core::ChartShape::kCylinder) {
+    // Its own (u, v) grid, as `export` writes it: m x m (a cylinder m x (m + 1)), every pixel a
+    // vertex, so `import --chart torus` takes it back exactly (up to 4096 columns).
+    hmW = std::min(planet.grid().m(), 4096);
+    hmH = shape == core::ChartShape::kTorus ? hmW : hmW + 1;
+    io::writeHeightPng16(io::resampleTube(planet, hmW, hmH), out / "heightmap.png");
+  } else {
+    io::writeHeightPng16(io::resampleEquirectangular(planet, hmW, hmH), out / "heightmap.png");
+  }
   p.update(0.6);
   io::savePlanet(planet, out / "planet.planet");
   p.done((out / "heightmap.png").string() + ", planet.planet");
@@ -217,8 +245,12 @@ void writeReliefPictures(const ReplayJob& job, const terrain::Terrain& planet,
   const std::filesystem::path& out = job.out;
   Progress p("pictures");
   const int w = kPictureW, h = kPictureH;
-  const double mpp = std::numbers::pi * planet.chart().radius() / h;
-  const cv::Mat after = io::reliefImage(io::resampleEquirectangular(planet, w, h), mpp);
+  // Metres per pixel along the picture's rows: half a great circle over h on a sphere; on a
+  // torus or a cylinder its circumference round the axis over w (the hill shading's scale).
+  const double R = planet.chart().radius();
+  const double mpp = R > 0 ? std::numbers::pi * R / h
+                           : 2 * std::numbers::pi * core::dimsOf(planet.chart()).radius / w;
+  const cv::Mat after = io::reliefImage(pictureRaster(planet, w, h), mpp);
   const cv::Mat beforeImg = io::reliefImage(beforeRaster, mpp);
   p.update(0.3);
   cv::Mat small;
@@ -288,24 +320,18 @@ nlohmann::json runReplayJob(const ReplayJob& job) {
   const std::filesystem::path& sidecar = in.sidecar;
   const replay::ReplayOptions& options = in.options;
   std::unique_ptr<terrain::Terrain> planet =
-      in.planetFile.empty() ? makeDefaultPlanet(in.gridLevel, in.seed, in.chart)
+      in.planetFile.empty() ? makeDefaultPlanet(in.gridLevel, in.seed, in.chart, in.dims)
                             : io::loadPlanet(in.planetFile);
-  const core::ChartShape shape = core::shapeOf(planet->chart());
-  if (shape == core::ChartShape::kTorus || shape == core::ChartShape::kCylinder) {
-    throw core::InputError(
-        (in.planetFile.empty() ? std::string("the planet") : in.planetFile.string()) + ": a " +
-        planet->chart().name() +
-        " planet cannot stand on the planet board yet (the AR scene places a "
-        "sphere); sculpt it through its planet file and export it as a mesh");
-  }
+  if (!(core::boundingRadius(planet->chart()) > 0))
+    throw core::InputError(in.planetFile.string() + ": a " + planet->chart().name() +
+                           " planet has no centre to stand on the planet board (a sphere, a "
+                           "torus or a cylinder does)");
   // Another start planet or calibration would sculpt another planet: refused before any edit.
   if (timeline) replay::checkSessionStart(*timeline, *planet, calib.forImageSize(source.size()));
   const std::vector<float> before(planet->heights().begin(), planet->heights().end());
   // The pictures' "before" raster, resampled now rather than from a rebuilt terrain afterwards.
-  const bool sphere = planet->chart().radius() > 0;
   io::Raster beforeRaster;
-  if (job.pictures && sphere)
-    beforeRaster = io::resampleEquirectangular(*planet, kPictureW, kPictureH);
+  if (job.pictures) beforeRaster = pictureRaster(*planet, kPictureW, kPictureH);
 
   std::string noRender;
   std::unique_ptr<ArRecorder> recorder = makeRecorder(job, noRender);
@@ -327,7 +353,7 @@ nlohmann::json runReplayJob(const ReplayJob& job) {
               << planet->chart().name() << " chart\n";
   if (forcesHere) {
     haptics::ForcePathConfig hc;
-    hc.map.scale = planet->chart().radius() / options.scene.planetRadius;
+    hc.map.scale = core::boundingRadius(planet->chart()) / options.scene.planetRadius;
     forces.open(out / "forces.csv.part");
     if (!forces) throw std::runtime_error("cannot write in " + out.string());
     haptic = std::make_unique<haptics::ForcePath>(*planet, nullptr, hc);
@@ -407,9 +433,13 @@ nlohmann::json runReplayJob(const ReplayJob& job) {
       {"warnings", s.warnings},
       {"grid", planet->grid().label()},
       {"chart", planet->chart().name()},
-      {"radius_m", planet->chart().radius()},
+      {"radius_m", core::dimsOf(planet->chart()).radius},  // a torus's major radius
       {"heightmap", {{"width", heightmap.width}, {"height", heightmap.height}}}};
   if (!truth.is_null()) summary["truth"] = truth;
+  if (const core::ChartDims d = core::dimsOf(planet->chart()); d.minorRadius > 0)
+    summary["minor_radius_m"] = d.minorRadius;
+  else if (d.length > 0)
+    summary["length_m"] = d.length;
 
   if (recorder) {
     summary["renderer"] = recorder->renderer();
@@ -430,8 +460,7 @@ nlohmann::json runReplayJob(const ReplayJob& job) {
     writeForcePlot(forceSeries, out);
     files.push_back("forces.png");
   }
-  if (job.pictures && sphere)
-    writeReliefPictures(job, *planet, before, beforeRaster, summary, files);
+  if (job.pictures) writeReliefPictures(job, *planet, before, beforeRaster, summary, files);
   summary["files"] = files;
   std::ofstream(out / "summary.json") << summary.dump(2) << "\n";
   for (const auto& w : s.warnings) std::cerr << "replay: warning: " << w << "\n";

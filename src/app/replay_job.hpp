@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "app/default_planet.hpp"
 #include "core/chart_factory.hpp"
 #include "replay/replay.hpp"
 
@@ -20,6 +21,7 @@ struct ReplayJob {
   int gridLevel = 11;                // default planet: 2049^2
   std::uint64_t seed = 1;
   core::ChartShape chart = core::ChartShape::kLatLong;  // default planet's chart (`--chart`)
+  PlanetDims dims;  // its dimensions (`--radius`, `--minor-radius`, `--length`)
   replay::ReplayOptions options;
   // Pictures: relief.png (after), relief_before.png, closeup.png (before | after around what
   // changed), view.png and view_wireframe.png (a tessellated view of the sculpted region).

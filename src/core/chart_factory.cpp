@@ -1,5 +1,6 @@
 #include "core/chart_factory.hpp"
 
+#include <cmath>
 #include <stdexcept>
 
 #include "core/cylinder_chart.hpp"
@@ -53,6 +54,14 @@ ChartDims dimsOf(const Chart& chart) {
     d.radius = chart.radius();
   }
   return d;
+}
+
+double boundingRadius(const Chart& chart) {
+  if (const auto* torus = dynamic_cast<const TorusChart*>(&chart))
+    return torus->majorRadius() + torus->minorRadius();
+  if (const auto* tube = dynamic_cast<const CylinderChart*>(&chart))
+    return std::hypot(tube->tubeRadius(), 0.5 * tube->length());
+  return chart.radius();  // a sphere's radius, the flat chart's 0
 }
 
 }  // namespace ps::core

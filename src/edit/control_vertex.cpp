@@ -28,6 +28,9 @@ core::GridPoint localSearch(const core::Chart& chart, const Eigen::Vector2d& uv,
   const core::GridSize g = chart.grid();
   const int m = g.m();
   const bool wraps = chart.wrapsU(), poles = chart.hasPoleRows();
+  // The torus's rows wrap too (v = 0 is v = m): rows beyond either side are the other side's,
+  // and row m is returned as row 0, its canonical twin.
+  const bool wrapsV = chart.gluing().vSides == core::SideGluing::kSeam;
   const int uc = int(std::lround(uv.x())), vc = int(std::lround(uv.y()));
   core::GridPoint best{-1, -1};
   double bestScore = -INFINITY;
@@ -35,7 +38,9 @@ core::GridPoint localSearch(const core::Chart& chart, const Eigen::Vector2d& uv,
     const double s = score(u, v);
     if (best.u < 0 || s > bestScore) best = {u, v}, bestScore = s;
   };
-  for (int v = std::max(0, vc - 2); v <= std::min(m, vc + 2); ++v) {
+  for (int vr = wrapsV ? vc - 2 : std::max(0, vc - 2);
+       vr <= (wrapsV ? vc + 2 : std::min(m, vc + 2)); ++vr) {
+    const int v = wrapsV ? ((vr % m) + m) % m : vr;
     if (poles && (v == 0 || v == m)) {
       consider(0, v);
       continue;

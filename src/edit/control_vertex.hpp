@@ -18,7 +18,8 @@ namespace ps::edit {
 // search over rows round(v) - 2 .. round(v) + 2 and, in each, the columns next to round(u) (the
 // nearest vertex of a latitude row is the one of nearest longitude; rows further than 1.5 cells
 // can never win). The seam wraps, a pole row is one point (returned as u = 0) and a seam vertex
-// is returned as u = 0. Ties go to the first candidate in (v, u) order.
+// is returned as u = 0; a torus's rows wrap too (row m is returned as row 0). Ties go to the
+// first candidate in (v, u) order.
 //
 // Throws core::InputError naming the position when p is not finite or lies at the planet's
 // centre (no direction).

@@ -15,6 +15,7 @@
 #include <memory>
 #include <optional>
 
+#include "core/chart_factory.hpp"
 #include "core/input_error.hpp"
 #include "haptics/device.hpp"
 #include "haptics/force_path.hpp"
@@ -25,6 +26,7 @@
 #include "live/window_layout.hpp"
 #include "render/projection.hpp"
 #include "replay/session_timeline.hpp"
+#include "sand/displacement.hpp"
 #include "session/frame_recorder.hpp"
 #include "session/planet_export.hpp"
 #include "terrain/tessellator.hpp"
@@ -143,11 +145,13 @@ class SculptLoop {
     pose_ = r.planetInCamera;
     controlVertex_ = r.control;
     status_.touching = r.touching;
-    const double t = haptic_->loop()->now();
-    if (r.scene.tipValid)
-      hapticDevice_->push(r.scene.tipPlanet, t);
-    else
-      hapticDevice_->push(Eigen::Vector3d::Constant(std::nan("")), t);
+    if (haptic_) {
+      const double t = haptic_->loop()->now();
+      if (r.scene.tipValid)
+        hapticDevice_->push(r.scene.tipPlanet, t);
+      else
+        hapticDevice_->push(Eigen::Vector3d::Constant(std::nan("")), t);
+    }
     status_.planetState = tracking::toString(r.scene.planet.state);
     status_.toolState = tracking::toString(r.scene.tool.state);
   }
@@ -161,6 +165,7 @@ class SculptLoop {
   }
 
   void followForces() {
+    if (!haptic_) return;
     const auto forces = haptic_->editorFrame();
     if (forces.last) lastForce_ = forces.last;
     status_.forceN = lastForce_ && lastForce_->touching ? lastForce_->force.norm() : 0.0;
@@ -233,7 +238,7 @@ class SculptLoop {
       // 8 N (the force clamp) draws as a quarter of the planet's radius.
       if (lastForce_ && lastForce_->touching && lastForce_->tipPlanet.allFinite()) {
         cursor->arrowFrom = lastForce_->tipPlanet;
-        cursor->arrow = lastForce_->force * (0.25 * planet_.chart().radius() / 8.0);
+        cursor->arrow = lastForce_->force * (0.25 * core::boundingRadius(planet_.chart()) / 8.0);
       }
     }
     const cv::Size fb = shell_.present(planet_, *mesh, cam ? *cam : placeholder_, style, cursor);
@@ -417,6 +422,15 @@ class SculptLoop {
   void startHaptics() {
     if (haptic_) haptic_->stopLoop();
     haptic_.reset();
+    // Its press tool is the sand core's displacement, which a torus or a cylinder does not
+    // have yet (docs/CHARTS.md): no forces there, said once.
+    if (!sand::sandCoreKnows(planet_.chart())) {
+      if (!hapticNoted_)
+        std::cerr << "live: no haptic forces on the " << planet_.chart().name()
+                  << " chart (the sand core does not work on it yet)\n";
+      hapticNoted_ = true;
+      return;
+    }
     hapticConfig_.map.scale = stepper_.scale();
     hapticDevice_ = std::make_unique<haptics::TrackedMarkerDevice>();
     haptic_ = std::make_unique<haptics::ForcePath>(planet_, nullptr, hapticConfig_);
@@ -457,6 +471,7 @@ class SculptLoop {
   haptics::ForcePathConfig hapticConfig_;
   std::unique_ptr<haptics::TrackedMarkerDevice> hapticDevice_;
   std::unique_ptr<haptics::ForcePath> haptic_;
+  bool hapticNoted_ = false;
   std::optional<haptics::ForceRecord> lastForce_;
 };
 

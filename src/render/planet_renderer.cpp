@@ -407,6 +407,45 @@ void PlanetRenderer::drawBoardShadowAndRim(const terrain::Camera& camera, double
   if (style.atmosphere) atmosphere_->drawRim(camera, R, sun);
 }
 
+namespace {
+// Back faces are culled, but a cylinder's: through its open ends its inside is seen.
+void cullBackFaces(const terrain::Terrain& planet) {
+  if (core::shapeOf(planet.chart()) == core::ChartShape::kCylinder)
+    glDisable(GL_CULL_FACE);
+  else
+    glEnable(GL_CULL_FACE);
+}
+}  // namespace
+
+void PlanetRenderer::drawSurfaceCursor(const terrain::Terrain& planet, const Cursor& cursor,
+                                       const terrain::Camera& camera, const Eigen::Matrix4d& clip) {
+  const core::Chart& chart = planet.chart();
+  const int side = planet.grid().side();
+  const Eigen::Vector3d n = chart.up(cursor.control.u, cursor.control.v);
+  const Eigen::Vector3d c = chart.position(cursor.control.u, cursor.control.v,
+                                           planet.height(cursor.control.u, cursor.control.v));
+  const Eigen::Vector3d e1 = n.unitOrthogonal(), e2 = n.cross(e1);
+  const double lift = 0.002 * cursor.radius;
+  // A point of the tangent plane laid onto the surface under it (the nearest vertex's height).
+  auto onSurface = [&](const Eigen::Vector3d& q) -> std::optional<Eigen::Vector3d> {
+    const auto uv = chart.inverse(q);
+    if (!uv) return std::nullopt;
+    const int u = std::clamp(int(std::lround(uv->x())), 0, side - 1);
+    const int v = std::clamp(int(std::lround(uv->y())), 0, side - 1);
+    return chart.positionAt(uv->x(), uv->y(), planet.height(u, v) + lift);
+  };
+  std::vector<Eigen::Vector3d> ring;
+  for (int i = 0; i < 96; ++i) {
+    const double phi = 2 * std::numbers::pi * i / 96;
+    if (auto p = onSurface(c + cursor.radius * (std::cos(phi) * e1 + std::sin(phi) * e2)))
+      ring.push_back(*p);
+  }
+  if (ring.size() == 96) drawLines(ring, true, camera, clip, {1.0f, 0.85f, 0.1f}, false);
+  const double arm = 0.15 * cursor.radius;
+  drawLines({c - arm * e1, c + arm * e1, c - arm * e2, c + arm * e2}, false, camera, clip,
+            {1.0f, 0.2f, 0.1f}, false);
+}
+
 cv::Mat PlanetRenderer::renderAR(const cv::Mat& background, const terrain::Terrain& planet,
                                  const terrain::Mesh& mesh, const terrain::Camera& camera,
                                  const RenderStyle& style, const std::optional<Cursor>& cursor) {
@@ -447,7 +486,7 @@ cv::Mat PlanetRenderer::renderAR(const cv::Mat& background, const terrain::Terra
   drawBoardShadowAndRim(camera, planet.chart().radius(), style);
   glEnable(GL_DEPTH_TEST);
   glDepthFunc(GL_LESS);
-  glEnable(GL_CULL_FACE);
+  cullBackFaces(planet);
   glCullFace(GL_BACK);
   // Triangles are CCW seen from outside; the projection negates y (OpenCV's rows go down, GL's
   // up), which keeps that winding in GL's window.
@@ -457,7 +496,9 @@ cv::Mat PlanetRenderer::renderAR(const cv::Mat& background, const terrain::Terra
   drawMesh(mesh, camera, clip, style, false);
   if (style.wireframe) drawMesh(mesh, camera, clip, style, true);
   glDisable(GL_CULL_FACE);
-  if (cursor && planet.chart().radius() > 0) {
+  if (cursor && !(planet.chart().radius() > 0)) {
+    drawSurfaceCursor(planet, *cursor, camera, clip);
+  } else if (cursor) {
     // A ring at geodesic distance r_d around the control vertex, lifted 0.2 % of r_d so that
     // it stays above the facets, and a cross at the control vertex.
     const core::Chart& chart = planet.chart();
@@ -495,8 +536,10 @@ cv::Mat PlanetRenderer::renderAR(const cv::Mat& background, const terrain::Terra
 
 cv::Mat PlanetRenderer::renderOverview(const terrain::Terrain& planet, const terrain::Mesh& arMesh,
                                        const terrain::Camera& arCamera, int width, int height) {
-  const double R = planet.chart().radius();
-  if (!(R > 0)) throw std::invalid_argument("renderer: the overview needs a spherical planet");
+  // The planet's bounding sphere: a sphere's radius, a torus's or a cylinder's sphere about
+  // its centre (core::boundingRadius).
+  const double R = core::boundingRadius(planet.chart());
+  if (!(R > 0)) throw std::invalid_argument("renderer: the overview needs a planet with a centre");
   // From 3.2 radii away, 60 degrees around from the AR
   // camera's side (about the axis across both the AR direction and the pole), so that the AR
   // camera's frustum crosses the picture.
@@ -516,7 +559,7 @@ cv::Mat PlanetRenderer::renderOverview(const terrain::Terrain& planet, const ter
   glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
   glEnable(GL_DEPTH_TEST);
   glDepthFunc(GL_LEQUAL);
-  glEnable(GL_CULL_FACE);
+  cullBackFaces(planet);
   glFrontFace(GL_CCW);
   const DepthRange depth = depthRangeFor(over, planet);
   const Eigen::Matrix4d clip = clipFromCamera(over, depth.nearZ, depth.farZ);

@@ -3,12 +3,15 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <nlohmann/json.hpp>
 
+#include "core/chart_factory.hpp"
 #include "core/input_error.hpp"
 #include "core/named_values.hpp"
 #include "edit/control_vertex.hpp"
 #include "edit/edit_pipeline.hpp"
+#include "edit/surface_height.hpp"
 #include "replay/session_timeline.hpp"
 #include "sand/tin_sand_tool.hpp"
 #include "tracking/camera_motion.hpp"
@@ -130,18 +133,36 @@ FrameStepper::FrameStepper(const tracking::CameraCalibration& calib, terrain::Te
   }
   family_ = dc.family;
   const core::Chart& chart = planet_.chart();
-  const double R = chart.radius();
-  if (!(R > 0)) throw core::InputError("replay needs a spherical planet (its chart has no radius)");
-  scale_ = R / o_.scene.planetRadius;
+  // The displayed planetRadius is the planet's bounding sphere (a sphere's own radius, bit for
+  // bit; a torus's or a cylinder's sphere about its centre): that sphere stands on the board.
+  const double bound = core::boundingRadius(chart);
+  if (!(bound > 0))
+    throw core::InputError(
+        "replay needs a planet with a centre (a sphere, a torus or a cylinder); "
+        "a " +
+        chart.name() + " planet has none to stand on the board");
+  scale_ = bound / o_.scene.planetRadius;
   p_ = std::make_unique<Parts>(tracking::makeDetector(dc), o_.scene, planet_);
   if (o_.scene.planet.holdWhileStill) p_->motion.emplace();
-  p_->scene.setSurface([this](const Eigen::Vector3d& tracked) {
-    if (!(tracked.norm() > 0)) return o_.scene.planetRadius;
-    const Eigen::Vector3d p =
-        rotated_ ? Eigen::Vector3d(userRotation_.transpose() * tracked) : tracked;
-    const auto c = edit::nearestVertex(planet_.chart(), p);
-    return (planet_.chart().radius() + planet_.height(c.u, c.v)) / scale_;
-  });
+  if (chart.radius() > 0) {
+    p_->scene.setSurface([this](const Eigen::Vector3d& tracked) {
+      if (!(tracked.norm() > 0)) return o_.scene.planetRadius;
+      const Eigen::Vector3d p =
+          rotated_ ? Eigen::Vector3d(userRotation_.transpose() * tracked) : tracked;
+      const auto c = edit::nearestVertex(planet_.chart(), p);
+      return (planet_.chart().radius() + planet_.height(c.u, c.v)) / scale_;
+    });
+  } else {
+    // A torus or a cylinder: the height along the surface's normal (edit/surface_height.hpp);
+    // where the tip has no nearest vertex (the torus's axis or centre circle, the cylinder's
+    // axis) it touches nothing.
+    p_->scene.setHeightAbove([this](const Eigen::Vector3d& tracked) {
+      const Eigen::Vector3d p =
+          rotated_ ? Eigen::Vector3d(userRotation_.transpose() * tracked) : tracked;
+      const auto c = edit::surfaceContact(planet_, p * scale_);
+      return c ? c->height / scale_ : std::numeric_limits<double>::infinity();
+    });
+  }
   p_->pipeline.setUndoEnabled(o_.undo);
   rebuildTools();
 }
@@ -212,7 +233,7 @@ void FrameStepper::setPlanetSize(double planetRadiusM) {
   p_->scene.setPlanetRadius(planetRadiusM);  // validates first
   endStroke();
   o_.scene.planetRadius = planetRadiusM;
-  scale_ = planet_.chart().radius() / planetRadiusM;
+  scale_ = core::boundingRadius(planet_.chart()) / planetRadiusM;
 }
 
 void FrameStepper::setBrush(const edit::BrushSettings& brush) {

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <numbers>
 
+#include "core/chart_factory.hpp"
 #include "core/input_error.hpp"
 #include "io/stroke_journal.hpp"
 #include "tracking/marker_layout.hpp"
@@ -76,7 +77,10 @@ SessionStart SessionStart::of(const terrain::Terrain& planet, const std::string&
   s.gridSide = gridSide;
   s.seed = seed;
   s.chart = planet.chart().name();
-  s.radius = planet.chart().radius();
+  const core::ChartDims dims = core::dimsOf(planet.chart());
+  s.radius = dims.radius;  // a sphere's radius() itself
+  s.minorRadius = dims.minorRadius;
+  s.length = dims.length;
   s.heightsCrc = io::heightsChecksum(planet.heights());
   s.calibrationFile = calibrationFile;
   s.imageSize = calib.imageSize;
@@ -142,6 +146,9 @@ nlohmann::json toJson(const SessionStart& s) {
                         {"filter", s.filter}}},
                       {"settle", s.settle},
                       {"undo_steps", s.undoSteps}};
+  // Only a torus's and a cylinder's: a sphere's sidecar stays as it was, byte for byte.
+  if (s.minorRadius > 0) j["planet"]["minor_radius_m"] = s.minorRadius;
+  if (s.length > 0) j["planet"]["length_m"] = s.length;
   if (s.board) j["markers"]["board"] = tracking::toJson(*s.board);
   if (s.toolLayout) j["markers"]["tool_layout"] = tracking::toJson(*s.toolLayout);
   return j;

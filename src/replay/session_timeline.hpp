@@ -50,9 +50,10 @@ struct SessionStart {
   std::string planetFile;  // "" : the default planet of (gridSide, seed)
   int gridSide = 0;
   std::uint64_t seed = 1;
-  std::string chart = "latlong";  // the start planet's chart (sidecars before it: lat-long)
-  double radius = 0;
-  std::uint32_t heightsCrc = 0;  // io::heightsChecksum of the heights at the first frame
+  std::string chart = "latlong";       // the start planet's chart (sidecars before it: lat-long)
+  double radius = 0;                   // a sphere's; a torus's major radius, a cylinder's radius
+  double minorRadius = 0, length = 0;  // a torus's tube radius, a cylinder's length; else 0
+  std::uint32_t heightsCrc = 0;        // io::heightsChecksum of the heights at the first frame
   std::string calibrationFile;
   cv::Size imageSize;
   std::vector<double> K, distortion;  // the calibration scaled to the frames, as the stepper has it

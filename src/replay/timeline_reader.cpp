@@ -139,6 +139,10 @@ SessionStart parseStart(const nlohmann::json& j, const std::filesystem::path& pa
     }
   }
   s.radius = read<double>(planet, "radius_m", path, line);
+  // A torus's and a cylinder's other dimension (sidecars of spheres have neither).
+  if (planet.contains("minor_radius_m"))
+    s.minorRadius = read<double>(planet, "minor_radius_m", path, line);
+  if (planet.contains("length_m")) s.length = read<double>(planet, "length_m", path, line);
   s.heightsCrc = read<std::uint32_t>(planet, "heights_crc32", path, line);
   const auto& cal = member(j, "calibration", path, line);
   s.calibrationFile = read<std::string>(cal, "file", path, line);
@@ -305,11 +309,13 @@ void checkSessionStart(const SessionTimeline& t, const terrain::Terrain& planet,
   const std::string where = t.path.string() + ":1: ";
   const int side = planet.grid().side();
   const std::uint32_t crc = io::heightsChecksum(planet.heights());
-  if (side != s.gridSide || planet.chart().name() != s.chart ||
-      planet.chart().radius() != s.radius || crc != s.heightsCrc) {
+  // A sphere's radius is its chart's radius(); a torus's and a cylinder's, their dimensions.
+  const core::ChartDims dims = core::dimsOf(planet.chart());
+  if (side != s.gridSide || planet.chart().name() != s.chart || dims.radius != s.radius ||
+      dims.minorRadius != s.minorRadius || dims.length != s.length || crc != s.heightsCrc) {
     char ours[200];
     std::snprintf(ours, sizeof ours, "%s grid %d, radius %.17g m, heights CRC-32 %08x",
-                  planet.chart().name().c_str(), side, planet.chart().radius(), unsigned(crc));
+                  planet.chart().name().c_str(), side, dims.radius, unsigned(crc));
     char theirs[200];
     std::snprintf(theirs, sizeof theirs, "%s grid %d, radius %.17g m, heights CRC-32 %08x",
                   s.chart.c_str(), s.gridSide, s.radius, unsigned(s.heightsCrc));

@@ -324,8 +324,12 @@ SceneFrame SceneTracker::update(const std::vector<Detection>& detections,
     f.tipHeld = !f.tool.measured;
     f.tipCamera = config_.filterTip && tipHave_ ? tipFilter_.value() : tipFromMarker(f.tool.pose);
     f.tipPlanet = planetFromMarker(f.planet.pose).inverse().apply(f.tipCamera);
-    const double surface = surface_ ? surface_(f.tipPlanet) : config_.planetRadius;
-    f.tipHeight = f.tipPlanet.norm() - surface;
+    if (heightAbove_) {
+      f.tipHeight = heightAbove_(f.tipPlanet);
+    } else {
+      const double surface = surface_ ? surface_(f.tipPlanet) : config_.planetRadius;
+      f.tipHeight = f.tipPlanet.norm() - surface;
+    }
     f.touching = f.tipHeight <= config_.touchDistance;
   }
   return f;

@@ -16,7 +16,9 @@
 // the marker's centre along the marker's normal; the planet frame has the marker's axes (north
 // pole along the normal). The tool tip is tipOffset in the tool marker's frame. The tip counts
 // as touching when its height above the surface (SurfaceFn, a sphere by default) is at most
-// touchDistance (inside the planet counts as touching too).
+// touchDistance (inside the planet counts as touching too). A torus or a cylinder measures the
+// tip's height with its own function (HeightFn); its displayed planetRadius is then its
+// bounding sphere's radius, and that sphere stands on the board where a sphere planet would.
 #include <Eigen/Core>
 #include <functional>
 #include <memory>
@@ -142,6 +144,10 @@ struct SceneConfig {
 
 // Radius of the surface (m, the displayed planet's scale) under a point of the planet frame.
 using SurfaceFn = std::function<double(const Eigen::Vector3d& pointInPlanetFrame)>;
+// Height of a point of the planet frame above the surface (m, the displayed planet's scale;
+// negative inside): for surfaces that are no sphere about the planet's centre (a torus, a
+// cylinder), where a radius under the point says nothing.
+using HeightFn = std::function<double(const Eigen::Vector3d& pointInPlanetFrame)>;
 
 struct SceneFrame {
   int frame = 0;
@@ -163,6 +169,8 @@ class SceneTracker {
   explicit SceneTracker(SceneConfig config);
   const SceneConfig& config() const { return config_; }
   void setSurface(SurfaceFn f) { surface_ = std::move(f); }
+  // Measure the tip's height with `f` instead of |tip| - surface(tip) (which stays for spheres).
+  void setHeightAbove(HeightFn f) { heightAbove_ = std::move(f); }
   // The displayed planet's radius (m) changed by hand: the planet frame moves along the marker's
   // normal with it; the filters keep their state. Throws core::InputError unless finite, > 0.
   void setPlanetRadius(double metres);
@@ -183,6 +191,7 @@ class SceneTracker {
   double lastTipTime_ = 0;
   bool tipHave_ = false;
   SurfaceFn surface_;
+  HeightFn heightAbove_;
 };
 
 }  // namespace ps::tracking
