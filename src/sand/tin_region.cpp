@@ -6,6 +6,7 @@
 #include <unordered_set>
 
 #include "core/flat_chart.hpp"
+#include "edit/control_vertex.hpp"
 #include "sand/displacement.hpp"
 
 namespace ps::sand {
@@ -93,6 +94,47 @@ std::size_t TinRegion::densify(const Eigen::Vector2d& centre, double radius) {
     for (std::size_t k = 0; k < points_.size(); ++k)
       surface_[k] = sand_->tin().heightAt(points_[k].xy);
   return added;
+}
+
+terrain::MeshPatch TinRegion::patch() const {
+  terrain::MeshPatch p;
+  const tin::Tin t = sand_->tin().toTin();
+  const double R = chart_->radius();
+  const core::GridSize g = chart_->grid();
+  p.positions.reserve(t.xy.size());
+  for (std::size_t i = 0; i < t.xy.size(); ++i) {
+    const double x = t.xy[i].x(), y = t.xy[i].y(), h = t.h[i];
+    Eigen::Vector3d q;
+    if (R > 0) {
+      // The sphere's point whose tangent-plane projection is (x, y) (the frame's origin is R up).
+      const double z = std::sqrt(std::max(0.0, R * R - x * x - y * y));
+      q = (x * frame_.east + y * frame_.north + z * frame_.up).normalized() * (R + h);
+    } else {
+      q = frame_.origin + x * frame_.east + y * frame_.north + h * frame_.up;
+    }
+    p.positions.push_back(q);
+    const core::GridPoint n = edit::nearestVertex(*chart_, q);
+    p.gridIndex.push_back(g.index(n.u, n.v));
+  }
+  p.indices.reserve(3 * t.triangles.size());
+  for (const auto& tri : t.triangles) p.indices.insert(p.indices.end(), tri.begin(), tri.end());
+  const bool sphere = R > 0;
+  const int m = g.m();
+  // It stands for the points two cells or more inside its domain: the view's triangles it
+  // replaces then lie well inside it, and its border ring overlaps the view's kept triangles
+  // (a triangle with a corner on the border to rounding left out could uncover a sliver).
+  const double margin = 2 * smallestSpacing(*chart_);
+  for (const Point& q : points_) {
+    if (sand_->tin().depthInside(q.xy) < margin) continue;
+    if (sphere && (q.v == 0 || q.v == m)) {
+      for (int u = 0; u <= m; ++u) p.replaces.push_back(g.index(u, q.v));
+      continue;
+    }
+    p.replaces.push_back(g.index(q.u, q.v));
+    if (sphere && q.u == 0) p.replaces.push_back(g.index(m, q.v));
+  }
+  std::sort(p.replaces.begin(), p.replaces.end());
+  return p;
 }
 
 bool TinRegion::holds(std::span<const float> heights) const {

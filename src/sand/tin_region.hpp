@@ -21,6 +21,7 @@
 #include "edit/region_growing.hpp"
 #include "sand/sand_grid.hpp"
 #include "sand/tin_sand.hpp"
+#include "terrain/mesh_patch.hpp"
 #include "tin/scattered_tin.hpp"
 
 namespace ps::sand {
@@ -69,6 +70,12 @@ class TinRegion {
   // is measured again: where the tool works, the TIN holds the grid's every point (what erosion
   // along edges needs to flow as on the all-points TIN), and coarse elsewhere. Returns how many.
   std::size_t densify(const Eigen::Vector2d& centre, double radius);
+
+  // The TIN as a patch for the view (terrain/mesh_patch): its vertices on the planet (the
+  // tangent plane's (x, y) taken back to the reference surface, raised by the height), standing
+  // for the grid entries of the region two equatorial cells or more inside its domain (seam
+  // twins and pole rows included).
+  terrain::MeshPatch patch() const;
 
   TinRegionWrite writeBack(std::span<float> heights, const SandGrid& cells, float heightLimit);
 
