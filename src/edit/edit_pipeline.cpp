@@ -138,6 +138,7 @@ EditReport EditPipeline::apply(const Tool& tool, const ToolInput& input) {
     observer_->onEndStroke();
   }
   if (undoEnabled_) journal_.beginStroke();
+  tool.beginStroke();
   const EditReport rep = stamp(tool, input);
   if (undoEnabled_) journal_.endStroke(terrain_.grid());
   return rep;
@@ -151,6 +152,7 @@ EditReport EditPipeline::beginStroke(const Tool& tool, const ToolInput& start) {
   if (undoEnabled_) journal_.beginStroke();
   strokeTool_ = &tool;
   lastStamp_ = start.position;
+  tool.beginStroke();
   return stamp(tool, start);
 }
 

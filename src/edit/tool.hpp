@@ -58,6 +58,11 @@ class Tool {
   // The vertices apply() may write; by default V_d. A tool reaching further returns a region it
   // owns (built in apply's preparation; the pipeline calls footprint() right before apply()).
   virtual const Region& footprint(const ToolContext& ctx) const { return ctx.region; }
+  // Called before a stroke's first stamp (and before a lone apply()): a tool that keeps state
+  // between the stamps of a stroke (the TIN sand tool's region TIN) starts it afresh, so that a
+  // stroke's result depends only on the heights at its start and its own samples (a journal or
+  // a recording replayed from any stroke gives the same planet).
+  virtual void beginStroke() const {}
 
   virtual terrain::GridRegion apply(const ToolContext& ctx, std::span<float> heights) const = 0;
 };

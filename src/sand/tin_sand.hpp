@@ -88,6 +88,9 @@ class TinSand {
   std::size_t removeRedundant();
 
   const tin::DynamicTin& tin() const { return tin_; }
+  // A vertex at p with height h (the surface changes there; nothing joins Le): a caller that
+  // adds detail before a stamp (the region TIN, at the grid's heights around it).
+  Vertex insert(const Eigen::Vector2d& p, double h) { return tin_.insert(p, h); }
   const TinSandSettings& settings() const { return settings_; }
   std::size_t activeCount() const { return le_.size(); }
   std::uint32_t generation() const { return generation_; }

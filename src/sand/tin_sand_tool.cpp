@@ -3,7 +3,6 @@
 #include <Eigen/Geometry>
 #include <cmath>
 #include <numbers>
-#include <unordered_set>
 #include <vector>
 
 #include "core/flat_chart.hpp"
@@ -25,6 +24,12 @@ void TinSandToolSettings::validate(const core::Chart* chart) const {
     throw core::InputError("TIN sand tool: region radius " + core::exactNumber(regionRadius) +
                            " x the tool's is outside [2.5, 8] (the stamp and its rampart reach "
                            "2.05 x)");
+  if (!(std::isfinite(tolerance) && tolerance >= 0 && tolerance <= 0.1))
+    throw core::InputError("TIN sand tool: tolerance " + core::exactNumber(tolerance) +
+                           " x the radius is outside [0, 0.1]");
+  if (!(std::isfinite(detailRadius) && detailRadius >= 0 && detailRadius <= 8))
+    throw core::InputError("TIN sand tool: detail radius " + core::exactNumber(detailRadius) +
+                           " x the radius is outside [0, 8]");
   if (!(std::isfinite(spacing) && spacing > 0 && spacing <= 1))
     throw core::InputError("TIN sand tool: spacing " + core::exactNumber(spacing) +
                            " x the radius is outside (0, 1]");
@@ -42,31 +47,34 @@ void TinSandToolSettings::validate(const core::Chart* chart) const {
   if (radius < 2 * cell)
     throw core::InputError("TIN sand tool: radius " + core::exactNumber(radius) +
                            " m is under two grid cells (" + core::exactNumber(2 * cell) + " m)");
-  if (chart->radius() > 0 && regionRadius * radius > 0.25 * chart->radius())
-    throw core::InputError("TIN sand tool: its region (" +
-                           core::exactNumber(regionRadius * radius) +
+  // The region shrinks to a quarter of the planet's radius, never under 2.5 radii.
+  if (chart->radius() > 0 && 2.5 * radius > 0.25 * chart->radius())
+    throw core::InputError("TIN sand tool: its region (at least " +
+                           core::exactNumber(2.5 * radius) +
                            " m) is over a quarter of the planet's radius, too curved for one "
                            "tangent plane");
 }
 
-namespace {
-
-// The smallest spacing between grid points at the equator (lat-long: a meridian step) or on a
-// flat grid.
-double smallestSpacing(const core::Chart& chart) {
-  if (chart.radius() > 0) return std::numbers::pi * chart.radius() / chart.grid().m();
-  if (const auto* flat = dynamic_cast<const core::FlatChart*>(&chart))
-    return std::min(flat->dx(), flat->dy());
-  return largestSpacing(chart);
-}
-
-}  // namespace
-
 TinSandTool::TinSandTool(std::shared_ptr<const core::Chart> chart, TinSandToolSettings settings)
     : chart_(std::move(chart)), cells_(chart_), settings_(std::move(settings)) {}
 
+double TinSandTool::regionMetres(const core::Chart& chart) const {
+  const double r = settings_.regionRadius * settings_.radius;
+  return chart.radius() > 0 ? std::min(r, 0.25 * chart.radius()) : r;
+}
+
+bool TinSandTool::reusable(const edit::ToolContext& ctx) const {
+  if (!settings_.persistent || !region_ || !(regionSettings_ == settings_)) return false;
+  const core::Chart& chart = ctx.terrain.chart();
+  const Eigen::Vector2d c =
+      region_->frame().project(chart.position(ctx.control.u, ctx.control.v, 0.0));
+  return region_->sand().tin().depthInside(c) >= kReuseDepth * settings_.radius &&
+         region_->holds(ctx.terrain.heights());
+}
+
 const edit::Region& TinSandTool::footprint(const edit::ToolContext& ctx) const {
-  grower_.grow(ctx.field, settings_.regionRadius * settings_.radius, footprint_);
+  if (reusable(ctx)) return region_->footprint();
+  grower_.grow(ctx.field, regionMetres(ctx.terrain.chart()), footprint_);
   return footprint_;
 }
 
@@ -74,98 +82,44 @@ terrain::GridRegion TinSandTool::apply(const edit::ToolContext& ctx,
                                        std::span<float> heights) const {
   settings_.validate(&ctx.terrain.chart());
   stats_ = {};
-  const edit::Region& F = footprint(ctx);
   const core::Chart& chart = ctx.terrain.chart();
-  const core::GridSize g = chart.grid();
-  const int m = g.m();
-  const bool sphere = chart.radius() > 0;
-
-  // The local frame: the tangent plane at the control vertex on the reference surface.
-  const Eigen::Vector3d origin = chart.position(ctx.control.u, ctx.control.v, 0.0);
-  const Eigen::Vector3d up = chart.up(ctx.control.u, ctx.control.v);
-  const Eigen::Vector3d across =
-      std::abs(up.z()) < 0.9 ? Eigen::Vector3d::UnitZ() : Eigen::Vector3d::UnitX();
-  const Eigen::Vector3d east = across.cross(up).normalized(), north = up.cross(east);
-
-  // Every distinct point of the region (a pole row once, the seam's u = m as its twin u = 0).
-  struct Point {
-    int u, v;
-    Eigen::Vector2d xy;
-    double h;
-  };
-  std::vector<Point> points;
-  F.forEachSpan([&](int v, int ub, int ue) {
-    for (int u = ub; u <= ue; ++u) {
-      if (sphere && (u == m || ((v == 0 || v == m) && u != 0))) continue;
-      const Eigen::Vector3d p = chart.position(u, v, 0.0) - origin;
-      points.push_back({u, v, {p.dot(east), p.dot(north)}, double(heights[g.index(u, v)])});
-    }
-  });
-  // The TIN's points: at most one per cell of the chart's smallest spacing at the equator, so
-  // that the pole's crowded rows (thousands of points a few metres apart on a lat-long chart)
-  // do not crowd the TIN too; everywhere else that is every point.
-  const double cell = 0.99 * smallestSpacing(chart);
-  std::unordered_set<std::uint64_t> taken;
-  std::vector<Eigen::Vector3d> xyz;
-  for (const Point& p : points) {
-    const auto ix = std::int64_t(std::floor(p.xy.x() / cell)) + (1 << 30);
-    const auto iy = std::int64_t(std::floor(p.xy.y() / cell)) + (1 << 30);
-    if (taken.insert((std::uint64_t(ix) << 32) | std::uint64_t(iy)).second)
-      xyz.emplace_back(p.xy.x(), p.xy.y(), p.h);
+  if (!reusable(ctx)) {
+    const edit::Region& F = footprint(ctx);
+    region_.reset();  // its TIN's memory back before the next is made
+    region_.emplace(chart, heights, F, ctx.control, settings_.tolerance * settings_.radius,
+                    settings_.sand);
+    regionSettings_ = settings_;
+    ++tinsMade_;
+    stats_.madeTin = true;
   }
-  TinSand sand(tin::DynamicTin(xyz), settings_.sand);
-  stats_.gridVertices = points.size();
-  stats_.tinStartVertices = sand.tin().vertexCount();
-  // The TIN's surface before the stamp at every point (its own height where it is a vertex):
-  // each point then takes the change of the surface, so a point the TIN left out keeps its
-  // detail.
-  std::vector<double> before(points.size());
-  for (std::size_t k = 0; k < points.size(); ++k) before[k] = sand.tin().heightAt(points[k].xy);
+  TinRegion& region = *region_;
+  TinSand& sand = region.sand();
+  stats_.generation = region.generation();
+  stats_.gridVertices = region.gridPoints();
+  stats_.tinStartVertices = stats_.madeTin ? region.startVertices() : sand.tin().vertexCount();
 
-  // The tool's bottom: the lowest point of its sphere, as the displacement tool presses.
-  const double bottom = (ctx.input.position - origin).dot(up) - settings_.radius;
+  // The stamp's centre in the region's plane; the tool's bottom: the lowest point of its sphere,
+  // as the displacement tool presses, its height above the reference surface measured at the
+  // control vertex.
+  const TangentFrame here(chart, ctx.control);
+  const Eigen::Vector2d centre = region.frame().project(here.origin);
+  const double bottom = (ctx.input.position - here.origin).dot(here.up) - settings_.radius;
+  if (settings_.detailRadius > 0)
+    stats_.densified = region.densify(centre, settings_.detailRadius * settings_.radius);
   const TinStampTool tool = TinStampTool::disc(settings_.radius, settings_.segments);
-  const TinStampStats stamped = sand.stamp({0.0, 0.0}, bottom, tool);
+  const TinStampStats stamped = sand.stamp(centre, bottom, tool);
   stats_.displacedVolume = stamped.displacedVolume;
   for (int s = 0; s < settings_.erosionSteps; ++s) sand.erode();
   stats_.removed = sand.removeRedundant();
   stats_.tinVertices = sand.tin().vertexCount();
   stats_.tinTriangles = sand.tin().triangleCount();
 
-  // Back onto the grid: the TIN's surface at every point, then the grid's own volume (sum A h)
-  // put back on the points that changed, then floats with the rounding carried on.
-  std::vector<double> next(points.size());
-  double change = 0, changedArea = 0;
-  for (std::size_t k = 0; k < points.size(); ++k) {
-    const double after = sand.tin().heightAt(points[k].xy);
-    // Outside the TIN's hull (a left-out point at the region's edge, or one on it to rounding).
-    next[k] = std::isnan(after) || std::isnan(before[k]) ? points[k].h
-                                                         : points[k].h + (after - before[k]);
-    if (next[k] != points[k].h) {
-      change += cells_.area(points[k].v) * (next[k] - points[k].h);
-      changedArea += cells_.area(points[k].v);
-      ++stats_.changed;
-    }
-  }
-  stats_.gridVolumeCorrection = -change;
-  const double limit = ctx.heightLimit;
-  double carry = 0;
-  for (std::size_t k = 0; k < points.size(); ++k) {
-    if (next[k] == points[k].h) continue;
-    const double area = cells_.area(points[k].v);
-    const double exact = next[k] - change / changedArea;
-    const double want = exact + carry / area;
-    const float f = float(std::clamp(want, -limit, limit));
-    if (std::abs(want) < limit) carry += area * (exact - double(f));
-    const int u = points[k].u, v = points[k].v;
-    if (sphere && (v == 0 || v == m)) {
-      std::fill_n(heights.begin() + std::ptrdiff_t(g.index(0, v)), g.side(), f);
-    } else {
-      heights[g.index(u, v)] = f;
-      if (sphere && u == 0) heights[g.index(m, v)] = f;
-    }
-  }
-  return F.bounds();
+  const TinRegionWrite w = region.writeBack(heights, cells_, ctx.heightLimit);
+  stats_.changed = w.changed;
+  stats_.gridVolumeCorrection = w.volumeCorrection;
+  const terrain::GridRegion dirty = region.footprint().bounds();
+  if (!settings_.persistent) region_.reset();
+  return dirty;
 }
 
 }  // namespace ps::sand

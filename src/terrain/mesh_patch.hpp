@@ -1,0 +1,43 @@
+#pragma once
+// A surface patch drawn in place of part of a tessellated view (the TIN sand tool's region TIN
+// at its own detail): the view's triangles whose three vertices the patch replaces are left
+// out, the patch's triangles go in, and the join is closed.
+//
+// Why the join can leak: the patch covers the hole it makes (the triangles left out have every
+// vertex inside the patch's convex domain, so they lie in it), but along the hole's border the
+// view's kept triangles and the patch are two surfaces that agree only to the view's error and
+// the patch's tolerance. A line of sight that passes over a kept triangle's border edge and
+// under the patch (where the patch lies lower there) meets neither: background. Skirts close
+// that: from every border edge of the hole a wall hangs `skirtDepth` metres down (both
+// windings), so such a line meets the wall.
+#include <Eigen/Core>
+#include <cstdint>
+#include <vector>
+
+#include "core/chart.hpp"
+#include "terrain/mesh.hpp"
+
+namespace ps::terrain {
+
+struct MeshPatch {
+  std::vector<Eigen::Vector3d> positions;  // planet frame
+  std::vector<std::uint64_t> gridIndex;    // per vertex: the nearest grid vertex (shading lookups)
+  std::vector<std::uint32_t> indices;      // 3 per triangle, counter-clockwise from outside
+  std::vector<std::uint64_t> replaces;     // sorted grid indices (v * side + u) it stands for
+};
+
+enum class PatchJoin { kNone, kSkirts };
+
+struct SpliceReport {
+  std::size_t dropped = 0;         // view triangles left out
+  std::size_t patchTriangles = 0;  // patch triangles added
+  std::size_t borderEdges = 0;     // edges between a kept and a left-out view triangle
+  std::size_t skirtTriangles = 0;
+};
+
+// `out` = `mesh` with the patch spliced in (positions relative to mesh.eye; a new generation).
+// The view's vertices stay first and in order, so `out` draws every kept triangle as `mesh` did.
+SpliceReport splicePatch(const Mesh& mesh, const MeshPatch& patch, const core::Chart& chart,
+                         PatchJoin join, double skirtDepth, Mesh& out);
+
+}  // namespace ps::terrain
