@@ -26,9 +26,8 @@ struct TemplateRefineConfig {
   int gaussianSize = 3;  // ECC's smoothing of template and image (odd, or 0 for none)
 };
 
-// Refines detections of one family, keeping each id's template (the canonical image cut to its
-// border and half a cell of the quiet zone, 4 pixels a cell) once made: making it costs more
-// than the alignment.
+// Refines detections of one family, each id's template (the canonical image cut to its border
+// and half a cell of the quiet zone, 4 pixels a cell) made once and kept, not every frame.
 class CornerRefiner {
  public:
   explicit CornerRefiner(std::string family, TemplateRefineConfig config = {});
