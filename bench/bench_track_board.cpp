@@ -126,7 +126,10 @@ void evaluateScene(const std::string& scene, bool quick, double singleMarkerMs, 
           {"time", truth.time},
           {"truth_touch", truth.tipHeight <= kTouch && truth.toolVisible},
           {"step_touch", step.touching},
-          {"truth_tip_cam", {truth.tipCamera.x(), truth.tipCamera.y(), truth.tipCamera.z()}}};
+          {"truth_tip_cam", {truth.tipCamera.x(), truth.tipCamera.y(), truth.tipCamera.z()}},
+          {"detect_ms", r3(step.times.detectMs)},
+          {"track_ms", r3(step.times.trackMs)},
+          {"board_markers", sf.planet.ids.size()}};
       const Eigen::Quaterniond tq(truth.tool.R);
       dj["truth_q"] = {tq.w(), tq.x(), tq.y(), tq.z()};
       if (sf.tool.measured) {

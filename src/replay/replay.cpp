@@ -278,8 +278,11 @@ StepResult FrameStepper::step(const cv::Mat& image, int frame, double time) {
   const auto t0 = std::chrono::steady_clock::now();
   nlohmann::json j = {{"frame", frame}, {"time", std::round(time * 1e6) / 1e6}};
   std::vector<tracking::Detection> found;
+  // One grey image for the detector and the camera-motion judge (each would convert again).
+  cv::Mat grey;
   try {
-    found = p_->detector->detect(image);
+    grey = tracking::toGrey(image);
+    found = p_->detector->detect(grey);
   } catch (const std::exception& e) {
     j["notes"].push_back(std::string("detection failed: ") + e.what());
   }
@@ -290,7 +293,7 @@ StepResult FrameStepper::step(const cv::Mat& image, int frame, double time) {
     const bool boardSeen = std::any_of(found.begin(), found.end(),
                                        [&](const auto& d) { return o_.scene.planet.owns(d.id); });
     if (!boardSeen && p_->planetHadPose && p_->motion->hasReference()) {
-      const tracking::CameraMotion m = p_->motion->judge(image);
+      const tracking::CameraMotion m = p_->motion->judge(grey.empty() ? image : grey);
       cameraStill = m.still;
       if (m.judged)
         j["camera_shift_px"] = std::isfinite(m.medianShiftPx)
@@ -303,7 +306,8 @@ StepResult FrameStepper::step(const cv::Mat& image, int frame, double time) {
   if (p_->motion && out.scene.planet.measured) {
     std::vector<std::array<cv::Point2d, 4>> quads;
     for (const auto& d : found) quads.push_back(d.corners);
-    p_->motion->setReference(image, quads);
+    p_->motion->setReference(grey.empty() ? image : grey, quads,
+                             !grey.empty() && grey.data != image.data);
   }
   if (rotated_) out.scene.tipPlanet = userRotation_.transpose() * out.scene.tipPlanet;
   const tracking::SceneFrame& f = out.scene;

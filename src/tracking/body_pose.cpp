@@ -5,6 +5,8 @@
 #include <limits>
 #include <opencv2/calib3d.hpp>
 
+#include "tracking/pose_refine.hpp"
+
 namespace ps::tracking {
 
 namespace {
@@ -29,27 +31,8 @@ cv::Vec3d rvecOf(const Pose& p) {
 // Polishes `seed` over every correspondence; returns the RMS (inf when the solver fails or the
 // body ends up behind the camera).
 double polish(const Correspondences& c, const CameraCalibration& calib, Pose& pose) {
-  cv::Mat rv(rvecOf(pose)), tv(cv::Vec3d(pose.t.x(), pose.t.y(), pose.t.z()));
-  rv = rv.clone();
-  tv = tv.clone();
-  try {
-    cv::solvePnPRefineLM(c.object, c.image, cv::Mat(calib.K), calib.distortion, rv, tv);
-  } catch (const cv::Exception&) {
-    return std::numeric_limits<double>::infinity();
-  }
-  std::vector<cv::Point2d> projected;
-  cv::projectPoints(c.object, rv, tv, cv::Mat(calib.K), calib.distortion, projected);
-  double sum = 0;
-  for (std::size_t k = 0; k < projected.size(); ++k) {
-    const cv::Point2d d = projected[k] - c.image[k];
-    sum += d.dot(d);
-  }
-  pose = Pose::fromRvecTvec({rv.at<double>(0), rv.at<double>(1), rv.at<double>(2)},
-                            {tv.at<double>(0), tv.at<double>(1), tv.at<double>(2)});
-  const double e = std::sqrt(sum / double(projected.size()));
-  if (!pose.finite() || !std::isfinite(e) || pose.t.z() <= 0)
-    return std::numeric_limits<double>::infinity();
-  return e;
+  const double e = refinePose(c.object, c.image, calib, pose);
+  return std::isfinite(e) && pose.t.z() > 0 ? e : std::numeric_limits<double>::infinity();
 }
 
 double imageArea(const Detection& d) {
@@ -140,8 +123,11 @@ BodyPoseResult solveBodyPose(const MarkerLayout& layout, std::span<const Detecti
   for (const Detection* d : bySize) {
     const LayoutMarker& m = *layout.find(d->id);
     // Unpolished: every seed is scored over all corners and the two kept are polished there.
-    const PoseCandidates c =
-        used.size() > 1 ? markerPoseSeeds(d->corners, m.edge(), calibration) : PoseCandidates{};
+    // SQPNP (5x IPPE's cost) only on the largest marker: it is there for IPPE's failure on an
+    // exactly head-on square, and the largest marker's seed covers that.
+    const PoseCandidates c = used.size() > 1 ? markerPoseSeeds(d->corners, m.edge(), calibration,
+                                                               d == bySize.front())
+                                             : PoseCandidates{};
     const Pose bodyInMarker = m.inBody().inverse();
     for (int i = 0; i < c.count; ++i) {
       const Pose s = c.poses[std::size_t(i)] * bodyInMarker;
@@ -173,7 +159,8 @@ BodyPoseResult solveBodyPose(const MarkerLayout& layout, std::span<const Detecti
   if (used.size() == 1) {
     // One marker: its own polished candidates and their errors are the answer.
     const LayoutMarker& m = *layout.find(used[0]->id);
-    const PoseCandidates c = solveMarkerPose(used[0]->corners, m.edge(), calibration);
+    const PoseCandidates c =
+        solveMarkerPose(used[0]->corners, m.edge(), calibration, PosePolish::kOwn);
     scored.clear();
     const Pose bodyInMarker = m.inBody().inverse();
     for (int i = 0; i < c.count; ++i)

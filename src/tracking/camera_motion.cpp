@@ -48,12 +48,13 @@ cv::Mat CameraMotionJudge::toWorkingGrey(const cv::Mat& image) const {
 }
 
 void CameraMotionJudge::setReference(const cv::Mat& image,
-                                     const std::vector<std::array<cv::Point2d, 4>>& exclude) {
+                                     const std::vector<std::array<cv::Point2d, 4>>& exclude,
+                                     bool imageIsOwned) {
   // Kept as it is (a copy: the caller's frame buffer is reused); made into the working
   // reference only when a frame without the board needs it, so frames with the board pay for
   // a copy only.
   const cv::Mat grey = toGrey(image);
-  pending_ = grey.data == image.data ? grey.clone() : grey;
+  pending_ = grey.data == image.data && !imageIsOwned ? grey.clone() : grey;
   pendingQuads_ = exclude;
   reference_.release();
   referencePyramid_.clear();

@@ -46,8 +46,11 @@ class CameraMotionJudge {
  public:
   explicit CameraMotionJudge(CameraMotionConfig config = {});
   // A frame in which the board gave a pose: the reference for the frames that follow. `exclude`
-  // are the quads (pixels) of every marker in it.
-  void setReference(const cv::Mat& image, const std::vector<std::array<cv::Point2d, 4>>& exclude);
+  // are the quads (pixels) of every marker in it. `imageIsOwned`: the caller will not write into
+  // the image's buffer again (a grey frame made for this frame alone), so it is kept without a
+  // copy.
+  void setReference(const cv::Mat& image, const std::vector<std::array<cv::Point2d, 4>>& exclude,
+                    bool imageIsOwned = false);
   // The frame now, against the reference (not judged without one).
   CameraMotion judge(const cv::Mat& image);
   bool hasReference() const { return !reference_.empty() || !pending_.empty(); }

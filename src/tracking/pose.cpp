@@ -5,6 +5,8 @@
 #include <limits>
 #include <opencv2/calib3d.hpp>
 
+#include "tracking/pose_refine.hpp"
+
 namespace ps::tracking {
 
 namespace {
@@ -46,7 +48,8 @@ namespace {
 // Every candidate (IPPE_SQUARE's two and SQPNP's), polished by Levenberg-Marquardt when asked,
 // with its RMS reprojection error; the two best distinct ones kept.
 PoseCandidates markerCandidates(const std::array<cv::Point2d, 4>& corners, double size,
-                                const CameraCalibration& calibration, bool polish) {
+                                const CameraCalibration& calibration, PosePolish polish,
+                                bool globalSolver) {
   PoseCandidates out;
   std::vector<cv::Point3d> object;
   for (const auto& p : markerObjectPoints(size)) object.emplace_back(p.x(), p.y(), p.z());
@@ -61,11 +64,13 @@ PoseCandidates markerCandidates(const std::array<cv::Point2d, 4>& corners, doubl
   try {
     cv::solvePnPGeneric(object, image, cv::Mat(calibration.K), calibration.distortion, rvecs, tvecs,
                         false, cv::SOLVEPNP_IPPE_SQUARE);
-    std::vector<cv::Mat> r2, t2;
-    cv::solvePnPGeneric(object, image, cv::Mat(calibration.K), calibration.distortion, r2, t2,
-                        false, cv::SOLVEPNP_SQPNP);
-    rvecs.insert(rvecs.end(), r2.begin(), r2.end());
-    tvecs.insert(tvecs.end(), t2.begin(), t2.end());
+    if (globalSolver) {
+      std::vector<cv::Mat> r2, t2;
+      cv::solvePnPGeneric(object, image, cv::Mat(calibration.K), calibration.distortion, r2, t2,
+                          false, cv::SOLVEPNP_SQPNP);
+      rvecs.insert(rvecs.end(), r2.begin(), r2.end());
+      tvecs.insert(tvecs.end(), t2.begin(), t2.end());
+    }
   } catch (const cv::Exception&) {
     return out;
   }
@@ -74,7 +79,14 @@ PoseCandidates markerCandidates(const std::array<cv::Point2d, 4>& corners, doubl
     cv::Mat rv, tv;
     rvecs[i].convertTo(rv, CV_64F);
     tvecs[i].convertTo(tv, CV_64F);
-    if (polish) {
+    if (polish == PosePolish::kOwn) {
+      Pose p = Pose::fromRvecTvec({rv.at<double>(0), rv.at<double>(1), rv.at<double>(2)},
+                                  {tv.at<double>(0), tv.at<double>(1), tv.at<double>(2)});
+      const double e = refinePose(object, image, calibration, p);
+      if (std::isfinite(e) && p.t.z() > 0) found.emplace_back(e, p);
+      continue;
+    }
+    if (polish == PosePolish::kOpenCv) {
       try {
         cv::solvePnPRefineLM(object, image, cv::Mat(calibration.K), calibration.distortion, rv, tv);
       } catch (const cv::Exception&) {
@@ -116,13 +128,13 @@ PoseCandidates markerCandidates(const std::array<cv::Point2d, 4>& corners, doubl
 }  // namespace
 
 PoseCandidates solveMarkerPose(const std::array<cv::Point2d, 4>& corners, double size,
-                               const CameraCalibration& calibration) {
-  return markerCandidates(corners, size, calibration, true);
+                               const CameraCalibration& calibration, PosePolish polish) {
+  return markerCandidates(corners, size, calibration, polish, true);
 }
 
 PoseCandidates markerPoseSeeds(const std::array<cv::Point2d, 4>& corners, double size,
-                               const CameraCalibration& calibration) {
-  return markerCandidates(corners, size, calibration, false);
+                               const CameraCalibration& calibration, bool globalSolver) {
+  return markerCandidates(corners, size, calibration, PosePolish::kNone, globalSolver);
 }
 
 PoseChoice choosePose(const PoseCandidates& c, const Pose* previous, double ratioThreshold) {

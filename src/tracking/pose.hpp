@@ -45,13 +45,18 @@ struct PoseCandidates {
   std::array<Pose, 2> poses;        // sorted by reprojection error
   std::array<double, 2> rms{0, 0};  // RMS reprojection error (px)
 };
+// How candidates are polished. kOpenCv (cv::solvePnPRefineLM) is the single-marker path's, kept
+// so that recordings replay bit for bit; kOwn (pose_refine.hpp) reaches the same minimum at
+// about a tenth of the cost and is what marker sets use.
+enum class PosePolish { kNone, kOpenCv, kOwn };
 PoseCandidates solveMarkerPose(const std::array<cv::Point2d, 4>& corners, double size,
-                               const CameraCalibration& calibration);
-// The same candidates before the Levenberg-Marquardt polish (IPPE_SQUARE's two and SQPNP's,
+                               const CameraCalibration& calibration,
+                               PosePolish polish = PosePolish::kOpenCv);
+// The same candidates before the polish (IPPE_SQUARE's two and, with `globalSolver`, SQPNP's;
 // the two best distinct ones): seeds for a pose that is polished over more points anyway (a
-// marker set's), at a fifth of the cost.
+// marker set's).
 PoseCandidates markerPoseSeeds(const std::array<cv::Point2d, 4>& corners, double size,
-                               const CameraCalibration& calibration);
+                               const CameraCalibration& calibration, bool globalSolver = true);
 
 struct PoseChoice {
   bool valid = false;
