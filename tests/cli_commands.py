@@ -417,7 +417,7 @@ def group_tube_charts():
     # path beside them writes forces.csv.
     for name, args in (("torus_sand_a", ("--chart", "torus")), ("torus_sand_b", ("--chart", "torus")),
                        ("tube_sand", ("--chart", "cylinder", "--radius", "6000000", "--length", "4000000"))):
-        run("replay", video, "--calib", CALIB, *args, "--tool", "displace", "--grid", "257",
+        run("replay", video, "--calib", CALIB, *args, "--tool", "displace", "--grid", "513",
             "--max-frames", "230", "--out", out(name))
     for name in ("torus_sand_a", "tube_sand"):
         with open(out(name, "summary.json")) as f:

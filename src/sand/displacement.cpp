@@ -257,7 +257,14 @@ terrain::GridRegion DisplacementTool::apply(const edit::ToolContext& ctx,
     dirty.uBegin = uFirst;
     dirty.uEnd = uLast;
   }
-  if (listener_) listener_->edited(dirty, settings_.material);
+  if (listener_ && grid_.tube()) {
+    // The settler marks what it is told: on the torus the written vertices beyond the centre's
+    // half lie in the box's images (across the v seam and the midline), which it is told too.
+    for (const terrain::GridRegion& image : terrain::gluedImages(chart, dirty))
+      listener_->edited(image, settings_.material);
+  } else if (listener_) {
+    listener_->edited(dirty, settings_.material);
+  }
   return dirty;
 }
 
