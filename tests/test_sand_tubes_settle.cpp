@@ -171,3 +171,47 @@ TEST(SandTubes, AStampAcrossTheSeamEqualsTheSameStampAwayFromIt) {
         nameOf(torus), worst, depth);
   }
 }
+
+TEST(SandTubes, TheSettlerIsToldOfEveryVertexAStampChanges) {
+  // The settler marks what the tool reports: on the torus the dirty box is the centre's half in v,
+  // so a stamp across the inner equator's midline (v = m/2) or the v seam changes vertices
+  // outside it, in its images, which the listener must be told of as well.
+  struct Recorder : sand::EditListener {
+    std::vector<terrain::GridRegion> told;
+    void edited(const terrain::GridRegion& r, const sand::Material&) override { told.push_back(r); }
+  };
+  for (const bool torus : {true, false}) {
+    auto chart = tube(torus, 7);
+    const int m = chart->grid().m();
+    const core::GridSize g = chart->grid();
+    for (const core::GridPoint p :
+         {core::GridPoint{5, m / 2 + 1}, core::GridPoint{m / 3, 1}, core::GridPoint{0, m - 1}}) {
+      terrain::Terrain t(chart, rowHeights(*chart));
+      const std::vector<float> before(t.heights().begin(), t.heights().end());
+      edit::EditPipeline pipe(t);
+      Recorder rec;
+      sand::DisplacementTool tool(chart, {.radius = 900.0}, &rec);
+      pipe.apply(tool, {chart->position(p.u, p.v, 900.0 - 150.0), 0.0});
+      auto told = [&](int u, int v) {
+        for (const terrain::GridRegion& r : rec.told) {
+          if (v < r.vBegin || v > r.vEnd) continue;
+          for (int k = -1; k <= 1; ++k) {
+            if (u + k * m >= r.uBegin && u + k * m <= r.uEnd) return true;
+          }
+        }
+        return false;
+      };
+      int changed = 0;
+      for (int v = 0; v <= m; ++v) {
+        for (int u = 0; u <= m; ++u) {
+          if (t.heights()[g.index(u, v)] == before[g.index(u, v)]) continue;
+          ++changed;
+          const core::GridPoint c = chart->canonical(u, v);
+          EXPECT_TRUE(told(u, v) || told(c.u, c.v))
+              << nameOf(torus) << " stamp " << p.u << "," << p.v << ": " << u << "," << v;
+        }
+      }
+      EXPECT_GT(changed, 20) << nameOf(torus);
+    }
+  }
+}
