@@ -22,8 +22,9 @@
 //
 // Sphere throughput (issue 28): the same on a planet of radius m / pi m (lat-long's meridian
 // spacing 1 m) at 1025^2 (--quick: 257^2), on lat-long and on the octahedral chart in the same
-// run (`chart`), noise +-10 m per distinct point; thermal and explicit diffusion (the
-// semi-implicit scheme is lat-long's only). The planet crater runs on both charts too.
+// run (`chart`), and on a torus and a cylinder of 1 m steps round the tube, noise +-10 m per
+// distinct point; thermal and explicit diffusion (the semi-implicit scheme is lat-long's only). The
+// planet crater runs on both charts too.
 //
 // The machine this was written on is shared with other builds: timings are noisy; compare runs
 // taken back to back.
@@ -41,9 +42,11 @@
 
 #include "bench/bench.hpp"
 #include "bench/bench_util.hpp"
+#include "core/cylinder_chart.hpp"
 #include "core/flat_chart.hpp"
 #include "core/latlong_chart.hpp"
 #include "core/octahedral_chart.hpp"
+#include "core/torus_chart.hpp"
 #include "edit/edit_pipeline.hpp"
 #include "sand/displacement.hpp"
 #include "sand/sand_field.hpp"
@@ -140,13 +143,23 @@ void throughput(int n, Method method, int threads, int repeats, std::ostream& ou
 }
 
 // Throughput on a sphere chart: noise per distinct point (twins, seam and pole rows one height).
-void sphereThroughput(int n, bool octahedral, Method method, int threads, int repeats,
+// The closed surfaces' charts of these rows: lat-long, octahedral, torus, cylinder.
+enum class Surface { kLatLong, kOctahedral, kTorus, kCylinder };
+
+void sphereThroughput(int n, Surface surface, Method method, int threads, int repeats,
                       std::ostream& out) {
   const core::GridSize g(n);
   const double R = g.m() / std::numbers::pi;  // lat-long's meridian spacing: 1 m
+  // The tubes: 1 m steps round the tube, the default torus's r / R = 0.4, a cylinder as long
+  // as its circumference.
+  const double tubeR = g.m() / (2.0 * std::numbers::pi);
   std::shared_ptr<const core::Chart> chart;
-  if (octahedral) {
+  if (surface == Surface::kOctahedral) {
     chart = std::make_shared<core::OctahedralChart>(g, R);
+  } else if (surface == Surface::kTorus) {
+    chart = std::make_shared<core::TorusChart>(g, 2.5 * tubeR, tubeR);
+  } else if (surface == Surface::kCylinder) {
+    chart = std::make_shared<core::CylinderChart>(g, tubeR, double(g.m()));
   } else {
     chart = std::make_shared<core::LatLongChart>(g, R);
   }
@@ -294,12 +307,14 @@ void benchErosion(const BenchOptions& options, std::ostream& out) {
   for (bool sphere : {false, true}) {
     for (int threads : {1, 2}) crater(sphere, options.quick, threads, out);
   }
-  // The sphere: lat-long and octahedral side by side, same run.
+  // The sphere: lat-long and octahedral side by side, same run; then the torus and the cylinder
+  // (the octahedral chart's per-cell loops).
   const int ns = options.quick ? 8 : 10;
   for (Method method : {Method::kThermal, Method::kExplicit}) {
     for (int threads : {1, 2}) {
-      for (bool octahedral : {false, true})
-        sphereThroughput(ns, octahedral, method, threads, repeats, out);
+      for (Surface surface :
+           {Surface::kLatLong, Surface::kOctahedral, Surface::kTorus, Surface::kCylinder})
+        sphereThroughput(ns, surface, method, threads, repeats, out);
     }
   }
   for (int threads : {1, 2}) crater(true, options.quick, threads, out, true);

@@ -412,6 +412,21 @@ def group_tube_charts():
             fail(f"the {chart} planet file's header: {planet[:32]!r}")
     if open(out("torus_a", "planet.planet"), "rb").read() != open(out("torus_b", "planet.planet"), "rb").read():
         fail("two replays onto the torus wrote different planet files")
+    # The sand core on the tubes: the displacement tool with settling along the same frames, twice
+    # onto the torus (the same planet file and forces), once onto the cylinder; the haptic force
+    # path beside them writes forces.csv.
+    for name, args in (("torus_sand_a", ("--chart", "torus")), ("torus_sand_b", ("--chart", "torus")),
+                       ("tube_sand", ("--chart", "cylinder", "--radius", "6000000", "--length", "4000000"))):
+        run("replay", video, "--calib", CALIB, *args, "--tool", "displace", "--grid", "513",
+            "--max-frames", "230", "--out", out(name))
+    for name in ("torus_sand_a", "tube_sand"):
+        with open(out(name, "summary.json")) as f:
+            s = json.load(f)
+        if s["stamps"] < 1 or s["modified_vertices"] <= 0 or "forces.csv" not in s["files"]:
+            fail(f"the sand replay {name} did not displace sand or wrote no forces: {s}")
+    for f in ("planet.planet", "forces.csv"):
+        if open(out("torus_sand_a", f), "rb").read() != open(out("torus_sand_b", f), "rb").read():
+            fail(f"two displacement replays onto the torus wrote different {f}")
     # The sculpted torus's heightmap goes back onto a torus of the same dimensions, and its mesh
     # export is a closed surface of Euler characteristic 0.
     run("import", out("torus_a", "heightmap.png"), "--chart", "torus", "--radius", "4500000",

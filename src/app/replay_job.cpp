@@ -346,13 +346,21 @@ nlohmann::json runReplayJob(const ReplayJob& job) {
   PlotSeries forceSeries;  // per frame: time, the largest force of its ticks
   // The force path presses with the sand core's displacement tool: none on a chart the sand
   // core does not know, and the summary says so.
-  const bool forcesHere = job.forces && sand::sandCoreKnows(planet->chart());
+  bool forcesHere = job.forces && sand::sandCoreKnows(planet->chart());
   if (job.forces && !forcesHere)
     std::cerr << "replay: no forces.csv: the haptic path's press tool (the sand core) does not "
                  "work on the "
               << planet->chart().name() << " chart\n";
+  haptics::ForcePathConfig hc;
+  // A coarse grid (257^2 on the default planets) has cells wider than the press tool, which the
+  // tool refuses: the replay goes on without forces, saying so.
+  if (forcesHere && hc.press.displacement.radius < sand::largestSpacing(planet->chart())) {
+    forcesHere = false;
+    std::cerr << "replay: no forces.csv: the haptic path's press tool (radius "
+              << hc.press.displacement.radius << " m) is below one cell of this grid ("
+              << sand::largestSpacing(planet->chart()) << " m)\n";
+  }
   if (forcesHere) {
-    haptics::ForcePathConfig hc;
     hc.map.scale = core::boundingRadius(planet->chart()) / options.scene.planetRadius;
     forces.open(out / "forces.csv.part");
     if (!forces) throw std::runtime_error("cannot write in " + out.string());

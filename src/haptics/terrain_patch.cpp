@@ -5,6 +5,9 @@
 #include <cmath>
 #include <numbers>
 
+#include "core/cylinder_chart.hpp"
+#include "core/torus_chart.hpp"
+
 namespace ps::haptics {
 
 bool TerrainPatch::capture(const terrain::Terrain& terrain, const Eigen::Vector3d& centre,
@@ -17,12 +20,32 @@ bool TerrainPatch::capture(const terrain::Terrain& terrain, const Eigen::Vector3
   revision_ = terrain.revision();
   m_ = chart.grid().m();
   wraps_ = chart.wrapsU();
-  const int k = std::max(2, halfSize);
-  const int cu = int(std::floor((*uv)(0))), cv = int(std::floor((*uv)(1)));
-  v0_ = std::max(0, cv - k);
-  const int v1 = std::min(m_, cv + 1 + k);
-  rows_ = v1 - v0_ + 1;
+  wrapsV_ = chart.gluing().vSides == core::SideGluing::kSeam;  // the torus
+  int k = std::max(2, halfSize);
   int ku = k;
+  // halfSize counts the chart's largest spacing (sand::largestSpacing); a tube's steps are
+  // shorter round the tube or along it, and a torus's round its inner equator.
+  if (const auto* torus = dynamic_cast<const core::TorusChart*>(&chart)) {
+    const double R = torus->majorRadius(), r = torus->minorRadius();
+    ku = int(std::ceil(k * (R + r) / (R - r)));
+    k = int(std::ceil(k * (R + r) / r));
+  } else if (const auto* cyl = dynamic_cast<const core::CylinderChart*>(&chart)) {
+    const double round = 2.0 * std::numbers::pi * cyl->tubeRadius(), along = cyl->length();
+    ku = int(std::ceil(k * std::max(round, along) / round));
+    k = int(std::ceil(k * std::max(round, along) / along));
+  }
+  const int cu = int(std::floor((*uv)(0))), cv = int(std::floor((*uv)(1)));
+  if (wrapsV_ && 2 * k + 2 <= m_) {
+    // Rows taken modulo m across the torus's v seam, as columns are across the u seam.
+    v0_ = cv - k;
+    rows_ = 2 * k + 2;
+  } else {
+    v0_ = std::max(0, cv - k);
+    const int vLast = std::min(m_, cv + 1 + k);
+    rows_ = vLast - v0_ + 1;
+    if (wrapsV_) v0_ = 0, rows_ = m_ + 1;
+  }
+  const int v1 = v0_ + rows_ - 1;
   bool fullRows = false;
   if (chart.hasPoleRows()) {
     // A cell in u is cos(latitude) times narrower than one in v: widen by the worst row.
@@ -54,7 +77,7 @@ bool TerrainPatch::capture(const terrain::Terrain& terrain, const Eigen::Vector3
   const std::span<const float> h = terrain.heights();
   const core::GridSize g = chart.grid();
   for (int r = 0; r < rows_; ++r) {
-    const int v = v0_ + r;
+    const int v = wrapsV_ ? ((v0_ + r) % m_ + m_) % m_ : v0_ + r;
     float* dst = heights_.data() + std::size_t(r) * cols_;
     if (!wraps_ || (u0_ >= 0 && u0_ + cols_ - 1 <= m_)) {
       std::copy_n(h.data() + g.index(u0_, v), cols_, dst);
@@ -100,7 +123,11 @@ std::optional<double> TerrainPatch::heightAt(double u, double v) const {
     fu = std::fmod(fu, double(m_));
     if (fu < 0) fu += m_;
   }
-  const double fv = v - v0_;
+  double fv = v - v0_;
+  if (wrapsV_ && rows_ != m_ + 1) {
+    fv = std::fmod(fv, double(m_));
+    if (fv < 0) fv += m_;
+  }
   int c = int(std::floor(fu)), r = int(std::floor(fv));
   // Points on the last row/column use the cell before it.
   if (c == cols_ - 1 && fu <= cols_ - 1) c = cols_ - 2;

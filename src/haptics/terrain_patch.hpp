@@ -21,11 +21,12 @@ struct SurfaceProbe {
 };
 
 // Heights of grid rows v0 .. v0+rows-1 and columns u0 .. u0+cols-1 (columns taken modulo m on a
-// wrapping chart, so u0 may be negative). Next to a pole row the patch holds whole rows. On a
-// chart that glues its sides beyond a seam (the octahedral chart's folds) a box that reaches a
-// side also holds its images across it (Chart::gluedImages), so that a foot point across a fold
-// from the tool (the inverse puts it on the other side of the square) is in the patch too.
-// Reading is const, allocation-free and thread-compatible; capture() reuses its buffer.
+// wrapping chart, so u0 may be negative; rows likewise across a torus's v seam). Next to a pole row
+// the patch holds whole rows. On a chart that glues its sides beyond a seam (the octahedral chart's
+// folds) a box that reaches a side also holds its images across it (Chart::gluedImages), so that a
+// foot point across a fold from the tool (the inverse puts it on the other side of the square) is
+// in the patch too. Reading is const, allocation-free and thread-compatible; capture() reuses its
+// buffer.
 class TerrainPatch {
  public:
   // Copies the heights within `halfSize` grid cells (along v; along u widened by 1/cos(latitude)
@@ -68,7 +69,7 @@ class TerrainPatch {
   bool valid_ = false;
   std::uint64_t revision_ = 0, serial_ = 0;
   int u0_ = 0, v0_ = 0, cols_ = 0, rows_ = 0, m_ = 0;
-  bool wraps_ = false;
+  bool wraps_ = false, wrapsV_ = false;
   std::vector<float> heights_;
   Image image_[3];
   int images_ = 0;

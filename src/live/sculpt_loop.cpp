@@ -422,8 +422,8 @@ class SculptLoop {
   void startHaptics() {
     if (haptic_) haptic_->stopLoop();
     haptic_.reset();
-    // Its press tool is the sand core's displacement, which a torus or a cylinder does not
-    // have yet (docs/CHARTS.md): no forces there, said once.
+    // Its press tool is the sand core's displacement: no forces on a chart the sand core does
+    // not know (docs/CHARTS.md), said once.
     if (!sand::sandCoreKnows(planet_.chart())) {
       if (!hapticNoted_)
         std::cerr << "live: no haptic forces on the " << planet_.chart().name()

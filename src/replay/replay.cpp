@@ -270,6 +270,14 @@ StepResult FrameStepper::step(const cv::Mat& image, int frame, double time) {
   auto toolPosition = [&](const Eigen::Vector3d& p, const core::GridPoint& c,
                           bool begin) -> Eigen::Vector3d {
     if (o.tool == ReplayTool::kBrush) return p;
+    if (!(R > 0.0)) {
+      // A torus or a cylinder: the same plough at a fixed height over the reference surface,
+      // along its normal under the tip (strokeAltitude_ is that height here).
+      if (begin) strokeAltitude_ = planet_.height(c.u, c.v) - o.pressDepth + o.displace.radius;
+      if (const auto uv = chart.inverse(p))
+        return chart.positionAt((*uv)(0), (*uv)(1), strokeAltitude_);
+      return chart.position(c.u, c.v, strokeAltitude_);
+    }
     if (begin) strokeAltitude_ = R + planet_.height(c.u, c.v) - o.pressDepth + o.displace.radius;
     return p.normalized() * strokeAltitude_;
   };

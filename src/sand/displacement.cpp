@@ -5,17 +5,21 @@
 #include <numbers>
 #include <vector>
 
+#include "core/cylinder_chart.hpp"
 #include "core/flat_chart.hpp"
 #include "core/input_error.hpp"
 #include "core/latlong_chart.hpp"
 #include "core/octahedral_chart.hpp"
+#include "core/torus_chart.hpp"
 
 namespace ps::sand {
 
 bool sandCoreKnows(const core::Chart& chart) {
   return dynamic_cast<const core::LatLongChart*>(&chart) ||
          dynamic_cast<const core::FlatChart*>(&chart) ||
-         dynamic_cast<const core::OctahedralChart*>(&chart);
+         dynamic_cast<const core::OctahedralChart*>(&chart) ||
+         dynamic_cast<const core::TorusChart*>(&chart) ||
+         dynamic_cast<const core::CylinderChart*>(&chart);
 }
 
 double largestSpacing(const core::Chart& chart) {
@@ -28,10 +32,29 @@ double largestSpacing(const core::Chart& chart) {
   if (const auto* flat = dynamic_cast<const core::FlatChart*>(&chart)) {
     return std::max(flat->dx(), flat->dy());
   }
+  const double m = chart.grid().m();
+  // The torus's outer equator (its longest steps in u) and a step round the tube.
+  if (const auto* torus = dynamic_cast<const core::TorusChart*>(&chart)) {
+    return 2.0 * std::numbers::pi * (torus->majorRadius() + torus->minorRadius()) / m;
+  }
+  if (const auto* cyl = dynamic_cast<const core::CylinderChart*>(&chart)) {
+    return std::max(2.0 * std::numbers::pi * cyl->tubeRadius(), cyl->length()) / m;
+  }
   throw core::InputError(
-      "the sand core works on the lat-long, flat and octahedral charts, not on '" + chart.name() +
-      "'");
+      "the sand core works on the lat-long, flat, octahedral, torus and "
+      "cylinder charts, not on '" +
+      chart.name() + "'");
 }
+
+namespace {
+// The tube's radius of a torus (its minor radius) or a cylinder; 0 on other charts.
+double tubeRadius(const core::Chart& chart) {
+  if (const auto* torus = dynamic_cast<const core::TorusChart*>(&chart))
+    return torus->minorRadius();
+  if (const auto* cyl = dynamic_cast<const core::CylinderChart*>(&chart)) return cyl->tubeRadius();
+  return 0.0;
+}
+}  // namespace
 
 void DisplacementSettings::validate(const core::Chart* chart) const {
   if (!std::isfinite(radius) || !(radius > 0.0)) {
@@ -49,6 +72,13 @@ void DisplacementSettings::validate(const core::Chart* chart) const {
         throw core::InputError("tool radius r = " + core::exactNumber(radius) +
                                " m is larger than the planet (radius " +
                                core::exactNumber(chart->radius()) + " m)");
+      }
+    } else if (const double tube = tubeRadius(*chart); tube > 0.0) {
+      // A sphere wider than the tube would press through it (and, on a torus, across the hole).
+      if (radius > tube) {
+        throw core::InputError("tool radius r = " + core::exactNumber(radius) +
+                               " m is larger than the " + chart->name() + "'s tube (radius " +
+                               core::exactNumber(tube) + " m)");
       }
     } else if (const auto* flat = dynamic_cast<const core::FlatChart*>(chart)) {
       const double extent = chart->grid().m() * std::max(flat->dx(), flat->dy());
@@ -113,7 +143,8 @@ terrain::GridRegion DisplacementTool::apply(const edit::ToolContext& ctx,
   const core::GridSize g = chart.grid();
   const int m = g.m();
   const bool sphere = grid_.sphere();
-  const bool glued = grid_.glued();  // the octahedral chart: a point once, at its canonical vertex
+  // The octahedral chart, the torus, the cylinder: a point once, at its canonical vertex.
+  const bool glued = grid_.glued();
   const Eigen::Vector3d c = ctx.input.position;
   const double r = settings_.radius;
   const double r2 = r * r;
@@ -217,11 +248,23 @@ terrain::GridRegion DisplacementTool::apply(const edit::ToolContext& ctx,
   terrain::GridRegion dirty = F.bounds();
   dirty.vBegin = vFirst;
   dirty.vEnd = vLast;
-  if (glued) {  // the box of every vertex written, twins across the folds included
+  if (grid_.tube()) {
+    // The region's box, as the brush reports it: its u range wraps the seam (the twins at u = m
+    // of the points at u = 0 lie in it, as on lat-long), and on the torus the box is the
+    // centre's half in v, whose image across the v seam (Terrain::commitEdit) holds the rest.
+    if (chart.gluesSidesBeyondSeam()) dirty = F.bounds();
+  } else if (glued) {  // the box of every vertex written, twins across the folds included
     dirty.uBegin = uFirst;
     dirty.uEnd = uLast;
   }
-  if (listener_) listener_->edited(dirty, settings_.material);
+  if (listener_ && grid_.tube()) {
+    // The settler marks what it is told: on the torus the written vertices beyond the centre's
+    // half lie in the box's images (across the v seam and the midline), which it is told too.
+    for (const terrain::GridRegion& image : terrain::gluedImages(chart, dirty))
+      listener_->edited(image, settings_.material);
+  } else if (listener_) {
+    listener_->edited(dirty, settings_.material);
+  }
   return dirty;
 }
 

@@ -88,9 +88,10 @@ class DisplacementTool final : public edit::Tool {
 
 // The chart's largest distance between neighbouring vertices ("one cell"), or a bound of it:
 // 2 pi R / m on the lat-long chart (the equator's) and on the octahedral one, max(dx, dy) on a
-// flat chart.
+// flat chart, 2 pi (R + r) / m on a torus (its outer equator), max(2 pi R, L) / m on a cylinder.
 double largestSpacing(const core::Chart& chart);
-// Whether the sand core's cells (SandGrid) are defined on this chart: lat-long and flat today.
+// Whether the sand core's cells (SandGrid) are defined on this chart: lat-long, flat,
+// octahedral, torus, cylinder.
 bool sandCoreKnows(const core::Chart& chart);
 
 }  // namespace ps::sand

@@ -13,12 +13,23 @@ void SandField::mark(const terrain::GridRegion& region) {
   if (grid_.glued()) {
     // A change at a twin on a glued side is a change at its point: the region's images across
     // the sides hold every twin of the vertices in it.
-    const core::GridBox box{std::max(0, region.uBegin), std::min(m_, region.uEnd),
-                            std::max(0, region.vBegin), std::min(m_, region.vEnd)};
-    core::GridBox out[4];
-    const int n = grid_.chart().gluedImages(box, false, out);
-    for (int i = 0; i < n; ++i)
-      markRegion({out[i].uBegin, out[i].uEnd, out[i].vBegin, out[i].vEnd});
+    auto markImages = [&](int ua, int ub) {
+      const core::GridBox box{std::max(0, ua), std::min(m_, ub), std::max(0, region.vBegin),
+                              std::min(m_, region.vEnd)};
+      core::GridBox out[4];
+      const int n = grid_.chart().gluedImages(box, false, out);
+      for (int i = 0; i < n; ++i)
+        markRegion({out[i].uBegin, out[i].uEnd, out[i].vBegin, out[i].vEnd});
+    };
+    if (!grid_.tube()) {
+      markImages(region.uBegin, region.uEnd);
+      return;
+    }
+    // A tube's u seam: the region's columns unwrapped, and u = m is the point at u = 0.
+    region.forEachColumnRange(grid_.grid(), [&](int a, int b) {
+      markImages(a, b);
+      if (b == m_ || a == m_) markImages(0, 0);
+    });
     return;
   }
   markRegion(region);

@@ -122,6 +122,7 @@ double SandField::driftBetween(const PushForce& force, double zetaInv, const Eig
   const bool sphere = chart.radius() > 0.0;
   const Eigen::Vector3d mid = 0.5 * (pa + pb);
   Eigen::Vector3d foot = force.centre;
+  if (grid_.tube()) return driftOnTube(force, zetaInv, pa, pb, faceLength);
   if (sphere) {
     foot = chart.radius() * force.centre.normalized();
   } else {
@@ -135,6 +136,28 @@ double SandField::driftBetween(const PushForce& force, double zetaInv, const Eig
     const Eigen::Vector3d up = mid.normalized();
     radial -= radial.dot(up) * up;
   }
+  const double rho = radial.norm();
+  if (!(rho < force.radius) || rho == 0.0) return 0.0;
+  const Eigen::Vector3d n = (pb - pa).normalized();
+  const double t = rho / force.radius;
+  const double prof = (1.0 - t * t) * (1.0 - t * t);
+  const double fn = force.strength * prof * radial.dot(n) / rho;
+  return zetaInv * fn * grid_.cellSize() * faceLength;
+}
+
+// A tube has no centre to project through: the foot is the surface point under the tool
+// (markForce), the radial direction is mid - foot in the tangent plane at mid, and only faces
+// within the force's radius of the foot in 3D and facing its way take part (not the far wall of
+// a cylinder, whose tangent projection of mid - foot can vanish, nor across a torus's hole).
+double SandField::driftOnTube(const PushForce& force, double zetaInv, const Eigen::Vector3d& pa,
+                              const Eigen::Vector3d& pb, double faceLength) const {
+  if (!tubeFootValid_) return 0.0;
+  const Eigen::Vector3d mid = 0.5 * (pa + pb);
+  Eigen::Vector3d radial = mid - tubeFoot_;
+  if (!(radial.norm() < force.radius)) return 0.0;
+  const Eigen::Vector3d up = grid_.tubeNormal(mid);
+  if (!(up.dot(tubeFootUp_) > 0.0)) return 0.0;
+  radial -= radial.dot(up) * up;
   const double rho = radial.norm();
   if (!(rho < force.radius) || rho == 0.0) return 0.0;
   const Eigen::Vector3d n = (pb - pa).normalized();
@@ -161,7 +184,25 @@ double SandField::netDriftFlux(const PushForce& force, double zetaInv, int u, in
 void SandField::markForce(const PushForce& force) {
   const core::Chart& chart = grid_.chart();
   const auto foot = chart.inverse(force.centre);
+  tubeFootValid_ = false;
   if (!foot) return;
+  if (grid_.tube()) {
+    // A box about the foot by the smallest chord in u and in v (the torus's inner equator, a
+    // step round the tube), its columns wrapping the seam; where it reaches a torus's v seam
+    // mark() adds its image across it (the rows it continues into).
+    const double du = std::min(grid_.chord(0, 0, 1), grid_.chord(0, m_ / 2, 1));
+    const double dv = std::min(grid_.chord(0, 1, 3), grid_.chord(0, m_ / 4, 3));
+    const int ru = int(std::min(double(m_), std::ceil(force.radius / du))) + 2;
+    const int rv = int(std::min(double(m_), std::ceil(force.radius / dv))) + 2;
+    tubeFoot_ = chart.positionAt((*foot)(0), (*foot)(1), 0.0);
+    tubeFootUp_ = grid_.tubeNormal(tubeFoot_);
+    tubeFootValid_ = true;
+    const int uc = int(std::lround((*foot)(0))), vc = int(std::lround((*foot)(1)));
+    terrain::GridRegion r{uc - ru, uc + ru, std::max(0, vc - rv), std::min(m_, vc + rv)};
+    if (2 * ru + 1 >= m_) r.uBegin = 0, r.uEnd = m_;
+    mark(r);
+    return;
+  }
   if (grid_.glued()) {
     // A box about the foot at a quarter of lat-long's equatorial spacing (the octahedral
     // charts' smallest is above 0.3 of it), and its images across the folds and midlines
@@ -233,7 +274,8 @@ StepReport SandField::diffusionStep(const Material& material, double dt, Diffusi
   if (grid_.glued() && scheme == DiffusionScheme::kSemiImplicit) {
     throw core::InputError(
         "semi-implicit (LOD) diffusion solves along the grid's rows and columns, which the " +
-        grid_.chart().name() + " chart's folds break: use the explicit scheme there");
+        grid_.chart().name() + " chart's " + (grid_.tube() ? "seams" : "folds") +
+        " break: use the explicit scheme there");
   }
   if (!std::isfinite(dt) || !(dt > 0.0)) {
     throw core::InputError("diffusion time step dt = " + core::exactNumber(dt) +

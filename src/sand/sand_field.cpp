@@ -240,8 +240,9 @@ terrain::GridRegion SandField::writeBack(double limit) {
     });
     if (vb < 0) continue;
     terrain::GridRegion r{ua, ub, va, vb};
-    if (sphere && ua == 0) r = terrain::GridRegion{m_, m_ + ub, va, vb};  // names u = m too
-    dirty = dirty.unite(r, g, sphere);
+    const bool seam = sphere || grid_.tube();  // u = m is the point at u = 0
+    if (seam && ua == 0) r = terrain::GridRegion{m_, m_ + ub, va, vb};  // names u = m too
+    dirty = dirty.unite(r, g, seam);
   }
   if (sphere) {
     for (int p = 0; p < 2; ++p) {

@@ -193,6 +193,8 @@ class SandField {
   double netDriftFluxGlued(const PushForce& force, double zetaInv, int u, int v) const;
   double driftBetween(const PushForce& force, double zetaInv, const Eigen::Vector3d& pa,
                       const Eigen::Vector3d& pb, double faceLength) const;
+  double driftOnTube(const PushForce& force, double zetaInv, const Eigen::Vector3d& pa,
+                     const Eigen::Vector3d& pb, double faceLength) const;
 
   // The semi-implicit step (sand_semi_implicit.cpp) and its parts, in order: next = cur, the
   // force's drift (explicit), the rows' implicit solves, the columns', the polar caps'.
@@ -224,6 +226,10 @@ class SandField {
   std::size_t totalCellSteps_ = 0;
   // m^3 the floats written so far hold less than the doubles did (writeBack's error diffusion).
   double carry_ = 0.0;
+  // A tube's push force (markForce): the surface point under the tool and its normal, set
+  // before a step's tiles run.
+  Eigen::Vector3d tubeFoot_ = Eigen::Vector3d::Zero(), tubeFootUp_ = Eigen::Vector3d::Zero();
+  bool tubeFootValid_ = false;
   // Per-row constants of the last material used (rebuilt when it changes).
   std::unique_ptr<ThermalTables> thermalTables_;
   std::unique_ptr<DiffusionTables> diffusionTables_;

@@ -1,6 +1,7 @@
-// The sand field on a chart whose sides are glued to themselves (the octahedral chart, both
-// mappings): per-cell geometry instead of per-row tables, a one-cell halo read across the folds
-// through the chart's gluing, no poles (docs/SAND.md, "The octahedral chart").
+// The sand field on a chart whose sides are glued beyond lat-long's seam (the octahedral chart,
+// both mappings; the torus and the cylinder): per-cell geometry instead of per-row tables, a
+// one-cell halo read across the folds and seams through the chart's gluing, no poles
+// (docs/SAND.md, "The octahedral chart", "The torus and the cylinder").
 //
 // Each cell is a distinct point at its canonical grid vertex; its 8 links are the grid continued
 // across the glued sides (SandGrid::neighbour; a cone point, a side's midpoint, has 4). A link's
@@ -141,6 +142,8 @@ bool SandField::gluedBorderTile(int tu, int tv) const {
 bool SandField::gluedSource(int tu, int tv, int r, int c, int& tile, int& local) const {
   int u = tu * kT + c - 2, v = tv * kT + r - 2;
   if (u < -1 || u > m_ + 1 || v < -1 || v > m_ + 1) return false;
+  // Beyond the cylinder's rims: no cell (a wall; SandGrid::neighbour gives those links none).
+  if ((v < 0 || v > m_) && grid_.chart().gluing().vSides == core::SideGluing::kOpen) return false;
   if (u <= 0 || u >= m_ || v <= 0 || v >= m_) {
     const core::Chart& chart = grid_.chart();
     const core::GridPoint p = chart.continued(u, v);

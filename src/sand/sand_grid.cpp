@@ -8,10 +8,12 @@
 #include <limits>
 #include <numbers>
 
+#include "core/cylinder_chart.hpp"
 #include "core/flat_chart.hpp"
 #include "core/input_error.hpp"
 #include "core/latlong_chart.hpp"
 #include "core/octahedral_chart.hpp"
+#include "core/torus_chart.hpp"
 
 namespace ps::sand {
 
@@ -77,6 +79,7 @@ SandGrid::SandGrid(std::shared_ptr<const core::Chart> chart)
         verticalFace_[i] = R * rho(v + 0.5) * dlon;
       }
     }
+    surfaceArea_ = 4.0 * kPi * R * R;
     return;
   }
   if (const auto* flat = dynamic_cast<const core::FlatChart*>(chart_.get())) {
@@ -94,15 +97,25 @@ SandGrid::SandGrid(std::shared_ptr<const core::Chart> chart)
         verticalFace_[i] = dx;
       }
     }
+    surfaceArea_ = double(m_) * dx * double(m_) * dy;
     return;
   }
   if (const auto* oct = dynamic_cast<const core::OctahedralChart*>(chart_.get())) {
     buildGlued(oct->radius());
     return;
   }
+  if (const auto* torus = dynamic_cast<const core::TorusChart*>(chart_.get())) {
+    buildTorus(torus->majorRadius(), torus->minorRadius());
+    return;
+  }
+  if (const auto* cyl = dynamic_cast<const core::CylinderChart*>(chart_.get())) {
+    buildCylinder(cyl->tubeRadius(), cyl->length());
+    return;
+  }
   throw core::InputError(
-      "the sand core works on the lat-long, flat and octahedral charts, not on '" + chart_->name() +
-      "'");
+      "the sand core works on the lat-long, flat, octahedral, torus and "
+      "cylinder charts, not on '" +
+      chart_->name() + "'");
 }
 
 struct SandGrid::AreaCache {
@@ -124,8 +137,40 @@ void SandGrid::buildGlued(double R) {
   columns_ = m_ + 1;
   // The mean cell's side: m^2 + 2 points share 4 pi R^2.
   cellSize_ = R * std::sqrt(4.0 * kPi) / m_;
+  surfaceArea_ = 4.0 * kPi * R * R;
   areaBlocksU_ = (m_ + AreaCache::kB) / AreaCache::kB;
   areas_ = std::make_shared<AreaCache>(std::size_t(areaBlocksU_) * std::size_t(areaBlocksU_));
+}
+
+void SandGrid::buildTorus(double R, double r) {
+  glued_ = tube_ = true;
+  torusMajor_ = R;
+  columns_ = m_ + 1;
+  const double dAlpha = 2.0 * kPi / m_, dBeta = 2.0 * kPi / m_;
+  const double band = r * dAlpha * R * dBeta, bulge = 2.0 * r * r * dAlpha * std::sin(0.5 * dBeta);
+  for (int v = 0; v <= m_; ++v) {
+    // cos(beta) from the nearer of v and m - v, so that rows mirrored in z get the same bits
+    // (the chart's own tables are mirrored that way too).
+    const int k = std::min(v % m_, m_ - v % m_);
+    area_[std::size_t(v)] = band + bulge * std::cos(dBeta * k);
+  }
+  surfaceArea_ = 4.0 * kPi * kPi * R * r;
+  cellSize_ = std::sqrt(surfaceArea_) / m_;  // m^2 points share the surface
+}
+
+void SandGrid::buildCylinder(double R, double L) {
+  glued_ = tube_ = openV_ = true;
+  columns_ = m_ + 1;
+  const double cell = R * (2.0 * kPi / m_) * (L / m_);
+  for (int v = 0; v <= m_; ++v) area_[std::size_t(v)] = (v == 0 || v == m_) ? 0.5 * cell : cell;
+  surfaceArea_ = 2.0 * kPi * R * L;
+  cellSize_ = std::sqrt(surfaceArea_ / (double(m_) * double(m_ + 1)));  // m (m + 1) points
+}
+
+Eigen::Vector3d SandGrid::tubeNormal(const Eigen::Vector3d& p) const {
+  const Eigen::Vector3d axial(p.x(), p.y(), 0.0);
+  const Eigen::Vector3d q = p - torusMajor_ * axial.normalized();
+  return (torusMajor_ > 0.0 ? q : axial).normalized();
 }
 
 double SandGrid::chordBetween(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
@@ -217,7 +262,7 @@ double SandGrid::gluedArea(int u, int v) const {
 }
 
 unsigned SandGrid::coneDrops(int u, int v) const {
-  if (!glued_) return 0;
+  if (!glued_ || tube_) return 0;
   const int h = m_ / 2;
   // Pairs of directions that reach one neighbour (the side's half turn about the point): keep
   // one of each pair (W E, S N, SW NE, SE NW).
@@ -232,6 +277,7 @@ unsigned SandGrid::coneDrops(int u, int v) const {
 core::GridPoint SandGrid::neighbour(int u, int v, int k) const {
   if (u > 1 && u < m_ - 1 && v > 1 && v < m_ - 1) return {u + kDu[k], v + kDv[k]};  // inside
   if ((coneDrops(u, v) >> k) & 1u) return {-1, -1};
+  if (openV_ && (v + kDv[k] < 0 || v + kDv[k] > m_)) return {-1, -1};  // the rim: a wall
   const core::GridPoint p = chart_->continued(u + kDu[k], v + kDv[k]);
   return chart_->canonical(p.u, p.v);
 }
@@ -261,6 +307,7 @@ Eigen::Vector3d SandGrid::quadCentre(int u, int v) const {
 Eigen::Vector3d SandGrid::centreOf(const Eigen::Vector3d sortedCorners[4]) const {
   Eigen::Vector3d s(0, 0, 0);
   for (int k = 0; k < 4; ++k) s += sortedCorners[k];
+  if (tube_) return 0.25 * s;
   const double len = std::sqrt((s.x() * s.x() + s.y() * s.y()) + s.z() * s.z());
   return s * (radius_ / len);
 }
@@ -289,7 +336,7 @@ double SandGrid::sum(std::span<const T> h, bool absolute) const {
       const T* p = h.data() + grid_.index(0, v);
       for (int u = 0; u <= m_; ++u) {
         if ((u == 0 || u == m_ || v == 0 || v == m_) && !isCell(u, v)) continue;
-        total.add(gluedArea(u, v) * (absolute ? std::abs(double(p[u])) : double(p[u])));
+        total.add(cellArea(u, v) * (absolute ? std::abs(double(p[u])) : double(p[u])));
       }
     }
     return total.value();

@@ -29,6 +29,13 @@ namespace ps::sand {
 //   |P_i - P_j|, an axis link's face the chord between the centres of the two quads beside it.
 //   The four side midpoints are cone points (180 degrees of the square around them): there the
 //   continued grid reaches each neighbour twice, and only one of each pair is a link (4 links).
+// * Torus and cylinder (TorusChart, CylinderChart; `glued()` and `tube()`): the same per-cell
+//   links, the grid continued across the seams (the torus's both, the cylinder's u), with no
+//   link across the cylinder's open rims (a closed wall: sand stays on the tube). The surfaces
+//   are shift-invariant in u, so a cell's area is a function of its row: the exact area of the
+//   band v +- 1/2 of one column (torus: r dalpha (R dbeta + 2 r cos(beta_v) sin(dbeta/2)); a
+//   cylinder's R dalpha L/m, half of it on a rim row), summing to 4 pi^2 R r and 2 pi R L.
+//   A quad's centre (faces) is its corners' mean, not projected onto the surface.
 //
 // "Volume" is sum_i A_i h_i over distinct points: the volume between the reference surface and the
 // terrain to first order in h / R (the shell's exact volume differs by a factor 1 + h/R +
@@ -38,8 +45,8 @@ namespace ps::sand {
 // Distances between neighbours are chords between their positions on the reference surface.
 class SandGrid {
  public:
-  // Throws core::InputError for a chart that is not a LatLongChart, FlatChart or
-  // OctahedralChart.
+  // Throws core::InputError for a chart that is not a LatLongChart, FlatChart, OctahedralChart,
+  // TorusChart or CylinderChart.
   explicit SandGrid(std::shared_ptr<const core::Chart> chart);
 
   const core::Chart& chart() const { return *chart_; }
@@ -48,18 +55,28 @@ class SandGrid {
   int m() const { return m_; }
   // Lat-long: the sphere with poles and a seam (the per-row tables below).
   bool sphere() const { return sphere_; }
-  // The octahedral chart: per-cell geometry (cellArea, neighbour, chord, face), no poles.
+  // The octahedral chart, the torus and the cylinder: per-cell geometry (cellArea, neighbour,
+  // chord, face), no poles.
   bool glued() const { return glued_; }
+  // The torus and the cylinder: glued, u a seam, the areas per row (area(v) holds them).
+  bool tube() const { return tube_; }
+  // A tube's outward unit normal at a point near its reference surface (not on its axis or
+  // a torus's centre circle).
+  Eigen::Vector3d tubeNormal(const Eigen::Vector3d& p) const;
+  // Total area (m^2) of the reference surface the cells tile.
+  double surfaceArea() const { return surfaceArea_; }
   // Distinct columns: m on the sphere (u = m is u = 0), m + 1 on a flat or glued grid.
   int columns() const { return columns_; }
   // Rows whose vertices are ordinary cells (all rows on a flat grid; 1 .. m-1 on the sphere).
   bool ordinaryRow(int v) const { return v >= 0 && v <= m_ && (!sphere_ || (v > 0 && v < m_)); }
 
-  // Area (m^2) of the cell of a vertex of row v; pole rows give the polar cap. Lat-long and
-  // flat only (the per-row tables; on a glued chart use cellArea).
+  // Area (m^2) of the cell of a vertex of row v; pole rows give the polar cap. Lat-long, flat
+  // and the tubes (the per-row tables; on the octahedral chart use cellArea).
   double area(int v) const { return area_[std::size_t(v)]; }
   // Area (m^2) of the cell of grid vertex (u, v) on any chart (a twin gives its point's).
-  double cellArea(int u, int v) const { return glued_ ? gluedArea(u, v) : area_[std::size_t(v)]; }
+  double cellArea(int u, int v) const {
+    return glued_ && !tube_ ? gluedArea(u, v) : area_[std::size_t(v)];
+  }
   // Whether grid vertex (u, v) owns a cell: on a glued chart its point's canonical vertex.
   bool isCell(int u, int v) const {
     if (!glued_ || (u > 0 && u < m_ && v > 0 && v < m_)) return true;
@@ -122,6 +139,8 @@ class SandGrid {
   template <class T>
   double sum(std::span<const T> heights, bool absolute) const;
   void buildGlued(double R);
+  void buildTorus(double R, double r);
+  void buildCylinder(double R, double L);
   double gluedArea(int u, int v) const;
   double quadArea(int u, int v) const;         // the grid quad (u..u+1, v..v+1) on the sphere
   double computeCellArea(int u, int v) const;  // of canonical (u, v), from its quads
@@ -134,7 +153,11 @@ class SandGrid {
   int m_ = 0;
   bool sphere_ = false;
   bool glued_ = false;
+  bool tube_ = false;
+  bool openV_ = false;  // the cylinder's rims: no link beyond rows 0 and m
   double radius_ = 0;
+  double surfaceArea_ = 0;
+  double torusMajor_ = 0;  // the torus's major radius (tubeNormal); 0 on a cylinder
   int columns_ = 0;
   double cellSize_ = 0;
   std::vector<double> area_, horizontal_, vertical_, diagonal_, horizontalFace_, verticalFace_;

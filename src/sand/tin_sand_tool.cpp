@@ -38,9 +38,11 @@ void TinSandToolSettings::validate(const core::Chart* chart) const {
                            " erosion steps is outside 0 .. 1000");
   sand.validate();
   if (!chart) return;
-  // Its points and areas are per row (a pole row once, a seam twin once); the octahedral chart's
-  // folds are not handled yet, while the grid sand core's tools work there.
-  if (dynamic_cast<const core::OctahedralChart*>(chart))
+  // Its points and areas are per row (a pole row once, a seam twin once) and its region lies in
+  // a sphere's or a plane's tangent plane; the octahedral chart's folds and the tubes are not
+  // handled yet, while the grid sand core's tools work there.
+  if (dynamic_cast<const core::OctahedralChart*>(chart) ||
+      (chart->radius() <= 0.0 && !dynamic_cast<const core::FlatChart*>(chart)))
     throw core::InputError("TIN sand tool: it works on the lat-long and flat charts, not on '" +
                            chart->name() + "'");
   const double cell = largestSpacing(*chart);
