@@ -59,6 +59,8 @@ uniform int upKind;             // 0: each vertex's up; 1: a sphere about the or
                                 // about z (tube centres at majorRadius); 3: a cylinder about z
 uniform float majorRadius;      // the torus's
 uniform int showTileLevels;     // 1: colour by the level read; red where it is coarser than asked
+uniform int ownSurface;         // 1: a spliced patch's triangles (terrain/mesh_patch), shaded
+                                // from their own heights and geometry, not the grid's tiles
 out vec4 colour;
 
 // The outward direction of the reference surface at planet-frame point p (upKind 1-3; with 0,
@@ -98,7 +100,24 @@ void main() {
   if (wireOnly == 1) { colour = vec4(0.08, 0.08, 0.08, 1.0); return; }
   vec3 n;
   float h;
-  if (perPixel == 1) {
+  if (perPixel == 1 && ownSurface == 1) {
+    // A patch (the sand TIN's region) is linear on each triangle: its height is the
+    // interpolated one, and its slope is how that height changes across the facet. From
+    // screen-space derivatives, g is the height's gradient within the facet; a surface of
+    // horizontal gradient G has g = (G + |G|^2 up) / (1 + |G|^2), so G = g_h / (1 - g . up),
+    // lit with the same exaggeration as the grid's gradient below (the chord's tilt against
+    // the pixel's up, L / 2R on a triangle of side L, enters only to second order).
+    h = metres;
+    vec3 a = dFdx(eyeRelative), b = dFdy(eyeRelative);
+    float ha = dFdx(metres), hb = dFdy(metres);
+    float aa = dot(a, a), ab = dot(a, b), bb = dot(b, b);
+    float det = aa * bb - ab * ab;
+    vec3 g = det > 0.0 ? ((bb * ha - ab * hb) * a + (aa * hb - ab * ha) * b) / det : vec3(0.0);
+    vec3 u = upKind != 0 ? outwardAt(eyeRelative + cameraPosition) : normalize(upDir);
+    float along = dot(g, u);
+    vec3 G = (g - along * u) / max(1.0 - along, 1e-3);
+    n = normalize(u - reliefScale * G);
+  } else if (perPixel == 1) {
     // The level where the pixel's footprint spans one to two texels (as a mip level would be
     // chosen); there the slope is taken over one texel and the height as the mean of two
     // samples across the footprint, so the picture stays still as the mesh changes.

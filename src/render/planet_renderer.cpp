@@ -204,12 +204,18 @@ void PlanetRenderer::upload(const terrain::Terrain& planet, const terrain::Mesh&
   Gl& g = *gl_;
   const int side = planet.grid().side();
   const core::Chart& chart = planet.chart();
+  const bool hasPatch = !mesh.patchHeights.empty();
+  if (hasPatch && (mesh.patchVertexBegin + mesh.patchHeights.size() != mesh.gridIndex.size() ||
+                   mesh.patchIndexBegin > mesh.indices.size()))
+    throw std::invalid_argument("renderer: a mesh's patch does not match its vertices");
   std::vector<float> heights(mesh.gridIndex.size()), grids(2 * heights.size()),
       frames(9 * heights.size());
   for (std::size_t i = 0; i < heights.size(); ++i) {
     const auto gi = mesh.gridIndex[i];
     const int u = int(gi % std::uint64_t(side)), v = int(gi / std::uint64_t(side));
-    heights[i] = planet.height(u, v);
+    // A spliced patch's vertex has its own height; its grid vertex is only the nearest one.
+    const bool own = hasPatch && i >= mesh.patchVertexBegin;
+    heights[i] = own ? mesh.patchHeights[i - mesh.patchVertexBegin] : planet.height(u, v);
     grids[2 * i] = float(u);
     grids[2 * i + 1] = float(v);
     // The chart's frame at the vertex, for per-pixel normals.
@@ -249,6 +255,7 @@ void PlanetRenderer::upload(const terrain::Terrain& planet, const terrain::Mesh&
   uploadedMesh_ = &mesh;
   uploadedGeneration_ = mesh.generation;
   uploadedIndices_ = mesh.indices.size();
+  uploadedPatchIndices_ = hasPatch ? mesh.patchIndexBegin : uploadedIndices_;
   ++stats_.uploads;
   stats_.uploadedBytes = sent;
   stats_.meshBytes = mesh.positions.size() * sizeof(Eigen::Vector3f) +
@@ -345,7 +352,15 @@ void PlanetRenderer::drawMesh(const terrain::Mesh& mesh, const terrain::Camera& 
     glEnable(GL_POLYGON_OFFSET_LINE);
     glPolygonOffset(-1, -1);
   }
-  glDrawElements(GL_TRIANGLES, GLsizei(uploadedIndices_), GL_UNSIGNED_INT, nullptr);
+  // The view's triangles, then a spliced patch's, shaded from its own surface (mesh_shaders).
+  const GLint ownSurface = glGetUniformLocation(g.meshProgram, "ownSurface");
+  glUniform1i(ownSurface, 0);
+  glDrawElements(GL_TRIANGLES, GLsizei(uploadedPatchIndices_), GL_UNSIGNED_INT, nullptr);
+  if (uploadedPatchIndices_ < uploadedIndices_) {
+    glUniform1i(ownSurface, 1);
+    glDrawElements(GL_TRIANGLES, GLsizei(uploadedIndices_ - uploadedPatchIndices_), GL_UNSIGNED_INT,
+                   reinterpret_cast<const void*>(uploadedPatchIndices_ * sizeof(std::uint32_t)));
+  }
   if (wireOnly) {
     glPolygonMode(GL_FRONT_AND_BACK, GL_FILL);
     glDisable(GL_POLYGON_OFFSET_LINE);
@@ -385,6 +400,16 @@ cv::Mat PlanetRenderer::readBack() const {
   cv::Mat bgr, flipped;
   cv::cvtColor(rgba, bgr, cv::COLOR_RGBA2BGR);
   cv::flip(bgr, flipped, 0);  // GL's row 0 is the bottom
+  return flipped;
+}
+
+cv::Mat PlanetRenderer::readDepth() const {
+  const Gl& g = *gl_;
+  cv::Mat depth(g.height, g.width, CV_32F), flipped;
+  glBindFramebuffer(GL_FRAMEBUFFER, g.framebuffer);
+  glPixelStorei(GL_PACK_ALIGNMENT, 1);
+  glReadPixels(0, 0, g.width, g.height, GL_DEPTH_COMPONENT, GL_FLOAT, depth.data);
+  cv::flip(depth, flipped, 0);
   return flipped;
 }
 
