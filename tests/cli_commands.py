@@ -148,7 +148,7 @@ def group_demo():
     # replay writes the same pictures twice, bit for bit (issue 27).
     tin_pictures = []
     for k in (1, 2):
-        run("replay", os.path.join(SRC, "data", "demo.mkv"), "--calib", CALIB, "--grid", "257",
+        run("replay", os.path.join(SRC, "data", "demo.mkv"), "--calib", CALIB, "--grid", "513",
             "--max-frames", "45", "--tool", "tin-sand", "--pictures", "--render", "--render-every", "15",
             "--out", out(f"tin{k}"))
         with open(out(f"tin{k}", "summary.json")) as f:

@@ -322,8 +322,18 @@ TEST(TinRegionRender, NoBackgroundLeaksThroughTheJoinInTheRenderedPicture) {
                         .string(),
                     img);
     }
-    if (dir && view == 1)
+    if (dir && view == 1) {
       cv::imwrite((std::filesystem::path(dir) / "join_grid.png").string(), plain);
+      // The grid's view | the spliced one (docs/images/tin_region_view.png).
+      const auto patch = std::make_shared<const terrain::MeshPatch>(s.tool.region()->patch());
+      terrain::SplicedView spliced;
+      cv::Mat both;
+      cv::hconcat(
+          plain,
+          renderer.renderAR(bg, s.planet, spliced.view(grid, patch, *s.chart), cam, plainStyle()),
+          both);
+      cv::imwrite((std::filesystem::path(dir) / "grid_and_spliced.png").string(), both);
+    }
   }
   std::cout << "a leak: a background pixel whose ray passes more than " << slack
             << " m under the TIN's surface\n";
