@@ -154,7 +154,8 @@ void main() {
 // A spliced patch's triangles (terrain/mesh_patch) are shaded from their own heights and
 // geometry, not the grid's tiles: kMeshFragment with this branch put in front of its per-pixel
 // one, in a program of its own, so that the view's program is compiled from the very source
-// it always was (a changed source changed faceted pixels by one grey level on llvmpipe).
+// it always was: a mesh without a patch draws the same bits as before, whatever a compiler
+// makes of the extra branch.
 constexpr const char* kOwnSurfaceBranch = R"(  if (perPixel == 1) {
     // A patch (the sand TIN's region) is linear on each triangle: its height is the
     // interpolated one, and its slope is how that height changes across the facet. From
