@@ -179,3 +179,41 @@ TEST(ReplayStepper, PlanetScaledByHandIsThePlanetConfiguredAtThatSize) {
   EXPECT_TRUE(
       std::memcmp(a.heights().data(), b.heights().data(), a.heights().size() * sizeof(float)) == 0);
 }
+
+// The view draws the TIN tool's region TIN (FrameStepper::viewPatch) from its first stamp,
+// through the stroke and after it, until the grid under it changes: an undo hides it, a redo
+// back to the same floats shows it again, another tool ends it.
+TEST(ReplayStepper, TheViewDrawsTheTinRegionUntilTheGridUnderItChanges) {
+  auto planet = testkit::bumpyTerrain(8, 4, 3000.0);
+  auto o = shortSceneOptions();
+  o.tool = replay::ReplayTool::kTinSand;
+  o.undo = true;
+  tracking::FrameSource src(shortSceneVideo());
+  replay::FrameStepper stepper(shortSceneCamera().forImageSize(src.size()), planet, o);
+  EXPECT_EQ(stepper.viewPatch(), nullptr) << "no stamp yet";
+  cv::Mat image;
+  bool stamped = false;
+  std::shared_ptr<const terrain::MeshPatch> patch;
+  while (src.read(image)) {
+    stamped |= stepper.step(image, src.index(), src.index() / src.fps()).touching;
+    if (stamped) {
+      patch = stepper.viewPatch();
+      ASSERT_NE(patch, nullptr) << "frame " << src.index() << ": stamped, and no region drawn";
+    }
+  }
+  ASSERT_TRUE(stamped);
+  stepper.endStroke();
+  EXPECT_EQ(stepper.viewPatch(), patch) << "the stroke's end changes nothing on screen";
+  EXPECT_GT(patch->replaces.size(), 0u);
+  EXPECT_EQ(patch->heights.size(), patch->positions.size());
+  stepper.pipeline().undo();
+  EXPECT_EQ(stepper.viewPatch(), nullptr) << "the grid no longer holds what the region wrote";
+  stepper.pipeline().redo();
+  const auto again = stepper.viewPatch();
+  ASSERT_NE(again, nullptr) << "a redo brings back the floats the region wrote";
+  EXPECT_EQ(again->positions, patch->positions);
+  stepper.setTool(replay::ReplayTool::kBrush);
+  EXPECT_EQ(stepper.viewPatch(), nullptr);
+  stepper.setTool(replay::ReplayTool::kTinSand);
+  EXPECT_EQ(stepper.viewPatch(), nullptr) << "the tool is made afresh, with no region";
+}

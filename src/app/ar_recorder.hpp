@@ -13,6 +13,7 @@
 #include "render/egl_context.hpp"
 #include "render/planet_renderer.hpp"
 #include "replay/replay.hpp"
+#include "terrain/mesh_patch.hpp"
 #include "terrain/tessellator.hpp"
 #include "tracking/undistort.hpp"
 
@@ -45,14 +46,18 @@ class ArRecorder {
   int framesWritten() const { return written_; }
   std::string renderer() const { return context_.renderer(); }
   double renderMsTotal() const { return renderMs_; }
+  // Frames rendered with the sand TIN's region spliced in (FrameContext::patch).
+  int tinRegionFrames() const { return tinRegionFrames_; }
 
  private:
   ArRecorderSettings settings_;
   render::EglContext context_;
   render::PlanetRenderer renderer_;
   terrain::Tessellator tessellator_;
+  terrain::SplicedView spliced_;  // the view with the sand TIN's region (FrameContext::patch)
   std::optional<tracking::FrameUndistorter> undistort_;
   int written_ = 0;
+  int tinRegionFrames_ = 0;
   double renderMs_ = 0;
   // The current touching run's frames and the best (longest) run's middle frame.
   std::vector<std::pair<cv::Mat, cv::Mat>> run_;

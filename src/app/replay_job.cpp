@@ -452,6 +452,8 @@ nlohmann::json runReplayJob(const ReplayJob& job) {
   if (recorder) {
     summary["renderer"] = recorder->renderer();
     summary["render_ms"] = recorder->renderMsTotal();
+    if (recorder->tinRegionFrames() > 0)
+      summary["ar_tin_region_frames"] = recorder->tinRegionFrames();
     if (job.render) {
       summary["ar_frames"] = recorder->framesWritten();
       files.push_back("ar/");

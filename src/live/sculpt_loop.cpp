@@ -29,6 +29,7 @@
 #include "sand/displacement.hpp"
 #include "session/frame_recorder.hpp"
 #include "session/planet_export.hpp"
+#include "terrain/mesh_patch.hpp"
 #include "terrain/tessellator.hpp"
 #include "tracking/undistort.hpp"
 
@@ -221,6 +222,8 @@ class SculptLoop {
                              shell_.camera.height);
       mesh = &tessellator_.tessellate(planet_, *cam, ts);
       status_.reused = tessellator_.stats().reused;
+      // The sand TIN's region at its own detail (replay's ArRecorder does the same).
+      mesh = &spliced_.view(*mesh, stepper_.viewPatch(), planet_.chart());
       status_.triangles = mesh->triangleCount();
     } else {
       status_.triangles = 0;
@@ -449,6 +452,7 @@ class SculptLoop {
   const std::chrono::steady_clock::time_point start_ = std::chrono::steady_clock::now();
   replay::FrameStepper stepper_;
   terrain::Tessellator tessellator_;
+  terrain::SplicedView spliced_;  // the view with the sand TIN's region (viewPatch)
   Texture overview_;
   session::SessionStore store_;
   replay::SettingsControl settingsControl_;

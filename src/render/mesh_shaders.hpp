@@ -11,6 +11,8 @@
 // per grid step), so the shader knows no chart's formulas; only whether up points away from a
 // centre (a sphere's). A seam the chart wraps is in the tiles' aprons.
 
+#include <string>
+
 namespace ps::render {
 
 constexpr const char* kMeshVertex = R"(#version 330 core
@@ -148,5 +150,36 @@ void main() {
   colour = vec4(c, 1.0);
 }
 )";
+
+// A spliced patch's triangles (terrain/mesh_patch) are shaded from their own heights and
+// geometry, not the grid's tiles: kMeshFragment with this branch put in front of its per-pixel
+// one, in a program of its own, so that the view's program is compiled from the very source
+// it always was: a mesh without a patch draws the same bits as before, whatever a compiler
+// makes of the extra branch.
+constexpr const char* kOwnSurfaceBranch = R"(  if (perPixel == 1) {
+    // A patch (the sand TIN's region) is linear on each triangle: its height is the
+    // interpolated one, and its slope is how that height changes across the facet. From
+    // screen-space derivatives, g is the height's gradient within the facet; a surface of
+    // horizontal gradient G has g = (G + |G|^2 up) / (1 + |G|^2), so G = g_h / (1 - g . up),
+    // lit with the same exaggeration as the grid's gradient below (the chord's tilt against
+    // the pixel's up, L / 2R on a triangle of side L, enters only to second order).
+    h = metres;
+    vec3 a = dFdx(eyeRelative), b = dFdy(eyeRelative);
+    float ha = dFdx(metres), hb = dFdy(metres);
+    float aa = dot(a, a), ab = dot(a, b), bb = dot(b, b);
+    float det = aa * bb - ab * ab;
+    vec3 g = det > 0.0 ? ((bb * ha - ab * hb) * a + (aa * hb - ab * ha) * b) / det : vec3(0.0);
+    vec3 u = upKind != 0 ? outwardAt(eyeRelative + cameraPosition) : normalize(upDir);
+    float along = dot(g, u);
+    vec3 G = (g - along * u) / max(1.0 - along, 1e-3);
+    n = normalize(u - reliefScale * G);
+  } else
+)";
+
+inline std::string ownSurfaceFragment() {
+  std::string s = kMeshFragment;
+  const std::string at = "  if (perPixel == 1) {";
+  return s.insert(s.find(at), kOwnSurfaceBranch);
+}
 
 }  // namespace ps::render

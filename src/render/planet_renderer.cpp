@@ -86,7 +86,7 @@ std::pair<Eigen::Vector3d, Eigen::Vector3d> gridTangents(const core::Chart& char
 }  // namespace
 
 struct PlanetRenderer::Gl {
-  GLuint meshProgram = 0, lineProgram = 0, backgroundProgram = 0;
+  GLuint meshProgram = 0, patchProgram = 0, lineProgram = 0, backgroundProgram = 0;
   GLuint meshVao = 0, positionBuffer = 0, heightBuffer = 0, indexBuffer = 0;
   GLuint gridBuffer = 0, frameBuffer = 0;                     // per vertex: (u, v); up, d/du, d/dv
   ShadowedBuffer positions, heights, indices, grids, frames;  // what the mesh buffers hold
@@ -100,6 +100,7 @@ struct PlanetRenderer::Gl {
 PlanetRenderer::PlanetRenderer() : gl_(new Gl) {
   Gl& g = *gl_;
   g.meshProgram = linkProgram(kMeshVertex, kMeshFragment);
+  g.patchProgram = linkProgram(kMeshVertex, ownSurfaceFragment().c_str());
   g.lineProgram = linkProgram(kLineVertex, kLineFragment);
   g.backgroundProgram = linkProgram(kBackgroundVertex, kBackgroundFragment);
   glGenVertexArrays(1, &g.meshVao);
@@ -153,6 +154,7 @@ PlanetRenderer::PlanetRenderer() : gl_(new Gl) {
 PlanetRenderer::~PlanetRenderer() {
   Gl& g = *gl_;
   glDeleteProgram(g.meshProgram);
+  glDeleteProgram(g.patchProgram);
   glDeleteProgram(g.lineProgram);
   glDeleteProgram(g.backgroundProgram);
   const GLuint buffers[] = {g.positionBuffer, g.heightBuffer, g.indexBuffer,
@@ -204,12 +206,18 @@ void PlanetRenderer::upload(const terrain::Terrain& planet, const terrain::Mesh&
   Gl& g = *gl_;
   const int side = planet.grid().side();
   const core::Chart& chart = planet.chart();
+  const bool hasPatch = !mesh.patchHeights.empty();
+  if (hasPatch && (mesh.patchVertexBegin + mesh.patchHeights.size() != mesh.gridIndex.size() ||
+                   mesh.patchIndexBegin > mesh.indices.size()))
+    throw std::invalid_argument("renderer: a mesh's patch does not match its vertices");
   std::vector<float> heights(mesh.gridIndex.size()), grids(2 * heights.size()),
       frames(9 * heights.size());
   for (std::size_t i = 0; i < heights.size(); ++i) {
     const auto gi = mesh.gridIndex[i];
     const int u = int(gi % std::uint64_t(side)), v = int(gi / std::uint64_t(side));
-    heights[i] = planet.height(u, v);
+    // A spliced patch's vertex has its own height; its grid vertex is only the nearest one.
+    const bool own = hasPatch && i >= mesh.patchVertexBegin;
+    heights[i] = own ? mesh.patchHeights[i - mesh.patchVertexBegin] : planet.height(u, v);
     grids[2 * i] = float(u);
     grids[2 * i + 1] = float(v);
     // The chart's frame at the vertex, for per-pixel normals.
@@ -249,6 +257,7 @@ void PlanetRenderer::upload(const terrain::Terrain& planet, const terrain::Mesh&
   uploadedMesh_ = &mesh;
   uploadedGeneration_ = mesh.generation;
   uploadedIndices_ = mesh.indices.size();
+  uploadedPatchIndices_ = hasPatch ? mesh.patchIndexBegin : uploadedIndices_;
   ++stats_.uploads;
   stats_.uploadedBytes = sent;
   stats_.meshBytes = mesh.positions.size() * sizeof(Eigen::Vector3f) +
@@ -298,59 +307,65 @@ void PlanetRenderer::drawMesh(const terrain::Mesh& mesh, const terrain::Camera& 
                               const Eigen::Matrix4d& clip, const RenderStyle& style,
                               bool wireOnly) {
   Gl& g = *gl_;
-  const Eigen::Vector3d offset = mesh.eye - camera.eye;
-  glUseProgram(g.meshProgram);
-  const auto m = columnMajor(clipFromEyeRelative(clip, camera.rotation, offset));
-  glUniformMatrix4fv(glGetUniformLocation(g.meshProgram, "clipFromEyeRelative"), 1, GL_FALSE,
-                     m.data());
-  glUniform3f(glGetUniformLocation(g.meshProgram, "offset"), float(offset.x()), float(offset.y()),
-              float(offset.z()));
-  const Eigen::Vector3d sun = style.sun.normalized();
-  glUniform3f(glGetUniformLocation(g.meshProgram, "sun"), float(sun.x()), float(sun.y()),
-              float(sun.z()));
-  glUniform3f(glGetUniformLocation(g.meshProgram, "cameraPosition"), float(camera.eye.x()),
-              float(camera.eye.y()), float(camera.eye.z()));
-  glUniform1f(glGetUniformLocation(g.meshProgram, "rampLow"), kRampLow);
-  glUniform1f(glGetUniformLocation(g.meshProgram, "rampHigh"), kRampHigh);
-  glUniform1f(glGetUniformLocation(g.meshProgram, "contourInterval"),
-              style.contours ? float(style.contourIntervalM) : 0.0f);
-  glUniform1i(glGetUniformLocation(g.meshProgram, "wireOnly"), wireOnly ? 1 : 0);
-  glActiveTexture(GL_TEXTURE0);
-  glBindTexture(GL_TEXTURE_1D, g.rampTexture);
-  glUniform1i(glGetUniformLocation(g.meshProgram, "ramp"), 0);
-  const HeightTileCache* tiles = g.heightTiles.get();
-  const bool perPixel = style.shading == Shading::kPerPixel && tiles && tiles->tiles() != 0;
-  glUniform1i(glGetUniformLocation(g.meshProgram, "perPixel"), perPixel ? 1 : 0);
-  glActiveTexture(GL_TEXTURE1);
-  glBindTexture(GL_TEXTURE_2D_ARRAY, perPixel ? tiles->tiles() : 0);
-  glUniform1i(glGetUniformLocation(g.meshProgram, "heightTiles"), 1);
-  glActiveTexture(GL_TEXTURE2);
-  glBindTexture(GL_TEXTURE_2D, perPixel ? tiles->pageTable() : 0);
-  glUniform1i(glGetUniformLocation(g.meshProgram, "pageTable"), 2);
-  glActiveTexture(GL_TEXTURE0);
-  if (perPixel) {
-    glUniform1f(glGetUniformLocation(g.meshProgram, "tileCells"),
-                float(tiles->pyramid().tileCells));
-    glUniform1i(glGetUniformLocation(g.meshProgram, "coarsestLevel"), tiles->pyramid().coarsest);
-    glUniform1f(glGetUniformLocation(g.meshProgram, "slotSide"), float(tiles->slotSide()));
-    glUniform1i(glGetUniformLocation(g.meshProgram, "showTileLevels"),
-                style.showTileLevels ? 1 : 0);
-  }
-  glUniform1i(glGetUniformLocation(g.meshProgram, "upKind"), upKind_);
-  glUniform1f(glGetUniformLocation(g.meshProgram, "majorRadius"), float(majorRadius_));
-  glUniform1f(glGetUniformLocation(g.meshProgram, "reliefScale"), float(style.reliefScale));
-  glBindVertexArray(g.meshVao);
-  if (wireOnly) {
-    glPolygonMode(GL_FRONT_AND_BACK, GL_LINE);
-    glEnable(GL_POLYGON_OFFSET_LINE);
-    glPolygonOffset(-1, -1);
-  }
-  glDrawElements(GL_TRIANGLES, GLsizei(uploadedIndices_), GL_UNSIGNED_INT, nullptr);
-  if (wireOnly) {
-    glPolygonMode(GL_FRONT_AND_BACK, GL_FILL);
-    glDisable(GL_POLYGON_OFFSET_LINE);
-  }
-  glBindVertexArray(0);
+  // The view's triangles, then a spliced patch's with the program that shades it from its own
+  // surface (kMeshFragment with OWN_SURFACE: the view's program is the one it always was, so a
+  // mesh without a patch draws the same bits).
+  const auto draw = [&](GLuint program, std::size_t first, std::size_t count) {
+    const Eigen::Vector3d offset = mesh.eye - camera.eye;
+    glUseProgram(program);
+    const auto m = columnMajor(clipFromEyeRelative(clip, camera.rotation, offset));
+    glUniformMatrix4fv(glGetUniformLocation(program, "clipFromEyeRelative"), 1, GL_FALSE, m.data());
+    glUniform3f(glGetUniformLocation(program, "offset"), float(offset.x()), float(offset.y()),
+                float(offset.z()));
+    const Eigen::Vector3d sun = style.sun.normalized();
+    glUniform3f(glGetUniformLocation(program, "sun"), float(sun.x()), float(sun.y()),
+                float(sun.z()));
+    glUniform3f(glGetUniformLocation(program, "cameraPosition"), float(camera.eye.x()),
+                float(camera.eye.y()), float(camera.eye.z()));
+    glUniform1f(glGetUniformLocation(program, "rampLow"), kRampLow);
+    glUniform1f(glGetUniformLocation(program, "rampHigh"), kRampHigh);
+    glUniform1f(glGetUniformLocation(program, "contourInterval"),
+                style.contours ? float(style.contourIntervalM) : 0.0f);
+    glUniform1i(glGetUniformLocation(program, "wireOnly"), wireOnly ? 1 : 0);
+    glActiveTexture(GL_TEXTURE0);
+    glBindTexture(GL_TEXTURE_1D, g.rampTexture);
+    glUniform1i(glGetUniformLocation(program, "ramp"), 0);
+    const HeightTileCache* tiles = g.heightTiles.get();
+    const bool perPixel = style.shading == Shading::kPerPixel && tiles && tiles->tiles() != 0;
+    glUniform1i(glGetUniformLocation(program, "perPixel"), perPixel ? 1 : 0);
+    glActiveTexture(GL_TEXTURE1);
+    glBindTexture(GL_TEXTURE_2D_ARRAY, perPixel ? tiles->tiles() : 0);
+    glUniform1i(glGetUniformLocation(program, "heightTiles"), 1);
+    glActiveTexture(GL_TEXTURE2);
+    glBindTexture(GL_TEXTURE_2D, perPixel ? tiles->pageTable() : 0);
+    glUniform1i(glGetUniformLocation(program, "pageTable"), 2);
+    glActiveTexture(GL_TEXTURE0);
+    if (perPixel) {
+      glUniform1f(glGetUniformLocation(program, "tileCells"), float(tiles->pyramid().tileCells));
+      glUniform1i(glGetUniformLocation(program, "coarsestLevel"), tiles->pyramid().coarsest);
+      glUniform1f(glGetUniformLocation(program, "slotSide"), float(tiles->slotSide()));
+      glUniform1i(glGetUniformLocation(program, "showTileLevels"), style.showTileLevels ? 1 : 0);
+    }
+    glUniform1i(glGetUniformLocation(program, "upKind"), upKind_);
+    glUniform1f(glGetUniformLocation(program, "majorRadius"), float(majorRadius_));
+    glUniform1f(glGetUniformLocation(program, "reliefScale"), float(style.reliefScale));
+    glBindVertexArray(g.meshVao);
+    if (wireOnly) {
+      glPolygonMode(GL_FRONT_AND_BACK, GL_LINE);
+      glEnable(GL_POLYGON_OFFSET_LINE);
+      glPolygonOffset(-1, -1);
+    }
+    glDrawElements(GL_TRIANGLES, GLsizei(count), GL_UNSIGNED_INT,
+                   reinterpret_cast<const void*>(first * sizeof(std::uint32_t)));
+    if (wireOnly) {
+      glPolygonMode(GL_FRONT_AND_BACK, GL_FILL);
+      glDisable(GL_POLYGON_OFFSET_LINE);
+    }
+    glBindVertexArray(0);
+  };
+  draw(g.meshProgram, 0, uploadedPatchIndices_);
+  if (uploadedPatchIndices_ < uploadedIndices_)
+    draw(g.patchProgram, uploadedPatchIndices_, uploadedIndices_ - uploadedPatchIndices_);
 }
 
 void PlanetRenderer::drawLines(const std::vector<Eigen::Vector3d>& points, bool loop,
@@ -385,6 +400,16 @@ cv::Mat PlanetRenderer::readBack() const {
   cv::Mat bgr, flipped;
   cv::cvtColor(rgba, bgr, cv::COLOR_RGBA2BGR);
   cv::flip(bgr, flipped, 0);  // GL's row 0 is the bottom
+  return flipped;
+}
+
+cv::Mat PlanetRenderer::readDepth() const {
+  const Gl& g = *gl_;
+  cv::Mat depth(g.height, g.width, CV_32F), flipped;
+  glBindFramebuffer(GL_FRAMEBUFFER, g.framebuffer);
+  glPixelStorei(GL_PACK_ALIGNMENT, 1);
+  glReadPixels(0, 0, g.width, g.height, GL_DEPTH_COMPONENT, GL_FLOAT, depth.data);
+  cv::flip(depth, flipped, 0);
   return flipped;
 }
 

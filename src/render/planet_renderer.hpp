@@ -100,6 +100,11 @@ class PlanetRenderer {
   // a window's keep GL's bottom-up rows, so no flip is needed. Leaves framebuffer 0 bound.
   void present(int x, int y, int width, int height) const;
 
+  // The last rendered image's window depth (CV_32F, top row first as the images: 1 where
+  // nothing was drawn, else [0, 1] through clipFromCamera's near and far planes): what tests
+  // compare with a surface's own depth.
+  cv::Mat readDepth() const;
+
   const RenderStats& stats() const { return stats_; }
   // On (the default), a changed mesh sends only its changed byte ranges; off sends it whole
   // (the baseline the frame benchmark and the tests compare with).
@@ -135,6 +140,7 @@ class PlanetRenderer {
   const terrain::Mesh* uploadedMesh_ = nullptr;  // identity of what the buffers hold
   std::uint64_t uploadedGeneration_ = 0;
   std::size_t uploadedIndices_ = 0;
+  std::size_t uploadedPatchIndices_ = 0;  // where a spliced patch's triangles start (else all)
   bool partialUploads_ = true;
   int upKind_ = 0;  // the mesh shader's (mesh_shaders.hpp)
   double majorRadius_ = 0;

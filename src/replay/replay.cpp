@@ -99,6 +99,11 @@ struct FrameStepper::Parts {
   std::optional<sand::Settler> settler;
   std::optional<sand::DisplacementTool> displacer;
   std::optional<sand::TinSandTool> tinSand;
+  // The view's patch of the TIN tool's region, and what it was made at (viewPatch()).
+  std::shared_ptr<const terrain::MeshPatch> patch;
+  std::uint64_t patchRevision = 0;
+  std::size_t patchStamps = 0;
+  const sand::TinSandTool* patchTool = nullptr;
   // Boards: whether the camera stood still while the board is hidden (tracker.hpp).
   std::optional<tracking::CameraMotionJudge> motion;
   // The planet had a pose after the last frame: only then can the camera's stillness keep it
@@ -175,6 +180,28 @@ edit::EditPipeline& FrameStepper::pipeline() {
 
 double FrameStepper::toolRadius() const {
   return p_->tool(o_.tool).radius();
+}
+
+std::shared_ptr<const terrain::MeshPatch> FrameStepper::viewPatch() {
+  Parts& p = *p_;
+  const sand::TinSandTool* tool =
+      o_.tool == ReplayTool::kTinSand && p.tinSand ? &*p.tinSand : nullptr;
+  if (!tool || !tool->region()) {
+    p.patch.reset();
+    p.patchTool = nullptr;
+    return nullptr;
+  }
+  // The planet's revision and the tool's stamps name what the region and the grid hold.
+  if (p.patchTool == tool && p.patchRevision == planet_.revision() &&
+      p.patchStamps == tool->stamps())
+    return p.patch;
+  p.patchTool = tool;
+  p.patchRevision = planet_.revision();
+  p.patchStamps = tool->stamps();
+  p.patch.reset();
+  if (tool->region()->holds(planet_.heights()))
+    p.patch = std::make_shared<const terrain::MeshPatch>(tool->region()->patch());
+  return p.patch;
 }
 
 void FrameStepper::rebuildTools() {
@@ -438,7 +465,8 @@ ReplaySummary runReplay(tracking::FrameSource& source, const tracking::CameraCal
                              r.planetInCamera,
                              r.touching,
                              r.control,
-                             stepper.toolRadius()};
+                             stepper.toolRadius(),
+                             stepper.viewPatch()};
       hook(ctx);
     }
     log << r.logLine << "\n";

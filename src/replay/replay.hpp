@@ -18,6 +18,7 @@
 #include "edit/edit_pipeline.hpp"
 #include "sand/displacement.hpp"
 #include "sand/settler.hpp"
+#include "terrain/mesh_patch.hpp"
 #include "terrain/terrain.hpp"
 #include "tracking/calibration.hpp"
 #include "tracking/detector.hpp"
@@ -93,6 +94,9 @@ struct FrameContext {
   bool touching = false;
   std::optional<core::GridPoint> control;  // the control vertex while touching
   double toolRadius = 0;                   // r_d of the active tool (m on the planet)
+  // The sand TIN's region to draw at its own detail in place of the 4-8 mesh there
+  // (FrameStepper::viewPatch); null: the grid's mesh alone.
+  std::shared_ptr<const terrain::MeshPatch> patch;
 };
 using FrameHook = std::function<void(const FrameContext&)>;
 
@@ -153,6 +157,13 @@ class FrameStepper {
   const tracking::CameraCalibration& calibration() const { return calib_; }
   double scale() const { return scale_; }  // planet metres per marker-world metre
   double toolRadius() const;               // r_d of the active tool (m on the planet)
+  // The TIN sand tool's region TIN as a patch for the view (terrain/mesh_patch), while it is
+  // the planet's surface there: from the stroke's first stamp, through the stroke and after it,
+  // until the grid no longer holds what the region wrote (an undo, another tool, settling, a
+  // loaded planet; a redo back to it shows it again), a new stroke makes a new region, or the
+  // tool or its settings change (the tool is made afresh). Null otherwise, and for other
+  // tools. Made again only after a stamp or a change of the planet.
+  std::shared_ptr<const terrain::MeshPatch> viewPatch();
   const ReplaySummary& summary() const { return s_; }
   bool anyMarker() const { return anyMarker_; }
   const std::string& family() const { return family_; }

@@ -96,7 +96,7 @@ std::size_t TinRegion::densify(const Eigen::Vector2d& centre, double radius) {
   return added;
 }
 
-terrain::MeshPatch TinRegion::patch() const {
+terrain::MeshPatch TinRegion::patch(double marginCells) const {
   terrain::MeshPatch p;
   const tin::Tin t = sand_->tin().toTin();
   const double R = chart_->radius();
@@ -113,6 +113,7 @@ terrain::MeshPatch TinRegion::patch() const {
       q = frame_.origin + x * frame_.east + y * frame_.north + h * frame_.up;
     }
     p.positions.push_back(q);
+    p.heights.push_back(h);
     const core::GridPoint n = edit::nearestVertex(*chart_, q);
     p.gridIndex.push_back(g.index(n.u, n.v));
   }
@@ -123,7 +124,7 @@ terrain::MeshPatch TinRegion::patch() const {
   // It stands for the points two cells or more inside its domain: the view's triangles it
   // replaces then lie well inside it, and its border ring overlaps the view's kept triangles
   // (a triangle with a corner on the border to rounding left out could uncover a sliver).
-  const double margin = 2 * smallestSpacing(*chart_);
+  const double margin = marginCells * smallestSpacing(*chart_);
   for (const Point& q : points_) {
     if (sand_->tin().depthInside(q.xy) < margin) continue;
     if (sphere && (q.v == 0 || q.v == m)) {

@@ -73,9 +73,10 @@ class TinRegion {
 
   // The TIN as a patch for the view (terrain/mesh_patch): its vertices on the planet (the
   // tangent plane's (x, y) taken back to the reference surface, raised by the height), standing
-  // for the grid entries of the region two equatorial cells or more inside its domain (seam
-  // twins and pole rows included).
-  terrain::MeshPatch patch() const;
+  // for the grid entries of the region `marginCells` equatorial cells or more inside its domain
+  // (seam twins and pole rows included). The default two cells make its border ring overlap the
+  // view's kept triangles, which closes the join (docs/RENDERING.md); 0 is for measuring that.
+  terrain::MeshPatch patch(double marginCells = 2) const;
 
   TinRegionWrite writeBack(std::span<float> heights, const SandGrid& cells, float heightLimit);
 

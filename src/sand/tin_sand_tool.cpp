@@ -84,6 +84,7 @@ terrain::GridRegion TinSandTool::apply(const edit::ToolContext& ctx,
                                        std::span<float> heights) const {
   settings_.validate(&ctx.terrain.chart());
   stats_ = {};
+  ++stamps_;
   const core::Chart& chart = ctx.terrain.chart();
   if (!reusable(ctx)) {
     const edit::Region& F = footprint(ctx);

@@ -86,6 +86,9 @@ class TinSandTool final : public edit::Tool {
   const TinSandToolStats& lastStats() const { return stats_; }
   // Region TINs made since construction (a stroke that reuses one makes one).
   std::size_t tinsMade() const { return tinsMade_; }
+  // Stamps applied since construction: the region's TIN changes at each (a view that draws it
+  // keys on this and the planet's revision).
+  std::size_t stamps() const { return stamps_; }
   // The region's TIN as the last stamp left it (null before the first stamp, and after a
   // stroke's start until its first stamp).
   const TinRegion* region() const { return region_ ? &*region_ : nullptr; }
@@ -113,6 +116,7 @@ class TinSandTool final : public edit::Tool {
   mutable std::optional<TinRegion> region_;
   mutable TinSandToolSettings regionSettings_;  // the settings region_ was made with
   mutable std::size_t tinsMade_ = 0;
+  mutable std::size_t stamps_ = 0;
 };
 
 }  // namespace ps::sand

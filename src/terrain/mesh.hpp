@@ -16,12 +16,21 @@ struct Mesh {
   // of the process (nextMeshGeneration()): a renderer re-uploads only when it changed, and a
   // new mesh that happens to live where an old one did is not taken for it.
   std::uint64_t generation = 0;
+  // A surface patch spliced in (terrain/mesh_patch: the sand TIN's region at its own detail):
+  // vertices from patchVertexBegin on carry their own height (patchHeights) rather than their
+  // grid vertex's, and triangles from index patchIndexBegin on are the patch's, which the
+  // renderer shades from their own geometry (the grid under them holds the patch only at its
+  // vertices). Empty patchHeights: no patch (every tessellator's mesh).
+  std::size_t patchVertexBegin = 0, patchIndexBegin = 0;
+  std::vector<float> patchHeights;
 
   std::size_t triangleCount() const { return indices.size() / 3; }
   void clear() {
     gridIndex.clear();
     positions.clear();
     indices.clear();
+    patchHeights.clear();
+    patchVertexBegin = patchIndexBegin = 0;
   }
 };
 

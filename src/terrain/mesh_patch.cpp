@@ -59,14 +59,37 @@ SpliceReport splicePatch(const Mesh& mesh, const MeshPatch& patch, const core::C
   }
   // The patch's vertices after the view's.
   const auto base = std::uint32_t(out.positions.size());
+  out.patchVertexBegin = base;
+  out.patchIndexBegin = out.indices.size();
+  out.patchHeights.clear();
   for (std::size_t i = 0; i < patch.positions.size(); ++i) {
     out.positions.push_back((patch.positions[i] - mesh.eye).cast<float>());
     out.gridIndex.push_back(patch.gridIndex[i]);
+    out.patchHeights.push_back(float(patch.heights[i]));
   }
   for (const std::uint32_t i : patch.indices) out.indices.push_back(base + i);
   rep.patchTriangles = patch.indices.size() / 3;
   out.generation = nextMeshGeneration();
   return rep;
+}
+
+const Mesh& SplicedView::view(const Mesh& mesh, std::shared_ptr<const MeshPatch> patch,
+                              const core::Chart& chart, PatchJoin join, double skirtDepth) {
+  if (!patch) {
+    patch_.reset();
+    mesh_ = nullptr;
+    return mesh;
+  }
+  if (patch != patch_ || mesh_ != &mesh || meshGeneration_ != mesh.generation || join != join_ ||
+      skirtDepth != skirtDepth_) {
+    report_ = splicePatch(mesh, *patch, chart, join, skirtDepth, out_);
+    patch_ = std::move(patch);
+    mesh_ = &mesh;
+    meshGeneration_ = mesh.generation;
+    join_ = join;
+    skirtDepth_ = skirtDepth;
+  }
+  return out_;
 }
 
 }  // namespace ps::terrain

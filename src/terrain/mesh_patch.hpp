@@ -12,6 +12,7 @@
 // windings), so such a line meets the wall.
 #include <Eigen/Core>
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 #include "core/chart.hpp"
@@ -22,6 +23,7 @@ namespace ps::terrain {
 struct MeshPatch {
   std::vector<Eigen::Vector3d> positions;  // planet frame
   std::vector<std::uint64_t> gridIndex;    // per vertex: the nearest grid vertex (shading lookups)
+  std::vector<double> heights;             // per vertex: metres above the reference surface
   std::vector<std::uint32_t> indices;      // 3 per triangle, counter-clockwise from outside
   std::vector<std::uint64_t> replaces;     // sorted grid indices (v * side + u) it stands for
 };
@@ -39,5 +41,26 @@ struct SpliceReport {
 // The view's vertices stay first and in order, so `out` draws every kept triangle as `mesh` did.
 SpliceReport splicePatch(const Mesh& mesh, const MeshPatch& patch, const core::Chart& chart,
                          PatchJoin join, double skirtDepth, Mesh& out);
+
+// What a renderer draws: the view's mesh with a patch spliced in, spliced again only when the
+// view's mesh (its generation) or the patch (another object) changed, so an unchanged view
+// keeps its generation and is not uploaded again.
+class SplicedView {
+ public:
+  // `mesh` itself when `patch` is null; else the spliced mesh, held until the next call.
+  const Mesh& view(const Mesh& mesh, std::shared_ptr<const MeshPatch> patch,
+                   const core::Chart& chart, PatchJoin join = PatchJoin::kNone,
+                   double skirtDepth = 0);
+  const SpliceReport& report() const { return report_; }  // of the last splice
+
+ private:
+  Mesh out_;
+  std::shared_ptr<const MeshPatch> patch_;
+  const Mesh* mesh_ = nullptr;
+  std::uint64_t meshGeneration_ = 0;
+  PatchJoin join_ = PatchJoin::kNone;
+  double skirtDepth_ = 0;
+  SpliceReport report_;
+};
 
 }  // namespace ps::terrain
