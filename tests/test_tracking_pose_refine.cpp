@@ -31,9 +31,10 @@ Problem randomProblem(std::mt19937& rng, const CameraCalibration& cam, int marke
   for (int m = 0; m < markers; ++m) {
     const Eigen::Vector3d centre(0.08 * u(rng), 0.08 * u(rng), solid ? 0.04 * u(rng) : 0.0);
     const Eigen::Matrix3d turn =
-        solid ? Eigen::AngleAxisd(0.8 * u(rng), Eigen::Vector3d(u(rng), u(rng), u(rng)).normalized())
-                    .toRotationMatrix()
-              : Eigen::Matrix3d::Identity();
+        solid
+            ? Eigen::AngleAxisd(0.8 * u(rng), Eigen::Vector3d(u(rng), u(rng), u(rng)).normalized())
+                  .toRotationMatrix()
+            : Eigen::Matrix3d::Identity();
     for (const auto& c : {Eigen::Vector3d(-0.02, 0.02, 0), Eigen::Vector3d(0.02, 0.02, 0),
                           Eigen::Vector3d(0.02, -0.02, 0), Eigen::Vector3d(-0.02, -0.02, 0)}) {
       const Eigen::Vector3d x = centre + turn * c;
@@ -76,8 +77,8 @@ double openCvRefine(const Problem& p, const CameraCalibration& cam, Pose& pose) 
 
 CameraCalibration lens(int coefficients) {
   CameraCalibration c = CameraCalibration::pinhole(610, 605, 322.5, 236.5, {640, 480});
-  const double k[14] = {-0.21, 0.09, 0.0011, -0.0007, -0.02, 0.05, -0.01, 0.004,
-                        0.0015, -0.0004, 0.0009, 0.0002, 0.01, -0.008};
+  const double k[14] = {-0.21, 0.09,   0.0011,  -0.0007, -0.02,  0.05, -0.01,
+                        0.004, 0.0015, -0.0004, 0.0009,  0.0002, 0.01, -0.008};
   c.distortion = cv::Mat(1, coefficients, CV_64F);
   for (int i = 0; i < coefficients; ++i) c.distortion.at<double>(i) = k[i];
   return c;

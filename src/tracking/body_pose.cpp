@@ -125,9 +125,9 @@ BodyPoseResult solveBodyPose(const MarkerLayout& layout, std::span<const Detecti
     // Unpolished: every seed is scored over all corners and the two kept are polished there.
     // SQPNP (5x IPPE's cost) only on the largest marker: it is there for IPPE's failure on an
     // exactly head-on square, and the largest marker's seed covers that.
-    const PoseCandidates c = used.size() > 1 ? markerPoseSeeds(d->corners, m.edge(), calibration,
-                                                               d == bySize.front())
-                                             : PoseCandidates{};
+    const PoseCandidates c =
+        used.size() > 1 ? markerPoseSeeds(d->corners, m.edge(), calibration, d == bySize.front())
+                        : PoseCandidates{};
     const Pose bodyInMarker = m.inBody().inverse();
     for (int i = 0; i < c.count; ++i) {
       const Pose s = c.poses[std::size_t(i)] * bodyInMarker;

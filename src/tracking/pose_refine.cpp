@@ -39,7 +39,8 @@ struct Lens {
   }
 
   // Pixel of the camera-frame point X, and d(pixel)/dX; false behind the camera.
-  bool project(const Eigen::Vector3d& X, Eigen::Vector2d& px, Eigen::Matrix<double, 2, 3>& J) const {
+  bool project(const Eigen::Vector3d& X, Eigen::Vector2d& px,
+               Eigen::Matrix<double, 2, 3>& J) const {
     if (!(X.z() > 0)) return false;
     const double iz = 1.0 / X.z(), x = X.x() * iz, y = X.y() * iz;
     const double r2 = x * x + y * y, r4 = r2 * r2, r6 = r4 * r2;
