@@ -6,12 +6,12 @@
 // three largest markers in the image, carried to the body's frame through each marker's place in
 // the layout, scored by the reprojection RMS of every visible corner. The best seed, and the best
 // one turned more than 10 degrees away from it (its flip), are polished by Levenberg-Marquardt
-// over all corners (pose_refine.hpp). With several markers seen at different places the wrong planar candidate of one
-// marker reprojects the others badly, so the flip is decided by the whole board. When the two
-// polished poses score within `ambiguityRatio` (one face of a solid seen alone), the one that
-// leaves fewer of the layout's markers unread though they would face the camera in the image
-// wins; if that ties, the one nearer the previous pose (continuity), as for a single marker
-// (pose.hpp).
+// over all corners (pose_refine.hpp). With several markers seen at different places the wrong
+// planar candidate of one marker reprojects the others badly, so the flip is decided by the
+// whole board. When the two polished poses score within `ambiguityRatio` (one face of a solid
+// seen alone), the one that leaves fewer of the layout's markers unread though they would face
+// the camera in the image wins; if that ties, the one nearer the previous pose (continuity), as
+// for a single marker (pose.hpp).
 #include <span>
 #include <string>
 #include <vector>
