@@ -156,11 +156,13 @@ def group_demo():
         if s.get("ar_tin_region_frames", 0) < 1 or s["stamps"] < 1:
             fail(f"replay --tool tin-sand drew no frame with its region TIN: {s}")
         names = sorted(os.listdir(out(f"tin{k}", "ar"))) + ["ar_view.png", "overview.png"]
+        # The force path feels the region TIN where the tool is in it (docs/HAPTICS.md).
+        names.append("forces.csv")
         tin_pictures.append({n: open(out(f"tin{k}", "ar", n) if n in os.listdir(out(f"tin{k}", "ar"))
                                      else out(f"tin{k}", n), "rb").read() for n in names})
     if tin_pictures[0] != tin_pictures[1]:
         differ = [n for n in tin_pictures[0] if tin_pictures[0][n] != tin_pictures[1].get(n)]
-        fail(f"two replays with --tool tin-sand wrote different pictures: {differ}")
+        fail(f"two replays with --tool tin-sand wrote different pictures or forces: {differ}")
     # A recording made with the single planet and tool markers: the default board and cube
     # see nothing and say how to replay it; with --board single --tool-layout flat it sculpts.
     video = out("short.mkv")

@@ -375,6 +375,8 @@ nlohmann::json runReplayJob(const ReplayJob& job) {
       if (haptic) {
         std::optional<Eigen::Vector3d> tip;
         if (f.scene.tipValid) tip = f.scene.tipPlanet * f.scale;
+        // The sand TIN tool's region is felt as it is drawn: at the TIN's own detail.
+        haptic->setSurface(f.patch);
         const auto ff = haptic->onFrame(tip, f.time);
         peakForce = std::max(peakForce, ff.maxForce);
         forceSeries.x.push_back(f.time);

@@ -50,7 +50,7 @@ int halfSizeFor(const ForcePathConfig& c, const core::Chart& chart) {
 }  // namespace
 
 ForcePath::ForcePath(const terrain::Terrain& terrain, edit::EditPipeline* pipeline,
-                             ForcePathConfig config, sand::EditListener* listener)
+                     ForcePathConfig config, sand::EditListener* listener)
     : terrain_(terrain),
       pipeline_(pipeline),
       config_(checked(config, terrain.chart())),
@@ -70,7 +70,7 @@ void ForcePath::focus(const Eigen::Vector3d& planetPoint) {
   if (!planetPoint.allFinite()) throw core::InputError("haptics: focus point is not finite");
   lastTip_ = planetPoint;
   haveTip_ = true;
-  if (loop_) loop_->publishPatch(terrain_, lastTip_, halfSize_);
+  if (loop_) loop_->publishPatch(terrain_, lastTip_, halfSize_, surface_.get());
 }
 
 void ForcePath::setLog(std::ostream* csv) {
@@ -91,7 +91,7 @@ FrameForces ForcePath::onFrame(const std::optional<Eigen::Vector3d>& tipPlanet, 
     haveTip_ = true;
   }
   if (haveTip_) {
-    if (!patch_.capture(terrain_, lastTip_, halfSize_)) patch_.clear();
+    if (!patch_.capture(terrain_, lastTip_, halfSize_, surface_.get())) patch_.clear();
   }
   if (!started_) {
     nextTick_ = (long long)std::ceil(time * rate);
@@ -124,7 +124,7 @@ void ForcePath::startLoop(HapticDevice& device, LoopOptions options) {
     settings.limits.maxForceRate = std::min(settings.limits.maxForceRate, lim->maxForceRate);
   }
   loop_ = std::make_unique<HapticLoop>(device, settings, config_.map, options);
-  if (haveTip_) loop_->publishPatch(terrain_, lastTip_, halfSize_);
+  if (haveTip_) loop_->publishPatch(terrain_, lastTip_, halfSize_, surface_.get());
   loop_->start();
 }
 
@@ -145,7 +145,7 @@ FrameForces ForcePath::editorFrame() {
     lastTip_ = l->tipPlanet;
     haveTip_ = true;
   }
-  if (haveTip_) loop_->publishPatch(terrain_, lastTip_, halfSize_);
+  if (haveTip_) loop_->publishPatch(terrain_, lastTip_, halfSize_, surface_.get());
   return f;
 }
 

@@ -65,7 +65,7 @@ class ForcePath {
   // otherwise it must edit `terrain`. `listener` (e.g. a sand::Settler) is told what the
   // displacement changed. All must outlive the force path.
   ForcePath(const terrain::Terrain& terrain, edit::EditPipeline* pipeline, ForcePathConfig config,
-                sand::EditListener* listener = nullptr);
+            sand::EditListener* listener = nullptr);
   ~ForcePath();
 
   // Force log (CSV, force_log.hpp) from now on; nullptr stops logging. Editor thread.
@@ -81,6 +81,15 @@ class ForcePath {
   FrameForces editorFrame();
   void stopLoop();
   HapticLoop* loop() { return loop_.get(); }
+
+  // A surface of its own over part of the terrain, felt in place of the grid's where the tip's
+  // foot point lies in it (the sand TIN's region: replay::FrameStepper::viewPatch, which is
+  // null once the grid no longer holds what the region wrote); null: the grid alone. Its
+  // triangles near the tool are copied into each snapshot, so it may change between frames.
+  // Editor thread, before onFrame / editorFrame.
+  void setSurface(std::shared_ptr<const terrain::MeshPatch> surface) {
+    surface_ = std::move(surface);
+  }
 
   // Where the tool is expected before the device has reported (the first snapshot is taken
   // around it). Editor thread.
@@ -111,6 +120,8 @@ class ForcePath {
 
   // live
   std::unique_ptr<HapticLoop> loop_;
+
+  std::shared_ptr<const terrain::MeshPatch> surface_;
 
   // presses
   TerrainPatch probePatch_;

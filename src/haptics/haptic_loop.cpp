@@ -63,9 +63,9 @@ void HapticLoop::stop() {
 }
 
 void HapticLoop::publishPatch(const terrain::Terrain& terrain, const Eigen::Vector3d& centre,
-                              int halfSize) {
+                              int halfSize, const terrain::MeshPatch* surface) {
   TerrainPatch& p = patches_.back();
-  if (!p.capture(terrain, centre, halfSize)) p.clear();
+  if (!p.capture(terrain, centre, halfSize, surface)) p.clear();
   patches_.publish();
 }
 

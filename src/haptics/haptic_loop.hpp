@@ -73,7 +73,8 @@ class HapticLoop {
 
   // Editor thread (one thread): snapshot of the heights within halfSize cells of `centre`
   // (planet frame) for the loop to read.
-  void publishPatch(const terrain::Terrain& terrain, const Eigen::Vector3d& centre, int halfSize);
+  void publishPatch(const terrain::Terrain& terrain, const Eigen::Vector3d& centre, int halfSize,
+                    const terrain::MeshPatch* surface = nullptr);
   // Editor thread: everything queued since the last drain, oldest first.
   std::size_t drain(std::vector<ForceRecord>& out) { return records_.drain(out); }
   // Editor thread: the newest tick (tip and force), if any ran.

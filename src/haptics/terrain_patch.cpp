@@ -3,16 +3,19 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <limits>
 #include <numbers>
 
 #include "core/cylinder_chart.hpp"
 #include "core/torus_chart.hpp"
+#include "sand/displacement.hpp"
 
 namespace ps::haptics {
 
 bool TerrainPatch::capture(const terrain::Terrain& terrain, const Eigen::Vector3d& centre,
-                           int halfSize) {
+                           int halfSize, const terrain::MeshPatch* surface) {
   valid_ = false;
+  tris_.clear();
   const core::Chart& chart = terrain.chart();
   const auto uv = chart.inverse(centre);
   if (!uv) return false;
@@ -109,10 +112,106 @@ bool TerrainPatch::capture(const terrain::Terrain& terrain, const Eigen::Vector3
       }
     }
   }
+  if (surface && surface->plane && surface->xy.size() == surface->positions.size() &&
+      surface->heights.size() == surface->positions.size()) {
+    // The grid's reach (halfSize largest spacings) and one cell more, so that the surface's
+    // triangles cover every foot point the grid's box does.
+    captureSurface(*surface, centre, (std::max(2, halfSize) + 1) * sand::largestSpacing(chart));
+  }
   static std::atomic<std::uint64_t> captures{0};
   serial_ = captures.fetch_add(1, std::memory_order_relaxed) + 1;
   valid_ = true;
   return true;
+}
+
+void TerrainPatch::captureSurface(const terrain::MeshPatch& s, const Eigen::Vector3d& centre,
+                                  double reach) {
+  plane_ = *s.plane;
+  const auto c = surfacePlanePoint(centre);
+  if (!c) return;
+  const double x0 = c->x() - reach, x1 = c->x() + reach, y0 = c->y() - reach, y1 = c->y() + reach;
+  double lox = std::numeric_limits<double>::infinity(), loy = lox, hix = -lox, hiy = -lox;
+  for (std::size_t t = 0; t + 2 < s.indices.size(); t += 3) {
+    const std::uint32_t i = s.indices[t], j = s.indices[t + 1], k = s.indices[t + 2];
+    const Eigen::Vector2d &a = s.xy[i], &b = s.xy[j], &d = s.xy[k];
+    const double tx0 = std::min({a.x(), b.x(), d.x()}), tx1 = std::max({a.x(), b.x(), d.x()});
+    const double ty0 = std::min({a.y(), b.y(), d.y()}), ty1 = std::max({a.y(), b.y(), d.y()});
+    if (tx1 < x0 || tx0 > x1 || ty1 < y0 || ty0 > y1) continue;
+    tris_.push_back(
+        {a.x(), a.y(), b.x(), b.y(), d.x(), d.y(), s.heights[i], s.heights[j], s.heights[k]});
+    lox = std::min(lox, tx0), hix = std::max(hix, tx1);
+    loy = std::min(loy, ty0), hiy = std::max(hiy, ty1);
+  }
+  if (tris_.empty()) return;
+  // About two triangles a bucket; at most 1024 buckets a side.
+  const double w = hix - lox, h = hiy - loy;
+  const double perBucket = std::sqrt(w * h / std::max(1.0, 0.5 * double(tris_.size())));
+  bucketSize_ = std::max({perBucket, std::max(w, h) / 1024.0, 1e-9});
+  nbx_ = std::clamp(int(std::ceil(w / bucketSize_)), 1, 1024);
+  nby_ = std::clamp(int(std::ceil(h / bucketSize_)), 1, 1024);
+  bx0_ = lox;
+  by0_ = loy;
+  // A triangle goes into every bucket its bounds touch, widened a little so that a point on a
+  // bucket's edge finds the triangles on either side.
+  const double pad = 1e-9 * bucketSize_;
+  auto bucketsOf = [&](const Tri& t, int& i0, int& i1, int& j0, int& j1) {
+    const double tx0 = std::min({t.ax, t.bx, t.cx}) - pad, tx1 = std::max({t.ax, t.bx, t.cx}) + pad;
+    const double ty0 = std::min({t.ay, t.by, t.cy}) - pad, ty1 = std::max({t.ay, t.by, t.cy}) + pad;
+    i0 = std::clamp(int(std::floor((tx0 - bx0_) / bucketSize_)), 0, nbx_ - 1);
+    i1 = std::clamp(int(std::floor((tx1 - bx0_) / bucketSize_)), 0, nbx_ - 1);
+    j0 = std::clamp(int(std::floor((ty0 - by0_) / bucketSize_)), 0, nby_ - 1);
+    j1 = std::clamp(int(std::floor((ty1 - by0_) / bucketSize_)), 0, nby_ - 1);
+  };
+  bucketStart_.assign(std::size_t(nbx_) * std::size_t(nby_) + 1, 0);
+  for (const Tri& t : tris_) {
+    int i0, i1, j0, j1;
+    bucketsOf(t, i0, i1, j0, j1);
+    for (int j = j0; j <= j1; ++j)
+      for (int i = i0; i <= i1; ++i) ++bucketStart_[std::size_t(j) * nbx_ + i + 1];
+  }
+  for (std::size_t b = 1; b < bucketStart_.size(); ++b) bucketStart_[b] += bucketStart_[b - 1];
+  bucketTris_.resize(bucketStart_.back());
+  bucketFill_.assign(bucketStart_.begin(), bucketStart_.end() - 1);
+  for (std::size_t n = 0; n < tris_.size(); ++n) {
+    int i0, i1, j0, j1;
+    bucketsOf(tris_[n], i0, i1, j0, j1);
+    for (int j = j0; j <= j1; ++j)
+      for (int i = i0; i <= i1; ++i)
+        bucketTris_[bucketFill_[std::size_t(j) * nbx_ + i]++] = std::uint32_t(n);
+  }
+}
+
+std::optional<Eigen::Vector2d> TerrainPatch::surfacePlanePoint(const Eigen::Vector3d& p) const {
+  if (plane_.radius > 0) {
+    const double n = p.norm();
+    if (!(n > 0) || !std::isfinite(n)) return std::nullopt;
+    const Eigen::Vector3d d = p / n;
+    if (!(d.dot(plane_.up) > 0)) return std::nullopt;
+    return Eigen::Vector2d(plane_.radius * d.dot(plane_.east), plane_.radius * d.dot(plane_.north));
+  }
+  const Eigen::Vector3d q = p - plane_.origin;
+  return Eigen::Vector2d(q.dot(plane_.east), q.dot(plane_.north));
+}
+
+std::optional<double> TerrainPatch::surfaceHeightAt(const Eigen::Vector2d& xy) const {
+  if (tris_.empty() || !xy.allFinite()) return std::nullopt;
+  const double px = xy.x(), py = xy.y();
+  const double fx = (px - bx0_) / bucketSize_, fy = (py - by0_) / bucketSize_;
+  if (!(fx > -1e-6 && fy > -1e-6 && fx < nbx_ + 1e-6 && fy < nby_ + 1e-6)) return std::nullopt;
+  const int i = std::clamp(int(fx), 0, nbx_ - 1), j = std::clamp(int(fy), 0, nby_ - 1);
+  const std::size_t b = std::size_t(j) * nbx_ + i;
+  // A point on an edge shared by two triangles is in both; either gives the same height.
+  constexpr double kEps = 1e-12;
+  for (std::uint32_t k = bucketStart_[b]; k < bucketStart_[b + 1]; ++k) {
+    const Tri& t = tris_[bucketTris_[k]];
+    const double d = (t.bx - t.ax) * (t.cy - t.ay) - (t.cx - t.ax) * (t.by - t.ay);
+    if (d == 0) continue;
+    const double la = ((t.bx - px) * (t.cy - py) - (t.cx - px) * (t.by - py)) / d;
+    const double lb = ((t.cx - px) * (t.ay - py) - (t.ax - px) * (t.cy - py)) / d;
+    const double lc = 1 - la - lb;
+    if (la >= -kEps && lb >= -kEps && lc >= -kEps) return la * t.ha + lb * t.hb + lc * t.hc;
+  }
+  return std::nullopt;
 }
 
 std::optional<double> TerrainPatch::heightAt(double u, double v) const {
@@ -163,6 +262,26 @@ std::optional<SurfaceProbe> TerrainPatch::probe(const Eigen::Vector3d& p) const 
   if (!valid_ || !p.allFinite()) return std::nullopt;
   const auto uv = chart_->inverse(p);
   if (!uv) return std::nullopt;
+  if (!tris_.empty()) {
+    const auto xy = surfacePlanePoint(p);
+    if (const auto th = xy ? surfaceHeightAt(*xy) : std::nullopt) {
+      SurfaceProbe s;
+      s.uv = *uv;
+      if (plane_.radius > 0) {
+        // Radial, as on the grid: d = R + h - |p|.
+        const double n = p.norm();
+        s.up = p / n;
+        s.surface = (plane_.radius + *th) * s.up;
+        s.depth = plane_.radius + *th - n;
+      } else {
+        s.up = plane_.up;
+        s.surface =
+            plane_.origin + xy->x() * plane_.east + xy->y() * plane_.north + *th * plane_.up;
+        s.depth = (s.surface - p).dot(s.up);
+      }
+      return s;
+    }
+  }
   const auto h = heightAt((*uv)(0), (*uv)(1));
   if (!h) return std::nullopt;
   SurfaceProbe s;

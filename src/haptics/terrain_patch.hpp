@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "core/chart.hpp"
+#include "terrain/mesh_patch.hpp"
 #include "terrain/terrain.hpp"
 
 namespace ps::haptics {
@@ -27,13 +28,25 @@ struct SurfaceProbe {
 // foot point across a fold from the tool (the inverse puts it on the other side of the square) is
 // in the patch too. Reading is const, allocation-free and thread-compatible; capture() reuses its
 // buffer.
+//
+// With a surface of its own over part of the grid (the sand TIN's region, a MeshPatch with a
+// plane), the patch also holds that surface's triangles that reach within its radius of the
+// tool, and the depth is taken under them where the foot point lies in one (the grid's heights
+// there are what the TIN wrote back, sampled at the grid's spacing: an imprint narrower than a
+// cell would be lost), under the grid elsewhere.
 class TerrainPatch {
  public:
   // Copies the heights within `halfSize` grid cells (along v; along u widened by 1/cos(latitude)
   // on a sphere) of the point under `centre` (planet frame). Returns false (and leaves the patch
   // empty) when the point has no foot point on the chart.
-  bool capture(const terrain::Terrain& terrain, const Eigen::Vector3d& centre, int halfSize);
-  void clear() { valid_ = false; }
+  // `surface` (may be null; ignored without a plane): its triangles within the same reach go in
+  // too. Editor thread; every buffer is reused.
+  bool capture(const terrain::Terrain& terrain, const Eigen::Vector3d& centre, int halfSize,
+               const terrain::MeshPatch* surface = nullptr);
+  void clear() {
+    valid_ = false;
+    tris_.clear();
+  }
 
   bool valid() const { return valid_; }
   const core::Chart* chart() const { return chart_; }
@@ -46,14 +59,22 @@ class TerrainPatch {
   int cols() const { return cols_; }
   int rows() const { return rows_; }
   std::size_t capacity() const { return heights_.capacity(); }
+  // The surface's triangles held (0: the grid alone).
+  std::size_t surfaceTriangles() const { return tris_.size(); }
 
   // The boxes of grid vertices beyond the first one (the images across glued sides).
   int images() const { return images_; }
 
   // Bilinear height at grid coordinates (u, v); nullopt outside the patch.
   std::optional<double> heightAt(double u, double v) const;
-  // Depth of `p` (planet frame) below the bilinear surface, radial on the chart; nullopt when
-  // the foot point is outside the patch or p has none.
+  // The surface's height at (x, y) of its plane; nullopt outside every triangle held.
+  std::optional<double> surfaceHeightAt(const Eigen::Vector2d& xy) const;
+  // Where the foot point of `p` lies in the surface's plane; nullopt without a surface or
+  // (sphere) on the far side of the planet.
+  std::optional<Eigen::Vector2d> surfacePlanePoint(const Eigen::Vector3d& p) const;
+  // Depth of `p` (planet frame) below the surface (the held triangles' where the foot point lies
+  // in one, else the grid's bilinear one), radial on the chart; nullopt when the foot point is
+  // outside the patch or p has none.
   std::optional<SurfaceProbe> probe(const Eigen::Vector3d& p) const;
 
  private:
@@ -73,6 +94,20 @@ class TerrainPatch {
   std::vector<float> heights_;
   Image image_[3];
   int images_ = 0;
+
+  void captureSurface(const terrain::MeshPatch& surface, const Eigen::Vector3d& centre,
+                      double reach);
+  // A triangle of the surface, corners in its plane, counter-clockwise.
+  struct Tri {
+    double ax, ay, bx, by, cx, cy, ha, hb, hc;
+  };
+  terrain::MeshPatch::Plane plane_;
+  std::vector<Tri> tris_;
+  // Triangles by bucket of a uniform grid over their bounds (CSR: bucket b holds
+  // bucketTris_[bucketStart_[b] .. bucketStart_[b + 1])), so that a tick tests a few.
+  std::vector<std::uint32_t> bucketStart_, bucketTris_, bucketFill_;
+  double bx0_ = 0, by0_ = 0, bucketSize_ = 1;
+  int nbx_ = 0, nby_ = 0;
 };
 
 }  // namespace ps::haptics

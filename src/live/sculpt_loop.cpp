@@ -167,6 +167,7 @@ class SculptLoop {
 
   void followForces() {
     if (!haptic_) return;
+    haptic_->setSurface(stepper_.viewPatch());
     const auto forces = haptic_->editorFrame();
     if (forces.last) lastForce_ = forces.last;
     status_.forceN = lastForce_ && lastForce_->touching ? lastForce_->force.norm() : 0.0;

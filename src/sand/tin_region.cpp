@@ -102,6 +102,13 @@ terrain::MeshPatch TinRegion::patch(double marginCells) const {
   const double R = chart_->radius();
   const core::GridSize g = chart_->grid();
   p.positions.reserve(t.xy.size());
+  p.plane.emplace();
+  p.plane->origin = frame_.origin;
+  p.plane->east = frame_.east;
+  p.plane->north = frame_.north;
+  p.plane->up = frame_.up;
+  p.plane->radius = R > 0 ? R : 0.0;
+  p.xy.assign(t.xy.begin(), t.xy.end());
   for (std::size_t i = 0; i < t.xy.size(); ++i) {
     const double x = t.xy[i].x(), y = t.xy[i].y(), h = t.h[i];
     Eigen::Vector3d q;
