@@ -178,6 +178,44 @@ TEST(HapticsTin, DepthIsTheTinsInsideTheRegionAndTheGridsBitForBitOutside) {
                                  "tolerance";
 }
 
+TEST(HapticsTin, OnAFlatGridTheDepthIsTheTinsHeightMinusZInsideAndTheGridsOutside) {
+  auto chart = sandtest::flatChart(7);  // 129^2, 1 m cells
+  terrain::Terrain t(chart, std::vector<float>(chart->grid().count(), 20.0f));
+  edit::EditPipeline pipe(t);
+  sand::TinSandToolSettings ts;
+  ts.radius = 8.0;
+  sand::TinSandTool tool(chart, ts);
+  pipe.apply(tool, {{64.0, 64.0, 20.0 - 4.0 + 8.0}, 0.0});
+  ASSERT_TRUE(tool.region() && tool.region()->holds(t.heights()));
+  const terrain::MeshPatch patch = tool.region()->patch();
+  ASSERT_TRUE(patch.plane);
+  EXPECT_EQ(patch.plane->radius, 0.0);
+  haptics::TerrainPatch withTin, gridOnly;
+  ASSERT_TRUE(withTin.capture(t, {64.0, 64.0, 20.0}, 60, &patch));
+  ASSERT_TRUE(gridOnly.capture(t, {64.0, 64.0, 20.0}, 60));
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> xy(4.0, 124.0), z(10.0, 25.0);
+  int inside = 0, outside = 0;
+  for (int k = 0; k < 5000; ++k) {
+    const Eigen::Vector3d p(xy(rng), xy(rng), z(rng));
+    const auto probe = withTin.probe(p);
+    const auto grid = gridOnly.probe(p);
+    ASSERT_TRUE(probe && grid);
+    const Eigen::Vector3d q = p - patch.plane->origin;
+    const Eigen::Vector2d at(q.dot(patch.plane->east), q.dot(patch.plane->north));
+    if (const auto th = bruteHeight(patch, at)) {
+      ++inside;
+      ASSERT_NEAR(probe->depth, *th - q.dot(patch.plane->up), 1e-9);
+    } else {
+      ++outside;
+      ASSERT_EQ(probe->depth, grid->depth);
+      ASSERT_EQ(probe->surface, grid->surface);
+    }
+  }
+  EXPECT_GT(inside, 200);
+  EXPECT_GT(outside, 2000);
+}
+
 TEST(HapticsTin, AnImprintNarrowerThanAGridCellIsFeltAtItsTinDepth) {
   Planet p;
   sand::TinSandTool tool(p.chart, [] {
