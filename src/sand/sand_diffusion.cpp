@@ -115,6 +115,24 @@ double SandField::driftFlux(const PushForce& force, double zetaInv, int ua, int 
   return swap ? -flux : flux;
 }
 
+namespace {
+
+// The push force's flux across the face pa-pb for a tangent offset `radial` from its foot: the
+// (1 - t^2)^2 profile of paper 004 along the face's normal, on a sphere and a tube alike.
+double profileFlux(const PushForce& force, double zetaInv, const Eigen::Vector3d& radial,
+                   const Eigen::Vector3d& pa, const Eigen::Vector3d& pb, double faceLength,
+                   double cellSize) {
+  const double rho = radial.norm();
+  if (!(rho < force.radius) || rho == 0.0) return 0.0;
+  const Eigen::Vector3d n = (pb - pa).normalized();
+  const double t = rho / force.radius;
+  const double prof = (1.0 - t * t) * (1.0 - t * t);
+  const double fn = force.strength * prof * radial.dot(n) / rho;
+  return zetaInv * fn * cellSize * faceLength;
+}
+
+}  // namespace
+
 // The drift flux from pa to pb across a face of that length.
 double SandField::driftBetween(const PushForce& force, double zetaInv, const Eigen::Vector3d& pa,
                                const Eigen::Vector3d& pb, double faceLength) const {
@@ -136,13 +154,7 @@ double SandField::driftBetween(const PushForce& force, double zetaInv, const Eig
     const Eigen::Vector3d up = mid.normalized();
     radial -= radial.dot(up) * up;
   }
-  const double rho = radial.norm();
-  if (!(rho < force.radius) || rho == 0.0) return 0.0;
-  const Eigen::Vector3d n = (pb - pa).normalized();
-  const double t = rho / force.radius;
-  const double prof = (1.0 - t * t) * (1.0 - t * t);
-  const double fn = force.strength * prof * radial.dot(n) / rho;
-  return zetaInv * fn * grid_.cellSize() * faceLength;
+  return profileFlux(force, zetaInv, radial, pa, pb, faceLength, grid_.cellSize());
 }
 
 // A tube has no centre to project through: the foot is the surface point under the tool
@@ -158,13 +170,7 @@ double SandField::driftOnTube(const PushForce& force, double zetaInv, const Eige
   const Eigen::Vector3d up = grid_.tubeNormal(mid);
   if (!(up.dot(tubeFootUp_) > 0.0)) return 0.0;
   radial -= radial.dot(up) * up;
-  const double rho = radial.norm();
-  if (!(rho < force.radius) || rho == 0.0) return 0.0;
-  const Eigen::Vector3d n = (pb - pa).normalized();
-  const double t = rho / force.radius;
-  const double prof = (1.0 - t * t) * (1.0 - t * t);
-  const double fn = force.strength * prof * radial.dot(n) / rho;
-  return zetaInv * fn * grid_.cellSize() * faceLength;
+  return profileFlux(force, zetaInv, radial, pa, pb, faceLength, grid_.cellSize());
 }
 
 double SandField::netDriftFlux(const PushForce& force, double zetaInv, int u, int v) const {
