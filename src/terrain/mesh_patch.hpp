@@ -21,22 +21,26 @@
 
 namespace ps::terrain {
 
+// Outside MeshPatch because clang 14 cannot default-construct a nested struct with member
+// initialisers inside std::optional of the enclosing class. The plane the surface is a height field
+// over, where it has one (the sand TIN's tangent plane): the haptic path feels the surface there by
+// the patch's own interpolation (linear in (x, y) per triangle) rather than by the planar facets
+// drawn between `positions`.
+struct PatchPlane {
+  Eigen::Vector3d origin = Eigen::Vector3d::Zero(), east = Eigen::Vector3d::UnitX(),
+                  north = Eigen::Vector3d::UnitY(), up = Eigen::Vector3d::UnitZ();
+  // > 0: a sphere about the planet frame's origin, (x, y) the orthographic projection of the
+  // point on it; 0: a flat chart, (x, y) along east and north from `origin`.
+  double radius = 0;
+};
+
 struct MeshPatch {
   std::vector<Eigen::Vector3d> positions;  // planet frame
   std::vector<std::uint64_t> gridIndex;    // per vertex: the nearest grid vertex (shading lookups)
   std::vector<double> heights;             // per vertex: metres above the reference surface
   std::vector<std::uint32_t> indices;      // 3 per triangle, counter-clockwise from outside
   std::vector<std::uint64_t> replaces;     // sorted grid indices (v * side + u) it stands for
-  // The plane the surface is a height field over, where it has one (the sand TIN's tangent
-  // plane): the haptic path feels the surface there by the patch's own interpolation (linear in
-  // (x, y) per triangle) rather than by the planar facets drawn between `positions`.
-  struct Plane {
-    Eigen::Vector3d origin = Eigen::Vector3d::Zero(), east = Eigen::Vector3d::UnitX(),
-                    north = Eigen::Vector3d::UnitY(), up = Eigen::Vector3d::UnitZ();
-    // > 0: a sphere about the planet frame's origin, (x, y) the orthographic projection of the
-    // point on it; 0: a flat chart, (x, y) along east and north from `origin`.
-    double radius = 0;
-  };
+  using Plane = PatchPlane;
   std::optional<Plane> plane;
   std::vector<Eigen::Vector2d> xy;  // per vertex, in `plane` (empty without one)
 };
