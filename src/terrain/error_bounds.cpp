@@ -74,22 +74,9 @@ class LevelPass {
         // at levels 2-5).
         seamTwinsLater_(chart.wrapsU() && !plan.centre) {}
 
-  // Every work item, on the team when the plan says the work pays for it. Returns the vertices
+  // Work item `item` of the plan (rows of one band in one column range). Returns the vertices
   // computed.
-  std::size_t run() const {
-    std::size_t count = 0;
-    const std::size_t items = plan_.items;
-    if (plan_.parallel) {
-#pragma omp parallel for schedule(dynamic, plan_.kernelLevel ? 1 : 4) reduction(+ : count)
-      for (std::size_t item = 0; item < items; ++item) count += band(item);
-    } else {
-      // Not through the OpenMP runtime: a region with if (false) still sets up a team of one
-      // and wakes the pool's sleeping threads (futex calls, about 2 us a level: a 150 km edit
-      // at 2049^2, whose levels all stay on this thread, took 0.138 ms with it, 0.098 without).
-      for (std::size_t item = 0; item < items; ++item) count += band(item);
-    }
-    return count;
-  }
+  std::size_t item(std::size_t item) const { return band(item); }
 
   // Seam twins hold the combined values of both halves of their diamond. Returns the vertices
   // computed (none when the region does not reach the seam).
@@ -364,25 +351,55 @@ detail::PositionBoxes positionBoxes(const ChartT& chart, std::span<const float> 
 
 template <class ChartT>
 void ErrorBounds::computeLevel(const ChartT& chart, std::span<const float> heights, int level,
-                               const GridRegion& region,
+                               std::span<const GridRegion> regions,
                                const std::vector<GridRegion>* gluedRegions,
                                const detail::PositionBoxes* boxes) {
   static_assert(kExactMaxHalfSize < (1 << kLatticeShift),
                 "the row kernels' levels hold no lattice vertex: they do not copy to it");
   const core::GridSize g = chart.grid();
-  const detail::LevelPlan plan(g, level, region);
+  std::vector<detail::LevelPlan> plans;
+  plans.reserve(regions.size());
+  for (const GridRegion& r : regions) plans.emplace_back(g, level, r);
   BoundCodes* codes = codes_.data();
   const detail::VertexBounds<ChartT> vertices(chart, heights.data(), codes, level, rule_,
                                               hasRadii(), boxes);
   const detail::BoundKernels<ChartT> kernels(chart, heights.data(), codes, level, rule_, hasRadii(),
                                              boxes);
-  const bool onLattice = !lattice_.empty() && plan.s >= (1 << kLatticeShift);
+  const int s = levelHalfSize(level);
+  const bool onLattice = !lattice_.empty() && s >= (1 << kLatticeShift);
   const LatticeCopy lattice{onLattice ? this : nullptr, lattice_.data(), heights, codes, g};
-  const LevelPass<ChartT> pass(chart, plan, vertices, kernels, codes, level, lattice);
-  lastUpdateCount_ += pass.run();
-  lastUpdateCount_ += pass.seamTwins(g, region);
-  if (gluedRegions && !plan.centre)
-    lastUpdateCount_ += gluedTwins(chart, vertices, codes, lattice, plan.s, *gluedRegions);
+  std::vector<LevelPass<ChartT>> passes;
+  passes.reserve(plans.size());
+  // The regions' work items in one loop (first[k]: region k's first), on the team when their
+  // work together pays for it: a corner of the octahedral chart is four images a level, and
+  // one team for them waits once for its last item instead of four times.
+  std::vector<std::size_t> first{0};
+  double work = 0;
+  for (const detail::LevelPlan& plan : plans) {
+    passes.emplace_back(chart, plan, vertices, kernels, codes, level, lattice);
+    first.push_back(first.back() + plan.items);
+    work += plan.work;
+  }
+  const std::size_t items = first.back();
+  auto run = [&](std::size_t i) {
+    const std::size_t k =
+        std::size_t(std::upper_bound(first.begin(), first.end(), i) - first.begin()) - 1;
+    return passes[k].item(i - first[k]);
+  };
+  std::size_t count = 0;
+  if (work > detail::LevelPlan::kParallelWork) {
+#pragma omp parallel for schedule(dynamic, s <= kExactMaxHalfSize ? 1 : 4) reduction(+ : count)
+    for (std::size_t i = 0; i < items; ++i) count += run(i);
+  } else {
+    // Not through the OpenMP runtime: a region with if (false) still sets up a team of one
+    // and wakes the pool's sleeping threads (futex calls, about 2 us a level: a 150 km edit
+    // at 2049^2, whose levels all stay on this thread, took 0.138 ms with it, 0.098 without).
+    for (std::size_t i = 0; i < items; ++i) count += run(i);
+  }
+  for (std::size_t k = 0; k < plans.size(); ++k) count += passes[k].seamTwins(g, regions[k]);
+  lastUpdateCount_ += count;
+  if (gluedRegions && !levelIsCentre(level))
+    lastUpdateCount_ += gluedTwins(chart, vertices, codes, lattice, s, *gluedRegions);
 }
 
 namespace {
@@ -457,8 +474,7 @@ void ErrorBounds::build(const core::Chart& chart, std::span<const float> heights
   const std::vector<GridRegion> all{GridRegion::all(g)};
   const std::vector<GridRegion>* glued = chart.gluesSidesBeyondSeam() ? &all : nullptr;
   dispatchChart(chart, [&](const auto& c) {
-    for (int level = 0; level < levelCount(g); ++level)
-      computeLevel(c, heights, level, GridRegion::all(g), glued);
+    for (int level = 0; level < levelCount(g); ++level) computeLevel(c, heights, level, all, glued);
   });
 }
 
@@ -488,7 +504,9 @@ void ErrorBounds::update(const core::Chart& chart, std::span<const float> height
       // A vertex of this level reads heights and children within its half-size s.
       for (GridRegion& r : regions) r = r.grown(levelHalfSize(l), g, c.wrapsU());
       if (!glued) {
-        for (const GridRegion& r : regions) computeLevel(c, heights, l, r, nullptr, kernelBoxes);
+        // One region at a time: dirty regions may overlap (two passes may not write one vertex).
+        for (const GridRegion& r : regions)
+          computeLevel(c, heights, l, std::span<const GridRegion>(&r, 1), nullptr, kernelBoxes);
         continue;
       }
       // Where a region reaches a glued side, the grid beyond it changed too: the region's
@@ -500,10 +518,8 @@ void ErrorBounds::update(const core::Chart& chart, std::span<const float> height
         const std::vector<GridRegion> images = gluedImages(c, r, false);
         level.insert(level.end(), images.begin(), images.end());
       }
-      mergeBoxes(level);
-      for (std::size_t k = 0; k < level.size(); ++k)
-        computeLevel(c, heights, l, level[k], k + 1 == level.size() ? &level : nullptr,
-                     kernelBoxes);
+      mergeBoxes(level);  // disjoint: their passes may run together
+      computeLevel(c, heights, l, level, &level, kernelBoxes);
     }
   });
 }

@@ -122,13 +122,15 @@ class ErrorBounds {
   std::size_t lastUpdateVertexCount() const { return lastUpdateCount_; }
 
  private:
-  // `gluedRegions`: on a chart that glues its sides beyond a u seam (core::Chart::
+  // One level's vertices in `regions`, which must not overlap (their rows run on the team
+  // together). `gluedRegions`: on a chart that glues its sides beyond a u seam (core::Chart::
   // gluesSidesBeyondSeam), the level's regions whose side vertices combine with their twins
-  // after the region's rows (null: none). `boxes`: positions computed ahead, read instead of
+  // after the regions' rows (null: none). `boxes`: positions computed ahead, read instead of
   // computing them (null: none).
   template <class ChartT>
   void computeLevel(const ChartT& chart, std::span<const float> heights, int level,
-                    const GridRegion& region, const std::vector<GridRegion>* gluedRegions = nullptr,
+                    std::span<const GridRegion> regions,
+                    const std::vector<GridRegion>* gluedRegions = nullptr,
                     const detail::PositionBoxes* boxes = nullptr);
 
   ErrorRule rule_ = ErrorRule::kHybridExact;

@@ -1,8 +1,7 @@
 #pragma once
 // Which vertices of one level of ErrorBounds a region holds, and how they are shared among
 // threads (error_bounds.cpp includes this; nothing else should): the level's rows inside the
-// region, its column ranges (two across the seam), bands of rows as work items, and whether the
-// work is worth waking the team.
+// region, its column ranges (two across the seam), bands of rows as work items, and their work.
 #include <algorithm>
 #include <array>
 #include <cstddef>
@@ -21,6 +20,13 @@ struct LevelPlan {
   // that neighbouring rows share the rows of positions they read (BoundKernels::forgetRows at
   // the start of an item: nothing is shared across items, whose order is the scheduler's).
   static constexpr std::size_t kBand = 8;
+  // The work (vertices, all of a level's regions together) from which the level goes to the
+  // team. Small regions (a typical edit near the fine levels) stay on this thread: waking the
+  // team costs more than the work, and much more when the machine is busy. About 2,000
+  // vertices (0.1-0.2 ms of work) pays: at 20,000 the pole's level 6 (17,000 vertices, 1.7 ms)
+  // and most levels of a 600 km edit elsewhere ran on one thread (bench deform: 300 km polar
+  // cap 19.5-21.5 -> 17.5-20.2 ms, latitude 30 / 600 km 6.6-7.7 -> 5.2-6.0 ms).
+  static constexpr double kParallelWork = 2000.0;
 
   LevelPlan(const core::GridSize& g, int level, const GridRegion& region)
       : m(g.m()),
@@ -36,17 +42,10 @@ struct LevelPlan {
     }
     // A region across the seam is two column ranges; one loop over (row, range) items keeps
     // both cores on one team instead of two fork-joins per level, each with half the work.
-    double work = 0;
     region.forEachColumnRange(g, [&](int uA, int uB) {
       ranges[rangeCount++] = {uA, uB};
       work += double(rows.size()) * double(uB - uA + 1) / double(2 * s);
     });
-    // Small regions (a typical edit near the fine levels) stay on this thread: waking the team
-    // costs more than the work, and much more when the machine is busy. About 2,000 vertices
-    // (0.1-0.2 ms of work) pays: at 20,000 the pole's level 6 (17,000 vertices, 1.7 ms) and
-    // most levels of a 600 km edit elsewhere ran on one thread (bench deform: 300 km polar cap
-    // 19.5-21.5 -> 17.5-20.2 ms, latitude 30 / 600 km 6.6-7.7 -> 5.2-6.0 ms).
-    parallel = work > 2000.0;
     items = (rows.size() + band - 1) / band * rangeCount;
   }
 
@@ -75,7 +74,7 @@ struct LevelPlan {
   std::array<std::pair<int, int>, 2> ranges{};
   std::size_t rangeCount = 0;
   std::size_t items = 0;
-  bool parallel = false;
+  double work = 0;  // about the vertices computed
 };
 
 }  // namespace ps::terrain::detail
