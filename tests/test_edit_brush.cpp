@@ -2,8 +2,11 @@
 
 #include <cmath>
 #include <random>
+#include <vector>
 
+#include "core/cylinder_chart.hpp"
 #include "core/input_error.hpp"
+#include "core/torus_chart.hpp"
 #include "edit/brush.hpp"
 #include "edit/edit_pipeline.hpp"
 #include "test_edit_util.hpp"
@@ -210,6 +213,64 @@ TEST(EditBrush, GenericChartPathAgreesWithTheLatLongPath) {
     ASSERT_NEAR(a.heights()[k], b.heights()[k], 1e-2) << k;
   EXPECT_TRUE(edittest::consistentHeights(b));
   EXPECT_TRUE(edittest::boundsEqualFullRebuild(b));
+}
+
+// The pipeline hands the brush the distances region growing computed: they are the field's own
+// bits, so the brush leaves the same heights as when it computes every distance again, on a
+// chart with folds (octahedral), with a seam glued beyond it (torus), with rims (cylinder) and
+// with a seam and pole rows (lat-long through the generic path); and they hold every vertex of
+// the region.
+TEST(EditBrush, RegionGrowingsDistancesAreTheOnesTheBrushWouldCompute) {
+  const std::vector<std::shared_ptr<const core::Chart>> charts{
+      testkit::octahedralChart(7),
+      std::make_shared<core::TorusChart>(core::GridSize(7), 4.5e6, 1.8e6),
+      std::make_shared<core::CylinderChart>(core::GridSize(7), 3e6, 6e6),
+      std::make_shared<edittest::OpaqueChart>(testkit::earthChart(7))};
+  std::mt19937 rng(8);
+  for (const auto& chart : charts) {
+    const auto heights = testkit::bumpyHeights(*chart, 5, 2000.0);
+    terrain::Terrain piped(chart, heights), computed(chart, heights);
+    edit::EditPipeline pipe(piped);
+    edit::DistanceField field(chart);
+    edit::RegionGrower grower;
+    edit::Region region;
+    const double size = chart->radius() > 0 ? chart->radius() : 3e6;
+    for (int i = 0; i < 16; ++i) {
+      const core::GridPoint c = edittest::randomCentre(rng, chart->grid().m());
+      BrushSettings s;
+      s.radius = size * (0.02 + 0.3 * (i % 5) / 4.0);
+      s.strength = 900;
+      s.mode = (i & 1) ? BrushMode::kRaise : BrushMode::kLower;
+      const GaussianBrush brush(s);
+      const Eigen::Vector3d p = chart->position(c.u, c.v, 0.0);
+      const auto rep = pipe.apply(brush, {p, 0});
+      // The same stamp, every distance computed by the field.
+      field.setCentre(rep.control);
+      grower.grow(field, s.radius, region);
+      float limit =
+          float(computed.heightLimit());  // the largest float within it, as the pipeline's
+      if (double(limit) > computed.heightLimit()) limit = std::nextafter(limit, 0.0f);
+      const edit::ToolContext ctx{computed, field, region, rep.control, {p, 0}, limit};
+      ASSERT_EQ(ctx.distances, nullptr);
+      auto h = computed.mutableHeights();
+      const terrain::GridRegion dirty = brush.apply(ctx, h);
+      ASSERT_TRUE(dirty.uBegin == rep.dirty.uBegin && dirty.uEnd == rep.dirty.uEnd &&
+                  dirty.vBegin == rep.dirty.vBegin && dirty.vEnd == rep.dirty.vEnd)
+          << chart->name() << ", stamp " << i;
+      for (std::size_t k = 0; k < heights.size(); ++k)
+        ASSERT_EQ(piped.heights()[k], computed.heights()[k]) << chart->name() << ", stamp " << i;
+      // Every vertex of the region has its distance kept, bit for bit the field's.
+      const edit::RowDistanceBlocks* kept = grower.distances();
+      ASSERT_NE(kept, nullptr);
+      std::vector<double> got, want;
+      region.forEachSpan([&](int v, int a, int b) {
+        got.resize(std::size_t(b - a + 1)), want.resize(got.size());
+        ASSERT_TRUE(kept->copy(v, a, b, got.data())) << chart->name() << ", row " << v;
+        field.rowDistances2(v, a, b, want.data());
+        ASSERT_EQ(got, want) << chart->name() << ", row " << v;
+      });
+    }
+  }
 }
 
 TEST(EditBrush, ExtremeButValidSettingsNeverProduceNaN) {

@@ -197,14 +197,16 @@ terrain::GridRegion applyRows(const ToolContext& ctx, const GaussianProfile& pro
       for (int v = v0; v <= v1; ++v) applyRow(v, weight);
     }
   } else {
-    // Any chart: one distance per vertex, a span's at once (the chart's row positions).
+    // Any chart: one distance per vertex, a span's at once: region growing's where it kept
+    // them (the same bits), else from the chart's row positions.
     auto applyRow = [&](int v) {
       thread_local std::vector<double> d2;
       float* row = h + std::size_t(v) * side;
       bool changed = false;
       for (const Span& s : region.row(v)) {
         d2.resize(std::size_t(s.size()));
-        field.rowDistances2(v, s.uBegin, s.uEnd, d2.data());
+        if (!ctx.distances || !ctx.distances->copy(v, s.uBegin, s.uEnd, d2.data()))
+          field.rowDistances2(v, s.uBegin, s.uEnd, d2.data());
         for (int u = s.uBegin; u <= s.uEnd; ++u) {
           const double w = amount * profile.fromDistance2(d2[std::size_t(u - s.uBegin)]);
           changed |= store(row[u], op(row[u], w));

@@ -93,7 +93,8 @@ EditReport EditPipeline::stamp(const Tool& tool, const ToolInput& input) {
   grower_.grow(field_, tool.radius(), region_);
   const auto t1 = Clock::now();
 
-  const ToolContext ctx{terrain_, field_, region_, field_.centre(), input, heightLimit_};
+  const RowDistanceBlocks* distances = grower_.distances();
+  const ToolContext ctx{terrain_, field_, region_, field_.centre(), input, heightLimit_, distances};
   auto heights = terrain_.mutableHeights();
   const Region* footprint = nullptr;
   if (undoEnabled_) {

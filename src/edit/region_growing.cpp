@@ -166,11 +166,13 @@ struct GenericOracle {
 // ---------------------------------------------------------------------------------------------
 // RowDistanceBlocks
 
-void RowDistanceBlocks::reset(int rows, int cols) {
+void RowDistanceBlocks::reset(int rows, int cols, bool wraps, bool poles) {
   for (const int v : rows_) slots_[std::size_t(v)].clear();
   rows_.clear();
   if (slots_.size() != std::size_t(rows)) slots_.assign(std::size_t(rows), {});
   cols_ = cols;
+  wraps_ = wraps;
+  poles_ = poles;
   values_.clear();
   computed_ = 0;
 }
@@ -182,6 +184,21 @@ std::int32_t RowDistanceBlocks::compute(const DistanceField& f, int v, int block
   f.rowDistances2(v, a, b, values_.data() + values_.size() - kBlock);
   computed_ += std::size_t(b - a + 1);
   return slot;
+}
+
+bool RowDistanceBlocks::copy(int v, int uFirst, int uLast, double* out) const {
+  if (v < 0 || std::size_t(v) >= slots_.size()) return false;
+  const std::vector<std::int32_t>& slots = slots_[std::size_t(v)];
+  if (slots.empty()) return false;
+  const int m = int(slots_.size()) - 1;
+  const bool pole = poles_ && (v == 0 || v == m);
+  for (int u = uFirst; u <= uLast; ++u) {
+    const int c = pole || (wraps_ && u == m) ? 0 : u;
+    const std::int32_t slot = slots[std::size_t(c / kBlock)];
+    if (slot < 0) return false;
+    out[u - uFirst] = values_[std::size_t(slot) * kBlock + std::size_t(c % kBlock)];
+  }
+  return true;
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -410,6 +427,7 @@ void RegionGrower::grow(const DistanceField& field, double radius, Region& out) 
   touched_.clear();
   evaluations_ = 0;
   const core::GridPoint seed = field.centre();
+  latLongGrow_ = field.latLong() != nullptr;
   if (field.latLong()) {
     halfWidth_.assign(std::size_t(m) + 1, -2);
     const LatLongOracle oracle{field, r2, m, halfWidth_, evaluations_};
@@ -417,7 +435,7 @@ void RegionGrower::grow(const DistanceField& field, double radius, Region& out) 
     emit(g, true, true, true, seed.u, out);
   } else {
     const int cols = wraps ? m : m + 1;
-    blocks_.reset(m + 1, cols);
+    blocks_.reset(m + 1, cols, wraps, poles);
     const GenericOracle oracle{field, r2, m, cols, wraps, poles, blocks_};
     fill(oracle, g, wraps, seed);
     const bool glued = chart.gluesSidesBeyondSeam();

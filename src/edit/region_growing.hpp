@@ -97,8 +97,9 @@ class Region {
 class RowDistanceBlocks {
  public:
   static constexpr int kBlock = 64;
-  // Forgets every block; rows 0 .. rows - 1, columns 0 .. cols - 1.
-  void reset(int rows, int cols);
+  // Forgets every block; rows 0 .. rows - 1, columns 0 .. cols - 1 (on a u seam, cols = m and
+  // grid column m is column 0; with pole rows, a pole row's every vertex is its column 0).
+  void reset(int rows, int cols, bool wraps, bool poles);
   double at(const DistanceField& f, int v, int c) {
     std::vector<std::int32_t>& slots = slots_[std::size_t(v)];
     if (slots.empty()) {
@@ -111,11 +112,16 @@ class RowDistanceBlocks {
   }
   // Distances computed since reset().
   std::size_t computed() const { return computed_; }
+  // Row v's distances for grid columns uFirst .. uLast into out[u - uFirst], bit for bit
+  // DistanceField::rowDistances2's, when every block holding them was computed since reset()
+  // (true); false otherwise (out partly written). Safe from several threads at once.
+  bool copy(int v, int uFirst, int uLast, double* out) const;
 
  private:
   std::int32_t compute(const DistanceField& f, int v, int block);
 
   int cols_ = 0;
+  bool wraps_ = false, poles_ = false;
   std::vector<std::vector<std::int32_t>> slots_;  // per row, per block: its index in values_
   std::vector<int> rows_;                         // the rows with slots
   std::vector<double> values_;
@@ -150,6 +156,10 @@ class RegionGrower {
   // Predicate evaluations of the last grow() (work measure for tests and benchmarks; on charts
   // other than lat-long the distances computed, whole blocks of a row).
   std::size_t lastEvaluations() const { return evaluations_; }
+  // The distances the last grow() computed (every vertex of its region's among them), for the
+  // tool that acts on the region; null after a grow on the lat-long chart (its distances are
+  // per row and column distance, as cheap to compute again).
+  const RowDistanceBlocks* distances() const { return latLongGrow_ ? nullptr : &blocks_; }
 
  private:
   template <class Oracle>
@@ -165,6 +175,7 @@ class RegionGrower {
   std::vector<int> halfWidth_;  // lat-long: per row, -2 = not computed yet
   std::vector<Span> scratch_;
   RowDistanceBlocks blocks_;  // other charts
+  bool latLongGrow_ = true;
   std::size_t evaluations_ = 0;
 };
 

@@ -26,6 +26,9 @@ struct ToolContext {
   ToolInput input;
   float heightLimit;  // largest float <= terrain.heightLimit(): results must stay within
                       // +-heightLimit
+  // The distances region growing computed for `region` (null: none kept; compute them with
+  // `field`): a tool reads a row's from here instead of computing them again.
+  const RowDistanceBlocks* distances = nullptr;
 };
 
 // An edit is a tool acting on a region and producing a dirty region. The pipeline finds the
