@@ -126,13 +126,13 @@ class PlanetRenderer {
                  const terrain::Camera& camera, const Eigen::Matrix4d& clip,
                  const Eigen::Vector3f& colour, bool depthTest);
   cv::Mat readBack() const;
+  // The cursor (planet_renderer_cursor.cpp): on a sphere a ring at geodesic distance r_d, a
+  // cross and the force arrow; else drawSurfaceCursor's.
+  void drawCursor(const terrain::Terrain& planet, const Cursor& cursor,
+                  const terrain::Camera& camera, const Eigen::Matrix4d& clip);
   // The cursor on a surface that is no sphere (a torus, a cylinder): a ring of the tool's
   // radius about the control vertex in its tangent plane and a cross, each point laid back onto
   // the surface through the chart's inverse and lifted as a sphere's ring is.
-  // The cursor (planet_renderer_cursor.cpp): on a sphere a ring at geodesic distance r_d, else
-  // drawSurfaceCursor's ring laid on the surface.
-  void drawCursor(const terrain::Terrain& planet, const Cursor& cursor,
-                  const terrain::Camera& camera, const Eigen::Matrix4d& clip);
   void drawSurfaceCursor(const terrain::Terrain& planet, const Cursor& cursor,
                          const terrain::Camera& camera, const Eigen::Matrix4d& clip);
   // The board shadow and the atmosphere rim, when `style` asks for them (after the background,
