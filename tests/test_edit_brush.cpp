@@ -247,10 +247,8 @@ TEST(EditBrush, RegionGrowingsDistancesAreTheOnesTheBrushWouldCompute) {
       // The same stamp, every distance computed by the field.
       field.setCentre(rep.control);
       grower.grow(field, s.radius, region);
-      float limit =
-          float(computed.heightLimit());  // the largest float within it, as the pipeline's
-      if (double(limit) > computed.heightLimit()) limit = std::nextafter(limit, 0.0f);
-      const edit::ToolContext ctx{computed, field, region, rep.control, {p, 0}, limit};
+      const edit::ToolContext ctx{computed,    field,  region,
+                                  rep.control, {p, 0}, edit::floatAtMost(computed.heightLimit())};
       ASSERT_EQ(ctx.distances, nullptr);
       auto h = computed.mutableHeights();
       const terrain::GridRegion dirty = brush.apply(ctx, h);
