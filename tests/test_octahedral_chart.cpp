@@ -217,6 +217,64 @@ TEST(OctahedralChart, LocalBoundUpdatesEqualAFullRebuildBitForBit) {
   }
 }
 
+// An edit whose changed vertices fill a box's octagon (terrain::CutRegion: a triangle in a
+// corner of the grid, as a disc about the south pole is, a diamond about the centre, as about
+// the north pole, random octagons anywhere): the bounds updated over the cut regions equal a
+// full rebuild bit for bit, and the triangle and the diamond cost less than their boxes.
+TEST(OctahedralChart, CutBoundUpdatesEqualAFullRebuildAndSkipTheBoxsCorners) {
+  auto t = testkit::bumpyOctahedralTerrain(8, 5, 4000.0);
+  auto boxed = testkit::bumpyOctahedralTerrain(8, 5, 4000.0);
+  const auto g = t.grid();
+  const int m = g.m();
+  std::mt19937 rng(23);
+  for (int trial = 0; trial < 24; ++trial) {
+    const int w = 4 + int(rng() % 40);
+    terrain::CutRegion edit;
+    if (trial % 3 == 0) {  // the corner (0, 0): u + v <= w
+      edit.box = {0, w, 0, w};
+      edit.cut.sumMax = w;
+    } else if (trial % 3 == 1) {  // a diamond about the centre: |u - m/2| + |v - m/2| <= w
+      edit.box = {m / 2 - w, m / 2 + w, m / 2 - w, m / 2 + w};
+      edit.cut = {m - w, m + w, -w, w};
+    } else {  // any octagon, sides and corners included
+      const int uc = int(rng() % std::uint32_t(m + 1)), vc = int(rng() % std::uint32_t(m + 1));
+      edit.box = {std::max(0, uc - w), std::min(m, uc + w), std::max(0, vc - w),
+                  std::min(m, vc + w)};
+      const int a = int(rng() % std::uint32_t(2 * w + 1)),
+                b = int(rng() % std::uint32_t(2 * w + 1));
+      edit.cut = {uc + vc - a, uc + vc + int(rng() % 8), uc - vc - b, uc - vc + int(rng() % 8)};
+    }
+    // The changed vertices: the octagon, and their twins across the folds.
+    auto h = t.mutableHeights();
+    auto hb = boxed.mutableHeights();
+    // Random per vertex: a bump by one value would leave many diamonds' shapes as they were.
+    std::uniform_real_distribution<float> bump(-3000.0f, 3000.0f);
+    int changed = 0;
+    for (int v = edit.box.vBegin; v <= edit.box.vEnd; ++v)
+      for (int u = std::max(edit.box.uBegin, edit.cut.firstColumn(v));
+           u <= std::min(edit.box.uEnd, edit.cut.lastColumn(v)); ++u) {
+        const float x = bump(rng);
+        edit::applyToVertex(t.chart(), h, u, v, h[g.index(u, v)] + x);
+        edit::applyToVertex(boxed.chart(), hb, u, v, hb[g.index(u, v)] + x);
+        ++changed;
+      }
+    if (changed == 0) continue;
+    const std::vector<terrain::CutRegion> images = terrain::gluedImages(t.chart(), edit, false);
+    t.commitEdit(images);
+    boxed.commitEdit(edit.box);
+    terrain::ErrorBounds full;
+    full.build(t.chart(), t.heights(), terrain::ErrorRule::kHybridExact);
+    ASSERT_EQ(full.errorCodes(), t.bounds().errorCodes()) << "trial " << trial;
+    ASSERT_EQ(full.radiusCodes(), t.bounds().radiusCodes()) << "trial " << trial;
+    ASSERT_TRUE(full.lattice() == t.bounds().lattice()) << "trial " << trial;
+    if (trial % 3 != 2 && w >= 16) {  // (the levels' growth fills small octagons' boxes)
+      EXPECT_LT(double(t.bounds().lastUpdateVertexCount()),
+                0.8 * double(boxed.bounds().lastUpdateVertexCount()))
+          << "trial " << trial << " w " << w;
+    }
+  }
+}
+
 // Views over the north pole, the south pole (a corner of the grid), a side's fold and a crease:
 // the tessellation is crack-free across every fold and its measured screen error is never above
 // dist_max.

@@ -148,7 +148,9 @@ class Chart {
   // in one part of the grid, met across a glued side or a midline, lies there inside a mirror
   // image of the centre's part (the edit's dirty box, edit::RegionGrower). Without
   // acrossMidlines (the error bounds, level by level) only the topology is used.
-  int gluedImages(const GridBox& box, bool acrossMidlines, GridBox out[4]) const {
+  // `flipsOut` (when given) receives each image's flips.
+  int gluedImages(const GridBox& box, bool acrossMidlines, GridBox out[4],
+                  Flips* flipsOut = nullptr) const {
     if (box.uBegin > box.uEnd || box.vBegin > box.vEnd) return 0;
     const int m = grid_.m();
     const Gluing gl = gluing();
@@ -162,10 +164,16 @@ class Chart {
         f.v && ((gl.uSides == SideGluing::kMirror && reachesU) ||
                 (gl.vSides == SideGluing::kSeam && reachesV) || (acrossMidlines && vMid));
     int n = 0;
-    out[n++] = box;
-    if (flipU) out[n++] = {m - box.uEnd, m - box.uBegin, box.vBegin, box.vEnd};
-    if (flipV) out[n++] = {box.uBegin, box.uEnd, m - box.vEnd, m - box.vBegin};
-    if (flipU && flipV) out[n++] = {m - box.uEnd, m - box.uBegin, m - box.vEnd, m - box.vBegin};
+    auto image = [&](bool u, bool v) {
+      out[n] = {u ? m - box.uEnd : box.uBegin, u ? m - box.uBegin : box.uEnd,
+                v ? m - box.vEnd : box.vBegin, v ? m - box.vBegin : box.vEnd};
+      if (flipsOut) flipsOut[n] = {u, v};
+      ++n;
+    };
+    image(false, false);
+    if (flipU) image(true, false);
+    if (flipV) image(false, true);
+    if (flipU && flipV) image(true, true);
     return n;
   }
   // The grid vertex at grid position (u, v) when the grid is continued across its sides, for

@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstring>
+#include <vector>
 
 #include "core/input_error.hpp"
 #include "edit/brush.hpp"
@@ -17,6 +18,34 @@ namespace {
 using Clock = std::chrono::steady_clock;
 double ms(Clock::time_point a, Clock::time_point b) {
   return std::chrono::duration<double, std::milli>(b - a).count();
+}
+
+// The dirty box's images across glued sides (terrain::gluedImages), each cut to the diagonals
+// around the footprint's vertices inside it (terrain::Diagonals): every vertex apply() changed
+// is in the footprint and in one of the images, so in that image's cut. On the octahedral
+// chart a disc about a pole is a triangle in each image, or a diamond, half its box. Open cuts
+// without a footprint, and on charts with a u seam (their columns wrap).
+std::vector<terrain::CutRegion> cutImages(const core::Chart& chart,
+                                          const terrain::GridRegion& dirty,
+                                          const Region* footprint) {
+  std::vector<terrain::CutRegion> out;
+  for (const terrain::GridRegion& box : terrain::gluedImages(chart, dirty)) {
+    terrain::Diagonals cut;
+    if (footprint && !chart.wrapsU()) {
+      cut = terrain::Diagonals::nothing();
+      const int vLast = std::min(box.vEnd, footprint->vEnd());
+      for (int v = std::max(box.vBegin, footprint->vBegin()); v <= vLast; ++v) {
+        for (const Span& s : footprint->row(v)) {
+          const int a = std::max(s.uBegin, box.uBegin), b = std::min(s.uEnd, box.uEnd);
+          if (a > b) continue;
+          cut.add(a, v);
+          cut.add(b, v);
+        }
+      }
+    }
+    out.push_back({box, cut});
+  }
+  return out;
 }
 
 }  // namespace
@@ -113,7 +142,8 @@ EditReport EditPipeline::stamp(const Tool& tool, const ToolInput& input) {
   const auto t3 = Clock::now();
   if (undoEnabled_) journal_.recordStamp(*footprint, snapshot_, heights, g, dirty, chart.wrapsU());
   const auto t4 = Clock::now();
-  terrain_.commitEdit(dirty);
+  if (!footprint && tool.footprintIsRegion()) footprint = &region_;
+  terrain_.commitEdit(cutImages(chart, dirty, footprint));
   const auto t5 = Clock::now();
 
   rep.control = field_.centre();

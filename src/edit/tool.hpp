@@ -61,6 +61,9 @@ class Tool {
   // The vertices apply() may write; by default V_d. A tool reaching further returns a region it
   // owns (built in apply's preparation; the pipeline calls footprint() right before apply()).
   virtual const Region& footprint(const ToolContext& ctx) const { return ctx.region; }
+  // Whether footprint() is V_d (the default): the pipeline then reads V_d as the vertices an
+  // apply() changed, to cut the error bounds' update to them, without asking footprint().
+  virtual bool footprintIsRegion() const { return true; }
   // Called before a stroke's first stamp (and before a lone apply()): a tool that keeps state
   // between the stamps of a stroke (the TIN sand tool's region TIN) starts it afresh, so that a
   // stroke's result depends only on the heights at its start and its own samples (a journal or

@@ -100,6 +100,7 @@ class TinSandTool final : public edit::Tool {
   double radius() const override { return settings_.radius; }
   double spacing() const override { return settings_.spacing * settings_.radius; }
   const edit::Region& footprint(const edit::ToolContext& ctx) const override;
+  bool footprintIsRegion() const override { return false; }
   terrain::GridRegion apply(const edit::ToolContext& ctx, std::span<float> heights) const override;
   void beginStroke() const override { region_.reset(); }
 

@@ -114,12 +114,17 @@ class LevelPass {
   std::size_t band(std::size_t item) const {
     std::size_t count = 0;
     const std::size_t rowBegin = plan_.rowBegin(item), rowEnd = plan_.rowEnd(item);
-    const auto [uA, uB] = plan_.range(item);
+    const std::pair<int, int> range = plan_.range(item);
     std::array<Span, detail::LevelPlan::kBand> spans{};
     std::size_t longest = 0;
     if (plan_.kernelLevel) kernels_.forgetRows();
     for (std::size_t r = rowBegin; r < rowEnd; ++r) {
       const int v = plan_.rows[r];
+      const auto [uA, uB] = plan_.clip(v, range);
+      if (uA > uB) {
+        spans[r - rowBegin] = {1, 0};
+        continue;
+      }
       const int u = plan_.firstColumn(v, uA);
       if (plan_.kernelLevel && v >= plan_.s && v <= plan_.m - plan_.s) {
         spans[r - rowBegin] = kernelSpan(v, u, uB, count);
@@ -211,7 +216,7 @@ class LevelPass {
 template <class ChartT>
 std::size_t gluedTwins(const ChartT& chart, const detail::VertexBounds<ChartT>& vertices,
                        BoundCodes* codes, const LatticeCopy& lattice, int s,
-                       const std::vector<GridRegion>& regions) {
+                       const std::vector<CutRegion>& regions) {
   const core::GridSize g = chart.grid();
   const int m = g.m();
   const core::Gluing gl = chart.gluing();
@@ -221,8 +226,16 @@ std::size_t gluedTwins(const ChartT& chart, const detail::VertexBounds<ChartT>& 
   // The level's side vertices (k / s odd along the side) that a region reaches, each point once
   // (by its canonical vertex).
   std::vector<std::pair<int, int>> points;  // (v, u) of the canonical vertex
-  for (const GridRegion& r : regions) {
+  for (const auto& [r, cut] : regions) {
+    // The side's vertices from a to b within the region's cut: along a row v = fixed its
+    // columns, along a column u = fixed the rows where u + v and u - v are within the limits.
     auto add = [&](bool alongU, int fixed, int a, int b) {
+      if (alongU) {
+        a = std::max(a, cut.firstColumn(fixed)), b = std::min(b, cut.lastColumn(fixed));
+      } else {
+        a = std::max({a, cut.sumMin - fixed, fixed - cut.diffMax});
+        b = std::min({b, cut.sumMax - fixed, fixed - cut.diffMin});
+      }
       a = std::max(0, a), b = std::min(m, b);
       for (int k = ((a / s) | 1) * s; k <= b; k += 2 * s) {
         if (k <= 0 || k >= m) continue;
@@ -262,25 +275,27 @@ std::size_t gluedTwins(const ChartT& chart, const detail::VertexBounds<ChartT>& 
 
 namespace {
 
-// Sorts boxes and replaces overlapping or touching ones by the box around both, until none
-// overlap: one pass over their union instead of one per box (a corner's four images, grown
-// over the upper levels).
-void mergeBoxes(std::vector<GridRegion>& boxes) {
-  std::sort(boxes.begin(), boxes.end(), [](const GridRegion& a, const GridRegion& b) {
+// Sorts regions and replaces those whose boxes overlap or touch by the box around both, cut by
+// the hull of both cuts, until none overlap: one pass over their union instead of one per
+// region (a corner's four images, grown over the upper levels).
+void mergeBoxes(std::vector<CutRegion>& regions) {
+  std::sort(regions.begin(), regions.end(), [](const CutRegion& x, const CutRegion& y) {
+    const GridRegion &a = x.box, &b = y.box;
     return std::tie(a.vBegin, a.uBegin, a.vEnd, a.uEnd) <
            std::tie(b.vBegin, b.uBegin, b.vEnd, b.uEnd);
   });
   for (bool merged = true; merged;) {
     merged = false;
-    for (std::size_t i = 0; i < boxes.size() && !merged; ++i)
-      for (std::size_t j = i + 1; j < boxes.size() && !merged; ++j) {
-        const GridRegion &a = boxes[i], &b = boxes[j];
+    for (std::size_t i = 0; i < regions.size() && !merged; ++i)
+      for (std::size_t j = i + 1; j < regions.size() && !merged; ++j) {
+        const GridRegion &a = regions[i].box, &b = regions[j].box;
         if (a.uBegin > b.uEnd + 1 || b.uBegin > a.uEnd + 1 || a.vBegin > b.vEnd + 1 ||
             b.vBegin > a.vEnd + 1)
           continue;
-        boxes[i] = {std::min(a.uBegin, b.uBegin), std::max(a.uEnd, b.uEnd),
-                    std::min(a.vBegin, b.vBegin), std::max(a.vEnd, b.vEnd)};
-        boxes.erase(boxes.begin() + std::ptrdiff_t(j));
+        regions[i] = {{std::min(a.uBegin, b.uBegin), std::max(a.uEnd, b.uEnd),
+                       std::min(a.vBegin, b.vBegin), std::max(a.vEnd, b.vEnd)},
+                      regions[i].cut.hull(regions[j].cut)};
+        regions.erase(regions.begin() + std::ptrdiff_t(j));
         merged = true;
       }
   }
@@ -293,29 +308,25 @@ void mergeBoxes(std::vector<GridRegion>& boxes) {
 // computed as before. None for a larger edit (the buffer stays with the thread).
 template <class ChartT>
 detail::PositionBoxes positionBoxes(const ChartT& chart, std::span<const float> heights,
-                                    const std::vector<GridRegion>& dirty) {
+                                    const std::vector<CutRegion>& dirty) {
   constexpr std::size_t kMaxVertices = std::size_t(1) << 22;  // 96 MB of positions
   const core::GridSize g = chart.grid();
   int reach = ErrorBounds::kExactMaxHalfSize + 1;
   for (int l = 0; levelHalfSize(l) <= ErrorBounds::kExactMaxHalfSize; ++l)
     reach += levelHalfSize(l);
-  std::vector<GridRegion> areas;
-  for (const GridRegion& r : dirty) {
-    const GridRegion grown = r.grown(reach, g, false);
-    if (!chart.gluesSidesBeyondSeam()) {
-      areas.push_back(grown);
-      continue;
-    }
-    const std::vector<GridRegion> images = gluedImages(chart, grown, false);
+  std::vector<CutRegion> areas;
+  for (const CutRegion& r : dirty) {
+    const CutRegion grown{r.box.grown(reach, g, false), r.cut.grown(reach)};
+    const std::vector<CutRegion> images = gluedImages(chart, grown, false);
     areas.insert(areas.end(), images.begin(), images.end());
   }
   mergeBoxes(areas);
   std::size_t total = 0;
   std::vector<std::pair<std::size_t, int>> rows;  // (box, v)
   for (std::size_t b = 0; b < areas.size(); ++b) {
-    total += std::size_t(areas[b].uEnd - areas[b].uBegin + 1) *
-             std::size_t(areas[b].vEnd - areas[b].vBegin + 1);
-    for (int v = areas[b].vBegin; v <= areas[b].vEnd; ++v) rows.push_back({b, v});
+    const GridRegion& a = areas[b].box;
+    total += std::size_t(a.uEnd - a.uBegin + 1) * std::size_t(a.vEnd - a.vBegin + 1);
+    for (int v = a.vBegin; v <= a.vEnd; ++v) rows.push_back({b, v});
   }
   if (total > kMaxVertices) return {};
   thread_local std::vector<double> storage;
@@ -324,17 +335,21 @@ detail::PositionBoxes positionBoxes(const ChartT& chart, std::span<const float> 
   detail::PositionBoxes out;
   std::vector<std::size_t> offset;
   std::size_t at = 0;
-  for (const GridRegion& a : areas) {
-    out.boxes.push_back({a, x + at, x + total + at, x + 2 * total + at});
+  for (const auto& [a, cut] : areas) {
+    out.boxes.push_back({a, cut, x + at, x + total + at, x + 2 * total + at});
     offset.push_back(at);
     at += std::size_t(a.uEnd - a.uBegin + 1) * std::size_t(a.vEnd - a.vBegin + 1);
   }
+  // Each row within its box's cut: the rest of the box is never read (PositionBoxes::row).
   auto fill = [&](std::size_t i) {
     const auto [b, v] = rows[i];
-    const GridRegion& a = areas[b];
-    const std::size_t k =
-        offset[b] + std::size_t(v - a.vBegin) * std::size_t(a.uEnd - a.uBegin + 1);
-    chart.rowPositions(v, a.uBegin, a.uEnd, heights.data() + g.index(0, v),
+    const auto& [a, cut] = areas[b];
+    const int uA = std::max(a.uBegin, cut.firstColumn(v)), uB = std::min(a.uEnd, cut.lastColumn(v));
+    if (uA > uB) return;
+    const std::size_t k = offset[b] +
+                          std::size_t(v - a.vBegin) * std::size_t(a.uEnd - a.uBegin + 1) +
+                          std::size_t(uA - a.uBegin);
+    chart.rowPositions(v, uA, uB, heights.data() + g.index(0, v),
                        {x + k, x + total + k, x + 2 * total + k});
   };
   const std::size_t n = rows.size();
@@ -351,15 +366,15 @@ detail::PositionBoxes positionBoxes(const ChartT& chart, std::span<const float> 
 
 template <class ChartT>
 void ErrorBounds::computeLevel(const ChartT& chart, std::span<const float> heights, int level,
-                               std::span<const GridRegion> regions,
-                               const std::vector<GridRegion>* gluedRegions,
+                               std::span<const CutRegion> regions,
+                               const std::vector<CutRegion>* gluedRegions,
                                const detail::PositionBoxes* boxes) {
   static_assert(kExactMaxHalfSize < (1 << kLatticeShift),
                 "the row kernels' levels hold no lattice vertex: they do not copy to it");
   const core::GridSize g = chart.grid();
   std::vector<detail::LevelPlan> plans;
   plans.reserve(regions.size());
-  for (const GridRegion& r : regions) plans.emplace_back(g, level, r);
+  for (const CutRegion& r : regions) plans.emplace_back(g, level, r);
   BoundCodes* codes = codes_.data();
   const detail::VertexBounds<ChartT> vertices(chart, heights.data(), codes, level, rule_,
                                               hasRadii(), boxes);
@@ -396,7 +411,7 @@ void ErrorBounds::computeLevel(const ChartT& chart, std::span<const float> heigh
     // at 2049^2, whose levels all stay on this thread, took 0.138 ms with it, 0.098 without).
     for (std::size_t i = 0; i < items; ++i) count += run(i);
   }
-  for (std::size_t k = 0; k < plans.size(); ++k) count += passes[k].seamTwins(g, regions[k]);
+  for (std::size_t k = 0; k < plans.size(); ++k) count += passes[k].seamTwins(g, regions[k].box);
   lastUpdateCount_ += count;
   if (gluedRegions && !levelIsCentre(level))
     lastUpdateCount_ += gluedTwins(chart, vertices, codes, lattice, s, *gluedRegions);
@@ -471,8 +486,8 @@ void ErrorBounds::build(const core::Chart& chart, std::span<const float> heights
     lattice_ = Lattice{};
   }
   lastUpdateCount_ = 0;
-  const std::vector<GridRegion> all{GridRegion::all(g)};
-  const std::vector<GridRegion>* glued = chart.gluesSidesBeyondSeam() ? &all : nullptr;
+  const std::vector<CutRegion> all{{GridRegion::all(g), {}}};
+  const std::vector<CutRegion>* glued = chart.gluesSidesBeyondSeam() ? &all : nullptr;
   dispatchChart(chart, [&](const auto& c) {
     for (int level = 0; level < levelCount(g); ++level) computeLevel(c, heights, level, all, glued);
   });
@@ -485,11 +500,21 @@ void ErrorBounds::update(const core::Chart& chart, std::span<const float> height
 
 void ErrorBounds::update(const core::Chart& chart, std::span<const float> heights,
                          std::span<const GridRegion> dirty) {
+  std::vector<CutRegion> regions;
+  for (const GridRegion& r : dirty) regions.push_back({r, {}});
+  update(chart, heights, regions);
+}
+
+void ErrorBounds::update(const core::Chart& chart, std::span<const float> heights,
+                         std::span<const CutRegion> dirty) {
   const core::GridSize g = chart.grid();
   lastUpdateCount_ = 0;
-  std::vector<GridRegion> regions;
-  for (const GridRegion& r : dirty)
-    if (!r.empty()) regions.push_back(r);
+  std::vector<CutRegion> regions;
+  for (const CutRegion& r : dirty) {
+    if (r.box.empty() || r.cut.holdsNothing()) continue;
+    regions.push_back(r);
+    if (chart.wrapsU()) regions.back().cut = {};  // unwrapped columns: the cut would not fit
+  }
   if (regions.empty()) return;
   const bool glued = chart.gluesSidesBeyondSeam();
   dispatchChart(chart, [&](const auto& c) {
@@ -499,14 +524,17 @@ void ErrorBounds::update(const core::Chart& chart, std::span<const float> height
     if constexpr (std::is_same_v<std::decay_t<decltype(c)>, core::OctahedralChart>)
       boxes = positionBoxes(c, heights, regions);
     const detail::PositionBoxes* kernelBoxes = boxes.boxes.empty() ? nullptr : &boxes;
-    std::vector<GridRegion> level;
+    std::vector<CutRegion> level;
     for (int l = 0; l < levelCount(g); ++l) {
       // A vertex of this level reads heights and children within its half-size s.
-      for (GridRegion& r : regions) r = r.grown(levelHalfSize(l), g, c.wrapsU());
+      for (CutRegion& r : regions) {
+        r.box = r.box.grown(levelHalfSize(l), g, c.wrapsU());
+        r.cut = r.cut.grown(levelHalfSize(l));
+      }
       if (!glued) {
         // One region at a time: dirty regions may overlap (two passes may not write one vertex).
-        for (const GridRegion& r : regions)
-          computeLevel(c, heights, l, std::span<const GridRegion>(&r, 1), nullptr, kernelBoxes);
+        for (const CutRegion& r : regions)
+          computeLevel(c, heights, l, std::span<const CutRegion>(&r, 1), nullptr, kernelBoxes);
         continue;
       }
       // Where a region reaches a glued side, the grid beyond it changed too: the region's
@@ -514,8 +542,8 @@ void ErrorBounds::update(const core::Chart& chart, std::span<const float> height
       // torus's v -> m - v) are computed as well, and the touched sides' twins combined once,
       // after all of them.
       level.clear();
-      for (const GridRegion& r : regions) {
-        const std::vector<GridRegion> images = gluedImages(c, r, false);
+      for (const CutRegion& r : regions) {
+        const std::vector<CutRegion> images = gluedImages(c, r, false);
         level.insert(level.end(), images.begin(), images.end());
       }
       mergeBoxes(level);  // disjoint: their passes may run together

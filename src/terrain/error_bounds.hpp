@@ -80,6 +80,10 @@ class ErrorBounds {
   // box and its images, terrain::gluedImages).
   void update(const core::Chart& chart, std::span<const float> heights,
               std::span<const GridRegion> dirty);
+  // The same over rectangles with their corners cut (CutRegion: every changed height inside
+  // one of them). On a chart with a u seam the cuts are not used (its regions' columns wrap).
+  void update(const core::Chart& chart, std::span<const float> heights,
+              std::span<const CutRegion> dirty);
 
   ErrorRule rule() const { return rule_; }
   bool hasRadii() const { return content_ == BoundsContent::kErrorsAndRadii; }
@@ -129,8 +133,8 @@ class ErrorBounds {
   // computing them (null: none).
   template <class ChartT>
   void computeLevel(const ChartT& chart, std::span<const float> heights, int level,
-                    std::span<const GridRegion> regions,
-                    const std::vector<GridRegion>* gluedRegions = nullptr,
+                    std::span<const CutRegion> regions,
+                    const std::vector<CutRegion>* gluedRegions = nullptr,
                     const detail::PositionBoxes* boxes = nullptr);
 
   ErrorRule rule_ = ErrorRule::kHybridExact;

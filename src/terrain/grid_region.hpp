@@ -90,6 +90,50 @@ struct GridRegion {
   }
 };
 
+// Limits on u + v and u - v (inclusive) that cut the corners off a region's rectangle, which
+// then holds an octagon. An edit's disc is no rectangle where the grid folds along its
+// diagonals: on the octahedral chart a disc about a pole is a triangle in each of the grid's
+// corners, or a diamond about its centre, half of its box, and the error bounds above the box's
+// other half need no update (ErrorBounds::update; edit::EditPipeline sets them from the
+// footprint). Only on charts without a u seam, whose regions' columns are in the grid.
+struct Diagonals {
+  static constexpr int kOpen = 1 << 28;   // no limit; far beyond any grid and its growth
+  int sumMin = -kOpen, sumMax = kOpen;    // u + v
+  int diffMin = -kOpen, diffMax = kOpen;  // u - v
+
+  // Limits that hold no vertex, for add() to widen.
+  static Diagonals nothing() { return {kOpen, -kOpen, kOpen, -kOpen}; }
+  bool holdsNothing() const { return sumMin > sumMax || diffMin > diffMax; }
+  void add(int u, int v) {
+    sumMin = std::min(sumMin, u + v), sumMax = std::max(sumMax, u + v);
+    diffMin = std::min(diffMin, u - v), diffMax = std::max(diffMax, u - v);
+  }
+  // Chebyshev dilation by d: the diagonals move by 2d.
+  Diagonals grown(int d) const {
+    return {sumMin - 2 * d, sumMax + 2 * d, diffMin - 2 * d, diffMax + 2 * d};
+  }
+  Diagonals hull(const Diagonals& o) const {
+    return {std::min(sumMin, o.sumMin), std::max(sumMax, o.sumMax), std::min(diffMin, o.diffMin),
+            std::max(diffMax, o.diffMax)};
+  }
+  // The limits of the region's image under u -> m - u and/or v -> m - v (core::Chart::Flips).
+  Diagonals flipped(int m, bool flipU, bool flipV) const {
+    Diagonals d = *this;
+    if (flipU) d = {m - d.diffMax, m - d.diffMin, m - d.sumMax, m - d.sumMin};
+    if (flipV) d = {m + d.diffMin, m + d.diffMax, d.sumMin - m, d.sumMax - m};
+    return d;
+  }
+  // The columns of row v within the limits: [firstColumn, lastColumn], none when first > last.
+  int firstColumn(int v) const { return std::max(sumMin - v, diffMin + v); }
+  int lastColumn(int v) const { return std::min(sumMax - v, diffMax + v); }
+};
+
+// A rectangle with its corners cut by diagonals (open: the rectangle).
+struct CutRegion {
+  GridRegion box;
+  Diagonals cut;
+};
+
 // The region and its images across the chart's glued sides (core::Chart::gluedImages: mirrored
 // sides, a seam between the rows v = 0 and v = m): on the octahedral chart and the torus an
 // edit's dirty box stands for its images too, and the error bounds compute a level's regions'
@@ -104,6 +148,23 @@ inline std::vector<GridRegion> gluedImages(const core::Chart& chart, const GridR
   out.reserve(std::size_t(n));
   for (int k = 0; k < n; ++k)
     out.push_back({boxes[k].uBegin, boxes[k].uEnd, boxes[k].vBegin, boxes[k].vEnd});
+  return out;
+}
+
+// The same for a cut region: each image's diagonals flipped as its rectangle is.
+inline std::vector<CutRegion> gluedImages(const core::Chart& chart, const CutRegion& r,
+                                          bool acrossMidlines = true) {
+  if (r.box.empty()) return {};
+  if (!chart.gluesSidesBeyondSeam()) return {r};
+  core::GridBox boxes[4];
+  core::Chart::Flips flips[4];
+  const int n = chart.gluedImages({r.box.uBegin, r.box.uEnd, r.box.vBegin, r.box.vEnd},
+                                  acrossMidlines, boxes, flips);
+  std::vector<CutRegion> out;
+  out.reserve(std::size_t(n));
+  for (int k = 0; k < n; ++k)
+    out.push_back({{boxes[k].uBegin, boxes[k].uEnd, boxes[k].vBegin, boxes[k].vEnd},
+                   r.cut.flipped(chart.grid().m(), flips[k].u, flips[k].v)});
   return out;
 }
 

@@ -28,25 +28,36 @@ struct LevelPlan {
   // cap 19.5-21.5 -> 17.5-20.2 ms, latitude 30 / 600 km 6.6-7.7 -> 5.2-6.0 ms).
   static constexpr double kParallelWork = 2000.0;
 
-  LevelPlan(const core::GridSize& g, int level, const GridRegion& region)
+  LevelPlan(const core::GridSize& g, int level, const CutRegion& cutRegion)
       : m(g.m()),
         s(levelHalfSize(level)),
         centre(levelIsCentre(level)),
         kernelLevel(s <= ErrorBounds::kExactMaxHalfSize),
-        band(kernelLevel ? kBand : 1) {
+        band(kernelLevel ? kBand : 1),
+        cut(cutRegion.cut) {
+    const GridRegion& region = cutRegion.box;
     const int vFirst = ((region.vBegin + s - 1) / s) * s;
     for (int v = vFirst; v <= region.vEnd; v += s) {
       const bool vOdd = ((v / s) & 1) != 0;
       if (centre && !vOdd) continue;  // centre vertices sit on odd rows only
+      if (cut.firstColumn(v) > cut.lastColumn(v)) continue;
       rows.push_back(v);
     }
     // A region across the seam is two column ranges; one loop over (row, range) items keeps
     // both cores on one team instead of two fork-joins per level, each with half the work.
     region.forEachColumnRange(g, [&](int uA, int uB) {
       ranges[rangeCount++] = {uA, uB};
-      work += double(rows.size()) * double(uB - uA + 1) / double(2 * s);
+      for (int v : rows) {
+        const auto [a, b] = clip(v, {uA, uB});
+        if (a <= b) work += double(b - a + 1) / double(2 * s);
+      }
     });
     items = (rows.size() + band - 1) / band * rangeCount;
+  }
+
+  // A column range's part on row v within the cut (first > last: none).
+  std::pair<int, int> clip(int v, std::pair<int, int> range) const {
+    return {std::max(range.first, cut.firstColumn(v)), std::min(range.second, cut.lastColumn(v))};
   }
 
   // The first column of the level on row v at or after uA.
@@ -70,6 +81,7 @@ struct LevelPlan {
   bool centre;       // centre vertices (odd levels) or edge vertices
   bool kernelLevel;  // the row kernels take the rows' inner vertices
   std::size_t band;  // rows per work item
+  Diagonals cut;     // the region's corners cut off (open on charts with a u seam)
   std::vector<int> rows;
   std::array<std::pair<int, int>, 2> ranges{};
   std::size_t rangeCount = 0;

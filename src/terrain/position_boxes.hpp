@@ -1,6 +1,7 @@
 #pragma once
 // Positions computed ahead for ErrorBounds::update (error_bounds.cpp, bound_kernels.hpp and
 // exact_deviation.hpp include this; nothing else should).
+#include <algorithm>
 #include <cstddef>
 #include <vector>
 
@@ -17,6 +18,7 @@ namespace ps::terrain::detail {
 struct PositionBoxes {
   struct Box {
     GridRegion area;  // within the grid
+    Diagonals cut;    // the area's positions within the cut were computed (open: all)
     const double *x, *y, *z;
   };
   std::vector<Box> boxes;
@@ -28,7 +30,9 @@ struct PositionBoxes {
   Row row(int v, int uLo, int uHi) const {
     for (const Box& b : boxes) {
       const GridRegion& a = b.area;
-      if (v < a.vBegin || v > a.vEnd || uLo < a.uBegin || uHi > a.uEnd) continue;
+      if (v < a.vBegin || v > a.vEnd || uLo < std::max(a.uBegin, b.cut.firstColumn(v)) ||
+          uHi > std::min(a.uEnd, b.cut.lastColumn(v)))
+        continue;
       const std::size_t i = std::size_t(v - a.vBegin) * std::size_t(a.uEnd - a.uBegin + 1) +
                             std::size_t(uLo - a.uBegin);
       return {b.x + i, b.y + i, b.z + i};

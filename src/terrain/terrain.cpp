@@ -118,8 +118,17 @@ void Terrain::refreshHeightRange() {
 void Terrain::commitEdit(const GridRegion& changed) {
   if (changed.empty()) return;
   // On a chart that glues its sides beyond a u seam an edit's box stands for its images too.
-  const std::vector<GridRegion> regions = gluedImages(*chart_, changed);
-  bounds_.update(*chart_, heights_, regions);
+  std::vector<CutRegion> regions;
+  for (const GridRegion& r : gluedImages(*chart_, changed)) regions.push_back({r, {}});
+  commitEdit(regions);
+}
+
+void Terrain::commitEdit(std::span<const CutRegion> changed) {
+  std::vector<GridRegion> regions;
+  for (const CutRegion& r : changed)
+    if (!r.box.empty() && !r.cut.holdsNothing()) regions.push_back(r.box);
+  if (regions.empty()) return;
+  bounds_.update(*chart_, heights_, changed);
   // The global range only widens cheaply; a full scan is O(N^2) and the range is only used as
   // a conservative occluder, so track it incrementally over the changed region.
   for (const GridRegion& r : regions) {

@@ -38,6 +38,9 @@ class Terrain {
   // Editors keep seam twins and pole rows consistent (see edit::applyToVertex).
   std::span<float> mutableHeights() { return heights_; }
   void commitEdit(const GridRegion& changed);
+  // The same for an edit whose changed heights all lie in `changed`, images across glued sides
+  // already among them (gluedImages), each cut to its part of the edit (edit::EditPipeline).
+  void commitEdit(std::span<const CutRegion> changed);
   void rebuildBounds(ErrorRule rule, BoundsContent content = BoundsContent::kErrorsAndRadii);
 
   // Unique across all terrains of the process and renewed whenever heights or bounds change:
