@@ -120,8 +120,36 @@ struct GenericOracle {
 
   bool pole(int v) const { return poles && (v == 0 || v == m); }
   bool inside(int v, int c) const { return blocks.at(f, v, pole(v) ? 0 : c) <= r2; }
+  // Without a seam or pole rows a row's columns are scanned a block at a time, not looked up one
+  // by one (three look-ups a vertex were half of a fill's time on the octahedral chart).
+  bool blockScans() const { return !wraps && !poles; }
+  // The first column in [from, to) that is outside, else to.
+  int firstOutsideRightwards(int v, int from, int to) const {
+    for (int c = from; c < to;) {
+      const int b = c / RowDistanceBlocks::kBlock, begin = b * RowDistanceBlocks::kBlock;
+      const double* d = blocks.block(f, v, b);
+      for (const int end = std::min(to, begin + RowDistanceBlocks::kBlock); c < end; ++c)
+        if (!(d[c - begin] <= r2)) return c;
+    }
+    return to;
+  }
+  // The last column in [0, from] that is outside, else -1.
+  int firstOutsideLeftwards(int v, int from) const {
+    for (int c = from; c >= 0;) {
+      const int b = c / RowDistanceBlocks::kBlock, begin = b * RowDistanceBlocks::kBlock;
+      const double* d = blocks.block(f, v, b);
+      for (; c >= begin; --c)
+        if (!(d[c - begin] <= r2)) return c;
+    }
+    return -1;
+  }
   ColumnRun span(int v, int c) const {
     if (pole(v)) return {0, cols};
+    if (blockScans()) {
+      const int end = firstOutsideRightwards(v, c + 1, cols),
+                start = firstOutsideLeftwards(v, c - 1) + 1;
+      return {start, end - start};
+    }
     int start = c, len = 1;
     for (int next = c + 1;; ++next) {  // rightwards
       if (len >= cols) break;
@@ -149,6 +177,22 @@ struct GenericOracle {
              Push&& push) const {
     if (pole(v)) {
       if (found.empty() && inside(v, 0)) push(0);
+      return;
+    }
+    if (blockScans()) {
+      // As below: a covered run is passed at once, an inside run after its seed by a scan.
+      for (int c = range.start, end = range.start + range.len; c < end;) {
+        const auto run = std::find_if(found.begin(), found.end(),
+                                      [&](const ColumnRun& r) { return inRun(r, c, cols); });
+        if (run != found.end()) {
+          c = run->start + run->len;
+        } else if (!inside(v, c)) {
+          ++c;
+        } else {
+          push(c);
+          c = firstOutsideRightwards(v, c + 1, end);
+        }
+      }
       return;
     }
     for (int i = 0; i < range.len; ++i) {

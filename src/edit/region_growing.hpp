@@ -100,15 +100,18 @@ class RowDistanceBlocks {
   // Forgets every block; rows 0 .. rows - 1, columns 0 .. cols - 1 (on a u seam, cols = m and
   // grid column m is column 0; with pole rows, a pole row's every vertex is its column 0).
   void reset(int rows, int cols, bool wraps, bool poles);
-  double at(const DistanceField& f, int v, int c) {
+  double at(const DistanceField& f, int v, int c) { return block(f, v, c / kBlock)[c % kBlock]; }
+  // Row v's distances of columns block * kBlock .. + kBlock - 1, computed if not yet (valid
+  // until the next block is computed).
+  const double* block(const DistanceField& f, int v, int block) {
     std::vector<std::int32_t>& slots = slots_[std::size_t(v)];
     if (slots.empty()) {
       slots.assign(std::size_t((cols_ + kBlock - 1) / kBlock), -1);
       rows_.push_back(v);
     }
-    std::int32_t& slot = slots[std::size_t(c / kBlock)];
-    if (slot < 0) slot = compute(f, v, c / kBlock);
-    return values_[std::size_t(slot) * kBlock + std::size_t(c % kBlock)];
+    std::int32_t& slot = slots[std::size_t(block)];
+    if (slot < 0) slot = compute(f, v, block);
+    return values_.data() + std::size_t(slot) * kBlock;
   }
   // Distances computed since reset().
   std::size_t computed() const { return computed_; }
