@@ -226,7 +226,10 @@ std::size_t gluedTwins(const ChartT& chart, const detail::VertexBounds<ChartT>& 
   // The level's side vertices (k / s odd along the side) that a region reaches, each point once
   // (by its canonical vertex).
   std::vector<std::pair<int, int>> points;  // (v, u) of the canonical vertex
-  for (const auto& [r, cut] : regions) {
+  for (const CutRegion& region : regions) {
+    // (Named, not bound: clang 14 cannot capture structured bindings.)
+    const GridRegion& r = region.box;
+    const Diagonals& cut = region.cut;
     // The side's vertices from a to b within the region's cut: along a row v = fixed its
     // columns, along a column u = fixed the rows where u + v and u - v are within the limits.
     auto add = [&](bool alongU, int fixed, int a, int b) {

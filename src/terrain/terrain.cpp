@@ -131,10 +131,18 @@ void Terrain::commitEdit(std::span<const CutRegion> changed) {
   bounds_.update(*chart_, heights_, changed);
   // The global range only widens cheaply; a full scan is O(N^2) and the range is only used as
   // a conservative occluder, so track it incrementally over the changed region.
-  for (const GridRegion& r : regions) {
+  for (const CutRegion& c : changed) {
+    // (Named, not bound: clang 14 cannot capture structured bindings.)
+    const GridRegion& r = c.box;
+    const Diagonals& cut = c.cut;
+    if (r.empty()) continue;
+    // (A cut's columns are in the grid: none on a chart with a u seam, whose columns wrap.)
+    const bool useCut = !chart_->wrapsU();
     r.forEachColumnRange(grid(), [&](int uA, int uB) {
       for (int v = r.vBegin; v <= r.vEnd; ++v) {
-        for (int u = uA; u <= uB; ++u) {
+        const int uFirst = useCut ? std::max(uA, cut.firstColumn(v)) : uA;
+        const int uLast = useCut ? std::min(uB, cut.lastColumn(v)) : uB;
+        for (int u = uFirst; u <= uLast; ++u) {
           const float x = heights_[grid().index(u, v)];
           minHeight_ = std::min(minHeight_, x);
           maxHeight_ = std::max(maxHeight_, x);
