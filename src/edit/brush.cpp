@@ -214,11 +214,18 @@ terrain::GridRegion applyRows(const ToolContext& ctx, const GaussianProfile& pro
       }
       reach[std::size_t(v - v0)] = changed ? 0 : -1;
     };
+    // Only the rows holding vertices: a region across a fold is two or four bands of rows far
+    // apart (the octahedral chart's south pole: rows near 0 and near m), and handing the empty
+    // rows between them to the team, two at a time, took a third of the Gaussian's time there.
+    std::vector<int> rows;
+    for (int v = v0; v <= v1; ++v)
+      if (!region.row(v).empty()) rows.push_back(v);
+    const int count = int(rows.size());
     if (parallel) {
 #pragma omp parallel for schedule(dynamic, 2)
-      for (int v = v0; v <= v1; ++v) applyRow(v);
+      for (int i = 0; i < count; ++i) applyRow(rows[std::size_t(i)]);
     } else {
-      for (int v = v0; v <= v1; ++v) applyRow(v);
+      for (int v : rows) applyRow(v);
     }
   }
   int first = -1, last = -1, kMax = -1;
