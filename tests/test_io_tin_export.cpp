@@ -8,8 +8,10 @@
 #include <opencv2/imgcodecs.hpp>
 #include <random>
 
+#include "core/cylinder_chart.hpp"
 #include "core/flat_chart.hpp"
 #include "core/input_error.hpp"
+#include "core/torus_chart.hpp"
 #include "fresh_dir.hpp"
 #include "io/export.hpp"
 #include "io/height_image.hpp"
@@ -17,6 +19,7 @@
 #include "io/tin_export.hpp"
 #include "test_terrains.hpp"
 #include "tin/tin_check.hpp"
+#include "tin/tin_mesher.hpp"
 #include "tin/triangle_error.hpp"
 
 using namespace ps;
@@ -158,6 +161,71 @@ TEST(TinExport, APlanetTinIsAClosedOutwardSphereWithinTheErrorOfEverySample) {
       worst = std::max(worst, distanceToMesh(p, m));
     }
   EXPECT_LE(worst, o.maxErrorM);
+}
+
+// Every chart's planet TIN is welded by the chart's topology (issue 28): a side vertex goes in
+// with its twins, and the weld joins the chart's canonical vertices. The octahedral chart's
+// folded sides and corners close into a sphere (Euler 2), the torus's two seams into a torus
+// (Euler 0), the cylinder's seam into a tube whose two ends are its only border (Euler 0);
+// every sample within the error, as exported. A quality TIN is refused on the glued charts.
+TEST(TinExport, EveryChartsPlanetTinIsWeldedByItsTopology) {
+  const fs::path dir = testkit::freshDir("tin_charts");
+  struct Case {
+    std::shared_ptr<const core::Chart> chart;
+    int euler;
+    bool openEnds;
+  };
+  const core::GridSize g(5);
+  const std::vector<Case> cases{
+      {testkit::octahedralChart(5), 2, false},
+      {testkit::octahedralChart(5, core::OctahedralChart::Mapping::kCentral), 2, false},
+      {std::make_shared<core::TorusChart>(g, 4.0e6, 1.5e6), 0, false},
+      {std::make_shared<core::CylinderChart>(g, 2.0e6, 8.0e6), 0, true}};
+  for (const Case& c : cases) {
+    const terrain::Terrain t(c.chart, testkit::bumpyHeights(*c.chart, 3, 30000.0));
+    const std::string name = c.chart->name();
+    io::savePlanet(t, dir / (name + ".planet"));
+    std::vector<std::string> notes;
+    io::TinExportOptions o;
+    o.maxErrorM = 5000.0;
+    const nlohmann::json s =
+        io::exportTinFromFile(dir / (name + ".planet"), io::ImportOptions{}, dir / (name + ".obj"),
+                              io::ExportFormat::kObj, o, notes);
+    EXPECT_LE(s["measured_error_m"].get<double>(), o.maxErrorM) << name;
+    const ObjMesh m = readObj(dir / (name + ".obj"));
+    const tin::MeshTopology top = tin::meshTopology(m.v.size(), m.f);
+    EXPECT_EQ(top.nonManifoldEdges, 0u) << name;
+    EXPECT_EQ(top.degenerate, 0u) << name;
+    EXPECT_EQ(top.euler(), c.euler) << name;
+    // The border: none, or the cylinder's ends (the TIN's edges along the rows v = 0 and m).
+    const tin::SampleField field = io::terrainSampleField(t);
+    tin::SampleField tolerant = field;
+    tolerant.uniformTolerance = 4000.0;
+    const tin::Tin tin = tin::buildTin(tolerant, {});
+    const tin::WeldedMesh welded = tin::weldTin(tolerant, tin);
+    const tin::MeshTopology weldedTop = tin::meshTopology(welded.vertices, welded.triangles);
+    std::size_t endEdges = 0;
+    const double last = t.grid().m();
+    for (const auto& tri : tin.triangles)
+      for (int k = 0; k < 3; ++k) {
+        const auto& a = tin.xy[tri[std::size_t(k)]];
+        const auto& b = tin.xy[tri[std::size_t((k + 1) % 3)]];
+        if ((a.y() == 0 && b.y() == 0) || (a.y() == last && b.y() == last)) ++endEdges;
+      }
+    EXPECT_EQ(weldedTop.borderEdges, c.openEnds ? endEdges : 0u) << name;
+    if (c.openEnds) {
+      EXPECT_GT(endEdges, 0u);
+      EXPECT_GT(top.borderEdges, 0u);
+    } else {
+      EXPECT_EQ(top.borderEdges, 0u) << name;
+    }
+    EXPECT_EQ(weldedTop.euler(), c.euler) << name;
+    tin::TinOptions quality;
+    quality.minAngleDeg = 20;
+    if (c.chart->gluesSidesBeyondSeam()) {
+      EXPECT_THROW(tin::buildTin(tolerant, quality), core::InputError) << name;
+    }
+  }
 }
 
 TEST(TinExport, APlanetRegionIsMeshedAloneWithinItsError) {

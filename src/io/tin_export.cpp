@@ -282,11 +282,23 @@ nlohmann::json exportTerrainTin(const terrain::Terrain& t, const std::filesystem
   if (field.metric == tin::ErrorMetric::kVertical) {
     area = field.dx * field.dy;
     maxCoordinate = std::max({field.dx * m, field.dy * m, hMax});
-  } else {
+  } else if (const double r = t.chart().radius(); r > 0) {
     // A lattice cell's area at the equator, where cells are largest.
-    const double r = t.chart().radius();
     area = (2 * std::numbers::pi * r / m) * (std::numbers::pi * r / m);
     maxCoordinate = r + hMax;
+  } else {
+    // No sphere (the torus, the cylinder): the largest cell and coordinate of a coarse
+    // lattice of the grid at height 0.
+    area = 0, maxCoordinate = 0;
+    const int step = std::max(1, m / 32);
+    for (int v = 0; v + 1 <= m; v += step)
+      for (int u = 0; u + 1 <= m; u += step) {
+        const Eigen::Vector3d p = t.chart().position(u, v, 0.0);
+        area = std::max(area, (t.chart().position(u + 1, v, 0.0) - p).norm() *
+                                  (t.chart().position(u, v + 1, 0.0) - p).norm());
+        maxCoordinate = std::max(maxCoordinate, p.norm());
+      }
+    maxCoordinate += hMax;
   }
   nlohmann::json summary = meshAndWrite(field, out, format, o, area, maxCoordinate);
   summary["error_metric"] = field.metric == tin::ErrorMetric::kVertical ? "vertical" : "3d";

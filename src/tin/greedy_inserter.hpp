@@ -146,8 +146,8 @@ class GreedyInserter {
   }
 
   void run() {
-    const int m = field_.width - 1;
-    const bool twins = field_.wrapsSeam();
+    const int m = field_.width - 1, n = field_.height - 1;
+    const bool twins = field_.wrapsSeam(), wholeChart = field_.wholeChart();
     while (!queue_.empty()) {
       const Entry e = queue_.top();
       queue_.pop();
@@ -158,7 +158,16 @@ class GreedyInserter {
       const int i = int(e.sample % std::uint64_t(field_.width));
       const int j = int(e.sample / std::uint64_t(field_.width));
       insert(i, j, f);
-      if (twins && (i == 0 || i == m)) insert(m - i, j, FaceHandle());
+      if (wholeChart && (i == 0 || i == m || j == 0 || j == n)) {
+        // A side's vertex with its twins (a seam's, a folded side's mirror, a corner's three):
+        // both sides then carry the same vertices, and the welded mesh is closed across them.
+        core::GridPoint twin[4];
+        const int count = field_.chart->twins(i, j, twin);
+        for (int k = 1; k < count; ++k)
+          if (twin[k].u != i || twin[k].v != j) insert(twin[k].u, twin[k].v, FaceHandle());
+      } else if (twins && (i == 0 || i == m)) {
+        insert(m - i, j, FaceHandle());
+      }
     }
   }
 

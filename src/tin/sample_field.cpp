@@ -29,6 +29,11 @@ bool SampleField::wrapsSeam() const {
          width == chart->grid().side();
 }
 
+bool SampleField::wholeChart() const {
+  return metric == ErrorMetric::kChart3d && i0 == 0 && j0 == 0 && width == chart->grid().side() &&
+         height == chart->grid().side();
+}
+
 bool SampleField::isPoleRow(int j) const {
   if (metric != ErrorMetric::kChart3d || !chart->hasPoleRows()) return false;
   const int v = j + j0;

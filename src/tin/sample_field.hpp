@@ -53,6 +53,9 @@ struct SampleField {
   // width on a chart that wraps), and row j is a pole row of the grid.
   bool wrapsSeam() const;
   bool isPoleRow(int j) const;
+  // kChart3d over the whole grid (no window): the chart's twins (seams, folded sides) and
+  // canonical vertices are the TIN's, so that its welded mesh is closed where the chart is.
+  bool wholeChart() const;
   // kChart3d: the positions of samples iFirst..iLast of row j (Chart::rowPositions).
   void rowPositions(int j, int iFirst, int iLast, core::Chart::RowOut out) const;
   Eigen::Vector3d samplePosition(int i, int j) const {

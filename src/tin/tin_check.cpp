@@ -74,11 +74,18 @@ WeldedMesh weldTin(const SampleField& field, const Tin& tin) {
   const double m = field.width - 1, top = field.height - 1;
   const bool seam = field.wrapsSeam();
   const bool southPole = field.isPoleRow(0), northPole = field.isPoleRow(field.height - 1);
+  const bool wholeChart = field.wholeChart();
   std::map<std::pair<double, double>, std::uint32_t> key;
   WeldedMesh out;
   out.vertexOf.resize(tin.xy.size());
   for (std::size_t v = 0; v < tin.xy.size(); ++v) {
     double x = tin.xy[v].x(), y = tin.xy[v].y();
+    if (wholeChart && x == std::floor(x) && y == std::floor(y)) {
+      // A grid point: the chart's canonical vertex of its surface point (a folded side's
+      // mirror, a corner, a seam's twin, a pole row).
+      const core::GridPoint c = field.chart->canonical(int(x), int(y));
+      x = c.u, y = c.v;
+    }
     if ((southPole && y == 0) || (northPole && y == top)) x = 0;
     if (seam && x == m) x = 0;
     const auto [it, fresh] = key.emplace(std::pair(x, y), std::uint32_t(key.size()));

@@ -131,6 +131,11 @@ Tin buildTin(const SampleField& field, const TinOptions& o, TinReport* reportOut
   if (!(std::isfinite(o.minArea) && o.minArea >= 0))
     throw core::InputError("minimum area " + core::exactNumber(o.minArea) +
                            " must be zero or positive");
+  if (o.minAngleDeg > 0 && field.wholeChart() && field.chart->gluesSidesBeyondSeam())
+    throw core::InputError("a quality TIN (minimum angle " + core::exactNumber(o.minAngleDeg) +
+                           " degrees) of a planet on the " + field.chart->name() +
+                           " chart is not supported: its refinement splits the glued sides' "
+                           "edges apart; use the fewest-triangles TIN (no minimum angle)");
   TinReport report;
   report.requestedAngleDeg = o.minAngleDeg;
 
@@ -148,6 +153,16 @@ Tin buildTin(const SampleField& field, const TinOptions& o, TinReport* reportOut
   FaceHandle across;
   int edge = 0;
   if (cdt.is_edge(corner[1], corner[3], across, edge)) cdt.flip(across, edge);
+  // A side glued to itself mirrored (the octahedral chart's) folds at its midpoint, a cone point
+  // of the surface: it must be a vertex, or the side's edge across it would weld onto itself.
+  if (field.wholeChart()) {
+    const core::Gluing gl = field.chart->gluing();
+    const int m = field.width - 1;
+    std::vector<std::array<int, 2>> cones;
+    if (gl.vSides == core::SideGluing::kMirror) cones.insert(cones.end(), {{m / 2, 0}, {m / 2, m}});
+    if (gl.uSides == core::SideGluing::kMirror) cones.insert(cones.end(), {{0, m / 2}, {m, m / 2}});
+    for (const auto& [i, j] : cones) cdt.insert(Point(i, j))->info().height = field.at(i, j);
+  }
 
   auto t0 = Clock::now();
   GreedyInserter greedy(cdt, field);
