@@ -217,6 +217,48 @@ TEST(OctahedralChart, LocalBoundUpdatesEqualAFullRebuildBitForBit) {
   }
 }
 
+// The tessellator reads a vertex of half-size 8 and up from the lattice: there every vertex
+// holds its codes, twins across a fold included (their combined codes). A twin's entry copied
+// before the twins were combined held its own half's codes, the twins split differently, and a
+// coarse view cracked along the fold (StressEdits.RandomBrushActionsOnTheOctahedralChart... at
+// 8x its size, action 5489: the side u = m split at (m, 3m/4) and not at (m, m/4)).
+TEST(OctahedralChart, TheLatticeHoldsEveryVertexsCodesTwinsIncluded) {
+  for (const Mapping mapping : kMappings) {
+    auto t = testkit::bumpyOctahedralTerrain(7, 5, 4000.0, mapping);
+    const auto g = t.grid();
+    const int m = g.m();
+    const auto& bounds = t.bounds();
+    auto check = [&](const std::string& when) {
+      int wrong = 0;
+      for (int v = 0; v <= m; ++v)
+        for (int u = 0; u <= m; ++u) {
+          if ((u == 0 || u == m) && (v == 0 || v == m)) continue;
+          if (std::countr_zero(unsigned(u | v)) < terrain::ErrorBounds::kLatticeShift) continue;
+          const auto& e = bounds.lattice()[bounds.latticeIndex(u, v)];
+          if (!(e.codes == bounds.codes()[g.index(u, v)]) || e.height != t.height(u, v)) {
+            if (wrong++ < 3)
+              ADD_FAILURE() << when << ": (" << u << "," << v << ") lattice error " << e.codes.error
+                            << " radius " << e.codes.radius << ", codes "
+                            << bounds.codes()[g.index(u, v)].error << " "
+                            << bounds.codes()[g.index(u, v)].radius;
+          }
+        }
+      EXPECT_EQ(wrong, 0) << when;
+    };
+    check("built");
+    edit::EditPipeline pipe(t);
+    const double R = t.chart().radius();
+    for (const Eigen::Vector3d& spot :
+         {Eigen::Vector3d(0, 0, -1), Eigen::Vector3d(1, 0, -0.2), Eigen::Vector3d(0.3, -1, 0.1)}) {
+      edit::BrushSettings b;
+      b.radius = 0.4 * R;
+      b.strength = 2500;
+      pipe.apply(edit::GaussianBrush(b), {R * spot.normalized(), 0.0});
+      check("after an edit");
+    }
+  }
+}
+
 // An edit whose changed vertices fill a box's octagon (terrain::CutRegion: a triangle in a
 // corner of the grid, as a disc about the south pole is, a diamond about the centre, as about
 // the north pole, random octagons anywhere): the bounds updated over the cut regions equal a

@@ -264,13 +264,20 @@ std::size_t gluedTwins(const ChartT& chart, const detail::VertexBounds<ChartT>& 
     GridPoint twins[4];
     const int n = chart.twins(u, v, twins);
     BoundCodes both{};
+    std::uint16_t childError[4];
     for (int t = 0; t < n; ++t) {
-      const std::uint16_t childError = vertices.compute(twins[t]);
-      if (lattice.active()) lattice(twins[t].u, twins[t].v, childError);
+      childError[t] = vertices.compute(twins[t]);
       const BoundCodes& c = codes[g.index(twins[t].u, twins[t].v)];
       both = {std::max(both.error, c.error), std::max(both.radius, c.radius)};
     }
-    for (int t = 0; t < n; ++t) codes[g.index(twins[t].u, twins[t].v)] = both;
+    // The lattice takes the combined codes (the tessellator reads a twin there from half-size
+    // 8 up): copied before combining, a twin's entry held its own half's, the twins split
+    // differently, and the mesh cracked along the fold (StressEdits at 8x its size found it).
+    // Each keeps its own children's largest error: those are the children on its side.
+    for (int t = 0; t < n; ++t) {
+      codes[g.index(twins[t].u, twins[t].v)] = both;
+      if (lattice.active()) lattice(twins[t].u, twins[t].v, childError[t]);
+    }
     count += std::size_t(n);
   }
   return count;
