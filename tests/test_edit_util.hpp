@@ -2,6 +2,7 @@
 // Helpers shared by the edit tests (tests/test_edit_*.cpp).
 #include <gtest/gtest.h>
 
+#include <bit>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -115,8 +116,31 @@ inline ::testing::AssertionResult consistentHeights(const terrain::Terrain& t) {
   return ::testing::AssertionSuccess();
 }
 
+// Every lattice vertex (half-size >= 2^kLatticeShift, where the tessellator reads it) holds the
+// height and codes the full arrays hold: twins across a fold or a seam their combined codes.
+// (Glued twins once held each its own half's there, equal in a build and an update alike.)
+inline ::testing::AssertionResult latticeHoldsTheCodes(const terrain::Terrain& t) {
+  const terrain::ErrorBounds& b = t.bounds();
+  if (b.lattice().empty()) return ::testing::AssertionSuccess();
+  const int m = t.grid().m();
+  for (int v = 0; v <= m; ++v)
+    for (int u = 0; u <= m; ++u) {
+      if ((u == 0 || u == m) && (v == 0 || v == m)) continue;  // corners split nothing
+      if (std::countr_zero(unsigned(u | v)) < terrain::ErrorBounds::kLatticeShift) continue;
+      const terrain::LatticeEntry& e = b.lattice()[b.latticeIndex(u, v)];
+      const terrain::BoundCodes& c = b.codes()[t.grid().index(u, v)];
+      if (!(e.codes == c) || e.height != t.height(u, v))
+        return ::testing::AssertionFailure()
+               << "lattice vertex (" << u << "," << v << ") holds error/radius codes "
+               << e.codes.error << "/" << e.codes.radius << ", the full arrays " << c.error << "/"
+               << c.radius;
+    }
+  return ::testing::AssertionSuccess();
+}
+
 // Bounds after the local updates == a full rebuild, bit for bit.
 inline ::testing::AssertionResult boundsEqualFullRebuild(const terrain::Terrain& t) {
+  if (auto held = latticeHoldsTheCodes(t); !held) return held;
   terrain::ErrorBounds full;
   full.build(t.chart(), t.heights(), t.bounds().rule());
   if (full.errorCodes() != t.bounds().errorCodes()) {

@@ -27,6 +27,7 @@
 #include "terrain/error_mesher.hpp"
 #include "terrain/screen_error.hpp"
 #include "terrain/tessellator.hpp"
+#include "test_edit_util.hpp"
 #include "test_terrains.hpp"
 #include "tin/tin_check.hpp"
 
@@ -225,27 +226,7 @@ TEST(OctahedralChart, LocalBoundUpdatesEqualAFullRebuildBitForBit) {
 TEST(OctahedralChart, TheLatticeHoldsEveryVertexsCodesTwinsIncluded) {
   for (const Mapping mapping : kMappings) {
     auto t = testkit::bumpyOctahedralTerrain(7, 5, 4000.0, mapping);
-    const auto g = t.grid();
-    const int m = g.m();
-    const auto& bounds = t.bounds();
-    auto check = [&](const std::string& when) {
-      int wrong = 0;
-      for (int v = 0; v <= m; ++v)
-        for (int u = 0; u <= m; ++u) {
-          if ((u == 0 || u == m) && (v == 0 || v == m)) continue;
-          if (std::countr_zero(unsigned(u | v)) < terrain::ErrorBounds::kLatticeShift) continue;
-          const auto& e = bounds.lattice()[bounds.latticeIndex(u, v)];
-          if (!(e.codes == bounds.codes()[g.index(u, v)]) || e.height != t.height(u, v)) {
-            if (wrong++ < 3)
-              ADD_FAILURE() << when << ": (" << u << "," << v << ") lattice error " << e.codes.error
-                            << " radius " << e.codes.radius << ", codes "
-                            << bounds.codes()[g.index(u, v)].error << " "
-                            << bounds.codes()[g.index(u, v)].radius;
-          }
-        }
-      EXPECT_EQ(wrong, 0) << when;
-    };
-    check("built");
+    EXPECT_TRUE(edittest::latticeHoldsTheCodes(t)) << "built";
     edit::EditPipeline pipe(t);
     const double R = t.chart().radius();
     for (const Eigen::Vector3d& spot :
@@ -254,7 +235,7 @@ TEST(OctahedralChart, TheLatticeHoldsEveryVertexsCodesTwinsIncluded) {
       b.radius = 0.4 * R;
       b.strength = 2500;
       pipe.apply(edit::GaussianBrush(b), {R * spot.normalized(), 0.0});
-      check("after an edit");
+      EXPECT_TRUE(edittest::latticeHoldsTheCodes(t)) << "after an edit at " << spot.transpose();
     }
   }
 }
