@@ -137,6 +137,24 @@ void TinSand::markFlatCandidate(Vertex v) {
   if (!inLr_[v]) inLr_[v] = 1, lr_.push_back(v);
 }
 
+// One stamp's contours: the tool's polygons at the stamp and the TIN's vertices along them.
+struct TinSand::StampContours {
+  std::vector<Eigen::Vector2d> inner, outer;  // the tool's outline and its rim's outer edge
+  std::vector<Vertex> innerIds, outerIds;     // the polygons' corners in the TIN
+  std::vector<Vertex> innerPath, outerPath;   // vertices where they cross older contours
+  // Older constrained edges freed near the stamp (3D end points).
+  std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>> freed;
+  double snap = 0;  // a contour point this close to a vertex takes that vertex
+
+  bool onInner(Vertex v) const { return has(innerIds, v) || has(innerPath, v); }
+  bool onContour(Vertex v) const { return onInner(v) || has(outerIds, v) || has(outerPath, v); }
+
+ private:
+  static bool has(const std::vector<Vertex>& ids, Vertex v) {
+    return std::find(ids.begin(), ids.end(), v) != ids.end();
+  }
+};
+
 TinStampStats TinSand::stamp(const Eigen::Vector2d& centre, double bottom,
                              const TinStampTool& tool) {
   const auto t0 = Clock::now();
@@ -150,107 +168,126 @@ TinStampStats TinSand::stamp(const Eigen::Vector2d& centre, double bottom,
   TinStampStats stats;
   const double before = tin_.volume();
   ++generation_;
+  const StampContours contours = placeContours(centre, bottom, tool, stats);
+
+  tin_.verticesWithin(centre, tool.outerRadius(), scratch_);
+  const std::vector<Vertex> inside = pressInside(contours, scratch_, bottom, stats);
+  removeFlatInside(contours, inside, bottom, stats);
+  removeWallVertices(contours, scratch_, centre, tool, stats);
+
+  const double displaced = before - tin_.volume();
+  stats.displacedVolume = displaced;
+  if (tool.pushAside) pushAside(contours, centre, tool, displaced);
+  timing_.stampMs += msSince(t0);
+  return stats;
+}
+
+// Outer contour first: it follows the terrain. Then the inner one, pressed. Then, when the tool
+// pushes aside, rings halfway across the rampart and at its edge, so that the material pushed
+// aside lands in the rampart's profile however coarse the TIN is there (and not beyond its edge).
+TinSand::StampContours TinSand::placeContours(const Eigen::Vector2d& centre, double bottom,
+                                              const TinStampTool& tool, TinStampStats& stats) {
+  StampContours c;
   const std::size_t n = tool.outline.size();
-  std::vector<Eigen::Vector2d> inner(n), outer(n);
+  c.inner.resize(n), c.outer.resize(n);
   for (std::size_t k = 0; k < n; ++k) {
     const Eigen::Vector2d& q = tool.outline[k];
-    inner[k] = centre + q;
-    outer[k] = centre + q * (1.0 + tool.rim / q.norm());
+    c.inner[k] = centre + q;
+    c.outer[k] = centre + q * (1.0 + tool.rim / q.norm());
   }
   // Contour points may snap to vertices up to `snap` outside the outer contour: free what
   // their edges could cross too.
-  const double snap = 0.25 * tool.rim;
-  std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>> freed;
-  stats.freedConstraints = tin_.freeConstraintsNear(centre, tool.outerRadius() + 2 * snap, &freed);
+  c.snap = 0.25 * tool.rim;
+  stats.freedConstraints =
+      tin_.freeConstraintsNear(centre, tool.outerRadius() + 2 * c.snap, &c.freed);
 
-  // Outer contour first: it follows the terrain. Then the inner one, pressed. A contour point
-  // next to a vertex already there (an earlier stamp's) takes that vertex instead of making a
-  // sliver beside it.
-  const auto place = [&](const Eigen::Vector2d& p, double cap) {
-    const Vertex near = tin_.vertexNear(p, snap);
-    if (near == tin::DynamicTin::kNoVertex) return tin_.insert(p, std::min(tin_.heightAt(p), cap));
-    tin_.setHeight(near, std::min(tin_.height(near), cap));
-    return near;
-  };
-  // Where a contour edge crosses an older contour's (freed) edge, a vertex at the older edge's
-  // height there (capped): the crease where the two imprints meet stays in the TIN (the freed
-  // edge's line is the surface before this stamp along it), and the wall is not cut across.
-  std::vector<std::pair<double, Eigen::Vector3d>> crossings;
-  const auto constrainEdge = [&](Vertex from, Vertex to, double cap, std::vector<Vertex>& path) {
-    const Eigen::Vector2d p = tin_.position(from), q = tin_.position(to);
-    const double length = (q - p).norm();
-    crossings.clear();
-    for (const auto& [a3, b3] : freed) {
-      const Eigen::Vector2d a = a3.head<2>(), b = b3.head<2>();
-      if (!segmentsCross(p, q, a, b)) continue;
-      const double den = cross(q - p, b - a);
-      const double s = cross(a - p, b - a) / den, u = cross(a - p, q - p) / den;
-      if (s * length < snap || (1 - s) * length < snap) continue;
-      crossings.emplace_back(s, Eigen::Vector3d(p.x() + s * (q - p).x(), p.y() + s * (q - p).y(),
-                                                (1 - u) * a3.z() + u * b3.z()));
-    }
-    std::sort(crossings.begin(), crossings.end(),
-              [](const auto& x, const auto& y) { return x.first < y.first; });
-    Vertex at = from;
-    double last = 0;
-    for (const auto& [s, x] : crossings) {
-      if ((s - last) * length < snap) continue;
-      const Eigen::Vector2d xy = x.head<2>();
-      Vertex v = tin_.vertexNear(xy, snap);
-      if (v == tin::DynamicTin::kNoVertex)
-        v = tin_.insert(xy, std::min(x.z(), cap));
-      else
-        tin_.setHeight(v, std::min(tin_.height(v), cap));
-      if (v == at || v == to) continue;
-      tin_.constrain(at, v, generation_);
-      path.push_back(v);
-      at = v, last = s;
-    }
-    if (at != to) tin_.constrain(at, to, generation_);
-  };
   const std::size_t countBefore = tin_.vertexCount();
-  std::vector<Vertex> outerIds(n), innerIds(n), outerPath, innerPath;
-  for (std::size_t k = 0; k < n; ++k) outerIds[k] = place(outer[k], INFINITY);
+  c.outerIds.resize(n), c.innerIds.resize(n);
   for (std::size_t k = 0; k < n; ++k)
-    constrainEdge(outerIds[k], outerIds[(k + 1) % n], INFINITY, outerPath);
-  for (std::size_t k = 0; k < n; ++k) innerIds[k] = place(inner[k], bottom);
+    c.outerIds[k] = placeContourPoint(c.outer[k], INFINITY, c.snap);
   for (std::size_t k = 0; k < n; ++k)
-    constrainEdge(innerIds[k], innerIds[(k + 1) % n], bottom, innerPath);
-  const auto onContour = [&](Vertex v) {
-    const auto has = [v](const std::vector<Vertex>& ids) {
-      return std::find(ids.begin(), ids.end(), v) != ids.end();
-    };
-    return has(innerIds) || has(outerIds) || has(innerPath) || has(outerPath);
-  };
-  const auto onInner = [&](Vertex v) {
-    return std::find(innerIds.begin(), innerIds.end(), v) != innerIds.end() ||
-           std::find(innerPath.begin(), innerPath.end(), v) != innerPath.end();
-  };
-  // Rings halfway across the rampart and at its edge, so that the material pushed aside lands
-  // in the rampart's profile however coarse the TIN is there (and not beyond its edge).
+    constrainAcrossFreed(c.outerIds[k], c.outerIds[(k + 1) % n], INFINITY, c, c.outerPath);
+  for (std::size_t k = 0; k < n; ++k) c.innerIds[k] = placeContourPoint(c.inner[k], bottom, c.snap);
+  for (std::size_t k = 0; k < n; ++k)
+    constrainAcrossFreed(c.innerIds[k], c.innerIds[(k + 1) % n], bottom, c, c.innerPath);
   for (const double across : {0.5, 1.0})
     for (std::size_t k = 0; k < n && tool.pushAside; ++k) {
       const Eigen::Vector2d& q = tool.outline[k];
-      place(centre + q * (1.0 + (tool.rim + across * tool.rampartWidth) / q.norm()), INFINITY);
+      placeContourPoint(centre + q * (1.0 + (tool.rim + across * tool.rampartWidth) / q.norm()),
+                        INFINITY, c.snap);
     }
   stats.inserted = tin_.vertexCount() - countBefore;
+  return c;
+}
 
-  // Press everything inside the inner contour down to the bottom.
+// A contour point next to a vertex already there (an earlier stamp's) takes that vertex instead
+// of making a sliver beside it; its height is capped at `cap`.
+TinSand::Vertex TinSand::placeContourPoint(const Eigen::Vector2d& p, double cap, double snap) {
+  const Vertex near = tin_.vertexNear(p, snap);
+  if (near == tin::DynamicTin::kNoVertex) return tin_.insert(p, std::min(tin_.heightAt(p), cap));
+  tin_.setHeight(near, std::min(tin_.height(near), cap));
+  return near;
+}
+
+// Where a contour edge crosses an older contour's (freed) edge, a vertex at the older edge's
+// height there (capped): the crease where the two imprints meet stays in the TIN (the freed
+// edge's line is the surface before this stamp along it), and the wall is not cut across.
+void TinSand::constrainAcrossFreed(Vertex from, Vertex to, double cap, const StampContours& c,
+                                   std::vector<Vertex>& path) {
+  const Eigen::Vector2d p = tin_.position(from), q = tin_.position(to);
+  const double length = (q - p).norm();
+  std::vector<std::pair<double, Eigen::Vector3d>> crossings;
+  for (const auto& [a3, b3] : c.freed) {
+    const Eigen::Vector2d a = a3.head<2>(), b = b3.head<2>();
+    if (!segmentsCross(p, q, a, b)) continue;
+    const double den = cross(q - p, b - a);
+    const double s = cross(a - p, b - a) / den, u = cross(a - p, q - p) / den;
+    if (s * length < c.snap || (1 - s) * length < c.snap) continue;
+    crossings.emplace_back(s, Eigen::Vector3d(p.x() + s * (q - p).x(), p.y() + s * (q - p).y(),
+                                              (1 - u) * a3.z() + u * b3.z()));
+  }
+  std::sort(crossings.begin(), crossings.end(),
+            [](const auto& x, const auto& y) { return x.first < y.first; });
+  Vertex at = from;
+  double last = 0;
+  for (const auto& [s, x] : crossings) {
+    if ((s - last) * length < c.snap) continue;
+    const Eigen::Vector2d xy = x.head<2>();
+    Vertex v = tin_.vertexNear(xy, c.snap);
+    if (v == tin::DynamicTin::kNoVertex)
+      v = tin_.insert(xy, std::min(x.z(), cap));
+    else
+      tin_.setHeight(v, std::min(tin_.height(v), cap));
+    if (v == at || v == to) continue;
+    tin_.constrain(at, v, generation_);
+    path.push_back(v);
+    at = v, last = s;
+  }
+  if (at != to) tin_.constrain(at, to, generation_);
+}
+
+// Presses everything inside the inner contour down to the bottom; wakes it and the contours.
+std::vector<TinSand::Vertex> TinSand::pressInside(const StampContours& c,
+                                                  const std::vector<Vertex>& nearby, double bottom,
+                                                  TinStampStats& stats) {
   std::vector<Vertex> inside;
-  tin_.verticesWithin(centre, tool.outerRadius(), scratch_);
-  for (const Vertex v : scratch_) {
-    if (!insidePolygon(inner, tin_.position(v))) continue;
+  for (const Vertex v : nearby) {
+    if (!insidePolygon(c.inner, tin_.position(v))) continue;
     inside.push_back(v);
     if (tin_.height(v) > bottom) tin_.setHeight(v, bottom), ++stats.pressed;
   }
   for (const Vertex v : inside) activate(v);
-  for (const Vertex v : outerIds) activate(v);
-  for (const Vertex v : outerPath) activate(v);
-  for (const Vertex v : innerPath) activate(v);
+  for (const Vertex v : c.outerIds) activate(v);
+  for (const Vertex v : c.outerPath) activate(v);
+  for (const Vertex v : c.innerPath) activate(v);
+  return inside;
+}
 
-  // Inner vertices on the bottom with no deeper neighbour carry nothing the contour does not.
+// Inner vertices on the bottom with no deeper neighbour carry nothing the contour does not.
+void TinSand::removeFlatInside(const StampContours& c, const std::vector<Vertex>& inside,
+                               double bottom, TinStampStats& stats) {
   for (const Vertex v : inside) {
-    if (onContour(v)) continue;
+    if (c.onContour(v)) continue;
     if (tin_.height(v) != bottom) continue;
     tin_.neighbours(v, neighbours_);
     // A vertex on a constrained edge (where this stamp's contour crossed one) stays: it carries
@@ -261,32 +298,36 @@ TinStampStats TinSand::stamp(const Eigen::Vector2d& centre, double bottom,
       continue;
     if (tin_.remove(v)) ++stats.removedInside;
   }
+}
 
-  // Older vertices between the contours (on the tool's wall) standing on or above the wall, the
-  // line across the rim from the inner contour to the outer one along their ray, carry nothing
-  // the contours do not: removed, the wall is the contours' own triangles. Those under it (an
-  // older, deeper imprint) stay. The volume this changes is in the stamp's own account below.
-  for (const Vertex v : scratch_) {
-    if (!tin_.alive(v) || tin_.onHull(v) || onContour(v)) continue;
+// Older vertices between the contours (on the tool's wall) standing on or above the wall, the
+// line across the rim from the inner contour to the outer one along their ray, carry nothing
+// the contours do not: removed, the wall is the contours' own triangles. Those under it (an
+// older, deeper imprint) stay. The volume this changes is in the stamp's own account.
+void TinSand::removeWallVertices(const StampContours& c, const std::vector<Vertex>& nearby,
+                                 const Eigen::Vector2d& centre, const TinStampTool& tool,
+                                 TinStampStats& stats) {
+  const std::size_t n = tool.outline.size();
+  // Where v's ray d crosses the contour edge a-b (at lambda * d), and the height there.
+  const auto crossing = [&](const Eigen::Vector2d& d, Vertex a, Vertex b, double& lambda,
+                            double& h) {
+    const Eigen::Vector2d pa = tin_.position(a) - centre, pb = tin_.position(b) - centre;
+    const double den = cross(d, pb - pa);
+    if (den == 0) return false;
+    lambda = cross(pa, pb - pa) / den;
+    const double u = std::clamp((lambda * d - pa).dot(pb - pa) / (pb - pa).squaredNorm(), 0.0, 1.0);
+    h = (1 - u) * tin_.height(a) + u * tin_.height(b);
+    return true;
+  };
+  for (const Vertex v : nearby) {
+    if (!tin_.alive(v) || tin_.onHull(v) || c.onContour(v)) continue;
     const Eigen::Vector2d d = tin_.position(v) - centre;
     for (std::size_t k = 0; k < n; ++k) {
       const std::size_t l = (k + 1) % n;
       if (cross(tool.outline[k], d) < 0 || cross(d, tool.outline[l]) <= 0) continue;
-      // Where v's ray crosses the inner and the outer contour's edge k (at lambda * d), and the
-      // heights there.
-      const auto crossing = [&](Vertex a, Vertex b, double& lambda, double& h) {
-        const Eigen::Vector2d pa = tin_.position(a) - centre, pb = tin_.position(b) - centre;
-        const double den = cross(d, pb - pa);
-        if (den == 0) return false;
-        lambda = cross(pa, pb - pa) / den;
-        const double u =
-            std::clamp((lambda * d - pa).dot(pb - pa) / (pb - pa).squaredNorm(), 0.0, 1.0);
-        h = (1 - u) * tin_.height(a) + u * tin_.height(b);
-        return true;
-      };
       double lIn = 0, hIn = 0, lOut = 0, hOut = 0;
-      if (!crossing(innerIds[k], innerIds[l], lIn, hIn) ||
-          !crossing(outerIds[k], outerIds[l], lOut, hOut) || !(lIn < 1 && 1 < lOut))
+      if (!crossing(d, c.innerIds[k], c.innerIds[l], lIn, hIn) ||
+          !crossing(d, c.outerIds[k], c.outerIds[l], lOut, hOut) || !(lIn < 1 && 1 < lOut))
         break;
       const double t = (1 - lIn) / (lOut - lIn);
       if (t > 0.02 && t < 0.98 && tin_.height(v) >= hIn + t * (hOut - hIn) &&
@@ -295,22 +336,20 @@ TinStampStats TinSand::stamp(const Eigen::Vector2d& centre, double bottom,
       break;
     }
   }
+}
 
-  // What the stamp changed goes onto the rampart, weighted by its profile.
-  const double displaced = before - tin_.volume();
-  stats.displacedVolume = displaced;
-  if (!tool.pushAside) {
-    timing_.stampMs += msSince(t0);
-    return stats;
-  }
+// What the stamp changed goes onto the rampart, weighted by its profile.
+void TinSand::pushAside(const StampContours& c, const Eigen::Vector2d& centre,
+                        const TinStampTool& tool, double displaced) {
   tin_.verticesWithin(centre, tool.reach(), scratch_);
   std::vector<std::pair<Vertex, double>> rampart;
   double weighted = 0;
   for (const Vertex v : scratch_) {
     const Eigen::Vector2d p = tin_.position(v);
     // The inner contour's vertices lie on the polygon, where the inside test may go either way.
-    if (insidePolygon(inner, p) || tin_.onHull(v) || onInner(v)) continue;
-    const double t = insidePolygon(outer, p) ? 0.0 : polygonDistance(outer, p) / tool.rampartWidth;
+    if (insidePolygon(c.inner, p) || tin_.onHull(v) || c.onInner(v)) continue;
+    const double t =
+        insidePolygon(c.outer, p) ? 0.0 : polygonDistance(c.outer, p) / tool.rampartWidth;
     const double profile = rampartProfile(t);
     if (profile <= 0) continue;
     rampart.emplace_back(v, profile);
@@ -323,8 +362,6 @@ TinStampStats TinSand::stamp(const Eigen::Vector2d& centre, double bottom,
       activate(v);
     }
   }
-  timing_.stampMs += msSince(t0);
-  return stats;
 }
 
 std::size_t TinSand::erode() {

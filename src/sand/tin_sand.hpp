@@ -102,6 +102,22 @@ class TinSand {
   const Timing& timing() const { return timing_; }
 
  private:
+  // A stamp's steps, in order (tin_sand.cpp).
+  struct StampContours;
+  StampContours placeContours(const Eigen::Vector2d& centre, double bottom,
+                              const TinStampTool& tool, TinStampStats& stats);
+  Vertex placeContourPoint(const Eigen::Vector2d& p, double cap, double snap);
+  void constrainAcrossFreed(Vertex from, Vertex to, double cap, const StampContours& c,
+                            std::vector<Vertex>& path);
+  std::vector<Vertex> pressInside(const StampContours& c, const std::vector<Vertex>& nearby,
+                                  double bottom, TinStampStats& stats);
+  void removeFlatInside(const StampContours& c, const std::vector<Vertex>& inside, double bottom,
+                        TinStampStats& stats);
+  void removeWallVertices(const StampContours& c, const std::vector<Vertex>& nearby,
+                          const Eigen::Vector2d& centre, const TinStampTool& tool,
+                          TinStampStats& stats);
+  void pushAside(const StampContours& c, const Eigen::Vector2d& centre, const TinStampTool& tool,
+                 double displaced);
   // Into Le (woken); also into Lr when its height changed.
   void activate(Vertex v, bool changed = true);
   void markFlatCandidate(Vertex v);
