@@ -95,33 +95,38 @@ TEST(BoundCode, EveryOctaveEncodesToTheSmallestBoundingCode) {
 // them (the boundaries), and at the starts of mantissa steps of both exponent parities. Away
 // from those boundaries it is encodeUp of the root.
 TEST(BoundCode, FromSquareIsTheSmallestCodeWhoseSquareBounds) {
-  auto check = [](double square) {
+  // A result, not ASSERTs (which would end only the lambda): the first failing square ends the
+  // test.
+  auto check = [](double square) -> testing::AssertionResult {
     const auto c = BoundCode::encodeUpFromSquare(square);
     const double value = BoundCode::decode(c);
-    if (c < 65535) {
-      ASSERT_GE(value * value, square) << square;
-    }
+    if (c < 65535 && !(value * value >= square))
+      return testing::AssertionFailure()
+             << "square " << square << ": code " << c << " squared is " << value * value;
     if (c > 1) {
       const double below = BoundCode::decode(std::uint16_t(c - 1));
-      ASSERT_LT(below * below, square) << square;
+      if (!(below * below < square))
+        return testing::AssertionFailure() << "square " << square << ": code " << c - 1
+                                           << " below already bounds it (" << below * below << ")";
     }
+    return testing::AssertionSuccess();
   };
   std::mt19937_64 rng(11);
   std::uniform_real_distribution<double> expo(-45.0, 85.0);
   int sameAsRoot = 0;
   for (int i = 0; i < 200000; ++i) {
     const double square = std::exp2(expo(rng));
-    check(square);
+    ASSERT_TRUE(check(square));
     sameAsRoot += BoundCode::encodeUpFromSquare(square) == BoundCode::encodeUp(std::sqrt(square));
   }
   EXPECT_EQ(sameAsRoot, 200000);
   for (int k = 1; k < 65535; ++k) {
     const double v = BoundCode::decode(std::uint16_t(k));
     for (double square : {v * v, std::nextafter(v * v, 0.0), std::nextafter(v * v, 1e300)})
-      check(square);
+      ASSERT_TRUE(check(square));
   }
   for (int e = -40; e < 80; ++e)
-    for (int j = 0; j < 4096; j += 17) check(std::ldexp(1.0 + j / 4096.0, e));
+    for (int j = 0; j < 4096; j += 17) ASSERT_TRUE(check(std::ldexp(1.0 + j / 4096.0, e)));
   EXPECT_EQ(BoundCode::encodeUpFromSquare(0.0), 0);
   EXPECT_EQ(BoundCode::encodeUpFromSquare(-1.0), 0);
   EXPECT_EQ(BoundCode::encodeUpFromSquare(1e-300), 1);

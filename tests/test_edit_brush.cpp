@@ -1,5 +1,6 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 #include <vector>
@@ -261,12 +262,25 @@ TEST(EditBrush, RegionGrowingsDistancesAreTheOnesTheBrushWouldCompute) {
       const edit::RowDistanceBlocks* kept = grower.distances();
       ASSERT_NE(kept, nullptr);
       std::vector<double> got, want;
+      // The first row that differs, then no more (an ASSERT would end only the lambda).
+      testing::AssertionResult rowsKept = testing::AssertionSuccess();
       region.forEachSpan([&](int v, int a, int b) {
+        if (!rowsKept) return;
         got.resize(std::size_t(b - a + 1)), want.resize(got.size());
-        ASSERT_TRUE(kept->copy(v, a, b, got.data())) << chart->name() << ", row " << v;
+        if (!kept->copy(v, a, b, got.data())) {
+          rowsKept = testing::AssertionFailure()
+                     << "row " << v << " [" << a << ", " << b << "] not kept";
+          return;
+        }
         field.rowDistances2(v, a, b, want.data());
-        ASSERT_EQ(got, want) << chart->name() << ", row " << v;
+        const auto differ = std::mismatch(got.begin(), got.end(), want.begin());
+        if (differ.first != got.end())
+          rowsKept = testing::AssertionFailure()
+                     << "vertex (" << a + (differ.first - got.begin()) << ", " << v
+                     << "): kept distance^2 " << *differ.first << ", the field's "
+                     << *differ.second;
       });
+      ASSERT_TRUE(rowsKept) << chart->name() << ", stamp " << i;
     }
   }
 }

@@ -1,5 +1,6 @@
 // Heightmap import: PNG 8/16-bit, TIFF (integer, float, GeoTIFF no-data), raw + sidecar, the
-// real DEMs in ../shared/data/dem, and a clear error naming the file for every kind of bad input.
+// real DEMs in ../shared/data/dem (or $PS_SHARED_DIR/data/dem), and a clear error naming the
+// file for every kind of bad input.
 #include <gtest/gtest.h>
 #include <tiffio.h>
 #include <unistd.h>

@@ -116,10 +116,12 @@ TEST(OctahedralChart, RowAndScatteredPositionsAreBitwisePositions) {
     std::uniform_real_distribution<float> height(-8000.0f, 8000.0f);
     std::vector<float> h(c.grid().count());
     for (float& x : h) x = height(rng);
-    auto expectAt = [&](int u, int v, double x, double y, double z) {
+    // A result the loops ASSERT on (an ASSERT here would end only the lambda).
+    auto isPosition = [&](int u, int v, double x, double y, double z) -> testing::AssertionResult {
       const Eigen::Vector3d p = c.position(u, v, double(h[c.grid().index(u, v)]));
-      ASSERT_TRUE(bits(x) == bits(p.x()) && bits(y) == bits(p.y()) && bits(z) == bits(p.z()))
-          << c.name() << " vertex (" << u << ", " << v << ")";
+      if (bits(x) == bits(p.x()) && bits(y) == bits(p.y()) && bits(z) == bits(p.z()))
+        return testing::AssertionSuccess();
+      return testing::AssertionFailure() << c.name() << " vertex (" << u << ", " << v << ")";
     };
     std::vector<double> x(std::size_t(m) + 1), y(x.size()), z(x.size());
     for (int v = 0; v <= m; ++v) {
@@ -130,7 +132,8 @@ TEST(OctahedralChart, RowAndScatteredPositionsAreBitwisePositions) {
                        {x.data(), y.data(), z.data()});
         for (int u = uFirst; u <= uLast; ++u) {
           const std::size_t k = std::size_t(u - uFirst);
-          expectAt(u, v, x[k], y[k], z[k]);
+          ASSERT_TRUE(isPosition(u, v, x[k], y[k], z[k]))
+              << "row " << v << " [" << uFirst << ", " << uLast << "]";
         }
       }
     }
@@ -146,7 +149,8 @@ TEST(OctahedralChart, RowAndScatteredPositionsAreBitwisePositions) {
     const std::size_t n = us.size() - 3;  // a remainder after any vector width
     std::vector<double> sx(n), sy(n), sz(n);
     c.scatteredPositions(us.data(), vs.data(), hs.data(), n, {sx.data(), sy.data(), sz.data()});
-    for (std::size_t k = 0; k < n; ++k) expectAt(us[k], vs[k], sx[k], sy[k], sz[k]);
+    for (std::size_t k = 0; k < n; ++k)
+      ASSERT_TRUE(isPosition(us[k], vs[k], sx[k], sy[k], sz[k])) << "scattered, entry " << k;
   }
 }
 
@@ -409,15 +413,18 @@ TEST(OctahedralChart, RegionGrowingAcrossTheFoldsEqualsBruteForce) {
               << "(" << u << "," << v << ") centre " << c.u << "," << c.v << " r " << radius;
       // Every vertex lies in an image of the dirty box.
       const auto images = terrain::gluedImages(*chart, region.bounds());
+      testing::AssertionResult allInImages = testing::AssertionSuccess();  // the first outside
       region.forEachSpan([&](int v, int a, int b) {
-        for (int u = a; u <= b; ++u) {
+        for (int u = a; u <= b && allInImages; ++u) {
           const bool inImage = std::any_of(images.begin(), images.end(), [&](const auto& r) {
             return u >= r.uBegin && u <= r.uEnd && v >= r.vBegin && v <= r.vEnd;
           });
-          ASSERT_TRUE(inImage) << "(" << u << "," << v << ") centre " << c.u << "," << c.v << " r "
-                               << radius << " box " << region.bounds().describe();
+          if (!inImage)
+            allInImages = testing::AssertionFailure() << "(" << u << "," << v << ") in no image";
         }
       });
+      ASSERT_TRUE(allInImages) << "centre " << c.u << "," << c.v << " r " << radius << " box "
+                               << region.bounds().describe();
     }
   }
 }

@@ -31,7 +31,7 @@ using namespace ps;
 namespace {
 
 // Every texel of the tiles the cache holds, apron included, with the level-0 grid position it
-// stands for: f(tile key, i, j, u, v, texel). Stops at the first fatal failure f records.
+// stands for: f(tile key, i, j, u, v, texel), which returns whether to go on.
 template <class F>
 void forEachHeldTexel(const render::HeightTileCache& cache, F&& f) {
   const auto& p = cache.pyramid();
@@ -48,10 +48,10 @@ void forEachHeldTexel(const render::HeightTileCache& cache, F&& f) {
     for (int j = 0; j < S; ++j)
       for (int i = 0; i < S; ++i) {
         const int u = (k.tx * p.tileCells + i - 1) * step, v = (k.ty * p.tileCells + j - 1) * step;
-        f(k, i, j, u, v,
-          texels[(std::size_t(layer) * std::size_t(S) + std::size_t(j)) * std::size_t(S) +
-                 std::size_t(i)]);
-        if (::testing::Test::HasFatalFailure()) return;
+        if (!f(k, i, j, u, v,
+               texels[(std::size_t(layer) * std::size_t(S) + std::size_t(j)) * std::size_t(S) +
+                      std::size_t(i)]))
+          return;
       }
   }
 }
@@ -207,17 +207,27 @@ TEST(TileRequests, TilesAndTheirApronsHoldTheHeightsAcrossFoldsAndSeams) {
       }
       return planet.height(sideU, sideV);  // a side's midpoint is its own twin: mirrored in place
     };
-    auto check = [&](const char* when) {
+    // The first wrong texel, or too few apron texels checked: the test ASSERTs on the result.
+    auto check = [&](const char* when) -> testing::AssertionResult {
       int apron = 0;
+      testing::AssertionResult result = testing::AssertionSuccess();
       forEachHeldTexel(cache, [&](const render::TileKey& k, int i, int j, int u, int v, float got) {
         const auto want = expected(u, v);
-        if (!want) return;
-        ASSERT_EQ(got, *want) << chart.name() << " " << when << ": tile " << k.level << "/" << k.tx
-                              << "," << k.ty << " texel (" << i << "," << j << ") = grid (" << u
-                              << "," << v << ")";
+        if (!want) return true;
+        if (got != *want) {
+          result = testing::AssertionFailure()
+                   << chart.name() << " " << when << ": tile " << k.level << "/" << k.tx << ","
+                   << k.ty << " texel (" << i << "," << j << ") = grid (" << u << "," << v
+                   << ") holds " << got << ", the grid " << *want;
+          return false;
+        }
         apron += u < 0 || u > m || v < 0 || v > m;
+        return true;
       });
-      EXPECT_GT(apron, 100) << chart.name() << " " << when;
+      if (result && apron <= 100)
+        return testing::AssertionFailure()
+               << chart.name() << " " << when << ": only " << apron << " apron texels";
+      return result;
     };
     // A view over the fold of side u = 0 south of the equator (lat-long: over the seam there).
     const Eigen::Vector3d d = Eigen::Vector3d(-0.7, 0.01, -0.7).normalized();
@@ -225,7 +235,7 @@ TEST(TileRequests, TilesAndTheirApronsHoldTheHeightsAcrossFoldsAndSeams) {
                                              70 * M_PI / 180);
     terrain::Tessellator tess;
     ASSERT_TRUE(cache.sync(planet, tess.tessellate(planet, cam, {}), cam, why)) << why;
-    check("first view");
+    ASSERT_TRUE(check("first view"));
     // An edit on the fold, then the same view: the tiles across it follow.
     edit::EditPipeline pipe(planet);
     edit::BrushSettings b;
@@ -233,7 +243,7 @@ TEST(TileRequests, TilesAndTheirApronsHoldTheHeightsAcrossFoldsAndSeams) {
     b.strength = 2500;
     pipe.apply(edit::GaussianBrush(b), {R * d, 0.0});
     ASSERT_TRUE(cache.sync(planet, tess.tessellate(planet, cam, {}), cam, why)) << why;
-    check("after an edit");
+    ASSERT_TRUE(check("after an edit"));
     // One vertex just inside a side (no twin of its own): the apron beyond the side's mirror
     // point, in the tiles across the fold, follows it too.
     for (const auto& [u, v] : {std::pair{1, m / 2 + 37}, std::pair{m / 2 - 53, 1}}) {
@@ -241,7 +251,7 @@ TEST(TileRequests, TilesAndTheirApronsHoldTheHeightsAcrossFoldsAndSeams) {
       planet.commitEdit(terrain::GridRegion{u, u, v, v});
     }
     ASSERT_TRUE(cache.sync(planet, tess.tessellate(planet, cam, {}), cam, why)) << why;
-    check("after single vertices beside the sides");
+    ASSERT_TRUE(check("after single vertices beside the sides"));
   }
 }
 
@@ -267,15 +277,25 @@ TEST(TileRequests, TorusAndCylinderApronsWrapAcrossTheirSeams) {
       if (torus) return planet.height(w, ((v % m) + m) % m);
       return planet.height(w, std::clamp(v, 0, m));  // the open ends clamp
     };
-    auto check = [&](const char* when) {
+    // The first wrong texel, or too few apron texels beyond the v sides: the test ASSERTs on it.
+    auto check = [&](const char* when) -> testing::AssertionResult {
       int apronV = 0;
+      testing::AssertionResult result = testing::AssertionSuccess();
       forEachHeldTexel(cache, [&](const render::TileKey& k, int i, int j, int u, int v, float got) {
-        ASSERT_EQ(got, expected(u, v))
-            << chart->name() << " " << when << ": tile " << k.level << "/" << k.tx << "," << k.ty
-            << " texel (" << i << "," << j << ") = grid (" << u << "," << v << ")";
+        if (got != expected(u, v)) {
+          result = testing::AssertionFailure()
+                   << chart->name() << " " << when << ": tile " << k.level << "/" << k.tx << ","
+                   << k.ty << " texel (" << i << "," << j << ") = grid (" << u << "," << v
+                   << ") holds " << got << ", the grid " << expected(u, v);
+          return false;
+        }
         apronV += v < 0 || v > m;
+        return true;
       });
-      EXPECT_GT(apronV, 100) << chart->name() << " " << when;
+      if (result && apronV <= 100)
+        return testing::AssertionFailure() << chart->name() << " " << when << ": only " << apronV
+                                           << " apron texels beyond the v sides";
+      return result;
     };
     // Over the seams' crossing (the torus's corner; the cylinder's seam at its end v = 0).
     const Eigen::Vector3d target = chart->position(0, 0, 0), n = chart->up(0, 0);
@@ -283,19 +303,19 @@ TEST(TileRequests, TorusAndCylinderApronsWrapAcrossTheirSeams) {
                                              240, 70 * M_PI / 180);
     terrain::Tessellator tess;
     ASSERT_TRUE(cache.sync(planet, tess.tessellate(planet, cam, {}), cam, why)) << why;
-    check("first view");
+    ASSERT_TRUE(check("first view"));
     edit::EditPipeline pipe(planet);
     edit::BrushSettings b;
     b.radius = 3.0e5;
     b.strength = 2500;
     pipe.apply(edit::GaussianBrush(b), {target, 0.0});
     ASSERT_TRUE(cache.sync(planet, tess.tessellate(planet, cam, {}), cam, why)) << why;
-    check("after an edit");
+    ASSERT_TRUE(check("after an edit"));
     for (const auto& [u, v] : {std::pair{1, 3}, std::pair{3, 1}, std::pair{m - 1, m - 2}}) {
       planet.mutableHeights()[planet.grid().index(u, v)] += 700.0f;
       planet.commitEdit(terrain::GridRegion{u, u, v, v});
     }
     ASSERT_TRUE(cache.sync(planet, tess.tessellate(planet, cam, {}), cam, why)) << why;
-    check("after single vertices beside the sides");
+    ASSERT_TRUE(check("after single vertices beside the sides"));
   }
 }

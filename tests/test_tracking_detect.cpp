@@ -64,7 +64,7 @@ double maxCornerError(const tracking::Detection& d, const std::array<cv::Point2d
 TEST(TrackingDetect, RealPhotographsMatchOpenCVsExpectedCorners) {
   if (!std::filesystem::exists(kRealMarkers / "singlemarkersoriginal.json"))
     GTEST_SKIP() << "no real marker photographs at " << kRealMarkers
-                 << " (they live in the shared data folder)";
+                 << " (they live in the shared data folder; PS_SHARED_DIR names it)";
   for (const char* name : {"singlemarkersoriginal", "choriginal"}) {
     std::ifstream f(kRealMarkers / (std::string(name) + ".json"));
     const auto expected = nlohmann::json::parse(f);

@@ -4,7 +4,8 @@
 // (build_paths.cpp.in, written into the build folder), so that a clone in another folder recompiles
 // that file alone and a compiler cache serves every other object (docs/CI.md). The environment
 // variable PLANETSCULPT_SOURCE_DIR, when set, replaces the source tree (and so the shared folder
-// beside it): a binary run against a copy of the tree elsewhere.
+// beside it): a binary run against a copy of the tree elsewhere. PS_SHARED_DIR, when set, names
+// the shared folder itself (a checkout that is not beside it; docs/CI.md).
 #include <filesystem>
 
 namespace ps::app {

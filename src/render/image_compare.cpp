@@ -1,6 +1,7 @@
 #include "render/image_compare.hpp"
 
 #include <opencv2/imgproc.hpp>
+#include <opencv2/quality/qualityssim.hpp>
 #include <stdexcept>
 
 namespace ps::render {
@@ -18,25 +19,14 @@ ImageDifference compareImages(const cv::Mat& image, const cv::Mat& reference, co
   cv::absdiff(image, reference, diff);
   const cv::Scalar s = cv::mean(diff, m);
   d.meanAbsDiff = (s[0] + s[1] + s[2]) / 3;
-  // SSIM on luma, in float.
-  cv::Mat x, y;
+  // SSIM on luma: OpenCV contrib's (the same 11x11 Gaussian windows, sigma 1.5, and constants),
+  // its per-pixel map averaged over the mask. Against the hand-written formula it replaced:
+  // within 2.6e-8 on six pairs (240x180 and 1280x960, blur and noise, SSIM 0.30-0.95), and
+  // 1.1-1.6x its time (float maps kept for the reference image too).
+  cv::Mat x, y, ssim;
   cv::cvtColor(image, x, cv::COLOR_BGR2GRAY);
   cv::cvtColor(reference, y, cv::COLOR_BGR2GRAY);
-  x.convertTo(x, CV_32F);
-  y.convertTo(y, CV_32F);
-  constexpr double c1 = (0.01 * 255) * (0.01 * 255), c2 = (0.03 * 255) * (0.03 * 255);
-  const cv::Size window(11, 11);
-  auto blur = [&](const cv::Mat& a) {
-    cv::Mat b;
-    cv::GaussianBlur(a, b, window, 1.5);
-    return b;
-  };
-  const cv::Mat mx = blur(x), my = blur(y);
-  const cv::Mat mx2 = mx.mul(mx), my2 = my.mul(my), mxy = mx.mul(my);
-  const cv::Mat sx2 = blur(x.mul(x)) - mx2, sy2 = blur(y.mul(y)) - my2, sxy = blur(x.mul(y)) - mxy;
-  cv::Mat num = (2 * mxy + c1).mul(2 * sxy + c2), den = (mx2 + my2 + c1).mul(sx2 + sy2 + c2);
-  cv::Mat ssim;
-  cv::divide(num, den, ssim);
+  cv::quality::QualitySSIM::compute(y, x, ssim);
   d.ssim = cv::mean(ssim, m)[0];
   return d;
 }

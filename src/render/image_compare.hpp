@@ -1,8 +1,8 @@
 #pragma once
 // How close a rendered image is to a reference of the same view (render benchmarks and tests):
 // the structural similarity (SSIM, Wang et al. 2004: 11x11 Gaussian windows, sigma 1.5, on
-// luma) and the mean absolute colour difference, both over the pixels a mask selects (the
-// planet's, where either image drew it).
+// luma; OpenCV contrib's cv::quality::QualitySSIM) and the mean absolute colour difference, both
+// over the pixels a mask selects (the planet's, where either image drew it).
 #include <opencv2/core.hpp>
 
 namespace ps::render {
