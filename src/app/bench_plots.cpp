@@ -64,17 +64,12 @@ PlotSeries bound(const std::string& label, double lo, double hi) {
   return s;
 }
 
-}  // namespace
+// Draws panels into DIR/name (a plot is drawn only when its bench's records are there).
+using SavePlot = std::function<void(const std::vector<PlotPanel>&, const char* name)>;
 
-std::vector<std::filesystem::path> writeBenchPlots(const std::vector<nlohmann::json>& records,
-                                                   const std::filesystem::path& dir) {
-  std::vector<std::filesystem::path> written;
-  auto save = [&](const std::vector<PlotPanel>& panels, const char* name) {
-    std::filesystem::create_directories(dir);
-    io::writePngAtomically(drawPlots(panels), dir / name);
-    written.push_back(dir / name);
-  };
-
+// tessellate.png: time and triangles against the measured screen error, and that error against
+// the dist_max bound.
+void tessellationPlots(const std::vector<nlohmann::json>& records, const SavePlot& save) {
   const auto tess = groups(records, "tessellate",
                            [](const auto& r) { return str(r, "view") + " " + str(r, "grid"); });
   if (!tess.empty()) {
@@ -110,6 +105,10 @@ std::vector<std::filesystem::path> writeBenchPlots(const std::vector<nlohmann::j
     err.series.push_back(bound("bound: error = dist_max", lo, hi));
     save({time, err, tris}, "tessellate.png");
   }
+}
+
+// tessellate_charts.png: the same relief on each chart.
+void chartPlots(const std::vector<nlohmann::json>& records, const SavePlot& save) {
   const auto charts = groups(records, "tessellate_chart", [](const auto& r) {
     return str(r, "chart") + " " + str(r, "view") + " " + str(r, "grid");
   });
@@ -134,7 +133,11 @@ std::vector<std::filesystem::path> writeBenchPlots(const std::vector<nlohmann::j
     }
     save({tris, time}, "tessellate_charts.png");
   }
+}
 
+// export.png: triangles and time against the measured true error, planetsculpt beside Martini,
+// and the measured error against the requested one with its bound.
+void exportPlots(const std::vector<nlohmann::json>& records, const SavePlot& save) {
   const auto exp = groups(
       records, "export",
       [](const auto& r) {
@@ -163,7 +166,11 @@ std::vector<std::filesystem::path> writeBenchPlots(const std::vector<nlohmann::j
     err.series.push_back(bound("bound (planetsculpt): true <= requested", lo, hi));
     save({tris, ms, err}, "export.png");
   }
+}
 
+// erosion.png: throughput against threads with the 100 M target, volume drift against step time
+// with the 1e-9 target.
+void erosionPlots(const std::vector<nlohmann::json>& records, const SavePlot& save) {
   const auto ero = groups(
       records, "erosion",
       [](const auto& r) {
@@ -211,7 +218,10 @@ std::vector<std::filesystem::path> writeBenchPlots(const std::vector<nlohmann::j
     drift.series.push_back(limit);
     save({rate, drift}, "erosion.png");
   }
+}
 
+// track.png: time against tip error for each detector setting.
+void trackingPlots(const std::vector<nlohmann::json>& records, const SavePlot& save) {
   const auto trk = groups(records, "track",
                           [](const auto& r) { return str(r, "detector") + " " + str(r, "scene"); });
   if (!trk.empty()) {
@@ -234,6 +244,20 @@ std::vector<std::filesystem::path> writeBenchPlots(const std::vector<nlohmann::j
     }
     save({med, p95}, "track.png");
   }
+}
+
+}  // namespace
+
+std::vector<std::filesystem::path> writeBenchPlots(const std::vector<nlohmann::json>& records,
+                                                   const std::filesystem::path& dir) {
+  std::vector<std::filesystem::path> written;
+  const SavePlot save = [&](const std::vector<PlotPanel>& panels, const char* name) {
+    std::filesystem::create_directories(dir);
+    io::writePngAtomically(drawPlots(panels), dir / name);
+    written.push_back(dir / name);
+  };
+  for (const auto plot : {tessellationPlots, chartPlots, exportPlots, erosionPlots, trackingPlots})
+    plot(records, save);
   return written;
 }
 
