@@ -23,6 +23,7 @@
 #include <iostream>
 #include <map>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <random>
 
 #include "app/build_paths.hpp"
@@ -171,6 +172,159 @@ fs::path writeHeightsF32(const Heightmap& h, const fs::path& work) {
   return file;
 }
 
+namespace {
+
+struct OurMesh {
+  int threads;
+  double request, trueError, ms;
+  std::size_t triangles;
+};
+struct MartiniMesh {
+  double threshold, trueError, ms;
+  std::size_t triangles;
+};
+
+// Our bounds build on one core (what compares with Martini's one) and on two (what
+// `planetsculpt export` uses on this machine); the mesh pass is single-threaded. One mesher and
+// one mesh for the whole sweep, as Martini keeps its index table in its Martini object: repeats
+// then compare warm processes. The first, cold pass of each request (fresh pages while the mesh
+// is larger than any before) is reported beside the median.
+std::vector<OurMesh> benchOurs(const Heightmap& h, terrain::Terrain& t,
+                               const std::vector<double>& requests, int repeats,
+                               const std::string& grid, std::ostream& out) {
+  std::map<int, double> buildMs;
+  for (const int threads : {1, 2}) {
+    omp_set_num_threads(threads);
+    std::vector<double> builds;
+    for (int r = 0; r < repeats; ++r)
+      builds.push_back(timeMs([&] {
+        t.rebuildBounds(terrain::ErrorRule::kHybridExact, terrain::BoundsContent::kErrorsOnly);
+      }));
+    buildMs[threads] = median(builds);
+  }
+  omp_set_num_threads(1);
+  std::vector<OurMesh> ours;
+  terrain::ErrorMesher mesher;
+  terrain::Mesh mesh;
+  for (const double e : requests) {
+    std::vector<double> ms;
+    const double coldMs = timeMs([&] { mesher.mesh(t, e, mesh); });
+    for (int r = 0; r < repeats; ++r) ms.push_back(timeMs([&] { mesher.mesh(t, e, mesh); }));
+    const double trueErr = terrain::measureTrueError(t, mesh);
+    for (const auto& [threads, build] : buildMs) {
+      ours.push_back({threads, e, trueErr, build + median(ms), mesh.triangleCount()});
+      out << nlohmann::json{{"bench", "export"},
+                            {"tool", "planetsculpt"},
+                            {"heightmap", h.name},
+                            {"grid", grid},
+                            {"rule", "hybrid-exact"},
+                            {"threads", threads},
+                            {"requested_error_m", e},
+                            {"true_error_m", trueErr},
+                            {"triangles", mesh.triangleCount()},
+                            {"ms", build + median(ms)},
+                            {"build_ms", build},
+                            {"mesh_ms", median(ms)},
+                            {"first_mesh_ms", coldMs},
+                            {"info", h.info}}
+                 .dump()
+          << std::endl;
+    }
+  }
+  return ours;
+}
+
+// Martini's meshes (scripts/martini/mesh.mjs's JSON lines), each measured against every sample
+// as ours are. None, with a "skipped" row, when node or the package is missing.
+std::optional<std::vector<MartiniMesh>> benchMartini(const Heightmap& h, const terrain::Terrain& t,
+                                                     const std::vector<double>& thresholds,
+                                                     int repeats, const fs::path& work,
+                                                     const std::string& grid, std::ostream& out) {
+  const std::string martiniJson = runMartini(h, thresholds, repeats, work);
+  if (martiniJson.empty()) {
+    out << nlohmann::json{{"bench", "export"},
+                          {"tool", "martini"},
+                          {"heightmap", h.name},
+                          {"skipped", true}}
+               .dump()
+        << std::endl;
+    return std::nullopt;
+  }
+  std::ifstream f(martiniJson);
+  std::string text;
+  std::getline(f, text);
+  const nlohmann::json m = nlohmann::json::parse(text);
+  const double martiniBuild = median(m["build_ms"].get<std::vector<double>>());
+  std::vector<MartiniMesh> theirs;
+  const auto gside = std::uint64_t(h.side);
+  while (std::getline(f, text)) {
+    const nlohmann::json theirMesh = nlohmann::json::parse(text);
+    const auto verts = theirMesh["vertices"].get<std::vector<std::uint32_t>>();
+    const auto tris = theirMesh["triangles"].get<std::vector<std::uint32_t>>();
+    // Martini's triangle (a, b, c) has its right angle at c; the measure wants it first.
+    terrain::Mesh tm;
+    for (std::size_t i = 0; i + 1 < verts.size(); i += 2)
+      tm.gridIndex.push_back(std::uint64_t(verts[i + 1]) * gside + verts[i]);
+    tm.positions.assign(tm.gridIndex.size(), Eigen::Vector3f::Zero());
+    for (std::size_t k = 0; k + 2 < tris.size(); k += 3) {
+      tm.indices.insert(tm.indices.end(), {tris[k + 2], tris[k], tris[k + 1]});
+    }
+    const double trueErr = terrain::measureTrueError(t, tm);
+    const double meshMs = median(theirMesh["mesh_ms"].get<std::vector<double>>());
+    const double e = theirMesh["max_error"].get<double>();
+    theirs.push_back({e, trueErr, martiniBuild + meshMs, tm.triangleCount()});
+    out << nlohmann::json{{"bench", "export"},
+                          {"tool", "martini"},
+                          {"heightmap", h.name},
+                          {"grid", grid},
+                          {"requested_error_m", e},
+                          {"true_error_m", trueErr},
+                          {"true_over_requested", trueErr / e},
+                          {"triangles", tm.triangleCount()},
+                          {"ms", martiniBuild + meshMs},
+                          {"build_ms", martiniBuild},
+                          {"mesh_ms", meshMs},
+                          {"init_ms", m["init_ms"]}}
+               .dump()
+        << std::endl;
+  }
+  return theirs;
+}
+
+// At equal *true* error: Martini's cheapest mesh whose measured error meets each request.
+void compareAtEqualError(const Heightmap& h, const std::string& grid,
+                         const std::vector<OurMesh>& ours, const std::vector<MartiniMesh>& theirs,
+                         std::ostream& out) {
+  for (const OurMesh& o : ours) {
+    const MartiniMesh* best = nullptr;
+    for (const MartiniMesh& th : theirs) {
+      if (th.trueError <= o.request && (!best || th.triangles < best->triangles)) best = &th;
+    }
+    nlohmann::json line = {{"bench", "export"},
+                           {"tool", "compare"},
+                           {"heightmap", h.name},
+                           {"grid", grid},
+                           {"threads", o.threads},
+                           {"true_error_bound_m", o.request},
+                           {"planetsculpt_triangles", o.triangles},
+                           {"planetsculpt_true_error_m", o.trueError},
+                           {"planetsculpt_ms", o.ms}};
+    if (best) {
+      line["martini_threshold_m"] = best->threshold;
+      line["martini_triangles"] = best->triangles;
+      line["martini_true_error_m"] = best->trueError;
+      line["martini_ms"] = best->ms;
+      line["triangles_ratio"] = double(o.triangles) / double(best->triangles);
+      line["time_ratio"] = o.ms / best->ms;
+    } else {
+      line["martini_triangles"] = nullptr;  // no swept threshold met this bound
+    }
+    out << line.dump() << std::endl;
+  }
+}
+
+}  // namespace
+
 void benchExport(const BenchOptions& options, std::ostream& out) {
   const int side = options.quick ? 513 : 1025;
   const int repeats = std::max(3, options.repeats / 5);
@@ -200,135 +354,9 @@ void benchExport(const BenchOptions& options, std::ostream& out) {
                    options.quick ? 1 : repeats, work, options.outDir, out);
     auto chart = std::make_shared<core::FlatChart>(core::GridSize::fromSide(side), h.dx, h.dy);
     terrain::Terrain t(chart, h.heights);
-    // The bounds build on one core (what compares with Martini's one) and on two (what
-    // `planetsculpt export` uses on this machine); the mesh pass is single-threaded.
-    std::map<int, double> buildMs;
-    for (const int threads : {1, 2}) {
-      omp_set_num_threads(threads);
-      std::vector<double> builds;
-      for (int r = 0; r < repeats; ++r)
-        builds.push_back(timeMs([&] {
-          t.rebuildBounds(terrain::ErrorRule::kHybridExact, terrain::BoundsContent::kErrorsOnly);
-        }));
-      buildMs[threads] = median(builds);
-    }
-    omp_set_num_threads(1);
-    struct Ours {
-      int threads;
-      double request, trueError, ms;
-      std::size_t triangles;
-    };
-    std::vector<Ours> ours;
-    // One mesher and one mesh for the whole sweep, as Martini keeps its index table in its
-    // Martini object: repeats then compare warm processes. The first, cold pass of each request
-    // (fresh pages while the mesh is larger than any before) is reported beside the median.
-    terrain::ErrorMesher mesher;
-    terrain::Mesh mesh;
-    for (const double e : requests) {
-      std::vector<double> ms;
-      const double coldMs = timeMs([&] { mesher.mesh(t, e, mesh); });
-      for (int r = 0; r < repeats; ++r) ms.push_back(timeMs([&] { mesher.mesh(t, e, mesh); }));
-      const double trueErr = terrain::measureTrueError(t, mesh);
-      for (const auto& [threads, build] : buildMs) {
-        ours.push_back({threads, e, trueErr, build + median(ms), mesh.triangleCount()});
-        out << nlohmann::json{{"bench", "export"},
-                              {"tool", "planetsculpt"},
-                              {"heightmap", h.name},
-                              {"grid", grid},
-                              {"rule", "hybrid-exact"},
-                              {"threads", threads},
-                              {"requested_error_m", e},
-                              {"true_error_m", trueErr},
-                              {"triangles", mesh.triangleCount()},
-                              {"ms", build + median(ms)},
-                              {"build_ms", build},
-                              {"mesh_ms", median(ms)},
-                              {"first_mesh_ms", coldMs},
-                              {"info", h.info}}
-                   .dump()
-            << std::endl;
-      }
-    }
-
-    const std::string martiniJson = runMartini(h, thresholds, repeats, work);
-    if (martiniJson.empty()) {
-      out << nlohmann::json{{"bench", "export"},
-                            {"tool", "martini"},
-                            {"heightmap", h.name},
-                            {"skipped", true}}
-                 .dump()
-          << std::endl;
-      continue;
-    }
-    std::ifstream f(martiniJson);
-    std::string text;
-    std::getline(f, text);
-    const nlohmann::json m = nlohmann::json::parse(text);
-    const double martiniBuild = median(m["build_ms"].get<std::vector<double>>());
-    struct Theirs {
-      double threshold, trueError, ms;
-      std::size_t triangles;
-    };
-    std::vector<Theirs> theirs;
-    const auto gside = std::uint64_t(side);
-    while (std::getline(f, text)) {
-      const nlohmann::json theirMesh = nlohmann::json::parse(text);
-      const auto verts = theirMesh["vertices"].get<std::vector<std::uint32_t>>();
-      const auto tris = theirMesh["triangles"].get<std::vector<std::uint32_t>>();
-      // Martini's triangle (a, b, c) has its right angle at c; the measure wants it first.
-      terrain::Mesh tm;
-      for (std::size_t i = 0; i + 1 < verts.size(); i += 2)
-        tm.gridIndex.push_back(std::uint64_t(verts[i + 1]) * gside + verts[i]);
-      tm.positions.assign(tm.gridIndex.size(), Eigen::Vector3f::Zero());
-      for (std::size_t k = 0; k + 2 < tris.size(); k += 3) {
-        tm.indices.insert(tm.indices.end(), {tris[k + 2], tris[k], tris[k + 1]});
-      }
-      const double trueErr = terrain::measureTrueError(t, tm);
-      const double meshMs = median(theirMesh["mesh_ms"].get<std::vector<double>>());
-      const double e = theirMesh["max_error"].get<double>();
-      theirs.push_back({e, trueErr, martiniBuild + meshMs, tm.triangleCount()});
-      out << nlohmann::json{{"bench", "export"},
-                            {"tool", "martini"},
-                            {"heightmap", h.name},
-                            {"grid", grid},
-                            {"requested_error_m", e},
-                            {"true_error_m", trueErr},
-                            {"true_over_requested", trueErr / e},
-                            {"triangles", tm.triangleCount()},
-                            {"ms", martiniBuild + meshMs},
-                            {"build_ms", martiniBuild},
-                            {"mesh_ms", meshMs},
-                            {"init_ms", m["init_ms"]}}
-                 .dump()
-          << std::endl;
-    }
-    // At equal *true* error: Martini's cheapest mesh whose measured error meets each request.
-    for (const Ours& o : ours) {
-      const Theirs* best = nullptr;
-      for (const Theirs& th : theirs) {
-        if (th.trueError <= o.request && (!best || th.triangles < best->triangles)) best = &th;
-      }
-      nlohmann::json line = {{"bench", "export"},
-                             {"tool", "compare"},
-                             {"heightmap", h.name},
-                             {"grid", grid},
-                             {"threads", o.threads},
-                             {"true_error_bound_m", o.request},
-                             {"planetsculpt_triangles", o.triangles},
-                             {"planetsculpt_true_error_m", o.trueError},
-                             {"planetsculpt_ms", o.ms}};
-      if (best) {
-        line["martini_threshold_m"] = best->threshold;
-        line["martini_triangles"] = best->triangles;
-        line["martini_true_error_m"] = best->trueError;
-        line["martini_ms"] = best->ms;
-        line["triangles_ratio"] = double(o.triangles) / double(best->triangles);
-        line["time_ratio"] = o.ms / best->ms;
-      } else {
-        line["martini_triangles"] = nullptr;  // no swept threshold met this bound
-      }
-      out << line.dump() << std::endl;
-    }
+    const std::vector<OurMesh> ours = benchOurs(h, t, requests, repeats, grid, out);
+    const auto theirs = benchMartini(h, t, thresholds, repeats, work, grid, out);
+    if (theirs) compareAtEqualError(h, grid, ours, *theirs, out);
   }
   omp_set_num_threads(threadsBefore);
   benchExportPlanetTin(options.quick, out);
