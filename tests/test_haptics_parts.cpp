@@ -194,7 +194,7 @@ TEST(HapticsBuffers, TripleBufferHandsOverTheNewestValueWithoutWaiting) {
 }
 
 TEST(HapticsBuffers, SpscQueueKeepsOrderAndCountsDrops) {
-  SpscQueue<int> q(5);
+  SpscQueue<int> q(8);
   EXPECT_EQ(q.capacity(), 8u);
   for (int i = 0; i < 10; ++i) q.push(i);
   EXPECT_EQ(q.dropped(), 2u);

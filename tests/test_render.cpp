@@ -15,6 +15,7 @@
 #include <opencv2/imgproc.hpp>
 #include <optional>
 #include <random>
+#include <string>
 
 #include "app/build_paths.hpp"
 #include "edit/brush.hpp"
@@ -93,6 +94,14 @@ cv::Mat bumpyView(render::PlanetRenderer& renderer, render::Shading shading) {
   style.contours = true;
   style.shading = shading;
   return renderer.renderAR({}, planet, tess.tessellate(planet, cam, {}), cam, style);
+}
+
+// The golden image holds llvmpipe's pixels; another rasteriser (a GPU's driver) differs by a
+// level here and there, which is no change of ours.
+bool drawnByLlvmpipe(const render::EglContext& gl) {
+  if (gl.renderer().find("llvmpipe") != std::string::npos) return true;
+  std::printf("golden image not compared: drawn by %s, not llvmpipe\n", gl.renderer().c_str());
+  return false;
 }
 
 cv::Mat goldenImage() {
@@ -252,6 +261,7 @@ TEST(RenderGl, DeterministicAndUploadsOnlyWhatChanged) {
 
   // The golden image (llvmpipe) detects changes only; what the picture must be is checked
   // against the sphere below. Regenerate it with PS_UPDATE_GOLDEN=1 after an intended change.
+  if (!drawnByLlvmpipe(gl)) return;
   if (std::getenv("PS_UPDATE_GOLDEN"))
     cv::imwrite((ps::app::sourceDir() / "tests/golden/render_bumpy.png").string(), a);
   const cv::Mat g = goldenImage();
@@ -264,6 +274,8 @@ TEST(RenderGl, DeterministicAndUploadsOnlyWhatChanged) {
 TEST(RenderGl, TheGoldenImageTripsOnAShadingChange) {
   SKIP_WITHOUT_GL();
   render::EglContext gl;
+  if (!drawnByLlvmpipe(gl))
+    GTEST_SKIP() << "the golden image is llvmpipe's; this is " << gl.renderer();
   render::PlanetRenderer renderer;
   const cv::Mat g = goldenImage();
   ASSERT_FALSE(g.empty()) << "tests/golden/render_bumpy.png";

@@ -6,6 +6,7 @@
 #include <cmath>
 
 #include "core/input_error.hpp"
+#include "haptics/spsc_queue.hpp"
 
 namespace ps::haptics {
 
@@ -37,11 +38,15 @@ HapticLoop::HapticLoop(HapticDevice& device, const HapticSettings& settings,
       core_(checked(settings, options), map),
       options_(options),
       epoch_(Clock::now()),
-      records_(options.recordCapacity),
+      records_(std::make_unique<SpscQueue<ForceRecord>>(options.recordCapacity)),
       timings_(options.timingCapacity) {}
 
 HapticLoop::~HapticLoop() {
   stop();
+}
+
+std::size_t HapticLoop::drain(std::vector<ForceRecord>& out) {
+  return records_->drain(out);
 }
 
 double HapticLoop::now() const {
@@ -86,7 +91,7 @@ LoopStats HapticLoop::stats() const {
   LoopStats s;
   s.ticks = ticks_.load(std::memory_order_relaxed);
   s.missedDeadlines = missed_.load(std::memory_order_relaxed);
-  s.droppedRecords = records_.dropped();
+  s.droppedRecords = records_->dropped();
   for (std::size_t i = 0; i < s.faults.size(); ++i)
     s.faults[i] = faults_[i].load(std::memory_order_relaxed);
   s.maxComputeUs = maxComputeUs_.load(std::memory_order_relaxed);
@@ -126,7 +131,7 @@ void HapticLoop::run(std::stop_token stop) {
     const bool ok = device_.read(t, pos);
     const ForceRecord r = core_.tick(t, ok, pos, patch.valid() ? &patch : nullptr);
     device_.command(r.force);
-    records_.push(r);
+    records_->push(r);
     latest_.back() = r;
     latest_.publish();
     if (r.fault != Fault::kNone)

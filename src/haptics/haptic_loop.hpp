@@ -14,6 +14,7 @@
 #include <atomic>
 #include <chrono>
 #include <cstdint>
+#include <memory>
 #include <optional>
 #include <string>
 #include <thread>
@@ -21,11 +22,13 @@
 
 #include "haptics/device.hpp"
 #include "haptics/haptic_core.hpp"
-#include "haptics/spsc_queue.hpp"
 #include "haptics/terrain_patch.hpp"
 #include "haptics/triple_buffer.hpp"
 
 namespace ps::haptics {
+
+template <class T>
+class SpscQueue;
 
 struct LoopOptions {
   double spinSeconds = 200e-6;        // busy-wait before each deadline, [0, period)
@@ -76,7 +79,7 @@ class HapticLoop {
   void publishPatch(const terrain::Terrain& terrain, const Eigen::Vector3d& centre, int halfSize,
                     const terrain::MeshPatch* surface = nullptr);
   // Editor thread: everything queued since the last drain, oldest first.
-  std::size_t drain(std::vector<ForceRecord>& out) { return records_.drain(out); }
+  std::size_t drain(std::vector<ForceRecord>& out);
   // Editor thread: the newest tick (tip and force), if any ran.
   std::optional<ForceRecord> latest();
 
@@ -103,7 +106,8 @@ class HapticLoop {
   std::chrono::steady_clock::time_point epoch_;
   TripleBuffer<TerrainPatch> patches_;
   TripleBuffer<ForceRecord> latest_;
-  SpscQueue<ForceRecord> records_;
+  std::unique_ptr<SpscQueue<ForceRecord>>
+      records_;  // haptics/spsc_queue.hpp (Boost), kept out of this header
   std::vector<TickTiming> timings_;
   std::atomic<std::size_t> timingCount_{0};
   std::atomic<std::uint64_t> ticks_{0}, missed_{0};

@@ -2,8 +2,8 @@
 // The interpolation kernels of import and export's resampling (heightmap_import.cpp,
 // heightmap_export.cpp): bilinear, and Catmull-Rom cubic (Keys, a = -0.5), which reproduces
 // quadratics and roughly halves the error of a round trip through the grid on smooth relief
-// (docs/EXPORT.md's import section gives the measured figures). Samples at integer coordinates; x wraps round a
-// period when asked, y (and x otherwise) clamps to the edge.
+// (docs/EXPORT.md's import section gives the measured figures). Samples at integer coordinates; x
+// wraps round a period when asked, y (and x otherwise) clamps to the edge.
 #include <algorithm>
 #include <array>
 #include <cmath>
