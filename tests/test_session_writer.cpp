@@ -281,3 +281,26 @@ TEST(SessionWriter, SigkillDuringBackgroundSavesRecoversAPlanetTheSessionHad) {
   std::cout << "kills while a planet file was written: " << killedWhileSaving
             << " of 3; save marks in the killed sessions' journals: " << recoveredFromMark << "\n";
 }
+
+TEST(StrokeJournal, SaveMarksRoundTripAndABadOneEndsTheReadableRecords) {
+  io::JournalBase base{65, 6.4e6, 0x1234u, 3};
+  std::vector<unsigned char> b = io::encodeJournalHeader(base);
+  const std::vector<io::JournalHeight> h{{5, 1.5f}, {70, -2.0f}};
+  io::encodeJournalRecord(io::JournalRecordKind::kStroke, 0, h, b);
+  io::encodeJournalMark({0xCAFEF00Du, 1, 4}, 1, b);
+  io::encodeJournalRecord(io::JournalRecordKind::kUndo, 2, h, b);
+  const auto j = io::parseStrokeJournal(b, "j");
+  ASSERT_EQ(j.records.size(), 3u) << j.warning;
+  EXPECT_EQ(j.records[1].kind, io::JournalRecordKind::kSaveMark);
+  EXPECT_EQ(j.records[1].mark, (io::JournalMark{0xCAFEF00Du, 1, 4}));
+  EXPECT_TRUE(j.records[1].heights.empty());
+  EXPECT_EQ(io::heightRecordsFrom(j, 0), 2u);
+  EXPECT_EQ(io::heightRecordsFrom(j, 1), 1u);
+  // A mark whose resume point lies after itself is not one the writer writes.
+  std::vector<unsigned char> bad = io::encodeJournalHeader(base);
+  io::encodeJournalRecord(io::JournalRecordKind::kStroke, 0, h, bad);
+  io::encodeJournalMark({1, 2, 4}, 1, bad);
+  const auto k = io::parseStrokeJournal(bad, "j");
+  EXPECT_EQ(k.records.size(), 1u);
+  EXPECT_NE(k.warning.find("save mark"), std::string::npos) << k.warning;
+}

@@ -68,8 +68,9 @@ class Recovery {
 struct SessionStoreOptions {
   double autosaveSeconds = 60;  // <= 0: no autosave (saves at start, on request and at the end)
   bool syncRecords = true;      // fdatasync every stroke, undo and redo record
-  // Heights the frame loop copies into the save's shadow per tick (HeightsShadow::catchUp).
-  std::size_t copyBytesPerTick = std::size_t(8) << 20;
+  // Heights the frame loop copies into the save's shadow per tick (HeightsShadow::catchUp):
+  // about a millisecond; a stroke across the seam dirties whole rows (8193²: 32 KiB each).
+  std::size_t copyBytesPerTick = std::size_t(2) << 20;
   SessionWriterOptions writer{};
 };
 
