@@ -66,6 +66,11 @@ std::uint32_t savePlanetInSteps(const core::Chart& chart, std::span<const float>
             // Flushed step by step, so the final flush before the rename is short.
             if (::fdatasync(fd) != 0)
               throw std::runtime_error("cannot flush " + path.string() + " to disk (disk full?)");
+            // On disk now: its page cache can go, so that saving 256 MiB again and again does
+            // not push the machine's memory into reclaim (which stalls the frame loop too).
+            const std::size_t done = std::min(step, total - at);
+            (void)::posix_fadvise(fd, off_t(kPlanetHeaderBytes + prologue.metadata.size() + at),
+                                  off_t(done), POSIX_FADV_DONTNEED);
             between();
           }
         } catch (...) {
