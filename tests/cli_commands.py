@@ -529,7 +529,7 @@ def finite_numbers(x, where):
         fail(f"{where} is {x}")
 
 
-BENCHES = ("bounds", "charts", "deform", "erosion", "export", "frame", "haptics", "render", "sand-tin",
+BENCHES = ("bounds", "charts", "deform", "erosion", "export", "frame", "haptics", "live", "render", "sand-tin",
            "tessellate", "track")
 
 
@@ -554,6 +554,9 @@ def check_bench_row(r):
                                                 or r.get("footprint_error_m", 0) > 1e-6
                                                 or r.get("outside_error_ratio", 0) > 1 + 1e-9):
         fail(f"export overlay: {r}")
+    if b == "live" and r.get("saving") and (r["saves_done"] < 2 or r["records"] <= 0
+                                           or r["saves_done"] > r["saves_started"]):
+        fail(f"live: the session with saving on saved or journaled nothing: {r}")
     if b == "deform" and r.get("modified_vertices", 1) <= 0:
         fail(f"deform: no vertex modified in {r}")
     if b == "deform" and "modified_vertices" in r and r["modified_vertices"] != r["bruteforce_vertices"]:

@@ -93,6 +93,7 @@ TEST(SessionStore, CrashAfterRandomStrokesRecoversTheLiveHeightsBitForBit) {
       now += 1 + double(rng() % 4);
       if (i + 4 < actions) store->tick(now, pipe.inStroke());  // no save for the last few
     }
+    store->flush();  // what the writer thread has queued reaches the disk
     ASSERT_TRUE(store->error().empty()) << store->error();
     EXPECT_GT(store->saves(), 1u) << "the test should cross autosaves";
     ASSERT_GT(store->recordsSinceSave(), 0u);
@@ -126,6 +127,7 @@ TEST(SessionStore, UndoIsJournaledAsTheHeightsBefore) {
   pipe.undo();
   pipe.undo();
   ASSERT_TRUE(sameHeights(t.heights(), start));
+  store.flush();
   const auto j = io::readStrokeJournal(dir / "planet.journal");
   ASSERT_EQ(j.records.size(), 4u);
   EXPECT_EQ(j.records[2].kind, io::JournalRecordKind::kUndo);
@@ -134,6 +136,7 @@ TEST(SessionStore, UndoIsJournaledAsTheHeightsBefore) {
   ASSERT_EQ(rec.state(), Recovery::State::kRecoverable) << rec.message();
   EXPECT_TRUE(sameHeights(rec.recover()->heights(), start));
   pipe.redo();
+  store.flush();
   EXPECT_TRUE(
       sameHeights(Recovery::inspect(SessionFiles::in(dir)).recover()->heights(), t.heights()));
   pipe.journal().setListener(nullptr);
@@ -153,10 +156,14 @@ TEST(SessionStore, AutosaveWaitsForTheIntervalAChangeAndTheEndOfAStroke) {
   pipe.beginStroke(brush, {p, 0});
   EXPECT_FALSE(store.tick(2000, true)) << "a stroke is open";
   pipe.endStroke();
+  store.flush();
   EXPECT_EQ(store.recordsSinceSave(), 1u);
   EXPECT_FALSE(store.tick(100 + 59.9, false)) << "before the interval";
   EXPECT_TRUE(store.tick(2000, false));
+  EXPECT_FALSE(store.tick(5000, false)) << "nothing changed since";
+  store.flush();
   EXPECT_EQ(store.saves(), 2u);
+  EXPECT_EQ(store.savesDone(), 2u);
   EXPECT_EQ(store.recordsSinceSave(), 0u);
   EXPECT_EQ(fs::file_size(dir / "planet.journal"), io::kStrokeJournalHeaderBytes);
   EXPECT_TRUE(sameHeights(io::readPlanetFile(dir / "planet.planet").heights, t.heights()));
@@ -180,6 +187,7 @@ TEST(StrokeJournal, TornLastRecordAtEveryByteRecoversTheCompleteStrokes) {
     states.emplace_back(t.heights().begin(), t.heights().end());
   }
   pipe.journal().setListener(nullptr);
+  store->flush();
   const auto full = fileBytes(dir / "planet.journal");
   const auto whole = io::parseStrokeJournal(full, "j");
   ASSERT_EQ(whole.records.size(), 4u);
@@ -337,6 +345,7 @@ TEST(SessionStore, DisplacedAndSettledSandThroughTheStepperRecoversBitForBit) {
     }
     EXPECT_GT(settledAfter, 0);
     // A crash now: the stroke's vertices as they are (settled between its stamps).
+    store.flush();
     if (store.recordsSinceSave() > 0) {
       const Recovery rec = Recovery::inspect(SessionFiles::in(dir));
       ASSERT_EQ(rec.state(), Recovery::State::kRecoverable) << rec.message();
@@ -354,6 +363,7 @@ TEST(SessionStore, DisplacedAndSettledSandThroughTheStepperRecoversBitForBit) {
         if (!r.settled.empty()) store.recordRegion(r.settled);
       }
     }
+    store.flush();
     ASSERT_TRUE(store.error().empty()) << store.error();
     EXPECT_GT(settledFrames, 3) << "the scene should settle sand";
     EXPECT_GE(stepper.summary().strokes, 1);

@@ -18,7 +18,8 @@ void fsyncPath(const std::filesystem::path& p, bool directory) {
 }  // namespace
 
 void writeAtomically(const std::filesystem::path& path,
-                     const std::function<void(const std::filesystem::path& tmp)>& write) {
+                     const std::function<void(const std::filesystem::path& tmp)>& write,
+                     const std::function<void()>& beforeRename) {
   const auto dir = path.has_parent_path() ? path.parent_path() : std::filesystem::path(".");
   // Built with append rather than operator+ chains: g++ 12 at -O3 raises a false -Wrestrict there.
   std::string name(1, '.');
@@ -27,6 +28,7 @@ void writeAtomically(const std::filesystem::path& path,
   try {
     write(tmp);
     fsyncPath(tmp, false);
+    if (beforeRename) beforeRename();
     std::filesystem::rename(tmp, path);
     fsyncPath(dir, true);
   } catch (...) {

@@ -529,6 +529,21 @@ std::unique_ptr<terrain::Terrain> loadPlanet(const std::filesystem::path& path) 
   }
 }
 
+PlanetPrologue planetPrologue(const core::Chart& chart, terrain::ErrorRule rule,
+                              std::uint32_t heightsCrc, const PlanetSaveOptions& options) {
+  if (options.encoding != HeightEncoding::kFloat32)
+    throw std::invalid_argument("planetPrologue: float32 heights only");
+  PlanetPrologue p;
+  p.metadata = metadataText(options);
+  const std::uint64_t heightBytes = chart.grid().count() * sizeof(float);
+  const std::uint32_t body = std::uint32_t(::crc32_combine(
+      crc(0, reinterpret_cast<const unsigned char*>(p.metadata.data()), p.metadata.size()),
+      heightsCrc, z_off_t(heightBytes)));
+  p.header = makeHeader(chart, HeightEncoding::kFloat32, 1.0, 0.0, rule,
+                        std::uint32_t(p.metadata.size()), heightBytes, body);
+  return p;
+}
+
 void savePlanet(const core::Chart& chart, std::span<const float> heights, terrain::ErrorRule rule,
                 const std::filesystem::path& path, const PlanetSaveOptions& options) {
   const Prepared p = prepare(chart, heights, rule, options);

@@ -3,6 +3,7 @@
 // specification. A fixed 128-byte little-endian header (magic, version, chart, grid, radius or
 // spacing, height encoding with scale and offset, error rule, section sizes, a CRC-32 of the
 // body and one of the header), then a UTF-8 JSON metadata block, then the heights row by row.
+#include <array>
 #include <cstdint>
 #include <filesystem>
 #include <memory>
@@ -67,6 +68,16 @@ void savePlanet(const core::Chart& chart, std::span<const float> heights, terrai
                 const std::filesystem::path& path, const PlanetSaveOptions& options = {});
 void savePlanet(const terrain::Terrain& terrain, const std::filesystem::path& path,
                 const PlanetSaveOptions& options = {});
+
+// The header and metadata block savePlanet writes before float32 heights (scale 1, offset 0)
+// whose CRC-32 (heightsChecksum, little-endian bytes) is `heightsCrc`: for writers that stream
+// the heights themselves (io/stepped_save.hpp).
+struct PlanetPrologue {
+  std::array<unsigned char, kPlanetHeaderBytes> header{};
+  std::string metadata;
+};
+PlanetPrologue planetPrologue(const core::Chart& chart, terrain::ErrorRule rule,
+                              std::uint32_t heightsCrc, const PlanetSaveOptions& options = {});
 
 // True when the first bytes are a planet file's magic.
 bool looksLikePlanetFile(std::span<const unsigned char> firstBytes);

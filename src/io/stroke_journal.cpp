@@ -62,12 +62,13 @@ std::string errnoText() {
 }  // namespace
 
 std::string toString(JournalRecordKind kind) {
-  constexpr core::NameTable<JournalRecordKind, 4> kNames{
+  constexpr core::NameTable<JournalRecordKind, 5> kNames{
       "journal record kind",
       {{{JournalRecordKind::kStroke, "stroke"},
         {JournalRecordKind::kUndo, "undo"},
         {JournalRecordKind::kRedo, "redo"},
-        {JournalRecordKind::kSettle, "settle"}}}};
+        {JournalRecordKind::kSettle, "settle"},
+        {JournalRecordKind::kSaveMark, "save mark"}}}};
   // A kind read from a damaged file has no name; its number is what helps.
   if (!kNames.contains(kind)) return "record kind " + std::to_string(std::uint32_t(kind));
   return kNames.nameOf(kind);
@@ -128,6 +129,19 @@ void encodeJournalRecord(JournalRecordKind kind, std::uint32_t sequence,
   put32(out, crc(0, out.data() + start, out.size() - start));
 }
 
+void encodeJournalMark(const JournalMark& mark, std::uint32_t sequence,
+                       std::vector<unsigned char>& out) {
+  const std::size_t start = out.size();
+  out.insert(out.end(), kRecordTag, kRecordTag + 4);
+  put32(out, std::uint32_t(JournalRecordKind::kSaveMark));
+  put32(out, sequence);
+  put32(out, 2);  // two 8-byte pairs, as a record's heights
+  put32(out, mark.heightsCrc);
+  put32(out, mark.resumeAt);
+  put64(out, mark.generation);
+  put32(out, crc(0, out.data() + start, out.size() - start));
+}
+
 JournalContents parseStrokeJournal(std::span<const unsigned char> bytes, const std::string& name) {
   JournalContents j;
   j.fileBytes = bytes.size();
@@ -140,10 +154,10 @@ JournalContents parseStrokeJournal(std::span<const unsigned char> bytes, const s
                            std::to_string(kStrokeJournalHeaderBytes) + ")");
   const unsigned char* h = bytes.data();
   const std::uint32_t version = get32(h + 8);
-  if (version != kStrokeJournalVersion)
+  if (version < 1 || version > kStrokeJournalVersion)
     throw core::InputError(name + ": stroke journal version " + std::to_string(version) +
-                           " (this program reads version " + std::to_string(kStrokeJournalVersion) +
-                           ")");
+                           " (this program reads versions 1 to " +
+                           std::to_string(kStrokeJournalVersion) + ")");
   const std::uint32_t stored = get32(h + kStrokeJournalHeaderBytes - 4),
                       computed = crc(0, h, kStrokeJournalHeaderBytes - 4);
   if (stored != computed || get32(h + 12) != kStrokeJournalHeaderBytes)
@@ -194,7 +208,7 @@ JournalContents parseStrokeJournal(std::span<const unsigned char> bytes, const s
       stop("fails its checksum (stored " + hex(want) + ", computed " + hex(got) + ")");
       break;
     }
-    if (kind < 1 || kind > 4 || sequence != j.records.size()) {
+    if (kind < 1 || kind > 5 || sequence != j.records.size()) {
       stop("has kind " + std::to_string(kind) + " and sequence number " + std::to_string(sequence) +
            " (expected " + std::to_string(j.records.size()) + ")");
       break;
@@ -202,6 +216,19 @@ JournalContents parseStrokeJournal(std::span<const unsigned char> bytes, const s
     JournalRecord rec;
     rec.kind = JournalRecordKind(kind);
     rec.sequence = sequence;
+    if (rec.kind == JournalRecordKind::kSaveMark) {
+      rec.mark = {get32(r + 16), get32(r + 20), get64(r + 24)};
+      if (n != 2 || rec.mark.resumeAt > sequence) {
+        stop("is a save mark with " + std::to_string(n) + " pairs and resume point " +
+             std::to_string(rec.mark.resumeAt) + " (expected 2 pairs and at most " +
+             std::to_string(sequence) + ")");
+        break;
+      }
+      j.records.push_back(std::move(rec));
+      at += size;
+      j.validBytes = at;
+      continue;
+    }
     rec.heights.resize(n);
     bool ok = true;
     for (std::uint32_t i = 0; i < n && ok; ++i) {
@@ -228,16 +255,23 @@ JournalContents readStrokeJournal(const std::filesystem::path& path) {
   return parseStrokeJournal(bytes, path.string());
 }
 
-void applyJournal(const JournalContents& journal, terrain::Terrain& planet,
-                  const std::string& name) {
+std::size_t heightRecordsFrom(const JournalContents& journal, std::size_t firstRecord) {
+  std::size_t n = 0;
+  for (std::size_t i = firstRecord; i < journal.records.size(); ++i)
+    n += journal.records[i].kind != JournalRecordKind::kSaveMark;
+  return n;
+}
+
+void applyJournal(const JournalContents& journal, terrain::Terrain& planet, const std::string& name,
+                  std::size_t firstRecord) {
   const core::GridSize& g = planet.grid();
   if (journal.base.side != std::uint32_t(g.side()))
     throw core::InputError(name + ": the journal continues a " + std::to_string(journal.base.side) +
                            "-side grid, the planet's side is " + std::to_string(g.side()));
   auto h = planet.mutableHeights();
   int uMin = g.m(), uMax = 0, vMin = g.m(), vMax = 0;
-  for (const JournalRecord& r : journal.records) {
-    for (const JournalHeight& x : r.heights) {
+  for (std::size_t i = firstRecord; i < journal.records.size(); ++i) {
+    for (const JournalHeight& x : journal.records[i].heights) {  // a mark has none
       h[x.index] = x.height;
       const int u = int(x.index % std::uint32_t(g.side())), v = int(x.index / g.side());
       uMin = std::min(uMin, u), uMax = std::max(uMax, u);
@@ -264,9 +298,12 @@ bool journalAlreadyIn(const JournalContents& journal, std::span<const float> hei
   return true;
 }
 
-StrokeJournalWriter::StrokeJournalWriter(const std::filesystem::path& path, const JournalBase& base)
+StrokeJournalWriter::StrokeJournalWriter(const std::filesystem::path& path, const JournalBase& base,
+                                         std::span<const PendingRecord> carried)
     : path_(path), base_(base) {
-  const std::vector<unsigned char> header = encodeJournalHeader(base);
+  std::vector<unsigned char> header = encodeJournalHeader(base);
+  for (const PendingRecord& r : carried)
+    encodeJournalRecord(r.kind, sequence_++, r.heights, header);
   writeAtomically(path, [&](const std::filesystem::path& tmp) {
     std::ofstream f(tmp, std::ios::binary | std::ios::trunc);
     f.write(reinterpret_cast<const char*>(header.data()), std::streamsize(header.size()));
@@ -288,6 +325,18 @@ void StrokeJournalWriter::append(JournalRecordKind kind, std::span<const Journal
                                  bool doSync) {
   buffer_.clear();
   encodeJournalRecord(kind, sequence_, heights, buffer_);
+  writeBuffer();
+  if (doSync) sync();
+}
+
+void StrokeJournalWriter::appendMark(const JournalMark& mark) {
+  buffer_.clear();
+  encodeJournalMark(mark, sequence_, buffer_);
+  writeBuffer();
+  sync();
+}
+
+void StrokeJournalWriter::writeBuffer() {
   std::size_t done = 0;
   while (done < buffer_.size()) {
     const ssize_t n = ::write(fd_, buffer_.data() + done, buffer_.size() - done);
@@ -303,7 +352,6 @@ void StrokeJournalWriter::append(JournalRecordKind kind, std::span<const Journal
   }
   bytes_ += buffer_.size();
   ++sequence_;
-  if (doSync) sync();
 }
 
 void StrokeJournalWriter::sync() {

@@ -4,7 +4,10 @@
 // record per finished stroke, undo, redo or sand-settling frame, each the heights some vertices
 // hold after it, with a CRC-32 of its own. Records are appended and flushed; a crash can leave
 // at most the last record torn, and a reader ignores that record (with a warning), never
-// anything before it.
+// anything before it. A save made while the session goes on (session/session_writer.hpp) leaves
+// a save mark in the journal: the heights' CRC-32 of the planet file it wrote and the first
+// record that file does not hold, so the journal still recovers once that file replaced the old
+// one and before the journal is started again for it.
 #include <cstdint>
 #include <filesystem>
 #include <span>
@@ -15,11 +18,18 @@
 
 namespace ps::io {
 
-inline constexpr std::uint32_t kStrokeJournalVersion = 1;
+// Written: 2 (adds the save mark); read: 1 and 2.
+inline constexpr std::uint32_t kStrokeJournalVersion = 2;
 inline constexpr std::size_t kStrokeJournalHeaderBytes = 64;
 inline constexpr std::size_t kStrokeJournalRecordOverhead = 20;  // 16 before the heights, 4 after
 
-enum class JournalRecordKind : std::uint32_t { kStroke = 1, kUndo = 2, kRedo = 3, kSettle = 4 };
+enum class JournalRecordKind : std::uint32_t {
+  kStroke = 1,
+  kUndo = 2,
+  kRedo = 3,
+  kSettle = 4,
+  kSaveMark = 5,  // no heights: a JournalMark
+};
 std::string toString(JournalRecordKind kind);
 
 // One vertex and the height it holds after the record.
@@ -40,10 +50,21 @@ struct JournalBase {
 std::uint32_t heightsChecksum(std::span<const float> heights);
 JournalBase journalBaseOf(const terrain::Terrain& planet, std::uint64_t generation = 0);
 
+// A planet file saved from the heights the journal's records up to `resumeAt` give: once that
+// file replaced the one the header names, the records from `resumeAt` on (marks skipped)
+// continue it.
+struct JournalMark {
+  std::uint32_t heightsCrc = 0;
+  std::uint32_t resumeAt = 0;  // a record sequence number, at most the mark's own
+  std::uint64_t generation = 0;
+  bool operator==(const JournalMark&) const = default;
+};
+
 struct JournalRecord {
   JournalRecordKind kind = JournalRecordKind::kStroke;
   std::uint32_t sequence = 0;  // 0, 1, 2, ... from the header on
   std::vector<JournalHeight> heights;
+  JournalMark mark;  // kSaveMark only
 };
 
 struct JournalContents {
@@ -61,20 +82,31 @@ struct JournalContents {
 JournalContents parseStrokeJournal(std::span<const unsigned char> bytes, const std::string& name);
 JournalContents readStrokeJournal(const std::filesystem::path& path);
 
-// The heights of `records` written into `planet` (bounds updated over what changed). Throws
-// core::InputError naming `name` when the journal's base is not the planet's grid.
-void applyJournal(const JournalContents& journal, terrain::Terrain& planet,
-                  const std::string& name);
+// The heights of `records` from `firstRecord` on (save marks skipped) written into `planet`
+// (bounds updated over what changed). Throws core::InputError naming `name` when the journal's
+// base is not the planet's grid.
+void applyJournal(const JournalContents& journal, terrain::Terrain& planet, const std::string& name,
+                  std::size_t firstRecord = 0);
+// The records with heights from `firstRecord` on (save marks not counted).
+std::size_t heightRecordsFrom(const JournalContents& journal, std::size_t firstRecord);
 
 // True when `heights` already holds every vertex's last height in `records` (the journal adds
 // nothing to them: e.g. a planet saved after the records, before the journal was restarted).
 bool journalAlreadyIn(const JournalContents& journal, std::span<const float> heights);
 
+// One record to write: its kind and heights (the writer numbers it).
+struct PendingRecord {
+  JournalRecordKind kind = JournalRecordKind::kStroke;
+  std::vector<JournalHeight> heights;
+};
+
 // Appends records to a journal file. The constructor replaces `path` atomically by a file
-// holding only the header for `base`.
+// holding the header for `base` and `carried` (records made after the planet `base` names was
+// taken, numbered from 0), flushed to disk.
 class StrokeJournalWriter {
  public:
-  StrokeJournalWriter(const std::filesystem::path& path, const JournalBase& base);
+  StrokeJournalWriter(const std::filesystem::path& path, const JournalBase& base,
+                      std::span<const PendingRecord> carried = {});
   ~StrokeJournalWriter();
   StrokeJournalWriter(const StrokeJournalWriter&) = delete;
   StrokeJournalWriter& operator=(const StrokeJournalWriter&) = delete;
@@ -83,6 +115,8 @@ class StrokeJournalWriter {
   // loss may, and readers ignore a torn last record); `sync` then fdatasync()s it to disk.
   // Throws std::runtime_error naming the file when the disk refuses.
   void append(JournalRecordKind kind, std::span<const JournalHeight> heights, bool sync);
+  // A save mark (JournalMark), always flushed to disk.
+  void appendMark(const JournalMark& mark);
   void sync();
 
   const std::filesystem::path& path() const { return path_; }
@@ -97,11 +131,14 @@ class StrokeJournalWriter {
   std::uint32_t sequence_ = 0;
   std::size_t bytes_ = 0;
   std::vector<unsigned char> buffer_;
+  void writeBuffer();
 };
 
 // The bytes of a record and of a header, as the writer writes them (tests).
 std::vector<unsigned char> encodeJournalHeader(const JournalBase& base);
 void encodeJournalRecord(JournalRecordKind kind, std::uint32_t sequence,
                          std::span<const JournalHeight> heights, std::vector<unsigned char>& out);
+void encodeJournalMark(const JournalMark& mark, std::uint32_t sequence,
+                       std::vector<unsigned char>& out);
 
 }  // namespace ps::io

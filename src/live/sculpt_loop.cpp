@@ -178,11 +178,14 @@ class SculptLoop {
   // Exports that finished, the autosave between strokes, and what the panel says about files.
   void keepFiles() {
     if (const auto x = exporter_.poll()) reportExport(*x);
-    if (store_.tick(now(), stepper_.pipeline().inStroke())) {
-      ++result_.autosaves;
-      char ms[32];
-      std::snprintf(ms, sizeof ms, " (%.0f ms)", store_.lastSaveMs());
-      note_ = "autosaved " + savePath_.string() + ms;
+    // Saves run on the store's writer thread: started here, reported when done.
+    store_.tick(now(), stepper_.pipeline().inStroke());
+    if (const std::uint64_t done = store_.savesDone(); done > savesSeen_) {
+      result_.autosaves += int(done - savesSeen_);
+      savesSeen_ = done;
+      char ms[48];
+      std::snprintf(ms, sizeof ms, " (%.0f ms, in the background)", store_.lastSaveMs());
+      note_ = "saved " + savePath_.string() + ms;
       std::cerr << "live: " << note_ << "\n";
     }
     if (!store_.error().empty()) note_ = store_.error();
@@ -313,12 +316,9 @@ class SculptLoop {
       note_ = e.what();
     }
     if (actions.save) {
-      try {
-        save();
-        note_ = "saved " + savePath_.string();
-      } catch (const std::exception& e) {
-        note_ = std::string("not saved: ") + e.what();
-      }
+      stepper_.endStroke();
+      store_.requestSave();  // at the next frame, in the background
+      note_ = "saving " + savePath_.string() + " ...";
     }
     if (actions.exportPlanet) {
       try {
@@ -352,14 +352,15 @@ class SculptLoop {
     if (const auto x = exporter_.wait()) reportExport(*x);
     if (shell_.interrupted) std::cerr << "live: interrupted; saving the planet\n";
     store_.save(now());
-    if (store_.recordsWritten() > 0) {
-      char line[160];
+    const session::SessionWriterStats w = store_.writerStats();
+    if (w.records > 0) {
+      char line[256];
       std::snprintf(line, sizeof line,
-                    "live: journal: %zu record%s written and flushed, %.1f ms on average, %.1f "
-                    "ms at most; last save %.0f ms\n",
-                    store_.recordsWritten(), store_.recordsWritten() == 1 ? "" : "s",
-                    store_.recordTotalMs() / double(store_.recordsWritten()), store_.recordMaxMs(),
-                    store_.lastSaveMs());
+                    "live: journal: %zu record%s written and flushed by the writer thread, %.1f "
+                    "ms on average, %.1f ms at most, on disk %.1f ms after the stroke at most; "
+                    "saves %.0f ms at most (the last %.0f ms); the frame's copy %.2f ms at most\n",
+                    w.records, w.records == 1 ? "" : "s", w.recordTotalMs / double(w.records),
+                    w.recordMaxMs, w.recordLagMaxMs, w.saveMaxMs, w.lastSaveMs, store_.copyMaxMs());
       std::cerr << line;
     }
     result_.saved = savePath_;
@@ -456,6 +457,7 @@ class SculptLoop {
   terrain::SplicedView spliced_;  // the view with the sand TIN's region (viewPatch)
   Texture overview_;
   session::SessionStore store_;
+  std::uint64_t savesSeen_ = 1;  // the store's save at the start
   replay::SettingsControl settingsControl_;
   replay::TimelineWriter timeline_;
   const std::uint32_t startCrc_;

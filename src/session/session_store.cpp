@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstdint>
 #include <exception>
 #include <system_error>
 
@@ -56,7 +57,30 @@ Recovery Recovery::inspect(const SessionFiles& files) {
   const std::uint32_t crc = io::heightsChecksum(planet.heights);
   if (side == j.base.side && crc == j.base.heightsCrc) {
     r.state_ = State::kRecoverable;
+    r.baseCrc_ = crc;
     r.message_ = holds + " newer than " + pname + " (save " + std::to_string(j.base.generation) +
+                 " of that session): the last session did not end normally" + torn;
+    return r;
+  }
+  // A save made while the session went on replaced the planet file, the journal not yet
+  // started again for it (session/session_writer.hpp): its mark says where the file's heights
+  // end in the journal.
+  for (std::size_t i = j.records.size(); side == j.base.side && i-- > 0;) {
+    const io::JournalRecord& m = j.records[i];
+    if (m.kind != io::JournalRecordKind::kSaveMark || m.mark.heightsCrc != crc) continue;
+    r.first_ = m.mark.resumeAt;
+    r.baseCrc_ = crc;
+    const std::size_t after = io::heightRecordsFrom(j, r.first_);
+    if (after == 0) {
+      r.state_ = State::kAlreadySaved;
+      r.message_ =
+          holds + " that " + pname + " already holds (saved after them); nothing to recover";
+      return r;
+    }
+    r.state_ = State::kRecoverable;
+    r.message_ = jname + " holds " + std::to_string(after) + " record" + (after == 1 ? "" : "s") +
+                 " (strokes, undos, redos) newer than " + pname + " (save " +
+                 std::to_string(m.mark.generation) +
                  " of that session): the last session did not end normally" + torn;
     return r;
   }
@@ -76,10 +100,10 @@ std::unique_ptr<terrain::Terrain> Recovery::recover() const {
   if (state_ != State::kRecoverable)
     throw core::InputError(files_.journal.string() + ": nothing to recover (" + message_ + ")");
   auto planet = io::loadPlanet(files_.planet);
-  if (io::heightsChecksum(planet->heights()) != journal_->base.heightsCrc)
+  if (io::heightsChecksum(planet->heights()) != baseCrc_)
     throw core::InputError(files_.planet.string() + " changed since " + files_.journal.string() +
                            " was inspected; not applied");
-  io::applyJournal(*journal_, *planet, files_.journal.string());
+  io::applyJournal(*journal_, *planet, files_.journal.string(), first_);
   return planet;
 }
 
@@ -93,57 +117,66 @@ std::filesystem::path Recovery::setAside() const {
 
 SessionStore::SessionStore(terrain::Terrain& planet, SessionFiles files,
                            SessionStoreOptions options, double now)
-    : planet_(planet), files_(std::move(files)), options_(options) {
+    : planet_(planet),
+      files_(std::move(files)),
+      options_(options),
+      shadow_(planet),
+      writer_(files_.planet, files_.journal, planet.chartPtr(), options.writer) {
   save(now);
 }
 
-void SessionStore::save(double now) {
-  const auto t0 = std::chrono::steady_clock::now();
-  // The planet first: a crash before the journal starts again leaves the old journal, whose
-  // records the new planet file already holds (Recovery says kAlreadySaved).
-  io::savePlanet(planet_, files_.planet);
-  writer_.reset();
-  ++generation_;
-  writer_ = std::make_unique<io::StrokeJournalWriter>(files_.journal,
-                                                      io::journalBaseOf(planet_, generation_));
+const std::string& SessionStore::error() {
+  std::string e = writer_.takeError();
+  if (!e.empty()) error_ = std::move(e);
+  return error_;
+}
+
+void SessionStore::startSave(double now) {
+  // The shadow equals the terrain now, and every record before this point is queued before the
+  // save: the planet file will hold exactly the records queued so far.
+  writer_.save(shadow_.heights(), planet_.bounds().rule(), ++generation_);
   dirty_ = false;
+  saveRequested_ = false;
   lastSave_ = now;
+}
+
+void SessionStore::save(double now) {
+  writer_.wait();  // a save still running: the shadow is the writer's until it ends
+  shadow_.follow(planet_);
+  shadow_.catchUp(planet_, SIZE_MAX);
+  const std::uint64_t done = writer_.stats().savesDone;
+  startSave(now);
+  writer_.wait();
+  if (writer_.stats().savesDone == done) {
+    const std::string e = writer_.takeError();
+    error_ = e;
+    throw std::runtime_error(e.empty() ? files_.planet.string() + ": not saved" : e);
+  }
   error_.clear();
-  lastSaveMs_ =
-      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
 }
 
 bool SessionStore::tick(double now, bool strokeOpen) {
-  if (options_.autosaveSeconds <= 0 || !dirty_ || strokeOpen ||
-      now - lastSave_ < options_.autosaveSeconds)
-    return false;
-  try {
-    save(now);
-    return true;
-  } catch (const std::exception& e) {
-    lastSave_ = now;  // try again after another interval
-    error_ = std::string("autosave failed: ") + e.what();
-    return false;
+  shadow_.follow(planet_);
+  if (writer_.saving()) return false;  // the shadow is the writer's until the save ends
+  if (!shadow_.current()) {
+    const auto t0 = std::chrono::steady_clock::now();
+    shadow_.catchUp(planet_, options_.copyBytesPerTick);
+    copyMaxMs_ = std::max(
+        copyMaxMs_,
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
   }
+  const bool due = saveRequested_ || (options_.autosaveSeconds > 0 && dirty_ &&
+                                      now - lastSave_ >= options_.autosaveSeconds);
+  if (!due || strokeOpen || !shadow_.current()) return false;
+  startSave(now);
+  return true;
 }
 
 void SessionStore::append(io::JournalRecordKind kind, bool sync) noexcept {
   dirty_ = true;
-  if (!writer_) return;  // journaling stopped after a disk error, until the next save
-  try {
-    const auto t0 = std::chrono::steady_clock::now();
-    writer_->append(kind, scratch_, sync);
-    const double ms =
-        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-    ++recordsWritten_;
-    recordTotalMs_ += ms;
-    recordMaxMs_ = std::max(recordMaxMs_, ms);
-  } catch (const std::exception& e) {
-    // A missing record would make the later ones wrong: stop journaling until the next save
-    // (the records before it still recover a consistent earlier state).
-    error_ = std::string(e.what()) + "; journaling stopped until the next save";
-    writer_.reset();
-  }
+  shadow_.follow(planet_);  // often enough that the terrain still keeps every change
+  writer_.record(kind, std::move(scratch_), sync);
+  scratch_ = {};
 }
 
 void SessionStore::onCommitted(edit::JournalEvent event,
@@ -152,8 +185,7 @@ void SessionStore::onCommitted(edit::JournalEvent event,
   try {
     scratch_.reserve(changes.size());
   } catch (...) {
-    error_ = "out of memory while journaling a stroke; journaling stopped until the next save";
-    writer_.reset();
+    error_ = "out of memory while journaling a stroke";
     dirty_ = true;
     return;
   }
@@ -184,8 +216,7 @@ void SessionStore::recordRegion(const terrain::GridRegion& region) noexcept {
         }
     });
   } catch (...) {
-    error_ = "out of memory while journaling settled sand; journaling stopped until the next save";
-    writer_.reset();
+    error_ = "out of memory while journaling settled sand";
     dirty_ = true;
     return;
   }

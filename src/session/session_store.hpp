@@ -4,7 +4,9 @@
 // save (io/stroke_journal.hpp), one record appended and flushed per finished stroke, undo and
 // redo (heard from the edit pipeline's undo journal) and per frame of sand settling. After a
 // save the journal starts again, its header naming the saved heights' checksum, so a journal is
-// never applied to another planet. A crash loses at most the stroke in progress.
+// never applied to another planet. A crash loses at most the stroke in progress (and records
+// still queued: a few milliseconds' worth). The disk work runs on a writer thread
+// (session/session_writer.hpp), the planet saved from a HeightsShadow that follows the terrain.
 #include <cstdint>
 #include <filesystem>
 #include <memory>
@@ -13,6 +15,8 @@
 
 #include "edit/undo_journal.hpp"
 #include "io/stroke_journal.hpp"
+#include "session/heights_shadow.hpp"
+#include "session/session_writer.hpp"
 #include "terrain/grid_region.hpp"
 #include "terrain/terrain.hpp"
 
@@ -40,7 +44,8 @@ class Recovery {
 
   State state() const { return state_; }
   const SessionFiles& files() const { return files_; }
-  std::size_t records() const { return journal_ ? journal_->records.size() : 0; }
+  // The records recover() applies (a save mark's point on, marks not counted).
+  std::size_t records() const { return journal_ ? io::heightRecordsFrom(*journal_, first_) : 0; }
   // One or two lines for the user, naming the files (and what a torn last record lost).
   const std::string& message() const { return message_; }
 
@@ -55,65 +60,81 @@ class Recovery {
   SessionFiles files_;
   State state_ = State::kNone;
   std::optional<io::JournalContents> journal_;
+  std::size_t first_ = 0;      // the first record that applies to the planet file
+  std::uint32_t baseCrc_ = 0;  // the heights' checksum it applies to
   std::string message_;
 };
 
 struct SessionStoreOptions {
   double autosaveSeconds = 60;  // <= 0: no autosave (saves at start, on request and at the end)
   bool syncRecords = true;      // fdatasync every stroke, undo and redo record
+  // Heights the frame loop copies into the save's shadow per tick (HeightsShadow::catchUp):
+  // about a millisecond; a stroke across the seam dirties whole rows (8193²: 32 KiB each).
+  std::size_t copyBytesPerTick = std::size_t(2) << 20;
+  SessionWriterOptions writer{};
 };
 
 class SessionStore final : public edit::JournalListener {
  public:
-  // Saves `planet` to files.planet and starts files.journal for it. `now` (s, any clock) starts
-  // the autosave clock. Throws std::runtime_error naming the file when the disk refuses.
+  // Saves `planet` to files.planet and starts files.journal for it (waits for both). `now` (s,
+  // any clock) starts the autosave clock. Throws std::runtime_error naming the file when the
+  // disk refuses.
   SessionStore(terrain::Terrain& planet, SessionFiles files, SessionStoreOptions options,
                double now);
 
   // From the undo journal (edit::UndoJournal::setListener): one record per stroke end, undo
-  // (the before-heights) and redo (the after-heights), flushed to disk.
+  // (the before-heights) and redo (the after-heights), queued for the writer (flushed to disk
+  // there).
   void onCommitted(edit::JournalEvent event,
                    std::span<const edit::HeightChange> changes) noexcept override;
   // Heights changed outside the undo journal (sand settling): the rectangle's heights are
-  // journaled as they are now (written, flushed to disk at the next stroke record).
+  // journaled as they are now (written, flushed to disk with the next stroke record).
   void recordRegion(const terrain::GridRegion& region) noexcept;
 
-  // Saves when the autosave interval has passed since the last save, something changed since
-  // and no stroke is open (a stroke is journaled only once it ends). Returns true if it saved.
+  // Once a frame: brings the save's copy of the heights up to date (a bounded copy) and starts
+  // a save in the background when the autosave interval has passed since the last one (or one
+  // was requested), something changed since, no stroke is open (a stroke is journaled only once
+  // it ends) and no save is running. Returns true if it started one.
   bool tick(double now, bool strokeOpen);
-  // Saves the planet atomically, then starts the journal again for the saved heights.
+  // A save in the background at the next tick that can start one (Ctrl+S).
+  void requestSave() { saveRequested_ = true; }
+  // Saves now and waits for it (the start, the end): the planet atomically, then the journal
+  // started again for the saved heights. Throws std::runtime_error when the save failed.
   void save(double now);
+  // Blocks until every queued record and a running save are on disk (tests, the end).
+  void flush() { writer_.wait(); }
 
   const SessionFiles& files() const { return files_; }
-  std::uint64_t saves() const { return generation_; }
-  std::uint32_t recordsSinceSave() const { return writer_ ? writer_->records() : 0; }
+  std::uint64_t saves() const { return generation_; }  // saves started, the first included
+  std::uint64_t savesDone() const { return writer_.stats().savesDone; }
+  bool saving() const { return writer_.saving(); }
+  std::uint32_t recordsSinceSave() const { return writer_.recordsSinceSave(); }
   bool dirty() const { return dirty_; }
-  double lastSaveMs() const { return lastSaveMs_; }
+  double lastSaveMs() const { return writer_.stats().lastSaveMs; }
   double lastSaveTime() const { return lastSave_; }
-  // Records written this session (all saves) and the time they took (write + flush), for the
-  // log line at the end.
-  std::size_t recordsWritten() const { return recordsWritten_; }
-  double recordMaxMs() const { return recordMaxMs_; }
-  double recordTotalMs() const { return recordTotalMs_; }
-  // The last disk error while journaling ("" when none); journaling goes on with the next
-  // record (the planet is still saved at the next autosave).
-  const std::string& error() const { return error_; }
+  SessionWriterStats writerStats() const { return writer_.stats(); }
+  // The frame loop's part of saving: the copy into the shadow per tick (ms), the longest.
+  double copyMaxMs() const { return copyMaxMs_; }
+  // The last disk error ("" when none); journaling goes on after the next save.
+  const std::string& error();
+  SessionWriter& writer() { return writer_; }
 
  private:
   void append(io::JournalRecordKind kind, bool sync) noexcept;
+  void startSave(double now);
 
   terrain::Terrain& planet_;
   SessionFiles files_;
   SessionStoreOptions options_;
-  std::unique_ptr<io::StrokeJournalWriter> writer_;
+  HeightsShadow shadow_;
   std::vector<io::JournalHeight> scratch_;
   std::uint64_t generation_ = 0;
   double lastSave_ = 0;
-  double lastSaveMs_ = 0;
+  double copyMaxMs_ = 0;
   bool dirty_ = false;
+  bool saveRequested_ = false;
   std::string error_;
-  std::size_t recordsWritten_ = 0;
-  double recordMaxMs_ = 0, recordTotalMs_ = 0;
+  SessionWriter writer_;  // last: its thread stops (writing what is queued) first
 };
 
 }  // namespace ps::session

@@ -1,0 +1,209 @@
+// `planetsculpt bench live`: the frame loop's time with the session's saving on and off
+// (issue 42 part 4, docs/LIVE.md "The writer thread"). A scripted session on the default planet:
+// a brush stroke of 1 s every PS_LIVE_STROKE_EVERY s (default 3) of session time, one stamp per
+// frame at 30 fps of session time, the AR view's tessellation (640x480, dist_max 4 px, a camera
+// circling the planet at 3 radii, as the live app's drawView), and with saving on the live app's
+// SessionStore (the journal fed by the undo journal's listener, tick() once a frame, an autosave
+// every PS_LIVE_AUTOSAVE s, default 10). The frames run as fast as they can (session time advances
+// 1/30 s a frame), so saves come back to back: a harder case than the live app's. Each frame's
+// time is its edit and tessellation work plus, with saving on, the store's work on the frame
+// thread. Rows per planet side (PS_LIVE_SIDES, default "4097,8193"; --quick: 1025) and
+// PS_LIVE_SECONDS of session (default 300; --quick: 30), run off, on and off again: p50, p99
+// and max frame time, the ratios of on to the mean of the two off runs, the saves, records and the
+// writer's times. The writer thread competes with the frame loop for the machine's cores (nproc and
+// the load go with the rows).
+#include <unistd.h>
+#include <chrono>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <nlohmann/json.hpp>
+#include <numeric>
+#include <random>
+#include <sstream>
+#include <thread>
+
+#include "app/default_planet.hpp"
+#include "bench/bench.hpp"
+#include "bench/bench_util.hpp"
+#include "edit/brush.hpp"
+#include "edit/edit_pipeline.hpp"
+#include "session/session_store.hpp"
+#include "terrain/tessellator.hpp"
+
+namespace ps::bench {
+
+namespace {
+
+std::string loadAverage() {
+  std::ifstream f("/proc/loadavg");
+  std::string a, b, c;
+  f >> a >> b >> c;
+  return a + " " + b + " " + c;
+}
+
+double envOr(const char* name, double fallback) {
+  const char* v = std::getenv(name);
+  return v ? std::atof(v) : fallback;
+}
+
+struct LiveRun {
+  std::vector<double> frameMs;
+  int strokes = 0;
+  session::SessionWriterStats writer;
+  std::uint64_t savesStarted = 0;
+  double copyMaxMs = 0;
+};
+
+// One scripted session on `planet`; saving into `outDir` when it is not empty.
+LiveRun runSession(terrain::Terrain& planet, double seconds, double autosave, double strokeEvery,
+                   const std::filesystem::path& outDir) {
+  constexpr double kFps = 30;
+  edit::EditPipeline pipe(planet);
+  edit::GaussianBrush brush;
+  edit::BrushSettings s;
+  s.radius = 500e3;
+  s.sigma = 0.3;
+  s.strength = 400;
+  brush.setSettings(s);
+  std::unique_ptr<session::SessionStore> store;
+  if (!outDir.empty()) {
+    std::filesystem::create_directories(outDir);
+    store =
+        std::make_unique<session::SessionStore>(planet, session::SessionFiles::in(outDir),
+                                                session::SessionStoreOptions{autosave, true}, 0.0);
+    pipe.journal().setListener(store.get());
+  }
+  std::mt19937 rng(7);
+  terrain::Tessellator tessellator;
+  const terrain::TessellationSettings view;
+  const double R = planet.chart().radius();
+  LiveRun run;
+  const int frames = int(seconds * kFps);
+  Eigen::Vector3d at = Eigen::Vector3d::UnitX() * R, step = Eigen::Vector3d::Zero();
+  run.frameMs.reserve(std::size_t(frames));
+  for (int f = 0; f < frames; ++f) {
+    const double now = f / kFps;
+    const double phase = std::fmod(now, strokeEvery);
+    const auto t0 = std::chrono::steady_clock::now();
+    if (phase < 1.0) {
+      if (!pipe.inStroke()) {
+        std::uniform_real_distribution<double> u(-1, 1);
+        at = Eigen::Vector3d(u(rng), u(rng), 0.6 * u(rng)).normalized() * R;
+        step = Eigen::Vector3d(u(rng), u(rng), u(rng)) * (0.004 * R);
+        pipe.beginStroke(brush, {at, 0});
+        ++run.strokes;
+      } else {
+        at = (at + step).normalized() * R;
+        pipe.moveTo({at, 1.0 / kFps});
+      }
+    } else if (pipe.inStroke()) {
+      pipe.endStroke();
+    }
+    const double a = 0.02 * f;
+    const Eigen::Vector3d eye = 3 * R * Eigen::Vector3d(std::cos(a), std::sin(a), 0.3).normalized();
+    tessellator.tessellate(planet,
+                           terrain::Camera::lookAt(eye, Eigen::Vector3d::Zero(),
+                                                   Eigen::Vector3d::UnitZ(), 640, 480, 1.0),
+                           view);
+    if (store) store->tick(now, pipe.inStroke());
+    run.frameMs.push_back(
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+  }
+  if (pipe.inStroke()) pipe.endStroke();
+  if (store) {
+    store->flush();
+    run.writer = store->writerStats();
+    run.savesStarted = store->saves();
+    run.copyMaxMs = store->copyMaxMs();
+    pipe.journal().setListener(nullptr);
+  }
+  return run;
+}
+
+double r3(double v) {
+  return std::round(v * 1000) / 1000;
+}
+
+}  // namespace
+
+void benchLive(const BenchOptions& options, std::ostream& out) {
+  const double seconds = envOr("PS_LIVE_SECONDS", options.quick ? 30 : 300);
+  const double autosave = envOr("PS_LIVE_AUTOSAVE", 10);
+  const double strokeEvery = envOr("PS_LIVE_STROKE_EVERY", 3);
+  std::string sides = options.quick ? "1025" : "4097,8193";
+  if (const char* e = std::getenv("PS_LIVE_SIDES")) sides = e;
+  const std::filesystem::path dir =
+      std::filesystem::temp_directory_path() / ("ps_bench_live_" + std::to_string(::getpid()));
+  std::stringstream list(sides);
+  for (std::string item; std::getline(list, item, ',');) {
+    const int side = std::atoi(item.c_str());
+    int level = 0;
+    while ((1 << level) + 1 < side) ++level;
+    if ((1 << level) + 1 != side) {
+      std::cerr << "bench live: side " << side << " is not 2^n + 1; skipped\n";
+      continue;
+    }
+    std::cerr << "bench live: " << side << "² planet ...\n";
+    auto planet = app::makeDefaultPlanet(level, 1);
+    const std::string loadBefore = loadAverage();
+    std::cerr << "bench live: " << seconds << " s of session, saving off\n";
+    const LiveRun off = runSession(*planet, seconds, autosave, strokeEvery, {});
+    std::cerr << "bench live: the same, saving on (autosave every " << autosave << " s)\n";
+    const LiveRun on = runSession(*planet, seconds, autosave, strokeEvery, dir / item);
+    std::filesystem::remove_all(dir / item);
+    // The machine's load drifts: saving on is compared with the mean of the runs before and
+    // after it.
+    std::cerr << "bench live: the same, saving off again\n";
+    const LiveRun off2 = runSession(*planet, seconds, autosave, strokeEvery, {});
+    const double p99Off = 0.5 * (percentile(off.frameMs, 0.99) + percentile(off2.frameMs, 0.99));
+    const double maxOff = 0.5 * (percentile(off.frameMs, 1.0) + percentile(off2.frameMs, 1.0));
+    const double p99On = percentile(on.frameMs, 0.99), maxOn = percentile(on.frameMs, 1.0);
+    int order = 0;
+    for (const auto* r : {&off, &on, &off2}) {
+      const bool saving = r == &on;
+      nlohmann::json row{
+          {"bench", "live"},
+          {"side", side},
+          {"run", ++order},
+          {"saving", saving},
+          {"session_s", seconds},
+          {"frames", r->frameMs.size()},
+          {"strokes", r->strokes},
+          {"frame_p50_ms", r3(median(r->frameMs))},
+          {"frame_p99_ms", r3(percentile(r->frameMs, 0.99))},
+          {"frame_max_ms", r3(percentile(r->frameMs, 1.0))},
+          {"frame_mean_ms", r3(std::accumulate(r->frameMs.begin(), r->frameMs.end(), 0.0) /
+                               double(r->frameMs.size()))}};
+      if (saving) {
+        row["autosave_s"] = autosave;
+        row["saves_started"] = r->savesStarted;
+        row["saves_done"] = r->writer.savesDone;
+        row["save_max_ms"] = r3(r->writer.saveMaxMs);
+        row["records"] = r->writer.records;
+        row["record_write_max_ms"] = r3(r->writer.recordMaxMs);
+        row["record_on_disk_after_max_ms"] = r3(r->writer.recordLagMaxMs);
+        row["frame_copy_max_ms"] = r3(r->copyMaxMs);
+      }
+      out << row.dump() << std::endl;
+    }
+    out << nlohmann::json{{"bench", "live"},
+                          {"side", side},
+                          {"case", "saving_on_vs_off"},
+                          {"p99_ratio", r3(p99On / p99Off)},
+                          {"max_ratio", r3(maxOn / maxOff)},
+                          {"p99_target", 1.2},
+                          {"max_target", 2.0},
+                          {"nproc", std::thread::hardware_concurrency()},
+                          {"load_before", loadBefore},
+                          {"load_after", loadAverage()}}
+               .dump()
+        << std::endl;
+  }
+  std::filesystem::remove_all(dir);
+}
+
+static const BenchRegistration kRegistered("live", benchLive);
+
+}  // namespace ps::bench
