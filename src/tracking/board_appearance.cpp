@@ -53,33 +53,39 @@ cv::Vec3d medianGain(const cv::Mat& image, const cv::Mat& model, const cv::Mat& 
 
 // Chromaticity distance to the nearest of the model's 3x3 neighbours (misregistration of one
 // texel is not a change), against a threshold that grows where the light is too low for
-// chromaticity to be measured through the noise.
+// chromaticity to be measured through the noise. One pass, no temporaries: the hot loop.
 cv::Mat chromaScore(const cv::Mat& image, const cv::Mat& sumI, const cv::Mat& model,
                     const cv::Mat& sumM, const BoardAppearanceConfig& c) {
-  cv::Mat cI, cM;
-  cv::Mat sI3, sM3;
-  cv::merge(std::vector<cv::Mat>{sumI, sumI, sumI}, sI3);
-  cv::merge(std::vector<cv::Mat>{sumM, sumM, sumM}, sM3);
-  cv::divide(image, cv::max(sI3, 1.0), cI);
-  cv::divide(model, cv::max(sM3, 1.0), cM);
-  cv::Mat padded;
-  cv::copyMakeBorder(cM, padded, 1, 1, 1, 1, cv::BORDER_REPLICATE);
-  cv::Mat best(image.size(), CV_32F, cv::Scalar(1e9));
-  cv::Mat diff, d2;
-  for (int dy = 0; dy < 3; ++dy)
-    for (int dx = 0; dx < 3; ++dx) {
-      cv::subtract(cI, padded(cv::Rect(dx, dy, image.cols, image.rows)), diff);
-      cv::multiply(diff, diff, diff);
-      d2 = channelSum(diff);
-      best = cv::min(best, d2);
+  const int rows = image.rows, cols = image.cols;
+  cv::Mat cM(rows, cols, CV_32FC3);
+  for (int y = 0; y < rows; ++y) {
+    const auto* m = model.ptr<cv::Vec3f>(y);
+    const auto* s = sumM.ptr<float>(y);
+    auto* out = cM.ptr<cv::Vec3f>(y);
+    for (int x = 0; x < cols; ++x) out[x] = m[x] * (1.0f / std::max(s[x], 1.0f));
+  }
+  const float noise = float(4.5 * c.noiseSigma), floor = float(c.chromaThreshold);
+  cv::Mat score(rows, cols, CV_32F);
+  for (int y = 0; y < rows; ++y) {
+    const auto* in = image.ptr<cv::Vec3f>(y);
+    const auto* sI = sumI.ptr<float>(y);
+    const auto* sM = sumM.ptr<float>(y);
+    auto* out = score.ptr<float>(y);
+    const cv::Vec3f* near[3] = {cM.ptr<cv::Vec3f>(std::max(y - 1, 0)), cM.ptr<cv::Vec3f>(y),
+                                cM.ptr<cv::Vec3f>(std::min(y + 1, rows - 1))};
+    for (int x = 0; x < cols; ++x) {
+      const cv::Vec3f ci = in[x] * (1.0f / std::max(sI[x], 1.0f));
+      float best = 1e9f;
+      for (const cv::Vec3f* r : near)
+        for (int dx = -1; dx <= 1; ++dx) {
+          const cv::Vec3f& cm = r[std::clamp(x + dx, 0, cols - 1)];
+          const float d0 = ci[0] - cm[0], d1 = ci[1] - cm[1], d2 = ci[2] - cm[2];
+          best = std::min(best, d0 * d0 + d1 * d1 + d2 * d2);
+        }
+      const float threshold = floor + noise / std::max(std::min(sI[x], sM[x]), 1.0f);
+      out[x] = std::sqrt(best) / threshold;
     }
-  cv::sqrt(best, best);
-  cv::Mat threshold = cv::min(sumI, sumM);
-  threshold = cv::max(threshold, 1.0);
-  cv::divide(4.5 * c.noiseSigma, threshold, threshold);
-  threshold += c.chromaThreshold;
-  cv::Mat score;
-  cv::divide(best, threshold, score);
+  }
   return score;
 }
 

@@ -23,7 +23,7 @@ namespace ps::tracking {
 
 struct BoardAppearanceConfig {
   double halfSizeM = 0.3;   // the modelled square's half side on the board plane (m)
-  double texelM = 0.0015;   // texel side (m)
+  double texelM = 0.002;    // texel side (m)
   double learnRate = 0.05;  // running-mean weight once a texel has warmed up
   int warmupFrames = 8;     // a texel's first frames are averaged equally
   double noiseSigma = 4.0;  // the camera's noise (grey levels) that must not count as a change

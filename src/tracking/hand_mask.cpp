@@ -1,5 +1,6 @@
 #include "tracking/hand_mask.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <opencv2/imgproc.hpp>
 #include <string>
@@ -41,16 +42,41 @@ void HandMaskConfig::validate() const {
           "is not in [0, 50]", featherPx);
 }
 
+namespace {
+
+// Where the sphere's silhouette can be: the projection of its bounding cube (the whole image
+// when the cube reaches behind the camera).
+cv::Rect silhouetteBounds(cv::Size size, const cv::Matx33d& K, const Eigen::Vector3d& c,
+                          double radius) {
+  const cv::Rect image(0, 0, size.width, size.height);
+  double x0 = 1e18, y0 = 1e18, x1 = -1e18, y1 = -1e18;
+  for (int i = 0; i < 8; ++i) {
+    const Eigen::Vector3d p =
+        c + radius * Eigen::Vector3d(i & 1 ? 1 : -1, i & 2 ? 1 : -1, i & 4 ? 1 : -1);
+    if (p.z() <= 1e-6) return image;
+    const double u = K(0, 0) * p.x() / p.z() + K(0, 2), v = K(1, 1) * p.y() / p.z() + K(1, 2);
+    x0 = std::min(x0, u), x1 = std::max(x1, u), y0 = std::min(y0, v), y1 = std::max(y1, v);
+  }
+  const auto clampTo = [](double v, int hi) { return int(std::clamp(v, 0.0, double(hi))); };
+  const int l = clampTo(std::floor(x0) - 1, size.width), r = clampTo(std::ceil(x1) + 2, size.width);
+  const int t = clampTo(std::floor(y0) - 1, size.height),
+            b = clampTo(std::ceil(y1) + 2, size.height);
+  return cv::Rect(l, t, r - l, b - t) & image;
+}
+
+}  // namespace
+
 cv::Mat sphereSilhouette(cv::Size size, const cv::Matx33d& K, const Eigen::Vector3d& c,
                          double radius) {
   cv::Mat out = cv::Mat::zeros(size, CV_8U);
   const double cc = c.squaredNorm(), r2 = radius * radius;
   if (!(c.z() > 0) || !(radius > 0) || !std::isfinite(cc)) return out;
+  const cv::Rect box = silhouetteBounds(size, K, c, radius);
   const double fx = K(0, 0), fy = K(1, 1), cx = K(0, 2), cy = K(1, 2);
-  for (int v = 0; v < size.height; ++v) {
+  for (int v = box.y; v < box.y + box.height; ++v) {
     auto* row = out.ptr<uchar>(v);
     const double dy = (v - cy) / fy;
-    for (int u = 0; u < size.width; ++u) {
+    for (int u = box.x; u < box.x + box.width; ++u) {
       const double dx = (u - cx) / fx;
       // The ray t·d meets the sphere when (d·c)² >= |d|²(|c|² - r²), ahead of the camera.
       const double dc = dx * c.x() + dy * c.y() + c.z();
