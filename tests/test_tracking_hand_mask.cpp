@@ -204,6 +204,23 @@ TEST(HandMask, RefusesBadSettingsByName) {
   EXPECT_NO_THROW(tracking::HandMasker{tracking::HandMaskConfig{}});
 }
 
+TEST(HandMask, APoseThatIsNotOneMasksNothing) {
+  const auto s = boardScript(learning(4, -90));
+  tracking::HandMasker masker;
+  runFrames(s, masker);
+  const int learned = masker.appearance().learnedTexels();
+  ASSERT_GT(learned, 0);
+  const tracking::SynthRenderer renderer(s);
+  const auto t = renderer.truth(3);
+  tracking::Pose bad = t.camera;
+  bad.t.x() = std::nan("");
+  const auto m = masker.update(renderer.render(3), s.camera.K, bad, t.planetCentreCamera, 0.06);
+  EXPECT_EQ(cv::countNonZero(m.soft), 0);
+  EXPECT_EQ(masker.appearance().learnedTexels(), learned);
+  const auto m2 = masker.update(renderer.render(3), s.camera.K, t.camera, t.planetCentreCamera, 0);
+  EXPECT_EQ(cv::countNonZero(m2.soft), 0);
+}
+
 TEST(HandMask, SilhouetteIsTheSphereOutline) {
   // A sphere on the optical axis: a disc of radius f·r/sqrt(d² - r²).
   const cv::Matx33d K(500, 0, 159.5, 0, 500, 119.5, 0, 0, 1);

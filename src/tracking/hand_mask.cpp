@@ -133,6 +133,11 @@ HandMaskFrame HandMasker::update(const cv::Mat& image, const cv::Matx33d& K, con
   const cv::Size size = image.size();
   out.soft = cv::Mat::zeros(size, CV_32F);
   out.silhouette = sphereSilhouette(size, K, planetCentreCamera, radius);
+  // A pose that is not one (the tracker reports none such; a caller might): nothing masked,
+  // nothing learned.
+  if (!board.finite() || !planetCentreCamera.allFinite() || !(radius > 0) ||
+      !std::isfinite(radius) || image.empty())
+    return out;
   const Eigen::Vector3d foot = board.inverse().apply(planetCentreCamera);
   const PlaneView view = appearance_.view(image, K, board, foot.head<2>());
   const ForegroundScore fg = appearance_.foreground(view);
