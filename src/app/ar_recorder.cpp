@@ -34,8 +34,12 @@ void ArRecorder::onFrame(const replay::FrameContext& f, const Eigen::Vector3d& f
     run_.clear();
   };
   if (!f.touching) closeRun();
-  // The hand mask learns the board's look from every frame, drawn or not.
-  const bool maskHands = settings_.handMask && f.planetInCamera && f.scene.planet.usable();
+  // The hand mask learns the board's look from every frame, drawn or not, whose board pose is
+  // this frame's (measured, or held while the camera stands still): a pose held over a moving
+  // camera would compare the board with what is beside it.
+  const auto& board = f.scene.planet;
+  const bool maskHands = settings_.handMask && f.planetInCamera && board.usable() &&
+                         (board.measured || board.heldStill);
   if (!wantSequence && !wantShowcase && !maskHands) return;
   const auto t0 = std::chrono::steady_clock::now();
   // The camera image as the pinhole K sees it, so the planet lands on its board

@@ -164,7 +164,9 @@ class SculptLoop {
   // from every tracked frame, the mask kept for drawView.
   void maskHands(const replay::StepResult& r) {
     handMask_.release();
-    if (!pose_ || !r.scene.planet.usable()) return;
+    // Only with this frame's board pose (measured, or held while the camera stands still).
+    const auto& board = r.scene.planet;
+    if (!pose_ || !board.usable() || !(board.measured || board.heldStill)) return;
     const auto t0 = std::chrono::steady_clock::now();
     cv::Matx33d K;
     for (int i = 0; i < 3; ++i)
