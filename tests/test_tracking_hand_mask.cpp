@@ -193,6 +193,12 @@ TEST(HandMask, RefusesBadSettingsByName) {
   c.appearance.shadowRatio = std::nan("");
   refused(c, "shadow_ratio");
   c = {};
+  c.appearance.learnBrightnessTolerance = 0;
+  refused(c, "learn_brightness_tolerance");
+  c = {};
+  c.appearance.forgetAfterFrames = 0;
+  refused(c, "forget_after_frames");
+  c = {};
   c.featherPx = -1;
   refused(c, "feather_px");
   c = {};
@@ -253,4 +259,28 @@ TEST(OcclusionComposite, BlendsTheCameraImageByTheMask) {
             0);
   EXPECT_THROW(render::composeOcclusion(view, camera, cv::Mat::zeros(10, 10, CV_32F)),
                std::invalid_argument);
+}
+
+TEST(HandMask, AHandSeenFromTheStartLeavesNoHoleWhenItGoes) {
+  // The hand over the planet in the first frames (learned as the board there), then gone: its
+  // ghost in the model hides the planet until the texels kept from learning forget it
+  // (forget_after_frames, 4 here; 300 by default).
+  std::vector<tracking::SynthKey> keys;
+  for (int f = 0; f < 20; ++f) {
+    tracking::SynthKey k = frameKey(f, -90, 1.0, 1.0);
+    if (f < 6) {
+      k.handX = 0.0;
+      k.handY = -0.08;
+      k.handRadius = 0.05;
+      k.handHeight = 0.16;
+    }
+    keys.push_back(k);
+  }
+  tracking::HandMaskConfig config;
+  config.appearance.forgetAfterFrames = 4;
+  tracking::HandMasker masker(config);
+  const MaskRun run = runFrames(boardScript(keys), masker);
+  EXPECT_GT(run.coverage[7], 0.1);  // the ghost, before it is forgotten
+  for (std::size_t f = 12; f < run.coverage.size(); ++f)
+    EXPECT_LT(run.coverage[f], 0.01) << "frame " << f;
 }

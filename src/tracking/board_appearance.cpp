@@ -150,6 +150,9 @@ void BoardAppearanceConfig::validate() const {
   require(std::isfinite(learnBelow) && learnBelow > 0, "learn_below", "is not > 0", learnBelow);
   require(learnGuardTexels >= 0 && learnGuardTexels <= 50, "learn_guard_texels", "is not in 0..50",
           learnGuardTexels);
+  require(std::isfinite(learnBrightnessTolerance) && learnBrightnessTolerance > 0,
+          "learn_brightness_tolerance", "is not > 0", learnBrightnessTolerance);
+  require(forgetAfterFrames >= 1, "forget_after_frames", "is not >= 1", forgetAfterFrames);
 }
 
 BoardAppearance::BoardAppearance(BoardAppearanceConfig config) : config_(config) {
@@ -161,6 +164,7 @@ BoardAppearance::BoardAppearance(BoardAppearanceConfig config) : config_(config)
 void BoardAppearance::reset() {
   mean_ = cv::Mat::zeros(side_, side_, CV_32FC3);
   count_ = cv::Mat::zeros(side_, side_, CV_32F);
+  kept_ = cv::Mat::zeros(side_, side_, CV_32F);
   centred_ = false;
 }
 
@@ -238,6 +242,7 @@ void BoardAppearance::learn(const PlaneView& v, const ForegroundScore& fg) {
   }
   const float rate = float(config_.learnRate);
   const float warm = float(config_.warmupFrames);
+  const float forget = float(config_.forgetAfterFrames);
   for (int j = 0; j < side_; ++j) {
     const auto* ok = v.valid.ptr<uchar>(j);
     const auto* no = busy.ptr<uchar>(j);
@@ -245,8 +250,14 @@ void BoardAppearance::learn(const PlaneView& v, const ForegroundScore& fg) {
     const auto* in = v.image.ptr<cv::Vec3f>(j);
     auto* m = mean_.ptr<cv::Vec3f>(j);
     auto* n = count_.ptr<float>(j);
+    auto* kept = kept_.ptr<float>(j);
     for (int i = 0; i < side_; ++i) {
-      if (!ok[i] || (n[i] > 0 && (no[i] || !steady[i]))) continue;
+      if (!ok[i]) continue;
+      if (n[i] > 0 && (no[i] || !steady[i])) {
+        if (++kept[i] < forget) continue;
+        n[i] = 0;  // kept out too long: start again from this frame
+      }
+      kept[i] = 0;
       const float a = n[i] < warm ? 1.0f / (n[i] + 1.0f) : rate;
       m[i] += a * (in[i] - m[i]);
       n[i] = std::min(n[i] + 1.0f, 1e6f);

@@ -38,6 +38,10 @@ struct BoardAppearanceConfig {
   // ...and the brightness is the model's times the frame's gain within this fraction: a shadow
   // is tolerated but not learned (a model that took it in would see its leaving as a change).
   double learnBrightnessTolerance = 0.15;
+  // A texel kept from learning this many frames in a row takes the frame: what the model learned
+  // there has left (a hand over the board when it was first seen) or the light there changed
+  // for good. A hand held still over the planet for that long is taken as the board.
+  int forgetAfterFrames = 300;
   // InputError "board appearance: FIELD ..." naming the first bad field.
   void validate() const;
 };
@@ -82,6 +86,7 @@ class BoardAppearance {
   bool centred_ = false;
   cv::Mat mean_;   // CV_32FC3
   cv::Mat count_;  // CV_32F, frames learned
+  cv::Mat kept_;   // CV_32F, frames in a row kept from learning
 };
 
 }  // namespace ps::tracking
