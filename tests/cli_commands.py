@@ -529,8 +529,8 @@ def finite_numbers(x, where):
         fail(f"{where} is {x}")
 
 
-BENCHES = ("bounds", "charts", "deform", "erosion", "export", "frame", "haptics", "live", "render", "sand-tin",
-           "tessellate", "track")
+BENCHES = ("bounds", "charts", "deform", "erosion", "export", "frame", "haptics", "live", "occlusion-hand",
+           "render", "sand-tin", "tessellate", "track")
 
 
 def check_bench_row(r):
@@ -585,6 +585,10 @@ def check_bench_row(r):
     for key in ("planet_detected", "control_vertex_within_3mm"):
         if b == "track" and key in r and not (0.0 <= r[key] <= 1.0):
             fail(f"track: {key} {r[key]} outside [0, 1]")
+    # The hand mask's figures are fractions (iou -1: no frame with a hand in front).
+    if b == "occlusion-hand" and not (r["iou"] == -1 or 0 <= r["iou"] <= 1) or \
+            b == "occlusion-hand" and not (0 <= r["hidden_by_mistake"] <= 1 and r["frames_with_pose"] > 0):
+        fail(f"occlusion-hand: {r}")
     if b == "render" and not r.get("skipped") and not (-1.0 <= r["ssim"] <= 1.0 and r["texture_bytes"] >= 0):
         fail(f"render: ssim {r['ssim']} or texture bytes {r['texture_bytes']} out of range")
     for key, v in r.items():

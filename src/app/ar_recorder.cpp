@@ -6,6 +6,7 @@
 
 #include "core/chart_factory.hpp"
 #include "io/heightmap_export.hpp"
+#include "render/occlusion_composite.hpp"
 #include "render/projection.hpp"
 
 namespace ps::app {
@@ -33,12 +34,31 @@ void ArRecorder::onFrame(const replay::FrameContext& f, const Eigen::Vector3d& f
     run_.clear();
   };
   if (!f.touching) closeRun();
-  if (!wantSequence && !wantShowcase) return;
+  // The hand mask learns the board's look from every frame, drawn or not, whose board pose is
+  // this frame's (measured, or held while the camera stands still): a pose held over a moving
+  // camera would compare the board with what is beside it.
+  const auto& board = f.scene.planet;
+  const bool maskHands = settings_.handMask && f.planetInCamera && board.usable() &&
+                         (board.measured || board.heldStill);
+  if (!wantSequence && !wantShowcase && !maskHands) return;
   const auto t0 = std::chrono::steady_clock::now();
   // The camera image as the pinhole K sees it, so the planet lands on its board
   // (tracking/undistort.hpp); made once, for the calibration the replay runs with.
   if (!undistort_) undistort_.emplace(f.calibration.forImageSize(f.image.size()));
   const cv::Mat image = undistort_->apply(f.image);
+  cv::Mat handMask;
+  if (maskHands) {
+    // The planet's bounding sphere in the board's metres (FrameContext::scale).
+    const double radius = core::boundingRadius(f.planet.chart()) / f.scale;
+    handMask =
+        handMasker_.update(image, f.calibration.K, f.scene.planet.pose, f.planetInCamera->t, radius)
+            .soft;
+  }
+  if (!wantSequence && !wantShowcase) {
+    renderMs_ +=
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    return;
+  }
   cv::Mat view, overview;
   if (f.planetInCamera) {
     const cv::Matx33d& K = f.calibration.K;
@@ -74,6 +94,10 @@ void ArRecorder::onFrame(const replay::FrameContext& f, const Eigen::Vector3d& f
       }
     }
     view = renderer_.renderAR(image, f.planet, mesh, cam, style, cursor);
+    if (!handMask.empty() && cv::countNonZero(handMask > 0.5f) > 0) {
+      view = render::composeOcclusion(view, image, handMask);
+      ++handMaskFrames_;
+    }
     overview = renderer_.renderOverview(f.planet, mesh, cam, 480, 480);
   } else {
     // No planet: the camera image alone (the planet is not drawn where it is not tracked).

@@ -15,6 +15,7 @@
 #include "replay/replay.hpp"
 #include "terrain/mesh_patch.hpp"
 #include "terrain/tessellator.hpp"
+#include "tracking/hand_mask.hpp"
 #include "tracking/undistort.hpp"
 
 namespace ps::app {
@@ -30,6 +31,9 @@ struct ArRecorderSettings {
   // planet's shadow on the board and the atmosphere rim (render/atmosphere_passes.hpp).
   Eigen::Vector3d sun = Eigen::Vector3d(1, 1, 1).normalized();
   bool boardShadow = true, atmosphere = true;
+  // The camera image shown over the planet where something is in front of it (a hand:
+  // tracking/hand_mask.hpp, learned from every frame; render/occlusion_composite.hpp).
+  bool handMask = true;
 };
 
 class ArRecorder {
@@ -48,6 +52,7 @@ class ArRecorder {
   double renderMsTotal() const { return renderMs_; }
   // Frames rendered with the sand TIN's region spliced in (FrameContext::patch).
   int tinRegionFrames() const { return tinRegionFrames_; }
+  int handMaskFrames() const { return handMaskFrames_; }
 
  private:
   ArRecorderSettings settings_;
@@ -56,6 +61,9 @@ class ArRecorder {
   terrain::Tessellator tessellator_;
   terrain::SplicedView spliced_;  // the view with the sand TIN's region (FrameContext::patch)
   std::optional<tracking::FrameUndistorter> undistort_;
+  tracking::HandMasker handMasker_;
+  // Frames whose AR view showed the camera image over part of the planet (a hand in front).
+  int handMaskFrames_ = 0;
   int written_ = 0;
   int tinRegionFrames_ = 0;
   double renderMs_ = 0;

@@ -88,6 +88,8 @@ void ReplayCli::addOptions(CLI::App* sub) {
                   "above the board, AZ,EL in degrees (default 45,35.26)");
   sub->add_flag("--no-shadow", noShadow, "AR frames: no shadow of the planet on the board");
   sub->add_flag("--no-atmosphere", noAtmosphere, "AR frames: no atmosphere rim");
+  sub->add_flag("--no-hand-mask", noHandMask,
+                "AR frames: draw the planet over a hand in front of it (no hand mask)");
 }
 
 void ReplayCli::apply() {
@@ -123,6 +125,7 @@ void ReplayCli::apply() {
   if (!sun.empty()) job.sun = render::sunDirection(render::parseSunAngles(sun, "--sun"));
   job.boardShadow = !noShadow;
   job.atmosphere = !noAtmosphere;
+  job.handMask = !noHandMask;
   o.validate();
   // What a session sidecar replaces (app/replay_job.hpp), when typed.
   for (const char* name : {"--grid",

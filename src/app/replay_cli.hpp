@@ -17,7 +17,7 @@ struct ReplayCli {
   double brushRadiusKm = 250, strengthM = 600, displaceRadiusKm = 400, pressM = 8000;
   bool noFilter = false, noSettle = false;
   std::string sun;  // "AZ,EL" in degrees; empty: the default sun (45, 35.26)
-  bool noShadow = false, noAtmosphere = false;
+  bool noShadow = false, noAtmosphere = false, noHandMask = false;
   // The planet's markers: "single" (one marker, --planet-id/--planet-marker-size), "board" (the
   // committed markers/planet-board.json) or a layout file; the tool's: "flat" (one marker on a
   // stick, --tool-id/--tool-marker-size/--tip), "cube" (markers/tool-cube.json) or a file.

@@ -191,6 +191,7 @@ std::unique_ptr<ArRecorder> makeRecorder(const ReplayJob& job, std::string& noRe
   rs.sun = job.sun;
   rs.boardShadow = job.boardShadow;
   rs.atmosphere = job.atmosphere;
+  rs.handMask = job.handMask;
   rs.showcase = job.pictures;
   try {
     return std::make_unique<ArRecorder>(rs);
@@ -456,6 +457,8 @@ nlohmann::json runReplayJob(const ReplayJob& job) {
     summary["render_ms"] = recorder->renderMsTotal();
     if (recorder->tinRegionFrames() > 0)
       summary["ar_tin_region_frames"] = recorder->tinRegionFrames();
+    // AR frames drawn with the camera image over part of the planet (a hand in front of it).
+    summary["ar_hand_mask_frames"] = recorder->handMaskFrames();
     if (job.render) {
       summary["ar_frames"] = recorder->framesWritten();
       files.push_back("ar/");

@@ -37,6 +37,9 @@ struct ReplayJob {
   // rim (`--no-shadow`, `--no-atmosphere`).
   Eigen::Vector3d sun = Eigen::Vector3d(1, 1, 1).normalized();
   bool boardShadow = true, atmosphere = true;
+  // The camera image over the planet where a hand is in front of it (tracking/hand_mask.hpp;
+  // `--no-hand-mask`).
+  bool handMask = true;
   // The haptic force path run offline beside the replay (forces only: the tool's edits stay the
   // replay's): OUT/forces.csv, one row per 1 kHz tick (haptics/force_log.hpp).
   bool forces = true;

@@ -15,7 +15,7 @@ bool Shell::running() const {
 cv::Size Shell::present(const terrain::Terrain& planet, const terrain::Mesh& mesh,
                         const terrain::Camera& cam, const render::RenderStyle& style,
                         const std::optional<render::Cursor>& cursor) {
-  renderer.renderAR(image, planet, mesh, cam, style, cursor);
+  lastView = renderer.renderAR(image, planet, mesh, cam, style, cursor);
   const cv::Size fb = window.framebufferSize();
   window.clear(fb);
   // GL's window coordinates start at the bottom: the rectangle's y from there.

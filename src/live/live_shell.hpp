@@ -22,6 +22,8 @@ struct Shell {
   const std::atomic<bool>& interrupted;  // Ctrl-C: save and leave
   const cv::Size camera = input.size();
   cv::Mat image = cv::Mat::zeros(camera, CV_8UC3);
+  cv::Mat lastView =
+      cv::Mat();  // the AR view present() drew last (BGR, read back from the renderer)
 
   bool running() const;
   // Draws the camera image (and the planet's mesh, when there is one) into the window, the

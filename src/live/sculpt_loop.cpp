@@ -24,6 +24,7 @@
 #include "live/panel.hpp"
 #include "live/panel_mapping.hpp"
 #include "live/window_layout.hpp"
+#include "render/occlusion_composite.hpp"
 #include "render/projection.hpp"
 #include "replay/session_timeline.hpp"
 #include "sand/displacement.hpp"
@@ -31,6 +32,7 @@
 #include "session/planet_export.hpp"
 #include "terrain/mesh_patch.hpp"
 #include "terrain/tessellator.hpp"
+#include "tracking/hand_mask.hpp"
 #include "tracking/undistort.hpp"
 
 namespace ps::live {
@@ -144,6 +146,7 @@ class SculptLoop {
     status_.trackMs = r.times.detectMs + r.times.trackMs;
     status_.editMs = r.times.editMs;
     pose_ = r.planetInCamera;
+    maskHands(r);
     controlVertex_ = r.control;
     status_.touching = r.touching;
     if (haptic_) {
@@ -155,6 +158,23 @@ class SculptLoop {
     }
     status_.planetState = tracking::toString(r.scene.planet.state);
     status_.toolState = tracking::toString(r.scene.tool.state);
+  }
+
+  // Where a hand is in front of the planet (tracking/hand_mask.hpp): the board's look learned
+  // from every tracked frame, the mask kept for drawView.
+  void maskHands(const replay::StepResult& r) {
+    handMask_.release();
+    // Only with this frame's board pose (measured, or held while the camera stands still).
+    const auto& board = r.scene.planet;
+    if (!pose_ || !board.usable() || !(board.measured || board.heldStill)) return;
+    const auto t0 = std::chrono::steady_clock::now();
+    cv::Matx33d K;
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j) K(i, j) = K_(i, j);
+    const double radius = core::boundingRadius(planet_.chart()) / stepper_.scale();
+    handMask_ = handMasker_.update(shell_.image, K, r.scene.planet.pose, pose_->t, radius).soft;
+    if (cv::countNonZero(handMask_ > 0.5f) == 0) handMask_.release();
+    status_.trackMs += msSince(t0);
   }
 
   // No frame (camera lost, video ended): the tool is not seen, so no stroke goes on; the last
@@ -249,6 +269,11 @@ class SculptLoop {
       }
     }
     const cv::Size fb = shell_.present(planet_, *mesh, cam ? *cam : placeholder_, style, cursor);
+    // A hand in front of the planet: the camera image over it, drawn over the blitted view by
+    // drawPanel (render/occlusion_composite.hpp; the renderer's framebuffer is left as it is).
+    showHandView_ = cam && !handMask_.empty();
+    if (showHandView_)
+      handView_.update(render::composeOcclusion(shell_.lastView, shell_.image, handMask_));
     status_.renderMs = msSince(t1);
     return fb;
   }
@@ -257,6 +282,13 @@ class SculptLoop {
   // user (or the script) asked for.
   PanelActions drawPanel(cv::Size fb) {
     shell_.imgui.newFrame();
+    if (showHandView_ && handView_.valid()) {
+      const ImVec2 display = ImGui::GetIO().DisplaySize;
+      const cv::Rect v = arViewRect(fb, int(display.x), shell_.camera);
+      const float s = display.x / float(std::max(1, fb.width));  // framebuffer px -> display
+      ImGui::GetBackgroundDrawList()->AddImage(handView_.imgui(), ImVec2(v.x * s, v.y * s),
+                                               ImVec2((v.x + v.width) * s, (v.y + v.height) * s));
+    }
     PanelActions actions;
     applyShortcuts(panel_, actions);
     status_.undoCount = stepper_.pipeline().journal().undoCount();
@@ -456,6 +488,10 @@ class SculptLoop {
   terrain::Tessellator tessellator_;
   terrain::SplicedView spliced_;  // the view with the sand TIN's region (viewPatch)
   Texture overview_;
+  tracking::HandMasker handMasker_;
+  cv::Mat handMask_;  // this frame's, empty when nothing is in front of the planet
+  Texture handView_;  // the AR view with the camera image over the hand
+  bool showHandView_ = false;
   session::SessionStore store_;
   std::uint64_t savesSeen_ = 1;  // the store's save at the start
   replay::SettingsControl settingsControl_;

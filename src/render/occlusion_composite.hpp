@@ -1,0 +1,15 @@
+#pragma once
+// The last step of an AR frame when something real is in front of the planet (issue 42): the
+// camera image shown over the rendered view where a soft mask says, an alpha blend
+// view·(1 - mask) + camera·mask. The mask comes from tracking::HandMasker (tracking/hand_mask.hpp).
+#include <opencv2/core.hpp>
+
+namespace ps::render {
+
+// `view`: the rendered AR frame (BGR 8-bit); `camera`: the image it was drawn over (BGR or grey,
+// the same size); `mask`: CV_32F in [0, 1], the same size (empty: nothing to do). Returns the
+// blended frame (the view itself, unchanged, when the mask is empty or all zero). Throws
+// std::invalid_argument for mismatched sizes or types.
+cv::Mat composeOcclusion(const cv::Mat& view, const cv::Mat& camera, const cv::Mat& mask);
+
+}  // namespace ps::render

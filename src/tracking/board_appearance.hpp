@@ -1,0 +1,92 @@
+#pragma once
+// What the board and the table around the planet look like without anything in front of them,
+// learned in the board plane's rectified frame (issue 42, the hand half): each camera frame is
+// warped through the homography of the tracked board pose (the board is planar, z = 0 in its
+// frame) onto a square of texels centred on the planet's foot, and every texel keeps a running
+// mean colour, updated only where the frame agrees with it. Because the model is carried by the
+// board's pose it survives camera motion; because it is of the camera image (the planet is not
+// in it), it holds what lies behind the planet as the camera sees it.
+//
+// The comparison is made to shrug off what is not an object: a global gain (and white balance)
+// change is measured each frame as the per-channel median ratio of the frame to the model and
+// divided out; a cast shadow darkens without changing chromaticity or texture, so a texel is
+// foreground only when (a) its chromaticity differs, (b) it is brighter than the model or darker
+// than the deepest shadow allowed, or (c) the model's texture (normalised cross-correlation over
+// a window) is not there; each test is tolerant of one texel of misregistration and scaled by
+// the camera's noise.
+#include <Eigen/Core>
+#include <opencv2/core.hpp>
+
+#include "tracking/pose.hpp"
+
+namespace ps::tracking {
+
+struct BoardAppearanceConfig {
+  double halfSizeM = 0.3;   // the modelled square's half side on the board plane (m)
+  double texelM = 0.002;    // texel side (m)
+  double learnRate = 0.05;  // running-mean weight once a texel has warmed up
+  int warmupFrames = 8;     // a texel's first frames are averaged equally
+  double noiseSigma = 4.0;  // the camera's noise (grey levels) that must not count as a change
+  double chromaThreshold = 0.06;  // chromaticity distance (L2 of b, g, r / their sum)
+  double shadowRatio = 0.3;       // darker than this fraction of the model: not a shadow
+  double brightRatio = 1.35;      // brighter than this multiple of the model: something there
+  double textureMinStd = 8.0;     // model texture (grey levels, window std) for the texture test
+  double textureMinNcc = 0.3;     // correlation below which the model's texture is gone
+  int textureWindow = 7;          // texels, odd
+  double learnBelow = 0.6;        // texels learned where the score is below this...
+  int learnGuardTexels = 4;       // ...and no texel within this distance is above it...
+  // ...and the brightness is the model's times the frame's gain within this fraction: a shadow
+  // is tolerated but not learned (a model that took it in would see its leaving as a change).
+  double learnBrightnessTolerance = 0.15;
+  // A texel kept from learning this many frames in a row takes the frame: what the model learned
+  // there has left (a hand over the board when it was first seen) or the light there changed
+  // for good. A hand held still over the planet for that long is taken as the board.
+  int forgetAfterFrames = 300;
+  // InputError "board appearance: FIELD ..." naming the first bad field.
+  void validate() const;
+};
+
+// One camera frame seen in the board plane's rectified frame.
+struct PlaneView {
+  cv::Mat image;               // CV_32FC3 (b, g, r), the camera image on the texels
+  cv::Mat valid;               // CV_8U, 255 where the texel is in the image, in front of it
+  cv::Matx33d imageFromTexel;  // texel (column, row, 1) -> camera pixel (homogeneous)
+};
+
+struct ForegroundScore {
+  cv::Mat score;    // CV_32F per texel: > 1 differs from the board; 0 where not yet learned
+  cv::Mat steady;   // CV_8U, 255 where the brightness is the model's times the gain
+  cv::Vec3d gain;   // per channel, this frame over the model (b, g, r)
+  int gainSamples;  // texels the gain was measured on
+};
+
+class BoardAppearance {
+ public:
+  explicit BoardAppearance(BoardAppearanceConfig config = {});
+  const BoardAppearanceConfig& config() const { return config_; }
+  int side() const { return side_; }
+
+  // `image`: BGR or grey 8-bit, undistorted (the pinhole K); `board`: board -> camera;
+  // `centreOnBoard`: the planet's foot on the board (m, board frame): the square's centre.
+  // A centre more than a quarter of the square from the model's forgets the model.
+  PlaneView view(const cv::Mat& image, const cv::Matx33d& K, const Pose& board,
+                 const Eigen::Vector2d& centreOnBoard);
+  ForegroundScore foreground(const PlaneView& view) const;
+  // Learns the frame where `fg` says it shows the board, unshadowed (texels never seen take
+  // the frame).
+  void learn(const PlaneView& view, const ForegroundScore& fg);
+  void reset();
+  // Texels learned at least once.
+  int learnedTexels() const;
+
+ private:
+  BoardAppearanceConfig config_;
+  int side_ = 0;
+  Eigen::Vector2d centre_ = Eigen::Vector2d::Zero();
+  bool centred_ = false;
+  cv::Mat mean_;   // CV_32FC3
+  cv::Mat count_;  // CV_32F, frames learned
+  cv::Mat kept_;   // CV_32F, frames in a row kept from learning
+};
+
+}  // namespace ps::tracking
