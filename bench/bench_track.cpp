@@ -117,6 +117,7 @@ double evaluate(const Recording& rec, const Config& c, const core::LatLongChart&
   std::vector<std::pair<double, nlohmann::json>> worst;
   int flips = 0, rawFlips = 0, visibleBoth = 0, trackedBoth = 0, touchingFrames = 0, cvWithin = 0;
   int toolVisible = 0, toolFound = 0, planetVisible = 0, planetFound = 0;
+  int drawnOff10 = 0;  // frames with a planet more than 10 mm off
   const double dt = 1.0 / rec.script.fps;
   for (std::size_t i = 0; i < rec.frames.size(); ++i) {
     const auto& gt = rec.truth[i];
@@ -136,6 +137,8 @@ double evaluate(const Recording& rec, const Config& c, const core::LatLongChart&
     ms.push_back(t);
     const auto fr =
         rawTracker.update(rawDetector->detect(rec.frames[i]), rec.script.camera, gt.frame, time);
+    drawnOff10 +=
+        f.planetCentreValid && (f.planetCentreCamera - gt.planetCentreCamera).norm() > 0.01;
     toolVisible += gt.toolVisible;
     planetVisible += gt.planetVisible;
     toolFound += gt.toolVisible && f.tool.measured;
@@ -222,6 +225,9 @@ double evaluate(const Recording& rec, const Config& c, const core::LatLongChart&
       {"touching_frames", touchingFrames},
       {"control_vertex_within_3mm", r3(touchingFrames ? double(cvWithin) / touchingFrames : 0)},
       {"tool_tilt_max_deg", r3(maxToolTilt)},
+      {"drawn_off_10mm_frames", drawnOff10},
+      {"drawn_off_10mm_fraction",
+       r3(rec.frames.empty() ? 0 : double(drawnOff10) / rec.frames.size())},
       {"filtered", c.filter}};
   std::sort(worst.begin(), worst.end(),
             [](const auto& a, const auto& b) { return a.first > b.first; });

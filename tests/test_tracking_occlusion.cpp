@@ -145,14 +145,21 @@ struct OcclusionRun {
   // the frame before (once lost, there is nothing for the camera's stillness to keep).
   int judgedWhileHeld = 0, judgedAfterLoss = 0;
   std::vector<double> centreErr;  // frames with a board marker at least half visible
+  std::vector<double> movedErr;   // hidden, the camera moved, with a pose
+  int carried = 0;                // poses carried by the plane around the board
+  // Held (not carried) with the planet's true centre more than 3 mm (in the image's frame) from
+  // where it was when the board was last measured: a pose known to be stale.
+  int stale = 0;
+  int drawnOff10 = 0;  // frames with a pose more than 10 mm off
 };
 
 // Replays a built-in board scene through the frame stepper (the pipeline `replay` and `live`
 // run) and compares the planet's pose with the ground truth, frame by frame. Every `step`th frame
 // only (the video then runs at 30/step fps; the holds count in seconds): rendering is what costs
 // here, and `bench track` runs the scenes whole.
-OcclusionRun replayBoardScene(const std::string& name, int step) {
-  const auto script = tracking::builtinScene(name, ps::app::sourceDir());
+OcclusionRun replayBoardScene(const std::string& name, int step, const std::string& table = "") {
+  auto script = tracking::builtinScene(name, ps::app::sourceDir());
+  if (!table.empty()) script.table = table;
   const tracking::SynthRenderer renderer(script);
   terrain::Terrain planet = testkit::bumpyTerrain(7);
   replay::ReplayOptions o;
@@ -162,6 +169,7 @@ OcclusionRun replayBoardScene(const std::string& name, int step) {
   replay::FrameStepper stepper(script.camera, planet, o);
   OcclusionRun r;
   tracking::Pose lastSeenCamera;
+  Eigen::Vector3d lastSeenCentre = Eigen::Vector3d::Zero();
   bool seen = false, hadPose = false;
   for (int f = 0; f < renderer.frames(); f += step) {
     const auto truth = renderer.truth(f);
@@ -190,10 +198,20 @@ OcclusionRun replayBoardScene(const std::string& name, int step) {
       } else {
         ++r.hiddenMoved;
         r.falseHolds += sf.planetCentreValid && err > 5e-3 ? 1 : 0;
+        if (sf.planetCentreValid) r.movedErr.push_back(err);
+      }
+      if (sf.planet.usable() && !sf.planet.carried &&
+          (truth.planetCentreCamera - lastSeenCentre).norm() > 3e-3) {
+        ++r.stale;
+        if (std::getenv("PS_DEBUG_OCCLUSION"))
+          std::fprintf(stderr, "frame %d: held %.1f mm off\n", f, 1e3 * err);
       }
     }
+    r.carried += sf.planet.carried ? 1 : 0;
+    r.drawnOff10 += sf.planetCentreValid && err > 0.01 ? 1 : 0;
     if (sf.planet.measured) {
       lastSeenCamera = truth.camera;
+      lastSeenCentre = truth.planetCentreCamera;
       seen = true;
     }
   }
@@ -243,4 +261,32 @@ TEST(TrackingOcclusion, BoardUnderAHandKeepsThePlanet) {
       << r.hiddenStillWithPose << " of " << r.hiddenStill;
   EXPECT_LT(quantile(r.centreErr, 0.5), 1e-3);
   EXPECT_LT(quantile(r.centreErr, 0.95), 3e-3);
+}
+
+// On a textured table, the board covered whole by a hand while the camera moves round it: the
+// planet is carried by the table that shows around the hand, close to the truth, and no pose
+// is held once the camera has moved from where it stood when the board was last seen.
+TEST(TrackingOcclusion, ACoveredBoardIsCarriedByTheTableWhileTheCameraMoves) {
+  const OcclusionRun r = replayBoardScene("board-covered-move", 1);
+  ASSERT_GT(r.hiddenMoved, 100) << "the scene covers the board while the camera moves";
+  EXPECT_GE(r.movedErr.size(), std::size_t(r.hiddenMoved) * 9 / 10)
+      << r.movedErr.size() << " of " << r.hiddenMoved << " hidden, moved frames with a pose";
+  EXPECT_GE(r.carried, r.hiddenMoved * 8 / 10);
+  EXPECT_LE(quantile(r.movedErr, 0.5), 2e-3);
+  EXPECT_LE(quantile(r.movedErr, 0.95), 5e-3);
+  EXPECT_EQ(r.stale, 0) << "held poses after the camera moved";
+  EXPECT_EQ(r.drawnOff10, 0);
+  EXPECT_LE(r.halfVisible - r.halfVisibleWithPose, kReacquireFrames);
+}
+
+// The same recording on a featureless table: nothing carries the planet, and it is lost rather
+// than drawn where it is not (nor held where it was).
+TEST(TrackingOcclusion, ACoveredBoardOnAPlainTableIsLostNotDrawnWrong) {
+  const OcclusionRun r = replayBoardScene("board-covered-move", 1, "plain");
+  ASSERT_GT(r.hiddenMoved, 100);
+  EXPECT_EQ(r.drawnOff10, 0);
+  EXPECT_EQ(r.stale, 0);
+  EXPECT_LE(r.movedErr.size(), std::size_t(r.hiddenMoved) / 10)
+      << "frames with a pose though nothing could carry it";
+  for (double e : r.movedErr) EXPECT_LE(e, 5e-3);
 }

@@ -15,6 +15,7 @@
 #include "replay/session_timeline.hpp"
 #include "sand/tin_sand_tool.hpp"
 #include "tracking/camera_motion.hpp"
+#include "tracking/plane_tracker.hpp"
 
 namespace ps::replay {
 
@@ -35,6 +36,7 @@ nlohmann::json markerJson(const tracking::MarkerEstimate& m) {
   }
   if (m.measured && m.ids.size() > 1) j["ids"] = m.ids;
   if (m.heldStill) j["held_still"] = true;
+  if (m.carried) j["carried"] = true;
   if (m.measured) {
     j["reprojection_px"] = std::round(m.rms * 1000) / 1000;
     if (std::isfinite(m.ratio)) j["ambiguity_ratio"] = std::round(m.ratio * 100) / 100;
@@ -106,9 +108,16 @@ struct FrameStepper::Parts {
   const sand::TinSandTool* patchTool = nullptr;
   // Boards: whether the camera stood still while the board is hidden (tracker.hpp).
   std::optional<tracking::CameraMotionJudge> motion;
+  // Boards: the board's pose from the table around it while it is hidden and the camera moves.
+  std::optional<tracking::PlaneTracker> plane;
+  tracking::Pose boardPlane;  // board-from-plane
   // The planet had a pose after the last frame: only then can the camera's stillness keep it
   // (once lost, it waits for the board; judging the camera then was work thrown away).
   bool planetHadPose = false;
+  // What the frame says of the board when none of its markers was read (tracker.hpp), and the
+  // log's camera_shift_px and plane entries.
+  tracking::BoardHint boardHint(const cv::Mat& grey, const std::vector<tracking::Detection>& found,
+                                const tracking::CameraCalibration& calib, nlohmann::json& log);
   Parts(std::unique_ptr<tracking::Detector> d, const tracking::SceneConfig& sc,
         terrain::Terrain& planet)
       : detector(std::move(d)), scene(sc), pipeline(planet) {}
@@ -148,7 +157,14 @@ FrameStepper::FrameStepper(const tracking::CameraCalibration& calib, terrain::Te
         chart.name() + " planet has none to stand on the board");
   scale_ = bound / o_.scene.planetRadius;
   p_ = std::make_unique<Parts>(tracking::makeDetector(dc), o_.scene, planet_);
-  if (o_.scene.planet.holdWhileStill) p_->motion.emplace();
+  if (o_.scene.planet.holdWhileStill) {
+    p_->motion.emplace();
+    if (o_.scene.planet.layout->planar()) {
+      p_->plane.emplace();
+      // The plane the board lies on: its first marker's, z = 0.
+      p_->boardPlane = o_.scene.planet.layout->markers.front().inBody();
+    }
+  }
   if (chart.radius() > 0) {
     p_->scene.setSurface([this](const Eigen::Vector3d& tracked) {
       if (!(tracked.norm() > 0)) return o_.scene.planetRadius;
@@ -282,6 +298,45 @@ void FrameStepper::setDisplacement(const sand::DisplacementSettings& displace, d
   rebuildTools();
 }
 
+tracking::BoardHint FrameStepper::Parts::boardHint(const cv::Mat& grey,
+                                                   const std::vector<tracking::Detection>& found,
+                                                   const tracking::CameraCalibration& calib,
+                                                   nlohmann::json& log) {
+  tracking::BoardHint hint;
+  if (!motion) return hint;
+  const bool boardSeen = std::any_of(
+      found.begin(), found.end(), [&](const auto& d) { return scene.config().planet.owns(d.id); });
+  if (boardSeen || !planetHadPose || !motion->hasReference()) return hint;
+  // Still (the cheap judge against the last frame with the board): held. Moved: carried by the
+  // plane the board lies on, or lost; once the plane carries it, the plane alone decides.
+  bool moved = plane && plane->active();
+  if (!moved) {
+    const tracking::CameraMotion m = motion->judge(grey);
+    hint.cameraStill = m.still;
+    moved = m.judged && std::isfinite(m.medianShiftPx) && !m.still;
+    if (m.judged)
+      log["camera_shift_px"] = std::isfinite(m.medianShiftPx)
+                                   ? nlohmann::json(std::round(m.medianShiftPx * 100) / 100)
+                                   : nlohmann::json("lost");
+  }
+  if (hint.cameraStill || !plane) {
+    hint.cameraMoved = moved;
+    return hint;
+  }
+  std::vector<std::array<cv::Point2d, 4>> toolQuads;
+  for (const auto& d : found)
+    if (scene.config().tool.owns(d.id)) toolQuads.push_back(d.corners);
+  const tracking::PlaneTrack t = plane->track(grey, calib, toolQuads);
+  if (t.ok) {
+    hint.carried = t.board * boardPlane.inverse();
+    log["plane"] = {{"inliers", t.inliers}, {"rms_px", std::round(t.rmsPx * 1000) / 1000}};
+  } else {
+    hint.cameraMoved = moved;
+    log["plane"] = {{"lost", t.why}};
+  }
+  return hint;
+}
+
 StepResult FrameStepper::step(const cv::Mat& image, int frame, double time) {
   const core::Chart& chart = planet_.chart();
   const double R = chart.radius();
@@ -323,26 +378,22 @@ StepResult FrameStepper::step(const cv::Mat& image, int frame, double time) {
   }
   out.times.detectMs = msSince(t0);
   const auto t1 = std::chrono::steady_clock::now();
-  bool cameraStill = false;
-  if (p_->motion) {
-    const bool boardSeen = std::any_of(found.begin(), found.end(),
-                                       [&](const auto& d) { return o_.scene.planet.owns(d.id); });
-    if (!boardSeen && p_->planetHadPose && p_->motion->hasReference()) {
-      const tracking::CameraMotion m = p_->motion->judge(grey.empty() ? image : grey);
-      cameraStill = m.still;
-      if (m.judged)
-        j["camera_shift_px"] = std::isfinite(m.medianShiftPx)
-                                   ? nlohmann::json(std::round(m.medianShiftPx * 100) / 100)
-                                   : nlohmann::json("lost");
-    }
-  }
-  out.scene = p_->scene.update(found, calib_, frame, time, cameraStill);
+  const tracking::BoardHint hint = p_->boardHint(grey.empty() ? image : grey, found, calib_, j);
+  out.scene = p_->scene.update(found, calib_, frame, time, hint);
   p_->planetHadPose = out.scene.planet.usable();
   if (p_->motion && out.scene.planet.measured) {
-    std::vector<std::array<cv::Point2d, 4>> quads;
-    for (const auto& d : found) quads.push_back(d.corners);
-    p_->motion->setReference(grey.empty() ? image : grey, quads,
-                             !grey.empty() && grey.data != image.data);
+    std::vector<std::array<cv::Point2d, 4>> quads, toolQuads;
+    for (const auto& d : found) {
+      quads.push_back(d.corners);
+      if (o_.scene.tool.owns(d.id)) toolQuads.push_back(d.corners);
+    }
+    // One copy of the frame kept for both (neither writes into it).
+    const cv::Mat& g = grey.empty() ? image : grey;
+    const cv::Mat kept = !grey.empty() && grey.data != image.data ? g : g.clone();
+    p_->motion->setReference(kept, quads, true);
+    if (p_->plane)
+      p_->plane->setReference(kept, out.scene.planet.raw * p_->boardPlane, toolQuads, true,
+                              int(out.scene.planet.ids.size()));
   }
   if (rotated_) out.scene.tipPlanet = userRotation_.transpose() * out.scene.tipPlanet;
   const tracking::SceneFrame& f = out.scene;

@@ -43,7 +43,34 @@ Eigen::Vector3d orthogonalPart(const Eigen::Vector3d& v, const Eigen::Vector3d& 
   return w.norm() > 1e-9 ? Eigen::Vector3d(w.normalized()) : perpendicular(axis);
 }
 
-cv::Mat makeTable(std::uint64_t seed) {
+// Over the wood, a fine pattern the size of a few pixels at arm's length: dark and light specks,
+// chips and short grain strokes (a worn, speckled table top), seeded, so that every patch of the
+// table has corners to follow.
+void addFineTexture(cv::Mat& table, std::uint64_t seed) {
+  cv::RNG rng(seed * 0x9E3779B97F4A7C15ULL + 101);
+  for (int i = 0; i < 9000; ++i) {
+    const cv::Point2f c(float(rng.uniform(0.0, double(kTablePixels))),
+                        float(rng.uniform(0.0, double(kTablePixels))));
+    const int v = rng.uniform(0, 2) ? rng.uniform(20, 90) : rng.uniform(170, 240);
+    const cv::Scalar colour(v * 0.8, v * 0.95, v);
+    if (i % 3 == 0) {
+      cv::circle(table, c, rng.uniform(1, 5), colour, cv::FILLED, cv::LINE_AA);
+    } else {
+      const cv::RotatedRect r(
+          c, cv::Size2f(float(rng.uniform(3.0, 14.0)), float(rng.uniform(2.0, 9.0))),
+          float(rng.uniform(0.0, 180.0)));
+      cv::Point2f p[4];
+      r.points(p);
+      std::vector<cv::Point> poly(p, p + 4);
+      cv::fillConvexPoly(table, poly, colour, cv::LINE_AA);
+    }
+  }
+  cv::GaussianBlur(table, table, cv::Size(0, 0), 0.6);
+}
+
+cv::Mat makeTable(std::uint64_t seed, const std::string& kind) {
+  if (kind == "plain")
+    return cv::Mat(kTablePixels, kTablePixels, CV_8UC3, cv::Scalar(80, 120, 150));
   cv::RNG rng(seed * 2654435761ULL + 17);
   // Smooth shading (fine texture would make the lossless video large for nothing).
   cv::Mat coarse(8, 8, CV_32F), a;
@@ -77,6 +104,7 @@ cv::Mat makeTable(std::uint64_t seed) {
     cv::line(table, p0, p1, cv::Scalar(rng.uniform(0, 80), rng.uniform(0, 80), rng.uniform(0, 80)),
              rng.uniform(2, 6), cv::LINE_AA);
   }
+  if (kind == "textured") addFineTexture(table, seed);
   return table;
 }
 
@@ -116,7 +144,7 @@ nlohmann::json FrameTruth::toJson() const {
 
 SynthRenderer::SynthRenderer(SynthScript script) : script_(std::move(script)) {
   script_.validate();
-  table_ = makeTable(script_.seed);
+  table_ = makeTable(script_.seed, script_.table);
   planetCard_ = makeCard(script_.family, script_.planetId, planetMargin_);
   toolCard_ = makeCard(script_.family, script_.toolId, toolMargin_);
   if (script_.board)
@@ -197,10 +225,9 @@ void SynthRenderer::poses(const SynthKey& k, Pose& camera, Pose& tool) const {
   camera.R.row(0) = x.transpose();
   camera.R.row(1) = y.transpose();
   camera.R.row(2) = z.transpose();
-  const Eigen::Matrix3d aim =
-      (Eigen::AngleAxisd(-k.camTiltDeg * kDeg, Eigen::Vector3d::UnitX()) *
-       Eigen::AngleAxisd(k.camPanDeg * kDeg, Eigen::Vector3d::UnitY()))
-          .toRotationMatrix();
+  const Eigen::Matrix3d aim = (Eigen::AngleAxisd(-k.camTiltDeg * kDeg, Eigen::Vector3d::UnitX()) *
+                               Eigen::AngleAxisd(k.camPanDeg * kDeg, Eigen::Vector3d::UnitY()))
+                                  .toRotationMatrix();
   camera.R = aim * camera.R;
   camera.t = -(camera.R * C);
 

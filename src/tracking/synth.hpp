@@ -10,7 +10,7 @@
 //     "camera": {"fx": 600, "fy": 600, "cx": 319.5, "cy": 239.5},      (optional; default)
 //     "planet": {"id": 0, "size": 0.08, "radius": 0.06},
 //     "tool": {"id": 1, "size": 0.05, "tip": [0, -0.08, 0]},
-//     "exposure": 0.0, "motion_samples": 1,
+//     "exposure": 0.0, "motion_samples": 1, "table": "wood",
 //     "keys": [ {"frame": 0,
 //                "camera": {"distance": 0.6, "elevation": 50, "azimuth": -90, "roll": 0},
 //                "tip": {"lat": 40, "lon": -90, "height_mm": 20},
@@ -30,6 +30,9 @@
 //           marker's TR corner, as a fraction of the marker's image size (0 = none).
 //   hand:   {"x", "y", "height", "radius"} (m, world frame): a hand-coloured disc of that radius
 //           held flat `height` above the table at (x, y), drawn over everything (radius 0: none).
+// table: "wood" (soft two-tone shading with a few scraps and strokes), "textured" (the wood under
+//         a fine seeded pattern of specks, chips and grain: what plane tracking needs to see) or
+//         "plain" (one flat colour: nothing to track).
 // Rigid marker sets (marker_layout.hpp) instead of the single markers:
 //   "board": a layout file name (relative to the script's folder) or the layout itself: its
 //            markers lie on a white sheet on the table, the planet at its planet_centre (moved
@@ -77,6 +80,7 @@ struct SynthScript {
   double exposure = 0.0;  // shutter open for this fraction of a frame period (motion blur)
   int motionSamples = 1;
   bool colour = true;
+  std::string table = "wood";  // "wood", "textured" or "plain"
   std::vector<SynthKey> keys;
 
   int frames() const { return keys.empty() ? 0 : int(keys.back().frame) + 1; }
@@ -102,7 +106,9 @@ nlohmann::json toJson(const SynthScript& s);
 // `root`/markers/): "board-demo" (the demo's story with hands over the board), "board-sweep"
 // (the tool sweeping over the board), "board-hand" (a hand covering half of it, then all of it
 // with the camera still), "board-hidden" (the board fully hidden while the camera stands, then
-// moves), "cube-spin" (the tool cube turned through 360 degrees, edge-on views included).
+// moves), "board-covered-move" (on a textured table, the board covered by a hand while the
+// camera moves round it), "cube-spin" (the tool cube turned through 360 degrees, edge-on views
+// included).
 SynthScript builtinScene(const std::string& name, const std::filesystem::path& root = {});
 std::vector<std::string> builtinSceneNames();
 

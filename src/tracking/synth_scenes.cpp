@@ -303,6 +303,29 @@ SynthScript boardHidden(const std::filesystem::path& root) {
   return s;
 }
 
+// On a textured table: the board seen, then covered whole by a hand held low over it while the
+// camera moves round and in (4 s), stops, moves back out, and the hand goes. The tool hovers
+// over the planet throughout (its cube is no part of the table). What shows of the table and
+// of the sheet's edge around the hand is all there is to carry the planet with.
+SynthScript boardCoveredMove(const std::filesystem::path& root) {
+  SynthScript s = onBoard(SynthScript{}, root);
+  s.seed = 37;
+  s.table = "textured";
+  KeyBuilder b;
+  b.look(0.4, 1.5, 1.0);
+  b.at(0).cam(0.62, 52, -90).tip(45, -80, 40).tool(15, 0).hand(0.0, -0.5, 0.16, 0.04).key();
+  b.at(20).hand(0.0, -0.01, 0.16, 0.04).key();
+  b.at(35).key();
+  b.at(80).cam(0.55, 60, -60, 5).tip(50, -70, 40).key();
+  b.at(95).key();
+  b.at(155).cam(0.66, 47, -115, -4).tip(40, -95, 45).key();
+  b.at(170).cam(0.6, 54, -100).key();
+  b.at(185).hand(0.0, -0.5, 0.16, 0.04).key();
+  b.at(199).key();
+  s.keys = b.keys;
+  return s;
+}
+
 // The tool cube turned through 360 degrees about its stick at three tilts, edge-on views
 // included, the tip touching the planet.
 SynthScript cubeSpin(const std::filesystem::path& root) {
@@ -340,6 +363,7 @@ const std::vector<std::pair<std::string, SceneFactory>>& scenes() {
       {"board-sweep", boardSweep},
       {"board-hand", boardHand},
       {"board-hidden", boardHidden},
+      {"board-covered-move", boardCoveredMove},
       {"cube-spin", cubeSpin}};
   return all;
 }

@@ -95,6 +95,8 @@ void SynthScript::validate() const {
       fail("id " + std::to_string(id) + " is on both the planet's and the tool's markers");
   if (!tipOffset.allFinite() || tipOffset.norm() < 1e-3) fail("tool tip offset must be >= 1 mm");
   if (!(exposure >= 0 && exposure <= 1)) fail("exposure must be in [0, 1]");
+  if (table != "wood" && table != "textured" && table != "plain")
+    fail("table \"" + table + "\" is not wood, textured or plain");
   if (motionSamples < 1 || motionSamples > 32) fail("motion_samples must be in 1..32");
   if (keys.empty()) fail("no keys");
   for (std::size_t i = 0; i < keys.size(); ++i) {
@@ -136,6 +138,7 @@ SynthScript parseSynthScript(const nlohmann::json& j, const std::string& source,
     if (j.contains("seed")) s.seed = j["seed"].get<std::uint64_t>();
     if (j.contains("family")) s.family = j["family"].get<std::string>();
     if (j.contains("colour")) s.colour = j["colour"].get<bool>();
+    if (j.contains("table")) s.table = j["table"].get<std::string>();
     if (j.contains("camera")) {
       const auto& c = j["camera"];
       s.camera = CameraCalibration::pinhole(get(c, "fx", s.camera.K(0, 0), "camera"),
@@ -237,6 +240,7 @@ nlohmann::json toJson(const SynthScript& s) {
         {"tip", {s.tipOffset.x(), s.tipOffset.y(), s.tipOffset.z()}}}},
       {"exposure", s.exposure},
       {"motion_samples", s.motionSamples}};
+  if (s.table != "wood") j["table"] = s.table;
   if (cv::countNonZero(s.camera.distortion) > 0) {
     std::vector<double> d(5, 0.0);
     for (int i = 0; i < std::min(5, int(s.camera.distortion.total())); ++i)

@@ -170,6 +170,15 @@ bool MarkerTracker::measureBody(std::span<const Detection> detections,
 MarkerEstimate MarkerTracker::update(std::span<const Detection> detections,
                                      const CameraCalibration& calib, double time,
                                      bool cameraStill) {
+  BoardHint hint;
+  hint.cameraStill = cameraStill;
+  return update(detections, calib, time, hint);
+}
+
+MarkerEstimate MarkerTracker::update(std::span<const Detection> detections,
+                                     const CameraCalibration& calib, double time,
+                                     const BoardHint& hint) {
+  const bool cameraStill = hint.cameraStill;
   MarkerEstimate e;
   e.id = config_.id;
   const double dt = have_ ? time - lastTime_ : 0.0;
@@ -206,6 +215,35 @@ MarkerEstimate MarkerTracker::update(std::span<const Detection> detections,
     return e;
   }
   measuredLast_ = false;
+  if (have_ && config_.holdWhileStill && hint.carried) {
+    // The plane around the board carries it: filtered on from the last pose, as a measurement.
+    const Pose& c = *hint.carried;
+    const bool restart =
+        (config_.restartJump > 0 && (c.t - last_.t).norm() > config_.restartJump) ||
+        (config_.restartTurn > 0 && rotationAngle(c.R, last_.R) > config_.restartTurn);
+    if (restart) {
+      tFilter_.reset();
+      rFilter_.reset();
+    }
+    Pose p = c;
+    if (config_.filter) {
+      p.t = tFilter_.filter(c.t, restart ? 0.0 : dt);
+      p.R = rFilter_.filter(Eigen::Quaterniond(c.R), restart ? 0.0 : dt).toRotationMatrix();
+    }
+    last_ = p;
+    lastStill_ = time;
+    e.pose = p;
+    e.state = TrackState::kHeld;
+    e.carried = true;
+    e.sinceSeen = time - lastSeen_;
+    return e;
+  }
+  if (have_ && config_.holdWhileStill && hint.cameraMoved) {
+    // Known stale: not drawn at all.
+    reset();
+    e.state = TrackState::kLost;
+    return e;
+  }
   if (have_ && config_.holdWhileStill && cameraStill) {
     lastStill_ = time;
     e.heldStill = true;
@@ -282,6 +320,14 @@ Pose SceneTracker::planetFromMarker(const Pose& marker) const {
 SceneFrame SceneTracker::update(const std::vector<Detection>& detections,
                                 const CameraCalibration& calib, int frame, double time,
                                 bool cameraStill) {
+  BoardHint hint;
+  hint.cameraStill = cameraStill;
+  return update(detections, calib, frame, time, hint);
+}
+
+SceneFrame SceneTracker::update(const std::vector<Detection>& detections,
+                                const CameraCalibration& calib, int frame, double time,
+                                const BoardHint& hint) {
   SceneFrame f;
   f.frame = frame;
   f.time = time;
@@ -295,7 +341,7 @@ SceneFrame SceneTracker::update(const std::vector<Detection>& detections,
     else if (std::find(others.begin(), others.end(), d.id) == others.end())
       others.push_back(d.id);
   }
-  f.planet = planet_.update(p, calib, time, cameraStill);
+  f.planet = planet_.update(p, calib, time, hint);
   f.tool = tool_.update(t, calib, time);
   if (!f.planet.note.empty()) f.notes.push_back(f.planet.note);
   if (!f.tool.note.empty()) f.notes.push_back(f.tool.note);

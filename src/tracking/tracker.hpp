@@ -22,6 +22,7 @@
 #include <Eigen/Core>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <span>
 #include <string>
 #include <vector>
@@ -90,9 +91,22 @@ struct MarkerEstimate {
   double sinceSeen = 0;    // seconds since the last measurement
   bool restarted = false;  // the filters restarted on a jump (restartJump, restartTurn)
   bool heldStill = false;  // held because the camera was judged still
+  bool carried = false;    // carried by the plane around the board (BoardHint::carried)
   std::vector<int> ids;    // markers whose corners gave this frame's measurement
   std::string note;        // why a detection was not used, if one was not
   bool usable() const { return state != TrackState::kLost; }
+};
+
+// What a frame says of a board none of whose markers was read (the frame stepper's judge and
+// plane tracker: camera_motion.hpp, plane_tracker.hpp). Read only with holdWhileStill.
+struct BoardHint {
+  bool cameraStill = false;  // the camera has not moved since the board was last measured
+  // The camera was judged moved and nothing carries the board: its last pose is stale, and it
+  // is lost at once (no short hold).
+  bool cameraMoved = false;
+  // The board's pose from the plane it lies on (the table around the hands): filtered as a
+  // measurement is, reported held with `carried`.
+  std::optional<Pose> carried;
 };
 
 class MarkerTracker {
@@ -105,6 +119,8 @@ class MarkerTracker {
   // measurement (only read with holdWhileStill).
   MarkerEstimate update(std::span<const Detection> detections, const CameraCalibration& calib,
                         double time, bool cameraStill = false);
+  MarkerEstimate update(std::span<const Detection> detections, const CameraCalibration& calib,
+                        double time, const BoardHint& hint);
   void reset();
 
  private:
@@ -178,6 +194,8 @@ class SceneTracker {
   // their pose while it holds).
   SceneFrame update(const std::vector<Detection>& detections, const CameraCalibration& calib,
                     int frame, double time, bool cameraStill = false);
+  SceneFrame update(const std::vector<Detection>& detections, const CameraCalibration& calib,
+                    int frame, double time, const BoardHint& hint);
   // Camera-from-planet pose for a planet-marker pose.
   Pose planetFromMarker(const Pose& marker) const;
   // Tip in the camera frame for a tool-marker pose.
