@@ -73,7 +73,8 @@ void ArRecorder::onFrame(const replay::FrameContext& f, const Eigen::Vector3d& f
         cursor->arrow = force * (0.25 * core::boundingRadius(f.planet.chart()) / 8.0);
       }
     }
-    view = renderer_.renderAR(image, f.planet, mesh, cam, style, cursor);
+    // The tracked tool hides the planet where it is in front of it.
+    view = renderer_.renderAR(image, f.planet, mesh, cam, style, cursor, f.toolTriangles);
     overview = renderer_.renderOverview(f.planet, mesh, cam, 480, 480);
   } else {
     // No planet: the camera image alone (the planet is not drawn where it is not tracked).

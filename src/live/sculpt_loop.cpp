@@ -144,6 +144,7 @@ class SculptLoop {
     status_.trackMs = r.times.detectMs + r.times.trackMs;
     status_.editMs = r.times.editMs;
     pose_ = r.planetInCamera;
+    toolTriangles_ = r.toolTriangles;  // the tool in front of the planet hides it
     controlVertex_ = r.control;
     status_.touching = r.touching;
     if (haptic_) {
@@ -163,6 +164,7 @@ class SculptLoop {
     stepper_.endStroke();
     status_.touching = false;
     controlVertex_.reset();
+    toolTriangles_.clear();
   }
 
   void followForces() {
@@ -245,7 +247,9 @@ class SculptLoop {
         cursor->arrow = lastForce_->force * (0.25 * core::boundingRadius(planet_.chart()) / 8.0);
       }
     }
-    const cv::Size fb = shell_.present(planet_, *mesh, cam ? *cam : placeholder_, style, cursor);
+    const cv::Size fb = shell_.present(planet_, *mesh, cam ? *cam : placeholder_, style, cursor,
+                                       cam ? std::span<const Eigen::Vector3d>(toolTriangles_)
+                                           : std::span<const Eigen::Vector3d>());
     status_.renderMs = msSince(t1);
     return fb;
   }
@@ -472,6 +476,7 @@ class SculptLoop {
   session::BackgroundExport exporter_;
   std::optional<tracking::Pose> pose_;
   std::optional<core::GridPoint> controlVertex_;
+  std::vector<Eigen::Vector3d> toolTriangles_;  // the tracked tool (planet frame), when posed
   double smoothedMs_ = 0;
   haptics::ForcePathConfig hapticConfig_;
   std::unique_ptr<haptics::TrackedMarkerDevice> hapticDevice_;

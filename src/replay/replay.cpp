@@ -109,6 +109,7 @@ struct FrameStepper::Parts {
   // The planet had a pose after the last frame: only then can the camera's stillness keep it
   // (once lost, it waits for the board; judging the camera then was work thrown away).
   bool planetHadPose = false;
+  tracking::ToolShape toolShape;  // the tool's solid and stick in its body frame
   Parts(std::unique_ptr<tracking::Detector> d, const tracking::SceneConfig& sc,
         terrain::Terrain& planet)
       : detector(std::move(d)), scene(sc), pipeline(planet) {}
@@ -148,6 +149,7 @@ FrameStepper::FrameStepper(const tracking::CameraCalibration& calib, terrain::Te
         chart.name() + " planet has none to stand on the board");
   scale_ = bound / o_.scene.planetRadius;
   p_ = std::make_unique<Parts>(tracking::makeDetector(dc), o_.scene, planet_);
+  p_->toolShape = tracking::toolShape(o_.scene);
   if (o_.scene.planet.holdWhileStill) p_->motion.emplace();
   if (chart.radius() > 0) {
     p_->scene.setSurface([this](const Eigen::Vector3d& tracked) {
@@ -416,6 +418,12 @@ StepResult FrameStepper::step(const cv::Mat& image, int frame, double time) {
   if (f.planet.usable()) {
     out.planetInCamera = p_->scene.planetFromMarker(f.planet.pose);
     if (rotated_) out.planetInCamera->R = out.planetInCamera->R * userRotation_;
+    if (f.tool.usable()) {
+      tracking::ToolShape shape = p_->toolShape;
+      if (f.tipValid) shape.tip = f.tool.pose.inverse().apply(f.tipCamera);
+      out.toolTriangles =
+          tracking::toolTriangles(shape, out.planetInCamera->inverse() * f.tool.pose, scale);
+    }
   }
   out.touching = touching;
   out.control = control;
@@ -466,7 +474,8 @@ ReplaySummary runReplay(tracking::FrameSource& source, const tracking::CameraCal
                              r.touching,
                              r.control,
                              stepper.toolRadius(),
-                             stepper.viewPatch()};
+                             stepper.viewPatch(),
+                             r.toolTriangles};
       hook(ctx);
     }
     log << r.logLine << "\n";

@@ -197,10 +197,9 @@ void SynthRenderer::poses(const SynthKey& k, Pose& camera, Pose& tool) const {
   camera.R.row(0) = x.transpose();
   camera.R.row(1) = y.transpose();
   camera.R.row(2) = z.transpose();
-  const Eigen::Matrix3d aim =
-      (Eigen::AngleAxisd(-k.camTiltDeg * kDeg, Eigen::Vector3d::UnitX()) *
-       Eigen::AngleAxisd(k.camPanDeg * kDeg, Eigen::Vector3d::UnitY()))
-          .toRotationMatrix();
+  const Eigen::Matrix3d aim = (Eigen::AngleAxisd(-k.camTiltDeg * kDeg, Eigen::Vector3d::UnitX()) *
+                               Eigen::AngleAxisd(k.camPanDeg * kDeg, Eigen::Vector3d::UnitY()))
+                                  .toRotationMatrix();
   camera.R = aim * camera.R;
   camera.t = -(camera.R * C);
 
@@ -351,7 +350,11 @@ SynthRenderer::Overlays SynthRenderer::overlays(const SynthKey& k, const Pose& c
         half = std::max(half, (m.inBody().t + grow * (c - m.inBody().t)).dot(d));
   }
   const Eigen::Vector3d side = Eigen::Vector3d::UnitZ().cross(d).normalized();
-  const double w0 = 0.005, w1 = 0.002;
+  // A tool solid's stick has its layout's radii (markers/tool-cube.json: 5 mm at the solid, 2 mm
+  // at the tip); a single marker's the same. Drawn as a flat strip in the tool's x-y plane, the
+  // cone's outline as the camera sees the face of the tool.
+  const double w0 = script_.toolLayout ? script_.toolLayout->stickBaseRadius() : 0.005;
+  const double w1 = script_.toolLayout ? script_.toolLayout->stickEndRadius() : 0.002;
   o.stickOk = true;
   for (const auto& p :
        {Eigen::Vector3d(d * half + side * w0), Eigen::Vector3d(d * half - side * w0),
