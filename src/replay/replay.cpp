@@ -149,7 +149,7 @@ FrameStepper::FrameStepper(const tracking::CameraCalibration& calib, terrain::Te
         chart.name() + " planet has none to stand on the board");
   scale_ = bound / o_.scene.planetRadius;
   p_ = std::make_unique<Parts>(tracking::makeDetector(dc), o_.scene, planet_);
-  p_->toolShape = tracking::toolShape(o_.scene);
+  p_->toolShape = tracking::toolShape(o_.scene, family_);
   if (o_.scene.planet.holdWhileStill) p_->motion.emplace();
   if (chart.radius() > 0) {
     p_->scene.setSurface([this](const Eigen::Vector3d& tracked) {

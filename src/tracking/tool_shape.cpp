@@ -45,9 +45,9 @@ ToolShape toolShape(const MarkerLayout& layout, const Eigen::Vector3d& tip, doub
   return s;
 }
 
-ToolShape toolShape(const SceneConfig& scene) {
+ToolShape toolShape(const SceneConfig& scene, const std::string& family) {
   if (scene.tool.layout) return toolShape(*scene.tool.layout, scene.tipOffset);
-  const MarkerLayout card = MarkerLayout::singleMarker(scene.tool.id, scene.tool.size);
+  const MarkerLayout card = MarkerLayout::singleMarker(scene.tool.id, scene.tool.size, family);
   ToolShape s = toolShape(card, scene.tipOffset, kCardMarginCells);
   s.baseRadius = kSingleStickBase;
   s.tipRadius = kSingleStickTip;

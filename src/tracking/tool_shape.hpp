@@ -9,6 +9,7 @@
 //     to the tip, of the layout's stick radii (marker_layout.hpp: "stick_radius",
 //     "stick_tip_radius"; a single marker's 5 mm and 2 mm, as synth draws it).
 #include <Eigen/Core>
+#include <string>
 #include <vector>
 
 #include "tracking/marker_layout.hpp"
@@ -30,9 +31,9 @@ struct ToolShape {
 
 // `marginCells`: cells of margin around each marker's quiet zone (0 for a solid's faces).
 ToolShape toolShape(const MarkerLayout& layout, const Eigen::Vector3d& tip, double marginCells = 0);
-// The scene's tool: its layout (tool solid) or the single marker with its card; the tip at
-// the scene's tipOffset.
-ToolShape toolShape(const SceneConfig& scene);
+// The scene's tool: its layout (tool solid) or the single marker of `family` (the detector's)
+// with its card; the tip at the scene's tipOffset.
+ToolShape toolShape(const SceneConfig& scene, const std::string& family = "tag36h11");
 
 // The shape as triangles (3 points each; the box's 12, the cone's side and its ends in
 // `segments` steps), each point mapped into a target frame: scale * bodyToTarget.apply(x).
