@@ -171,7 +171,7 @@ void benchCase(const BenchOptions& options, std::ostream& out, nlohmann::json ma
       std::optional<render::Cursor> cursor;
       if (r.control) cursor = render::Cursor{*r.control, stepper.toolRadius()};
       t0 = std::chrono::steady_clock::now();
-      renderer.renderAR(image, *planet, mesh, cam, style, cursor);
+      renderer.renderAR(image, *planet, mesh, cam, style, cursor, r.toolTriangles);
       renderMs = ms(t0);
       if (frame % kOverviewEvery == 0) {
         t0 = std::chrono::steady_clock::now();

@@ -529,8 +529,8 @@ def finite_numbers(x, where):
         fail(f"{where} is {x}")
 
 
-BENCHES = ("bounds", "charts", "deform", "erosion", "export", "frame", "haptics", "live", "occlusion-hand",
-           "render", "sand-tin", "tessellate", "track")
+BENCHES = ("bounds", "charts", "deform", "erosion", "export", "frame", "haptics", "live", "occlusion",
+           "occlusion-hand", "render", "sand-tin", "tessellate", "track")
 
 
 def check_bench_row(r):
@@ -591,6 +591,16 @@ def check_bench_row(r):
         fail(f"occlusion-hand: {r}")
     if b == "render" and not r.get("skipped") and not (-1.0 <= r["ssim"] <= 1.0 and r["texture_bytes"] >= 0):
         fail(f"render: ssim {r['ssim']} or texture bytes {r['texture_bytes']} out of range")
+    # Occlusion: IoUs and fractions are fractions, and the rows say which frames they cover.
+    if b == "occlusion" and not r.get("skipped"):
+        for key in ("iou", "iou_tool_tracked", "iou_frame_median", "iou_frame_min", "false_hidden",
+                    "false_hidden_frame_max"):
+            if key in r and not (0.0 <= r[key] <= 1.0):
+                fail(f"occlusion {r['recording']}: {key} {r[key]} outside [0, 1]")
+        if r["frames_tool_in_front"] + r["frames_nothing_in_front"] + r["frames_planet_lost"] != r["frames"]:
+            fail(f"occlusion {r['recording']}: frame counts do not add up: {r}")
+        if r["recording"].startswith("tool-") and "behind" not in r["recording"] and r["frames_tool_in_front"] == 0:
+            fail(f"occlusion {r['recording']}: the tool never passed in front of the planet")
     for key, v in r.items():
         if (key == "ms" or key.endswith("_ms")) and isinstance(v, (int, float)) and v < 0:
             fail(f"{b}: {key} = {v} is negative")

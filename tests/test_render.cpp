@@ -30,6 +30,7 @@
 #include "tracking/detector.hpp"
 #include "tracking/pose.hpp"
 #include "tracking/synth.hpp"
+#include "tracking/tool_shape.hpp"
 #include "tracking/tracker.hpp"
 
 using namespace ps;
@@ -512,6 +513,90 @@ TEST(RenderGl, CursorRingAndForceArrowAreDrawn) {
   const cv::Mat none = renderer.renderAR({}, planet, mesh, cam, {}, c);
   cv::inRange(none, cv::Scalar(50, 240, 30), cv::Scalar(100, 255, 80), arrow);
   EXPECT_EQ(cv::countNonZero(arrow), 0);
+}
+
+// The tool's depth pass (render/occluder_pass.hpp): a stick of known radius across the view in
+// front of a planet of known radius hides the planet exactly where a ray meets the stick first
+// (the camera image shows there, pixel for pixel), and nowhere else; the same stick behind the
+// planet, or nearer the camera than the planet's near plane, is judged the same way.
+TEST(RenderGl, TheToolHidesThePlanetExactlyWhereItIsInFront) {
+  SKIP_WITHOUT_GL();
+  const terrain::Terrain planet = smoothPlanet(7);
+  const double R = planet.chart().radius();
+  render::EglContext gl;
+  render::PlanetRenderer renderer;
+  const auto cam = orbitCamera(3 * R, 320, 240);
+  terrain::Tessellator tess;
+  terrain::TessellationSettings ts;
+  ts.distMaxPx = 0.5;
+  const auto& mesh = tess.tessellate(planet, cam, ts);
+  const cv::Vec3b camColour(255, 0, 255);  // the "camera image": no planet pixel has it
+  const cv::Mat background(cam.height, cam.width, CV_8UC3, cv::Scalar(camColour));
+  const cv::Mat bare = renderer.renderAR(background, planet, mesh, cam, {});
+  cv::Mat planetPixels;
+  cv::inRange(bare, cv::Scalar(camColour), cv::Scalar(camColour), planetPixels);
+  planetPixels = ~planetPixels;
+  ASSERT_GT(cv::countNonZero(planetPixels), 5000);
+  const Eigen::Matrix3d Rt = cam.rotation.transpose();
+  const Eigen::Vector3d toCam = cam.eye.normalized();
+  const Eigen::Vector3d across = toCam.cross(Eigen::Vector3d::UnitZ()).normalized();
+  const double radius = 0.04 * R;
+  // `distance`: the stick's axis from the camera along the line to the planet's centre.
+  auto check = [&](double distance, const char* what) {
+    SCOPED_TRACE(what);
+    const Eigen::Vector3d mid = cam.eye - distance * toCam, a = mid - 3 * R * across,
+                          b = mid + 3 * R * across + 0.2 * R * Eigen::Vector3d::UnitZ();
+    tracking::ToolShape shape;  // a tiny box at one end, out of view; the stick across it
+    shape.boxCentre = a;
+    shape.boxHalf = Eigen::Vector3d::Constant(1e-3 * R);
+    shape.stickBase = a;
+    shape.tip = b;
+    shape.baseRadius = shape.tipRadius = radius;
+    const auto triangles = tracking::toolTriangles(shape, tracking::Pose{}, 1.0, 48);
+    const cv::Mat img =
+        renderer.renderAR(background, planet, mesh, cam, {}, std::nullopt, triangles);
+    cv::Mat grown, shrunk;
+    cv::dilate(planetPixels, grown, cv::Mat::ones(3, 3, CV_8U));
+    cv::erode(planetPixels, shrunk, cv::Mat::ones(3, 3, CV_8U));
+    int hidden = 0, shown = 0;
+    for (int y = 0; y < cam.height; ++y)
+      for (int x = 0; x < cam.width; ++x) {
+        const Eigen::Vector3d d =
+            (Rt * Eigen::Vector3d((x - cam.cx) / cam.fx, (y - cam.cy) / cam.fy, 1)).normalized();
+        // The ray's closest approach to the stick's axis, and where it meets the sphere.
+        const Eigen::Vector3d u = (b - a).normalized(), w = cam.eye - a;
+        const double dd = d.dot(u), den = 1 - dd * dd;
+        const double s = (dd * u.dot(w) - d.dot(w)) / den;  // along the ray
+        const double gap = (cam.eye + s * d - a - (cam.eye + s * d - a).dot(u) * u).norm();
+        const double along = -cam.eye.dot(d), miss = (cam.eye + along * d).norm();
+        const double hitSphere = miss < R ? along - std::sqrt(R * R - miss * miss) : 1e300;
+        const double pixel = s / cam.fx;  // a pixel's width at the stick (planet metres)
+        const cv::Vec3b got = img.at<cv::Vec3b>(y, x), was = bare.at<cv::Vec3b>(y, x);
+        if (gap < radius - 1.5 * pixel && s < hitSphere) {
+          // On the stick in front: the camera image, wherever the planet was or not.
+          EXPECT_EQ(got, camColour) << x << "," << y;
+          hidden += shrunk.at<uchar>(y, x) ? 1 : 0;
+        } else if (gap > radius + 1.5 * pixel || s > hitSphere + 0.01 * R) {
+          // Off the stick, or the stick behind the surface: the picture without the tool.
+          if (gap > radius + 1.5 * pixel || shrunk.at<uchar>(y, x)) {
+            EXPECT_EQ(got, was) << x << "," << y;
+            shown += grown.at<uchar>(y, x) ? 1 : 0;
+          }
+        }
+      }
+    return std::make_pair(hidden, shown);
+  };
+  // In front, between the camera and the planet (2R away from it: its near plane is at R).
+  const auto front = check(1.5 * R, "in front");
+  EXPECT_GT(front.first, 500);
+  EXPECT_GT(front.second, 5000);
+  // Nearer the camera than the planet's near plane: clamped, it still hides the planet.
+  const auto near = check(0.5 * R, "nearer than the near plane");
+  EXPECT_GT(near.first, 500);
+  // Behind the planet: it hides nothing of it.
+  const auto behind = check(3.5 * R, "behind");
+  EXPECT_EQ(behind.first, 0);
+  EXPECT_GT(behind.second, 5000);
 }
 
 // Issue 9's skips in the renderer, each against doing the work. The views: low over the

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
@@ -67,7 +68,7 @@ TEST(ReplayStepper, TurnedPlanetMovesPoseAndTipTogether) {
   turned.setUserRotation(turn);
   EXPECT_TRUE(turned.userRotation().isApprox(turn));
   cv::Mat ia, ib;
-  int compared = 0;
+  int compared = 0, posedTools = 0;
   while (srcA.read(ia) && srcB.read(ib)) {
     const auto ra = plain.step(ia, srcA.index(), srcA.index() / srcA.fps());
     const auto rb = turned.step(ib, srcB.index(), srcB.index() / srcB.fps());
@@ -86,8 +87,24 @@ TEST(ReplayStepper, TurnedPlanetMovesPoseAndTipTogether) {
       }
       ++compared;
     }
+    // The tool's shape (what hides the planet in the AR view): posed while both have a pose,
+    // the same points in the camera for the turned planet, its stick ending at the tip.
+    ASSERT_EQ(ra.toolTriangles.size(), rb.toolTriangles.size());
+    EXPECT_EQ(!ra.toolTriangles.empty(), ra.planetInCamera && ra.scene.tool.usable());
+    for (std::size_t i = 0; i < ra.toolTriangles.size(); ++i)
+      EXPECT_TRUE(
+          rb.planetInCamera->apply(rb.toolTriangles[i] / turned.scale())
+              .isApprox(ra.planetInCamera->apply(ra.toolTriangles[i] / plain.scale()), 1e-9));
+    if (!ra.toolTriangles.empty() && ra.scene.tipValid) {
+      double nearest = 1e300;
+      for (const auto& p : ra.toolTriangles)
+        nearest = std::min(nearest, (p - plain.scale() * ra.scene.tipPlanet).norm());
+      EXPECT_LT(nearest, 1e-9 * plain.scale());
+      ++posedTools;
+    }
   }
   EXPECT_GE(compared, 10);
+  EXPECT_GE(posedTools, 10);
   // Not a rotation: refused, nothing changed.
   EXPECT_THROW(turned.setUserRotation(2 * Eigen::Matrix3d::Identity()), core::InputError);
   EXPECT_TRUE(turned.userRotation().isApprox(turn));

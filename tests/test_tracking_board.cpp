@@ -22,6 +22,7 @@
 #include "tracking/marker_layout.hpp"
 #include "tracking/marker_sheet.hpp"
 #include "tracking/synth.hpp"
+#include "tracking/tool_shape.hpp"
 #include "tracking/tracker.hpp"
 
 using namespace ps;
@@ -165,6 +166,64 @@ TEST(TrackingBoard, MalformedLayoutsAreRefusedNamingFileAndEntry) {
   EXPECT_NE(msg.find((dir / "broken.json").string() + ": not JSON"), std::string::npos) << msg;
   const std::string missing = errorOf([&] { tracking::loadMarkerLayout(dir / "absent.json"); });
   EXPECT_NE(missing.find("absent.json: cannot open"), std::string::npos) << missing;
+}
+
+// The tool's stick in its layout file: the committed cube's radii, the default, millimetres,
+// and every bad value refused naming the file; the tool's shape follows from it.
+TEST(TrackingBoard, ToolStickRadiusIsReadDefaultedAndRefused) {
+  const MarkerLayout cube = tracking::loadMarkerLayout(tracking::defaultToolLayoutPath(kRoot));
+  ASSERT_TRUE(cube.stickRadius && cube.stickTipRadius);
+  EXPECT_DOUBLE_EQ(cube.stickBaseRadius(), 0.005);
+  EXPECT_DOUBLE_EQ(cube.stickEndRadius(), 0.002);
+  const MarkerLayout again = tracking::parseMarkerLayout(tracking::toJson(cube), "again");
+  EXPECT_EQ(again.stickRadius, cube.stickRadius);
+  EXPECT_EQ(again.stickTipRadius, cube.stickTipRadius);
+  const std::string marker =
+      R"("markers": [{"id": 3, "corners": [[-20, 20, 0], [20, 20, 0], [20, -20, 0], [-20, -20, 0]]}])";
+  auto layout = [&](const std::string& extra) {
+    return R"({"family": "tag36h11", "units": "mm", )" + extra + marker + "}";
+  };
+  const MarkerLayout plain =
+      tracking::parseMarkerLayout(nlohmann::json::parse(layout(R"("tip": [0, -90, 0], )")), "t");
+  EXPECT_FALSE(plain.stickRadius.has_value());
+  EXPECT_DOUBLE_EQ(plain.stickBaseRadius(), tracking::kDefaultStickRadius);
+  EXPECT_DOUBLE_EQ(plain.stickEndRadius(), tracking::kDefaultStickRadius);
+  const MarkerLayout mm = tracking::parseMarkerLayout(
+      nlohmann::json::parse(layout(R"("tip": [0, -90, 0], "stick_radius": 3, )")), "t");
+  EXPECT_DOUBLE_EQ(mm.stickBaseRadius(), 0.003);
+  EXPECT_DOUBLE_EQ(mm.stickEndRadius(), 0.003);  // the tip's radius defaults to the stick's
+  auto refused = [&](const std::string& extra, const std::string& part) {
+    const std::string msg = parseError(layout(extra));
+    EXPECT_EQ(msg.rfind("bad-board.json: ", 0), 0u) << msg;
+    EXPECT_NE(msg.find(part), std::string::npos) << msg << "\nexpected: " << part;
+  };
+  refused(R"("tip": [0, -90, 0], "stick_radius": -1, )",
+          "\"stick_radius\" -0.001 m is not in (0, ");
+  refused(R"("tip": [0, -90, 0], "stick_radius": 0, )", "\"stick_radius\" 0 m is not in");
+  refused(R"("tip": [0, -90, 0], "stick_radius": 500, )", "\"stick_radius\" 0.5 m is not in");
+  refused(R"("tip": [0, -90, 0], "stick_radius": "thin", )", "\"stick_radius\" is not a number");
+  refused(R"("tip": [0, -90, 0], "stick_tip_radius": 1e300, )", "stick_tip_radius");
+  refused(R"("stick_radius": 3, )", "\"stick_radius\" without a \"tip\"");
+
+  // The cube's shape: the 50 mm box its 40 mm markers' quiet zones make, the stick from the
+  // face under the tip down to the tip.
+  const tracking::ToolShape shape = tracking::toolShape(cube, *cube.tip);
+  EXPECT_LT((shape.boxCentre).norm(), 1e-12);
+  EXPECT_LT((shape.boxHalf - Eigen::Vector3d::Constant(0.025)).norm(), 1e-12);
+  EXPECT_LT((shape.stickBase - Eigen::Vector3d(0, -0.025, 0)).norm(), 1e-12);
+  EXPECT_EQ(shape.tip, *cube.tip);
+  // Every triangle's points lie on the box's surface or on the cone's.
+  const auto triangles = tracking::toolTriangles(shape, Pose{}, 1.0, 16);
+  EXPECT_EQ(triangles.size(), std::size_t(3 * (12 + 4 * 16)));
+  for (const auto& p : triangles) {
+    const Eigen::Vector3d q = (p - shape.boxCentre).cwiseAbs();
+    const bool onBox = q.maxCoeff() < 0.025 + 1e-12 && q.maxCoeff() > 0.025 - 1e-12;
+    const double along = (p - shape.stickBase).dot(Eigen::Vector3d(0, -1, 0)) / 0.08;
+    const double off = std::hypot(p.x(), p.z());
+    const bool onCone =
+        along > -1e-12 && along < 1 + 1e-12 && off < 0.005 + (0.002 - 0.005) * along + 1e-12;
+    EXPECT_TRUE(onBox || onCone) << p.transpose();
+  }
 }
 
 // One marker's layout gives exactly the single-marker solver's choice.

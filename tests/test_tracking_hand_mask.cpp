@@ -284,3 +284,29 @@ TEST(HandMask, AHandSeenFromTheStartLeavesNoHoleWhenItGoes) {
   for (std::size_t f = 12; f < run.coverage.size(); ++f)
     EXPECT_LT(run.coverage[f], 0.01) << "frame " << f;
 }
+
+// The tool has its own, exact occlusion: the hand mask is cleared over its projection (grown by
+// the margin), left as it was elsewhere, and a triangle reaching behind the camera clears
+// nothing.
+TEST(OcclusionComposite, TheToolsProjectionIsLeftToTheDepthPass) {
+  terrain::Camera camera;  // at the origin looking down +z
+  camera.fx = camera.fy = 500;
+  camera.cx = 320, camera.cy = 240;
+  camera.width = 640, camera.height = 480;
+  // A triangle 1 m away whose corners project to (320, 140), (220, 340), (420, 340).
+  const std::vector<Eigen::Vector3d> tool = {{0, -0.2, 1}, {-0.2, 0.2, 1}, {0.2, 0.2, 1}};
+  cv::Mat mask(480, 640, CV_32F, cv::Scalar(1.0f));
+  render::clearToolFromMask(mask, camera, tool, 3);
+  EXPECT_EQ(mask.at<float>(300, 320), 0.0f);  // inside
+  EXPECT_EQ(mask.at<float>(342, 320), 0.0f);  // 2 px below the bottom edge: within the margin
+  EXPECT_EQ(mask.at<float>(350, 320), 1.0f);  // 10 px below it
+  EXPECT_EQ(mask.at<float>(240, 100), 1.0f);  // far to the side
+  const double cleared = double(cv::countNonZero(mask == 0.0f));
+  EXPECT_GT(cleared, 0.5 * 200 * 200 * 0.95);       // the triangle's 20,000 px at least
+  EXPECT_LT(cleared, 0.5 * 200 * 200 + 3.5 * 700);  // plus a 3 px band round its 690 px rim
+
+  cv::Mat untouched(480, 640, CV_32F, cv::Scalar(1.0f));
+  const std::vector<Eigen::Vector3d> behind = {{0, -0.2, 1}, {-0.2, 0.2, -1}, {0.2, 0.2, 1}};
+  render::clearToolFromMask(untouched, camera, behind, 3);
+  EXPECT_EQ(cv::countNonZero(untouched != 1.0f), 0);
+}

@@ -93,7 +93,9 @@ void ArRecorder::onFrame(const replay::FrameContext& f, const Eigen::Vector3d& f
         cursor->arrow = force * (0.25 * core::boundingRadius(f.planet.chart()) / 8.0);
       }
     }
-    view = renderer_.renderAR(image, f.planet, mesh, cam, style, cursor);
+    // The tracked tool hides the planet where it is in front of it.
+    view = renderer_.renderAR(image, f.planet, mesh, cam, style, cursor, f.toolTriangles);
+    render::clearToolFromMask(handMask, cam, f.toolTriangles);
     if (!handMask.empty() && cv::countNonZero(handMask > 0.5f) > 0) {
       view = render::composeOcclusion(view, image, handMask);
       ++handMaskFrames_;

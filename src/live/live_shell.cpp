@@ -14,8 +14,9 @@ bool Shell::running() const {
 
 cv::Size Shell::present(const terrain::Terrain& planet, const terrain::Mesh& mesh,
                         const terrain::Camera& cam, const render::RenderStyle& style,
-                        const std::optional<render::Cursor>& cursor) {
-  lastView = renderer.renderAR(image, planet, mesh, cam, style, cursor);
+                        const std::optional<render::Cursor>& cursor,
+                        std::span<const Eigen::Vector3d> occluders) {
+  lastView = renderer.renderAR(image, planet, mesh, cam, style, cursor, occluders);
   const cv::Size fb = window.framebufferSize();
   window.clear(fb);
   // GL's window coordinates start at the bottom: the rectangle's y from there.

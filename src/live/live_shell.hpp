@@ -4,6 +4,7 @@
 #include <atomic>
 #include <opencv2/core.hpp>
 #include <optional>
+#include <span>
 
 #include "live/frame_input.hpp"
 #include "live/gl_window.hpp"
@@ -30,7 +31,8 @@ struct Shell {
   // camera's aspect fitted in and centred; returns the window's framebuffer size.
   cv::Size present(const terrain::Terrain& planet, const terrain::Mesh& mesh,
                    const terrain::Camera& cam, const render::RenderStyle& style,
-                   const std::optional<render::Cursor>& cursor);
+                   const std::optional<render::Cursor>& cursor,
+                   std::span<const Eigen::Vector3d> occluders = {});
   // The panel over the view, the screenshot on the last scripted frame, and the swap.
   void finish(cv::Size fb);
 };

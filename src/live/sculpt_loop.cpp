@@ -147,6 +147,7 @@ class SculptLoop {
     status_.editMs = r.times.editMs;
     pose_ = r.planetInCamera;
     maskHands(r);
+    toolTriangles_ = r.toolTriangles;  // the tool in front of the planet hides it
     controlVertex_ = r.control;
     status_.touching = r.touching;
     if (haptic_) {
@@ -183,6 +184,7 @@ class SculptLoop {
     stepper_.endStroke();
     status_.touching = false;
     controlVertex_.reset();
+    toolTriangles_.clear();
   }
 
   void followForces() {
@@ -268,9 +270,12 @@ class SculptLoop {
         cursor->arrow = lastForce_->force * (0.25 * core::boundingRadius(planet_.chart()) / 8.0);
       }
     }
-    const cv::Size fb = shell_.present(planet_, *mesh, cam ? *cam : placeholder_, style, cursor);
+    const cv::Size fb = shell_.present(planet_, *mesh, cam ? *cam : placeholder_, style, cursor,
+                                       cam ? std::span<const Eigen::Vector3d>(toolTriangles_)
+                                           : std::span<const Eigen::Vector3d>());
     // A hand in front of the planet: the camera image over it, drawn over the blitted view by
     // drawPanel (render/occlusion_composite.hpp; the renderer's framebuffer is left as it is).
+    if (cam) render::clearToolFromMask(handMask_, *cam, toolTriangles_);
     showHandView_ = cam && !handMask_.empty();
     if (showHandView_)
       handView_.update(render::composeOcclusion(shell_.lastView, shell_.image, handMask_));
@@ -510,6 +515,7 @@ class SculptLoop {
   session::BackgroundExport exporter_;
   std::optional<tracking::Pose> pose_;
   std::optional<core::GridPoint> controlVertex_;
+  std::vector<Eigen::Vector3d> toolTriangles_;  // the tracked tool (planet frame), when posed
   double smoothedMs_ = 0;
   haptics::ForcePathConfig hapticConfig_;
   std::unique_ptr<haptics::TrackedMarkerDevice> hapticDevice_;

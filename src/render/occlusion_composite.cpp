@@ -1,5 +1,6 @@
 #include "render/occlusion_composite.hpp"
 
+#include <cmath>
 #include <opencv2/imgproc.hpp>
 #include <stdexcept>
 
@@ -30,6 +31,29 @@ cv::Mat composeOcclusion(const cv::Mat& view, const cv::Mat& camera, const cv::M
   cv::Mat blend = v + a.mul(c - v);
   blend.convertTo(out(box), CV_8UC3);
   return out;
+}
+
+void clearToolFromMask(cv::Mat& mask, const terrain::Camera& camera,
+                       std::span<const Eigen::Vector3d> toolTriangles, int marginPx) {
+  if (mask.empty() || toolTriangles.size() < 3) return;
+  cv::Mat tool = cv::Mat::zeros(mask.size(), CV_8U);
+  for (std::size_t i = 0; i + 2 < toolTriangles.size(); i += 3) {
+    cv::Point corners[3];
+    bool inFront = true;
+    for (int k = 0; k < 3 && inFront; ++k) {
+      const Eigen::Vector3d c = camera.rotation * (toolTriangles[i + k] - camera.eye);
+      inFront = c.z() > 0;
+      const Eigen::Vector2d p = inFront ? camera.project(c) : Eigen::Vector2d::Zero();
+      corners[k] = cv::Point(int(std::lround(p.x())), int(std::lround(p.y())));
+    }
+    // A triangle reaching behind the camera is the stick's far end out of view: left out.
+    if (inFront) cv::fillConvexPoly(tool, corners, 3, cv::Scalar(255));
+  }
+  if (marginPx > 0)
+    cv::dilate(
+        tool, tool,
+        cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(2 * marginPx + 1, 2 * marginPx + 1)));
+  mask.setTo(0.0f, tool);
 }
 
 }  // namespace ps::render

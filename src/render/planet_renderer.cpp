@@ -25,6 +25,7 @@
 #include "render/gl_program.hpp"
 #include "render/height_tile_cache.hpp"
 #include "render/mesh_shaders.hpp"
+#include "render/occluder_pass.hpp"
 #include "render/projection.hpp"
 
 namespace ps::render {
@@ -444,7 +445,8 @@ void cullBackFaces(const terrain::Terrain& planet) {
 
 cv::Mat PlanetRenderer::renderAR(const cv::Mat& background, const terrain::Terrain& planet,
                                  const terrain::Mesh& mesh, const terrain::Camera& camera,
-                                 const RenderStyle& style, const std::optional<Cursor>& cursor) {
+                                 const RenderStyle& style, const std::optional<Cursor>& cursor,
+                                 std::span<const Eigen::Vector3d> occluders) {
   camera.validate();
   if (!background.empty() && (background.cols != camera.width || background.rows != camera.height))
     throw std::invalid_argument("renderer: background is " + std::to_string(background.cols) + "x" +
@@ -480,6 +482,14 @@ cv::Mat PlanetRenderer::renderAR(const cv::Mat& background, const terrain::Terra
     glBindVertexArray(0);
   }
   drawBoardShadowAndRim(camera, planet.chart().radius(), style);
+  const DepthRange depth = depthRangeFor(camera, planet);
+  const Eigen::Matrix4d clip = clipFromCamera(camera, depth.nearZ, depth.farZ);
+  // The tool's depth (and the camera image over the shadow and rim where it stands), before the
+  // planet: the planet is hidden where the tool is nearer.
+  if (occluders.size() >= 3) {
+    if (!occluders_) occluders_ = std::make_unique<OccluderPass>();
+    occluders_->draw(occluders, camera, clip, background.empty() ? 0 : g.imageTexture);
+  }
   glEnable(GL_DEPTH_TEST);
   glDepthFunc(GL_LESS);
   cullBackFaces(planet);
@@ -487,8 +497,6 @@ cv::Mat PlanetRenderer::renderAR(const cv::Mat& background, const terrain::Terra
   // Triangles are CCW seen from outside; the projection negates y (OpenCV's rows go down, GL's
   // up), which keeps that winding in GL's window.
   glFrontFace(GL_CCW);
-  const DepthRange depth = depthRangeFor(camera, planet);
-  const Eigen::Matrix4d clip = clipFromCamera(camera, depth.nearZ, depth.farZ);
   drawMesh(mesh, camera, clip, style, false);
   if (style.wireframe) drawMesh(mesh, camera, clip, style, true);
   glDisable(GL_CULL_FACE);

@@ -15,6 +15,7 @@
 #include <memory>
 #include <opencv2/core.hpp>
 #include <optional>
+#include <span>
 #include <string>
 
 #include "core/grid.hpp"
@@ -71,6 +72,7 @@ struct RenderStats {
 };
 
 class AtmospherePasses;
+class OccluderPass;
 
 class PlanetRenderer {
  public:
@@ -82,10 +84,14 @@ class PlanetRenderer {
   PlanetRenderer& operator=(const PlanetRenderer&) = delete;
 
   // The AR frame at the camera's size: `background` (BGR or grey, the camera's size; empty for
-  // a black background) with the planet drawn over it. Returns BGR 8-bit.
+  // a black background) with the planet drawn over it. Returns BGR 8-bit. `occluders`: what
+  // stands in front of the planet (the tracked tool's triangles, 3 points each, planet frame,
+  // planet metres; tracking/tool_shape.hpp): the planet is hidden where they are nearer the
+  // camera, and the camera image shows there (render/occluder_pass.hpp).
   cv::Mat renderAR(const cv::Mat& background, const terrain::Terrain& planet,
                    const terrain::Mesh& mesh, const terrain::Camera& camera,
-                   const RenderStyle& style, const std::optional<Cursor>& cursor = std::nullopt);
+                   const RenderStyle& style, const std::optional<Cursor>& cursor = std::nullopt,
+                   std::span<const Eigen::Vector3d> occluders = {});
 
   // The overview at width x height: the planet seen from outside (3.2 radii away, 60 degrees
   // round from the AR camera) with `arMesh` in wireframe, the AR camera's frustum and its axis.
@@ -151,6 +157,7 @@ class PlanetRenderer {
   std::size_t heightCacheBudget_ = std::size_t(64) << 20;
   int failedSide_ = 0;  // a grid side the height tile cache could not hold
   std::unique_ptr<AtmospherePasses> atmosphere_;  // made at the first frame that asks for it
+  std::unique_ptr<OccluderPass> occluders_;       // likewise
 };
 
 }  // namespace ps::render

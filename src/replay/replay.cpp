@@ -118,6 +118,7 @@ struct FrameStepper::Parts {
   // log's camera_shift_px and plane entries.
   tracking::BoardHint boardHint(const cv::Mat& grey, const std::vector<tracking::Detection>& found,
                                 const tracking::CameraCalibration& calib, nlohmann::json& log);
+  tracking::ToolShape toolShape;  // the tool's solid and stick in its body frame
   Parts(std::unique_ptr<tracking::Detector> d, const tracking::SceneConfig& sc,
         terrain::Terrain& planet)
       : detector(std::move(d)), scene(sc), pipeline(planet) {}
@@ -157,6 +158,7 @@ FrameStepper::FrameStepper(const tracking::CameraCalibration& calib, terrain::Te
         chart.name() + " planet has none to stand on the board");
   scale_ = bound / o_.scene.planetRadius;
   p_ = std::make_unique<Parts>(tracking::makeDetector(dc), o_.scene, planet_);
+  p_->toolShape = tracking::toolShape(o_.scene, family_);
   if (o_.scene.planet.holdWhileStill) {
     p_->motion.emplace();
     if (o_.scene.planet.layout->planar()) {
@@ -467,6 +469,12 @@ StepResult FrameStepper::step(const cv::Mat& image, int frame, double time) {
   if (f.planet.usable()) {
     out.planetInCamera = p_->scene.planetFromMarker(f.planet.pose);
     if (rotated_) out.planetInCamera->R = out.planetInCamera->R * userRotation_;
+    if (f.tool.usable()) {
+      tracking::ToolShape shape = p_->toolShape;
+      if (f.tipValid) shape.tip = f.tool.pose.inverse().apply(f.tipCamera);
+      out.toolTriangles =
+          tracking::toolTriangles(shape, out.planetInCamera->inverse() * f.tool.pose, scale);
+    }
   }
   out.touching = touching;
   out.control = control;
@@ -517,7 +525,8 @@ ReplaySummary runReplay(tracking::FrameSource& source, const tracking::CameraCal
                              r.touching,
                              r.control,
                              stepper.toolRadius(),
-                             stepper.viewPatch()};
+                             stepper.viewPatch(),
+                             r.toolTriangles};
       hook(ctx);
     }
     log << r.logLine << "\n";

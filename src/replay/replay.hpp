@@ -10,6 +10,7 @@
 #include <memory>
 #include <optional>
 #include <ostream>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -22,6 +23,7 @@
 #include "terrain/terrain.hpp"
 #include "tracking/calibration.hpp"
 #include "tracking/detector.hpp"
+#include "tracking/tool_shape.hpp"
 #include "tracking/tracker.hpp"
 #include "tracking/video.hpp"
 
@@ -97,6 +99,8 @@ struct FrameContext {
   // The sand TIN's region to draw at its own detail in place of the 4-8 mesh there
   // (FrameStepper::viewPatch); null: the grid's mesh alone.
   std::shared_ptr<const terrain::MeshPatch> patch;
+  // The tracked tool's shape (StepResult::toolTriangles): what hides the planet.
+  std::span<const Eigen::Vector3d> toolTriangles = {};
 };
 using FrameHook = std::function<void(const FrameContext&)>;
 
@@ -119,6 +123,11 @@ struct StepResult {
   terrain::GridRegion settled;
   std::string logLine;  // the replay log's JSON line for this frame (no newline)
   StepTimes times;
+  // The tool's solid and stick (tracking/tool_shape.hpp) as triangles in the planet frame
+  // (planet metres, 3 points each) while both the planet and the tool have a pose; its stick
+  // ends at the tracked tip. What the AR view draws in front of the planet
+  // (render::PlanetRenderer::renderAR's occluders).
+  std::vector<Eigen::Vector3d> toolTriangles;
 };
 
 class FrameStepper {

@@ -72,6 +72,14 @@ Pose LayoutMarker::inBody() const {
   return p;
 }
 
+double MarkerLayout::stickBaseRadius() const {
+  return stickRadius.value_or(kDefaultStickRadius);
+}
+
+double MarkerLayout::stickEndRadius() const {
+  return stickTipRadius.value_or(stickBaseRadius());
+}
+
 const LayoutMarker* MarkerLayout::find(int id) const {
   for (const auto& m : markers)
     if (m.id == id) return &m;
@@ -161,6 +169,19 @@ MarkerLayout parseMarkerLayout(const nlohmann::json& j, const std::string& sourc
   } catch (const core::InputError& e) {
     fail(e.what());
   }
+  auto radius = [&](const char* key) -> std::optional<double> {
+    if (!j.contains(key)) return std::nullopt;
+    const std::string name = std::string("\"") + key + "\"";
+    if (!j[key].is_number()) fail(name + " is not a number");
+    if (!l.tip) fail(name + " without a \"tip\" (a stick runs from the solid to the tip)");
+    const double r = j[key].get<double>() * scale;
+    if (!(r > 0) || !(r <= kMaxStickRadius))
+      fail(name + " " + core::exactNumber(r) + " m is not in (0, " +
+           core::exactNumber(kMaxStickRadius) + "] m");
+    return r;
+  };
+  l.stickRadius = radius("stick_radius");
+  l.stickTipRadius = radius("stick_tip_radius");
   return l;
 }
 
@@ -189,6 +210,8 @@ nlohmann::json toJson(const MarkerLayout& layout) {
   }
   if (layout.planetCentre) j["planet_centre"] = arr(*layout.planetCentre);
   if (layout.tip) j["tip"] = arr(*layout.tip);
+  if (layout.stickRadius) j["stick_radius"] = *layout.stickRadius;
+  if (layout.stickTipRadius) j["stick_tip_radius"] = *layout.stickTipRadius;
   return j;
 }
 

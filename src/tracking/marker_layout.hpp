@@ -5,7 +5,10 @@
 //   {"family": "tag36h11", "units": "m",
 //    "markers": [{"id": N, "corners": [[x,y,z], [x,y,z], [x,y,z], [x,y,z]]}, ...],
 //    "planet_centre": [x,y,z],     (boards: where the planet's centre sits, default size)
-//    "tip": [x,y,z]}               (tools: the tip)
+//    "tip": [x,y,z],               (tools: the tip)
+//    "stick_radius": r,            (tools, optional: the stick from the solid to the tip is a
+//    "stick_tip_radius": r}         cone of these radii at the solid and at the tip; default
+//                                   4 mm, the tip's radius the stick's; tool_shape.hpp)
 //
 // Corners are TL, TR, BR, BL of each marker's canonical image (marker_family.hpp), in the
 // body's frame (metres; "units": "mm" is read and scaled). A marker's own frame follows from
@@ -31,12 +34,23 @@ struct LayoutMarker {
   Pose inBody() const;
 };
 
+// A tool's stick when its layout file names no radius: a 8 mm dowel or pencil.
+constexpr double kDefaultStickRadius = 0.004;
+// Radii above this (m) are refused: a stick thicker than a broom handle is a typo.
+constexpr double kMaxStickRadius = 0.02;
+
 struct MarkerLayout {
   std::string family = "tag36h11";
   std::vector<LayoutMarker> markers;
   std::optional<Eigen::Vector3d> planetCentre;  // boards
   std::optional<Eigen::Vector3d> tip;           // tools
-  std::string source;                           // file name, for messages
+  // The stick's radius at the solid and at the tip (m), when the file gives them (tools only).
+  std::optional<double> stickRadius, stickTipRadius;
+  std::string source;  // file name, for messages
+
+  // The stick's radii with their defaults: kDefaultStickRadius, the tip's the stick's.
+  double stickBaseRadius() const;
+  double stickEndRadius() const;
 
   const LayoutMarker* find(int id) const;
   std::vector<int> ids() const;
@@ -50,7 +64,8 @@ struct MarkerLayout {
 // Throws core::InputError "SOURCE: markers[i] (id N): ..." for anything malformed: not JSON, a
 // missing or mistyped field, units other than m or mm, an unknown family, an id outside the
 // family, duplicate ids, corners that are not a planar square (edges and diagonals equal and
-// the four corners in one plane, within 0.5 % of the edge).
+// the four corners in one plane, within 0.5 % of the edge), a stick radius that is not a number
+// in (0, 20 mm] or is given without a tip.
 MarkerLayout parseMarkerLayout(const nlohmann::json& j, const std::string& source);
 MarkerLayout loadMarkerLayout(const std::filesystem::path& path);
 nlohmann::json toJson(const MarkerLayout& layout);  // units m

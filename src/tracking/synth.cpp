@@ -378,7 +378,11 @@ SynthRenderer::Overlays SynthRenderer::overlays(const SynthKey& k, const Pose& c
         half = std::max(half, (m.inBody().t + grow * (c - m.inBody().t)).dot(d));
   }
   const Eigen::Vector3d side = Eigen::Vector3d::UnitZ().cross(d).normalized();
-  const double w0 = 0.005, w1 = 0.002;
+  // A tool solid's stick has its layout's radii (markers/tool-cube.json: 5 mm at the solid, 2 mm
+  // at the tip), a single marker's 5 and 2 mm (tracking/tool_shape.cpp). Drawn as a flat strip
+  // in the tool's x-y plane: the cone's outline as the camera sees the tool's face.
+  const double w0 = script_.toolLayout ? script_.toolLayout->stickBaseRadius() : 0.005;
+  const double w1 = script_.toolLayout ? script_.toolLayout->stickEndRadius() : 0.002;
   o.stickOk = true;
   for (const auto& p :
        {Eigen::Vector3d(d * half + side * w0), Eigen::Vector3d(d * half - side * w0),
