@@ -16,6 +16,8 @@ struct BenchOptions {
 
 void benchTessellate(const BenchOptions& options, std::ostream& out);
 void benchDeform(const BenchOptions& options, std::ostream& out);
+// `bench occlusion`'s hand rows (bench_occlusion_hand.cpp), after its tool rows.
+void benchOcclusionHand(const BenchOptions& options, std::ostream& out);
 
 // Benchmarks register themselves by name (one static BenchRegistration per bench file), so the
 // command line lists whatever was built.

@@ -10,8 +10,8 @@
 //     mistake (target <= 1 %); the demo's frames with the tool in front give its IoU too.
 // A mask is the planet's pixels (depth < 1 drawn without the tool) whose depth the tool's
 // triangles beat (drawn with it): what the tool hides, whatever the planet's colour.
-// The hand's rows (an appearance model of the board and the table, built beside this) go in
-// handRows(): it gets every recording and returns its rows.
+// Then the hand's rows (bench_occlusion_hand.cpp: the board's appearance model's mask against
+// the scenes' geometry), one a recording and pose, "part": "hand".
 #include <algorithm>
 #include <cmath>
 #include <fstream>
@@ -162,6 +162,7 @@ nlohmann::json toolRow(const OcclusionRecording& rec, const Tally& t) {
   std::vector<double> ious = t.frameIoU;
   nlohmann::json row = {{"bench", "occlusion"},
                         {"part", "tool"},
+                        {"part", "tool"},
                         {"recording", rec.name},
                         {"kind", rec.kind},
                         {"frames", t.frames},
@@ -189,12 +190,6 @@ nlohmann::json toolRow(const OcclusionRecording& rec, const Tally& t) {
     row["planet_px"] = t.planetPx;
   }
   return row;
-}
-
-// The hand's occlusion rows for a recording (issue 42: the appearance model of the board and
-// the table, built in its own files): not measured here.
-std::vector<nlohmann::json> handRows(const OcclusionRecording& /*recording*/) {
-  return {};
 }
 
 // A synthetic recording on the board with the tool cube: its keys, rendered on demand.
@@ -299,8 +294,8 @@ void benchOcclusion(const BenchOptions& o, std::ostream& out) {
   for (const auto& rec : recordings) {
     std::cerr << "bench occlusion: " << rec.name << "\n";
     out << toolRow(rec, measureTool(rec, gridLevel, renderer)).dump() << std::endl;
-    for (const auto& row : handRows(rec)) out << row.dump() << std::endl;
   }
+  benchOcclusionHand(o, out);
 }
 
 static const BenchRegistration kRegistered("occlusion", benchOcclusion);

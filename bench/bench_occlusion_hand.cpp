@@ -1,4 +1,4 @@
-// `planetsculpt bench occlusion-hand` (issue 42, the hand half): synthetic recordings on the
+// `planetsculpt bench occlusion`'s hand rows (issue 42, the hand half): synthetic recordings on the
 // planet board (tracking/synth.hpp) with a hand-coloured disc passing in front of the planet,
 // and one with nothing in front of it under lighting changes, a moving cast shadow and camera
 // noise; each frame tracked by the frame stepper `replay` and `live` run, then the hand mask
@@ -286,7 +286,8 @@ void runRecording(const Recording& rec, const BenchOptions& o, std::ostream& out
   }
   progress.done(std::to_string(frames) + " frames");
   for (const bool onTrackedPose : {true, false}) {
-    nlohmann::json j = {{"bench", "occlusion-hand"},
+    nlohmann::json j = {{"bench", "occlusion"},
+                        {"part", "hand"},
                         {"recording", rec.name},
                         {"pose", onTrackedPose ? "tracked" : "truth"},
                         {"frames", frames},
@@ -299,12 +300,10 @@ void runRecording(const Recording& rec, const BenchOptions& o, std::ostream& out
   }
 }
 
+}  // namespace
+
 void benchOcclusionHand(const BenchOptions& o, std::ostream& out) {
   for (const auto& rec : recordings(o.quick)) runRecording(rec, o, out);
 }
-
-const BenchRegistration kRegistered("occlusion-hand", benchOcclusionHand);
-
-}  // namespace
 
 }  // namespace ps::bench
