@@ -97,7 +97,7 @@ struct SandField::DiffusionTables {
 // where the topology is (rows v and m - v of the octahedral chart, the tubes' seams).
 struct SandField::GluedLines {
   struct Direction {
-    std::vector<std::uint32_t> cells;  // grid index of each line's cells, in order
+    std::vector<std::uint32_t> cells;  // each line's cells in order: tile << 10 | index in it
     std::vector<std::uint8_t> link;    // link k (< 4) from each cell to the next of its line
     std::vector<std::uint32_t> start;  // line l: cells[start[l] .. start[l + 1])
     std::vector<std::uint8_t> cyclic;

@@ -22,6 +22,8 @@ namespace ps::sand {
 namespace {
 constexpr std::size_t kCells = std::size_t(kT) * kT;
 constexpr std::uint32_t kNone = std::uint32_t(-1);
+constexpr int kLocalBits = 10;  // a cell's index in its tile (GluedLines::Direction::cells)
+static_assert(kT * kT == 1 << kLocalBits);
 }  // namespace
 
 // Walks every cell's lines: from a cell, back to an end of its line (or round to itself: a
@@ -95,6 +97,12 @@ const SandField::GluedLines& SandField::gluedLines() {
       }
     }
     dir.start.push_back(std::uint32_t(dir.cells.size()));
+    // Each cell as its tile and its index there (what the solves look up), not its grid index.
+    for (std::uint32_t& c : dir.cells) {
+      const int u = int(c % side), v = int(c / side);
+      c = (std::uint32_t(tileIndex(u / kT, v / kT)) << kLocalBits) |
+          std::uint32_t((v % kT) * kT + u % kT);
+    }
   }
   gluedLines_ = std::move(lines);
   return *gluedLines_;
@@ -135,7 +143,6 @@ void SandField::applyDriftGlued(const PushForce& force, const DiffusionTables& t
 // cell outside P is a wall, as in the explicit step), next -> next.
 void SandField::solveGluedLines(int dir, const DiffusionTables& tb, double dt, BusyFlags& busy) {
   const GluedLines::Direction& L = gluedLines_->dir[std::size_t(dir)];
-  const std::uint32_t side = std::uint32_t(m_ + 1);
   const int nTiles = dir == 0 ? tilesV_ : tilesU_;
   std::vector<std::uint8_t> bandUsed(std::size_t(nTiles), 0), lineUsed(L.cyclic.size(), 0);
   for (int t : tileList_) bandUsed[std::size_t(dir == 0 ? t / tilesU_ : t % tilesU_)] = 1;
@@ -150,10 +157,8 @@ void SandField::solveGluedLines(int dir, const DiffusionTables& tb, double dt, B
   }
   const kernels::Repose rep = tb.repose;
   const double Dl2 = diffusionMaterial_.diffusion * grid_.cellSize() * grid_.cellSize();
-  auto tileOf = [&](std::uint32_t c) { return tileIndex(int(c % side) / kT, int(c / side) / kT); };
-  auto localOf = [&](std::uint32_t c) {
-    return std::size_t((int(c / side) % kT) * kT + int(c % side) % kT);
-  };
+  auto tileOf = [](std::uint32_t c) { return int(c >> kLocalBits); };
+  auto localOf = [](std::uint32_t c) { return std::size_t(c & ((1u << kLocalBits) - 1u)); };
 #pragma omp parallel if (int(tileList_.size()) >= kParallelTiles)
   {
     std::vector<double> x, a, K, xs, as, ks, work;
