@@ -621,7 +621,7 @@ def group_bench():
         check_bench_row(r)
     # The sand core on the octahedral chart beside lat-long's in the same run (docs/SAND.md).
     if name == "erosion":
-        for method in ("thermal", "diffusion-explicit", "crater-settle"):
+        for method in ("thermal", "diffusion-explicit", "diffusion-implicit", "crater-settle"):
             if not any(r.get("method") == method and r.get("chart") == "octahedral" for r in rows):
                 fail(f"bench erosion wrote no octahedral {method} row")
     # Both parts of the occlusion bench (docs/BENCHMARKS.md): the tool's rows, then the hand's.

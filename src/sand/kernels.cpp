@@ -293,4 +293,76 @@ void solveColumns(std::vector<double>& x, const std::vector<double>& K,
   }
 }
 
+namespace {
+
+// Thomas algorithm for diag[i] x_i - K[i-1] x_{i-1} - K[i] x_{i+1} = x_i (x holds the right-hand
+// side on entry), i < n, the faces K[i] for i < n - 1.
+void thomasWeighted(double* x, const double* diag, const double* K, int n, double* cp) {
+  double kPrev = 0.0, cPrev = 0.0;
+  for (int i = 0; i < n; ++i) {
+    const double kr = i + 1 < n ? K[i] : 0.0;
+    const double denom = diag[i] + kPrev * cPrev;  // sub-diagonal -kPrev, cPrev = -c'_{i-1}
+    cp[i] = -kr / denom;
+    x[i] = (x[i] + kPrev * (i > 0 ? x[i - 1] : 0.0)) / denom;
+    cPrev = cp[i];
+    kPrev = kr;
+  }
+  for (int i = n - 2; i >= 0; --i) x[i] -= cp[i] * x[i + 1];
+}
+
+}  // namespace
+
+void solveLine(std::vector<double>& x, const std::vector<double>& a, const std::vector<double>& K,
+               bool cyclic, std::vector<double>& work) {
+  const int n = int(x.size());
+  if (n < 2) return;
+  const int faces = cyclic ? n : n - 1;
+  int cut = -1;
+  bool any = false;
+  for (int i = 0; i < faces; ++i) {
+    any |= K[std::size_t(i)] > 0.0;
+    if (cut < 0 && !(K[std::size_t(i)] > 0.0)) cut = i;
+  }
+  if (!any) return;
+  work.resize(std::size_t(6 * n));
+  double* diag = work.data();
+  double* cp = work.data() + n;
+  double* y = work.data() + 2 * n;
+  double* ka = work.data() + 3 * n;  // the faces in solving order
+  double* z = work.data() + 4 * n;
+  double* ar = work.data() + 5 * n;
+  // The open chain from position s (a face at rest at s - 1 cuts a circle there).
+  const int s = cyclic && cut >= 0 ? cut + 1 : 0;
+  for (int j = 0; j < n; ++j) {
+    const std::size_t i = std::size_t((s + j) % n);
+    ar[j] = a[i];
+    y[j] = a[i] * x[i];
+    ka[j] = j + 1 < n ? K[i] : 0.0;
+  }
+  for (int j = 0; j < n; ++j) diag[j] = ar[j] + (j > 0 ? ka[j - 1] : 0.0) + ka[j];
+  if (!cyclic || cut >= 0) {
+    thomasWeighted(y, diag, ka, n, cp);
+    for (int j = 0; j < n; ++j) x[std::size_t((s + j) % n)] = y[j];
+    return;
+  }
+  // Every face of the circle active: M = T + u v^T with u = (gamma, 0, .., 0, -kc),
+  // v = (1, 0, .., 0, -kc / gamma), gamma = -M_00, T the open chain with the corner faces'
+  // terms in its first and last diagonal entries.
+  const double kc = K[std::size_t(n - 1)];
+  diag[0] += kc;
+  diag[n - 1] += kc;
+  const double gamma = -diag[0];
+  diag[0] -= gamma;
+  diag[n - 1] -= kc * kc / gamma;
+  for (int j = 0; j < n; ++j) z[j] = 0.0;
+  z[0] = gamma;
+  z[n - 1] = -kc;
+  thomasWeighted(y, diag, ka, n, cp);
+  thomasWeighted(z, diag, ka, n, cp);
+  const double vy = y[0] - kc / gamma * y[n - 1];
+  const double vz = z[0] - kc / gamma * z[n - 1];
+  const double f = vy / (1.0 + vz);
+  for (int j = 0; j < n; ++j) x[std::size_t(j)] = y[j] - f * z[j];
+}
+
 }  // namespace ps::sand::kernels

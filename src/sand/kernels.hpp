@@ -134,5 +134,13 @@ void solveRow(std::vector<double>& x, const std::vector<double>& k, bool circle,
 // between rows i and i + 1.
 void solveColumns(std::vector<double>& x, const std::vector<double>& K,
                   const std::vector<double>& a, int n, int lanes, std::vector<double>& work);
+// Implicit Euler along one line of cells with their own areas (the glued charts' lines,
+// sand_semi_implicit_glued.cpp): (a_i + K_{i-1} + K_i) x_i - K_{i-1} x_{i-1} - K_i x_{i+1} =
+// a_i b_i, K[i] the face between i and i + 1 and, when `cyclic`, K[n-1] the face between n - 1
+// and 0 (Sherman-Morrison when every face is active; a face at rest cuts the circle). The matrix
+// is symmetric with column sums a_i, so sum a_i x_i = sum a_i b_i up to rounding. x holds b on
+// entry and the solution on return.
+void solveLine(std::vector<double>& x, const std::vector<double>& a, const std::vector<double>& K,
+               bool cyclic, std::vector<double>& work);
 
 }  // namespace ps::sand::kernels

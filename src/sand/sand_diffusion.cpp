@@ -277,12 +277,6 @@ const SandField::DiffusionTables& SandField::diffusionTables(const Material& mat
 StepReport SandField::diffusionStep(const Material& material, double dt, DiffusionScheme scheme,
                                     StepPolicy policy, const PushForce* force) {
   material.validate();
-  if (grid_.glued() && scheme == DiffusionScheme::kSemiImplicit) {
-    throw core::InputError(
-        "semi-implicit (LOD) diffusion solves along the grid's rows and columns, which the " +
-        grid_.chart().name() + " chart's " + (grid_.tube() ? "seams" : "folds") +
-        " break: use the explicit scheme there");
-  }
   if (!std::isfinite(dt) || !(dt > 0.0)) {
     throw core::InputError("diffusion time step dt = " + core::exactNumber(dt) +
                            " must be finite and > 0");

@@ -214,6 +214,14 @@ class SandField {
   void solveColumns(const std::vector<ColumnRun>& runs, const DiffusionTables& tb, double dt,
                     BusyFlags& busy);
   void solvePolarCaps(const DiffusionTables& tb, double dt, BusyFlags& busy);
+  // The glued charts' semi-implicit step (sand_semi_implicit_glued.cpp): the same sub-steps
+  // along lines of canonical cells continued across the folds and seams (GluedLines).
+  struct GluedLines;
+  const GluedLines& gluedLines();
+  void semiImplicitGlued(const DiffusionTables& tb, double dt, const PushForce* force);
+  void applyDriftGlued(const PushForce& force, const DiffusionTables& tb, double dt,
+                       BusyFlags& busy);
+  void solveGluedLines(int dir, const DiffusionTables& tb, double dt, BusyFlags& busy);
 
   SandGrid grid_;
   std::span<float> heights_;
@@ -233,6 +241,7 @@ class SandField {
   // Per-row constants of the last material used (rebuilt when it changes).
   std::unique_ptr<ThermalTables> thermalTables_;
   std::unique_ptr<DiffusionTables> diffusionTables_;
+  std::unique_ptr<GluedLines> gluedLines_;  // built on the first glued semi-implicit step
   Material thermalMaterial_, diffusionMaterial_;
 };
 

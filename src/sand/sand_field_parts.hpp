@@ -2,6 +2,7 @@
 // SandField's private parts, shared by the files that implement it (sand_field.cpp: storage and
 // output; sand_active_set.cpp; sand_thermal.cpp; sand_diffusion.cpp; sand_semi_implicit.cpp);
 // nothing else should include this.
+#include <cstdint>
 #include <memory>
 #include <vector>
 
@@ -88,6 +89,21 @@ struct SandField::DiffusionTables {
   std::vector<double> gH, gV, invH, invV, invA;
   kernels::Repose repose;
   double zetaInv = 0;
+};
+
+// The glued charts' lines for the semi-implicit step (sand_semi_implicit_glued.cpp): in
+// direction 0 the chains of W/E links, in direction 1 of S/N links, each cell of the chart in at
+// most one line per direction (none where it has no link that way), a line closed into a circle
+// where the topology is (rows v and m - v of the octahedral chart, the tubes' seams).
+struct SandField::GluedLines {
+  struct Direction {
+    std::vector<std::uint32_t> cells;  // each line's cells in order: tile << 10 | index in it
+    std::vector<std::uint8_t> link;    // link k (< 4) from each cell to the next of its line
+    std::vector<std::uint32_t> start;  // line l: cells[start[l] .. start[l + 1])
+    std::vector<std::uint8_t> cyclic;
+    std::vector<std::vector<int>> byRow;  // by grid row (direction 0) or column (1): its lines
+  };
+  Direction dir[2];
 };
 
 // Tile::geo: the 8 links' chords d (+inf where none), the 4 axis links' face over chord L / d

@@ -24,6 +24,10 @@ struct SandField::ColumnRun {
 };
 
 void SandField::semiImplicit(const DiffusionTables& tb, double dt, const PushForce* force) {
+  if (grid_.glued()) {
+    semiImplicitGlued(tb, dt, force);
+    return;
+  }
   auto busy = std::make_unique<std::atomic<std::uint8_t>[]>(tiles_.size());
   for (int t : tileList_) busy[std::size_t(t)].store(0, std::memory_order_relaxed);
   copyCurToNext();

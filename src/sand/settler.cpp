@@ -55,14 +55,6 @@ Settler::Settler(terrain::Terrain& terrain, Material material, SettleSettings se
       limit_(edit::floatAtMost(terrain.heightLimit())) {
   material_.validate();
   settings_.validate();
-  if (field_.grid().glued() && settings_.method == SettleMethod::kDiffusionSemiImplicit) {
-    throw core::InputError(
-        "settling method diffusion-implicit (semi-implicit LOD) solves along "
-        "the grid's rows and columns, which the " +
-        terrain.chart().name() +
-        " chart's folds break: use thermal or "
-        "diffusion-explicit there");
-  }
 }
 
 void Settler::edited(const terrain::GridRegion& region, const Material& material) {

@@ -1,0 +1,276 @@
+// Semi-implicit (LOD) diffusion on the glued charts (the octahedral chart, both mappings; the
+// torus and the cylinder): lat-long's scheme (sand_semi_implicit.cpp) with its rows and columns
+// replaced by lines of canonical cells continued across the folds and seams. Along W/E links,
+// then along S/N links, each line is one implicit Euler system in the area-weighted form
+//     A_i x_i + sum_f K_f (x_i - x_j) = A_i b_i,   K_f = dt D l^2 (L_f / d_f) w_f >= 0,
+// with the explicit scheme's per-cell constants (Tile::geo) and weights from the heights before
+// the step: symmetric, diagonally dominant M-matrices, so each sub-step keeps sum A_i x_i and
+// obeys a maximum principle at any dt. A cell is one unknown however many twins it has; a line
+// that comes back to its first cell is a circle (Sherman-Morrison, as lat-long's rows round the
+// sphere). Diffusion has axis links only (the diagonals are thermal erosion's), so the two
+// directions hold every link of the explicit operator, each once.
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+#include <utility>
+
+#include "sand/sand_field_parts.hpp"
+
+namespace ps::sand {
+
+namespace {
+constexpr std::size_t kCells = std::size_t(kT) * kT;
+constexpr std::uint32_t kNone = std::uint32_t(-1);
+constexpr int kLocalBits = 10;  // a cell's index in its tile (GluedLines::Direction::cells)
+static_assert(kT * kT == 1 << kLocalBits);
+}  // namespace
+
+// Walks every cell's lines: from a cell, back to an end of its line (or round to itself: a
+// circle), then forwards from there, each step taking the link of the direction's two that does
+// not lead back. A cone point keeps one of the two links that reach its one neighbour, so it
+// ends its line (the middle rows and columns fold onto themselves there); the cylinder's rims
+// end its columns.
+const SandField::GluedLines& SandField::gluedLines() {
+  if (gluedLines_) return *gluedLines_;
+  auto lines = std::make_unique<GluedLines>();
+  const core::GridSize& g = grid_.grid();
+  const std::uint32_t side = std::uint32_t(m_ + 1);
+  for (int d = 0; d < 2; ++d) {
+    GluedLines::Direction& dir = lines->dir[std::size_t(d)];
+    dir.byRow.assign(std::size_t(m_) + 1, {});
+    std::vector<std::uint8_t> seen(g.count(), 0);
+    // The next cell from `cur` along direction d, not `prev`, and the link there.
+    auto next = [&](std::uint32_t prev, std::uint32_t cur, int& kOut) -> std::uint32_t {
+      const int u = int(cur % side), v = int(cur / side);
+      for (int k = 2 * d; k < 2 * d + 2; ++k) {
+        const core::GridPoint n = grid_.neighbour(u, v, k);
+        if (n.u < 0) continue;
+        const std::uint32_t j = std::uint32_t(g.index(n.u, n.v));
+        if (j == prev) continue;
+        kOut = k;
+        return j;
+      }
+      return kNone;
+    };
+    for (int v = 0; v <= m_; ++v) {
+      for (int u = 0; u <= m_; ++u) {
+        const std::uint32_t s = std::uint32_t(g.index(u, v));
+        if (!grid_.isCell(u, v) || seen[s]) continue;
+        int k = 0;
+        if (next(kNone, s, k) == kNone) continue;  // no link this way: no line
+        // Back to an end, or round to s.
+        std::uint32_t prev = s, cur = next(kNone, s, k), first = s;
+        for (std::size_t guard = 0; cur != s; ++guard) {
+          const std::uint32_t n = next(prev, cur, k);
+          if (n == kNone) {
+            first = cur;
+            break;
+          }
+          if (guard > g.count()) throw std::logic_error("glued lines: a walk does not end");
+          prev = cur, cur = n;
+        }
+        const int l = int(dir.start.size());
+        dir.start.push_back(std::uint32_t(dir.cells.size()));
+        bool circle = false;
+        prev = kNone, cur = first;
+        for (;;) {
+          if (seen[cur]) {
+            throw std::logic_error("glued lines: cell " + std::to_string(cur) +
+                                   " lies on two lines of the " + grid_.chart().name() + " chart");
+          }
+          seen[cur] = 1;
+          dir.cells.push_back(cur);
+          dir.link.push_back(0);
+          auto& rows = dir.byRow[d == 0 ? cur / side : cur % side];
+          if (rows.empty() || rows.back() != l) rows.push_back(l);
+          const std::uint32_t n = next(prev, cur, k);
+          if (n == kNone) break;
+          dir.link.back() = std::uint8_t(k);
+          if (n == first) {
+            circle = true;
+            break;
+          }
+          prev = cur, cur = n;
+        }
+        dir.cyclic.push_back(circle ? 1 : 0);
+      }
+    }
+    dir.start.push_back(std::uint32_t(dir.cells.size()));
+    // Each cell as its tile and its index there (what the solves look up), not its grid index.
+    for (std::uint32_t& c : dir.cells) {
+      const int u = int(c % side), v = int(c / side);
+      c = (std::uint32_t(tileIndex(u / kT, v / kT)) << kLocalBits) |
+          std::uint32_t((v % kT) * kT + u % kT);
+    }
+  }
+  gluedLines_ = std::move(lines);
+  return *gluedLines_;
+}
+
+void SandField::semiImplicitGlued(const DiffusionTables& tb, double dt, const PushForce* force) {
+  auto busy = std::make_unique<std::atomic<std::uint8_t>[]>(tiles_.size());
+  for (int t : tileList_) busy[std::size_t(t)].store(0, std::memory_order_relaxed);
+  gluedLines();
+  copyCurToNext();
+  if (force) applyDriftGlued(*force, tb, dt, busy);
+  solveGluedLines(0, tb, dt, busy);
+  solveGluedLines(1, tb, dt, busy);
+  for (int t : tileList_) {
+    busy_[std::size_t(t)] = busy[std::size_t(t)].load(std::memory_order_relaxed);
+    Tile& tile = *tiles_[std::size_t(t)];
+    std::swap(tile.cur, tile.next);
+  }
+}
+
+// The force's drift, explicit, per cell with its own area.
+void SandField::applyDriftGlued(const PushForce& force, const DiffusionTables& tb, double dt,
+                                BusyFlags& busy) {
+  for (int t : tileList_) {
+    Tile& tile = *tiles_[std::size_t(t)];
+    const double* area = tile.geo.get() + std::size_t(kGeoArea) * kCells;
+    forEachCellOf(t, [&](int u, int v, std::size_t i) {
+      const double f = netDriftFluxGlued(force, tb.zetaInv, u, v);
+      if (f != 0.0) {
+        tile.next[i] -= dt * f * (1.0 / area[i]);
+        busy[std::size_t(t)].store(1, std::memory_order_relaxed);
+      }
+    });
+  }
+}
+
+// The lines of direction `dir` with a cell in P, each solved over its runs of cells in P (a
+// cell outside P is a wall, as in the explicit step), next -> next.
+void SandField::solveGluedLines(int dir, const DiffusionTables& tb, double dt, BusyFlags& busy) {
+  const GluedLines::Direction& L = gluedLines_->dir[std::size_t(dir)];
+  const int nTiles = dir == 0 ? tilesV_ : tilesU_;
+  std::vector<std::uint8_t> bandUsed(std::size_t(nTiles), 0), lineUsed(L.cyclic.size(), 0);
+  for (int t : tileList_) bandUsed[std::size_t(dir == 0 ? t / tilesU_ : t % tilesU_)] = 1;
+  std::vector<int> todo;
+  for (int b = 0; b < nTiles; ++b) {
+    if (!bandUsed[std::size_t(b)]) continue;
+    for (int r = b * kT; r < std::min(m_ + 1, b * kT + kT); ++r) {
+      for (int l : L.byRow[std::size_t(r)]) {
+        if (!lineUsed[std::size_t(l)]) lineUsed[std::size_t(l)] = 1, todo.push_back(l);
+      }
+    }
+  }
+  const kernels::Repose rep = tb.repose;
+  const double Dl2 = diffusionMaterial_.diffusion * grid_.cellSize() * grid_.cellSize();
+  auto tileOf = [](std::uint32_t c) { return int(c >> kLocalBits); };
+  auto localOf = [](std::uint32_t c) { return std::size_t(c & ((1u << kLocalBits) - 1u)); };
+#pragma omp parallel if (int(tileList_.size()) >= kParallelTiles)
+  {
+    std::vector<double> x, a, K, xs, as, ks, work;
+    std::vector<std::uint32_t> run;
+    std::vector<std::uint8_t> runLink;
+    std::vector<int> chain;
+    // Solves the open chain of run positions `chain` (faces ks between them) or, with `circle`,
+    // the whole run round.
+    auto solveChain = [&](bool circle) {
+      const int n = int(chain.size());
+      xs.resize(std::size_t(n));
+      as.resize(std::size_t(n));
+      for (int i = 0; i < n; ++i) {
+        xs[std::size_t(i)] = x[std::size_t(chain[std::size_t(i)])];
+        as[std::size_t(i)] = a[std::size_t(chain[std::size_t(i)])];
+      }
+      kernels::solveLine(xs, as, ks, circle, work);
+      for (int i = 0; i < n; ++i) {
+        const std::uint32_t c = run[std::size_t(chain[std::size_t(i)])];
+        tiles_[std::size_t(tileOf(c))]->next[localOf(c)] = xs[std::size_t(i)];
+      }
+    };
+    // Solves the run of cells in `run` (a circle when `circle`): each stretch of active faces
+    // apart, so that cells at rest keep their bits and a step over P is the step over the grid.
+    auto solveRun = [&](bool circle) {
+      const int n = int(run.size());
+      if (n < 2) return;
+      x.resize(std::size_t(n));
+      a.resize(std::size_t(n));
+      K.assign(std::size_t(n), 0.0);
+      for (int i = 0; i < n; ++i) {
+        const std::uint32_t c = run[std::size_t(i)];
+        const Tile& tile = *tiles_[std::size_t(tileOf(c))];
+        const std::size_t li = localOf(c);
+        x[std::size_t(i)] = tile.next[li];
+        a[std::size_t(i)] = tile.geo[std::size_t(kGeoArea) * kCells + li];
+      }
+      const int faces = circle ? n : n - 1;
+      int rest = -1;  // a face at rest, if any
+      for (int i = 0; i < faces; ++i) {
+        const std::uint32_t c = run[std::size_t(i)], cn = run[std::size_t((i + 1) % n)];
+        const Tile& tile = *tiles_[std::size_t(tileOf(c))];
+        const Tile& tn = *tiles_[std::size_t(tileOf(cn))];
+        const std::size_t li = localOf(c), k = runLink[std::size_t(i)];
+        const double ratio = tile.geo[(std::size_t(kGeoRatio) + k) * kCells + li];
+        const double inv = tile.geo[(std::size_t(kGeoInv) + k) * kCells + li];
+        const double w = kernels::weight(std::abs(tile.cur[li] - tn.cur[localOf(cn)]), inv, rep);
+        K[std::size_t(i)] = dt * (Dl2 * ratio) * w;
+        if (w > 0.0) {
+          busy[std::size_t(tileOf(c))].store(1, std::memory_order_relaxed);
+          busy[std::size_t(tileOf(cn))].store(1, std::memory_order_relaxed);
+        } else if (rest < 0) {
+          rest = i;
+        }
+      }
+      if (circle && rest < 0) {
+        chain.resize(std::size_t(n));
+        for (int i = 0; i < n; ++i) chain[std::size_t(i)] = i;
+        ks = K;
+        solveChain(true);
+        return;
+      }
+      // From just after a face at rest (a circle's), chains of active faces.
+      const int s = circle ? rest + 1 : 0;
+      chain.clear();
+      ks.clear();
+      for (int j = 0; j < n; ++j) {
+        const int i = (s + j) % n;
+        chain.push_back(i);
+        const bool face = j + 1 < n && (circle || i + 1 < n);
+        if (face && K[std::size_t(i)] > 0.0) {
+          ks.push_back(K[std::size_t(i)]);
+          continue;
+        }
+        if (chain.size() > 1) {
+          ks.push_back(0.0);
+          solveChain(false);
+        }
+        chain.clear();
+        ks.clear();
+      }
+    };
+#pragma omp for schedule(dynamic, 4)
+    for (int j = 0; j < int(todo.size()); ++j) {
+      const int l = todo[std::size_t(j)];
+      const int b = int(L.start[std::size_t(l)]), n = int(L.start[std::size_t(l) + 1]) - b;
+      auto inside = [&](int i) { return inP_[std::size_t(tileOf(L.cells[std::size_t(b + i)]))]; };
+      // A circle is cut after a cell outside P (if any); runs are the cells in P between.
+      int s = 0;
+      const bool circle = L.cyclic[std::size_t(l)] != 0;
+      bool whole = false;
+      if (circle) {
+        while (s < n && inside(s)) ++s;
+        whole = s == n;
+        s = whole ? 0 : s + 1;
+      }
+      run.clear();
+      runLink.clear();
+      for (int q = 0; q < n; ++q) {
+        const int i = circle ? (s + q) % n : q;
+        if (!inside(i)) {
+          solveRun(false);
+          run.clear();
+          runLink.clear();
+          continue;
+        }
+        run.push_back(L.cells[std::size_t(b + i)]);
+        runLink.push_back(L.link[std::size_t(b + i)]);
+      }
+      solveRun(whole);
+    }
+  }
+}
+
+}  // namespace ps::sand
