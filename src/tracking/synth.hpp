@@ -30,6 +30,7 @@
 //           marker's TR corner, as a fraction of the marker's image size (0 = none).
 //   hand:   {"x", "y", "height", "radius"} (m, world frame): a hand-coloured disc of that radius
 //           held flat `height` above the table at (x, y), drawn over everything (radius 0: none).
+// "family" is the single markers'; a layout's markers are drawn in the layout's own family.
 // Rigid marker sets (marker_layout.hpp) instead of the single markers:
 //   "board": a layout file name (relative to the script's folder) or the layout itself: its
 //            markers lie on a white sheet on the table, the planet at its planet_centre (moved
