@@ -74,8 +74,11 @@ bool findChessboard(const cv::Mat& image, const ChessboardSpec& spec,
   const cv::Mat grey = toGrey(image);
   corners.clear();
   // OpenCV's tutorial pipeline (samples/cpp/calibration.cpp): findChessboardCorners, then
-  // cornerSubPix in an 11x11 half-window (smaller where the squares are, so that the window
-  // never reaches the next corner). Where it finds no grid, the sector-based detector
+  // cornerSubPix in an 11x11 half-window, made smaller where neighbouring corners are under
+  // 20 px apart (half-window 0.55 x their distance): on rendered views with 14-25 px squares the
+  // tutorial's window, reaching the next corners' edges, moved cy by 5 px (0.6 x: cy 231.0 for
+  // 236.25), where 0.55 x gives 235.4; on OpenCV's photographs (neighbours >= 20 px) the window
+  // is the tutorial's, and so is the result. Where no grid is found, the sector-based detector
   // (findChessboardCornersSB, sub-pixel by itself) tries.
   const bool found = cv::findChessboardCorners(
       grey, spec.innerCorners(), corners,
@@ -89,7 +92,7 @@ bool findChessboard(const cv::Mat& image, const ChessboardSpec& spec,
       if (i + std::size_t(w) < corners.size())
         nearest = std::min(nearest, double(cv::norm(corners[i] - corners[i + std::size_t(w)])));
     }
-    const int half = std::clamp(int(nearest / 2) - 1, 2, 11);
+    const int half = std::clamp(int(0.55 * nearest), 2, 11);
     cv::cornerSubPix(grey, corners, {half, half}, {-1, -1},
                      cv::TermCriteria(cv::TermCriteria::EPS + cv::TermCriteria::COUNT, 30, 1e-4));
     return true;
