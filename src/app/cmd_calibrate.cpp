@@ -1,10 +1,10 @@
 // `planetsculpt calibrate INPUT --out FILE`: camera calibration from views of the ChArUco board
-// that `planetsculpt markers` prints. INPUT is a video file, an image folder (or one image), or
-// a camera index (0, 1, ...). Progress lines on stderr say which views were kept and how much of
-// the image the corners have covered (a coarse grid: the empty cells are where the board should
-// go next); at the end, the RMS reprojection error and the intrinsics' standard deviations. A
-// calibration that misses a threshold is not written (exit code 2), with the reasons. A summary
-// JSON object goes to stdout.
+// that `planetsculpt markers` prints, or of a plain chessboard (--pattern chessboard). INPUT is a
+// video file, an image folder (or one image), or a camera index (0, 1, ...). Progress lines on
+// stderr say which views were kept and how much of the image the corners have covered (a coarse
+// grid: the empty cells are where the board should go next); at the end, the RMS reprojection error
+// and the intrinsics' standard deviations. A calibration that misses a threshold is not written
+// (exit code 2), with the reasons. A summary JSON object goes to stdout.
 #include <algorithm>
 #include <cctype>
 #include <chrono>
@@ -15,10 +15,12 @@
 #include <nlohmann/json.hpp>
 #include <opencv2/videoio.hpp>
 #include <sstream>
+#include <tuple>
 
 #include "app/command_registry.hpp"
 #include "core/input_error.hpp"
 #include "tracking/charuco_calibration.hpp"
+#include "tracking/chessboard_calibration.hpp"
 #include "tracking/video.hpp"
 
 namespace ps::app {
@@ -26,7 +28,7 @@ namespace ps::app {
 namespace {
 
 struct CalibrateArgs {
-  std::string input, out = "camera.yml", squares = "5x7";
+  std::string input, out = "camera.yml", squares = "5x7", pattern = "charuco";
   double squareMm = 30, markerMm = 22;
   std::string dictionary = "DICT_5X5_100";
   tracking::CalibrationThresholds thresholds;
@@ -35,6 +37,7 @@ struct CalibrateArgs {
   int maxFrames = 0;
   int targetViews = 30;  // cameras: stop when this many views cover enough of the image
   bool k3 = false, fixAspect = false, zeroTangent = false;
+  bool squaresGiven = false, markerOptionGiven = false;
 };
 
 bool isCameraIndex(const std::string& s) {
@@ -51,20 +54,27 @@ std::string fixed(double v, int digits) {
   return s.str();
 }
 
-tracking::CharucoBoardSpec boardFrom(const CalibrateArgs& a) {
-  tracking::CharucoBoardSpec b;
+// --squares COLUMNSxROWS.
+std::pair<int, int> squaresFrom(const CalibrateArgs& a) {
+  std::pair<int, int> b;
   const auto x = a.squares.find('x');
   try {
     if (x == std::string::npos) throw std::invalid_argument("no x");
     std::size_t used = 0;
-    b.squaresX = std::stoi(a.squares.substr(0, x), &used);
+    b.first = std::stoi(a.squares.substr(0, x), &used);
     if (used != x) throw std::invalid_argument("columns");
     const std::string rows = a.squares.substr(x + 1);
-    b.squaresY = std::stoi(rows, &used);
+    b.second = std::stoi(rows, &used);
     if (used != rows.size()) throw std::invalid_argument("rows");
   } catch (const std::exception&) {
     throw core::InputError("--squares '" + a.squares + "' is not COLUMNSxROWS (e.g. 5x7)");
   }
+  return b;
+}
+
+tracking::CharucoBoardSpec boardFrom(const CalibrateArgs& a) {
+  tracking::CharucoBoardSpec b;
+  std::tie(b.squaresX, b.squaresY) = squaresFrom(a);
   b.squareLength = a.squareMm * 1e-3;
   b.markerLength = a.markerMm * 1e-3;
   b.dictionary = a.dictionary;
@@ -77,8 +87,12 @@ void printCoverage(const tracking::Coverage& c) {
   for (const auto& row : c.map()) std::cerr << "    " << row << "\n";
 }
 
-int runCalibrate(CalibrateArgs& a) {
-  const tracking::CharucoBoardSpec board = boardFrom(a);
+// The views from the input into `make`'s calibrator (ChArUco or chessboard: the same methods),
+// then the calibration judged and written. `target` describes the board, `check` names the
+// options that describe it.
+template <class Make>
+int calibrateWith(CalibrateArgs& a, Make make, const std::string& target,
+                  const std::string& check) {
   const bool camera = isCameraIndex(a.input) && !std::filesystem::exists(a.input);
   std::unique_ptr<tracking::FrameSource> source;
   cv::VideoCapture capture;
@@ -97,9 +111,9 @@ int runCalibrate(CalibrateArgs& a) {
   flags.fixK3 = !a.k3;
   flags.fixAspect = a.fixAspect;
   flags.zeroTangent = a.zeroTangent;
-  tracking::CharucoCalibrator calibrator(board, a.thresholds, flags);
-  std::cerr << "calibrate: board " << board.describe() << "; "
-            << (camera ? "camera " + a.input : source->name()) << "\n";
+  auto calibrator = make(a.thresholds, flags);
+  std::cerr << "calibrate: " << target << "; " << (camera ? "camera " + a.input : source->name())
+            << "\n";
 
   cv::Mat frame;
   int frames = 0, withBoard = 0, lastCoveragePrint = 0;
@@ -127,8 +141,9 @@ int runCalibrate(CalibrateArgs& a) {
       }
     } else if (!video || now - lastLine > std::chrono::seconds(3)) {
       std::cerr << "calibrate: " << name << ": not kept ("
-                << (v.reason.empty() ? std::string("no board") : v.reason) << ", " << v.markers
-                << " markers, " << v.corners << " corners)\n";
+                << (v.reason.empty() ? std::string("no board") : v.reason) << ", "
+                << (a.pattern == "charuco" ? std::to_string(v.markers) + " markers, " : "")
+                << v.corners << " corners)\n";
       lastLine = now;
     }
     if (calibrator.full()) break;
@@ -141,12 +156,11 @@ int runCalibrate(CalibrateArgs& a) {
   std::cerr << "calibrate: " << calibrator.views() << " view(s) kept of " << frames
             << " frame(s); the board's corners were found in " << withBoard << "\n";
   if (calibrator.views() == 0)
-    throw core::InputError((camera ? "camera " + a.input : source->name()) +
-                           ": the ChArUco board (" + board.describe() +
-                           ") was never seen with enough corners; check --squares, "
-                           "--square-mm, --marker-mm and --dictionary against the printed board");
+    throw core::InputError((camera ? "camera " + a.input : source->name()) + ": the " + target +
+                           " was never seen with enough corners; check " + check +
+                           " against the printed board");
   if (lastCoveragePrint != calibrator.views()) printCoverage(calibrator.coverage());
-  const auto res = calibrator.calibrate();
+  const tracking::CalibrationResult res = calibrator.calibrate();
   const auto& K = res.calibration.K;
   std::cerr << "calibrate: RMS reprojection error " << fixed(res.rms, 3) << " px over " << res.views
             << " views, " << res.corners << " corners\n";
@@ -188,7 +202,7 @@ int runCalibrate(CalibrateArgs& a) {
   }
   const std::filesystem::path out = a.out;
   if (out.has_parent_path()) std::filesystem::create_directories(out.parent_path());
-  tracking::saveCharucoCalibration(res, board, out);
+  tracking::saveCalibrationResult(res, target, out);
   std::cerr << "calibrate: wrote " << out.string() << "\n";
   j["written"] = true;
   j["file"] = out.string();
@@ -196,17 +210,51 @@ int runCalibrate(CalibrateArgs& a) {
   return 0;
 }
 
+int runCalibrate(CalibrateArgs& a) {
+  if (a.pattern == "charuco") {
+    const tracking::CharucoBoardSpec board = boardFrom(a);
+    return calibrateWith(
+        a,
+        [&](const tracking::CalibrationThresholds& t, tracking::CalibrationFlags f) {
+          return tracking::CharucoCalibrator(board, t, f);
+        },
+        "ChArUco board " + board.describe(),
+        "--squares, --square-mm, --marker-mm and --dictionary");
+  }
+  if (a.pattern != "chessboard")
+    throw core::InputError("--pattern '" + a.pattern + "' is not charuco or chessboard");
+  if (!a.squaresGiven)
+    throw core::InputError(
+        "--pattern chessboard needs --squares COLUMNSxROWS, the squares as printed (8x6 squares "
+        "have 7x5 inner corners; OpenCV's pattern.png is 10x7)");
+  if (a.markerOptionGiven)
+    throw core::InputError(
+        "--marker-mm and --dictionary describe a ChArUco board; a chessboard has no markers");
+  tracking::ChessboardSpec board;
+  std::tie(board.squaresX, board.squaresY) = squaresFrom(a);
+  board.squareLength = a.squareMm * 1e-3;
+  board.validate();
+  return calibrateWith(
+      a,
+      [&](const tracking::CalibrationThresholds& t, tracking::CalibrationFlags f) {
+        return tracking::ChessboardCalibrator(board, t, f);
+      },
+      "chessboard " + board.describe(), "--squares and --square-mm");
+}
+
 const CommandRegistration kCalibrate([](CLI::App& root, CLI::App*& sub) -> CommandAction {
   auto a = std::make_shared<CalibrateArgs>();
   sub = root.add_subcommand(
       "calibrate",
-      "Calibrate a camera from a ChArUco board (video, image folder or camera index); refuses a "
-      "poor calibration");
+      "Calibrate a camera from a ChArUco board or a plain chessboard (video, image folder or "
+      "camera index); refuses a poor calibration");
   sub->add_option("input", a->input, "Video file, image folder, image, or camera index (0, 1, ..)")
       ->required();
   sub->add_option("--out", a->out, "Calibration file to write (OpenCV YAML)")
       ->capture_default_str();
-  sub->add_option("--squares", a->squares, "Board squares, COLUMNSxROWS (rows odd)")
+  sub->add_option("--squares", a->squares,
+                  "Board squares, COLUMNSxROWS (ChArUco: rows odd; a chessboard of 8x6 squares "
+                  "has 7x5 inner corners)")
       ->capture_default_str();
   sub->add_option("--square-mm", a->squareMm, "Chessboard square edge as printed (mm)")
       ->capture_default_str();
@@ -237,7 +285,18 @@ const CommandRegistration kCalibrate([](CLI::App& root, CLI::App*& sub) -> Comma
   sub->add_flag("--k3", a->k3, "Estimate the third radial coefficient too (wide-angle lenses)");
   sub->add_flag("--fix-aspect", a->fixAspect, "Keep fx/fy = 1");
   sub->add_flag("--zero-tangent", a->zeroTangent, "Assume no tangential distortion");
-  return [a] { return runCalibrate(*a); };
+  sub->add_option("--pattern", a->pattern,
+                  "The printed target: charuco (the board `markers` prints) or chessboard (a "
+                  "plain chessboard: --squares and --square-mm only)")
+      ->capture_default_str();
+  const CLI::Option* squares = sub->get_option("--squares");
+  const CLI::Option* markerMm = sub->get_option("--marker-mm");
+  const CLI::Option* dictionary = sub->get_option("--dictionary");
+  return [a, squares, markerMm, dictionary] {
+    a->squaresGiven = squares->count() > 0;
+    a->markerOptionGiven = markerMm->count() > 0 || dictionary->count() > 0;
+    return runCalibrate(*a);
+  };
 });
 
 }  // namespace

@@ -1,6 +1,7 @@
 // `planetsculpt detect IMAGE|FOLDER|VIDEO`: the user's first check that printed markers work.
 // One JSON object per marker on stdout: frame, id, corners (TL, TR, BR, BL, OpenCV pixel
 // convention) and, with --calib, the pose (rvec/tvec of the marker in the camera frame, metres).
+#include <algorithm>
 #include <cmath>
 #include <iostream>
 #include <memory>
@@ -45,7 +46,17 @@ int runDetect(DetectArgs& a) {
     throw core::InputError("--marker-size " + std::to_string(a.markerSize) + " m is not > 0");
   tracking::FrameSource source(a.input);
   if (!source.isVideo() && !a.decimateGiven) a.detector.decimate = kStillImageDecimate;
-  auto detector = tracking::makeDetector(a.detector);
+  // --family A,B: every family listed, each marker's JSON naming its family.
+  std::vector<tracking::DetectorConfig> families;
+  for (std::size_t start = 0; start <= a.detector.family.size();) {
+    const std::size_t comma =
+        std::min(a.detector.family.find(',', start), a.detector.family.size());
+    families.push_back(a.detector);
+    families.back().family = a.detector.family.substr(start, comma - start);
+    start = comma + 1;
+  }
+  const bool manyFamilies = families.size() > 1;
+  auto detector = tracking::makeDetector(families);
   std::unique_ptr<tracking::CameraCalibration> calib;
   if (!a.calib.empty())
     calib = std::make_unique<tracking::CameraCalibration>(
@@ -64,12 +75,13 @@ int runDetect(DetectArgs& a) {
     for (std::size_t i = 0; i < found.size(); ++i) {
       const auto& d = found[i];
       nlohmann::json j = {{"frame", source.index()}, {"id", d.id}};
+      if (manyFamilies) j["family"] = d.family;
       if (!source.isVideo() && source.announcedFrames() > 1) j["file"] = source.frameName();
       nlohmann::json corners = nlohmann::json::array();
       for (const auto& c : d.corners) corners.push_back({round3(c.x), round3(c.y)});
       j["corners"] = corners;
-      const bool twice =
-          (i > 0 && found[i - 1].id == d.id) || (i + 1 < found.size() && found[i + 1].id == d.id);
+      auto same = [&](std::size_t k) { return found[k].id == d.id && found[k].family == d.family; };
+      const bool twice = (i > 0 && same(i - 1)) || (i + 1 < found.size() && same(i + 1));
       if (twice) j["duplicate_id"] = true;
       if (calib) {
         const auto cands = tracking::solveMarkerPose(d.corners, a.markerSize, *calib);
@@ -108,7 +120,8 @@ const CommandRegistration kDetect([](CLI::App& root, CLI::App*& sub) -> CommandA
                             "Detect markers in an image, image folder or video; JSON lines");
   sub->add_option("input", a->input, "Image, folder of images, or video")->required();
   sub->add_option("--family", a->detector.family,
-                  "Marker family as the libraries name it (tag36h11, DICT_6X6_250, ...)")
+                  "Marker family as the libraries name it (tag36h11, DICT_6X6_250, ...); "
+                  "several, comma-separated, to detect each")
       ->capture_default_str();
   sub->add_option("--detector", a->backend, "Back end: auto, aruco or apriltag")
       ->capture_default_str();

@@ -1,8 +1,11 @@
 // `planetsculpt markers --out DIR`: print-ready sheets of the planet board and the tool cube's net
 // (from their layouts, markers/*.json), the single planet and tool markers and the ChArUco
 // calibration board, for A4 and US Letter, as 1-bit 300-dpi PNG and one-page PDF
-// (tracking/marker_sheet.hpp). Defaults are the tracker's (tracking::SceneConfig): tag36h11,
-// planet id 0 of 80 mm, tool id 1 of 50 mm with its tip 80 mm below the marker centre.
+// (tracking/marker_sheet.hpp), and the board's and the tool's layout files (planet-board.json,
+// tool-cube.json) in the family and size printed. Defaults are the tracker's
+// (tracking::SceneConfig): tag36h11, planet id 0 of 80 mm, tool id 1 of 50 mm with its tip 80 mm
+// below the marker centre.
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
@@ -36,6 +39,11 @@ struct MarkersArgs {
   double dpi = 300;
   std::string board = (sourceDir() / "markers" / "planet-board.json").string();
   std::string toolLayout = (sourceDir() / "markers" / "tool-cube.json").string();
+  // The board's and the tool's family and marker edge (empty, 0: --family when given, else the
+  // layout's; the layout's size).
+  std::string boardFamily, toolFamily;
+  double boardMarkerMm = 0, toolMarkerMm = 0;
+  bool familyGiven = false;
 };
 
 // Written next to the target and renamed: a crash never leaves half a sheet under its name.
@@ -49,6 +57,35 @@ void writeFile(const std::filesystem::path& path, const std::vector<std::uint8_t
     if (!f) throw std::runtime_error("cannot write " + tmp.string());
   }
   std::filesystem::rename(tmp, path);
+}
+
+// The layout as printed: its family (the option, else --family when given, else its own) and
+// marker edge.
+tracking::MarkerLayout printedLayout(const MarkersArgs& a, const std::string& path,
+                                     const std::string& family, double markerMm) {
+  const tracking::MarkerLayout l = tracking::loadMarkerLayout(path);
+  const std::string f = !family.empty() ? family : a.familyGiven ? a.family : l.family;
+  return tracking::resizedLayout(l, f, markerMm * 1e-3);
+}
+
+// Writes a printed layout beside its sheets, unless the file there already holds that layout
+// (the committed markers/*.json, when the sheets are made again into markers/).
+void writeLayout(const std::filesystem::path& path, const tracking::MarkerLayout& layout) {
+  const std::string text = tracking::layoutFileText(layout);
+  if (std::filesystem::exists(path)) {
+    try {
+      if (tracking::layoutFileText(tracking::loadMarkerLayout(path)) == text) {
+        std::cerr << "markers: " << path.string() << " (unchanged)\n";
+        return;
+      }
+    } catch (const core::InputError&) {
+      // not a layout (or a broken one): written over, as the sheets are
+    }
+  }
+  writeFile(path, std::vector<std::uint8_t>(text.begin(), text.end()));
+  std::cerr << "markers: " << path.string() << " (layout: " << layout.family << ", "
+            << layout.markers.size() << " markers of "
+            << std::lround(layout.markers.front().edge() * 1e4) / 10.0 << " mm)\n";
 }
 
 tracking::CharucoBoardSpec boardFrom(const MarkersArgs& a) {
@@ -76,8 +113,17 @@ int runMarkers(const MarkersArgs& a) {
     throw core::InputError("the planet and tool markers need different ids (both are " +
                            std::to_string(a.planetId) + ")");
   const auto board = boardFrom(a);
-  const tracking::MarkerLayout planetBoard = tracking::loadMarkerLayout(a.board);
-  const tracking::MarkerLayout toolCube = tracking::loadMarkerLayout(a.toolLayout);
+  const tracking::MarkerLayout planetBoard =
+      printedLayout(a, a.board, a.boardFamily, a.boardMarkerMm);
+  const tracking::MarkerLayout toolCube =
+      printedLayout(a, a.toolLayout, a.toolFamily, a.toolMarkerMm);
+  // What `live --board FILE --tool-layout FILE` will refuse: one id on both, in one family.
+  {
+    tracking::SceneConfig scene;
+    scene.useBoard(std::make_shared<const tracking::MarkerLayout>(planetBoard));
+    scene.useToolLayout(std::make_shared<const tracking::MarkerLayout>(toolCube));
+    scene.validate();
+  }
   tracking::MarkerSheetSpec planet;
   planet.family = a.family;
   planet.id = a.planetId;
@@ -90,6 +136,8 @@ int runMarkers(const MarkersArgs& a) {
   tool.tipOffsetMm = {a.tipMm[0], a.tipMm[1], a.tipMm[2]};
   const std::filesystem::path dir = a.out;
   std::filesystem::create_directories(dir);
+  writeLayout(dir / "planet-board.json", planetBoard);
+  writeLayout(dir / "tool-cube.json", toolCube);
   long long total = 0;
   for (const auto& paper : papers) {
     const std::pair<std::string, tracking::Sheet> sheets[5] = {
@@ -126,13 +174,25 @@ const CommandRegistration kMarkers([](CLI::App& root, CLI::App*& sub) -> Command
   sub = root.add_subcommand(
       "markers",
       "Write print-ready sheets (planet board, tool cube net, single planet and tool markers, "
-      "ChArUco board; A4 and US Letter; 300-dpi PNG and PDF)");
+      "ChArUco board; A4 and US Letter; 300-dpi PNG and PDF) and the board's and tool's layout "
+      "files beside them");
   sub->add_option("--out", a->out, "Folder to write the sheets to")->capture_default_str();
   sub->add_option("--paper", a->paper, "a4, letter or both")->capture_default_str();
   sub->add_option("--format", a->format, "png, pdf or both")->capture_default_str();
   sub->add_option("--dpi", a->dpi, "Resolution")->capture_default_str();
-  sub->add_option("--family", a->family, "Marker family (tag36h11, DICT_6X6_250, ...)")
+  sub->add_option("--family", a->family,
+                  "Marker family of every sheet (tag36h11, DICT_6X6_250, ...); the board and the "
+                  "tool keep their layouts' unless given")
       ->capture_default_str();
+  sub->add_option("--board-family", a->boardFamily,
+                  "The board's family (default: --family when given, else its layout's)");
+  sub->add_option("--board-marker-mm", a->boardMarkerMm,
+                  "The board's marker edge (mm; the whole board scales; default: its layout's)");
+  sub->add_option("--tool-family", a->toolFamily,
+                  "The tool cube's family (default: --family when given, else its layout's)");
+  sub->add_option("--tool-marker-mm", a->toolMarkerMm,
+                  "The tool cube's marker edge (mm; the cube and its tip scale; default: its "
+                  "layout's)");
   sub->add_option("--board", a->board, "Planet board layout (JSON)")->capture_default_str();
   sub->add_option("--tool-layout", a->toolLayout, "Tool cube layout (JSON)")->capture_default_str();
   sub->add_option("--planet-id", a->planetId, "Planet marker id")->capture_default_str();
@@ -149,7 +209,11 @@ const CommandRegistration kMarkers([](CLI::App& root, CLI::App*& sub) -> Command
   sub->add_option("--square-mm", a->squareMm, "ChArUco square edge (mm)")->capture_default_str();
   sub->add_option("--marker-mm", a->markerMm, "ChArUco marker edge (mm)")->capture_default_str();
   sub->add_option("--dictionary", a->dictionary, "ChArUco board dictionary")->capture_default_str();
-  return [a] { return runMarkers(*a); };
+  const CLI::Option* family = sub->get_option("--family");
+  return [a, family] {
+    a->familyGiven = family->count() > 0;
+    return runMarkers(*a);
+  };
 });
 
 }  // namespace

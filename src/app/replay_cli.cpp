@@ -43,7 +43,10 @@ void ReplayCli::addOptions(CLI::App* sub) {
                   "Default torus's tube radius in metres, below --radius (default 1800000)");
   sub->add_option("--length", length, "Default cylinder's length in metres (default 4000000)");
   sub->add_option("--seed", job.seed, "Default planet's relief seed")->capture_default_str();
-  sub->add_option("--family", family, "Marker family")->capture_default_str();
+  sub->add_option("--family", family,
+                  "Family of the single markers (--board single, --tool-layout flat); layout "
+                  "files name their own, and every family they name is detected")
+      ->capture_default_str();
   sub->add_option("--decimate", o.detector.decimate, "AprilTag search decimation")
       ->capture_default_str();
   sub->add_option("--planet-id", o.scene.planet.id, "Planet marker id")->capture_default_str();

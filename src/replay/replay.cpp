@@ -133,20 +133,30 @@ FrameStepper::FrameStepper(const tracking::CameraCalibration& calib, terrain::Te
                            const ReplayOptions& options)
     : o_(options), calib_(calib), planet_(planet) {
   o_.validate();
-  tracking::DetectorConfig dc = o_.detector;
-  dc.ids.clear();
-  for (const auto* m : {&o_.scene.planet, &o_.scene.tool}) {
+  // One detector config per family that the board and the tool name: a layout file names its
+  // own family, single markers are of the configured one.
+  std::vector<tracking::DetectorConfig> families;
+  auto configFor = [&](const std::string& family) -> tracking::DetectorConfig& {
+    for (auto& c : families)
+      if (c.family == family) return c;
+    families.push_back(o_.detector);
+    families.back().family = family;
+    families.back().ids.clear();
+    families.back().sets.clear();
+    return families.back();
+  };
+  for (auto* m : {&o_.scene.planet, &o_.scene.tool}) {
     if (!m->layout) {
-      dc.ids.push_back(m->id);
+      m->family = o_.detector.family;
+      configFor(m->family).ids.push_back(m->id);
       continue;
     }
-    if (m->layout->family != dc.family)
-      throw core::InputError(m->layout->source + ": its markers are " + m->layout->family +
-                             ", the detector reads " + dc.family);
+    tracking::DetectorConfig& dc = configFor(m->layout->family);
     for (int id : m->layout->ids()) dc.ids.push_back(id);
     dc.sets.push_back(m->layout->ids());
   }
-  family_ = dc.family;
+  o_.scene.validate();  // ids clash within a family only, now that each names its family
+  for (const auto& c : families) family_ += (family_.empty() ? "" : ", ") + c.family;
   const core::Chart& chart = planet_.chart();
   // The displayed planetRadius is the planet's bounding sphere (a sphere's own radius, bit for
   // bit; a torus's or a cylinder's sphere about its centre): that sphere stands on the board.
@@ -157,8 +167,8 @@ FrameStepper::FrameStepper(const tracking::CameraCalibration& calib, terrain::Te
         "a " +
         chart.name() + " planet has none to stand on the board");
   scale_ = bound / o_.scene.planetRadius;
-  p_ = std::make_unique<Parts>(tracking::makeDetector(dc), o_.scene, planet_);
-  p_->toolShape = tracking::toolShape(o_.scene, family_);
+  p_ = std::make_unique<Parts>(tracking::makeDetector(families), o_.scene, planet_);
+  p_->toolShape = tracking::toolShape(o_.scene, o_.scene.tool.family);
   if (o_.scene.planet.holdWhileStill) {
     p_->motion.emplace();
     if (o_.scene.planet.layout->planar()) {
@@ -306,8 +316,8 @@ tracking::BoardHint FrameStepper::Parts::boardHint(const cv::Mat& grey,
                                                    nlohmann::json& log) {
   tracking::BoardHint hint;
   if (!motion) return hint;
-  const bool boardSeen = std::any_of(
-      found.begin(), found.end(), [&](const auto& d) { return scene.config().planet.owns(d.id); });
+  const bool boardSeen = std::any_of(found.begin(), found.end(),
+                                     [&](const auto& d) { return scene.config().planet.owns(d); });
   if (boardSeen || !planetHadPose || !motion->hasReference()) return hint;
   // Still (the cheap judge against the last frame with the board): held. Moved: carried by the
   // plane the board lies on, or lost; once the plane carries it, the plane alone decides.
@@ -327,7 +337,7 @@ tracking::BoardHint FrameStepper::Parts::boardHint(const cv::Mat& grey,
   }
   std::vector<std::array<cv::Point2d, 4>> toolQuads;
   for (const auto& d : found)
-    if (scene.config().tool.owns(d.id)) toolQuads.push_back(d.corners);
+    if (scene.config().tool.owns(d)) toolQuads.push_back(d.corners);
   const tracking::PlaneTrack t = plane->track(grey, calib, toolQuads);
   if (t.ok) {
     hint.carried = t.board * boardPlane.inverse();
@@ -387,7 +397,7 @@ StepResult FrameStepper::step(const cv::Mat& image, int frame, double time) {
     std::vector<std::array<cv::Point2d, 4>> quads, toolQuads;
     for (const auto& d : found) {
       quads.push_back(d.corners);
-      if (o_.scene.tool.owns(d.id)) toolQuads.push_back(d.corners);
+      if (o_.scene.tool.owns(d)) toolQuads.push_back(d.corners);
     }
     // One copy of the frame kept for both (neither writes into it).
     const cv::Mat& g = grey.empty() ? image : grey;

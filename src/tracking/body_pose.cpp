@@ -86,10 +86,15 @@ BodyPoseResult solveBodyPose(const MarkerLayout& layout, std::span<const Detecti
   BodyPoseResult out;
   std::vector<const Detection*> used;
   std::vector<int> doubled;
+  // A detection of another family is not the layout's marker, whatever its id.
+  auto ofLayout = [&](const Detection& d) {
+    return (d.family.empty() || d.family == layout.family) && layout.find(d.id);
+  };
   for (const auto& d : detections) {
-    if (!layout.find(d.id)) continue;
-    const auto same = std::count_if(detections.begin(), detections.end(),
-                                    [&](const Detection& o) { return o.id == d.id; });
+    if (!ofLayout(d)) continue;
+    const auto same = std::count_if(detections.begin(), detections.end(), [&](const Detection& o) {
+      return o.id == d.id && ofLayout(o);
+    });
     if (same > 1) {
       if (std::find(doubled.begin(), doubled.end(), d.id) == doubled.end()) doubled.push_back(d.id);
       continue;

@@ -34,8 +34,8 @@ struct BodyPoseResult {
   std::string note;           // why some detections were not used
 };
 
-// `detections` may hold ids outside the layout (ignored). An id seen more than once is not used
-// (which of them is the board's cannot be told from one frame).
+// `detections` may hold ids outside the layout or markers of another family (ignored). An id seen
+// more than once is not used (which of them is the board's cannot be told from one frame).
 BodyPoseResult solveBodyPose(const MarkerLayout& layout, std::span<const Detection> detections,
                              const CameraCalibration& calibration, const Pose* previous,
                              double ambiguityRatio);

@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "tracking/calibration.hpp"
+#include "tracking/calibration_views.hpp"
 
 namespace ps::tracking {
 
@@ -48,61 +49,14 @@ int findCharucoCorners(const cv::Mat& image, const cv::Ptr<cv::aruco::CharucoBoa
                        const cv::Ptr<cv::aruco::DetectorParameters>& params,
                        std::vector<cv::Point2f>& corners, std::vector<int>& ids);
 
-struct CalibrationThresholds {
-  int minViews = 12;          // views kept
-  int minCornersPerView = 8;  // chessboard corners for a view to count
-  double minViewShiftPx = 0;  // mean corner motion since the last kept view (video: ~20 px)
-  int maxViews = 60;          // later views are ignored (calibration time grows with them)
-  double maxRmsPx = 1.0;      // RMS reprojection error
-  double minCoverage = 0.6;   // fraction of the grid cells with a corner in some view
-  int gridColumns = 8, gridRows = 6;
-  double maxFocalStdRel = 0.01;   // standard deviation of fx, fy over fx, fy
-  double maxCentreStdRel = 0.02;  // standard deviation of cx, cy over the image width
-  void validate() const;          // core::InputError
-};
-
-struct CalibrationFlags {
-  bool fixK3 = true;  // estimate k1, k2, p1, p2 and keep k3 = 0 (webcams; k3 overfits)
-  bool fixAspect = false;
-  bool zeroTangent = false;
-};
-
-struct ViewResult {
-  int markers = 0;  // ArUco markers of the board found
-  int corners = 0;  // chessboard corners interpolated
-  bool kept = false;
-  std::string reason;  // why not kept ("", "too few corners", "did not move", "enough views")
-};
-
-struct Coverage {
-  int columns = 0, rows = 0;
-  std::vector<int> counts;  // corners per cell, row-major
-  int covered() const;
-  double fraction() const;
-  // One text row per grid row: '#' covered, '.' empty.
-  std::vector<std::string> map() const;
-};
-
-struct CharucoCalibrationResult {
-  CameraCalibration calibration;
-  double rms = 0;
-  // Standard deviations as calibrateCameraCharuco reports them: fx, fy, cx, cy, k1, k2, p1, p2,
-  // k3 (a fixed parameter reports 0).
-  std::vector<double> stdDeviations;
-  std::vector<double> perViewRms;
-  int views = 0;
-  int corners = 0;
-  double coverage = 0;
-  bool acceptable = false;
-  std::vector<std::string> problems;  // why it is not acceptable (one line each)
-};
+using CharucoCalibrationResult = CalibrationResult;
 
 class CharucoCalibrator {
  public:
   CharucoCalibrator(CharucoBoardSpec board, CalibrationThresholds thresholds,
                     CalibrationFlags flags = {});
   const CharucoBoardSpec& board() const { return spec_; }
-  const CalibrationThresholds& thresholds() const { return thresholds_; }
+  const CalibrationThresholds& thresholds() const { return views_.thresholds(); }
 
   // Looks for the board in `image` (8-bit grey or BGR; every image must have the first one's
   // size, else core::InputError naming `name`) and keeps the view when it qualifies.
@@ -111,10 +65,10 @@ class CharucoCalibrator {
   ViewResult addCorners(const std::vector<cv::Point2f>& corners, const std::vector<int>& ids,
                         const std::string& name = "");
 
-  int views() const { return int(corners_.size()); }
-  bool full() const { return views() >= thresholds_.maxViews; }
-  cv::Size imageSize() const { return size_; }
-  const Coverage& coverage() const { return coverage_; }
+  int views() const { return views_.views(); }
+  bool full() const { return views_.full(); }
+  cv::Size imageSize() const { return views_.imageSize(); }
+  const Coverage& coverage() const { return views_.coverage(); }
 
   // Calibrates from the kept views. Never throws for a poor calibration: the result says why it
   // is poor. Throws core::InputError when there is nothing to calibrate from (no views).
@@ -122,20 +76,13 @@ class CharucoCalibrator {
 
  private:
   CharucoBoardSpec spec_;
-  CalibrationThresholds thresholds_;
   CalibrationFlags flags_;
   cv::Ptr<cv::aruco::CharucoBoard> board_;
   cv::Ptr<cv::aruco::DetectorParameters> params_;
-  cv::Size size_{0, 0};
-  Coverage coverage_;
-  std::vector<std::vector<cv::Point2f>> corners_;
-  std::vector<std::vector<int>> ids_;
-  std::vector<std::string> names_;
+  CalibrationViews views_;
 };
 
-// Writes the calibration in OpenCV's YAML (what loadCalibration reads) plus how it was made:
-// board, views, coverage, RMS and the standard deviations. Atomic (a temporary file in the same
-// folder, renamed). Throws std::runtime_error on I/O errors.
+// saveCalibrationResult (calibration_views.hpp) naming the ChArUco board.
 void saveCharucoCalibration(const CharucoCalibrationResult& result, const CharucoBoardSpec& board,
                             const std::filesystem::path& path);
 

@@ -79,6 +79,7 @@ cv::Mat toGrey(const cv::Mat& image) {
 }
 
 void finishDetections(const DetectorConfig& config, std::vector<Detection>& d) {
+  for (auto& x : d) x.family = config.family;
   if (!config.ids.empty()) {
     std::erase_if(d, [&](const Detection& x) {
       return std::find(config.ids.begin(), config.ids.end(), x.id) == config.ids.end();
@@ -89,6 +90,49 @@ void finishDetections(const DetectorConfig& config, std::vector<Detection>& d) {
     if (a.corners[0].y != b.corners[0].y) return a.corners[0].y < b.corners[0].y;
     return a.corners[0].x < b.corners[0].x;
   });
+}
+
+namespace {
+
+class MultiFamilyDetector final : public Detector {
+ public:
+  explicit MultiFamilyDetector(std::vector<std::unique_ptr<Detector>> parts)
+      : parts_(std::move(parts)) {}
+  std::string name() const override {
+    std::string n;
+    for (const auto& p : parts_) n += (n.empty() ? "" : " | ") + p->name();
+    return n;
+  }
+  // The first family's back end (the others are named in name()).
+  Backend backend() const override { return parts_.front()->backend(); }
+  std::vector<Detection> detect(const cv::Mat& image) override {
+    const cv::Mat grey = toGrey(image);  // once for every family
+    std::vector<Detection> all;
+    for (const auto& p : parts_) {
+      std::vector<Detection> found = p->detect(grey);
+      all.insert(all.end(), std::make_move_iterator(found.begin()),
+                 std::make_move_iterator(found.end()));
+    }
+    return all;
+  }
+
+ private:
+  std::vector<std::unique_ptr<Detector>> parts_;
+};
+
+}  // namespace
+
+std::unique_ptr<Detector> makeDetector(const std::vector<DetectorConfig>& families) {
+  if (families.empty()) throw core::InputError("no marker family to detect");
+  for (std::size_t i = 0; i < families.size(); ++i)
+    for (std::size_t k = 0; k < i; ++k)
+      if (families[i].family == families[k].family)
+        throw core::InputError("marker family " + families[i].family +
+                               " is given twice to one detector");
+  if (families.size() == 1) return makeDetector(families.front());
+  std::vector<std::unique_ptr<Detector>> parts;
+  for (const auto& c : families) parts.push_back(makeDetector(c));
+  return std::make_unique<MultiFamilyDetector>(std::move(parts));
 }
 
 std::unique_ptr<Detector> makeDetector(const DetectorConfig& config) {

@@ -16,6 +16,9 @@
 namespace ps::tracking {
 
 struct Detection {
+  // The family the marker was read as (the config's family name): ids are only unique within
+  // a family, so a marker is known by (family, id). Empty: not said (corners made elsewhere).
+  std::string family;
   int id = -1;
   std::array<cv::Point2d, 4> corners;  // TL, TR, BR, BL
   int hamming = 0;                     // bits corrected (AprilTag), 0 for aruco
@@ -98,6 +101,13 @@ class Detector {
 // core::InputError for a family the back end cannot read or a bad setting.
 std::unique_ptr<Detector> makeDetector(const DetectorConfig& config);
 
+// Several families in one frame (a board of one family beside a tool of another): one
+// detector per config (each config one family, with that family's ids and sets; two configs of
+// one family are refused), run on one grey image made once. Detections come out in the order of
+// the configs, then as each detector sorts them, each tagged with its family. One config: that
+// config's detector. Throws core::InputError as makeDetector does, or for no config.
+std::unique_ptr<Detector> makeDetector(const std::vector<DetectorConfig>& families);
+
 // The region-tracking wrapper (what makeDetector returns when config.regions is set).
 std::unique_ptr<Detector> makeRegionDetector(const DetectorConfig& config);
 
@@ -106,7 +116,7 @@ std::unique_ptr<Detector> makeArucoDetector(const DetectorConfig& config);
 std::unique_ptr<Detector> makeAprilTagDetector(const DetectorConfig& config);
 // Grey view of an image (no copy when it already is CV_8UC1); InputError for other types.
 cv::Mat toGrey(const cv::Mat& image);
-// Keeps the configured ids and sorts.
+// Keeps the configured ids, tags each detection with the config's family, and sorts.
 void finishDetections(const DetectorConfig& config, std::vector<Detection>& detections);
 
 }  // namespace ps::tracking

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <fstream>
+#include <functional>
 
 #include "core/input_error.hpp"
 #include "tracking/marker_family.hpp"
@@ -213,6 +214,62 @@ nlohmann::json toJson(const MarkerLayout& layout) {
   if (layout.stickRadius) j["stick_radius"] = *layout.stickRadius;
   if (layout.stickTipRadius) j["stick_tip_radius"] = *layout.stickTipRadius;
   return j;
+}
+
+MarkerLayout resizedLayout(const MarkerLayout& layout, const std::string& family,
+                           double markerEdge) {
+  if (layout.markers.empty()) throw core::InputError(layout.source + ": the layout has no markers");
+  if (!(markerEdge >= 0) || !std::isfinite(markerEdge))
+    throw core::InputError(layout.source + ": marker size " + std::to_string(markerEdge * 1e3) +
+                           " mm is not > 0");
+  double mean = 0;
+  for (const auto& m : layout.markers) mean += m.edge();
+  mean /= double(layout.markers.size());
+  const double k = markerEdge > 0 ? markerEdge / mean : 1.0;
+  MarkerLayout out = layout;
+  if (!family.empty()) out.family = family;
+  // A solid's faces hold their markers with the quiet zone (a cube of 40 mm tag36h11 markers is
+  // 50 mm): in another family the faces move along their normals with the quiet zone's share
+  // (the in-plane offsets and the markers scale by k), and the tip with them. A board scales.
+  double faces = k;
+  if (!layout.planar()) {
+    const FamilyInfo from = familyInfo(layout.family), to = familyInfo(out.family);
+    faces = k * (double(to.totalCells) / to.edgeCells) / (double(from.totalCells) / from.edgeCells);
+  }
+  for (auto& m : out.markers) {
+    const Pose p = m.inBody();
+    const Eigen::Vector3d n = p.R.col(2);
+    const double d = p.t.dot(n);
+    const Eigen::Vector3d centre = (p.t - d * n) * k + d * faces * n;
+    for (auto& c : m.corners) c = centre + (c - p.t) * k;
+  }
+  if (out.planetCentre) *out.planetCentre *= k;
+  if (out.tip) *out.tip *= faces;
+  // Read back as a file would be: an id the family does not hold is named.
+  MarkerLayout checked = parseMarkerLayout(toJson(out), layout.source);
+  checked.source = layout.source;
+  return checked;
+}
+
+std::string layoutFileText(const MarkerLayout& layout) {
+  // Every field toJson writes (whatever a layout grows), numbers to the nanometre.
+  nlohmann::json j = toJson(layout);
+  std::function<void(nlohmann::json&)> round = [&](nlohmann::json& v) {
+    if (v.is_number_float()) v = std::round(v.get<double>() * 1e9) / 1e9 + 0.0;  // no -0
+    if (v.is_structured())
+      for (auto& x : v) round(x);
+  };
+  round(j);
+  std::string text = "{\n  \"family\": " + j["family"].dump() +
+                     ",\n  \"units\": " + j["units"].dump() + ",\n  \"markers\": [\n";
+  const auto& markers = j["markers"];
+  for (std::size_t i = 0; i < markers.size(); ++i)
+    text += "    " + markers[i].dump(-1, ' ', false) + (i + 1 < markers.size() ? ",\n" : "\n");
+  text += "  ]";
+  for (const auto& [key, value] : j.items())
+    if (key != "family" && key != "units" && key != "markers")
+      text += ",\n  " + nlohmann::json(key).dump() + ": " + value.dump();
+  return text + "\n}\n";
 }
 
 std::filesystem::path defaultBoardPath(const std::filesystem::path& root) {

@@ -70,6 +70,19 @@ MarkerLayout parseMarkerLayout(const nlohmann::json& j, const std::string& sourc
 MarkerLayout loadMarkerLayout(const std::filesystem::path& path);
 nlohmann::json toJson(const MarkerLayout& layout);  // units m
 
+// The layout in another family and at another size (what `planetsculpt markers` prints and writes
+// beside its sheets): the family replaced (empty: as it is) and every marker and the planet's
+// centre scaled about the body's origin so that the markers' mean edge is `markerEdge` (m; 0:
+// as it is); a solid's (a cube's) faces moved along their normals so that they still just hold
+// their markers with the new family's quiet zone, the tip scaled with them. Checked as a layout
+// file is: InputError "SOURCE: ..." for an id the new family does not hold, or a size that is not >
+// 0.
+MarkerLayout resizedLayout(const MarkerLayout& layout, const std::string& family,
+                           double markerEdge);
+// The layout file's text: the committed files' style (one marker a line, metres rounded to the
+// nanometre), what loadMarkerLayout reads back.
+std::string layoutFileText(const MarkerLayout& layout);
+
 // The committed layouts (markers/planet-board.json, markers/tool-cube.json) under `root`.
 std::filesystem::path defaultBoardPath(const std::filesystem::path& root);
 std::filesystem::path defaultToolLayoutPath(const std::filesystem::path& root);

@@ -149,10 +149,10 @@ SynthRenderer::SynthRenderer(SynthScript script) : script_(std::move(script)) {
   toolCard_ = makeCard(script_.family, script_.toolId, toolMargin_);
   if (script_.board)
     for (const auto& m : script_.board->markers)
-      boardCards_.push_back(makeCard(script_.family, m.id, 0));
+      boardCards_.push_back(makeCard(script_.board->family, m.id, 0));
   if (script_.toolLayout)
     for (const auto& m : script_.toolLayout->markers)
-      toolFaceCards_.push_back(makeCard(script_.family, m.id, 0));
+      toolFaceCards_.push_back(makeCard(script_.toolLayout->family, m.id, 0));
   if (cv::countNonZero(script_.camera.distortion) > 0) {
     // Each frame pixel's ray, undistorted: the scene is drawn through a pinhole and then
     // resampled there, so the frame shows what the lens shows.

@@ -33,6 +33,7 @@
 // table: "wood" (soft two-tone shading with a few scraps and strokes), "textured" (the wood under
 //         a fine seeded pattern of specks, chips and grain: what plane tracking needs to see) or
 //         "plain" (one flat colour: nothing to track).
+// "family" is the single markers'; a layout's markers are drawn in the layout's own family.
 // Rigid marker sets (marker_layout.hpp) instead of the single markers:
 //   "board": a layout file name (relative to the script's folder) or the layout itself: its
 //            markers lie on a white sheet on the table, the planet at its planet_centre (moved

@@ -136,7 +136,7 @@ std::vector<std::vector<cv::Point2d>> SynthRenderer::occluders(const SynthKey& k
   std::vector<std::vector<cv::Point2d>> out;
   const Overlays o = overlays(k, camera, tool);
   if (script_.toolLayout) {
-    for (const auto& f : solidFaces(*script_.toolLayout, familyInfo(script_.family))) {
+    for (const auto& f : solidFaces(*script_.toolLayout, familyInfo(script_.toolLayout->family))) {
       const Pose p = tool * f.frame;
       if (!facesCamera(p)) continue;
       std::vector<cv::Point2d> px;
@@ -157,7 +157,7 @@ std::vector<std::vector<cv::Point2d>> SynthRenderer::occluders(const SynthKey& k
 
 void SynthRenderer::drawBoard(cv::Mat& img, const std::vector<Pose>& cams) const {
   const MarkerLayout& board = *script_.board;
-  const FamilyInfo info = familyInfo(script_.family);
+  const FamilyInfo info = familyInfo(board.family);
   // The white sheet: the markers' extent and a 15 mm margin, on the table.
   double x0 = 1e9, x1 = -1e9, y0 = 1e9, y1 = -1e9;
   for (const auto& m : board.markers)
@@ -184,7 +184,7 @@ void SynthRenderer::drawBoard(cv::Mat& img, const std::vector<Pose>& cams) const
 
 void SynthRenderer::drawToolSolid(cv::Mat& img, const std::vector<Pose>& tools) const {
   const MarkerLayout& layout = *script_.toolLayout;
-  const FamilyInfo info = familyInfo(script_.family);
+  const FamilyInfo info = familyInfo(layout.family);
   const Pose& mid = tools[tools.size() / 2];
   for (const auto& f : solidFaces(layout, info)) {
     if (!facesCamera(mid * f.frame)) continue;  // a convex solid: front faces never overlap

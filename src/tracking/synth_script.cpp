@@ -83,15 +83,16 @@ void SynthScript::validate() const {
   if (!(planetMarkerSize > 0) || !(toolMarkerSize > 0) || !(planetRadius > 0))
     fail("marker sizes and the planet radius must be > 0");
   if (!board && !toolLayout && planetId == toolId) fail("planet and tool markers have the same id");
-  for (const auto* l : {board.get(), toolLayout.get()})
-    if (l && l->family != family)
-      fail(l->source + ": its markers are " + l->family + ", the scene's family is " + family);
   if (board && !board->planetCentre) fail(board->source + ": a board needs planet_centre");
   if (board && !board->planar()) fail(board->source + ": a board's markers must lie in one plane");
   if (toolLayout && !toolLayout->tip) fail(toolLayout->source + ": a tool layout needs tip");
+  // A layout's markers are of its own family, the single markers of `family`: ids clash within
+  // one family only.
+  const bool oneFamily =
+      (board ? board->family : family) == (toolLayout ? toolLayout->family : family);
   const std::vector<int> toolIds = toolLayout ? toolLayout->ids() : std::vector<int>{toolId};
   for (int id : toolIds)
-    if (board ? board->find(id) != nullptr : id == planetId)
+    if (oneFamily && (board ? board->find(id) != nullptr : id == planetId))
       fail("id " + std::to_string(id) + " is on both the planet's and the tool's markers");
   if (!tipOffset.allFinite() || tipOffset.norm() < 1e-3) fail("tool tip offset must be >= 1 mm");
   if (!(exposure >= 0 && exposure <= 1)) fail("exposure must be in [0, 1]");

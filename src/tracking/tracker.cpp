@@ -71,6 +71,12 @@ bool MarkerTrackerConfig::owns(int markerId) const {
   return layout ? layout->find(markerId) != nullptr : markerId == id;
 }
 
+bool MarkerTrackerConfig::owns(const Detection& d) const {
+  const std::string& mine = familyName();
+  if (!d.family.empty() && !mine.empty() && d.family != mine) return false;
+  return owns(d.id);
+}
+
 std::string MarkerTrackerConfig::name() const {
   return layout ? "layout " + layout->source : "marker " + std::to_string(id);
 }
@@ -270,9 +276,13 @@ void SceneConfig::validate() const {
   if (!planet.layout && !tool.layout && planet.id == tool.id)
     throw core::InputError("the planet and tool markers have the same id " +
                            std::to_string(planet.id));
+  // Ids clash within one family only (a board and a tool of two families may share ids); an
+  // unnamed family may be either.
+  const std::string &planetFamily = planet.familyName(), &toolFamily = tool.familyName();
+  const bool oneFamily = planetFamily.empty() || toolFamily.empty() || planetFamily == toolFamily;
   const std::vector<int> toolIds = tool.layout ? tool.layout->ids() : std::vector<int>{tool.id};
   for (int id : toolIds)
-    if (planet.layout && planet.owns(id))
+    if (oneFamily && planet.layout && planet.owns(id))
       throw core::InputError(planet.name() + " and " + tool.name() + " both hold id " +
                              std::to_string(id));
   if (planet.layout && !planet.layout->planetCentre)
@@ -334,9 +344,9 @@ SceneFrame SceneTracker::update(const std::vector<Detection>& detections,
   std::vector<Detection> p, t;
   std::vector<int> others;
   for (const auto& d : detections) {
-    if (config_.planet.owns(d.id))
+    if (config_.planet.owns(d))
       p.push_back(d);
-    else if (config_.tool.owns(d.id))
+    else if (config_.tool.owns(d))
       t.push_back(d);
     else if (std::find(others.begin(), others.end(), d.id) == others.end())
       others.push_back(d.id);

@@ -72,9 +72,15 @@ struct MarkerTrackerConfig {
     c.size = size;
     return c;
   }
+  // A single marker's family (a layout names its own); empty: whatever family is detected.
+  std::string family;
+  const std::string& familyName() const { return layout ? layout->family : family; }
   bool owns(int markerId) const;  // the id belongs to this tracker
-  std::string name() const;       // "marker 0", "board markers/planet-board.json"
-  void validate() const;          // InputError
+  // The marker belongs to this tracker: its id, and its family when the detection names one
+  // (ids are unique within a family only).
+  bool owns(const Detection& d) const;
+  std::string name() const;  // "marker 0", "board markers/planet-board.json"
+  void validate() const;     // InputError
 };
 
 struct MarkerEstimate {
