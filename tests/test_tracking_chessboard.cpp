@@ -170,7 +170,7 @@ TEST(TrackingChessboard, AgreesWithOpenCvOnRealPhotographs) {
   const auto dir = opencvSamples();
   std::vector<std::filesystem::path> files;
   for (int i = 1; i <= 14; ++i) {
-    char name[16];
+    char name[32];  // room for any int: -O1 cannot prove i <= 14
     std::snprintf(name, sizeof name, "left%02d.jpg", i);
     if (std::filesystem::exists(dir / name)) files.push_back(dir / name);
   }
