@@ -15,11 +15,21 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   try {
     const ps::io::JournalContents j = ps::io::parseStrokeJournal({data, size}, "fuzz.journal");
     std::vector<unsigned char> again = ps::io::encodeJournalHeader(j.base);
-    for (const ps::io::JournalRecord& r : j.records)
-      ps::io::encodeJournalRecord(r.kind, r.sequence, r.heights, again);
+    for (const ps::io::JournalRecord& r : j.records) {
+      if (r.kind == ps::io::JournalRecordKind::kSaveMark)
+        ps::io::encodeJournalMark(r.mark, r.sequence, again);
+      else
+        ps::io::encodeJournalRecord(r.kind, r.sequence, r.heights, again);
+    }
     constexpr std::size_t kFields = 40;  // magic, version, length, side, CRC, radius, generation
     const std::size_t header = ps::io::kStrokeJournalHeaderBytes;
-    if (again.size() != j.validBytes || !std::equal(again.begin(), again.begin() + kFields, data) ||
+    // An older version's header is read, and written again as the current version (its version
+    // field and header checksum differ): only the current version's header must come back.
+    const std::uint32_t version = std::uint32_t(data[8]) | std::uint32_t(data[9]) << 8 |
+                                  std::uint32_t(data[10]) << 16 | std::uint32_t(data[11]) << 24;
+    const bool current = version == ps::io::kStrokeJournalVersion;
+    if (again.size() != j.validBytes ||
+        (current && !std::equal(again.begin(), again.begin() + kFields, data)) ||
         !std::equal(again.begin() + std::ptrdiff_t(header), again.end(), data + header))
       std::abort();
   } catch (const ps::core::InputError&) {
