@@ -206,7 +206,9 @@ TEST(SessionWriter, KillAtEveryStepOfABackgroundSaveRecoversBitForBit) {
 TEST(SessionWriterChild, StrokesAndSavesUntilKilled) {
   const char* dir = std::getenv("PS_WRITER_CHILD_DIR");
   const char* seed = std::getenv("PS_WRITER_CHILD_SEED");
-  if (!dir || !seed) GTEST_SKIP() << "run by SessionWriter.SigkillDuringBackgroundSaves";
+  const char* killAt = std::getenv("PS_WRITER_CHILD_KILL_AT");
+  if (!dir || !seed || !killAt) GTEST_SKIP() << "run by SessionWriter.SigkillDuringBackgroundSaves";
+  const int strokesBeforeKill = std::atoi(killAt);
   auto t = testkit::bumpyTerrain(10, 3, 3000.0);
   edit::EditPipeline pipe(t);
   edit::GaussianBrush brush;
@@ -216,7 +218,10 @@ TEST(SessionWriterChild, StrokesAndSavesUntilKilled) {
   SessionStore store(t, SessionFiles::in(dir), o, 0.0);
   pipe.journal().setListener(&store);
   std::ofstream(fs::path(dir) / "started") << "1";
+  // SIGKILL from the session's own thread after the parent's number of strokes: wherever the
+  // writer thread is then (appending, in a save's step, renaming) is the instant of the kill.
   for (int i = 0; i < 100000; ++i) {
+    if (i == strokesBeforeKill) ::raise(SIGKILL);
     strokeFrom(pipe, rng, brush);
     store.tick(double(i), false);
   }
@@ -232,25 +237,23 @@ TEST(SessionWriter, SigkillDuringBackgroundSavesRecoversAPlanetTheSessionHad) {
     fs::create_directories(out);
     const std::string seed = std::to_string(100 + run);
     const std::string envDir = "PS_WRITER_CHILD_DIR=" + out.string(),
-                      envSeed = "PS_WRITER_CHILD_SEED=" + seed;
+                      envSeed = "PS_WRITER_CHILD_SEED=" + seed,
+                      envKill = "PS_WRITER_CHILD_KILL_AT=" + std::to_string(20 + pick() % 400);
     std::vector<char*> env;
     for (char** e = environ; *e; ++e) env.push_back(*e);
     env.push_back(const_cast<char*>(envDir.c_str()));
     env.push_back(const_cast<char*>(envSeed.c_str()));
+    env.push_back(const_cast<char*>(envKill.c_str()));
     env.push_back(nullptr);
     std::string exe = fs::read_symlink("/proc/self/exe").string(),
                 filter = "--gtest_filter=SessionWriterChild.StrokesAndSavesUntilKilled";
     char* argv[] = {exe.data(), filter.data(), nullptr};
     pid_t pid = 0;
     ASSERT_EQ(::posix_spawn(&pid, exe.c_str(), nullptr, nullptr, argv, env.data()), 0);
-    // Killed at a random instant once the session runs (its first save is done then).
-    for (int w = 0; w < 3000 && !fs::exists(out / "started"); ++w)
-      std::this_thread::sleep_for(std::chrono::milliseconds(5));
-    ASSERT_TRUE(fs::exists(out / "started")) << "the child session did not start";
-    std::this_thread::sleep_for(std::chrono::milliseconds(100 + pick() % 900));
-    ::kill(pid, SIGKILL);
+    // The child kills itself after a random number of strokes (its first save is done then).
     int status = 0;
     ::waitpid(pid, &status, 0);
+    ASSERT_TRUE(fs::exists(out / "started")) << "the child session did not start";
     ASSERT_TRUE(WIFSIGNALED(status)) << "the child ended before the kill; status " << status;
 
     const SessionFiles files = SessionFiles::in(out);
