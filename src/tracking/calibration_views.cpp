@@ -14,16 +14,12 @@
 
 namespace ps::tracking {
 
-namespace {
-
-std::string num(double v, int precision = 3) {
+std::string calibrationNumber(double v, int precision) {
   std::ostringstream s;
   s.precision(precision);
   s << v;
   return s.str();
 }
-
-}  // namespace
 
 void CalibrationThresholds::validate() const {
   if (minViews < 3) throw core::InputError("at least 3 views are needed to calibrate (minViews)");
@@ -165,12 +161,14 @@ void judgeCalibration(const CalibrationViews& views, double rms, const cv::Mat& 
     p.push_back(std::to_string(res.views) + " views of the board, at least " +
                 std::to_string(t.minViews) + " needed (show it from more angles and distances)");
   if (!std::isfinite(res.rms) || res.rms > t.maxRmsPx)
-    p.push_back("RMS reprojection error " + num(res.rms) + " px is above " + num(t.maxRmsPx) +
+    p.push_back("RMS reprojection error " + calibrationNumber(res.rms) + " px is above " +
+                calibrationNumber(t.maxRmsPx) +
                 " px (blur, a board that is not flat, or a wrong square size)");
   if (res.coverage < t.minCoverage)
-    p.push_back("the corners covered " + num(100 * res.coverage, 2) + " % of the image's " +
-                std::to_string(t.gridColumns) + "x" + std::to_string(t.gridRows) +
-                " cells, at least " + num(100 * t.minCoverage, 2) +
+    p.push_back("the corners covered " + calibrationNumber(100 * res.coverage, 2) +
+                " % of the image's " + std::to_string(t.gridColumns) + "x" +
+                std::to_string(t.gridRows) + " cells, at least " +
+                calibrationNumber(100 * t.minCoverage, 2) +
                 " % needed (bring the board to the image's edges and corners)");
   try {
     res.calibration.validate();
@@ -182,13 +180,15 @@ void judgeCalibration(const CalibrationViews& views, double rms, const cv::Mat& 
     const double sfx = res.stdDeviations[0], sfy = res.stdDeviations[1];
     const double scx = res.stdDeviations[2], scy = res.stdDeviations[3];
     if (!(sfx <= t.maxFocalStdRel * fx) || !(sfy <= t.maxFocalStdRel * fy))
-      p.push_back("focal lengths uncertain: std fx " + num(sfx) + " px, fy " + num(sfy) +
-                  " px, above " + num(100 * t.maxFocalStdRel) +
+      p.push_back("focal lengths uncertain: std fx " + calibrationNumber(sfx) + " px, fy " +
+                  calibrationNumber(sfy) + " px, above " +
+                  calibrationNumber(100 * t.maxFocalStdRel) +
                   " % of the focal length (more views at a slant)");
     const double limit = t.maxCentreStdRel * size.width;
     if (!(scx <= limit) || !(scy <= limit))
-      p.push_back("principal point uncertain: std cx " + num(scx) + " px, cy " + num(scy) +
-                  " px, above " + num(limit) + " px (more views, tilted both ways)");
+      p.push_back("principal point uncertain: std cx " + calibrationNumber(scx) + " px, cy " +
+                  calibrationNumber(scy) + " px, above " + calibrationNumber(limit) +
+                  " px (more views, tilted both ways)");
   } else {
     p.push_back("no standard deviations from the solver");
   }

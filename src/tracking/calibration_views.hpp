@@ -93,6 +93,9 @@ class CalibrationViews {
   std::vector<std::string> names_;
 };
 
+// A number as the calibration's messages and file print it (`precision` significant digits).
+std::string calibrationNumber(double v, int precision = 3);
+
 // A solver's output (camera matrix, distortion, the intrinsics' standard deviations, per-view
 // RMS) into `result`, judged against the views' thresholds: the problems that make it poor.
 void judgeCalibration(const CalibrationViews& views, double rms, const cv::Mat& K,

@@ -9,19 +9,13 @@
 #include <sstream>
 
 #include "core/input_error.hpp"
+#include "tracking/calibration_views.hpp"
 #include "tracking/detector.hpp"
 #include "tracking/marker_family.hpp"
 
 namespace ps::tracking {
 
 namespace {
-
-std::string num(double v, int precision = 3) {
-  std::ostringstream s;
-  s.precision(precision);
-  s << v;
-  return s.str();
-}
 
 int arucoDictionaryOf(const std::string& name) {
   const FamilyInfo info = familyInfo(name);  // InputError for an unknown name
@@ -50,11 +44,12 @@ void CharucoBoardSpec::validate() const {
                            " rows: use an odd number of rows (OpenCV versions disagree on the "
                            "layout of even-row boards)");
   if (!(squareLength > 0) || !std::isfinite(squareLength))
-    throw core::InputError("ChArUco square length " + num(squareLength) + " m is not > 0");
+    throw core::InputError("ChArUco square length " + calibrationNumber(squareLength) +
+                           " m is not > 0");
   if (!(markerLength > 0) || !(markerLength < squareLength))
-    throw core::InputError("ChArUco marker length " + num(markerLength) +
-                           " m must be > 0 and smaller than the square (" + num(squareLength) +
-                           " m)");
+    throw core::InputError("ChArUco marker length " + calibrationNumber(markerLength) +
+                           " m must be > 0 and smaller than the square (" +
+                           calibrationNumber(squareLength) + " m)");
   const int dict = arucoDictionaryOf(dictionary);
   const int needed = (squaresX * squaresY) / 2;
   const int have = cv::aruco::getPredefinedDictionary(dict)->bytesList.rows;
@@ -73,7 +68,8 @@ cv::Ptr<cv::aruco::CharucoBoard> CharucoBoardSpec::create() const {
 
 std::string CharucoBoardSpec::describe() const {
   return std::to_string(squaresX) + "x" + std::to_string(squaresY) + " squares of " +
-         num(squareLength * 1e3) + " mm, markers " + num(markerLength * 1e3) + " mm, " + dictionary;
+         calibrationNumber(squareLength * 1e3) + " mm, markers " +
+         calibrationNumber(markerLength * 1e3) + " mm, " + dictionary;
 }
 
 cv::Mat renderCharucoBoard(const CharucoBoardSpec& spec, double pixelsPerMetre, int marginPx) {

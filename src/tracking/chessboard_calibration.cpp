@@ -9,20 +9,10 @@
 #include <sstream>
 
 #include "core/input_error.hpp"
+#include "tracking/calibration_views.hpp"
 #include "tracking/detector.hpp"
 
 namespace ps::tracking {
-
-namespace {
-
-std::string num(double v) {
-  std::ostringstream s;
-  s.precision(3);
-  s << v;
-  return s.str();
-}
-
-}  // namespace
 
 void ChessboardSpec::validate() const {
   // findChessboardCornersSB needs at least 3 inner corners each way.
@@ -31,7 +21,8 @@ void ChessboardSpec::validate() const {
                            std::to_string(squaresY) +
                            " squares: each side needs 4 to 40 squares (3 to 39 inner corners)");
   if (!(squareLength > 0) || !std::isfinite(squareLength))
-    throw core::InputError("chessboard square length " + num(squareLength) + " m is not > 0");
+    throw core::InputError("chessboard square length " + calibrationNumber(squareLength) +
+                           " m is not > 0");
 }
 
 std::vector<cv::Point3f> ChessboardSpec::objectPoints() const {
@@ -45,7 +36,7 @@ std::vector<cv::Point3f> ChessboardSpec::objectPoints() const {
 
 std::string ChessboardSpec::describe() const {
   return std::to_string(squaresX) + "x" + std::to_string(squaresY) + " squares of " +
-         num(squareLength * 1e3) + " mm (" + std::to_string(squaresX - 1) + "x" +
+         calibrationNumber(squareLength * 1e3) + " mm (" + std::to_string(squaresX - 1) + "x" +
          std::to_string(squaresY - 1) + " inner corners)";
 }
 
