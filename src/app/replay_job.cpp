@@ -308,18 +308,10 @@ nlohmann::json compareWithTruthBeside(const std::filesystem::path& video,
   }
 }
 
-}  // namespace
-
-nlohmann::json runReplayJob(const ReplayJob& job) {
-  job.options.validate();
-  // Inputs first: a bad video, calibration or sidecar costs nothing.
-  tracking::FrameSource source(job.video.string());
-  const auto calib = tracking::loadCalibration(job.calibration);
-  calib.forImageSize(source.size());  // refuses another aspect ratio, naming the file
-  ReplayInputs in = resolveInputs(job);
-  const std::optional<replay::SessionTimeline>& timeline = in.timeline;
-  const std::filesystem::path& sidecar = in.sidecar;
-  const replay::ReplayOptions& options = in.options;
+// The planet the replay sculpts: the job's file or the default one, checked against the session
+// sidecar's start (another start planet or calibration would sculpt another planet).
+std::unique_ptr<terrain::Terrain> startPlanet(const ReplayInputs& in,
+                                              const tracking::CameraCalibration& calib) {
   std::unique_ptr<terrain::Terrain> planet =
       in.planetFile.empty() ? makeDefaultPlanet(in.gridLevel, in.seed, in.chart, in.dims)
                             : io::loadPlanet(in.planetFile);
@@ -327,102 +319,111 @@ nlohmann::json runReplayJob(const ReplayJob& job) {
     throw core::InputError(in.planetFile.string() + ": a " + planet->chart().name() +
                            " planet has no centre to stand on the planet board (a sphere, a "
                            "torus or a cylinder does)");
-  // Another start planet or calibration would sculpt another planet: refused before any edit.
-  if (timeline) replay::checkSessionStart(*timeline, *planet, calib.forImageSize(source.size()));
-  const std::vector<float> before(planet->heights().begin(), planet->heights().end());
-  // The pictures' "before" raster, resampled now rather than from a rebuilt terrain afterwards.
-  io::Raster beforeRaster;
-  if (job.pictures) beforeRaster = pictureRaster(*planet, kPictureW, kPictureH);
+  if (in.timeline) replay::checkSessionStart(*in.timeline, *planet, calib);
+  return planet;
+}
 
-  std::string noRender;
-  std::unique_ptr<ArRecorder> recorder = makeRecorder(job, noRender);
+// The haptic force path run beside the replay, its log written to OUT/forces.csv.
+struct ForceRecording {
+  std::unique_ptr<haptics::ForcePath> path;
+  std::ofstream csv;
+  bool here = false;  // forces.csv is written
+  double peak = 0;
+  PlotSeries series;  // per frame: time, the largest force of its ticks
+  std::size_t rows = 0;
 
+  // The force path presses with the sand core's displacement tool: none on a chart the sand
+  // core does not know, nor on a grid whose cells are wider than the tool; the replay goes on
+  // without forces, saying so.
+  void start(const ReplayJob& job, terrain::Terrain& planet, double planetRadius) {
+    here = job.forces && sand::sandCoreKnows(planet.chart());
+    if (job.forces && !here)
+      std::cerr << "replay: no forces.csv: the haptic path's press tool (the sand core) does not "
+                   "work on the "
+                << planet.chart().name() << " chart\n";
+    haptics::ForcePathConfig hc;
+    if (here && hc.press.displacement.radius < sand::largestSpacing(planet.chart())) {
+      here = false;
+      std::cerr << "replay: no forces.csv: the haptic path's press tool (radius "
+                << hc.press.displacement.radius << " m) is below one cell of this grid ("
+                << sand::largestSpacing(planet.chart()) << " m)\n";
+    }
+    if (!here) return;
+    hc.map.scale = core::boundingRadius(planet.chart()) / planetRadius;
+    csv.open(job.out / "forces.csv.part");
+    if (!csv) throw std::runtime_error("cannot write in " + job.out.string());
+    path = std::make_unique<haptics::ForcePath>(planet, nullptr, hc);
+    path->setLog(&csv);
+  }
+
+  // One frame: the force the tool felt and where (zero when not touching).
+  void onFrame(const replay::FrameContext& f, Eigen::Vector3d& force, Eigen::Vector3d& forceTip) {
+    if (!path) return;
+    std::optional<Eigen::Vector3d> tip;
+    if (f.scene.tipValid) tip = f.scene.tipPlanet * f.scale;
+    // The sand TIN tool's region is felt as it is drawn: at the TIN's own detail.
+    path->setSurface(f.patch);
+    const auto ff = path->onFrame(tip, f.time);
+    peak = std::max(peak, ff.maxForce);
+    series.x.push_back(f.time);
+    series.y.push_back(ff.maxForce);
+    // The workspace map is the identity rotation: device directions are planet directions.
+    if (ff.last && ff.last->touching && ff.last->tipPlanet.allFinite()) {
+      force = ff.last->force;
+      forceTip = ff.last->tipPlanet;
+    }
+  }
+
+  void finish(const std::filesystem::path& out) {
+    if (!path) return;
+    rows = path->logRows();
+    path->setLog(nullptr);
+    path.reset();
+    csv.close();
+    renameInto(out / "forces.csv.part", out / "forces.csv");
+  }
+};
+
+// Every frame of the video through the stepper, with the force path and the AR recorder on
+// each; the log and timings written to OUT.
+replay::ReplaySummary runFrames(const ReplayJob& job, tracking::FrameSource& source,
+                                const tracking::CameraCalibration& calib, terrain::Terrain& planet,
+                                const ReplayInputs& in, ForceRecording& forces,
+                                ArRecorder* recorder) {
   const std::filesystem::path& out = job.out;
-  std::filesystem::create_directories(out);
   std::ofstream log(out / "log.jsonl.part"), timings(out / "timings.jsonl.part");
   if (!log || !timings) throw std::runtime_error("cannot write in " + out.string());
-  std::unique_ptr<haptics::ForcePath> haptic;
-  std::ofstream forces;
-  double peakForce = 0;
-  PlotSeries forceSeries;  // per frame: time, the largest force of its ticks
-  // The force path presses with the sand core's displacement tool: none on a chart the sand
-  // core does not know, and the summary says so.
-  bool forcesHere = job.forces && sand::sandCoreKnows(planet->chart());
-  if (job.forces && !forcesHere)
-    std::cerr << "replay: no forces.csv: the haptic path's press tool (the sand core) does not "
-                 "work on the "
-              << planet->chart().name() << " chart\n";
-  haptics::ForcePathConfig hc;
-  // A coarse grid (257^2 on the default planets) has cells wider than the press tool, which the
-  // tool refuses: the replay goes on without forces, saying so.
-  if (forcesHere && hc.press.displacement.radius < sand::largestSpacing(planet->chart())) {
-    forcesHere = false;
-    std::cerr << "replay: no forces.csv: the haptic path's press tool (radius "
-              << hc.press.displacement.radius << " m) is below one cell of this grid ("
-              << sand::largestSpacing(planet->chart()) << " m)\n";
-  }
-  if (forcesHere) {
-    hc.map.scale = core::boundingRadius(planet->chart()) / options.scene.planetRadius;
-    forces.open(out / "forces.csv.part");
-    if (!forces) throw std::runtime_error("cannot write in " + out.string());
-    haptic = std::make_unique<haptics::ForcePath>(*planet, nullptr, hc);
-    haptic->setLog(&forces);
-  }
-  replay::ReplaySummary s;
-  {
-    Progress p("replay " + job.video.filename().string());
-    replay::FrameHook hook = [&](const replay::FrameContext& f) {
-      Eigen::Vector3d force = Eigen::Vector3d::Zero(), forceTip = Eigen::Vector3d::Zero();
-      if (haptic) {
-        std::optional<Eigen::Vector3d> tip;
-        if (f.scene.tipValid) tip = f.scene.tipPlanet * f.scale;
-        // The sand TIN tool's region is felt as it is drawn: at the TIN's own detail.
-        haptic->setSurface(f.patch);
-        const auto ff = haptic->onFrame(tip, f.time);
-        peakForce = std::max(peakForce, ff.maxForce);
-        forceSeries.x.push_back(f.time);
-        forceSeries.y.push_back(ff.maxForce);
-        // The workspace map is the identity rotation: device directions are planet directions.
-        if (ff.last && ff.last->touching && ff.last->tipPlanet.allFinite()) {
-          force = ff.last->force;
-          forceTip = ff.last->tipPlanet;
-        }
-      }
-      if (recorder) recorder->onFrame(f, force, forceTip);
-    };
-    s = replay::runReplay(
-        source, calib, *planet, options, log, &timings,
-        [&](int f, int total) {
-          p.update(total > 0 ? double(f) / total : 0.0, std::to_string(f) + " frames");
-        },
-        hook, timeline ? &*timeline : nullptr);
-    if (timeline && !timeline->warning.empty()) s.warnings.push_back(timeline->warning);
-    p.done(std::to_string(s.frames) + " frames, " + std::to_string(s.strokes) + " strokes, " +
-           std::to_string(s.stamps) + " stamps");
-  }
+  Progress p("replay " + job.video.filename().string());
+  replay::FrameHook hook = [&](const replay::FrameContext& f) {
+    Eigen::Vector3d force = Eigen::Vector3d::Zero(), forceTip = Eigen::Vector3d::Zero();
+    forces.onFrame(f, force, forceTip);
+    if (recorder) recorder->onFrame(f, force, forceTip);
+  };
+  replay::ReplaySummary s = replay::runReplay(
+      source, calib, planet, in.options, log, &timings,
+      [&](int f, int total) {
+        p.update(total > 0 ? double(f) / total : 0.0, std::to_string(f) + " frames");
+      },
+      hook, in.timeline ? &*in.timeline : nullptr);
+  if (in.timeline && !in.timeline->warning.empty()) s.warnings.push_back(in.timeline->warning);
+  p.done(std::to_string(s.frames) + " frames, " + std::to_string(s.strokes) + " strokes, " +
+         std::to_string(s.stamps) + " stamps");
   log.close();
   timings.close();
   renameInto(out / "log.jsonl.part", out / "log.jsonl");
   renameInto(out / "timings.jsonl.part", out / "timings.jsonl");
-  const nlohmann::json truth = compareWithTruthBeside(job.video, out / "log.jsonl", s.warnings);
-  std::size_t forceRows = 0;
-  if (haptic) {
-    forceRows = haptic->logRows();
-    haptic->setLog(nullptr);
-    haptic.reset();
-    forces.close();
-    renameInto(out / "forces.csv.part", out / "forces.csv");
-  }
+  return s;
+}
 
-  nlohmann::json files = {"heightmap.png", "heightmap.png.json", "planet.planet", "log.jsonl",
-                          "timings.jsonl"};
-  if (forcesHere) files.push_back("forces.csv");
-  const cv::Size heightmap = writeHeightmapAndPlanet(*planet, out);
+// summary.json's figures of the replay and the planet it left.
+nlohmann::json replaySummary(const ReplayJob& job, const ReplayInputs& in,
+                             const replay::ReplaySummary& s, const terrain::Terrain& planet,
+                             const ForceRecording& forces, cv::Size heightmap) {
   nlohmann::json summary = {
       {"video", job.video.string()},
       {"calibration", job.calibration.string()},
-      {"tool", replay::toString(options.tool)},
-      {"session", timeline ? sidecar.string() : ""},
+      {"tool", replay::toString(in.options.tool)},
+      {"session", in.timeline ? in.sidecar.string() : ""},
       {"session_changes", s.sessionChanges},
       {"frames", s.frames},
       {"announced_frames", s.announcedFrames},
@@ -439,40 +440,80 @@ nlohmann::json runReplayJob(const ReplayJob& job) {
       {"modified_vertices", s.modifiedVertices},
       {"skipped_frames", s.skippedFrames},
       {"settle_cell_steps", s.settleCellSteps},
-      {"force_ticks", forceRows},
-      {"peak_force_n", peakForce},
+      {"force_ticks", forces.rows},
+      {"peak_force_n", forces.peak},
       {"warnings", s.warnings},
-      {"grid", planet->grid().label()},
-      {"chart", planet->chart().name()},
-      {"radius_m", core::dimsOf(planet->chart()).radius},  // a torus's major radius
+      {"grid", planet.grid().label()},
+      {"chart", planet.chart().name()},
+      {"radius_m", core::dimsOf(planet.chart()).radius},  // a torus's major radius
       {"heightmap", {{"width", heightmap.width}, {"height", heightmap.height}}}};
-  if (!truth.is_null()) summary["truth"] = truth;
-  if (const core::ChartDims d = core::dimsOf(planet->chart()); d.minorRadius > 0)
+  if (const core::ChartDims d = core::dimsOf(planet.chart()); d.minorRadius > 0)
     summary["minor_radius_m"] = d.minorRadius;
   else if (d.length > 0)
     summary["length_m"] = d.length;
+  return summary;
+}
 
-  if (recorder) {
-    summary["renderer"] = recorder->renderer();
-    summary["render_ms"] = recorder->renderMsTotal();
-    if (recorder->tinRegionFrames() > 0)
-      summary["ar_tin_region_frames"] = recorder->tinRegionFrames();
-    // AR frames drawn with the camera image over part of the planet (a hand in front of it).
-    summary["ar_hand_mask_frames"] = recorder->handMaskFrames();
-    if (job.render) {
-      summary["ar_frames"] = recorder->framesWritten();
-      files.push_back("ar/");
+// The AR recorder's figures and pictures into the summary and the file list.
+void addRecorderOutputs(const ReplayJob& job, ArRecorder* recorder, const std::string& noRender,
+                        nlohmann::json& summary, nlohmann::json& files) {
+  if (!recorder) {
+    if (!noRender.empty()) {
+      summary["ar_view_skipped"] = noRender;
+      std::cerr << "replay: no AR pictures: " << noRender << "\n";
     }
-    if (job.pictures && recorder->writeShowcase(out)) {
-      files.push_back("ar_view.png");
-      files.push_back("overview.png");
-    }
-  } else if (!noRender.empty()) {
-    summary["ar_view_skipped"] = noRender;
-    std::cerr << "replay: no AR pictures: " << noRender << "\n";
+    return;
   }
-  if (job.pictures && forcesHere && !forceSeries.x.empty()) {
-    writeForcePlot(forceSeries, out);
+  summary["renderer"] = recorder->renderer();
+  summary["render_ms"] = recorder->renderMsTotal();
+  if (recorder->tinRegionFrames() > 0)
+    summary["ar_tin_region_frames"] = recorder->tinRegionFrames();
+  // AR frames drawn with the camera image over part of the planet (a hand in front of it).
+  summary["ar_hand_mask_frames"] = recorder->handMaskFrames();
+  if (job.render) {
+    summary["ar_frames"] = recorder->framesWritten();
+    files.push_back("ar/");
+  }
+  if (job.pictures && recorder->writeShowcase(job.out)) {
+    files.push_back("ar_view.png");
+    files.push_back("overview.png");
+  }
+}
+
+}  // namespace
+
+nlohmann::json runReplayJob(const ReplayJob& job) {
+  job.options.validate();
+  // Inputs first: a bad video, calibration or sidecar costs nothing.
+  tracking::FrameSource source(job.video.string());
+  const auto calib = tracking::loadCalibration(job.calibration);
+  calib.forImageSize(source.size());  // refuses another aspect ratio, naming the file
+  const ReplayInputs in = resolveInputs(job);
+  std::unique_ptr<terrain::Terrain> planet = startPlanet(in, calib.forImageSize(source.size()));
+  const std::vector<float> before(planet->heights().begin(), planet->heights().end());
+  // The pictures' "before" raster, resampled now rather than from a rebuilt terrain afterwards.
+  io::Raster beforeRaster;
+  if (job.pictures) beforeRaster = pictureRaster(*planet, kPictureW, kPictureH);
+
+  std::string noRender;
+  std::unique_ptr<ArRecorder> recorder = makeRecorder(job, noRender);
+  const std::filesystem::path& out = job.out;
+  std::filesystem::create_directories(out);
+  ForceRecording forces;
+  forces.start(job, *planet, in.options.scene.planetRadius);
+  replay::ReplaySummary s = runFrames(job, source, calib, *planet, in, forces, recorder.get());
+  const nlohmann::json truth = compareWithTruthBeside(job.video, out / "log.jsonl", s.warnings);
+  forces.finish(out);
+
+  nlohmann::json files = {"heightmap.png", "heightmap.png.json", "planet.planet", "log.jsonl",
+                          "timings.jsonl"};
+  if (forces.here) files.push_back("forces.csv");
+  const cv::Size heightmap = writeHeightmapAndPlanet(*planet, out);
+  nlohmann::json summary = replaySummary(job, in, s, *planet, forces, heightmap);
+  if (!truth.is_null()) summary["truth"] = truth;
+  addRecorderOutputs(job, recorder.get(), noRender, summary, files);
+  if (job.pictures && forces.here && !forces.series.x.empty()) {
+    writeForcePlot(forces.series, out);
     files.push_back("forces.png");
   }
   if (job.pictures) writeReliefPictures(job, *planet, before, beforeRaster, summary, files);
