@@ -8,6 +8,7 @@
 #include "tracking/render.hpp"
 #include "tracking/synth.hpp"
 #include "tracking/synth_internal.hpp"
+#include "tracking/tool_shape.hpp"
 
 namespace ps::tracking {
 
@@ -24,16 +25,7 @@ struct BoxFace {
 
 // The box that holds the layout's markers with their quiet zones: the printed solid.
 std::vector<BoxFace> solidFaces(const MarkerLayout& layout, const FamilyInfo& info) {
-  const double grow = double(info.totalCells) / info.edgeCells;
-  Eigen::Vector3d lo = Eigen::Vector3d::Constant(1e9), hi = Eigen::Vector3d::Constant(-1e9);
-  for (const auto& m : layout.markers) {
-    const Eigen::Vector3d c = m.inBody().t;
-    for (const auto& p : m.corners) {
-      const Eigen::Vector3d q = c + grow * (p - c);
-      lo = lo.cwiseMin(q);
-      hi = hi.cwiseMax(q);
-    }
-  }
+  const auto [lo, hi] = markersBox(layout, double(info.totalCells) / info.edgeCells);
   const Eigen::Vector3d mid = 0.5 * (lo + hi), half = 0.5 * (hi - lo);
   std::vector<BoxFace> faces;
   const Eigen::Vector3d X = Eigen::Vector3d::UnitX(), Y = Eigen::Vector3d::UnitY(),

@@ -17,18 +17,22 @@ constexpr double kSingleStickBase = 0.005, kSingleStickTip = 0.002;
 
 }  // namespace
 
-ToolShape toolShape(const MarkerLayout& layout, const Eigen::Vector3d& tip, double marginCells) {
-  const FamilyInfo info = familyInfo(layout.family);
-  const double grow = (info.totalCells + 2 * marginCells) / info.edgeCells;
-  Eigen::Vector3d lo = Eigen::Vector3d::Constant(1e9), hi = Eigen::Vector3d::Constant(-1e9);
+MarkerBox markersBox(const MarkerLayout& layout, double grow) {
+  MarkerBox box{Eigen::Vector3d::Constant(1e9), Eigen::Vector3d::Constant(-1e9)};
   for (const auto& m : layout.markers) {
     const Eigen::Vector3d c = m.inBody().t;
     for (const auto& p : m.corners) {
       const Eigen::Vector3d q = c + grow * (p - c);
-      lo = lo.cwiseMin(q);
-      hi = hi.cwiseMax(q);
+      box.lo = box.lo.cwiseMin(q);
+      box.hi = box.hi.cwiseMax(q);
     }
   }
+  return box;
+}
+
+ToolShape toolShape(const MarkerLayout& layout, const Eigen::Vector3d& tip, double marginCells) {
+  const FamilyInfo info = familyInfo(layout.family);
+  const auto [lo, hi] = markersBox(layout, (info.totalCells + 2 * marginCells) / info.edgeCells);
   ToolShape s;
   s.boxCentre = 0.5 * (lo + hi);
   s.boxHalf = (0.5 * (hi - lo)).cwiseMax(kCardHalfThickness);  // a flat card has a thickness

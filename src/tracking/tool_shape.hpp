@@ -29,6 +29,13 @@ struct ToolShape {
   bool hasStick() const { return (tip - stickBase).norm() > 1e-6; }
 };
 
+// The axis-aligned box (body frame) of a layout's markers, each grown about its centre by `grow`
+// (the family's total cells over its edge cells: the printed quiet zone): the printed solid.
+struct MarkerBox {
+  Eigen::Vector3d lo, hi;
+};
+MarkerBox markersBox(const MarkerLayout& layout, double grow);
+
 // `marginCells`: cells of margin around each marker's quiet zone (0 for a solid's faces).
 ToolShape toolShape(const MarkerLayout& layout, const Eigen::Vector3d& tip, double marginCells = 0);
 // The scene's tool: its layout (tool solid) or the single marker of `family` (the detector's)
