@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cstdlib>
 #include <fstream>
+#include <functional>
 #include <memory>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
@@ -257,4 +258,140 @@ TEST(TrackingFamilies, MarkersPrintsABoardAndAToolOfAnyFamilyWithTheirLayouts) {
   const auto before = std::filesystem::last_write_time(dir / "planet-board.json");
   ASSERT_EQ(std::system(command.c_str()), 0) << command;
   EXPECT_EQ(std::filesystem::last_write_time(dir / "planet-board.json"), before);
+}
+
+namespace {
+
+// Where a cube face's centre lies in the printed net, in faces from the front (+z) face, and
+// whether its marker is printed turned (marker_sheet.hpp: a cross, the top over the front over
+// the bottom over the back, -x left and +x right of the front).
+struct NetPlace {
+  cv::Point2d offset;
+  bool turned = false;
+};
+NetPlace netPlace(const Eigen::Vector3d& normal) {
+  const std::pair<Eigen::Vector3d, NetPlace> places[] = {
+      {Eigen::Vector3d::UnitY(), {{0, -1}, false}},  {Eigen::Vector3d::UnitZ(), {{0, 0}, false}},
+      {-Eigen::Vector3d::UnitY(), {{0, 1}, false}},  {-Eigen::Vector3d::UnitZ(), {{0, 2}, true}},
+      {-Eigen::Vector3d::UnitX(), {{-1, 0}, false}}, {Eigen::Vector3d::UnitX(), {{1, 0}, false}}};
+  for (const auto& p : places)
+    if ((p.first - normal).norm() < 1e-9) return p.second;
+  ADD_FAILURE() << "no face of the net has the normal " << normal.transpose();
+  return {};
+}
+
+// Each marker of a sheet as read back: its centre and its x axis (TL to TR) on the paper, mm.
+struct ReadMarker {
+  int id = -1;
+  cv::Point2d centreMm, xAxisMm;
+};
+
+// A sheet's PNG as a camera 150 dpi away would see it (half size, a slight blur), through the
+// family's own detector; positions back in millimetres of the 300-dpi page.
+std::vector<ReadMarker> readBack(const std::filesystem::path& png, const std::string& family) {
+  const cv::Mat sheet = cv::imread(png.string(), cv::IMREAD_GRAYSCALE);
+  if (sheet.empty()) ADD_FAILURE() << "cannot read " << png;
+  if (sheet.empty()) return {};
+  constexpr double kScale = 0.5, kMmPerPx = 25.4 / 300;
+  cv::Mat small;
+  cv::resize(sheet, small, {}, kScale, kScale, cv::INTER_AREA);
+  cv::GaussianBlur(small, small, {0, 0}, 0.6);
+  tracking::DetectorConfig dc;
+  dc.family = family;
+  dc.regions = false;
+  dc.decimate = 1;
+  std::vector<ReadMarker> out;
+  for (const auto& d : tracking::makeDetector(dc)->detect(small)) {
+    auto page = [&](const cv::Point2d& p) {
+      return ((p + cv::Point2d(0.5, 0.5)) / kScale - cv::Point2d(0.5, 0.5)) * kMmPerPx;
+    };
+    ReadMarker m;
+    m.id = d.id;
+    for (const auto& c : d.corners) m.centreMm += 0.25 * page(c);
+    m.xAxisMm =
+        0.5 * (page(d.corners[1]) + page(d.corners[2]) - page(d.corners[0]) - page(d.corners[3]));
+    out.push_back(m);
+  }
+  std::sort(out.begin(), out.end(), [](const auto& a, const auto& b) { return a.id < b.id; });
+  return out;
+}
+
+// The markers read back against where the layout puts them on the paper (`expected`, mm, up to
+// one shift: where the sheet places the drawing), their x axes (`xAxis`, a unit vector on the
+// paper) and edges: the worst centre error after the shift, mm.
+double worstCentreError(const std::vector<ReadMarker>& found, const MarkerLayout& layout,
+                        const std::function<cv::Point2d(const tracking::LayoutMarker&)>& expected,
+                        const std::function<cv::Point2d(const tracking::LayoutMarker&)>& xAxis,
+                        const std::string& what) {
+  std::vector<int> ids;
+  for (const auto& m : found) ids.push_back(m.id);
+  EXPECT_EQ(ids, layout.ids()) << what << ": every marker read back, nothing else";
+  if (ids != layout.ids()) return 1e9;
+  cv::Point2d shift;
+  for (const auto& m : found)
+    shift += (m.centreMm - expected(*layout.find(m.id))) / double(found.size());
+  double worst = 0;
+  for (const auto& m : found) {
+    const auto& l = *layout.find(m.id);
+    worst = std::max(worst, cv::norm(m.centreMm - expected(l) - shift));
+    EXPECT_NEAR(cv::norm(m.xAxisMm), 1e3 * l.edge(), 0.3) << what << " id " << m.id << ": edge";
+    const cv::Point2d dir = m.xAxisMm / cv::norm(m.xAxisMm);
+    EXPECT_GT(dir.dot(xAxis(l)), std::cos(0.5 * CV_PI / 180))
+        << what << " id " << m.id << ": x axis " << dir;
+  }
+  return worst;
+}
+
+}  // namespace
+
+// What `planetsculpt markers` prints in any family is read back from its own sheet: for an
+// AprilTag family and OpenCV dictionaries of 4x4, 6x6 and AprilTag 36h11 bits, the board's and
+// the cube net's PNGs give every id of their layout files (nothing else), each marker's centre
+// where the layout puts it on the paper (one shift for the whole sheet, the scale the sheet's
+// 300 dpi), its edge the layout's and its x axis the right way. Until the net's fold lines were
+// dashed, cubes of 8 or more cells across (DICT_6X6_250, DICT_APRILTAG_36h11) read back nothing
+// in OpenCV's detector (docs/TRACKING.md).
+TEST(TrackingFamilies, BoardAndCubeOfEveryFamilyReadBackFromTheirSheets) {
+  const std::filesystem::path exe = app::commandPath();
+  if (!std::filesystem::exists(exe)) GTEST_SKIP() << "no " << exe << " in this build";
+  const auto root = testkit::freshDir("markers_read_back");
+  for (const std::string family :
+       {"tag36h11", "DICT_4X4_50", "DICT_6X6_250", "DICT_APRILTAG_36h11"}) {
+    SCOPED_TRACE(family);
+    const auto dir = root / family;
+    // 35 mm board markers: the 4x4 dictionary's quiet zone (1 cell of 6) makes the 50 mm board
+    // too wide for A4.
+    const std::string command = "'" + exe.string() + "' markers --out '" + dir.string() +
+                                "' --paper a4 --format png --board-family " + family +
+                                " --board-marker-mm 35 --tool-family " + family + " > '" +
+                                (root / (family + ".log")).string() + "' 2>&1";
+    ASSERT_EQ(std::system(command.c_str()), 0) << command;
+    const MarkerLayout board = tracking::loadMarkerLayout(dir / "planet-board.json");
+    const MarkerLayout cube = tracking::loadMarkerLayout(dir / "tool-cube.json");
+    ASSERT_EQ(board.family, family);
+    ASSERT_EQ(cube.family, family);
+    // The board: x along the paper's width, y up the paper.
+    const double boardError = worstCentreError(
+        readBack(dir / "planet-board-a4.png", family), board,
+        [](const tracking::LayoutMarker& m) {
+          const Eigen::Vector3d c = m.inBody().t;
+          return cv::Point2d(1e3 * c.x(), -1e3 * c.y());
+        },
+        [](const tracking::LayoutMarker&) { return cv::Point2d(1, 0); }, "board");
+    EXPECT_LT(boardError, 0.15) << "board";
+    // The cube: each face at its place in the net, faces as wide as the cube.
+    const double faceMm = 2e3 * cube.markers.front().inBody().t.norm();
+    const double cubeError = worstCentreError(
+        readBack(dir / "tool-cube-a4.png", family), cube,
+        [&](const tracking::LayoutMarker& m) {
+          return netPlace(m.inBody().R.col(2)).offset * faceMm;
+        },
+        [](const tracking::LayoutMarker& m) {
+          return cv::Point2d(netPlace(m.inBody().R.col(2)).turned ? -1 : 1, 0);
+        },
+        "cube");
+    EXPECT_LT(cubeError, 0.15) << "cube";
+    std::cerr << family << ": worst marker centre off its layout place by " << boardError
+              << " mm (board), " << cubeError << " mm (cube)\n";
+  }
 }

@@ -1,7 +1,9 @@
 // Printable sheets of rigid marker sets (marker_sheet.hpp): the planet board at its exact size
 // and the tool cube's net.
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <iterator>
 
 #include "core/input_error.hpp"
 #include "tracking/marker_family.hpp"
@@ -31,6 +33,56 @@ std::array<cv::Point2d, 4> paintMarker(Canvas& c, const std::string& family, int
   const auto box = cornersPx(c, x, y, x + edgeMm, y + edgeMm);  // page TL, TR, BR, BL
   if (!turned) return box;
   return {box[2], box[3], box[0], box[1]};
+}
+
+// A fold line: dashes with a gap at both ends, so that it touches neither the cut outline nor
+// another fold. Solid lines round a face would close a square one quiet zone outside its marker,
+// which OpenCV's aruco detector takes for a candidate "too close" to the marker
+// (DetectorParameters::minMarkerDistanceRate: mean corner distance under 5 % of the perimeter;
+// a one-cell quiet zone is under that from 8 cells across, DICT_6X6 and up) and keeps the
+// larger of the two: the outline, which decodes to nothing, and the marker is lost.
+void foldLine(Canvas& c, double x0, double y0, double x1, double y1) {
+  constexpr double kDash = 3, kGap = 2, kWidth = 0.2;
+  const double len = std::hypot(x1 - x0, y1 - y0);
+  const int dashes = int(std::floor((len - kGap) / (kDash + kGap)));
+  const double first = (len - dashes * kDash - (dashes - 1) * kGap) / 2;
+  for (int k = 0; k < dashes; ++k) {
+    const double a = (first + k * (kDash + kGap)) / len, b = a + kDash / len;
+    c.line(x0 + a * (x1 - x0), y0 + a * (y1 - y0), x0 + b * (x1 - x0), y0 + b * (y1 - y0), kWidth);
+  }
+}
+
+// A face of the cube's net: its outward normal and x axis in the cube's frame, its place in the
+// net (column, row in faces) and whether its marker is printed turned by 180 degrees.
+struct Slot {
+  Eigen::Vector3d normal, x;
+  int col, row;
+  bool turned;
+};
+
+// The net's cut lines (solid, where no face is beyond an edge) and fold lines (dashed, between
+// two faces, each drawn once).
+void netLines(Canvas& c, const Slot (&slots)[6], double left, double top, double faceMm) {
+  auto inNet = [&](int col, int row) {
+    return std::any_of(std::begin(slots), std::end(slots),
+                       [&](const Slot& o) { return o.col == col && o.row == row; });
+  };
+  for (const Slot& s : slots) {
+    const double fx = left + s.col * faceMm, fy = top + s.row * faceMm;
+    const struct {
+      int dc, dr;
+      double x0, y0, x1, y1;
+    } edges[] = {{0, -1, fx, fy, fx + faceMm, fy},
+                 {0, 1, fx, fy + faceMm, fx + faceMm, fy + faceMm},
+                 {-1, 0, fx, fy, fx, fy + faceMm},
+                 {1, 0, fx + faceMm, fy, fx + faceMm, fy + faceMm}};
+    for (const auto& e : edges) {
+      if (!inNet(s.col + e.dc, s.row + e.dr))
+        c.line(e.x0, e.y0, e.x1, e.y1, 0.2);
+      else if (e.dc + e.dr > 0)  // the face below or right of it does not draw it again
+        foldLine(c, e.x0, e.y0, e.x1, e.y1);
+    }
+  }
 }
 
 void crosshair(Canvas& c, double x, double y, double armMm) {
@@ -112,11 +164,6 @@ Sheet renderCubeNetSheet(const MarkerLayout& cube, const Paper& paper, double dp
   // The net, as a cross (column, row in faces): top (+y) over front (+z) over bottom (-y) over
   // back (-z), -x left and +x right of the front. Folding it printed side out puts each face's
   // (x, y) where these frames say; the back, reached over the bottom, is printed turned.
-  struct Slot {
-    Eigen::Vector3d normal, x;
-    int col, row;
-    bool turned;
-  };
   const Eigen::Vector3d X = Eigen::Vector3d::UnitX(), Y = Eigen::Vector3d::UnitY(),
                         Z = Eigen::Vector3d::UnitZ();
   const Slot slots[] = {{Y, X, 1, 0, false},  {Z, X, 1, 1, false},  {-Y, X, 1, 2, false},
@@ -150,11 +197,6 @@ Sheet renderCubeNetSheet(const MarkerLayout& cube, const Paper& paper, double dp
   const double top = 28, left = W / 2 - 1.5 * faceMm;
   for (std::size_t s = 0; s < 6; ++s) {
     const double fx = left + slots[s].col * faceMm, fy = top + slots[s].row * faceMm;
-    // Cut and fold lines along the face's outline.
-    c.line(fx, fy, fx + faceMm, fy, 0.2);
-    c.line(fx, fy + faceMm, fx + faceMm, fy + faceMm, 0.2);
-    c.line(fx, fy, fx, fy + faceMm, 0.2);
-    c.line(fx + faceMm, fy, fx + faceMm, fy + faceMm, 0.2);
     if (onSlot[s]) {
       const double e = 1e3 * onSlot[s]->edge();
       const double gap = (faceMm - e) / 2;
@@ -165,6 +207,7 @@ Sheet renderCubeNetSheet(const MarkerLayout& cube, const Paper& paper, double dp
       c.text("stick", fx + faceMm / 2, fy + faceMm / 2 + 10, 2.6, true);
     }
   }
+  netLines(c, slots, left, top, faceMm);  // over the faces' white quiet zones, not under them
   double y = top + 4 * faceMm + 8;
   std::string ids;
   for (const auto& m : cube.markers) ids += (ids.empty() ? "" : " ") + std::to_string(m.id);
@@ -172,10 +215,10 @@ Sheet renderCubeNetSheet(const MarkerLayout& cube, const Paper& paper, double dp
              mm(1e3 * cube.tip.value_or(Eigen::Vector3d::Zero()).norm()) + " mm below the centre",
          W / 2, y, 2.6, true, true);
   y += 5;
-  c.text(
-      "Glue on card, cut out, fold printed side out, tape the edges; the stick goes into the "
-      "cross.",
-      W / 2, y, 2.4, true);
+  c.text("Glue on card, cut along the solid lines, fold along the dashed ones printed side out,",
+         W / 2, y, 2.4, true);
+  y += 4.5;
+  c.text("tape the edges; the stick goes into the cross.", W / 2, y, 2.4, true);
   return finish(c, std::move(sheet), c.heightMm() - 23);
 }
 
