@@ -143,6 +143,44 @@ TEST(TrackingMarkers, PngHasItsResolutionAndThePixels) {
   EXPECT_THROW(tracking::encodeSheetPng(grey, 300), std::invalid_argument);
 }
 
+// The sheet's image is its drawing to the pixel, at any resolution: black and white only, and
+// every box (a marker's cells, the ChArUco board's squares, the scale bar) fills exactly the
+// pixels between its edges' rounded positions: no blurred, grey or shifted cell edge.
+TEST(TrackingMarkers, ImageHoldsEveryBoxOnItsRoundedPixels) {
+  tracking::MarkerSheetSpec planet;
+  tracking::MarkerSheetSpec aruco;
+  aruco.family = "DICT_6X6_250";
+  aruco.id = 17;
+  aruco.sizeMm = 60;
+  aruco.tool = true;
+  for (const double dpi : {150.0, 203.0, 300.0}) {
+    const tracking::Sheet sheets[] = {
+        tracking::renderMarkerSheet(planet, tracking::paperA4(), dpi),
+        tracking::renderMarkerSheet(aruco, tracking::paperLetter(), dpi),
+        tracking::renderCharucoSheet(tracking::CharucoBoardSpec{}, tracking::paperA4(), dpi)};
+    for (const auto& sheet : sheets) {
+      SCOPED_TRACE(sheet.title + " at " + std::to_string(int(dpi)) + " dpi");
+      const cv::Mat& img = sheet.image;
+      ASSERT_EQ(img.type(), CV_8U);
+      EXPECT_EQ(cv::countNonZero((img != 0) & (img != 255)), 0) << "only black and white";
+      auto px = [&](double mm) { return int(std::floor(mm / 25.4 * dpi + 0.5)); };
+      int boxes = 0;
+      for (const auto& op : sheet.ops) {
+        if (op.kind != tracking::SheetOp::Kind::kBox) continue;
+        const cv::Rect r(cv::Point(px(op.x0), px(op.y0)), cv::Point(px(op.x1), px(op.y1)));
+        if (r.empty()) continue;
+        ASSERT_EQ(r & cv::Rect({}, img.size()), r);
+        const int value = op.black ? 0 : 255;
+        ASSERT_EQ(cv::countNonZero(img(r) != value), 0)
+            << "box (" << op.x0 << ", " << op.y0 << ") - (" << op.x1 << ", " << op.y1
+            << ") mm is not all " << value << " on pixels " << r;
+        ++boxes;
+      }
+      EXPECT_GT(boxes, 50);
+    }
+  }
+}
+
 // The page's drawing: every FlateDecode stream of the PDF inflated and joined.
 std::string inflatedStreams(const std::string& pdf) {
   std::string all;

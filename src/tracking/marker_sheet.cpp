@@ -5,7 +5,6 @@
 #include <cstdio>
 #include <cstring>
 #include <opencv2/aruco.hpp>
-#include <opencv2/imgproc.hpp>
 #include <sstream>
 #include <stdexcept>
 
@@ -19,15 +18,14 @@ using namespace sheet_detail;
 
 namespace {
 
-// The ChArUco board's squares and markers as vector steps with its top-left corner at (x0, y0)
-// mm (renderCharucoBoard draws the same boxes into the raster).
+// The ChArUco board's squares and markers as boxes with its top-left corner at (x0, y0) mm (the
+// boxes renderCharucoBoard fills).
 void charucoSteps(Canvas& c, const CharucoBoardSpec& spec, double x0, double y0) {
   const auto board = spec.create();
   const double sq = spec.squareLength * 1e3;
   for (int r = 0; r < spec.squaresY; ++r)
     for (int k = 0; k < spec.squaresX; ++k)
-      if (r % 2 == k % 2)
-        c.vectorBox(x0 + k * sq, y0 + r * sq, x0 + (k + 1) * sq, y0 + (r + 1) * sq);
+      if (r % 2 == k % 2) c.box(x0 + k * sq, y0 + r * sq, x0 + (k + 1) * sq, y0 + (r + 1) * sq);
   const int cells = board->dictionary->markerSize + 2;
   const double cell = spec.markerLength * 1e3 / cells;
   for (std::size_t i = 0; i < board->ids.size(); ++i) {
@@ -36,8 +34,8 @@ void charucoSteps(Canvas& c, const CharucoBoardSpec& spec, double x0, double y0)
     const double mx = x0 + board->objPoints[i][0].x * 1e3, my = y0 + board->objPoints[i][0].y * 1e3;
     for (int a = 0; a < cells; ++a)
       for (int b = 0; b < cells; ++b)
-        c.vectorBox(mx + b * cell, my + a * cell, mx + (b + 1) * cell, my + (a + 1) * cell,
-                    bits.at<uchar>(a, b) ? 255 : 0);
+        c.box(mx + b * cell, my + a * cell, mx + (b + 1) * cell, my + (a + 1) * cell,
+              bits.at<uchar>(a, b) ? 255 : 0);
   }
 }
 
@@ -145,15 +143,11 @@ Sheet renderCharucoSheet(const CharucoBoardSpec& board, const Paper& paper, doub
   sheet.title = "PlanetSculpt ChArUco calibration board";
   c.text(sheet.title, W / 2, 14, 4.5, true, true);
   const double top = 19, x0 = (W - bw) / 2;
-  // The board's own renderer at this page's resolution, placed at the rounded pixel of its
-  // top-left corner (its squares are then on this page's rounded grid too).
-  const cv::Mat img = renderCharucoBoard(board, dpi / 0.0254, 0);
-  const cv::Rect r(c.ipx(x0), c.ipx(top), img.cols, img.rows);
-  img.copyTo(c.img(r));
-  charucoSteps(c, board, r.x * 25.4 / dpi, r.y * 25.4 / dpi);
-  sheet.corners = {cv::Point2d(r.x - 0.5, r.y - 0.5), cv::Point2d(r.x + r.width - 0.5, r.y - 0.5),
-                   cv::Point2d(r.x + r.width - 0.5, r.y + r.height - 0.5),
-                   cv::Point2d(r.x - 0.5, r.y + r.height - 0.5)};
+  // The board's top-left corner on a pixel of the image: its squares are then as
+  // renderCharucoBoard draws them at this resolution.
+  const double bx = c.ipx(x0) * 25.4 / dpi, by = c.ipx(top) * 25.4 / dpi;
+  charucoSteps(c, board, bx, by);
+  sheet.corners = cornersPx(c, bx, by, bx + bw, by + bh);
   double y = top + bh + 6;
   c.text(board.describe(), W / 2, y, 3.4, true, true);
   y += 5.5;

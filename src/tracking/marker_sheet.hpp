@@ -5,9 +5,11 @@
 // physical size, family and ids printed on the sheet and a 100 mm scale bar to check that it
 // was printed at 100 %.
 //
-// Files (sheet_files.cpp): a 1-bit PNG with its resolution in a pHYs chunk (libpng), and a
-// one-page vector PDF (cairo) drawn from the same steps at their exact sizes in millimetres, so
-// that the markers' cells print sharp at any printer resolution.
+// A sheet is drawn once, as steps in millimetres (SheetOp), and one cairo function paints the
+// steps onto any surface (sheet_files.cpp): an image surface at the sheet's dpi gives its pixels
+// (written as a 1-bit PNG with its resolution in a pHYs chunk, libpng), a PDF surface the
+// one-page vector PDF at their exact sizes, so that the markers' cells print sharp at any
+// printer resolution.
 #include <Eigen/Core>
 #include <array>
 #include <cstdint>
@@ -39,7 +41,7 @@ struct MarkerSheetSpec {
 };
 
 // One drawing step of a sheet, in millimetres from the page's top-left corner: what the PDF draws
-// as vectors (the sheet's image is the same steps rasterised at its dpi).
+// as vectors and the sheet's image holds rasterised at its dpi.
 struct SheetOp {
   enum class Kind { kBox, kLine, kText };
   Kind kind = Kind::kBox;
@@ -77,6 +79,11 @@ Sheet renderBoardSheet(const MarkerLayout& board, const Paper& paper, double dpi
 // the layout says. InputError naming the layout when it is not a cube of that convention
 // (markers/tool-cube.json: face frames as docs/TRACKING.md shows) or does not fit the page.
 Sheet renderCubeNetSheet(const MarkerLayout& cube, const Paper& paper, double dpi = 300);
+
+// The steps painted by cairo onto an image surface of `size` pixels at `dpi`: 0 (black) or 255
+// only. Boxes have their edges on the rounded pixel boundaries (a marker's cells exact to the
+// pixel, no antialiasing anywhere); a line is at least one pixel wide.
+cv::Mat rasterizeSheet(const std::vector<SheetOp>& ops, cv::Size size, double dpi);
 
 // A bilevel image (0 or 255) as a 1-bit PNG with a pHYs chunk saying `dpi`; std::invalid_argument
 // for other values.

@@ -5,7 +5,6 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <opencv2/imgproc.hpp>
 #include <sstream>
 #include <string>
 #include <utility>
@@ -22,55 +21,33 @@ inline std::string mm(double v) {
   return s.str();
 }
 
-// Drawing in millimetres on a page at `dpi` (origin at the page's top-left corner): into the
-// raster image, and recorded as steps for the vector PDF.
+// Drawing in millimetres on a page at `dpi` (origin at the page's top-left corner), recorded as
+// steps: sheet_files.cpp draws them through cairo onto the sheet's image and into its PDF.
 struct Canvas {
-  cv::Mat img;
+  int cols, rows;  // the page in pixels at `dpi`
   double dpi;
   std::vector<SheetOp> ops;
 
   Canvas(const Paper& paper, double d)
-      : img(int(std::lround(paper.heightMm / 25.4 * d)), int(std::lround(paper.widthMm / 25.4 * d)),
-            CV_8U, cv::Scalar(255)),
+      : cols(int(std::lround(paper.widthMm / 25.4 * d))),
+        rows(int(std::lround(paper.heightMm / 25.4 * d))),
         dpi(d) {}
   double px(double v) const { return v / 25.4 * dpi; }
   int ipx(double v) const { return int(std::lround(px(v))); }
-  double widthMm() const { return img.cols * 25.4 / dpi; }
-  double heightMm() const { return img.rows * 25.4 / dpi; }
+  double widthMm() const { return cols * 25.4 / dpi; }
+  double heightMm() const { return rows * 25.4 / dpi; }
 
-  // Box from (x0, y0) to (x1, y1) mm, edges at the rounded pixel boundaries.
+  // Box from (x0, y0) to (x1, y1) mm (in the image, its edges at the rounded pixel boundaries).
   void box(double x0, double y0, double x1, double y1, uchar v = 0) {
-    vectorBox(x0, y0, x1, y1, v);
-    const int ix0 = ipx(x0), iy0 = ipx(y0), ix1 = ipx(x1), iy1 = ipx(y1);
-    const cv::Rect r = cv::Rect(ix0, iy0, ix1 - ix0, iy1 - iy0) & cv::Rect({}, img.size());
-    if (r.area() > 0) img(r).setTo(v);
-  }
-  // A box in the PDF only (where the raster comes from another renderer at this page's pixels).
-  void vectorBox(double x0, double y0, double x1, double y1, uchar v = 0) {
     ops.push_back({SheetOp::Kind::kBox, x0, y0, x1, y1, v == 0, 0, {}, false, false});
   }
   void line(double x0, double y0, double x1, double y1, double widthMm) {
     ops.push_back({SheetOp::Kind::kLine, x0, y0, x1, y1, true, widthMm, {}, false, false});
-    cv::line(img, {ipx(x0), ipx(y0)}, {ipx(x1), ipx(y1)}, cv::Scalar(0), std::max(1, ipx(widthMm)),
-             cv::LINE_8);
   }
   // Text with its baseline at y and capital letters `heightMm` tall; centred on x or from x.
   void text(const std::string& s, double x, double y, double heightMm, bool centre = false,
             bool bold = false) {
     ops.push_back({SheetOp::Kind::kText, x, y, x, y, true, heightMm, s, centre, bold});
-    const int font = cv::FONT_HERSHEY_SIMPLEX;
-    const double scale = px(heightMm) / 22.0;  // capital height of this font at scale 1
-    const int thick = std::max(1, int(std::lround(scale * (bold ? 2.6 : 1.5))));
-    int base = 0;
-    const cv::Size sz = cv::getTextSize(s, font, scale, thick, &base);
-    const int ix = centre ? ipx(x) - sz.width / 2 : ipx(x);
-    cv::putText(img, s, {ix, ipx(y)}, font, scale, cv::Scalar(0), thick, cv::LINE_8);
-  }
-  double textWidthMm(const std::string& s, double heightMm) const {
-    const double scale = px(heightMm) / 22.0;
-    int base = 0;
-    const int thick = std::max(1, int(std::lround(scale * 1.5)));
-    return cv::getTextSize(s, cv::FONT_HERSHEY_SIMPLEX, scale, thick, &base).width * 25.4 / dpi;
   }
 
   // 100 mm scale bar with centimetre ticks, centred on the page, its top at y.
@@ -119,8 +96,8 @@ inline void footer(Canvas& c, const Paper& paper, double dpi) {
 inline Sheet finish(Canvas& c, Sheet sheet, double scaleBarY) {
   c.scaleBar(scaleBarY);
   footer(c, sheet.paper, c.dpi);
-  sheet.image = c.img;
   sheet.ops = std::move(c.ops);
+  sheet.image = rasterizeSheet(sheet.ops, {c.cols, c.rows}, c.dpi);
   return sheet;
 }
 
