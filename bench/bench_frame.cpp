@@ -319,6 +319,8 @@ void benchCase(const BenchOptions& options, std::ostream& out, nlohmann::json ma
 
 }  // namespace
 
-static const BenchRegistration kRegistered("frame", benchFrame);
+static const BenchRegistration kRegistered(
+    "frame", "The AR app's whole frame on data/demo.mkv: track, edit, tessellate, render",
+    benchFrame);
 
 }  // namespace ps::bench

@@ -3,11 +3,11 @@
 // tool tip error in the planet's frame (filtered and raw), pose flips (filtered poses more than
 // 15 degrees off) and how often the control vertex on a 2049^2 planet lands within 3 mm of the
 // ground truth's in touching frames.
+#include <CLI/CLI.hpp>
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <cstdlib>
 #include <ctime>
 #include <iostream>
 #include <map>
@@ -77,9 +77,23 @@ struct Config {
   bool filter = true;
 };
 
+// `bench track`'s options (`planetsculpt bench track --help`).
+struct TrackSettings {
+  std::string scene;     // sweep, tilt, near or board ("" = all)
+  std::string detector;  // one configuration's label, on the sweep only ("" = all)
+  // The single-marker rows' detector settings (defaults: DetectorConfig's).
+  int searchEvery = tracking::DetectorConfig{}.searchEvery;
+  double regionMargin = tracking::DetectorConfig{}.regionMargin;
+  int minContrast = tracking::DetectorConfig{}.minContrast;
+  // The single-marker rows' filters: translation, rotation and tip One Euro parameters (min
+  // cutoff, beta, d cutoff each); empty: the SceneConfig defaults.
+  std::vector<double> tune;
+  BoardBenchSettings boards;
+};
+
 // Returns the median time per frame (ms).
-double evaluate(const Recording& rec, const Config& c, const core::LatLongChart& chart,
-                double touch, std::ostream& out) {
+double evaluate(const Recording& rec, const Config& c, const TrackSettings& settings,
+                const core::LatLongChart& chart, double touch, std::ostream& out) {
   tracking::SceneConfig sc;
   sc.planet.id = rec.script.planetId;
   sc.planet.size = rec.script.planetMarkerSize;
@@ -89,20 +103,17 @@ double evaluate(const Recording& rec, const Config& c, const core::LatLongChart&
   sc.planetRadius = rec.script.planetRadius;
   sc.tipOffset = rec.script.tipOffset;
   sc.touchDistance = touch;
-  if (const char* tune = std::getenv("PS_TRACK_TUNE")) {
-    double v[9];
-    if (std::sscanf(tune, "%lf,%lf,%lf,%lf,%lf,%lf,%lf,%lf,%lf", &v[0], &v[1], &v[2], &v[3], &v[4],
-                    &v[5], &v[6], &v[7], &v[8]) == 9) {
-      sc.planet.translation = sc.tool.translation = {v[0], v[1], v[2]};
-      sc.planet.rotation = sc.tool.rotation = {v[3], v[4], v[5]};
-      sc.tipFilter = {v[6], v[7], v[8]};
-    }
+  if (settings.tune.size() == 9) {
+    const auto& v = settings.tune;
+    sc.planet.translation = sc.tool.translation = {v[0], v[1], v[2]};
+    sc.planet.rotation = sc.tool.rotation = {v[3], v[4], v[5]};
+    sc.tipFilter = {v[6], v[7], v[8]};
   }
   tracking::DetectorConfig dc = c.detector;
   dc.ids = {sc.planet.id, sc.tool.id};
-  if (const char* e = std::getenv("PS_TRACK_SEARCH_EVERY")) dc.searchEvery = std::atoi(e);
-  if (const char* e = std::getenv("PS_TRACK_MARGIN")) dc.regionMargin = std::atof(e);
-  if (const char* e = std::getenv("PS_TRACK_MIN_CONTRAST")) dc.minContrast = std::atoi(e);
+  dc.searchEvery = settings.searchEvery;
+  dc.regionMargin = settings.regionMargin;
+  dc.minContrast = settings.minContrast;
   auto detector = tracking::makeDetector(dc);
   auto rawDetector = tracking::makeDetector(dc);
   tracking::SceneTracker tracker(sc);
@@ -243,10 +254,8 @@ double evaluate(const Recording& rec, const Config& c, const core::LatLongChart&
   return median(ms);
 }
 
-void benchTrack(const BenchOptions& o, std::ostream& out) {
-  const int threads = cv::getNumThreads();
-  cv::setNumThreads(1);  // "on one core": OpenCV's parallel loops off too
-  const core::LatLongChart chart(core::GridSize::fromSide(2049), 1.0);
+// The detector configurations of the single-marker rows; the first is the default.
+std::vector<Config> detectorConfigs(bool quick) {
   std::vector<Config> configs;
   auto add = [&](const std::string& label, tracking::Backend b, double decimate, bool regions,
                  tracking::ArucoRefinement refine = tracking::ArucoRefinement::kContour) {
@@ -262,64 +271,115 @@ void benchTrack(const BenchOptions& o, std::ostream& out) {
   add("apriltag d2", tracking::Backend::kAprilTag, 2.0, false);
   add("apriltag d1", tracking::Backend::kAprilTag, 1.0, false);
   add("aruco contour + regions", tracking::Backend::kAruco, 1.0, true);
-  if (!o.quick) {
+  if (!quick) {
     add("aruco contour", tracking::Backend::kAruco, 1.0, false);
     add("aruco apriltag-refine", tracking::Backend::kAruco, 1.0, false,
         tracking::ArucoRefinement::kAprilTag);
   }
+  return configs;
+}
+
+void benchTrack(const BenchOptions& o, const TrackSettings& settings, std::ostream& out) {
+  const int threads = cv::getNumThreads();
+  cv::setNumThreads(1);  // "on one core": OpenCV's parallel loops off too
+  const core::LatLongChart chart(core::GridSize::fromSide(2049), 1.0);
+  const std::vector<Config> configs = detectorConfigs(o.quick);
   const int stride = o.quick ? 5 : 1;
   std::vector<cv::Size> sizes = {{640, 480}};
   if (!o.quick) sizes.push_back({1280, 720});
-  // PS_TRACK_SCENE=sweep|tilt|near|board runs one scene only (to re-measure one without the
-  // rest); board also runs the single-marker default on the 640x480 sweep, its time baseline.
-  const char* sceneEnv = std::getenv("PS_TRACK_SCENE");
-  const std::string onlyScene = sceneEnv ? sceneEnv : "";
+  // --scene runs one scene only (to re-measure one without the rest); board also runs the
+  // single-marker default on the 640x480 sweep, its time baseline. --board-scene implies board.
+  const std::string onlyScene =
+      settings.scene.empty() && !settings.boards.scene.empty() ? "board" : settings.scene;
   auto wanted = [&](const std::string& scene) { return onlyScene.empty() || onlyScene == scene; };
   const bool baselineOnly = onlyScene == "board";
   if (baselineOnly) sizes = {{640, 480}};
   if (!wanted("sweep") && !baselineOnly) sizes.clear();
+  const std::string& only = settings.detector;
   double defaultMs = 0;                    // the single-marker default on the 640x480 sweep
   std::optional<Recording> baselineSweep;  // kept to measure that default again
   for (const auto& size : sizes) {
     const Recording rec = record("sweep", size, stride);
     if (size.width == 640) baselineSweep = rec;
-    const char* only = std::getenv("PS_TRACK_ONLY");
     for (const auto& c : configs)
-      if ((!only || c.label == only) && (!baselineOnly || &c == &configs[0])) {
-        const double m = evaluate(rec, c, chart, 0.004, out);
+      if ((only.empty() || c.label == only) && (!baselineOnly || &c == &configs[0])) {
+        const double m = evaluate(rec, c, settings, chart, 0.004, out);
         if (size.width == 640 && &c == &configs[0]) defaultMs = m;
       }
-    if (size.width == 640 && !only && !baselineOnly) {
+    if (size.width == 640 && only.empty() && !baselineOnly) {
       Config raw = configs[0];
       raw.filter = false;
       raw.label += " unfiltered";
-      evaluate(rec, raw, chart, 0.004, out);
+      evaluate(rec, raw, settings, chart, 0.004, out);
     }
   }
   // The tool marker turned up to 60 degrees away, 0.35-0.9 m; and the camera 0.30-0.33 m away,
   // where only some placements keep both markers in view: the default detector and aruco.
-  if (!std::getenv("PS_TRACK_ONLY")) {
+  if (only.empty()) {
     for (const char* scene : {"tilt", "near"}) {
       if (!wanted(scene)) continue;
       const Recording rec = record(scene, {640, 480}, stride);
-      evaluate(rec, configs[0], chart, 0.004, out);
-      evaluate(rec, configs[3], chart, 0.004, out);
+      evaluate(rec, configs[0], settings, chart, 0.004, out);
+      evaluate(rec, configs[3], settings, chart, 0.004, out);
     }
   }
-  // The planet board and the tool cube (PS_TRACK_SCENE=board runs only these).
-  if (!std::getenv("PS_TRACK_ONLY") && (onlyScene.empty() || onlyScene == "board"))
+  // The planet board and the tool cube (--scene board runs only these).
+  if (only.empty() && wanted("board"))
     benchTrackBoards(
-        o,
+        o, settings.boards,
         [&] {
           if (!baselineSweep || defaultMs <= 0) return 0.0;
           std::ostream discard(nullptr);  // its row was written once, above
-          return evaluate(*baselineSweep, configs[0], chart, 0.004, discard);
+          return evaluate(*baselineSweep, configs[0], settings, chart, 0.004, discard);
         },
         out);
   cv::setNumThreads(threads);
 }
 
-const BenchRegistration kTrack("track", benchTrack);
+void addTrackOptions(CLI::App& command, TrackSettings& s) {
+  command.add_option("--scene", s.scene, "Only this scene (board: with its time baseline)")
+      ->check(CLI::IsMember({"sweep", "tilt", "near", "board"}));
+  command
+      .add_option("--board-scene", s.boards.scene, "Only this board scene (implies --scene board)")
+      ->check(CLI::IsMember(boardSceneNames()));
+  std::vector<std::string> labels;
+  for (const Config& c : detectorConfigs(false)) labels.push_back(c.label);
+  command.add_option("--detector", s.detector, "Only this detector configuration, on the sweep")
+      ->check(CLI::IsMember(labels));
+  command
+      .add_option("--search-every", s.searchEvery,
+                  "Single-marker rows: whole-frame search at most every N frames")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  command
+      .add_option("--region-margin", s.regionMargin,
+                  "Single-marker rows: search box margin, a fraction of the marker's size")
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
+  command
+      .add_option("--min-contrast", s.minContrast,
+                  "Single-marker rows: the detector's minimum contrast")
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
+  command
+      .add_option("--tune", s.tune,
+                  "Single-marker rows: One Euro filters, translation, rotation, tip (min cutoff, "
+                  "beta, d cutoff each)")
+      ->delimiter(',')
+      ->expected(9);
+  command
+      .add_option("--dump", s.boards.dumpDir,
+                  "Board scenes: one JSON line per frame in DIR/SCENE.jsonl")
+      ->check(CLI::ExistingDirectory);
+}
+
+const BenchRegistration kTrack(
+    "track", "Marker tracking against synthetic ground truth: single markers, board and cube",
+    [](CLI::App& command) -> BenchFunction {
+      auto s = std::make_shared<TrackSettings>();
+      addTrackOptions(command, *s);
+      return [s](const BenchOptions& o, std::ostream& out) { benchTrack(o, *s, out); };
+    });
 
 }  // namespace
 }  // namespace ps::bench

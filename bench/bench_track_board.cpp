@@ -16,7 +16,6 @@
 //     detector's on the sweep measured in the same run (target <= 1.5x).
 #include <algorithm>
 #include <cmath>
-#include <cstdlib>
 #include <fstream>
 #include <memory>
 #include <nlohmann/json.hpp>
@@ -48,7 +47,8 @@ double fraction(int part, int whole) {
   return whole > 0 ? double(part) / whole : 1.0;
 }
 
-void evaluateScene(const std::string& scene, bool quick, double singleMarkerMs, std::ostream& out) {
+void evaluateScene(const std::string& scene, bool quick, const std::string& dumpDir,
+                   double singleMarkerMs, std::ostream& out) {
   const tracking::SynthScript script = tracking::builtinScene(scene, app::sourceDir());
   const tracking::SynthRenderer renderer(script);
   // A small planet: the stepper's edits are not what is timed here.
@@ -71,13 +71,12 @@ void evaluateScene(const std::string& scene, bool quick, double singleMarkerMs, 
   bool seen = false;
   const int frames = quick ? std::min(renderer.frames(), 120) : renderer.frames();
   app::Progress progress("track " + scene);
-  // PS_TRACK_DUMP=DIR: one JSON line per frame (DIR/SCENE.jsonl) with the tool's truth, what
-  // was detected of it and the tracker's answer, to find out why a frame is bad.
-  const char* dumpDir = std::getenv("PS_TRACK_DUMP");
+  // --dump DIR: one JSON line per frame (DIR/SCENE.jsonl) with the tool's truth, what was
+  // detected of it and the tracker's answer, to find out why a frame is bad.
   std::ofstream dump;
   std::unique_ptr<tracking::Detector> dumpDetector;
-  if (dumpDir) {
-    dump.open(std::string(dumpDir) + "/" + scene + ".jsonl");
+  if (!dumpDir.empty()) {
+    dump.open(dumpDir + "/" + scene + ".jsonl");
     tracking::DetectorConfig dc = o.detector;
     dc.ids = script.board->ids();
     for (int id : script.toolLayout->ids()) dc.ids.push_back(id);
@@ -260,14 +259,17 @@ void evaluateScene(const std::string& scene, bool quick, double singleMarkerMs, 
 
 }  // namespace
 
-void benchTrackBoards(const BenchOptions& o, const std::function<double()>& singleMarkerMs,
-                      std::ostream& out) {
-  // PS_TRACK_BOARD=SCENE runs that one of them only.
-  const char* only = std::getenv("PS_TRACK_BOARD");
-  for (const char* scene : {"board-sweep", "board-hand", "board-hidden", "board-covered-move",
-                            "cube-spin", "board-demo"})
-    if ((!o.quick || std::string(scene) != "board-demo") && (!only || scene == std::string(only)))
-      evaluateScene(scene, o.quick, singleMarkerMs(), out);
+const std::vector<std::string>& boardSceneNames() {
+  static const std::vector<std::string> names = {"board-sweep",        "board-hand", "board-hidden",
+                                                 "board-covered-move", "cube-spin",  "board-demo"};
+  return names;
+}
+
+void benchTrackBoards(const BenchOptions& o, const BoardBenchSettings& settings,
+                      const std::function<double()>& singleMarkerMs, std::ostream& out) {
+  for (const std::string& scene : boardSceneNames())
+    if ((!o.quick || scene != "board-demo") && (settings.scene.empty() || scene == settings.scene))
+      evaluateScene(scene, o.quick, settings.dumpDir, singleMarkerMs(), out);
 }
 
 }  // namespace ps::bench
