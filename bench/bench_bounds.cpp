@@ -39,6 +39,8 @@ void benchBounds(const BenchOptions& options, std::ostream& out) {
   }
 }
 
-static const BenchRegistration kRegistered("bounds", benchBounds);
+static const BenchRegistration kRegistered(
+    "bounds", "The wedgie rule against hybrid-exact bounds: build time, triangles for an error",
+    benchBounds);
 
 }  // namespace ps::bench

@@ -145,7 +145,8 @@ void benchCharts(const BenchOptions& o, std::ostream& out) {
 }
 
 namespace {
-const BenchRegistration kCharts("charts", benchCharts);
+const BenchRegistration kCharts("charts", "How evenly each chart spends its samples on the sphere",
+                                benchCharts);
 }  // namespace
 
 }  // namespace ps::bench

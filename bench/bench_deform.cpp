@@ -13,6 +13,7 @@
 // table entries (its times are whole rendered frames, deformation included).
 #include <omp.h>
 
+#include <CLI/CLI.hpp>
 #include <array>
 #include <cmath>
 #include <cstdlib>
@@ -20,7 +21,6 @@
 #include <map>
 #include <memory>
 #include <nlohmann/json.hpp>
-#include <sstream>
 #include <string>
 #include <vector>
 
@@ -121,31 +121,26 @@ double brushOnlyMs(const edit::GaussianProfile& profile, double amount,
 
 }  // namespace
 
-void benchDeform(const BenchOptions& options, std::ostream& out) {
+// `--chart`, `--side`, `--latitude`: one chart's cells, of one grid, at one latitude alone, for
+// profiling one cell (with --repeats). Empty / 0 / -1: all.
+struct DeformSettings {
+  std::string chart;
+  int side = 0;
+  int latitude = -1;
+};
+
+void benchDeform(const BenchOptions& options, const DeformSettings& only, std::ostream& out) {
   const std::vector<int> levels =
       options.quick ? std::vector<int>{11} : std::vector<int>{11, 12, 13};
   const int repeats = std::max(1, options.quick ? std::min(options.repeats, 5) : options.repeats);
-  // PS_DEFORM_ONLY=CHART:SIDE[:LATITUDE] (e.g. octahedral:8193:0) runs that chart's cells of that
-  // grid alone: for profiling one cell (with --repeats).
-  std::string onlyChart;
-  int onlySide = 0, onlyLatitude = -1;
-  if (const char* only = std::getenv("PS_DEFORM_ONLY")) {
-    std::istringstream in(only);
-    std::string side, latitude;
-    std::getline(in, onlyChart, ':');
-    std::getline(in, side, ':');
-    std::getline(in, latitude, ':');
-    onlySide = side.empty() ? 0 : std::stoi(side);
-    onlyLatitude = latitude.empty() ? -1 : std::stoi(latitude);
-  }
   for (const int n : levels) {
     const int side = (1 << n) + 1, m = 1 << n;
     // The worst cell of each chart in this run (issue 28: the octahedral chart's worst cell at
     // most a quarter of lat-long's).
     std::map<std::string, double> worstMs;
-    if (onlySide != 0 && onlySide != side) continue;
+    if (only.side != 0 && only.side != side) continue;
     for (const bool octahedral : {false, true}) {
-      if (!onlyChart.empty() && onlyChart != (octahedral ? "octahedral" : "latlong")) continue;
+      if (!only.chart.empty() && only.chart != (octahedral ? "octahedral" : "latlong")) continue;
       std::cerr << "deform: building the " << side << "^2 "
                 << (octahedral ? "octahedral" : "lat-long") << " planet ... " << std::flush;
       std::unique_ptr<terrain::Terrain> planet;
@@ -159,7 +154,7 @@ void benchDeform(const BenchOptions& options, std::ostream& out) {
       // southern half of that meridian is a folded side (x = -1) and the south pole its corners.
       const core::LatLongChart latLong(core::GridSize(n), kPlanetRadius);
       for (const PaperRow& row : paper) {
-        if (onlyLatitude >= 0 && row.latitude != onlyLatitude) continue;
+        if (only.latitude >= 0 && row.latitude != only.latitude) continue;
         const int v = int(std::lround(double(row.latitude) * m / 180.0));
         const Eigen::Vector3d tool = latLong.position(0, v, 0.0);
         for (std::size_t ri = 0; ri < kRadiiKm.size(); ++ri) {
@@ -248,6 +243,17 @@ void benchDeform(const BenchOptions& options, std::ostream& out) {
   }
 }
 
-static const BenchRegistration kRegistered("deform", benchDeform);
+static const BenchRegistration kRegistered(
+    "deform", "Paper 003's tables: one brush edit through the pipeline per grid, latitude, radius",
+    [](CLI::App& command) -> BenchFunction {
+      auto only = std::make_shared<DeformSettings>();
+      command.add_option("--chart", only->chart, "Only this chart's cells")
+          ->check(CLI::IsMember({"latlong", "octahedral"}));
+      command.add_option("--side", only->side, "Only this grid's cells (--quick runs 2049 only)")
+          ->check(CLI::IsMember({2049, 4097, 8193}));
+      command.add_option("--latitude", only->latitude, "Only the cells at this latitude (degrees)")
+          ->check(CLI::IsMember({0, 30, 60, 90, 120, 150, 180}));
+      return [only](const BenchOptions& o, std::ostream& out) { benchDeform(o, *only, out); };
+    });
 
 }  // namespace ps::bench

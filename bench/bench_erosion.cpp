@@ -323,6 +323,7 @@ void benchErosion(const BenchOptions& options, std::ostream& out) {
   omp_set_num_threads(saved);
 }
 
-static const BenchRegistration kRegistered("erosion", benchErosion);
+static const BenchRegistration kRegistered(
+    "erosion", "The sand core's throughput and the frames a crater needs to settle", benchErosion);
 
 }  // namespace ps::bench

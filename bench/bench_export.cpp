@@ -364,6 +364,7 @@ void benchExport(const BenchOptions& options, std::ostream& out) {
   fs::remove_all(work, ec);
 }
 
-static const BenchRegistration kRegistered("export", benchExport);
+static const BenchRegistration kRegistered(
+    "export", "View-independent meshes and TINs against Martini and Delatin", benchExport);
 
 }  // namespace ps::bench

@@ -20,6 +20,7 @@
 #include <iostream>
 #include <memory>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <thread>
 #include <tuple>
 
@@ -80,7 +81,7 @@ struct Series {
 
 void benchCase(const BenchOptions& options, std::ostream& out, nlohmann::json machine,
                render::EglContext& context, int gridLevel, const std::string& name,
-               double kDistMaxPx, render::Shading shading);
+               double distMaxPx, render::Shading shading);
 
 void benchFrame(const BenchOptions& options, std::ostream& out) {
   namespace fs = std::filesystem;
@@ -114,211 +115,253 @@ void benchFrame(const BenchOptions& options, std::ostream& out) {
     benchCase(options, out, machine, *context, gridLevel, name, distMaxPx, shading);
 }
 
-void benchCase(const BenchOptions& options, std::ostream& out, nlohmann::json machine,
-               render::EglContext& context, int gridLevel, const std::string& name,
-               double kDistMaxPx, render::Shading shading) {
-  render::RenderStyle style;
-  style.shading = shading;
-  style.boardShadow = style.atmosphere = shading == render::Shading::kPerPixel;
-  namespace fs = std::filesystem;
-  const fs::path video = ps::app::sourceDir() / "data" / "demo.mkv";
-  const fs::path calibPath = ps::app::sourceDir() / "calib" / "synthetic-640x480.yml";
-  context.makeCurrent();
-  render::PlanetRenderer renderer;
-  terrain::Tessellator tessellator;
-  machine["load_avg_before"] = loadAverage();
-  auto planet = app::makeDefaultPlanet(gridLevel, 1);
-  tracking::FrameSource source(video);
-  const auto calib = tracking::loadCalibration(calibPath).forImageSize(source.size());
-  replay::ReplayOptions ro = demoReplayOptions();
-  replay::FrameStepper stepper(calib, *planet, ro);
-  const double fps = source.fps() > 0 ? source.fps() : ro.fallbackFps;
-  const int maxFrames = options.quick ? 90 : 0;
-  const Eigen::Matrix3d K = eigenK(calib.K);
-  const int W = source.size().width, H = source.size().height;
-  terrain::TessellationSettings ts;
-  ts.distMaxPx = kDistMaxPx;
-  ts.triangleBudget = kBudget;
-  // Frames without the planet still draw the camera image: an empty mesh and a camera 1 m in
-  // front of the planet (nothing of the planet is drawn).
-  const terrain::Mesh empty;
-  const terrain::Camera placeholder = render::arCamera(
-      Eigen::Matrix3d::Identity(), Eigen::Vector3d(0, 0, 1), stepper.scale(), K, W, H);
-
-  Series s;      // frames with the planet in view: the figures of the issue
-  Series every;  // every frame (the planet hidden behind the tool in most of the demo)
-  int frames = 0, planetFrames = 0, reused = 0, noUpload = 0, overviews = 0;
-  std::size_t trianglesMax = 0;
-  std::optional<terrain::Camera> lastView;
-  SkipInputs skips;  // a sample of the views and the edit times, for the skips' line
-  std::vector<double> idleEdit;
-  cv::Mat image;
-  const auto wall0 = std::chrono::steady_clock::now();
-  while ((maxFrames == 0 || frames < maxFrames) && source.read(image)) {
-    const int frame = source.index();
-    const auto r = stepper.step(image, frame, frame / fps);
-    double tessMs = 0, renderMs = 0, overviewMs = 0;
-    if (r.planetInCamera) {
-      const terrain::Camera cam =
-          render::arCamera(r.planetInCamera->R, r.planetInCamera->t, stepper.scale(), K, W, H);
-      auto t0 = std::chrono::steady_clock::now();
-      const terrain::Mesh& mesh = tessellator.tessellate(*planet, cam, ts);
-      tessMs = ms(t0);
-      ++planetFrames;
-      reused += tessellator.stats().reused;
-      s.triangles.push_back(double(mesh.triangleCount()));
-      trianglesMax = std::max(trianglesMax, mesh.triangleCount());
-      std::optional<render::Cursor> cursor;
-      if (r.control) cursor = render::Cursor{*r.control, stepper.toolRadius()};
-      t0 = std::chrono::steady_clock::now();
-      renderer.renderAR(image, *planet, mesh, cam, style, cursor, r.toolTriangles);
-      renderMs = ms(t0);
-      if (frame % kOverviewEvery == 0) {
-        t0 = std::chrono::steady_clock::now();
-        renderer.renderOverview(*planet, mesh, cam, 240, 240);
-        overviewMs = ms(t0);
-        ++overviews;
-      }
-      lastView = cam;
-      if (planetFrames % 8 == 1 && skips.views.size() < 12) {
-        skips.views.push_back(cam);
-        skips.background = image.clone();
-      }
-    } else {
-      const auto t0 = std::chrono::steady_clock::now();
-      renderer.renderAR(image, *planet, empty, lastView ? *lastView : placeholder, style);
-      renderMs = ms(t0);
-    }
-    noUpload += !renderer.stats().uploadedThisFrame;
-    if (r.scene.tipValid && !r.touching) idleEdit.push_back(r.times.editMs);
-    const double trackMs = r.times.detectMs + r.times.trackMs;
-    for (Series* t : {&every, &s}) {
-      if (t == &s && !r.planetInCamera) continue;
-      t->detect.push_back(r.times.detectMs);
-      t->scene.push_back(r.times.trackMs);
-      t->track.push_back(trackMs);
-      t->edit.push_back(r.times.editMs);
-      if (r.touching) t->editTouching.push_back(r.times.editMs);
-      t->tessellate.push_back(tessMs);
-      t->render.push_back(renderMs);
-      t->overview.push_back(overviewMs);
-      t->total.push_back(trackMs + r.times.editMs + tessMs + renderMs + overviewMs);
-    }
-    ++frames;
-    if (frames % 30 == 0) std::cerr << "bench frame: " << frames << " frames\r" << std::flush;
+// One case's replay of the demo video: the frame stepper, the AR view's tessellation and render
+// and the overview, each timed per frame, with what the case's rows report.
+class CaseReplay {
+ public:
+  CaseReplay(int gridLevel, double distMaxPx, render::Shading shading)
+      : planet_(app::makeDefaultPlanet(gridLevel, 1)),
+        source_(ps::app::sourceDir() / "data" / "demo.mkv"),
+        calib_(tracking::loadCalibration(ps::app::sourceDir() / "calib" / "synthetic-640x480.yml")
+                   .forImageSize(source_.size())),
+        ro_(demoReplayOptions()),
+        stepper_(calib_, *planet_, ro_),
+        K_(eigenK(calib_.K)),
+        W_(source_.size().width),
+        H_(source_.size().height) {
+    style_.shading = shading;
+    style_.boardShadow = style_.atmosphere = shading == render::Shading::kPerPixel;
+    ts_.distMaxPx = distMaxPx;
+    ts_.triangleBudget = kBudget;
   }
-  std::cerr << "\n";
-  const double wallMs = ms(wall0);
-  const double all = s.sum(s.total);
-  auto share = [&](const std::vector<double>& v) {
-    return all > 0 ? std::round(s.sum(v) / all * 1000) / 1000 : 0.0;
-  };
-  machine["load_avg_after"] = loadAverage();
-  const double medianFrame = median(s.total);
-  out << nlohmann::json{{"bench", "frame"},
-                        {"case", name},
-                        {"video", "data/demo.mkv"},
-                        {"size", std::to_string(W) + "x" + std::to_string(H)},
-                        {"grid", planet->grid().side()},
-                        {"dist_max_px", kDistMaxPx},
-                        {"shading",
-                         shading == render::Shading::kPerPixel ? "per_pixel" : "faceted"},
-                        {"board_shadow_and_rim", style.boardShadow},
-                        {"triangle_budget", kBudget},
-                        {"frames", frames},
-                        {"planet_frames", planetFrames},
-                        {"fps", medianFrame > 0 ? std::round(10000 / medianFrame) / 10 : 0},
-                        {"fps_wall", wallMs > 0 ? std::round(frames * 10000 / wallMs) / 10 : 0},
-                        {"frame_ms", round3(medianFrame)},
-                        {"frame_ms_p90", round3(percentile(s.total, 0.9))},
-                        {"all_frames",
-                         {{"fps", median(every.total) > 0
-                                      ? std::round(10000 / median(every.total)) / 10
-                                      : 0},
-                          {"frame_ms", round3(median(every.total))},
-                          {"track_ms", round3(median(every.track))},
-                          {"render_ms", round3(median(every.render))}}},
-                        {"track_ms", round3(median(s.track))},
-                        {"detect_ms", round3(median(s.detect))},
-                        {"scene_ms", round3(median(s.scene))},
-                        {"edit_ms", round3(median(s.edit))},
-                        {"edit_ms_p90", round3(percentile(s.edit, 0.9))},
-                        {"edit_ms_touching", round3(median(s.editTouching))},
-                        {"touching_frames", s.editTouching.size()},
-                        {"tessellate_ms", round3(median(s.tessellate))},
-                        {"render_ms", round3(median(s.render))},
-                        {"overview_ms_when_drawn",
-                         round3(overviews ? s.sum(s.overview) / overviews : 0.0)},
-                        {"triangles", std::llround(median(s.triangles))},
-                        {"triangles_max", trianglesMax},
-                        {"share",
-                         {{"track", share(s.track)},
-                          {"edit", share(s.edit)},
-                          {"tessellate", share(s.tessellate)},
-                          {"render", share(s.render)},
-                          {"overview", share(s.overview)}}},
-                        {"skips",
-                         {{"tessellation_reused", reused},
-                          {"no_upload", noUpload},
-                          {"frames_without_planet", frames - planetFrames},
-                          {"overview_every", kOverviewEvery},
-                          {"overview_frames", overviews}}},
-                        {"machine", machine}}
-             .dump()
-      << std::endl;
+
+  // The video's frames (the first `maxFrames`; 0: all).
+  void run(int maxFrames) {
+    const double fps = source_.fps() > 0 ? source_.fps() : ro_.fallbackFps;
+    // Frames without the planet still draw the camera image: an empty mesh and a camera 1 m in
+    // front of the planet (nothing of the planet is drawn).
+    const terrain::Camera placeholder = render::arCamera(
+        Eigen::Matrix3d::Identity(), Eigen::Vector3d(0, 0, 1), stepper_.scale(), K_, W_, H_);
+    const auto wall0 = std::chrono::steady_clock::now();
+    while ((maxFrames == 0 || frames_ < maxFrames) && source_.read(image_)) {
+      const int frame = source_.index();
+      const auto r = stepper_.step(image_, frame, frame / fps);
+      const StageTimes t = r.planetInCamera ? drawPlanet(r, frame) : drawWithout(placeholder);
+      noUpload_ += !renderer_.stats().uploadedThisFrame;
+      if (r.scene.tipValid && !r.touching) idleEdit_.push_back(r.times.editMs);
+      addTimes(r, t);
+      ++frames_;
+      if (frames_ % 30 == 0) std::cerr << "bench frame: " << frames_ << " frames\r" << std::flush;
+    }
+    std::cerr << "\n";
+    wallMs_ = ms(wall0);
+  }
+
+  // The case's row: medians over the frames with the planet in view, shares, skips.
+  nlohmann::json row(const std::string& name, const nlohmann::json& machine) const {
+    const double all = s_.sum(s_.total);
+    auto share = [&](const std::vector<double>& v) {
+      return all > 0 ? std::round(s_.sum(v) / all * 1000) / 1000 : 0.0;
+    };
+    const double medianFrame = median(s_.total);
+    return {{"bench", "frame"},
+            {"case", name},
+            {"video", "data/demo.mkv"},
+            {"size", std::to_string(W_) + "x" + std::to_string(H_)},
+            {"grid", planet_->grid().side()},
+            {"dist_max_px", ts_.distMaxPx},
+            {"shading", style_.shading == render::Shading::kPerPixel ? "per_pixel" : "faceted"},
+            {"board_shadow_and_rim", style_.boardShadow},
+            {"triangle_budget", kBudget},
+            {"frames", frames_},
+            {"planet_frames", planetFrames_},
+            {"fps", medianFrame > 0 ? std::round(10000 / medianFrame) / 10 : 0},
+            {"fps_wall", wallMs_ > 0 ? std::round(frames_ * 10000 / wallMs_) / 10 : 0},
+            {"frame_ms", round3(medianFrame)},
+            {"frame_ms_p90", round3(percentile(s_.total, 0.9))},
+            {"all_frames",
+             {{"fps", median(every_.total) > 0 ? std::round(10000 / median(every_.total)) / 10 : 0},
+              {"frame_ms", round3(median(every_.total))},
+              {"track_ms", round3(median(every_.track))},
+              {"render_ms", round3(median(every_.render))}}},
+            {"track_ms", round3(median(s_.track))},
+            {"detect_ms", round3(median(s_.detect))},
+            {"scene_ms", round3(median(s_.scene))},
+            {"edit_ms", round3(median(s_.edit))},
+            {"edit_ms_p90", round3(percentile(s_.edit, 0.9))},
+            {"edit_ms_touching", round3(median(s_.editTouching))},
+            {"touching_frames", s_.editTouching.size()},
+            {"tessellate_ms", round3(median(s_.tessellate))},
+            {"render_ms", round3(median(s_.render))},
+            {"overview_ms_when_drawn", round3(overviews_ ? s_.sum(s_.overview) / overviews_ : 0.0)},
+            {"triangles", std::llround(median(s_.triangles))},
+            {"triangles_max", trianglesMax_},
+            {"share",
+             {{"track", share(s_.track)},
+              {"edit", share(s_.edit)},
+              {"tessellate", share(s_.tessellate)},
+              {"render", share(s_.render)},
+              {"overview", share(s_.overview)}}},
+            {"skips",
+             {{"tessellation_reused", reused_},
+              {"no_upload", noUpload_},
+              {"frames_without_planet", frames_ - planetFrames_},
+              {"overview_every", kOverviewEvery},
+              {"overview_frames", overviews_}}},
+            {"machine", machine}};
+  }
 
   // The same view again and again, nothing changed: the tessellator hands back its mesh and
-  // the renderer uploads nothing; only the drawing and the read-back remain.
-  if (lastView) {
-    const int repeats = std::max(10, options.repeats * 2);
+  // the renderer uploads nothing; only the drawing and the read-back remain. Nothing when the
+  // planet was never in view.
+  std::optional<nlohmann::json> stillRow(const std::string& name, int repeats) {
+    if (!lastView_) return std::nullopt;
     std::vector<double> tess, rend;
     int reusedStill = 0;
-    const std::size_t uploads0 = renderer.stats().uploads;
+    const std::size_t uploads0 = renderer_.stats().uploads;
     const terrain::Mesh* mesh = nullptr;
     for (int i = 0; i < repeats; ++i) {
       auto t0 = std::chrono::steady_clock::now();
-      mesh = &tessellator.tessellate(*planet, *lastView, ts);
+      mesh = &tessellator_.tessellate(*planet_, *lastView_, ts_);
       tess.push_back(ms(t0));
-      reusedStill += tessellator.stats().reused;
+      reusedStill += tessellator_.stats().reused;
       t0 = std::chrono::steady_clock::now();
-      renderer.renderAR(image, *planet, *mesh, *lastView, style);
+      renderer_.renderAR(image_, *planet_, *mesh, *lastView_, style_);
       rend.push_back(ms(t0));
     }
-    out << nlohmann::json{{"bench", "frame"},
+    return nlohmann::json{{"bench", "frame"},
                           {"case", name + "_still"},
                           {"repeats", repeats},
                           {"triangles", mesh->triangleCount()},
                           {"tessellate_ms", round3(median(tess))},
                           {"render_ms", round3(median(rend))},
                           {"tessellation_reused", reusedStill},
-                          {"uploads", renderer.stats().uploads - uploads0},
-                          {"load_avg", loadAverage()}}
-               .dump()
-        << std::endl;
+                          {"uploads", renderer_.stats().uploads - uploads0},
+                          {"load_avg", loadAverage()}};
   }
 
-  // Each skip against doing the work, on views of this replay (the faceted baseline only
-  // measures its frame rate).
+  // Each skip against doing the work, on views of this replay.
+  nlohmann::json skipsRow(const std::string& name, int repeats) {
+    skips_.settings = ts_;
+    skips_.editTouchingMs = median(s_.editTouching);
+    skips_.editIdleMs = median(idleEdit_);
+    skips_.idleFrames = int(idleEdit_.size());
+    skips_.overviewMs = overviews_ ? s_.sum(s_.overview) / overviews_ : 0.0;
+    skips_.overviewEvery = kOverviewEvery;
+    skips_.repeats = repeats;
+    return {{"bench", "frame"},
+            {"case", name + "_skips"},
+            {"grid", planet_->grid().side()},
+            {"skips", measureSkips(renderer_, *planet_, skips_)},
+            {"load_avg", loadAverage()}};
+  }
+
+ private:
+  struct StageTimes {
+    double tessellate = 0, render = 0, overview = 0;
+  };
+
+  // The planet in view: tessellated, drawn over the frame, the overview every 4th frame.
+  StageTimes drawPlanet(const replay::StepResult& r, int frame) {
+    StageTimes t;
+    const terrain::Camera cam =
+        render::arCamera(r.planetInCamera->R, r.planetInCamera->t, stepper_.scale(), K_, W_, H_);
+    auto t0 = std::chrono::steady_clock::now();
+    const terrain::Mesh& mesh = tessellator_.tessellate(*planet_, cam, ts_);
+    t.tessellate = ms(t0);
+    ++planetFrames_;
+    reused_ += tessellator_.stats().reused;
+    s_.triangles.push_back(double(mesh.triangleCount()));
+    trianglesMax_ = std::max(trianglesMax_, mesh.triangleCount());
+    std::optional<render::Cursor> cursor;
+    if (r.control) cursor = render::Cursor{*r.control, stepper_.toolRadius()};
+    t0 = std::chrono::steady_clock::now();
+    renderer_.renderAR(image_, *planet_, mesh, cam, style_, cursor, r.toolTriangles);
+    t.render = ms(t0);
+    if (frame % kOverviewEvery == 0) {
+      t0 = std::chrono::steady_clock::now();
+      renderer_.renderOverview(*planet_, mesh, cam, 240, 240);
+      t.overview = ms(t0);
+      ++overviews_;
+    }
+    lastView_ = cam;
+    if (planetFrames_ % 8 == 1 && skips_.views.size() < 12) {
+      skips_.views.push_back(cam);
+      skips_.background = image_.clone();
+    }
+    return t;
+  }
+
+  // No planet in view: the camera image alone, through the renderer.
+  StageTimes drawWithout(const terrain::Camera& placeholder) {
+    StageTimes t;
+    const auto t0 = std::chrono::steady_clock::now();
+    renderer_.renderAR(image_, *planet_, empty_, lastView_ ? *lastView_ : placeholder, style_);
+    t.render = ms(t0);
+    return t;
+  }
+
+  void addTimes(const replay::StepResult& r, const StageTimes& t) {
+    const double trackMs = r.times.detectMs + r.times.trackMs;
+    for (Series* series : {&every_, &s_}) {
+      if (series == &s_ && !r.planetInCamera) continue;
+      series->detect.push_back(r.times.detectMs);
+      series->scene.push_back(r.times.trackMs);
+      series->track.push_back(trackMs);
+      series->edit.push_back(r.times.editMs);
+      if (r.touching) series->editTouching.push_back(r.times.editMs);
+      series->tessellate.push_back(t.tessellate);
+      series->render.push_back(t.render);
+      series->overview.push_back(t.overview);
+      series->total.push_back(trackMs + r.times.editMs + t.tessellate + t.render + t.overview);
+    }
+  }
+
+  render::RenderStyle style_;
+  render::PlanetRenderer renderer_;
+  terrain::Tessellator tessellator_;
+  std::unique_ptr<terrain::Terrain> planet_;
+  tracking::FrameSource source_;
+  tracking::CameraCalibration calib_;
+  replay::ReplayOptions ro_;
+  replay::FrameStepper stepper_;
+  Eigen::Matrix3d K_;
+  int W_, H_;
+  terrain::TessellationSettings ts_;
+  const terrain::Mesh empty_;
+
+  Series s_;      // frames with the planet in view: the figures of the issue
+  Series every_;  // every frame (the planet hidden behind the tool in most of the demo)
+  int frames_ = 0, planetFrames_ = 0, reused_ = 0, noUpload_ = 0, overviews_ = 0;
+  std::size_t trianglesMax_ = 0;
+  std::optional<terrain::Camera> lastView_;
+  SkipInputs skips_;  // a sample of the views and the edit times, for the skips' line
+  std::vector<double> idleEdit_;
+  cv::Mat image_;  // the frame last read, drawn over
+  double wallMs_ = 0;
+};
+
+void benchCase(const BenchOptions& options, std::ostream& out, nlohmann::json machine,
+               render::EglContext& context, int gridLevel, const std::string& name,
+               double distMaxPx, render::Shading shading) {
+  context.makeCurrent();
+  machine["load_avg_before"] = loadAverage();
+  CaseReplay replay(gridLevel, distMaxPx, shading);
+  replay.run(options.quick ? 90 : 0);
+  machine["load_avg_after"] = loadAverage();
+  out << replay.row(name, machine).dump() << std::endl;
+  if (const auto still = replay.stillRow(name, std::max(10, options.repeats * 2)))
+    out << still->dump() << std::endl;
+  // The faceted baseline only measures its frame rate.
   if (shading == render::Shading::kFaceted) return;
   std::cerr << "bench frame: skips (" << name << ")\n";
-  skips.settings = ts;
-  skips.editTouchingMs = median(s.editTouching);
-  skips.editIdleMs = median(idleEdit);
-  skips.idleFrames = int(idleEdit.size());
-  skips.overviewMs = overviews ? s.sum(s.overview) / overviews : 0.0;
-  skips.overviewEvery = kOverviewEvery;
-  skips.repeats = options.quick ? 2 : 5;
-  out << nlohmann::json{{"bench", "frame"},
-                        {"case", name + "_skips"},
-                        {"grid", planet->grid().side()},
-                        {"skips", measureSkips(renderer, *planet, skips)},
-                        {"load_avg", loadAverage()}}
-             .dump()
-      << std::endl;
+  out << replay.skipsRow(name, options.quick ? 2 : 5).dump() << std::endl;
 }
 
 }  // namespace
 
-static const BenchRegistration kRegistered("frame", benchFrame);
+static const BenchRegistration kRegistered(
+    "frame", "The AR app's whole frame on data/demo.mkv: track, edit, tessellate, render",
+    benchFrame);
 
 }  // namespace ps::bench

@@ -295,6 +295,8 @@ void benchHaptics(const BenchOptions& options, std::ostream& out) {
   demoReplay(options, out);
 }
 
-static const BenchRegistration kRegistered("haptics", benchHaptics);
+static const BenchRegistration kRegistered("haptics",
+                                           "The 1 kHz haptic loop beside the editor thread's work",
+                                           benchHaptics);
 
 }  // namespace ps::bench

@@ -1,18 +1,20 @@
 // `planetsculpt bench live`: the frame loop's time with the session's saving on and off
 // (issue 42 part 4, docs/LIVE.md "The writer thread"). A scripted session on the default planet:
-// a brush stroke of 1 s every PS_LIVE_STROKE_EVERY s (default 3) of session time, one stamp per
+// a brush stroke of 1 s every --stroke-every s (default 3) of session time, one stamp per
 // frame at 30 fps of session time, the AR view's tessellation (640x480, dist_max 4 px, a camera
 // circling the planet at 3 radii, as the live app's drawView), and with saving on the live app's
 // SessionStore (the journal fed by the undo journal's listener, tick() once a frame, an autosave
-// every PS_LIVE_AUTOSAVE s, default 10). The frames run as fast as they can (session time advances
+// every --autosave s, default 10). The frames run as fast as they can (session time advances
 // 1/30 s a frame), so saves come back to back: a harder case than the live app's. Each frame's
 // time is its edit and tessellation work plus, with saving on, the store's work on the frame
-// thread. Rows per planet side (PS_LIVE_SIDES, default "4097,8193"; --quick: 1025) and
-// PS_LIVE_SECONDS of session (default 300; --quick: 30), run off, on and off again: p50, p99
+// thread. Rows per planet side (--sides, default 4097,8193; --quick: 1025) and
+// --seconds of session (default 300; --quick: 30), run off, on and off again: p50, p99
 // and max frame time, the ratios of on to the mean of the two off runs, the saves, records and the
 // writer's times. The writer thread competes with the frame loop for the machine's cores (nproc and
 // the load go with the rows).
 #include <unistd.h>
+
+#include <CLI/CLI.hpp>
 #include <chrono>
 #include <cstdlib>
 #include <filesystem>
@@ -21,7 +23,6 @@
 #include <nlohmann/json.hpp>
 #include <numeric>
 #include <random>
-#include <sstream>
 #include <thread>
 
 #include "app/default_planet.hpp"
@@ -41,11 +42,6 @@ std::string loadAverage() {
   std::string a, b, c;
   f >> a >> b >> c;
   return a + " " + b + " " + c;
-}
-
-double envOr(const char* name, double fallback) {
-  const char* v = std::getenv(name);
-  return v ? std::atof(v) : fallback;
 }
 
 struct LiveRun {
@@ -128,23 +124,25 @@ double r3(double v) {
 
 }  // namespace
 
-void benchLive(const BenchOptions& options, std::ostream& out) {
-  const double seconds = envOr("PS_LIVE_SECONDS", options.quick ? 30 : 300);
-  const double autosave = envOr("PS_LIVE_AUTOSAVE", 10);
-  const double strokeEvery = envOr("PS_LIVE_STROKE_EVERY", 3);
-  std::string sides = options.quick ? "1025" : "4097,8193";
-  if (const char* e = std::getenv("PS_LIVE_SIDES")) sides = e;
+// `bench live`'s options; 0 / empty: the defaults (below).
+struct LiveSettings {
+  std::vector<int> sides;  // planet sides, each 2^n + 1
+  double seconds = 0;      // of session per run
+  double autosave = 10;    // s between autosaves
+  double strokeEvery = 3;  // s of session between strokes
+};
+
+void benchLive(const BenchOptions& options, const LiveSettings& settings, std::ostream& out) {
+  const double seconds = settings.seconds > 0 ? settings.seconds : options.quick ? 30 : 300;
+  const double autosave = settings.autosave, strokeEvery = settings.strokeEvery;
+  std::vector<int> sides = settings.sides;
+  if (sides.empty()) sides = options.quick ? std::vector<int>{1025} : std::vector<int>{4097, 8193};
   const std::filesystem::path dir =
       std::filesystem::temp_directory_path() / ("ps_bench_live_" + std::to_string(::getpid()));
-  std::stringstream list(sides);
-  for (std::string item; std::getline(list, item, ',');) {
-    const int side = std::atoi(item.c_str());
+  for (const int side : sides) {
+    const std::string item = std::to_string(side);
     int level = 0;
     while ((1 << level) + 1 < side) ++level;
-    if ((1 << level) + 1 != side) {
-      std::cerr << "bench live: side " << side << " is not 2^n + 1; skipped\n";
-      continue;
-    }
     std::cerr << "bench live: " << side << "² planet ...\n";
     auto planet = app::makeDefaultPlanet(level, 1);
     const std::string loadBefore = loadAverage();
@@ -204,6 +202,39 @@ void benchLive(const BenchOptions& options, std::ostream& out) {
   std::filesystem::remove_all(dir);
 }
 
-static const BenchRegistration kRegistered("live", benchLive);
+// A side the planet's grid can have: 2^n + 1, 3 .. 16385.
+std::string notAGridSide(const std::string& text) {
+  int side = 0;
+  try {
+    std::size_t used = 0;
+    side = std::stoi(text, &used);
+    if (used != text.size()) side = 0;
+  } catch (const std::exception&) {
+  }
+  for (int level = 1; level <= 14; ++level)
+    if ((1 << level) + 1 == side) return "";
+  return "side " + text + " is not 2^n + 1 (3 .. 16385)";
+}
+
+static const BenchRegistration kRegistered(
+    "live", "The live frame loop with the session's saving on and off",
+    [](CLI::App& command) -> BenchFunction {
+      auto s = std::make_shared<LiveSettings>();
+      command
+          .add_option("--sides", s->sides,
+                      "Planet sides, comma-separated (default 4097,8193; --quick: 1025)")
+          ->delimiter(',')
+          ->check(CLI::Validator(notAGridSide, "2^n+1"));
+      command
+          .add_option("--seconds", s->seconds, "Session time per run (default 300; --quick: 30)")
+          ->check(CLI::PositiveNumber);
+      command.add_option("--autosave", s->autosave, "Seconds between autosaves")
+          ->capture_default_str()
+          ->check(CLI::PositiveNumber);
+      command.add_option("--stroke-every", s->strokeEvery, "Seconds of session between strokes")
+          ->capture_default_str()
+          ->check(CLI::PositiveNumber);
+      return [s](const BenchOptions& o, std::ostream& out) { benchLive(o, *s, out); };
+    });
 
 }  // namespace ps::bench

@@ -284,7 +284,7 @@ OcclusionRecording demoRecording(bool quick) {
 
 }  // namespace
 
-void benchOcclusion(const BenchOptions& o, std::ostream& out) {
+void benchOcclusion(const BenchOptions& o, const HandBenchSettings& hand, std::ostream& out) {
   const auto gl = glContextOrSkip("occlusion", out);
   if (!gl) return;
   render::PlanetRenderer renderer;
@@ -295,9 +295,15 @@ void benchOcclusion(const BenchOptions& o, std::ostream& out) {
     std::cerr << "bench occlusion: " << rec.name << "\n";
     out << toolRow(rec, measureTool(rec, gridLevel, renderer)).dump() << std::endl;
   }
-  benchOcclusionHand(o, out);
+  benchOcclusionHand(o, hand, out);
 }
 
-static const BenchRegistration kRegistered("occlusion", benchOcclusion);
+static const BenchRegistration kRegistered(
+    "occlusion", "The tool and the hand in front of the planet: masks against the truth",
+    [](CLI::App& command) -> BenchFunction {
+      auto hand = std::make_shared<HandBenchSettings>();
+      addHandOptions(command, *hand);
+      return [hand](const BenchOptions& o, std::ostream& out) { benchOcclusion(o, *hand, out); };
+    });
 
 }  // namespace ps::bench

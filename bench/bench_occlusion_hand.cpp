@@ -13,6 +13,7 @@
 //   * the mask's time per frame against the tracking's (detection + pose) in the same run.
 // The synthetic renderer draws no shadows: the lighting recording's shadow is a soft-edged
 // disc darkening the frame to 55 %, laid over the rendered frame here, crossing the planet.
+#include <CLI/CLI.hpp>
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
@@ -196,7 +197,21 @@ struct Tally {
   }
 };
 
-void runRecording(const Recording& rec, const BenchOptions& o, std::ostream& out) {
+// The mask's settings with the tests `--hand-off` names turned off and `--texel-mm`'s texel (3 mm:
+// hand-orbit --quick IoU 0.936 at 16 ms a frame, against 2 mm's 0.975 at 24 ms).
+tracking::HandMaskConfig handMaskConfig(const HandBenchSettings& settings) {
+  tracking::HandMaskConfig hc;
+  for (const std::string& test : settings.testsOff) {
+    if (test == "chroma") hc.appearance.chromaThreshold = 1e3;
+    if (test == "bright") hc.appearance.brightRatio = 1e3, hc.appearance.shadowRatio = 0;
+    if (test == "texture") hc.appearance.textureMinStd = 1e4;
+  }
+  if (settings.texelMm > 0) hc.appearance.texelM = 1e-3 * settings.texelMm;
+  return hc;
+}
+
+void runRecording(const Recording& rec, const BenchOptions& o, const HandBenchSettings& settings,
+                  std::ostream& out) {
   const tracking::SynthRenderer renderer(rec.script);
   const auto chart = std::make_shared<core::LatLongChart>(core::GridSize::fromSide(129), 1.0e6);
   terrain::Terrain planet(chart, std::vector<float>(chart->grid().count(), 0.0f));
@@ -205,20 +220,7 @@ void runRecording(const Recording& rec, const BenchOptions& o, std::ostream& out
   ro.scene.useToolLayout(rec.script.toolLayout);
   ro.scene.planetRadius = rec.script.planetRadius;
   replay::FrameStepper stepper(rec.script.camera, planet, ro);
-  tracking::HandMaskConfig hc;
-  // PS_HAND_OFF=chroma,bright,texture turns those tests off (what each one does);
-  // PS_HAND_ONLY=RECORDING runs that recording only; PS_HAND_TEXEL_MM=T sets the texel (3 mm:
-  // hand-orbit --quick IoU 0.936 at 16 ms a frame, against 2 mm's 0.975 at 24 ms).
-  if (const char* off = std::getenv("PS_HAND_OFF")) {
-    const std::string w = off;
-    if (w.find("chroma") != std::string::npos) hc.appearance.chromaThreshold = 1e3;
-    if (w.find("bright") != std::string::npos)
-      hc.appearance.brightRatio = 1e3, hc.appearance.shadowRatio = 0;
-    if (w.find("texture") != std::string::npos) hc.appearance.textureMinStd = 1e4;
-  }
-  if (const char* texel = std::getenv("PS_HAND_TEXEL_MM"))
-    hc.appearance.texelM = 1e-3 * std::atof(texel);
-  if (const char* only = std::getenv("PS_HAND_ONLY"); only && rec.name != only) return;
+  const tracking::HandMaskConfig hc = handMaskConfig(settings);
   tracking::HandMasker tracked(hc), truthPosed(hc);
   Tally onTracked, onTruth;
   std::vector<double> trackMs;
@@ -302,8 +304,26 @@ void runRecording(const Recording& rec, const BenchOptions& o, std::ostream& out
 
 }  // namespace
 
-void benchOcclusionHand(const BenchOptions& o, std::ostream& out) {
-  for (const auto& rec : recordings(o.quick)) runRecording(rec, o, out);
+void addHandOptions(CLI::App& command, HandBenchSettings& settings) {
+  command
+      .add_option("--hand-off", settings.testsOff,
+                  "Hand rows: turn these hand-mask tests off (comma-separated)")
+      ->delimiter(',')
+      ->check(CLI::IsMember({"chroma", "bright", "texture"}));
+  // The names recordings() gives.
+  command.add_option("--hand-recording", settings.recording, "Hand rows: this recording only")
+      ->check(CLI::IsMember({"hand-sweep", "hand-orbit", "hand-low", "lighting-noise"}));
+  command
+      .add_option("--texel-mm", settings.texelMm,
+                  "Hand rows: the mask's texel in mm (default: the hand mask's own)")
+      ->check(CLI::PositiveNumber);
+}
+
+void benchOcclusionHand(const BenchOptions& o, const HandBenchSettings& settings,
+                        std::ostream& out) {
+  for (const auto& rec : recordings(o.quick))
+    if (settings.recording.empty() || rec.name == settings.recording)
+      runRecording(rec, o, settings, out);
 }
 
 }  // namespace ps::bench

@@ -118,7 +118,9 @@ void benchRender(const BenchOptions& o, std::ostream& out) {
 }
 
 namespace {
-const BenchRegistration kRender("render", benchRender);
+const BenchRegistration kRender("render",
+                                "Per-pixel shading against facets: SSIM, triangles, render time",
+                                benchRender);
 }  // namespace
 
 }  // namespace ps::bench

@@ -27,6 +27,8 @@
 // Every row: "model" ("tin" or "grid"), vertices, memory_bytes (the TIN: its triangulation's
 // containers; the grid: its float heights and the sand field's resident tiles), surface_error_m,
 // volume_drift (|V_end - V_start| / V_start, each model's own V), ms.
+#include <CLI/CLI.hpp>
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <iostream>
@@ -667,14 +669,13 @@ void plots(const std::vector<nlohmann::json>& rows, const std::string& outDir) {
   std::cerr << "bench: wrote " << outDir << "/sand_tin.png\n";
 }
 
-void benchSandTin(const BenchOptions& options, std::ostream& out) {
+// `--only PART,...`: only those experiments (empty: all).
+void benchSandTin(const BenchOptions& options, const std::vector<std::string>& only,
+                  std::ostream& out) {
   const Scene scene;
   std::vector<nlohmann::json> rows;
-  // PS_SAND_TIN_ONLY=PART[,PART]: only those experiments (size, compare, exact, drift).
-  const char* onlyEnv = std::getenv("PS_SAND_TIN_ONLY");
-  const std::string only = onlyEnv ? std::string(",") + onlyEnv + "," : "";
   const auto runs = [&](const char* part) {
-    return only.empty() || only.find(std::string(",") + part + ",") != std::string::npos;
+    return only.empty() || std::find(only.begin(), only.end(), part) != only.end();
   };
   if (runs("size")) sizeAndTrace(options, scene, out, rows);
   if (runs("compare")) compare(options, scene, out, rows);
@@ -685,6 +686,14 @@ void benchSandTin(const BenchOptions& options, std::ostream& out) {
 
 }  // namespace
 
-static const BenchRegistration kRegistered("sand-tin", benchSandTin);
+static const BenchRegistration kRegistered(
+    "sand-tin", "The sand TIN in paper 000's experiments, beside the grid core",
+    [](CLI::App& command) -> BenchFunction {
+      auto only = std::make_shared<std::vector<std::string>>();
+      command.add_option("--only", *only, "Only these experiments (comma-separated)")
+          ->delimiter(',')
+          ->check(CLI::IsMember({"size", "compare", "exact", "drift"}));
+      return [only](const BenchOptions& o, std::ostream& out) { benchSandTin(o, *only, out); };
+    });
 
 }  // namespace ps::bench

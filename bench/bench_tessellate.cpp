@@ -196,6 +196,8 @@ void benchTessellateAll(const BenchOptions& options, std::ostream& out) {
   benchTessellateCharts(options, out);
 }
 
-static const BenchRegistration kRegistered("tessellate", benchTessellateAll);
+static const BenchRegistration kRegistered(
+    "tessellate", "View-dependent tessellation time against measured screen error",
+    benchTessellateAll);
 
 }  // namespace ps::bench

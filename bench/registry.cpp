@@ -2,8 +2,8 @@
 
 namespace ps::bench {
 
-std::map<std::string, BenchFunction>& registeredBenchmarks() {
-  static std::map<std::string, BenchFunction> all;
+std::map<std::string, RegisteredBench>& registeredBenchmarks() {
+  static std::map<std::string, RegisteredBench> all;
   return all;
 }
 

@@ -680,6 +680,27 @@ def group_errors():
             fail(f"--sun {sun} was not refused by name: {p.returncode} {p.stderr}")
     if os.path.exists(out("sun")):
         fail("a refused --sun still wrote its output folder")
+    # A benchmark's settings are options of its own subcommand: a value that does not parse or is
+    # out of range, or an option the benchmark does not have, is refused before anything runs,
+    # naming the option and the value; `bench --help` names every benchmark's options.
+    for args, named in ((("live", "--sides", "abc"), ("--sides", "abc")),
+                        (("live", "--sides", "4097,1000"), ("--sides", "1000")),
+                        (("live", "--seconds", "-3"), ("--seconds", "-3")),
+                        (("track", "--scene", "baord"), ("--scene", "baord")),
+                        (("track", "--tune", "1,2,3"), ("--tune",)),
+                        (("track", "--search-every", "two"), ("--search-every", "two")),
+                        (("deform", "--side", "1000"), ("--side", "1000")),
+                        (("occlusion", "--hand-off", "chroma,brite"), ("--hand-off", "brite")),
+                        (("sand-tin", "--only", "sizes"), ("--only", "sizes")),
+                        (("track", "--sides", "1025"), ("--sides",))):
+        p = subprocess.run([EXE, "bench", *args, "--quick"], capture_output=True, text=True)
+        if p.returncode <= 0 or p.stdout or not all(n in p.stderr for n in named):
+            fail(f"bench {' '.join(args)} was not refused by name: exit {p.returncode}\n"
+                 f"{p.stdout[-500:]}{p.stderr}")
+    stdout, _ = run("bench", "--help")
+    for option in ("--sides", "--texel-mm", "--board-scene", "--only", "--latitude"):
+        if option not in stdout:
+            fail(f"bench --help does not name {option}:\n{stdout}")
 
 
 if __name__ == "__main__":

@@ -1,5 +1,8 @@
-// `planetsculpt bench [NAME]`: runs the registered benchmarks (bench/), JSON lines on stdout;
-// with --out DIR also PNG plots of the results (app/bench_plots.hpp).
+// `planetsculpt bench [NAME] [OPTIONS]`: runs the registered benchmarks (bench/), JSON lines on
+// stdout; with --out DIR also PNG plots of the results (app/bench_plots.hpp). Each benchmark is a
+// subcommand of `bench` with its own options (bench/bench.hpp); without a name all of them run
+// with their defaults.
+#include <algorithm>
 #include <fstream>
 #include <iostream>
 #include <memory>
@@ -16,8 +19,24 @@ namespace {
 
 struct BenchArgs {
   bench::BenchOptions options;
-  std::string name = "all", jsonFile;
+  std::string jsonFile;
 };
+
+// One line per benchmark with options of its own, naming them: `bench --help` shows every
+// setting there is, `bench NAME --help` what each one does.
+std::string optionsSummary(const std::vector<std::pair<std::string, CLI::App*>>& benches) {
+  std::string text =
+      "Each benchmark's own options (planetsculpt bench NAME --help says what they do):";
+  for (const auto& [name, command] : benches) {
+    std::string line;
+    for (const CLI::Option* option : command->get_options())
+      if (option->get_name() != "--help") line += " " + option->get_name();
+    if (!line.empty())
+      text += "\n  " + name + std::string(std::max<std::size_t>(1, 12 - name.size()), ' ') +
+              line.substr(1);
+  }
+  return text;
+}
 
 // Copies everything written to it into two stream buffers (stdout and the --json file).
 struct TeeBuffer : std::streambuf {
@@ -38,17 +57,27 @@ struct TeeBuffer : std::streambuf {
 
 const CommandRegistration kBench([](CLI::App& root, CLI::App*& sub) -> CommandAction {
   auto args = std::make_shared<BenchArgs>();
-  std::vector<std::string> names = {"all"};
-  for (const auto& [name, fn] : bench::registeredBenchmarks()) names.push_back(name);
   sub = root.add_subcommand("bench", "Run benchmarks; one JSON object per line on stdout");
-  sub->add_option("name", args->name, "Which benchmark (default: all)")
-      ->check(CLI::IsMember(names));
   sub->add_flag("--quick", args->options.quick, "Smaller grids, fewer repeats");
   sub->add_option("--repeats", args->options.repeats, "Timed repeats per measurement")
       ->capture_default_str();
   sub->add_option("--out", args->options.outDir, "Folder for plots and pictures");
   sub->add_option("--json", args->jsonFile, "Also append the JSON lines to this file");
-  return [args] {
+  sub->require_subcommand(0, 1);
+  // Each benchmark a subcommand: `bench track --scene board --quick` (the common options may
+  // come before or after the name: they fall through to `bench`).
+  std::vector<std::pair<std::string, CLI::App*>> commands;
+  auto runs = std::make_shared<std::vector<std::pair<CLI::App*, bench::BenchFunction>>>();
+  for (const auto& [name, entry] : bench::registeredBenchmarks()) {
+    CLI::App* command = sub->add_subcommand(name, entry.description);
+    command->fallthrough();
+    command->footer(
+        "Also the options of `planetsculpt bench` (--quick, --repeats, --out, --json).");
+    runs->emplace_back(command, entry.registrar(*command));
+    commands.emplace_back(name, command);
+  }
+  sub->footer("Without NAME every benchmark runs with its defaults.\n" + optionsSummary(commands));
+  return [args, runs] {
     std::ofstream file;
     if (!args->jsonFile.empty()) {
       file.open(args->jsonFile, std::ios::app);
@@ -63,8 +92,10 @@ const CommandRegistration kBench([](CLI::App& root, CLI::App*& sub) -> CommandAc
     tee.a = std::cout.rdbuf();
     tee.b = &toFile;
     std::ostream out(&tee);
-    for (const auto& [name, fn] : bench::registeredBenchmarks()) {
-      if (args->name == "all" || args->name == name) fn(args->options, out);
+    const bool all =
+        std::none_of(runs->begin(), runs->end(), [](const auto& r) { return r.first->parsed(); });
+    for (const auto& [command, run] : *runs) {
+      if (all || command->parsed()) run(args->options, out);
     }
     out.flush();
     if (!args->options.outDir.empty()) {
