@@ -387,11 +387,18 @@ def group_charts():
         fail(f"the octahedral sand replay: {s}")
     if open(out("octa_sand_a", "planet.planet"), "rb").read() != open(out("octa_sand_b", "planet.planet"), "rb").read():
         fail("two sand replays onto the octahedral planet wrote different planet files")
-    # Refusals, named: an unknown chart, --chart with a planet file (it has its own), and the
-    # TIN sand tool, which does not handle the octahedral chart's folds yet.
+    # The TIN sand tool on the octahedral chart (issue 43): its region TIN drawn in the AR view,
+    # stamps written back, forces felt.
+    run("replay", video, "--calib", CALIB, "--chart", "octahedral", "--grid", "513", "--max-frames", "60",
+        "--tool", "tin-sand", "--render", "--render-every", "15", "--out", out("octa_tin"))
+    with open(out("octa_tin", "summary.json")) as f:
+        s = json.load(f)
+    if (s["chart"] != "octahedral" or s["tool"] != "tin-sand" or s["stamps"] <= 0
+            or s["modified_vertices"] <= 0 or s.get("ar_tin_region_frames", 0) < 1):
+        fail(f"the octahedral TIN sand replay: {s}")
+    # Refusals, named: an unknown chart, --chart with a planet file (it has its own).
     for args, said in ((("--chart", "cube"), "chart 'cube' is not one of"),
-                       (("--chart", "octahedral", "--planet", out("octa_a", "planet.planet")), "has its own chart"),
-                       (("--chart", "octahedral", "--tool", "tin-sand"), "not on 'octahedral'")):
+                       (("--chart", "octahedral", "--planet", out("octa_a", "planet.planet")), "has its own chart")):
         p = subprocess.run([EXE, "replay", video, "--calib", CALIB, "--grid", "1025", "--max-frames", "5", *args,
                             "--out", out("refused")], capture_output=True, text=True)
         if p.returncode <= 0 or said not in p.stderr:
@@ -448,6 +455,22 @@ def group_tube_charts():
     for f in ("planet.planet", "forces.csv"):
         if open(out("torus_sand_a", f), "rb").read() != open(out("torus_sand_b", f), "rb").read():
             fail(f"two displacement replays onto the torus wrote different {f}")
+    # The TIN sand tool on both tubes (issue 43), its region TIN across the seams where the strokes
+    # cross them; on the default torus its stamp must be small enough for the tube's tangent plane
+    # (a region of 2.5 radii within a quarter of the tube radius, 1,800 km: at most 180 km).
+    for name, args in (("torus_tin", ("--chart", "torus")),
+                       ("tube_tin", ("--chart", "cylinder", "--radius", "6000000", "--length", "4000000"))):
+        run("replay", video, "--calib", CALIB, *args, "--tool", "tin-sand", "--displace-radius-km", "150",
+            "--grid", "1025", "--max-frames", "230", "--out", out(name))
+        with open(out(name, "summary.json")) as f:
+            s = json.load(f)
+        if s["tool"] != "tin-sand" or s["stamps"] < 1 or s["modified_vertices"] <= 0:
+            fail(f"the TIN sand replay {name} did not sculpt: {s}")
+    p = subprocess.run([EXE, "replay", video, "--calib", CALIB, "--chart", "torus", "--grid", "1025",
+                        "--max-frames", "5", "--tool", "tin-sand", "--out", out("refused_tin")],
+                       capture_output=True, text=True)
+    if p.returncode <= 0 or "too curved" not in p.stderr:
+        fail(f"a 400 km TIN sand stamp on the default torus was not refused as too curved: {p.stderr}")
     # The sculpted torus's heightmap goes back onto a torus of the same dimensions, and its mesh
     # export is a closed surface of Euler characteristic 0.
     run("import", out("torus_a", "heightmap.png"), "--chart", "torus", "--radius", "4500000",
