@@ -20,7 +20,9 @@
 #include "core/torus_chart.hpp"
 #include "edit/edit_pipeline.hpp"
 #include "sand/sand_grid.hpp"
+#include "sand/tin_region.hpp"
 #include "sand/tin_sand_tool.hpp"
+#include "terrain/mesh_patch.hpp"
 #include "terrain/terrain.hpp"
 #include "test_edit_util.hpp"
 
@@ -224,6 +226,46 @@ TEST(TinSandGlued, AStrokeAcrossAFoldOrASeamReusesItsRegionTin) {
     EXPECT_GT(tool.stamps(), 1u);
     EXPECT_EQ(tool.tinsMade(), 1u) << "one region TIN for the stroke across the fold or seam";
     EXPECT_TRUE(edittest::boundsEqualFullRebuild(t));
+  }
+}
+
+// A tube's region patch (what the AR view draws in place of the 4-8 mesh) lies on the tube:
+// every vertex is its TIN point's surface point (whose projection into the region's plane is
+// the TIN's (x, y)) raised by its height along the normal, and the patch stands for both twins
+// of a seam's points. It has no plane (the haptic path feels the grid there).
+TEST(TinSandGlued, ATubesRegionPatchLiesOnTheTube) {
+  for (const GluedCase& c : gluedCases()) {
+    if (c.name == "octahedral") continue;
+    SCOPED_TRACE(c.name);
+    terrain::Terrain t(c.chart, std::vector<float>(c.chart->grid().count(), float(kDepth)));
+    edit::EditPipeline pipe(t);
+    sand::TinSandToolSettings s;
+    s.radius = c.radius;
+    const sand::TinSandTool tool(c.chart, s);
+    const sand::SandGrid cells(c.chart);
+    const core::GridPoint at = c.special[c.name == "cylinder" ? 0 : 2];  // on the u seam
+    (void)stampAt(t, pipe, tool, cells, at, c.radius);
+    ASSERT_NE(tool.region(), nullptr);
+    const sand::TinRegion& region = *tool.region();
+    const terrain::MeshPatch p = region.patch();
+    EXPECT_FALSE(p.plane.has_value());
+    const tin::Tin tin = region.sand().tin().toTin();
+    ASSERT_EQ(p.positions.size(), tin.xy.size());
+    double worstPlane = 0, worstHeight = 0;
+    for (std::size_t i = 0; i < tin.xy.size(); ++i) {
+      const auto uv = c.chart->inverse(p.positions[i]);
+      ASSERT_TRUE(uv.has_value());
+      const Eigen::Vector3d foot = c.chart->positionAt(uv->x(), uv->y(), 0.0);
+      worstPlane = std::max(worstPlane, (region.frame().project(foot) - tin.xy[i]).norm());
+      worstHeight = std::max(worstHeight, std::abs((p.positions[i] - foot).norm() - tin.h[i]));
+    }
+    EXPECT_LE(worstPlane, 1e-6 * c.radius) << "the plane point's surface point";
+    EXPECT_LE(worstHeight, 1e-6 * c.radius) << "raised by the height along the normal";
+    const int m = c.chart->grid().m();
+    const auto replaces = [&](int u, int v) {
+      return std::binary_search(p.replaces.begin(), p.replaces.end(), c.chart->grid().index(u, v));
+    };
+    EXPECT_TRUE(replaces(0, at.v) && replaces(m, at.v)) << "both twins of the seam's point";
   }
 }
 
