@@ -553,7 +553,7 @@ def finite_numbers(x, where):
 
 
 BENCHES = ("bounds", "charts", "deform", "erosion", "export", "frame", "haptics", "live", "occlusion",
-           "render", "sand-tin", "tessellate", "track")
+           "render", "sand-tin", "sand-tin-charts", "tessellate", "track")
 
 
 def check_bench_row(r):
@@ -603,6 +603,11 @@ def check_bench_row(r):
     if exact and (r["surface_error_max_outside_band_m"] > 1e-9 or not r["surface_error_m"] > 0
                   or (r["model"] == "tin" and not 0 < r["memory_ratio_at_equal_error"] < 1e3)):
         fail(f"sand-tin compare-exact: {r}")
+    # The TIN sand tool's same stamp on every chart: the grid's volume kept as on lat-long, the
+    # same volume displaced (docs/SAND.md, "The TIN sand tool on the glued charts").
+    if b == "sand-tin-charts" and (r["volume_drift"] > 1e-9 or r["grid_points"] <= 0 or r["tin_vertices"] <= 0
+                                   or not r["displaced_m3"] > 0):
+        fail(f"sand-tin-charts: {r}")
     if b == "erosion" and abs(r.get("volume_drift", 0.0)) > 1e-6:
         fail(f"erosion: volume drift {r['volume_drift']}")
     for key in ("planet_detected", "control_vertex_within_3mm"):
@@ -647,6 +652,14 @@ def group_bench():
         for method in ("thermal", "diffusion-explicit", "diffusion-implicit", "crater-settle"):
             if not any(r.get("method") == method and r.get("chart") == "octahedral" for r in rows):
                 fail(f"bench erosion wrote no octahedral {method} row")
+    if name == "sand-tin-charts":
+        for chart in ("latlong", "octahedral", "torus", "cylinder"):
+            if not any(r.get("chart") == chart for r in rows):
+                fail(f"bench sand-tin-charts wrote no {chart} row")
+        ref = next(r["displaced_m3"] for r in rows if r.get("chart") == "latlong")
+        for r in rows:
+            if not 0.95 < r["displaced_m3"] / ref < 1.05:
+                fail(f"bench sand-tin-charts: the same stamp displaced otherwise than on lat-long: {r}")
     # Both parts of the occlusion bench (docs/BENCHMARKS.md): the tool's rows, then the hand's.
     if name == "occlusion" and not any(r.get("skipped") for r in rows):
         for part in ("tool", "hand"):
