@@ -387,11 +387,18 @@ def group_charts():
         fail(f"the octahedral sand replay: {s}")
     if open(out("octa_sand_a", "planet.planet"), "rb").read() != open(out("octa_sand_b", "planet.planet"), "rb").read():
         fail("two sand replays onto the octahedral planet wrote different planet files")
-    # Refusals, named: an unknown chart, --chart with a planet file (it has its own), and the
-    # TIN sand tool, which does not handle the octahedral chart's folds yet.
+    # The TIN sand tool on the octahedral chart (issue 43): its region TIN drawn in the AR view,
+    # stamps written back, forces felt.
+    run("replay", video, "--calib", CALIB, "--chart", "octahedral", "--grid", "513", "--max-frames", "60",
+        "--tool", "tin-sand", "--render", "--render-every", "15", "--out", out("octa_tin"))
+    with open(out("octa_tin", "summary.json")) as f:
+        s = json.load(f)
+    if (s["chart"] != "octahedral" or s["tool"] != "tin-sand" or s["stamps"] <= 0
+            or s["modified_vertices"] <= 0 or s.get("ar_tin_region_frames", 0) < 1):
+        fail(f"the octahedral TIN sand replay: {s}")
+    # Refusals, named: an unknown chart, --chart with a planet file (it has its own).
     for args, said in ((("--chart", "cube"), "chart 'cube' is not one of"),
-                       (("--chart", "octahedral", "--planet", out("octa_a", "planet.planet")), "has its own chart"),
-                       (("--chart", "octahedral", "--tool", "tin-sand"), "not on 'octahedral'")):
+                       (("--chart", "octahedral", "--planet", out("octa_a", "planet.planet")), "has its own chart")):
         p = subprocess.run([EXE, "replay", video, "--calib", CALIB, "--grid", "1025", "--max-frames", "5", *args,
                             "--out", out("refused")], capture_output=True, text=True)
         if p.returncode <= 0 or said not in p.stderr:
@@ -448,6 +455,22 @@ def group_tube_charts():
     for f in ("planet.planet", "forces.csv"):
         if open(out("torus_sand_a", f), "rb").read() != open(out("torus_sand_b", f), "rb").read():
             fail(f"two displacement replays onto the torus wrote different {f}")
+    # The TIN sand tool on both tubes (issue 43), its region TIN across the seams where the strokes
+    # cross them; on the default torus its stamp must be small enough for the tube's tangent plane
+    # (a region of 2.5 radii within a quarter of the tube radius, 1,800 km: at most 180 km).
+    for name, args in (("torus_tin", ("--chart", "torus")),
+                       ("tube_tin", ("--chart", "cylinder", "--radius", "6000000", "--length", "4000000"))):
+        run("replay", video, "--calib", CALIB, *args, "--tool", "tin-sand", "--displace-radius-km", "150",
+            "--grid", "1025", "--max-frames", "230", "--out", out(name))
+        with open(out(name, "summary.json")) as f:
+            s = json.load(f)
+        if s["tool"] != "tin-sand" or s["stamps"] < 1 or s["modified_vertices"] <= 0:
+            fail(f"the TIN sand replay {name} did not sculpt: {s}")
+    p = subprocess.run([EXE, "replay", video, "--calib", CALIB, "--chart", "torus", "--grid", "1025",
+                        "--max-frames", "5", "--tool", "tin-sand", "--out", out("refused_tin")],
+                       capture_output=True, text=True)
+    if p.returncode <= 0 or "too curved" not in p.stderr:
+        fail(f"a 400 km TIN sand stamp on the default torus was not refused as too curved: {p.stderr}")
     # The sculpted torus's heightmap goes back onto a torus of the same dimensions, and its mesh
     # export is a closed surface of Euler characteristic 0.
     run("import", out("torus_a", "heightmap.png"), "--chart", "torus", "--radius", "4500000",
@@ -530,7 +553,7 @@ def finite_numbers(x, where):
 
 
 BENCHES = ("bounds", "charts", "deform", "erosion", "export", "frame", "haptics", "live", "occlusion",
-           "render", "sand-tin", "tessellate", "track")
+           "render", "sand-tin", "sand-tin-charts", "tessellate", "track")
 
 
 def check_bench_row(r):
@@ -580,6 +603,11 @@ def check_bench_row(r):
     if exact and (r["surface_error_max_outside_band_m"] > 1e-9 or not r["surface_error_m"] > 0
                   or (r["model"] == "tin" and not 0 < r["memory_ratio_at_equal_error"] < 1e3)):
         fail(f"sand-tin compare-exact: {r}")
+    # The TIN sand tool's same stamp on every chart: the grid's volume kept as on lat-long, the
+    # same volume displaced (docs/SAND.md, "The TIN sand tool on the glued charts").
+    if b == "sand-tin-charts" and (r["volume_drift"] > 1e-9 or r["grid_points"] <= 0 or r["tin_vertices"] <= 0
+                                   or not r["displaced_m3"] > 0):
+        fail(f"sand-tin-charts: {r}")
     if b == "erosion" and abs(r.get("volume_drift", 0.0)) > 1e-6:
         fail(f"erosion: volume drift {r['volume_drift']}")
     for key in ("planet_detected", "control_vertex_within_3mm"):
@@ -624,6 +652,14 @@ def group_bench():
         for method in ("thermal", "diffusion-explicit", "diffusion-implicit", "crater-settle"):
             if not any(r.get("method") == method and r.get("chart") == "octahedral" for r in rows):
                 fail(f"bench erosion wrote no octahedral {method} row")
+    if name == "sand-tin-charts":
+        for chart in ("latlong", "octahedral", "torus", "cylinder"):
+            if not any(r.get("chart") == chart for r in rows):
+                fail(f"bench sand-tin-charts wrote no {chart} row")
+        ref = next(r["displaced_m3"] for r in rows if r.get("chart") == "latlong")
+        for r in rows:
+            if not 0.95 < r["displaced_m3"] / ref < 1.05:
+                fail(f"bench sand-tin-charts: the same stamp displaced otherwise than on lat-long: {r}")
     # Both parts of the occlusion bench (docs/BENCHMARKS.md): the tool's rows, then the hand's.
     if name == "occlusion" and not any(r.get("skipped") for r in rows):
         for part in ("tool", "hand"):

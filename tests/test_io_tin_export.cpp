@@ -3,8 +3,10 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <cmath>
 #include <fstream>
+#include <iostream>
 #include <opencv2/imgcodecs.hpp>
 #include <random>
 
@@ -58,6 +60,33 @@ double distanceToMesh(const Eigen::Vector3d& p, const ObjMesh& m) {
   for (const auto& f : m.f)
     best = std::min(best, tin::pointTriangleDistance(p, m.v[f[0]], m.v[f[1]], m.v[f[2]]));
   return best;
+}
+
+// The TIN's edges along the rows v = 0 and v = last (a cylinder's open ends).
+std::size_t endEdgesOf(const tin::Tin& tin, double last) {
+  std::size_t n = 0;
+  for (const auto& tri : tin.triangles)
+    for (int k = 0; k < 3; ++k) {
+      const auto& a = tin.xy[tri[std::size_t(k)]];
+      const auto& b = tin.xy[tri[std::size_t((k + 1) % 3)]];
+      if ((a.y() == 0 && b.y() == 0) || (a.y() == last && b.y() == last)) ++n;
+    }
+  return n;
+}
+
+// The smallest angle (degrees) of the TIN's triangles in the lattice (the plane the quality
+// mode refines in), computed from their corners' (x, y).
+double smallestLatticeAngleDeg(const tin::Tin& tin) {
+  double smallest = 180;
+  for (const auto& tri : tin.triangles)
+    for (int k = 0; k < 3; ++k) {
+      const Eigen::Vector2d& a = tin.xy[tri[std::size_t(k)]];
+      const Eigen::Vector2d e1 = tin.xy[tri[std::size_t((k + 1) % 3)]] - a;
+      const Eigen::Vector2d e2 = tin.xy[tri[std::size_t((k + 2) % 3)]] - a;
+      const double c = e1.dot(e2) / (e1.norm() * e2.norm());
+      smallest = std::min(smallest, std::acos(std::clamp(c, -1.0, 1.0)) * 180 / M_PI);
+    }
+  return smallest;
 }
 
 // A 16-bit grey PNG of random relief (row 0 north), values = metres * 10 (scale 0.1).
@@ -167,7 +196,7 @@ TEST(TinExport, APlanetTinIsAClosedOutwardSphereWithinTheErrorOfEverySample) {
 // with its twins, and the weld joins the chart's canonical vertices. The octahedral chart's
 // folded sides and corners close into a sphere (Euler 2), the torus's two seams into a torus
 // (Euler 0), the cylinder's seam into a tube whose two ends are its only border (Euler 0);
-// every sample within the error, as exported. A quality TIN is refused on the glued charts.
+// every sample within the error, as exported. The quality TIN (a minimum angle) likewise.
 TEST(TinExport, EveryChartsPlanetTinIsWeldedByItsTopology) {
   const fs::path dir = testkit::freshDir("tin_charts");
   struct Case {
@@ -204,14 +233,8 @@ TEST(TinExport, EveryChartsPlanetTinIsWeldedByItsTopology) {
     const tin::Tin tin = tin::buildTin(tolerant, {});
     const tin::WeldedMesh welded = tin::weldTin(tolerant, tin);
     const tin::MeshTopology weldedTop = tin::meshTopology(welded.vertices, welded.triangles);
-    std::size_t endEdges = 0;
     const double last = t.grid().m();
-    for (const auto& tri : tin.triangles)
-      for (int k = 0; k < 3; ++k) {
-        const auto& a = tin.xy[tri[std::size_t(k)]];
-        const auto& b = tin.xy[tri[std::size_t((k + 1) % 3)]];
-        if ((a.y() == 0 && b.y() == 0) || (a.y() == last && b.y() == last)) ++endEdges;
-      }
+    const std::size_t endEdges = endEdgesOf(tin, last);
     EXPECT_EQ(weldedTop.borderEdges, c.openEnds ? endEdges : 0u) << name;
     if (c.openEnds) {
       EXPECT_GT(endEdges, 0u);
@@ -220,11 +243,92 @@ TEST(TinExport, EveryChartsPlanetTinIsWeldedByItsTopology) {
       EXPECT_EQ(top.borderEdges, 0u) << name;
     }
     EXPECT_EQ(weldedTop.euler(), c.euler) << name;
+  }
+}
+
+// The quality mode (a minimum angle) on every chart (issue 43): its Steiner points on a glued
+// side (the octahedral chart's folds, the torus's seams, the cylinder's seam) go in with their
+// twins, so the welded mesh closes as the fewest-triangles one does; the angle holds in the
+// lattice and every sample is within the error.
+TEST(TinExport, EveryChartsQualityTinKeepsItsAngleAndCloses) {
+  struct Case {
+    std::shared_ptr<const core::Chart> chart;
+    int euler;
+    bool openEnds;
+  };
+  const core::GridSize g(7);
+  const std::vector<Case> cases{
+      {testkit::octahedralChart(7), 2, false},
+      {testkit::octahedralChart(7, core::OctahedralChart::Mapping::kCentral), 2, false},
+      {std::make_shared<core::TorusChart>(g, 4.0e6, 1.5e6), 0, false},
+      {std::make_shared<core::CylinderChart>(g, 2.0e6, 8.0e6), 0, true}};
+  for (const Case& c : cases) {
+    const terrain::Terrain t(c.chart, testkit::bumpyHeights(*c.chart, 3, 30000.0));
+    const std::string name = c.chart->name();
+    const double last = t.grid().m();
+    tin::SampleField field = io::terrainSampleField(t);
+    field.uniformTolerance = 8000.0;
     tin::TinOptions quality;
-    quality.minAngleDeg = 20;
-    if (c.chart->gluesSidesBeyondSeam()) {
-      EXPECT_THROW(tin::buildTin(tolerant, quality), core::InputError) << name;
-    }
+    quality.minAngleDeg = 30;
+    tin::TinReport rep;
+    const tin::Tin q = tin::buildTin(field, quality, &rep);
+    EXPECT_TRUE(rep.angleMet) << name << ": " << rep.smallestAngleDeg;
+    EXPECT_GE(smallestLatticeAngleDeg(q), 30.0 - 1e-6) << name;
+    // Steiner points on the glued sides, between grid points: the twins' path was taken.
+    std::size_t onSides = 0;
+    for (const auto& p : q.xy)
+      if ((p.x() == 0 || p.x() == last || p.y() == 0 || p.y() == last) &&
+          (p.x() != std::floor(p.x()) || p.y() != std::floor(p.y())))
+        ++onSides;
+    EXPECT_GT(onSides, 0u) << name;
+    std::cout << name << ": quality TIN at 30 degrees, " << rep.steinerVertices
+              << " Steiner vertices (greedy " << rep.greedyVertices << "), " << onSides
+              << " between grid points on the sides\n";
+    const tin::WeldedMesh qw = tin::weldTin(field, q);
+    const tin::MeshTopology qt = tin::meshTopology(qw.vertices, qw.triangles);
+    EXPECT_EQ(qt.nonManifoldEdges, 0u) << name;
+    EXPECT_EQ(qt.degenerate, 0u) << name;
+    EXPECT_EQ(qt.borderEdges, c.openEnds ? endEdgesOf(q, last) : 0u) << name;
+    EXPECT_EQ(qt.euler(), c.euler) << name;
+    const tin::TinErrorCheck qe = tin::measureTinError(field, q);
+    EXPECT_EQ(qe.uncovered, 0u) << name;
+    EXPECT_LE(qe.maxRatio, 1.0) << name;
+  }
+}
+
+// `export --tin --min-angle` of an octahedral planet: the written OBJ is a closed outward sphere
+// (Euler 2, no border, no non-manifold edge) whose triangles keep the angle in the lattice, with
+// every grid vertex within the error of the written mesh (brute force).
+TEST(TinExport, AQualityTinOfAnOctahedralPlanetIsClosedAndKeepsItsAngle) {
+  const fs::path dir = testkit::freshDir("tin_quality_octahedral");
+  const terrain::Terrain t(testkit::octahedralChart(5),
+                           testkit::bumpyHeights(*testkit::octahedralChart(5), 7, 30000.0));
+  io::savePlanet(t, dir / "p.planet");
+  for (const double angle : {20.0, 28.0}) {
+    io::TinExportOptions o;
+    o.maxErrorM = 4000.0;
+    o.minAngleDeg = angle;
+    std::vector<std::string> notes;
+    const nlohmann::json s = io::exportTinFromFile(dir / "p.planet", io::ImportOptions{},
+                                                   dir / "q.obj", io::ExportFormat::kObj, o, notes);
+    EXPECT_LE(s["measured_error_ratio"].get<double>(), 1.0) << angle;
+    EXPECT_TRUE(s["angle_met"].get<bool>()) << angle;
+    EXPECT_GE(s["smallest_angle_deg"].get<double>(), angle - 1e-6);
+    const ObjMesh m = readObj(dir / "q.obj");
+    const tin::MeshTopology top = tin::meshTopology(m.v.size(), m.f);
+    EXPECT_EQ(top.borderEdges, 0u) << angle;
+    EXPECT_EQ(top.nonManifoldEdges, 0u) << angle;
+    EXPECT_EQ(top.degenerate, 0u) << angle;
+    EXPECT_EQ(top.euler(), 2) << angle;
+    double volume6 = 0;
+    for (const auto& f : m.f) volume6 += m.v[f[0]].dot(m.v[f[1]].cross(m.v[f[2]]));
+    EXPECT_GT(volume6, 0) << "triangles face outwards";
+    double worst = 0;
+    const int side = t.grid().side();
+    for (int v = 0; v < side; ++v)
+      for (int u = 0; u < side; ++u)
+        worst = std::max(worst, distanceToMesh(t.chart().position(u, v, t.height(u, v)), m));
+    EXPECT_LE(worst, o.maxErrorM) << angle;
   }
 }
 

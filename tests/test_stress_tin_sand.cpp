@@ -10,9 +10,13 @@
 #include <cmath>
 #include <cstdio>
 #include <iostream>
+#include <memory>
 #include <random>
 
+#include "core/cylinder_chart.hpp"
 #include "core/input_error.hpp"
+#include "core/octahedral_chart.hpp"
+#include "core/torus_chart.hpp"
 #include "edit/edit_pipeline.hpp"
 #include "sand/sand_grid.hpp"
 #include "sand/tin_sand.hpp"
@@ -202,6 +206,98 @@ TEST(StressTinSand, ToolOnAPlanetAtThePolesTheSeamAndRandomPoints) {
   // Strokes of several stamps must have stamped into their region TIN, not only made new ones.
   EXPECT_GT(reused, 0u);
   RecordProperty("stamps_into_a_kept_region", int(reused));
+}
+
+// The tool on the glued charts (issue 43): the same random strokes on the octahedral chart, a
+// torus and a cylinder, half of them starting on a fold, a corner or a seam and moving across it
+// (the grid continued there; on the cylinder away from its open rims, where a stamp reaching
+// over the rim is refused as at a flat grid's border), every radius the tool accepts, each stamp
+// pressed a random depth:
+// the region TIN valid by CGAL's check, the grid's volume kept to 1e-9, heights finite and twins
+// one height after every stamp, the bounds equal a full rebuild at the end. 40 stamps a chart in
+// CI; PS_STRESS_SCALE=k runs k times as many.
+TEST(StressTinSand, ToolOnTheGluedChartsAcrossFoldsAndSeams) {
+  struct Case {
+    std::shared_ptr<const ps::core::Chart> chart;
+    double curvature;  // the surface's smallest radius of curvature
+    bool openEnds;     // the cylinder's rims: strokes stay a quarter of its length from them
+  };
+  const std::vector<Case> cases{
+      {std::make_shared<ps::core::OctahedralChart>(ps::core::GridSize(8), 20e3), 20e3, false},
+      {std::make_shared<ps::core::TorusChart>(ps::core::GridSize(9), 20e3, 10e3), 10e3, false},
+      {std::make_shared<ps::core::CylinderChart>(ps::core::GridSize(8), 5e3, 2 * M_PI * 5e3), 5e3,
+       true}};
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.chart->name());
+    ps::terrain::Terrain t(c.chart, ps::testkit::bumpyHeights(*c.chart, 5, 100.0));
+    ps::edit::EditPipeline pipe(t);
+    pipe.setUndoEnabled(false);
+    ps::sand::TinSandToolSettings settings;
+    const auto valid = [&](double r) {
+      settings.radius = r;
+      try {
+        settings.validate(c.chart.get());
+        return true;
+      } catch (const ps::core::InputError&) {
+        return false;
+      }
+    };
+    const double rMax = 0.25 * c.curvature / 2.5;
+    ASSERT_TRUE(valid(rMax));
+    double rMin = rMax;
+    while (valid(rMin * 0.99)) rMin *= 0.99;
+    const ps::sand::SandGrid grid(c.chart);
+    const ps::core::Chart& chart = *c.chart;
+    const int m = chart.grid().m();
+    std::mt19937 rng(43);
+    std::uniform_real_distribution<double> uni(0.0, 1.0);
+    const int stamps = 40 * ps::testkit::stressScale();
+    std::size_t reused = 0;
+    for (int k = 0; k < stamps;) {
+      // Where the stroke starts: a side (u = 0 or m, v = 0 or m: a fold, a corner, a seam) every
+      // other stroke, else anywhere.
+      int u = int(uni(rng) * m + 0.5), v = int(uni(rng) * m + 0.5);
+      if (c.openEnds) v = m / 4 + v / 2;
+      if (k % 2 == 0) (uni(rng) < 0.5 || c.openEnds ? u : v) = uni(rng) < 0.5 ? 0 : m;
+      settings.radius = rMin + (rMax - rMin) * uni(rng);
+      settings.segments = 3 + int(uni(rng) * 45);
+      ps::sand::TinSandTool tool(c.chart, settings);
+      // Up to three moves of about half a radius in one grid direction, continued across a side.
+      const double cell =
+          (chart.position(chart.continued(u + 1, v).u, chart.continued(u + 1, v).v, 0.0) -
+           chart.position(u, v, 0.0))
+              .norm();
+      const int step = std::max(1, int(0.5 * settings.radius / std::max(cell, 1.0)));
+      const int du = int(uni(rng) * 3) - 1, dv = int(uni(rng) * 3) - 1;
+      const int moves = int(uni(rng) * 4);
+      for (int s = 0; s <= moves && k < stamps; ++s) {
+        const ps::core::GridPoint p = chart.continued(u + s * step * du, v + s * step * dv);
+        const double depth = 0.5 * settings.radius * uni(rng);
+        const ps::edit::ToolInput input{
+            chart.position(p.u, p.v, 0.0) + (settings.radius - depth) * chart.up(p.u, p.v), 0.0};
+        const double vBefore = grid.volume(t.heights());
+        const std::size_t stampsBefore = tool.stamps();
+        if (s == 0) {
+          pipe.beginStroke(tool, input);
+        } else {
+          pipe.moveTo(input);
+        }
+        k += int(tool.stamps() - stampsBefore);
+        if (tool.stamps() == stampsBefore) continue;
+        ASSERT_NE(tool.region(), nullptr) << "stamp " << k;
+        ASSERT_EQ(tool.region()->sand().tin().validityProblem(), "")
+            << "stamp " << k << " at (" << p.u << ", " << p.v << ")";
+        const double drift =
+            std::abs(grid.volume(t.heights()) - vBefore) / grid.absVolume(t.heights());
+        ASSERT_LE(drift, 1e-9) << "stamp " << k << " at (" << p.u << ", " << p.v << ")";
+        ASSERT_TRUE(ps::edittest::consistentHeights(t)) << "after stamp " << k;
+      }
+      pipe.endStroke();
+      reused += tool.stamps() - tool.tinsMade();
+    }
+    EXPECT_TRUE(ps::edittest::boundsEqualFullRebuild(t));
+    EXPECT_GT(reused, 0u);
+  }
 }
 
 }  // namespace

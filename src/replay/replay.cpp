@@ -236,8 +236,8 @@ void FrameStepper::rebuildTools() {
   endStroke();
   p_->brush.emplace(o_.brush);
   // The sand tools on a chart the sand core does not know are refused when chosen, by
-  // SandGrid's message (the TIN sand tool refuses the octahedral chart by its own); the brush
-  // works there.
+  // SandGrid's message (the TIN sand tool's by its own, as a stamp too large for a surface's
+  // curvature); the brush works there.
   const bool sandChart = sand::sandCoreKnows(planet_.chart());
   if (!sandChart && o_.tool == ReplayTool::kBrush) {
     p_->displacer.reset();

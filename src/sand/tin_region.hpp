@@ -4,6 +4,11 @@
 // surface), that persists while the stamps of a stroke stay inside it. Made with the TIN
 // export's error-bounded generation (tin/scattered_tin: every grid point of the region within
 // `tolerance` of it), or from every point (tolerance 0: the TIN the tool made per stamp before).
+// Its points are the region's distinct grid points at their canonical vertices; the region is
+// grown across the chart's seams and folds (edit::RegionGrower), so on the octahedral chart, the
+// torus and the cylinder a disc across a fold or a seam is one height field in the plane. A
+// tube's patch for the view lies on the tube (the plane's points taken back to the surface
+// through the chart's inverse).
 //
 // Writing back: every grid point takes the change of the TIN's surface since the last write
 // (so the grid's own detail under the tolerance stays, and a point the TIN left out keeps its
@@ -74,8 +79,10 @@ class TinRegion {
   // The TIN as a patch for the view (terrain/mesh_patch): its vertices on the planet (the
   // tangent plane's (x, y) taken back to the reference surface, raised by the height), standing
   // for the grid entries of the region `marginCells` equatorial cells or more inside its domain
-  // (seam twins and pole rows included). The default two cells make its border ring overlap the
-  // view's kept triangles, which closes the join (docs/RENDERING.md); 0 is for measuring that.
+  // (seam twins, glued sides' twins and pole rows included). On a tube it has no plane (its
+  // surface is no sphere and no plane): the haptic path feels the grid there. The default two cells
+  // make its border ring overlap the view's kept triangles, which closes the join
+  // (docs/RENDERING.md); 0 is for measuring that.
   terrain::MeshPatch patch(double marginCells = 2) const;
 
   TinRegionWrite writeBack(std::span<float> heights, const SandGrid& cells, float heightLimit);
@@ -84,6 +91,7 @@ class TinRegion {
   const core::Chart* chart_;
   edit::Region footprint_;
   TangentFrame frame_;
+  double spacing_;  // m: the TIN's lattice and the pole's thinning cell (latticeSpacing)
   std::vector<Point> points_;
   std::vector<float> left_;              // the grid's height at each point as last written or read
   std::vector<double> surface_;          // the TIN's surface there then (NaN: outside its domain)

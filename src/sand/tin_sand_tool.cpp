@@ -5,13 +5,22 @@
 #include <numbers>
 #include <vector>
 
-#include "core/flat_chart.hpp"
+#include "core/cylinder_chart.hpp"
 #include "core/input_error.hpp"
-#include "core/octahedral_chart.hpp"
+#include "core/torus_chart.hpp"
 #include "sand/displacement.hpp"
 #include "sand/sand_grid.hpp"
 
 namespace ps::sand {
+
+double smallestCurvatureRadius(const core::Chart& chart) {
+  if (chart.radius() > 0) return chart.radius();
+  if (const auto* torus = dynamic_cast<const core::TorusChart*>(&chart))
+    return std::min(torus->minorRadius(), torus->majorRadius() - torus->minorRadius());
+  if (const auto* tube = dynamic_cast<const core::CylinderChart*>(&chart))
+    return tube->tubeRadius();
+  return INFINITY;
+}
 
 void TinSandToolSettings::validate(const core::Chart* chart) const {
   if (!(std::isfinite(radius) && radius > 0))
@@ -38,23 +47,31 @@ void TinSandToolSettings::validate(const core::Chart* chart) const {
                            " erosion steps is outside 0 .. 1000");
   sand.validate();
   if (!chart) return;
-  // Its points and areas are per row (a pole row once, a seam twin once) and its region lies in
-  // a sphere's or a plane's tangent plane; the octahedral chart's folds and the tubes are not
-  // handled yet, while the grid sand core's tools work there.
-  if (dynamic_cast<const core::OctahedralChart*>(chart) ||
-      (chart->radius() <= 0.0 && !dynamic_cast<const core::FlatChart*>(chart)))
-    throw core::InputError("TIN sand tool: it works on the lat-long and flat charts, not on '" +
-                           chart->name() + "'");
+  // Its region is a height field over the tangent plane at the stroke's first stamp, its points
+  // the grid's distinct points (SandGrid's cells, on every chart the sand core knows), so it
+  // works across the octahedral chart's folds and the tubes' seams as across lat-long's seam.
+  if (!sandCoreKnows(*chart))
+    throw core::InputError(
+        "TIN sand tool: it works on the lat-long, octahedral, torus, cylinder "
+        "and flat charts, not on '" +
+        chart->name() + "'");
   const double cell = largestSpacing(*chart);
   if (radius < 2 * cell)
     throw core::InputError("TIN sand tool: radius " + core::exactNumber(radius) +
                            " m is under two grid cells (" + core::exactNumber(2 * cell) + " m)");
-  // The region shrinks to a quarter of the planet's radius, never under 2.5 radii.
-  if (chart->radius() > 0 && 2.5 * radius > 0.25 * chart->radius())
+  // The region shrinks to a quarter of the surface's smallest radius of curvature (a sphere's
+  // radius, a torus's tube radius or the inner equator's R - r, a cylinder's radius), never
+  // under 2.5 radii.
+  const double curvature = smallestCurvatureRadius(*chart);
+  if (std::isfinite(curvature) && 2.5 * radius > 0.25 * curvature)
     throw core::InputError("TIN sand tool: its region (at least " +
-                           core::exactNumber(2.5 * radius) +
-                           " m) is over a quarter of the planet's radius, too curved for one "
-                           "tangent plane");
+                           core::exactNumber(2.5 * radius) + " m) is over " +
+                           (chart->radius() > 0 ? std::string("a quarter of the planet's radius")
+                                                : "a quarter of the " + chart->name() +
+                                                      "'s smallest radius of "
+                                                      "curvature (" +
+                                                      core::exactNumber(curvature) + " m)") +
+                           ", too curved for one tangent plane");
 }
 
 TinSandTool::TinSandTool(std::shared_ptr<const core::Chart> chart, TinSandToolSettings settings)
@@ -62,7 +79,7 @@ TinSandTool::TinSandTool(std::shared_ptr<const core::Chart> chart, TinSandToolSe
 
 double TinSandTool::regionMetres(const core::Chart& chart) const {
   const double r = settings_.regionRadius * settings_.radius;
-  return chart.radius() > 0 ? std::min(r, 0.25 * chart.radius()) : r;
+  return std::min(r, 0.25 * smallestCurvatureRadius(chart));
 }
 
 bool TinSandTool::reusable(const edit::ToolContext& ctx) const {

@@ -1,8 +1,9 @@
 #pragma once
 // The sand TIN as an edit tool: a TIN of the region around a stroke's first stamp, made from
 // the terrain's heights with the TIN export's error-bounded generation (sand/tin_region: in the
-// tangent plane at that stamp, so it works the same at a pole, across the seam and on a flat
-// grid), persists while the stroke's stamps stay inside it; each stamp presses the tool into
+// tangent plane at that stamp, so it works the same at a pole, across lat-long's seam, across
+// the octahedral chart's folds and the torus's and the cylinder's seams, and on a flat grid),
+// persists while the stroke's stamps stay inside it; each stamp presses the tool into
 // it, erodes it along its edges and removes its flat vertices (sand/tin_sand, paper 000), and
 // the result is written back into the grid's heights, keeping the grid's volume. Through the
 // edit pipeline it gets what every tool gets: undo, the journal, saves, exports and the 4-8
@@ -24,12 +25,18 @@
 
 namespace ps::sand {
 
+// The smallest radius of curvature of `chart`'s reference surface (m): a sphere's radius, a
+// torus's min(r, R - r) (its tube; the inner equator's R - r round the axis), a cylinder's
+// radius; infinite on a flat chart. The region TIN's tangent plane holds a quarter of it.
+double smallestCurvatureRadius(const core::Chart& chart);
+
 struct TinSandToolSettings {
   double radius = 100e3;  // m: the stamp's radius (a regular polygon's corners on it)
   int segments = 24;      // the stamp's corners, 3..256
   // The TIN's region around a stroke's first stamp, x radius, [2.5, 8] (on a sphere at most a
-  // quarter of its radius: the tangent plane's distortion stays under 3 %). Stamps reuse it
-  // while their reach (2.05 radii: the rim and the rampart) lies kReuseDepth radii inside it.
+  // quarter of its radius, on a tube of its smallest radius of curvature: the tangent plane's
+  // distortion stays under 3 %). Stamps reuse it while their reach (2.05 radii: the rim and the
+  // rampart) lies kReuseDepth radii inside it.
   double regionRadius = 5.0;
   // The region TIN's largest vertical error at the grid's points, x radius, >= 0 (0: every
   // grid point a vertex, error 0).
@@ -92,7 +99,8 @@ class TinSandTool final : public edit::Tool {
   // The region's TIN as the last stamp left it (null before the first stamp, and after a
   // stroke's start until its first stamp).
   const TinRegion* region() const { return region_ ? &*region_ : nullptr; }
-  // The region's radius (m) on `chart`: regionRadius x radius, at most a quarter of a sphere's.
+  // The region's radius (m) on `chart`: regionRadius x radius, at most a quarter of the
+  // surface's smallest radius of curvature (smallestCurvatureRadius).
   double regionMetres(const core::Chart& chart) const;
 
   std::string name() const override { return "tin-sand"; }

@@ -69,26 +69,34 @@ TinErrorCheck measureTinError(const SampleField& field, const Tin& tin,
   return out;
 }
 
-WeldedMesh weldTin(const SampleField& field, const Tin& tin) {
+std::pair<double, double> weldKey(const SampleField& field, double x, double y) {
   // One surface point, one key: a chart's seam twins and pole rows meet at u = 0.
   const double m = field.width - 1, top = field.height - 1;
-  const bool seam = field.wrapsSeam();
-  const bool southPole = field.isPoleRow(0), northPole = field.isPoleRow(field.height - 1);
-  const bool wholeChart = field.wholeChart();
+  if (field.wholeChart() && x == std::floor(x) && y == std::floor(y)) {
+    // A grid point: the chart's canonical vertex of its surface point (a folded side's mirror, a
+    // corner, a seam's twin, a pole row).
+    const core::GridPoint c = field.chart->canonical(int(x), int(y));
+    x = c.u, y = c.v;
+  } else if (field.wholeChart()) {
+    // A point between grid points on a glued side (a quality TIN's Steiner point, inserted with
+    // its twins): one key for the twins, as the chart's gluing pairs them.
+    const core::Gluing gl = field.chart->gluing();
+    if (gl.vSides == core::SideGluing::kSeam && y == top) y = 0;
+    if (gl.vSides == core::SideGluing::kMirror && (y == 0 || y == top)) x = std::min(x, m - x);
+    if (gl.uSides == core::SideGluing::kMirror && (x == 0 || x == m)) y = std::min(y, top - y);
+  }
+  if ((field.isPoleRow(0) && y == 0) || (field.isPoleRow(field.height - 1) && y == top)) x = 0;
+  if (field.wrapsSeam() && x == m) x = 0;
+  return {x, y};
+}
+
+WeldedMesh weldTin(const SampleField& field, const Tin& tin) {
   std::map<std::pair<double, double>, std::uint32_t> key;
   WeldedMesh out;
   out.vertexOf.resize(tin.xy.size());
   for (std::size_t v = 0; v < tin.xy.size(); ++v) {
-    double x = tin.xy[v].x(), y = tin.xy[v].y();
-    if (wholeChart && x == std::floor(x) && y == std::floor(y)) {
-      // A grid point: the chart's canonical vertex of its surface point (a folded side's
-      // mirror, a corner, a seam's twin, a pole row).
-      const core::GridPoint c = field.chart->canonical(int(x), int(y));
-      x = c.u, y = c.v;
-    }
-    if ((southPole && y == 0) || (northPole && y == top)) x = 0;
-    if (seam && x == m) x = 0;
-    const auto [it, fresh] = key.emplace(std::pair(x, y), std::uint32_t(key.size()));
+    const auto [it, fresh] =
+        key.emplace(weldKey(field, tin.xy[v].x(), tin.xy[v].y()), std::uint32_t(key.size()));
     out.vertexOf[v] = it->second;
   }
   out.vertices = key.size();

@@ -6,6 +6,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <span>
+#include <utility>
 #include <vector>
 
 #include "tin/sample_field.hpp"
@@ -35,6 +36,8 @@ struct WeldedMesh {
   std::size_t collapsed = 0;                  // TIN triangles dropped (two corners welded into one)
 };
 WeldedMesh weldTin(const SampleField& field, const Tin& tin);
+// The key weldTin joins a TIN vertex at lattice point (x, y) by: its surface point's.
+std::pair<double, double> weldKey(const SampleField& field, double x, double y);
 
 struct MeshTopology {
   std::size_t vertices = 0, edges = 0, triangles = 0;

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <map>
 #include <numbers>
 #include <set>
 #include <stdexcept>
@@ -12,6 +13,7 @@
 #include "core/input_error.hpp"
 #include "tin/cdt.hpp"
 #include "tin/greedy_inserter.hpp"
+#include "tin/tin_check.hpp"
 #include "tin/triangle_error.hpp"
 
 namespace ps::tin {
@@ -102,21 +104,84 @@ void constrainBorder(Cdt& cdt, const std::array<VertexHandle, 4>& corner) {
     cdt.insert_constraint(corner[std::size_t(k)], corner[std::size_t((k + 1) % 4)]);
 }
 
-// Seam twins for vertices the refinement put on one side of a planet's seam only. Returns how
-// many were added.
-std::size_t addMissingSeamTwins(Cdt& cdt, const SampleField& field) {
-  const double m = field.width - 1;
-  std::set<double> left, right;
-  for (auto v = cdt.finite_vertices_begin(); v != cdt.finite_vertices_end(); ++v) {
-    if (v->point().x() == 0) left.insert(v->point().y());
-    if (v->point().x() == m) right.insert(v->point().y());
+// The points of the lattice's border that are one point of the surface with (x, y), itself
+// first: across a planet's u seam (x -> m - x on the sides x = 0, m), and on a whole chart across
+// its other glued sides (the torus's v seam: y -> top - y on y = 0, top; the octahedral chart's
+// mirrored sides: x -> m - x along y = 0 and top, y -> top - y along x = 0 and m), repeated
+// until closed (a corner's three twins).
+std::vector<Point> borderTwins(const SampleField& field, const Point& p) {
+  const double m = field.width - 1, top = field.height - 1;
+  const bool uSeam = field.wrapsSeam();
+  core::Gluing gl{core::SideGluing::kOpen, core::SideGluing::kOpen};
+  if (field.wholeChart()) gl = field.chart->gluing();
+  std::vector<Point> out{p};
+  for (std::size_t k = 0; k < out.size() && out.size() < 8; ++k) {
+    const double x = out[k].x(), y = out[k].y();
+    std::vector<Point> next;
+    if ((x == 0 || x == m) && uSeam) next.emplace_back(m - x, y);
+    if ((x == 0 || x == m) && gl.uSides == core::SideGluing::kMirror) next.emplace_back(x, top - y);
+    if ((y == 0 || y == top) && gl.vSides == core::SideGluing::kSeam) next.emplace_back(x, top - y);
+    if ((y == 0 || y == top) && gl.vSides == core::SideGluing::kMirror) next.emplace_back(m - x, y);
+    for (const Point& q : next)
+      if (std::find(out.begin(), out.end(), q) == out.end()) out.push_back(q);
   }
-  std::size_t added = 0;
-  for (const double y : left)
-    if (!right.count(y)) cdt.insert(Point(m, y)), ++added;
-  for (const double y : right)
-    if (!left.count(y)) cdt.insert(Point(0, y)), ++added;
-  return added;
+  return out;
+}
+
+// Twins for vertices the refinement put on one side of a planet's seam or of a whole chart's
+// glued side only (its border edges are constrained, so the same vertices on both sides make
+// the same edges, and the welded mesh is closed). Returns how many were added.
+std::size_t addMissingGluedTwins(Cdt& cdt, const SampleField& field) {
+  const double m = field.width - 1, top = field.height - 1;
+  std::set<std::pair<double, double>> border;
+  for (auto v = cdt.finite_vertices_begin(); v != cdt.finite_vertices_end(); ++v) {
+    const Point& p = v->point();
+    if (p.x() == 0 || p.x() == m || p.y() == 0 || p.y() == top) border.emplace(p.x(), p.y());
+  }
+  std::vector<Point> missing;
+  for (const auto& [x, y] : border)
+    for (const Point& q : borderTwins(field, Point(x, y)))
+      if (!border.count({q.x(), q.y()})) {
+        border.emplace(q.x(), q.y());
+        missing.push_back(q);
+      }
+  for (const Point& q : missing) cdt.insert(q);
+  return missing.size();
+}
+
+// An interior vertex joined to two twins of one border point (beside a folded side's cone point,
+// where a point's twins lie close in the lattice): welded, its two edges would be one edge of
+// four triangles. Each such edge is split at its midpoint (the refinement runs again). Returns
+// how many points were inserted.
+std::size_t splitEdgesToTwins(Cdt& cdt, const SampleField& field) {
+  if (!field.wholeChart() || !field.chart->foldsSides()) return 0;
+  const double m = field.width - 1, top = field.height - 1;
+  const auto onBorder = [&](const Point& p) {
+    return p.x() == 0 || p.x() == m || p.y() == 0 || p.y() == top;
+  };
+  std::set<std::pair<double, double>> mids;
+  for (auto v = cdt.finite_vertices_begin(); v != cdt.finite_vertices_end(); ++v) {
+    const Point& p = v->point();
+    if (onBorder(p)) continue;
+    std::map<std::pair<double, double>, Point> seen;  // weld key -> the neighbour that had it
+    auto w = cdt.incident_vertices(v), end = w;
+    do {
+      if (cdt.is_infinite(w) || !onBorder(w->point())) continue;
+      const Point& q = w->point();
+      const auto [it, fresh] = seen.emplace(weldKey(field, q.x(), q.y()), q);
+      if (fresh || it->second == q) continue;
+      for (const Point& r : {q, it->second})
+        mids.emplace(0.5 * (p.x() + r.x()), 0.5 * (p.y() + r.y()));
+    } while (++w != end);
+  }
+  for (const auto& [x, y] : mids) cdt.insert(Point(x, y));
+  return mids.size();
+}
+
+// Whether the quality refinement's border vertices need twins: a planet's u seam, or a whole
+// chart glued on other sides.
+bool bordersAreGlued(const SampleField& field) {
+  return field.wrapsSeam() || (field.wholeChart() && field.chart->gluesSidesBeyondSeam());
 }
 
 }  // namespace
@@ -131,11 +196,6 @@ Tin buildTin(const SampleField& field, const TinOptions& o, TinReport* reportOut
   if (!(std::isfinite(o.minArea) && o.minArea >= 0))
     throw core::InputError("minimum area " + core::exactNumber(o.minArea) +
                            " must be zero or positive");
-  if (o.minAngleDeg > 0 && field.wholeChart() && field.chart->gluesSidesBeyondSeam())
-    throw core::InputError("a quality TIN (minimum angle " + core::exactNumber(o.minAngleDeg) +
-                           " degrees) of a planet on the " + field.chart->name() +
-                           " chart is not supported: its refinement splits the glued sides' "
-                           "edges apart; use the fewest-triangles TIN (no minimum angle)");
   TinReport report;
   report.requestedAngleDeg = o.minAngleDeg;
 
@@ -182,7 +242,7 @@ Tin buildTin(const SampleField& field, const TinOptions& o, TinReport* reportOut
     const double s = std::sin(o.minAngleDeg * std::numbers::pi / 180.0);
     const std::size_t budget =
         o.steinerBudget ? o.steinerBudget : 4 * report.greedyVertices + 10000;
-    const bool planetSeam = field.wrapsSeam();
+    const bool glued = bordersAreGlued(field);
     for (int round = 0;; ++round) {
       bool exhausted = false;
       refine(cdt, QualityCriteria(field, s * s, o.minArea), budget, exhausted);
@@ -192,9 +252,12 @@ Tin buildTin(const SampleField& field, const TinOptions& o, TinReport* reportOut
         bool never = false;
         refine(cdt, QualityCriteria(field, 0.0, o.minArea), std::size_t(-1), never);
       }
-      if (!planetSeam || addMissingSeamTwins(cdt, field) == 0) break;
+      if (!glued) break;
+      const std::size_t twins = addMissingGluedTwins(cdt, field);
+      if (twins == 0 && splitEdgesToTwins(cdt, field) == 0) break;
       if (round == 16)
-        throw std::runtime_error("TIN: the seam's two sides kept differing after 16 refinements");
+        throw std::runtime_error(
+            "TIN: the glued sides' vertices kept differing after 16 refinements");
     }
     report.steinerVertices = cdt.number_of_vertices() - report.greedyVertices;
     report.refineMs = msSince(t0);
