@@ -127,7 +127,7 @@ void benchCase(const BenchOptions& options, std::ostream& out, nlohmann::json ma
   render::PlanetRenderer renderer;
   terrain::Tessellator tessellator;
   machine["load_avg_before"] = loadAverage();
-  auto planet = app::makeDefaultPlanet(gridLevel, 1);
+  auto planet = app::makeDefaultPlanet(gridLevel, 1, core::ChartShape::kLatLong);
   tracking::FrameSource source(video);
   const auto calib = tracking::loadCalibration(calibPath).forImageSize(source.size());
   replay::ReplayOptions ro = demoReplayOptions();

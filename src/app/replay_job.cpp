@@ -121,7 +121,7 @@ struct ReplayInputs {
   std::filesystem::path planetFile;
   int gridLevel = 0;
   std::uint64_t seed = 0;
-  core::ChartShape chart = core::ChartShape::kLatLong;
+  core::ChartShape chart = kDefaultChart;
   PlanetDims dims;
 };
 
@@ -161,6 +161,12 @@ ReplayInputs resolveInputs(const ReplayJob& job) {
     in.gridLevel = core::GridSize::fromSide(st.gridSide).n();
     in.seed = st.seed;
     in.chart = core::chartShapeFromString(st.chart);
+    // Sidecars from before charts were recorded on lat-long, the default then (today's default
+    // is kDefaultChart): the replay makes the planet the session sculpted.
+    if (!st.chartNamed)
+      std::cerr << "replay: the session sidecar " << in.sidecar.string()
+                << " names no chart: replaying onto lat-long, the chart of recordings made "
+                   "before sidecars named one\n";
     in.dims = {};
     if (st.radius > 0) in.dims.radius = st.radius;
     if (st.minorRadius > 0) in.dims.minorRadius = st.minorRadius;
