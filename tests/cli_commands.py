@@ -115,6 +115,14 @@ def group_demo():
         fail(f"demo replayed {s['frames']} frames of 60")
     if s["chart"] != "octahedral":
         fail(f"the demo's planet is {s['chart']}, not the default chart (octahedral)")
+    # The close-up frames the largest change (its latitude and longitude in the equirectangular
+    # picture), in a small part of the picture.
+    box, (pw, ph) = s["closeup_box_px"], s["picture_px"]
+    lat, lon = s["largest_change_lat_lon_deg"]
+    px, py = (lon + 180) / 360 * pw, (90 - lat) / 180 * ph
+    if not (box[0] - 1 <= px <= box[0] + box[2] + 1 and box[1] - 1 <= py <= box[1] + box[3] + 1) \
+            or box[2] * box[3] > 0.1 * pw * ph:
+        fail(f"the demo's close-up box {box} of {pw}x{ph} does not frame its largest change at ({px:.0f}, {py:.0f})")
     if s["planet_tracked"] + s["planet_held"] != s["frames_with_planet"] or s["planet_lost"] != 60 - s["frames_with_planet"]:
         fail(f"the planet's tracked / held / lost counts do not add up: {s}")
     t = s.get("truth")
