@@ -8,12 +8,14 @@
 // and north_* / south_* apart) against the rows within 5 degrees of the equator (equator_*);
 // polar_floor_rms_m and equator_floor_rms_m: what the DEM holds along those rows' parallels that
 // is narrower than the grid's spacing there (each pixel less the mean of the pixels within half
-// a spacing along its row: no grid of that spacing holds it, a floor under the error);
+// a spacing along its row: a yardstick for what a grid of that spacing cannot hold, not a
+// strict bound);
 // band_rms_m: the rms of each 10-degree band of latitude, north to south; rms_vs_latlong and
 // p99_vs_latlong against lat-long's in the same run; import_ms and export_ms (one run each).
-// --quick: 2049^2 instead of the default grid.
+// --quick: 2049^2 instead of the default grid; PS_ROUNDTRIP_GRID=SIDE: that grid for both.
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <filesystem>
 #include <iostream>
 #include <nlohmann/json.hpp>
@@ -48,9 +50,9 @@ struct ErrorSet {
 
 // What the DEM holds along its parallels that is narrower than the grid's spacing there: the
 // rms of each pixel less the mean of the pixels within half a spacing of it along its row, over
-// the rows with |latitude| >= `fromDeg` (and <= `toDeg`). No grid of that spacing can hold it,
-// so it is a floor under the round trip's error in those rows. `spacingRad(latRad)`: the
-// grid's spacing along the parallel as an angle of arc.
+// the rows with |latitude| >= `fromDeg` (and <= `toDeg`): about what a grid of that spacing
+// cannot hold in those rows (a box filter's estimate, not a strict bound). `spacingRad(latRad)`:
+// the grid's spacing along the parallel as an angle of arc.
 template <class Spacing>
 double detailBelowSpacing(const io::HeightImage& img, double fromDeg, double toDeg,
                           Spacing spacingRad) {
@@ -152,7 +154,8 @@ void benchRoundTrip(const BenchOptions& options, std::ostream& out) {
     return;
   }
   const io::HeightImage original = io::readHeightImage(file);
-  const long long grid = options.quick ? 2049 : 0;  // 0: each chart's default grid
+  long long grid = options.quick ? 2049 : 0;  // 0: each chart's default grid
+  if (const char* side = std::getenv("PS_ROUNDTRIP_GRID"); side && *side) grid = std::atoll(side);
   nlohmann::json latlong;
   for (const io::ChartKind chart : {io::ChartKind::kLatLong, io::ChartKind::kOctahedral}) {
     std::cerr << "bench roundtrip: " << core::toString(chart) << "\n";

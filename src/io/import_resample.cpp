@@ -103,7 +103,7 @@ void resampleLatLong(const HeightImage& img, const ImportOptions& o, double radi
 
 // The window along a parallel, in grid spacings: measured on the Mars round trip (rows within 5
 // degrees of the poles, rms): point samples 22.5 m, windows of 0.5, 0.75, 1 and 1.5 spacings
-// 20.3, 19.9, 20.1 and 22.0 m (the DEM holds 17.6 m of detail narrower than the spacing there).
+// 20.3, 19.9, 20.1 and 22.0 m (the DEM holds about 17.6 m of detail narrower than the spacing).
 constexpr double kParallelWindow = 0.75;
 
 // The image's mean along a parallel over `windowDeg` of longitude centred on `lonDeg`: as many
