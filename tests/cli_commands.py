@@ -392,6 +392,19 @@ def group_charts():
         fail("replays with --chart octahedral and without --chart wrote different planet files")
     if struct.unpack("<I", a[8:12])[0] != 2 or not a[16:32].startswith(b"octahedral\0"):
         fail(f"the octahedral planet file's header: {a[:32]!r}")
+    # A planet file keeps its chart under the octahedral default: a lat-long planet (a version 1
+    # file) replayed with --planet and no --chart stays lat-long.
+    run("replay", video, "--calib", CALIB, "--chart", "latlong", "--grid", "257", "--max-frames", "5",
+        "--out", out("ll"))
+    ll = open(out("ll", "planet.planet"), "rb").read()
+    if struct.unpack("<I", ll[8:12])[0] != 1:
+        fail(f"the lat-long planet file's header: {ll[:32]!r}")
+    run("replay", video, "--calib", CALIB, "--planet", out("ll", "planet.planet"), "--max-frames", "5",
+        "--out", out("ll_again"))
+    with open(out("ll_again", "summary.json")) as f:
+        s = json.load(f)
+    if s["chart"] != "latlong":
+        fail(f"a lat-long planet file replayed onto {s['chart']}")
     # Its heightmap export is the whole sphere (equirectangular through the chart's inverse).
     meta = json.load(open(out("octa_a", "heightmap.png.json")))
     if meta.get("projection", "").find("equirectangular") < 0:
