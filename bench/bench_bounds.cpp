@@ -13,7 +13,7 @@ namespace ps::bench {
 
 void benchBounds(const BenchOptions& options, std::ostream& out) {
   const int level = options.quick ? 10 : 12;
-  auto planet = app::makeDefaultPlanet(level, 1);
+  auto planet = app::makeDefaultPlanet(level, 1, core::ChartShape::kLatLong);
   const std::vector<float> heights(planet->heights().begin(), planet->heights().end());
   for (const auto rule : {terrain::ErrorRule::kWedgie, terrain::ErrorRule::kHybridExact}) {
     std::vector<double> builds;

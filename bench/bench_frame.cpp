@@ -120,7 +120,7 @@ void benchFrame(const BenchOptions& options, std::ostream& out) {
 class CaseReplay {
  public:
   CaseReplay(int gridLevel, double distMaxPx, render::Shading shading)
-      : planet_(app::makeDefaultPlanet(gridLevel, 1)),
+      : planet_(app::makeDefaultPlanet(gridLevel, 1, core::ChartShape::kLatLong)),
         source_(ps::app::sourceDir() / "data" / "demo.mkv"),
         calib_(tracking::loadCalibration(ps::app::sourceDir() / "calib" / "synthetic-640x480.yml")
                    .forImageSize(source_.size())),

@@ -240,7 +240,7 @@ void demoReplay(const BenchOptions& options, std::ostream& out) {
   }
   tracking::FrameSource source(video);
   const auto calib = tracking::loadCalibration(calibPath);
-  auto planet = app::makeDefaultPlanet(options.quick ? 9 : 11, 1);
+  auto planet = app::makeDefaultPlanet(options.quick ? 9 : 11, 1, core::ChartShape::kLatLong);
   replay::ReplayOptions ro = demoReplayOptions();
   if (options.quick) ro.maxFrames = 150;
   haptics::ForcePathConfig cfg;
@@ -289,7 +289,7 @@ void demoReplay(const BenchOptions& options, std::ostream& out) {
 }  // namespace
 
 void benchHaptics(const BenchOptions& options, std::ostream& out) {
-  auto planet = app::makeDefaultPlanet(options.quick ? 10 : 12, 1);
+  auto planet = app::makeDefaultPlanet(options.quick ? 10 : 12, 1, core::ChartShape::kLatLong);
   run(false, options, *planet, out);
   run(true, options, *planet, out);
   demoReplay(options, out);

@@ -144,7 +144,7 @@ void benchLive(const BenchOptions& options, const LiveSettings& settings, std::o
     int level = 0;
     while ((1 << level) + 1 < side) ++level;
     std::cerr << "bench live: " << side << "² planet ...\n";
-    auto planet = app::makeDefaultPlanet(level, 1);
+    auto planet = app::makeDefaultPlanet(level, 1, core::ChartShape::kLatLong);
     const std::string loadBefore = loadAverage();
     std::cerr << "bench live: " << seconds << " s of session, saving off\n";
     const LiveRun off = runSession(*planet, seconds, autosave, strokeEvery, {});

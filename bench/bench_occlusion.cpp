@@ -100,7 +100,7 @@ Eigen::Matrix3d eigenOf(const cv::Matx33d& K) {
 }
 
 Tally measureTool(const OcclusionRecording& rec, int gridLevel, render::PlanetRenderer& renderer) {
-  auto planet = app::makeDefaultPlanet(gridLevel, 1);
+  auto planet = app::makeDefaultPlanet(gridLevel, 1, core::ChartShape::kLatLong);
   replay::FrameStepper stepper(rec.calibration, *planet, rec.options);
   const tracking::ToolShape shape = tracking::toolShape(rec.options.scene);
   const Eigen::Matrix3d K = eigenOf(rec.calibration.K);

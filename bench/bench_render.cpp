@@ -49,7 +49,7 @@ void benchRender(const BenchOptions& o, std::ostream& out) {
   const auto gl = glContextOrSkip("render", out);
   if (!gl) return;
   const int level = o.quick ? 10 : 12;
-  const auto planet = app::makeDefaultPlanet(level, 1);
+  const auto planet = app::makeDefaultPlanet(level, 1, core::ChartShape::kLatLong);
   const double R = planet->chart().radius();
   render::PlanetRenderer renderer;
   const int repeats = o.quick ? 3 : 9;

@@ -78,7 +78,8 @@ void benchTessellate(const BenchOptions& options, std::ostream& out) {
   const double rssBefore = procStatusMiB("VmRSS");
   double buildS = 0;
   std::unique_ptr<terrain::Terrain> planet;
-  buildS = timeMs([&] { planet = app::makeDefaultPlanet(level, 1); }) / 1000.0;
+  buildS = timeMs([&] { planet = app::makeDefaultPlanet(level, 1, core::ChartShape::kLatLong); }) /
+           1000.0;
   const double rssAfter = procStatusMiB("VmRSS");
   out << nlohmann::json{{"bench", "tessellate_memory"},
                         {"grid", planet->grid().label()},

@@ -43,4 +43,8 @@ double timeMs(F&& f) {
   return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
 }
 
+// A CLI11 check: empty when `text` is a side a planet's grid can have (2^n + 1, 3 .. 16385),
+// else why not (bench_live.cpp).
+std::string notAGridSide(const std::string& text);
+
 }  // namespace ps::bench

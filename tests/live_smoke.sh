@@ -92,6 +92,21 @@ sed '3s/.*/{"frame": 99, "sigma": "wide"}/' "$side" >"$out/i/bad.jsonl"
 grep -q "$out/i/bad.jsonl:3: \"sigma\" is not a number" "$out/replay5.txt" ||
   { cat "$out/replay5.txt"; fail "the damaged sidecar's message does not name file and line"; }
 [ -e "$out/i/bad/planet.planet" ] && fail "a planet was written despite the damaged sidecar"
+# The sidecar names the chart the session sculpted (the default planet's: octahedral). One that
+# names none (written before sidecars named charts, when every new planet was lat-long) replays
+# onto lat-long and says so once: a lat-long session's sidecar with its chart taken out replays
+# to the session's planet, byte for byte.
+grep -q '"chart":"octahedral"' "$side" || { cat "$side"; fail "the sidecar does not name the octahedral chart"; }
+run "$out/live13.txt" --frames 60 --chart latlong --out "$out/k" --record "$out/k/old.mkv" ||
+  { cat "$out/live13.txt"; fail "live --chart latlong --record failed"; }
+grep -q '"chart":"latlong",' "$out/k/old.mkv.session.jsonl" || fail "the lat-long sidecar does not name its chart"
+sed -i 's/"chart":"latlong",//' "$out/k/old.mkv.session.jsonl"
+"$exe" replay "$out/k/old.mkv" --calib "$src/calib/synthetic-640x480.yml" --out "$out/k/replay" \
+  >"$out/replay6.txt" 2>&1 || { cat "$out/replay6.txt"; fail "replay of a sidecar naming no chart failed"; }
+[ "$(grep -c 'names no chart: replaying onto lat-long' "$out/replay6.txt")" -eq 1 ] ||
+  { cat "$out/replay6.txt"; fail "the replay did not say once that the sidecar names no chart"; }
+cmp -s "$out/k/planet.planet" "$out/k/replay/planet.planet" ||
+  fail "a sidecar naming no chart did not replay onto the lat-long planet it was recorded on"
 # Ctrl-C (SIGINT) while the window is open (sent by the app to itself at window frame 20): exits 0
 # and saves the planet.
 # Without PS_TEST_ACTIONS the test actions are not part of the command surface: refused.

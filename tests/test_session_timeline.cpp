@@ -371,3 +371,41 @@ TEST(SessionTimeline, TornLastLineOfACrashIsIgnoredWithAWarning) {
   EXPECT_DOUBLE_EQ(t.entries[0].settings.brush.sigma, 0.2);
   EXPECT_NE(t.warning.find(p.string() + ":3: "), std::string::npos) << t.warning;
 }
+
+// A sidecar names the start planet's chart (lat-long or octahedral alike); one written before
+// sidecars named it reads as lat-long, the chart every recording was made on then, and says it
+// named none (the replay tells the user so; app/replay_job.cpp).
+TEST(SessionTimeline, SidecarsNameTheirChartAndOnesThatNameNoneAreLatLong) {
+  const auto dir = testkit::freshDir("timeline_chart");
+  auto write = [&](const terrain::Terrain& planet, const std::string& name) {
+    const auto path = dir / name;
+    replay::TimelineWriter w;
+    w.open(
+        path,
+        replay::SessionStart::of(planet, "", planet.grid().side(), 1, testkit::shortSceneCamera(),
+                                 "synthetic", testkit::shortSceneOptions(), 30, 0),
+        replay::SessionSettings::of(testkit::shortSceneOptions()));
+    return path;
+  };
+  const auto latlong = replay::readSessionTimeline(write(testkit::bumpyTerrain(5, 4), "ll.jsonl"));
+  EXPECT_EQ(latlong.start.chart, "latlong");
+  EXPECT_TRUE(latlong.start.chartNamed);
+  const auto octaPath = write(testkit::bumpyOctahedralTerrain(5, 4), "octa.jsonl");
+  const auto octa = replay::readSessionTimeline(octaPath);
+  EXPECT_EQ(octa.start.chart, "octahedral");
+  EXPECT_TRUE(octa.start.chartNamed);
+  // The same header without its "chart" field: an old sidecar.
+  std::ifstream in(octaPath);
+  std::string header;
+  std::getline(in, header);
+  const std::string field = "\"chart\":\"octahedral\",";
+  const auto at = header.find(field);
+  ASSERT_NE(at, std::string::npos) << header;
+  header.erase(at, field.size());
+  const auto old = dir / "old.jsonl";
+  std::ofstream(old) << header << "\n";
+  const auto before = replay::readSessionTimeline(old);
+  EXPECT_EQ(before.start.chart, "latlong");
+  EXPECT_FALSE(before.start.chartNamed);
+  EXPECT_EQ(before.start.gridSide, octa.start.gridSide);
+}

@@ -5,6 +5,7 @@
 #include <memory>
 
 #include "app/command_registry.hpp"
+#include "app/default_planet.hpp"
 #include "core/input_error.hpp"
 #include "io/heightmap_import.hpp"
 #include "io/planet_file.hpp"
@@ -14,8 +15,9 @@ namespace ps::app {
 namespace {
 
 struct ImportArgs {
-  std::string input, output, chart = "latlong", noData = "fill", noDataValue, encoding = "stored",
-                             store = "f32", rule = "hybrid-exact", interpolation = "cubic";
+  std::string input, output, chart = core::toString(kDefaultChart), noData = "fill", noDataValue,
+                             encoding = "stored", store = "f32", rule = "hybrid-exact",
+                             interpolation = "cubic";
   std::optional<double> radius, minorRadius, length, scale, offset, westLon, spacing;
   long long grid = 0;
 };

@@ -82,8 +82,13 @@ int runTrack(const TrackArgs& a) {
   double radius = io::kDefaultImportRadius;
   if (!a.planet.empty()) {
     planet = io::loadPlanet(a.planet);
-    if (!planet->chart().hasPoleRows())
-      throw core::InputError(a.planet + ": a stroke's track needs a planet (a lat-long chart)");
+    // Any sphere: the track is laid on the tangent plane and read back through the chart's
+    // inverse (the default planet is octahedral).
+    if (!(planet->chart().radius() > 0))
+      throw core::InputError(a.planet +
+                             ": a stroke's track needs a sphere (a lat-long or "
+                             "octahedral planet), not a " +
+                             planet->chart().name() + " one");
     radius = planet->chart().radius();
   }
   const bool replayLog = std::filesystem::path(a.strokes).extension() == ".jsonl";

@@ -9,6 +9,11 @@
 namespace ps::app {
 
 inline constexpr double kDefaultRadiusMetres = 6372790.0;  // paper 003's planet
+// A new planet's chart when the user names none (`demo`, `live`, `replay` without `--planet` or
+// `--chart`, `import` of an equirectangular image): the octahedral chart, no poles and cells of
+// one area (issue 43; docs/CHARTS.md, "The default chart"). Planet files and session sidecars
+// keep the chart they name; a sidecar that names none is lat-long (replay::SessionStart).
+inline constexpr core::ChartShape kDefaultChart = core::ChartShape::kOctahedral;
 // A new torus or cylinder without dimensions (docs/CHARTS.md): about the default sphere's
 // bounding radius (6,300 and 6,325 km), so that the demo recording's strokes, made over that
 // sphere's middle latitudes, reach the torus's outer equator and the band of the cylinder.
@@ -25,11 +30,11 @@ struct PlanetDims {
 // option the shape does not take (--minor-radius off a torus, --length off a cylinder).
 core::ChartDims resolveDims(core::ChartShape shape, const PlanetDims& given);
 
-// The bundled default planet: the procedural relief on a sphere of the given chart (lat-long
+// The bundled default planet: the procedural relief on a sphere of the given chart (kDefaultChart
 // unless `--chart` says otherwise), a torus or a cylinder, with progress. The flat chart is
 // refused (no planet stands on the board without a centre).
-std::unique_ptr<terrain::Terrain> makeDefaultPlanet(
-    int gridLevel, std::uint64_t seed, core::ChartShape chart = core::ChartShape::kLatLong,
-    const PlanetDims& dims = {});
+std::unique_ptr<terrain::Terrain> makeDefaultPlanet(int gridLevel, std::uint64_t seed,
+                                                    core::ChartShape chart = kDefaultChart,
+                                                    const PlanetDims& dims = {});
 
 }  // namespace ps::app

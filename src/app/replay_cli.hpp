@@ -25,7 +25,7 @@ struct ReplayCli {
   // not lose them. A recording made with the single markers replays with `--board single
   // --tool-layout flat` (or by itself, when its session sidecar says so).
   std::string board = "board", toolLayout = "cube";
-  std::string chart = "latlong";  // the default planet's chart
+  std::string chart = core::toString(kDefaultChart);  // the default planet's chart
   // Its dimensions (as `import` takes them): unset, the chart's defaults (app/default_planet.hpp).
   std::optional<double> radius, minorRadius, length;
 

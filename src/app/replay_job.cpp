@@ -35,8 +35,10 @@ void renameInto(const std::filesystem::path& from, const std::filesystem::path& 
   if (ec) throw std::runtime_error("cannot rename " + from.string() + " to " + to.string());
 }
 
-// The vertices the replay changed: their bounding box in equirectangular pixels of a w x h
-// raster, and the vertex whose height changed most (the view looks there).
+// The vertices the replay changed: their bounding box in pixels of the w x h picture raster
+// (pictureRaster), and the vertex whose height changed most (the view looks there). Lat-long's
+// and the tubes' rasters follow the grid's (u, v); on the octahedral chart a vertex's pixel is
+// its direction's latitude and longitude (its grid is folded, every column a point of its own).
 struct Change {
   bool any = false;
   cv::Rect box;
@@ -47,16 +49,24 @@ struct Change {
 Change findChange(const terrain::Terrain& t, const std::vector<float>& before, int w, int h) {
   Change c;
   const int side = t.grid().side(), m = t.grid().m();
+  const bool byDirection = t.chart().radius() > 0 && !t.chart().hasPoleRows();
   int x0 = w, x1 = -1, y0 = h, y1 = -1;
   const auto now = t.heights();
   for (int v = 0; v < side; ++v) {
-    for (int u = 0; u < m; ++u) {
+    for (int u = 0; u < (byDirection ? side : m); ++u) {
       const std::size_t i = std::size_t(v) * std::size_t(side) + std::size_t(u);
       const double d = std::abs(double(now[i]) - double(before[i]));
       if (d < 1.0) continue;  // metres: float noise of untouched cells is far below this
       c.any = true;
       if (d > c.largest) c = {true, {}, u, v, d};
-      const int x = int(double(u) / m * w), y = h - 1 - int(double(v) / (side - 1) * (h - 1));
+      int x = int(double(u) / m * w), y = h - 1 - int(double(v) / (side - 1) * (h - 1));
+      if (byDirection) {  // column 0 at 180 degrees W, row 0 at the north pole (io::Raster)
+        const Eigen::Vector3d dir = t.chart().up(u, v);
+        const double lon = std::atan2(dir.y(), dir.x());
+        const double lat = std::asin(std::clamp(dir.z(), -1.0, 1.0));
+        x = std::clamp(int((0.5 + lon / (2 * std::numbers::pi)) * w), 0, w - 1);
+        y = std::clamp(int((0.5 - lat / std::numbers::pi) * h), 0, h - 1);
+      }
       x0 = std::min(x0, x), x1 = std::max(x1, x), y0 = std::min(y0, y), y1 = std::max(y1, y);
     }
   }
@@ -121,7 +131,7 @@ struct ReplayInputs {
   std::filesystem::path planetFile;
   int gridLevel = 0;
   std::uint64_t seed = 0;
-  core::ChartShape chart = core::ChartShape::kLatLong;
+  core::ChartShape chart = kDefaultChart;
   PlanetDims dims;
 };
 
@@ -161,6 +171,12 @@ ReplayInputs resolveInputs(const ReplayJob& job) {
     in.gridLevel = core::GridSize::fromSide(st.gridSide).n();
     in.seed = st.seed;
     in.chart = core::chartShapeFromString(st.chart);
+    // Sidecars from before charts were recorded on lat-long, the default then (today's default
+    // is kDefaultChart): the replay makes the planet the session sculpted.
+    if (!st.chartNamed)
+      std::cerr << "replay: the session sidecar " << in.sidecar.string()
+                << " names no chart: replaying onto lat-long, the chart of recordings made "
+                   "before sidecars named one\n";
     in.dims = {};
     if (st.radius > 0) in.dims.radius = st.radius;
     if (st.minorRadius > 0) in.dims.minorRadius = st.minorRadius;
@@ -268,6 +284,16 @@ void writeReliefPictures(const ReplayJob& job, const terrain::Terrain& planet,
     files.push_back("closeup.png");
     vu = change.u, vv = change.v;
     summary["largest_change_m"] = change.largest;
+    // Where the close-up looks, in the picture raster's pixels (x, y, width, height of w x h),
+    // and on a sphere where the largest change is: the close-up must frame it.
+    summary["closeup_box_px"] = {change.box.x, change.box.y, change.box.width, change.box.height};
+    summary["picture_px"] = {w, h};
+    if (R > 0) {
+      const Eigen::Vector3d d = planet.chart().up(vu, vv);
+      summary["largest_change_lat_lon_deg"] = {
+          std::asin(std::clamp(d.z(), -1.0, 1.0)) * 180 / std::numbers::pi,
+          std::atan2(d.y(), d.x()) * 180 / std::numbers::pi};
+    }
   }
   p.update(0.6);
   const terrain::Camera cam = viewOf(planet, vu, vv);

@@ -20,7 +20,7 @@ struct ReplayJob {
   std::filesystem::path planetFile;  // empty: the default planet
   int gridLevel = 11;                // default planet: 2049^2
   std::uint64_t seed = 1;
-  core::ChartShape chart = core::ChartShape::kLatLong;  // default planet's chart (`--chart`)
+  core::ChartShape chart = kDefaultChart;  // default planet's chart (`--chart`)
   PlanetDims dims;  // its dimensions (`--radius`, `--minor-radius`, `--length`)
   replay::ReplayOptions options;
   // Pictures: relief.png (after), relief_before.png, closeup.png (before | after around what

@@ -51,6 +51,7 @@ struct SessionStart {
   int gridSide = 0;
   std::uint64_t seed = 1;
   std::string chart = "latlong";       // the start planet's chart (sidecars before it: lat-long)
+  bool chartNamed = false;             // the sidecar names it (false: one before charts)
   double radius = 0;                   // a sphere's; a torus's major radius, a cylinder's radius
   double minorRadius = 0, length = 0;  // a torus's tube radius, a cylinder's length; else 0
   std::uint32_t heightsCrc = 0;        // io::heightsChecksum of the heights at the first frame

@@ -132,6 +132,7 @@ SessionStart parseStart(const nlohmann::json& j, const std::filesystem::path& pa
   s.seed = read<std::uint64_t>(planet, "seed", path, line);
   if (planet.contains("chart")) {
     s.chart = read<std::string>(planet, "chart", path, line);
+    s.chartNamed = true;
     try {
       core::chartShapeFromString(s.chart);
     } catch (const core::InputError& e) {
