@@ -26,7 +26,9 @@
 // distinct point; thermal, explicit diffusion at each chart's bound and semi-implicit diffusion at
 // 4x it (on the glued charts along lines continued across the folds and seams). The four charts
 // are stepped in turn and each row carries the median over the repetitions of its rate over
-// lat-long's in the same repetition (`rate_ratio_vs_latlong`); `bench erosion-charts` runs these
+// lat-long's in the same repetition (`rate_ratio_vs_latlong`; `cpu_rate_ratio_vs_latlong` the same
+// per CPU-second of the process, which a loaded machine's scheduling disturbs less on one
+// thread); `bench erosion-charts` runs these
 // rows alone. The planet crater runs on both sphere charts too.
 //
 // The machine this was written on is shared with other builds: timings are noisy; compare runs
@@ -155,7 +157,7 @@ struct SurfaceRun {
   std::unique_ptr<sand::SandField> field;
   double scale = 0, dt = 0, loadMs = 0, v0 = 0, totalMs = 0;
   std::size_t cells = 0;
-  std::vector<double> rates;
+  std::vector<double> rates, cpuRates;
 };
 
 std::shared_ptr<const core::Chart> surfaceChart(const core::GridSize& g, Surface surface) {
@@ -220,16 +222,20 @@ void sphereThroughput(int n, const std::vector<Surface>& surfaces, Method method
     for (std::size_t j = 0; j < count; ++j) {
       SurfaceRun& s = runs[(j + std::size_t(k)) % count];
       sand::StepReport r;
+      const double c0 = cpuSeconds();
       const double t = timeMs([&] { r = surfaceStep(s, method, mat); });
       s.rates.push_back(double(r.cells) / (t * 1e-3));
+      s.cpuRates.push_back(double(r.cells) / std::max(cpuSeconds() - c0, 1e-9));
       s.cells += r.cells;
       s.totalMs += t;
     }
   }
   for (const SurfaceRun& s : runs) {
-    std::vector<double> ratios;
-    for (int k = 0; k < repeats; ++k)
+    std::vector<double> ratios, cpuRatios;
+    for (int k = 0; k < repeats; ++k) {
       ratios.push_back(s.rates[std::size_t(k)] / runs[0].rates[std::size_t(k)]);
+      cpuRatios.push_back(s.cpuRates[std::size_t(k)] / runs[0].cpuRates[std::size_t(k)]);
+    }
     const double drift = std::abs(s.field->volume() - s.v0) / s.scale;
     const core::GridSize& g = s.chart->grid();
     nlohmann::json j = {
@@ -245,6 +251,8 @@ void sphereThroughput(int n, const std::vector<Surface>& surfaces, Method method
         {"rate_ratio_vs_latlong", median(ratios)},
         {"rate_ratio_vs_latlong_min", *std::min_element(ratios.begin(), ratios.end())},
         {"rate_ratio_vs_latlong_max", *std::max_element(ratios.begin(), ratios.end())},
+        {"cell_steps_per_cpu_s", median(s.cpuRates)},
+        {"cpu_rate_ratio_vs_latlong", median(cpuRatios)},
         {"ms_per_step", s.totalMs / repeats},
         {"first_step_ms", s.loadMs},
         {"volume_drift", drift},
@@ -256,7 +264,8 @@ void sphereThroughput(int n, const std::vector<Surface>& surfaces, Method method
     std::cerr << "erosion " << methodName(method) << " " << s.chart->name() << " " << g.label()
               << " threads " << threads << ": " << median(s.rates) / 1e6 << " M cell-steps/s, "
               << s.totalMs / repeats << " ms a step, x" << median(ratios)
-              << " lat-long's rate (median of the repetitions), drift " << drift << "\n";
+              << " lat-long's rate (median of the repetitions; per CPU-second x"
+              << median(cpuRatios) << "), drift " << drift << "\n";
   }
 }
 
