@@ -24,8 +24,12 @@
 // spacing 1 m) at 1025^2 (--quick: 257^2), on lat-long and on the octahedral chart in the same
 // run (`chart`), and on a torus and a cylinder of 1 m steps round the tube, noise +-10 m per
 // distinct point; thermal, explicit diffusion at each chart's bound and semi-implicit diffusion at
-// 4x it (on the glued charts along lines continued across the folds and seams). The planet crater
-// runs on both charts too.
+// 4x it (on the glued charts along lines continued across the folds and seams). The four charts
+// are stepped in turn and each row carries the median over the repetitions of its rate over
+// lat-long's in the same repetition (`rate_ratio_vs_latlong`; `cpu_rate_ratio_vs_latlong` the same
+// per CPU-second of the process, which a loaded machine's scheduling disturbs less on one
+// thread); `bench erosion-charts` runs these
+// rows alone. The planet crater runs on both sphere charts too.
 //
 // The machine this was written on is shared with other builds: timings are noisy; compare runs
 // taken back to back.
@@ -147,76 +151,122 @@ void throughput(int n, Method method, int threads, int repeats, std::ostream& ou
 // The closed surfaces' charts of these rows: lat-long, octahedral, torus, cylinder.
 enum class Surface { kLatLong, kOctahedral, kTorus, kCylinder };
 
-void sphereThroughput(int n, Surface surface, Method method, int threads, int repeats,
-                      std::ostream& out) {
-  const core::GridSize g(n);
+// One surface's field, ready to step (its first step, which loads every tile, done).
+struct SurfaceRun {
+  std::shared_ptr<const core::Chart> chart;
+  std::unique_ptr<sand::SandField> field;
+  double scale = 0, dt = 0, loadMs = 0, v0 = 0, totalMs = 0;
+  std::size_t cells = 0;
+  std::vector<double> rates, cpuRates;
+};
+
+std::shared_ptr<const core::Chart> surfaceChart(const core::GridSize& g, Surface surface) {
   const double R = g.m() / std::numbers::pi;  // lat-long's meridian spacing: 1 m
   // The tubes: 1 m steps round the tube, the default torus's r / R = 0.4, a cylinder as long
   // as its circumference.
   const double tubeR = g.m() / (2.0 * std::numbers::pi);
-  std::shared_ptr<const core::Chart> chart;
-  if (surface == Surface::kOctahedral) {
-    chart = std::make_shared<core::OctahedralChart>(g, R);
-  } else if (surface == Surface::kTorus) {
-    chart = std::make_shared<core::TorusChart>(g, 2.5 * tubeR, tubeR);
-  } else if (surface == Surface::kCylinder) {
-    chart = std::make_shared<core::CylinderChart>(g, tubeR, double(g.m()));
-  } else {
-    chart = std::make_shared<core::LatLongChart>(g, R);
-  }
+  if (surface == Surface::kOctahedral) return std::make_shared<core::OctahedralChart>(g, R);
+  if (surface == Surface::kTorus) return std::make_shared<core::TorusChart>(g, 2.5 * tubeR, tubeR);
+  if (surface == Surface::kCylinder)
+    return std::make_shared<core::CylinderChart>(g, tubeR, double(g.m()));
+  return std::make_shared<core::LatLongChart>(g, R);
+}
+
+sand::StepReport surfaceStep(SurfaceRun& s, Method method, const sand::Material& mat) {
+  if (method == Method::kThermal) return s.field->thermalStep(mat);
+  return s.field->diffusionStep(mat, s.dt,
+                                method == Method::kSemiImplicit
+                                    ? sand::DiffusionScheme::kSemiImplicit
+                                    : sand::DiffusionScheme::kExplicit,
+                                sand::StepPolicy::kRefuse);
+}
+
+SurfaceRun startSurface(int n, Surface surface, Method method, const sand::Material& mat) {
+  const core::GridSize g(n);
+  SurfaceRun s;
+  s.chart = surfaceChart(g, surface);
   std::vector<float> h(g.count());
   for (int v = 0; v <= g.m(); ++v) {
     for (int u = 0; u <= g.m(); ++u) {
-      const core::GridPoint c = chart->canonical(u, v);
-      std::mt19937 rng(std::uint32_t(g.index(c.u, c.v) * 2654435761u + 1234u));
-      h[g.index(u, v)] = 100.0f + std::uniform_real_distribution<float>(-10.0f, 10.0f)(rng);
+      // A hash of the canonical vertex's index (seeding a std::mt19937 per point took most of
+      // the bench's time at 1025^2).
+      const core::GridPoint c = s.chart->canonical(u, v);
+      std::uint64_t x = std::uint64_t(g.index(c.u, c.v)) + 0x9e3779b97f4a7c15ull;
+      x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ull;
+      x = (x ^ (x >> 27)) * 0x94d049bb133111ebull;
+      x ^= x >> 31;
+      h[g.index(u, v)] = 100.0f + float(-10.0 + 20.0 * double(x >> 11) * 0x1.0p-53);
     }
   }
-  const sand::SandGrid grid(chart);
-  const double scale = grid.absVolume(h);
-  sand::SandField field(chart, h);
+  s.scale = sand::SandGrid(s.chart).absVolume(h);
+  s.field = std::make_unique<sand::SandField>(s.chart, h);
+  s.field->markAll();
+  s.dt = s.field->explicitBound(mat) * (method == Method::kSemiImplicit ? 4.0 : 1.0);
+  s.loadMs = timeMs([&] { surfaceStep(s, method, mat); });  // every tile (and its geometry)
+  s.v0 = s.field->volume();
+  return s;
+}
+
+// Every surface stepped once per repetition, the order rotated from one repetition to the next,
+// so that the machine's drift falls on all of them alike; each surface's rate in a repetition is
+// divided by lat-long's of the same repetition (the first surface), and the row reports the
+// median of those ratios (`rate_ratio_vs_latlong`) beside the median rates.
+void sphereThroughput(int n, const std::vector<Surface>& surfaces, Method method, int threads,
+                      int repeats, std::ostream& out) {
   const sand::Material mat = sand::Material::sand();
   omp_set_num_threads(threads);
-  field.markAll();
-  const bool implicit = method == Method::kSemiImplicit;
-  const double dt = field.explicitBound(mat) * (implicit ? 4.0 : 1.0);
-  auto step = [&] {
-    if (method == Method::kThermal) return field.thermalStep(mat);
-    return field.diffusionStep(
-        mat, dt, implicit ? sand::DiffusionScheme::kSemiImplicit : sand::DiffusionScheme::kExplicit,
-        sand::StepPolicy::kRefuse);
-  };
-  const double loadMs = timeMs([&] { step(); });  // loads every tile (and its geometry)
-  const double v0 = field.volume();
-  std::vector<double> rates;
-  std::size_t cells = 0;
-  double totalMs = 0;
+  std::vector<SurfaceRun> runs;
+  for (Surface surface : surfaces) runs.push_back(startSurface(n, surface, method, mat));
+  const std::size_t count = runs.size();
   for (int k = 0; k < repeats; ++k) {
-    sand::StepReport r;
-    const double t = timeMs([&] { r = step(); });
-    rates.push_back(double(r.cells) / (t * 1e-3));
-    cells += r.cells;
-    totalMs += t;
+    for (std::size_t j = 0; j < count; ++j) {
+      SurfaceRun& s = runs[(j + std::size_t(k)) % count];
+      sand::StepReport r;
+      const double c0 = cpuSeconds();
+      const double t = timeMs([&] { r = surfaceStep(s, method, mat); });
+      s.rates.push_back(double(r.cells) / (t * 1e-3));
+      s.cpuRates.push_back(double(r.cells) / std::max(cpuSeconds() - c0, 1e-9));
+      s.cells += r.cells;
+      s.totalMs += t;
+    }
   }
-  const double drift = std::abs(field.volume() - v0) / scale;
-  nlohmann::json j = {{"bench", "erosion"},
-                      {"method", methodName(method)},
-                      {"chart", chart->name()},
-                      {"grid", g.label()},
-                      {"threads", threads},
-                      {"steps", repeats},
-                      {"dt", method == Method::kThermal ? 0.0 : dt},
-                      {"cells_per_step", cells / std::size_t(std::max(1, repeats))},
-                      {"cell_steps_per_s", median(rates)},
-                      {"ms_per_step", totalMs / repeats},
-                      {"first_step_ms", loadMs},
-                      {"volume_drift", drift},
-                      {"resident_mb", double(field.residentBytes()) / (1 << 20)},
-                      {"note", "planet radius m/pi m; shared machine: timings are noisy"}};
-  out << j.dump() << "\n" << std::flush;
-  std::cerr << "erosion " << methodName(method) << " " << chart->name() << " " << g.label()
-            << " threads " << threads << ": " << median(rates) / 1e6 << " M cell-steps/s, "
-            << totalMs / repeats << " ms a step, drift " << drift << "\n";
+  for (const SurfaceRun& s : runs) {
+    std::vector<double> ratios, cpuRatios;
+    for (int k = 0; k < repeats; ++k) {
+      ratios.push_back(s.rates[std::size_t(k)] / runs[0].rates[std::size_t(k)]);
+      cpuRatios.push_back(s.cpuRates[std::size_t(k)] / runs[0].cpuRates[std::size_t(k)]);
+    }
+    const double drift = std::abs(s.field->volume() - s.v0) / s.scale;
+    const core::GridSize& g = s.chart->grid();
+    nlohmann::json j = {
+        {"bench", "erosion"},
+        {"method", methodName(method)},
+        {"chart", s.chart->name()},
+        {"grid", g.label()},
+        {"threads", threads},
+        {"steps", repeats},
+        {"dt", method == Method::kThermal ? 0.0 : s.dt},
+        {"cells_per_step", s.cells / std::size_t(std::max(1, repeats))},
+        {"cell_steps_per_s", median(s.rates)},
+        {"rate_ratio_vs_latlong", median(ratios)},
+        {"rate_ratio_vs_latlong_min", *std::min_element(ratios.begin(), ratios.end())},
+        {"rate_ratio_vs_latlong_max", *std::max_element(ratios.begin(), ratios.end())},
+        {"cell_steps_per_cpu_s", median(s.cpuRates)},
+        {"cpu_rate_ratio_vs_latlong", median(cpuRatios)},
+        {"ms_per_step", s.totalMs / repeats},
+        {"first_step_ms", s.loadMs},
+        {"volume_drift", drift},
+        {"resident_mb", double(s.field->residentBytes()) / (1 << 20)},
+        {"note",
+         "planet radius m/pi m; the charts stepped in turn, ratio per repetition; "
+         "shared machine: timings are noisy"}};
+    out << j.dump() << "\n" << std::flush;
+    std::cerr << "erosion " << methodName(method) << " " << s.chart->name() << " " << g.label()
+              << " threads " << threads << ": " << median(s.rates) / 1e6 << " M cell-steps/s, "
+              << s.totalMs / repeats << " ms a step, x" << median(ratios)
+              << " lat-long's rate (median of the repetitions; per CPU-second x"
+              << median(cpuRatios) << "), drift " << drift << "\n";
+  }
 }
 
 void crater(bool sphere, bool quick, int threads, std::ostream& out, bool octahedral = false) {
@@ -298,6 +348,23 @@ void crater(bool sphere, bool quick, int threads, std::ostream& out, bool octahe
 
 }  // namespace
 
+// The sphere: lat-long, octahedral, torus and cylinder stepped in turn in one run (the glued
+// charts' per-cell loops against lat-long's rows). Also `bench erosion-charts` alone.
+void benchErosionCharts(const BenchOptions& options, std::ostream& out) {
+  const int saved = omp_get_max_threads();
+  const int repeats =
+      std::max(3, options.quick ? std::min(options.repeats, 5) : std::min(options.repeats, 9));
+  const int ns = options.quick ? 8 : 10;
+  for (Method method : {Method::kThermal, Method::kExplicit, Method::kSemiImplicit}) {
+    for (int threads : {1, 2}) {
+      sphereThroughput(
+          ns, {Surface::kLatLong, Surface::kOctahedral, Surface::kTorus, Surface::kCylinder},
+          method, threads, repeats, out);
+    }
+  }
+  omp_set_num_threads(saved);
+}
+
 void benchErosion(const BenchOptions& options, std::ostream& out) {
   const int saved = omp_get_max_threads();
   const int n = options.quick ? 9 : 11;
@@ -309,21 +376,15 @@ void benchErosion(const BenchOptions& options, std::ostream& out) {
   for (bool sphere : {false, true}) {
     for (int threads : {1, 2}) crater(sphere, options.quick, threads, out);
   }
-  // The sphere: lat-long and octahedral side by side, same run; then the torus and the cylinder
-  // (the octahedral chart's per-cell loops).
-  const int ns = options.quick ? 8 : 10;
-  for (Method method : {Method::kThermal, Method::kExplicit, Method::kSemiImplicit}) {
-    for (int threads : {1, 2}) {
-      for (Surface surface :
-           {Surface::kLatLong, Surface::kOctahedral, Surface::kTorus, Surface::kCylinder})
-        sphereThroughput(ns, surface, method, threads, repeats, out);
-    }
-  }
+  benchErosionCharts(options, out);
   for (int threads : {1, 2}) crater(true, options.quick, threads, out, true);
   omp_set_num_threads(saved);
 }
 
 static const BenchRegistration kRegistered(
     "erosion", "The sand core's throughput and the frames a crater needs to settle", benchErosion);
+static const BenchRegistration kRegisteredCharts(
+    "erosion-charts", "The sand core's rate on the four sphere charts in turn, ratios to lat-long",
+    benchErosionCharts);
 
 }  // namespace ps::bench

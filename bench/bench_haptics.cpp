@@ -5,8 +5,10 @@
 // view (the rendering stand-in, one OpenMP thread: "the other core").
 //
 // The device is scripted (ScriptedDevice): the demo's kind of stroke on a 6 cm globe, repeated
-// every 3 s: down to 1.5 mm below the surface, dragged 8 degrees east, lifted. Two runs: the loop
-// alone (no editor work) and the loop beside the editor. Per run one JSON line: the loop's rate,
+// every 3 s: down to 1.5 mm below the surface, dragged 8 degrees east, lifted. The default planet
+// on lat-long and on the octahedral chart (each row names its `chart`): first the tick's work on
+// both, offline and in turn (tickCompare), then per chart two runs: the loop alone (no editor
+// work) and the loop beside the editor. Per run one JSON line: the loop's rate,
 // wake-up period (median, p99, max), per-tick compute time (read + depth + force + queue:
 // median, p99, max), deadlines missed, whether SCHED_FIFO was granted, the editor's frame times,
 // and the machine's load average before and after (the machine is shared: read the figures with
@@ -31,8 +33,12 @@
 #include "bench/bench.hpp"
 #include "bench/bench_util.hpp"
 #include "bench/demo_options.hpp"
+#include "core/chart_factory.hpp"
 #include "edit/edit_pipeline.hpp"
+#include "haptics/device.hpp"
 #include "haptics/force_path.hpp"
+#include "haptics/haptic_core.hpp"
+#include "haptics/terrain_patch.hpp"
 #include "replay/replay.hpp"
 #include "sand/settler.hpp"
 #include "terrain/camera.hpp"
@@ -58,8 +64,10 @@ Eigen::Vector3d dirAt(double latDeg, double lonDeg) {
   return {std::cos(lo) * std::cos(la), std::sin(lo) * std::cos(la), std::sin(la)};
 }
 
-// The stroke in the device frame (m from the globe's centre), period 3 s.
-haptics::ScriptedDevice::Path strokePath(const terrain::Terrain& planet, double scale) {
+// The stroke in the device frame (m from the globe's centre), period 3 s: along the parallel
+// `lat` from longitude lonA to lonB (degrees).
+haptics::ScriptedDevice::Path strokePath(const terrain::Terrain& planet, double scale,
+                                         double lat = 30, double lonA = 20, double lonB = 28) {
   const core::Chart& chart = planet.chart();
   auto surfaceAt = [&](const Eigen::Vector3d& d) {
     const auto uv = chart.inverse(d);
@@ -67,7 +75,7 @@ haptics::ScriptedDevice::Path strokePath(const terrain::Terrain& planet, double 
             planet.height(int(std::lround((*uv)(0))), int(std::lround((*uv)(1))))) /
            scale;
   };
-  const Eigen::Vector3d a = dirAt(30, 20), b = dirAt(30, 28);
+  const Eigen::Vector3d a = dirAt(lat, lonA), b = dirAt(lat, lonB);
   const double ra = surfaceAt(a), rb = surfaceAt(b);
   auto key = haptics::ScriptedDevice::keyframes({{0.0, a * (ra + 0.003)},
                                                  {0.8, a * (ra - 0.0015)},
@@ -150,6 +158,7 @@ void run(bool withEditor, const BenchOptions& options, terrain::Terrain& planet,
   nlohmann::json j = {
       {"bench", "haptics"},
       {"run", withEditor ? "loop+editor" : "loop-alone"},
+      {"chart", planet.chart().name()},
       {"grid", planet.grid().label()},
       {"seconds", wall},
       {"target_rate_hz", cfg.haptics.rateHz},
@@ -180,11 +189,102 @@ void run(bool withEditor, const BenchOptions& options, terrain::Terrain& planet,
        "shared machine: compare with the load average; targets tick_us <= 20, p99 period <= "
        "1.5 ms"}};
   out << j.dump() << "\n" << std::flush;
-  std::cerr << "haptics " << (withEditor ? "loop+editor" : "loop-alone") << ": "
-            << double(st.ticks) / wall << " Hz, period median " << median(period) << " ms p99 "
-            << percentile(period, 0.99) << " ms max " << j["period_max_ms"].get<double>()
-            << " ms, tick median " << median(compute) << " us p99 " << percentile(compute, 0.99)
-            << " us, load " << load1[0] << "\n";
+  std::cerr << "haptics " << (withEditor ? "loop+editor" : "loop-alone") << " "
+            << planet.chart().name() << ": " << double(st.ticks) / wall << " Hz, period median "
+            << median(period) << " ms p99 " << percentile(period, 0.99) << " ms max "
+            << j["period_max_ms"].get<double>() << " ms, tick median " << median(compute)
+            << " us p99 " << percentile(compute, 0.99) << " us, load " << load1[0] << "\n";
+}
+
+// The haptic tick on the sphere's charts (issue 43): the loop's work per tick (the scripted
+// device read, the depth in the patch, the force law and clamps: HapticCore::tick) timed
+// offline, without the loop's sleeps, on the same stroke on each planet; the patch captured
+// about the tip every 33 ticks as the editor does every frame (not timed). Each repetition runs
+// one 3 s stroke (3,000 ticks) per chart, the charts in turn, the order rotated; a row per
+// chart and scene with the median per-tick time and the median over the repetitions of its
+// time over lat-long's in the same repetition. Scenes: the live run's stroke (30 N, 20 -> 28 E)
+// and one across the octahedral chart's fold at 0 E (30 S, 4 W -> 4 E), where its patch holds
+// the box's images across the fold.
+void tickCompare(const BenchOptions& options, const std::vector<const terrain::Terrain*>& planets,
+                 std::ostream& out) {
+  struct Scene {
+    const char* name;
+    double lat, lonA, lonB;
+  };
+  const int repeats = options.quick ? 5 : 9;
+  for (const Scene& scene : {Scene{"mid-latitude", 30, 20, 28}, Scene{"fold", -30, -4, 4}}) {
+    struct Run {
+      const terrain::Terrain* planet;
+      haptics::ForcePathConfig cfg;
+      int halfSize = 0;
+      std::vector<double> usPerTick;
+      std::uint64_t touching = 0, images = 0;
+    };
+    std::vector<Run> runs;
+    for (const terrain::Terrain* planet : planets) {
+      Run r;
+      r.planet = planet;
+      r.cfg.map.scale = planet->chart().radius() / kGlobe;
+      r.cfg.press.displacement.radius = 60e3;
+      r.halfSize = haptics::ForcePath(*planet, nullptr, r.cfg).patchHalfSize();
+      runs.push_back(std::move(r));
+    }
+    for (int k = 0; k < repeats; ++k) {
+      for (std::size_t j = 0; j < runs.size(); ++j) {
+        Run& r = runs[(j + std::size_t(k)) % runs.size()];
+        haptics::ScriptedDevice device(
+            strokePath(*r.planet, r.cfg.map.scale, scene.lat, scene.lonA, scene.lonB));
+        haptics::HapticCore core(r.cfg.haptics, r.cfg.map);
+        haptics::TerrainPatch patch;
+        const int ticks = 3000;
+        double us = 0;
+        Eigen::Vector3d pos = Eigen::Vector3d::Zero();
+        for (int i = 0; i < ticks; i += 33) {
+          if (device.read(i * 1e-3, pos) &&
+              !patch.capture(*r.planet, r.cfg.map.toPlanet(pos), r.halfSize))
+            patch.clear();
+          r.images += std::uint64_t(patch.images());
+          const auto t0 = std::chrono::steady_clock::now();
+          for (int q = i; q < std::min(ticks, i + 33); ++q) {
+            const double t = q * 1e-3;
+            const bool ok = device.read(t, pos);
+            const haptics::ForceRecord rec =
+                core.tick(t, ok, pos, patch.valid() ? &patch : nullptr);
+            r.touching += rec.force.squaredNorm() > 0 ? 1 : 0;
+          }
+          us += std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - t0)
+                    .count();
+        }
+        r.usPerTick.push_back(us / ticks);
+      }
+    }
+    for (const Run& r : runs) {
+      std::vector<double> ratios;
+      for (int k = 0; k < repeats; ++k)
+        ratios.push_back(r.usPerTick[std::size_t(k)] / runs[0].usPerTick[std::size_t(k)]);
+      nlohmann::json j = {
+          {"bench", "haptics"},
+          {"run", "tick-compare"},
+          {"scene", scene.name},
+          {"chart", r.planet->chart().name()},
+          {"grid", r.planet->grid().label()},
+          {"repetitions", repeats},
+          {"ticks_per_repetition", 3000},
+          {"touching_ticks", r.touching / std::uint64_t(repeats)},
+          {"patch_images", r.images},
+          {"tick_us_median", median(r.usPerTick)},
+          {"tick_time_ratio_vs_latlong", median(ratios)},
+          {"tick_time_ratio_vs_latlong_min", *std::min_element(ratios.begin(), ratios.end())},
+          {"tick_time_ratio_vs_latlong_max", *std::max_element(ratios.begin(), ratios.end())},
+          {"load_avg", loadAverage()},
+          {"note", "offline ticks (no sleeps), charts in turn; shared machine"}};
+      out << j.dump() << "\n" << std::flush;
+      std::cerr << "haptics tick " << scene.name << " " << r.planet->chart().name() << ": "
+                << median(r.usPerTick) << " us a tick, x" << median(ratios)
+                << " lat-long's (median of the repetitions), " << r.touching / repeats
+                << " touching ticks\n";
+    }
+  }
 }
 
 // Force magnitude, repulse and depth against time, as a PNG (OpenCV drawing; no plotting
@@ -289,9 +389,14 @@ void demoReplay(const BenchOptions& options, std::ostream& out) {
 }  // namespace
 
 void benchHaptics(const BenchOptions& options, std::ostream& out) {
-  auto planet = app::makeDefaultPlanet(options.quick ? 10 : 12, 1, core::ChartShape::kLatLong);
-  run(false, options, *planet, out);
-  run(true, options, *planet, out);
+  const int level = options.quick ? 10 : 12;
+  auto planet = app::makeDefaultPlanet(level, 1, core::ChartShape::kLatLong);
+  auto octahedral = app::makeDefaultPlanet(level, 1, core::ChartShape::kOctahedral);
+  tickCompare(options, {planet.get(), octahedral.get()}, out);
+  for (terrain::Terrain* p : {planet.get(), octahedral.get()}) {
+    run(false, options, *p, out);
+    run(true, options, *p, out);
+  }
   demoReplay(options, out);
 }
 

@@ -99,33 +99,59 @@ unsigned diffusionRow(const double* hm, const double* h0, const double* hp, doub
   return any;
 }
 
+// The glued kernels read their operands through restrict-qualified copies of the pointers and
+// capture scalars by value: without that GCC cannot rule out that `out` or `s` alias one of
+// the 17 constant planes (too many pairs to check at run time) and leaves the loops scalar
+// (4.6x lat-long's time per thermal cell-step; docs/SAND.md, "Where the octahedral chart's time
+// went"). The operations are the same, lane by lane: the results are bit for bit the same.
+namespace {
+struct GluedPlanes {
+  const double* __restrict d0;
+  const double* __restrict d1;
+  const double* __restrict d2;
+  const double* __restrict d3;
+  const double* __restrict d4;
+  const double* __restrict d5;
+  const double* __restrict d6;
+  const double* __restrict d7;
+  const double* __restrict area;
+};
+}  // namespace
+
 PS_SAND_CLONES
-void gluedThermalPass1(const double* hm, const double* h0, const double* hp, double* s,
-                       const GluedRow& g, double T, double coh, double eta, double halfRate) {
-  auto ex = [&](double h, double hn, double d) { return act(h - hn - (T * d + coh), eta * T * d); };
+void gluedThermalPass1(const double* __restrict hm, const double* __restrict h0,
+                       const double* __restrict hp, double* __restrict s, const GluedRow& g,
+                       double T, double coh, double eta, double halfRate) {
+  const GluedPlanes p{g.d[0], g.d[1], g.d[2], g.d[3], g.d[4], g.d[5], g.d[6], g.d[7], g.area};
+  auto ex = [T, coh, eta](double h, double hn, double d) {
+    return act(h - hn - (T * d + coh), eta * T * d);
+  };
   for (int c = 0; c < kGluedRow; ++c) {
     const double h = h0[c];
-    const double eW = ex(h, h0[c - 1], g.d[0][c]), eE = ex(h, h0[c + 1], g.d[1][c]);
-    const double eS = ex(h, hm[c], g.d[2][c]), eN = ex(h, hp[c], g.d[3][c]);
-    const double eSW = ex(h, hm[c - 1], g.d[4][c]), eSE = ex(h, hm[c + 1], g.d[5][c]);
-    const double eNW = ex(h, hp[c - 1], g.d[6][c]), eNE = ex(h, hp[c + 1], g.d[7][c]);
+    const double eW = ex(h, h0[c - 1], p.d0[c]), eE = ex(h, h0[c + 1], p.d1[c]);
+    const double eS = ex(h, hm[c], p.d2[c]), eN = ex(h, hp[c], p.d3[c]);
+    const double eSW = ex(h, hm[c - 1], p.d4[c]), eSE = ex(h, hm[c + 1], p.d5[c]);
+    const double eNW = ex(h, hp[c - 1], p.d6[c]), eNE = ex(h, hp[c + 1], p.d7[c]);
     const double E = ((eW + eE) + (eS + eN)) + ((eSW + eNE) + (eSE + eNW));
     const double mx = std::max(std::max(std::max(eW, eE), std::max(eS, eN)),
                                std::max(std::max(eSW, eNE), std::max(eSE, eNW)));
-    const double q = (halfRate * g.area[c]) * mx / (E > 0.0 ? E : 1.0);
-    s[c] = ((E > 0.0) & (g.area[c] > 0.0)) ? q : 0.0;
+    const double q = (halfRate * p.area[c]) * mx / (E > 0.0 ? E : 1.0);
+    s[c] = ((E > 0.0) & (p.area[c] > 0.0)) ? q : 0.0;
   }
 }
 
 PS_SAND_CLONES
-void gluedThermalPass2(const double* hm, const double* h0, const double* hp, const double* sm,
-                       const double* s0, const double* sp, const double* cm, const double* c0,
-                       const double* cp, double* out, const GluedRow& g, double T, double coh,
-                       double eta) {
+void gluedThermalPass2(const double* __restrict hm, const double* __restrict h0,
+                       const double* __restrict hp, const double* __restrict sm,
+                       const double* __restrict s0, const double* __restrict sp,
+                       const double* __restrict cm, const double* __restrict c0,
+                       const double* __restrict cp, double* __restrict out, const GluedRow& g,
+                       double T, double coh, double eta) {
+  const GluedPlanes p{g.d[0], g.d[1], g.d[2], g.d[3], g.d[4], g.d[5], g.d[6], g.d[7], g.area};
   // thermalPass2's link: act(|d| - t) times min(s_sender, cap_receiver), signed by which side
   // is higher; the same operands from both cells.
-  auto link = [&](double h, double hn, double dist, double sOther, double capOther, double sSelf,
-                  double capSelf) {
+  auto link = [T, coh, eta](double h, double hn, double dist, double sOther, double capOther,
+                            double sSelf, double capSelf) {
     const double d = h - hn;
     const double a = act(std::abs(d) - (T * dist + coh), eta * T * dist);
     const double coef = d > 0.0 ? -std::min(sSelf, capOther) : std::min(sOther, capSelf);
@@ -133,34 +159,44 @@ void gluedThermalPass2(const double* hm, const double* h0, const double* hp, con
   };
   for (int c = 0; c < kGluedRow; ++c) {
     const double h = h0[c], si = s0[c], capSelf = c0[c];
-    const double nW = link(h, h0[c - 1], g.d[0][c], s0[c - 1], c0[c - 1], si, capSelf);
-    const double nE = link(h, h0[c + 1], g.d[1][c], s0[c + 1], c0[c + 1], si, capSelf);
-    const double nS = link(h, hm[c], g.d[2][c], sm[c], cm[c], si, capSelf);
-    const double nN = link(h, hp[c], g.d[3][c], sp[c], cp[c], si, capSelf);
-    const double nSW = link(h, hm[c - 1], g.d[4][c], sm[c - 1], cm[c - 1], si, capSelf);
-    const double nSE = link(h, hm[c + 1], g.d[5][c], sm[c + 1], cm[c + 1], si, capSelf);
-    const double nNW = link(h, hp[c - 1], g.d[6][c], sp[c - 1], cp[c - 1], si, capSelf);
-    const double nNE = link(h, hp[c + 1], g.d[7][c], sp[c + 1], cp[c + 1], si, capSelf);
+    const double nW = link(h, h0[c - 1], p.d0[c], s0[c - 1], c0[c - 1], si, capSelf);
+    const double nE = link(h, h0[c + 1], p.d1[c], s0[c + 1], c0[c + 1], si, capSelf);
+    const double nS = link(h, hm[c], p.d2[c], sm[c], cm[c], si, capSelf);
+    const double nN = link(h, hp[c], p.d3[c], sp[c], cp[c], si, capSelf);
+    const double nSW = link(h, hm[c - 1], p.d4[c], sm[c - 1], cm[c - 1], si, capSelf);
+    const double nSE = link(h, hm[c + 1], p.d5[c], sm[c + 1], cm[c + 1], si, capSelf);
+    const double nNW = link(h, hp[c - 1], p.d6[c], sp[c - 1], cp[c - 1], si, capSelf);
+    const double nNE = link(h, hp[c + 1], p.d7[c], sp[c + 1], cp[c + 1], si, capSelf);
     const double net = ((nW + nE) + (nS + nN)) + ((nSW + nNE) + (nSE + nNW));
-    const double A = g.area[c];
+    const double A = p.area[c];
     const double next = h + net * (1.0 / (A > 0.0 ? A : 1.0));
     out[c] = A > 0.0 ? next : out[c];
   }
 }
 
 PS_SAND_CLONES
-unsigned gluedDiffusionRow(const double* hm, const double* h0, const double* hp, double* out,
-                           const GluedRow& g, double Dl2, double dt, const Repose& r) {
+unsigned gluedDiffusionRow(const double* __restrict hm, const double* __restrict h0,
+                           const double* __restrict hp, double* __restrict out, const GluedRow& g,
+                           double Dl2, double dt, const Repose& r) {
   const Repose rr = r;
+  const double* __restrict r0 = g.ratio[0];
+  const double* __restrict r1 = g.ratio[1];
+  const double* __restrict r2 = g.ratio[2];
+  const double* __restrict r3 = g.ratio[3];
+  const double* __restrict i0 = g.inv[0];
+  const double* __restrict i1 = g.inv[1];
+  const double* __restrict i2 = g.inv[2];
+  const double* __restrict i3 = g.inv[3];
+  const double* __restrict area = g.area;
   unsigned any = 0;
   for (int c = 0; c < kGluedRow; ++c) {
     const double h = h0[c];
-    const double fW = faceFlux(h, h0[c - 1], Dl2 * g.ratio[0][c], g.inv[0][c], rr);
-    const double fE = faceFlux(h, h0[c + 1], Dl2 * g.ratio[1][c], g.inv[1][c], rr);
-    const double fS = faceFlux(h, hm[c], Dl2 * g.ratio[2][c], g.inv[2][c], rr);
-    const double fN = faceFlux(h, hp[c], Dl2 * g.ratio[3][c], g.inv[3][c], rr);
+    const double fW = faceFlux(h, h0[c - 1], Dl2 * r0[c], i0[c], rr);
+    const double fE = faceFlux(h, h0[c + 1], Dl2 * r1[c], i1[c], rr);
+    const double fS = faceFlux(h, hm[c], Dl2 * r2[c], i2[c], rr);
+    const double fN = faceFlux(h, hp[c], Dl2 * r3[c], i3[c], rr);
     const double net = (fW + fE) + (fS + fN);
-    const double A = g.area[c];
+    const double A = area[c];
     const double dtInvA = dt * (1.0 / (A > 0.0 ? A : 1.0));
     out[c] = A > 0.0 ? h - dtInvA * net : out[c];
     any |= unsigned(((std::abs(fW) + std::abs(fE)) + (std::abs(fS) + std::abs(fN))) > 0.0);

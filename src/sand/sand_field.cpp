@@ -138,6 +138,8 @@ std::size_t SandField::residentBytes() const {
     bytes += (std::size_t(kT) * kT * (t->next ? 2 : 1) + std::size_t(8) * kT) * sizeof(double);
     if (t->geo) bytes += std::size_t(kGeoPlanes) * kT * kT * sizeof(double);
     if (t->s) bytes += std::size_t(kT) * kT * sizeof(double);
+    if (t->capHalo) bytes += std::size_t(kW) * kW * sizeof(double);
+    bytes += t->haloSource.size() * sizeof(std::uint32_t);
   }
   return bytes;
 }

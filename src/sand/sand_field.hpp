@@ -175,9 +175,10 @@ class SandField {
   double computeGeometry(int t, double* geo) const;
   // The source of scratch position (r, c) of tile (tu, tv) (a one-cell halo, the grid continued
   // across the glued sides to the canonical vertex): its tile and index there, or false
-  // (outside the grid or not in P).
+  // (outside the grid).
   bool gluedSource(int tu, int tv, int r, int c, int& tile, int& local) const;
-  void gatherGlued(int tu, int tv, double* hs, double* ss, double* caps) const;
+  void gatherGlued(int tu, int tv, double* hs, double* ss) const;
+  void loadHalo(Tile& tile, int t) const;
   bool gluedBorderTile(int tu, int tv) const;
   double gluedTileBound(int t) const;  // min A / sum_f (L_f / d_f) over tile t's cells
   double gluedBound(const Material& material, bool wholeGrid, bool visited) const;
@@ -186,7 +187,7 @@ class SandField {
                            const std::function<void(int)>& add);
   StepReport thermalStepGlued(const Material& material);
   void thermalGluedPass1(int t, const Material& material, double* hs);
-  void thermalGluedPass2(int t, const Material& material, double* hs, double* ss, double* cs,
+  void thermalGluedPass2(int t, const Material& material, double* hs, double* ss,
                          std::uint8_t& busy);
   void diffusionGluedTile(int t, const DiffusionTables& tb, double dt, const PushForce* force,
                           double* hs, std::uint8_t& busy);

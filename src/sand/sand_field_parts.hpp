@@ -46,6 +46,14 @@ struct SandField::Tile {
   std::unique_ptr<double[]> geo, s;
   double boundFactor = 0.0;
   std::vector<int> linked;  // glued: the other tiles its cells have links to
+  // Glued: the receiver caps of the tile's cells and its one-cell halo in the detail::kW^2
+  // scratch layout (0 where no cell), made once when the geometry is loaded: thermal pass 2 reads
+  // them in place of a gather every step (a wall's cap is never read: it neither sends nor
+  // receives). On a tile by a glued side, each halo cell's source (tile << 10 | index in it,
+  // kNoSource where none), so that a step's gather makes no chart look-ups.
+  std::unique_ptr<double[]> capHalo;
+  std::vector<std::uint32_t> haloSource;
+  static constexpr std::uint32_t kNoSource = ~std::uint32_t(0);
 
   void snapshot() {
     double* e = edge.get();

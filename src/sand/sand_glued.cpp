@@ -36,6 +36,7 @@ void SandField::loadGeometry(Tile& tile, int t) {
   if (tile.geo) return;
   tile.geo = std::make_unique<double[]>(std::size_t(kGeoPlanes) * kCells);
   tile.boundFactor = computeGeometry(t, tile.geo.get());
+  loadHalo(tile, t);
   // The tiles its cells link to (other than itself).
   tile.linked.clear();
   const int tu = t % tilesU_, tv = t / tilesU_;
@@ -151,51 +152,70 @@ bool SandField::gluedSource(int tu, int tv, int r, int c, int& tile, int& local)
     u = q.u, v = q.v;
   }
   tile = tileIndex(u / kT, v / kT);
-  if (!inP_[std::size_t(tile)]) return false;
   local = (v % kT) * kT + (u % kT);
   return true;
 }
 
-// The tile's heights (hs), thermal outflow scales (ss, optional) and receiver caps (caps,
-// optional) with a one-cell halo, in the kW x kW scratch layout (the tile at offset 2): cells
-// outside P read as walls (kWall, s = 0).
-void SandField::gatherGlued(int tu, int tv, double* hs, double* ss, double* caps) const {
+// The tile's static halo (Tile::capHalo, Tile::haloSource): each cap is computed as
+// computeGeometry computes the source cell's, so it holds the same bits as that cell's plane.
+void SandField::loadHalo(Tile& tile, int t) const {
+  const int tu = t % tilesU_, tv = t / tilesU_;
+  const bool border = gluedBorderTile(tu, tv);
+  tile.capHalo = std::make_unique<double[]>(std::size_t(kW) * kW);
+  std::fill_n(tile.capHalo.get(), kW * kW, 0.0);
+  if (border) tile.haloSource.assign(std::size_t(kW) * kW, Tile::kNoSource);
+  for (int r = 1; r < kW - 1; ++r) {
+    for (int c = 1; c < kW - 1; ++c) {
+      int src = 0, local = 0;
+      if (!gluedSource(tu, tv, r, c, src, local)) continue;
+      const int u = (src % tilesU_) * kT + local % kT, v = (src / tilesU_) * kT + local / kT;
+      const std::size_t at = std::size_t(r * kW + c);
+      if (cellExists(u, v))
+        tile.capHalo[at] = grid_.cellArea(u, v) * (grid_.linkCount(u, v) == 4 ? 0.25 : 0.125);
+      if (border) tile.haloSource[at] = (std::uint32_t(src) << 10) | std::uint32_t(local);
+    }
+  }
+}
+
+// The tile's heights (hs) and thermal outflow scales (ss, optional) with a one-cell halo, in the
+// kW x kW scratch layout (the tile at offset 2): cells outside P read as walls (kWall, s = 0).
+void SandField::gatherGlued(int tu, int tv, double* hs, double* ss) const {
   const int own = tileIndex(tu, tv);
   if (!gluedBorderTile(tu, tv)) {
     // Inside the grid: no twin within the halo, the lat-long gather's row copies (a two-cell
-    // halo, of which the kernels read one), then s and the caps from the neighbours' arrays.
+    // halo, of which the kernels read one), then s from the neighbours' arrays.
     gather(tu, tv, hs);
+    if (!ss) return;
     for (int r = 1; r < kW - 1; ++r) {
       const int v = tv * kT + r - 2, tvr = v / kT, lv = v % kT;
+      double* srow = ss + r * kW;
       for (int piece = 0; piece < 3; ++piece) {
         const int tn = tileIndex(tu - 1 + piece, tvr);
         const int c0 = piece == 0 ? 1 : (piece == 1 ? 2 : kT + 2);
-        const int c1 = piece == 0 ? 2 : (piece == 1 ? kT + 2 : kT + 3);
+        const int n = piece == 1 ? kT : 1;
         const int lu0 = piece == 0 ? kT - 1 : 0;
         const Tile* src = inP_[std::size_t(tn)] ? tiles_[std::size_t(tn)].get() : nullptr;
-        double* srow = ss ? ss + r * kW : nullptr;
-        double* crow = caps ? caps + r * kW : nullptr;
-        for (int c = c0; c < c1; ++c) {
-          const std::size_t l = std::size_t(lv * kT + lu0 + (c - c0));
-          if (srow) srow[c] = src ? src->s[l] : 0.0;
-          if (crow) crow[c] = src ? src->geo[std::size_t(kGeoCap) * kCells + l] : 0.0;
-        }
+        if (src)
+          std::copy_n(src->s.get() + lv * kT + lu0, n, srow + c0);
+        else
+          std::fill_n(srow + c0, n, 0.0);
       }
     }
     return;
   }
   std::fill_n(hs, kW * kW, kWall);
   if (ss) std::fill_n(ss, kW * kW, 0.0);
-  if (caps) std::fill_n(caps, kW * kW, 0.0);
+  const std::uint32_t* source = tiles_[std::size_t(own)]->haloSource.data();
   for (int r = 1; r < kW - 1; ++r) {
     for (int c = 1; c < kW - 1; ++c) {
-      int tile = 0, local = 0;
-      if (!gluedSource(tu, tv, r, c, tile, local)) continue;
-      const Tile& src = *tiles_[std::size_t(tile)];
       const std::size_t at = std::size_t(r * kW + c);
+      const std::uint32_t from = source[at];
+      if (from == Tile::kNoSource) continue;
+      const int tile = int(from >> 10), local = int(from & 1023u);
+      if (!inP_[std::size_t(tile)]) continue;
+      const Tile& src = *tiles_[std::size_t(tile)];
       hs[at] = tile == own ? src.cur[std::size_t(local)] : src.edgeAt(local % kT, local / kT);
       if (ss) ss[at] = src.s[std::size_t(local)];
-      if (caps) caps[at] = src.geo[std::size_t(kGeoCap) * kCells + std::size_t(local)];
     }
   }
 }
@@ -292,7 +312,7 @@ kernels::GluedRow rowOf(const double* geo, int lv) {
 // left as they were.
 void SandField::thermalGluedPass1(int t, const Material& material, double* hs) {
   const int tu = t % tilesU_, tv = t / tilesU_;
-  gatherGlued(tu, tv, hs, nullptr, nullptr);
+  gatherGlued(tu, tv, hs, nullptr);
   Tile& tile = *tiles_[std::size_t(t)];
   if (!tile.s) tile.s = std::make_unique<double[]>(kCells);
   const double* geo = tile.geo.get();
@@ -305,10 +325,11 @@ void SandField::thermalGluedPass1(int t, const Material& material, double* hs) {
 }
 
 void SandField::thermalGluedPass2(int t, const Material& material, double* hs, double* ss,
-                                  double* cs, std::uint8_t& busy) {
+                                  std::uint8_t& busy) {
   const int tu = t % tilesU_, tv = t / tilesU_;
-  gatherGlued(tu, tv, hs, ss, cs);
+  gatherGlued(tu, tv, hs, ss);
   Tile& tile = *tiles_[std::size_t(t)];
+  const double* cs = tile.capHalo.get();
   const double* geo = tile.geo.get();
   // Busy: some cell of the tile or of its halo sends (every halo cell is linked to the tile).
   unsigned any = 0;
@@ -333,8 +354,7 @@ StepReport SandField::thermalStepGlued(const Material& material) {
   const int n = int(tileList_.size());
 #pragma omp parallel if (n >= kParallelTiles)
   {
-    std::vector<double> hs(std::size_t(kW) * kW), ss(std::size_t(kW) * kW),
-        cs(std::size_t(kW) * kW);
+    std::vector<double> hs(std::size_t(kW) * kW), ss(std::size_t(kW) * kW);
 #pragma omp for schedule(static)
     for (int j = 0; j < n; ++j) tiles_[std::size_t(tileList_[std::size_t(j)])]->snapshot();
       // (barrier: every tile's edge holds the heights before the step)
@@ -343,7 +363,7 @@ StepReport SandField::thermalStepGlued(const Material& material) {
       // (barrier: every cell's s is known)
 #pragma omp for schedule(dynamic, 1)
     for (int j = 0; j < n; ++j) {
-      thermalGluedPass2(tileList_[std::size_t(j)], material, hs.data(), ss.data(), cs.data(),
+      thermalGluedPass2(tileList_[std::size_t(j)], material, hs.data(), ss.data(),
                         busyOut[std::size_t(j)]);
     }
   }
@@ -359,7 +379,7 @@ StepReport SandField::thermalStepGlued(const Material& material) {
 void SandField::diffusionGluedTile(int t, const DiffusionTables& tb, double dt,
                                    const PushForce* force, double* hs, std::uint8_t& busy) {
   const int tu = t % tilesU_, tv = t / tilesU_;
-  gatherGlued(tu, tv, hs, nullptr, nullptr);
+  gatherGlued(tu, tv, hs, nullptr);
   Tile& tile = *tiles_[std::size_t(t)];
   const double* geo = tile.geo.get();
   const double Dl2 = diffusionMaterial_.diffusion * grid_.cellSize() * grid_.cellSize();
