@@ -12,9 +12,6 @@ namespace ps::tracking {
 
 namespace {
 
-const cv::Size kWindow(15, 15);
-constexpr int kLevels = 3;
-
 cv::Vec3d cvVec(const Eigen::Vector3d& v) {
   return {v.x(), v.y(), v.z()};
 }
@@ -39,6 +36,10 @@ void keep(std::vector<T>& v, const std::vector<unsigned char>& ok) {
 void PlaneTrackerConfig::validate() const {
   auto bad = [](const std::string& what) { throw core::InputError("plane tracker: " + what); };
   if (maxFeatures < 4) bad("max features is not >= 4");
+  if (gridColumns < 1 || gridRows < 1) bad("the corner grid is not at least 1 x 1");
+  if (downscale < 1) bad("downscale is not >= 1");
+  if (windowPx < 3) bad("the LK window is not >= 3 px");
+  if (pyramidMaxLevel < 0) bad("the pyramid's max level is not >= 0");
   if (minInliers < 4) bad("min inliers is not >= 4");
   for (double v : {minDistancePx, ransacPx, maxRmsPx, maxJump, backPx, reanchorAgreePx})
     if (!(v > 0) || !std::isfinite(v)) bad("a distance or error bound is not > 0");
@@ -79,33 +80,76 @@ void PlaneTracker::setReference(const cv::Mat& grey, const Pose& board,
   pendingExclude_ = exclude;
 }
 
-void PlaneTracker::pick(const cv::Mat& grey, const std::vector<cv::Mat>& pyramid, const Pose& board,
+cv::Mat PlaneTracker::working(const cv::Mat& grey) const {
+  if (config_.downscale == 1) return grey;
+  cv::Mat out;
+  cv::resize(grey, out, cv::Size(grey.cols / config_.downscale, grey.rows / config_.downscale), 0,
+             0, cv::INTER_AREA);
+  return out;
+}
+
+std::vector<cv::Mat> PlaneTracker::pyramid(const cv::Mat& work) const {
+  std::vector<cv::Mat> out;
+  cv::buildOpticalFlowPyramid(work, out, cv::Size(config_.windowPx, config_.windowPx),
+                              config_.pyramidMaxLevel);
+  return out;
+}
+
+std::vector<cv::Point2f> PlaneTracker::full(const std::vector<cv::Point2f>& work) const {
+  // Pixel centres: working pixel i covers full-resolution pixels [i * s, (i + 1) * s).
+  std::vector<cv::Point2f> out;
+  out.reserve(work.size());
+  for (const auto& p : work)
+    out.emplace_back(float((p.x + 0.5) * scaleX_ - 0.5), float((p.y + 0.5) * scaleY_ - 0.5));
+  return out;
+}
+
+void PlaneTracker::pick(const cv::Mat& work, const std::vector<cv::Mat>& pyramid, const Pose& board,
                         const CameraCalibration& calib,
                         const std::vector<std::array<cv::Point2d, 4>>& exclude, bool asAnchor) {
-  cv::Mat mask(grey.size(), CV_8U, cv::Scalar(255));
+  cv::Mat mask(work.size(), CV_8U, cv::Scalar(255));
   for (const auto& q : exclude) {
     cv::Point2d c(0, 0);
     for (const auto& p : q) c += 0.25 * p;
     std::vector<cv::Point> poly;
     for (const auto& p : q) {
       const cv::Point2d grown = c + (1 + 2 * config_.maskMargin) * (p - c);
-      poly.emplace_back(int(std::lround(grown.x)), int(std::lround(grown.y)));
+      poly.emplace_back(int(std::lround((grown.x + 0.5) / scaleX_ - 0.5)),
+                        int(std::lround((grown.y + 0.5) / scaleY_ - 0.5)));
     }
     cv::fillConvexPoly(mask, poly, cv::Scalar(0));
   }
+  const double minDistance = config_.minDistancePx / config_.downscale;
   for (const auto& p : prev_)
     cv::circle(mask, cv::Point(int(std::lround(p.x)), int(std::lround(p.y))),
-               int(config_.minDistancePx), cv::Scalar(0), cv::FILLED);
+               int(std::ceil(minDistance)), cv::Scalar(0), cv::FILLED);
   const int wanted = asAnchor
                          ? config_.maxFeatures
                          : std::min(config_.maxFeatures - int(prev_.size()), int(prev_.size()));
   if (wanted <= 0) return;
-  std::vector<cv::Point2f> corners;
-  cv::goodFeaturesToTrack(grey, corners, wanted, 0.01, config_.minDistancePx, mask, 5);
+  // Spread over the grid: the strongest of each cell first (goodFeaturesToTrack sorts them), its
+  // share of the count; what textureless cells leave goes to the strongest of the rest.
+  std::vector<cv::Point2f> candidates, corners;
+  cv::goodFeaturesToTrack(work, candidates, 4 * wanted, 0.01, minDistance, mask, 5);
+  const int cells = config_.gridColumns * config_.gridRows;
+  const int share = (wanted + cells - 1) / cells;
+  std::vector<int> inCell(std::size_t(cells), 0);
+  std::vector<unsigned char> taken(candidates.size(), 0);
+  for (std::size_t i = 0; i < candidates.size() && int(corners.size()) < wanted; ++i) {
+    const int cx = std::clamp(int(candidates[i].x * config_.gridColumns / work.cols), 0,
+                              config_.gridColumns - 1);
+    const int cy =
+        std::clamp(int(candidates[i].y * config_.gridRows / work.rows), 0, config_.gridRows - 1);
+    if (inCell[std::size_t(cy * config_.gridColumns + cx)]++ >= share) continue;
+    corners.push_back(candidates[i]);
+    taken[i] = 1;
+  }
+  for (std::size_t i = 0; i < candidates.size() && int(corners.size()) < wanted; ++i)
+    if (!taken[i]) corners.push_back(candidates[i]);
   // Each corner's ray meets the board's plane (z = 0 in the board's frame).
   const Eigen::Vector3d n = board.R.col(2);
   const double nt = n.dot(board.t);
-  const std::vector<cv::Point2f> r = rays(corners, calib);
+  const std::vector<cv::Point2f> r = rays(full(corners), calib);
   for (std::size_t i = 0; i < corners.size(); ++i) {
     const Eigen::Vector3d d(r[i].x, r[i].y, 1.0);
     const double nd = n.dot(d);
@@ -123,8 +167,12 @@ void PlaneTracker::pick(const cv::Mat& grey, const std::vector<cv::Mat>& pyramid
 
 bool PlaneTracker::start(const CameraCalibration& calib) {
   if (pending_.empty()) return false;
-  cv::buildOpticalFlowPyramid(pending_, anchorPyramid_, kWindow, kLevels);
-  pick(pending_, anchorPyramid_, pendingBoard_, calib, pendingExclude_, true);
+  const cv::Mat work = working(pending_);
+  fullSize_ = pending_.size();
+  scaleX_ = double(pending_.cols) / work.cols;
+  scaleY_ = double(pending_.rows) / work.rows;
+  anchorPyramid_ = pyramid(work);
+  pick(work, anchorPyramid_, pendingBoard_, calib, pendingExclude_, true);
   prevPyramid_ = anchorPyramid_;
   last_ = pendingBoard_;
   pending_.release();
@@ -140,18 +188,18 @@ void PlaneTracker::reanchor(const std::vector<cv::Mat>& nowPyramid, PlaneTrack& 
   std::vector<cv::Point2f> direct = prev_, back;
   std::vector<unsigned char> status, backStatus;
   std::vector<float> err;
-  cv::calcOpticalFlowPyrLK(
-      anchorPyramid_, nowPyramid, anchor_, direct, status, err, kWindow, kLevels,
-      cv::TermCriteria(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, 30, 0.01),
-      cv::OPTFLOW_USE_INITIAL_FLOW);
+  const cv::Size window(config_.windowPx, config_.windowPx);
+  const cv::TermCriteria stop(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, 30, 0.01);
+  cv::calcOpticalFlowPyrLK(anchorPyramid_, nowPyramid, anchor_, direct, status, err, window,
+                           config_.pyramidMaxLevel, stop, cv::OPTFLOW_USE_INITIAL_FLOW);
   back = anchor_;
-  cv::calcOpticalFlowPyrLK(
-      nowPyramid, anchorPyramid_, direct, back, backStatus, err, kWindow, kLevels,
-      cv::TermCriteria(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, 30, 0.01),
-      cv::OPTFLOW_USE_INITIAL_FLOW);
+  cv::calcOpticalFlowPyrLK(nowPyramid, anchorPyramid_, direct, back, backStatus, err, window,
+                           config_.pyramidMaxLevel, stop, cv::OPTFLOW_USE_INITIAL_FLOW);
+  const double backPx = config_.backPx / config_.downscale;
+  const double agreePx = config_.reanchorAgreePx / config_.downscale;
   for (std::size_t i = 0; i < prev_.size(); ++i)
-    if (status[i] && backStatus[i] && cv::norm(back[i] - anchor_[i]) < config_.backPx &&
-        cv::norm(direct[i] - prev_[i]) < config_.reanchorAgreePx) {
+    if (status[i] && backStatus[i] && cv::norm(back[i] - anchor_[i]) < backPx &&
+        cv::norm(direct[i] - prev_[i]) < agreePx) {
       prev_[i] = direct[i];
       r.reanchored = true;
     }
@@ -167,22 +215,25 @@ PlaneTrack PlaneTracker::track(const cv::Mat& grey, const CameraCalibration& cal
   };
   if (failed_) return fail("lost since an earlier frame");
   if (!started_ && !start(calib)) return fail("no frame with the board to start from");
-  if (grey.size() != anchorPyramid_[0].size()) return fail("the frame size changed");
+  if (grey.size() != fullSize_) return fail("the frame size changed");
   r.features = int(prev_.size());
-  std::vector<cv::Mat> nowPyramid;
-  cv::buildOpticalFlowPyramid(grey, nowPyramid, kWindow, kLevels);
+  const cv::Mat work = working(grey);
+  const std::vector<cv::Mat> nowPyramid = pyramid(work);
   // Frame to frame, and back: a corner a hand covered or uncovered does not come back.
   std::vector<cv::Point2f> now, back;
   std::vector<unsigned char> status, backStatus;
   std::vector<float> err;
+  const cv::Size window(config_.windowPx, config_.windowPx);
   if (!prev_.empty()) {
-    cv::calcOpticalFlowPyrLK(prevPyramid_, nowPyramid, prev_, now, status, err, kWindow, kLevels);
-    cv::calcOpticalFlowPyrLK(nowPyramid, prevPyramid_, now, back, backStatus, err, kWindow,
-                             kLevels);
+    cv::calcOpticalFlowPyrLK(prevPyramid_, nowPyramid, prev_, now, status, err, window,
+                             config_.pyramidMaxLevel);
+    cv::calcOpticalFlowPyrLK(nowPyramid, prevPyramid_, now, back, backStatus, err, window,
+                             config_.pyramidMaxLevel);
   }
+  const double backPx = config_.backPx / config_.downscale;
   std::vector<unsigned char> ok(prev_.size());
   for (std::size_t i = 0; i < prev_.size(); ++i)
-    ok[i] = status[i] && backStatus[i] && cv::norm(back[i] - prev_[i]) < config_.backPx;
+    ok[i] = status[i] && backStatus[i] && cv::norm(back[i] - prev_[i]) < backPx;
   keep(now, ok);
   keep(plane_, ok);
   keep(anchor_, ok);
@@ -193,7 +244,8 @@ PlaneTrack PlaneTracker::track(const cv::Mat& grey, const CameraCalibration& cal
 
   // The pose from the corners that agree on one: a homography (RANSAC) on undistorted rays
   // sorts them, Levenberg-Marquardt from the last pose polishes it on the inliers.
-  const std::vector<cv::Point2f> nowRays = rays(prev_, calib);
+  const std::vector<cv::Point2f> nowPx = full(prev_);
+  const std::vector<cv::Point2f> nowRays = rays(nowPx, calib);
   std::vector<cv::Point2f> onPlane;
   for (const auto& p : plane_) onPlane.emplace_back(p.x, p.y);
   std::vector<unsigned char> inlier;
@@ -204,7 +256,7 @@ PlaneTrack PlaneTracker::track(const cv::Mat& grey, const CameraCalibration& cal
   std::vector<cv::Point3f> obj;
   std::vector<cv::Point2f> img;
   for (std::size_t i = 0; i < inlier.size(); ++i)
-    if (inlier[i]) obj.push_back(plane_[i]), img.push_back(prev_[i]);
+    if (inlier[i]) obj.push_back(plane_[i]), img.push_back(nowPx[i]);
   if (int(obj.size()) < config_.minInliers) return fail("too few corners agree on a plane");
   cv::Mat rvec(cvVec(last_.rvec())), tvec(cvVec(last_.t));
   cv::solvePnPRefineLM(obj, img, cv::Mat(calib.K), calib.distortion, rvec, tvec);
@@ -220,13 +272,13 @@ PlaneTrack PlaneTracker::track(const cv::Mat& grey, const CameraCalibration& cal
   int n = 0;
   cv::Point2f lo(1e9f, 1e9f), hi(-1e9f, -1e9f);
   for (std::size_t i = 0; i < plane_.size(); ++i) {
-    const double e = cv::norm(reproj[i] - prev_[i]);
+    const double e = cv::norm(reproj[i] - nowPx[i]);
     agree[i] = e <= config_.ransacPx;
     if (!agree[i]) continue;
     sq += e * e;
     ++n;
-    lo = {std::min(lo.x, prev_[i].x), std::min(lo.y, prev_[i].y)};
-    hi = {std::max(hi.x, prev_[i].x), std::max(hi.y, prev_[i].y)};
+    lo = {std::min(lo.x, nowPx[i].x), std::min(lo.y, nowPx[i].y)};
+    hi = {std::max(hi.x, nowPx[i].x), std::max(hi.y, nowPx[i].y)};
   }
   r.inliers = n;
   r.rmsPx = n > 0 ? std::sqrt(sq / n) : 0;
@@ -244,7 +296,7 @@ PlaneTrack PlaneTracker::track(const cv::Mat& grey, const CameraCalibration& cal
   if (int(prev_.size()) < config_.refillBelow) {
     // New corners where the camera sees now, put on the plane by this pose; the frame becomes
     // the anchor of every corner.
-    pick(grey, nowPyramid, pose, calib, exclude, false);
+    pick(work, nowPyramid, pose, calib, exclude, false);
     anchorPyramid_ = nowPyramid;
     anchor_ = prev_;
     r.refilled = true;

@@ -33,8 +33,19 @@
 namespace ps::tracking {
 
 struct PlaneTrackerConfig {
-  int maxFeatures = 300;
+  // Corners picked in the anchor: at most maxFeatures, spread over a gridColumns x gridRows grid
+  // (each cell takes its strongest first, its share of maxFeatures; what cells without texture
+  // leave goes to the strongest of the rest).
+  int maxFeatures = 150;
+  int gridColumns = 8, gridRows = 6;
   double minDistancePx = 8;
+  // Corners are picked and tracked on the frame made this many times smaller (INTER_AREA), by
+  // pyramidal LK with a windowPx-wide window and pyramidMaxLevel levels above that frame
+  // (OpenCV's maxLevel); the pose is solved at full resolution. Every distance below is in
+  // full-resolution pixels.
+  int downscale = 2;
+  int windowPx = 9;
+  int pyramidMaxLevel = 1;
   int minInliers = 20;
   double minSpread = 0.04;  // the inliers' bounding box covers this fraction of the image
   double ransacPx = 2.0;
@@ -82,10 +93,15 @@ class PlaneTracker {
 
  private:
   bool start(const CameraCalibration& calib);
-  void pick(const cv::Mat& grey, const std::vector<cv::Mat>& pyramid, const Pose& board,
+  // `work`: the frame at the working scale (downscale).
+  void pick(const cv::Mat& work, const std::vector<cv::Mat>& pyramid, const Pose& board,
             const CameraCalibration& calib, const std::vector<std::array<cv::Point2d, 4>>& exclude,
             bool asAnchor);
   void reanchor(const std::vector<cv::Mat>& nowPyramid, PlaneTrack& r);
+  cv::Mat working(const cv::Mat& grey) const;
+  std::vector<cv::Mat> pyramid(const cv::Mat& work) const;
+  // Working-scale pixels to full-resolution ones.
+  std::vector<cv::Point2f> full(const std::vector<cv::Point2f>& work) const;
   PlaneTrackerConfig config_;
   cv::Mat pending_;  // the anchor frame, until a frame without the board needs it
   Pose pendingBoard_;
@@ -95,7 +111,9 @@ class PlaneTracker {
   // Per corner: its place on the board plane, in the anchor (x < 0: picked later, no anchor),
   // and in the last frame.
   std::vector<cv::Point3f> plane_;
-  std::vector<cv::Point2f> anchor_, prev_;
+  std::vector<cv::Point2f> anchor_, prev_;  // working-scale pixels
+  cv::Size fullSize_;
+  double scaleX_ = 1, scaleY_ = 1;  // full-resolution pixels per working pixel
   Pose last_;
   bool started_ = false, failed_ = false;
   int frames_ = 0;

@@ -4,6 +4,8 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <opencv2/calib3d.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include "tracking/marker_family.hpp"
 
@@ -14,6 +16,22 @@ namespace {
 // The single tool marker's card and stick (synth.cpp draws them so; markers/README.md).
 constexpr double kCardMarginCells = 2, kCardHalfThickness = 0.0005;
 constexpr double kSingleStickBase = 0.005, kSingleStickTip = 0.002;
+
+// The convex hull (pixels) of body points seen by the camera; empty when one lies behind it.
+std::vector<cv::Point2f> silhouette(const std::vector<Eigen::Vector3d>& body, const Pose& tool,
+                                    const CameraCalibration& calib) {
+  std::vector<cv::Point3f> inCamera;
+  for (const auto& p : body) {
+    const Eigen::Vector3d x = tool.apply(p);
+    if (!(x.z() > 1e-3)) return {};
+    inCamera.emplace_back(float(x.x()), float(x.y()), float(x.z()));
+  }
+  std::vector<cv::Point2f> px, hull;
+  cv::projectPoints(inCamera, cv::Vec3d(0, 0, 0), cv::Vec3d(0, 0, 0), cv::Mat(calib.K),
+                    calib.distortion, px);
+  cv::convexHull(px, hull);
+  return hull;
+}
 
 }  // namespace
 
@@ -98,6 +116,52 @@ std::vector<Eigen::Vector3d> toolTriangles(const ToolShape& shape, const Pose& b
     put(shape.tip, t0, t1);
   }
   return out;
+}
+
+bool toolCoversMarkerOutline(const ToolShape& shape, const Pose& tool,
+                             const CameraCalibration& calib,
+                             const std::array<cv::Point2d, 4>& corners, int edgeCells,
+                             double bandCells) {
+  std::vector<Eigen::Vector3d> box, stick;
+  for (int k = 0; k < 8; ++k) {
+    Eigen::Vector3d p = shape.boxCentre;
+    for (int i = 0; i < 3; ++i) p[i] += ((k >> i) & 1 ? 1 : -1) * shape.boxHalf[i];
+    box.push_back(p);
+  }
+  if (shape.hasStick()) {
+    // The cone's two end rings, eight points each: their hull holds the cone's outline.
+    const Eigen::Vector3d axis = (shape.tip - shape.stickBase).normalized();
+    const Eigen::Vector3d e1 = axis.unitOrthogonal(), e2 = axis.cross(e1);
+    for (int k = 0; k < 8; ++k) {
+      const double a = std::numbers::pi * k / 4;
+      const Eigen::Vector3d r = std::cos(a) * e1 + std::sin(a) * e2;
+      // The ring's chords lie inside the circle: grown so the octagon holds it.
+      const double grow = 1 / std::cos(std::numbers::pi / 8);
+      stick.push_back(shape.stickBase + grow * shape.baseRadius * r);
+      stick.push_back(shape.tip + grow * shape.tipRadius * r);
+    }
+  }
+  double perimeter = 0;
+  for (int k = 0; k < 4; ++k) perimeter += cv::norm(corners[k] - corners[(k + 1) % 4]);
+  const double band = bandCells * perimeter / (4.0 * edgeCells);
+  for (const auto& body : {box, stick}) {
+    if (body.empty()) continue;
+    const std::vector<cv::Point2f> hull = silhouette(body, tool, calib);
+    if (hull.size() < 3) continue;
+    for (int k = 0; k < 4; ++k) {
+      // The band about edge k: band wide on either side, band beyond either end.
+      const cv::Point2d a = corners[k], b = corners[(k + 1) % 4];
+      const double len = cv::norm(b - a);
+      if (!(len > 0)) continue;
+      const cv::Point2d u = (b - a) / len, n(-u.y, u.x);
+      const std::vector<cv::Point2f> strip = {
+          cv::Point2f(a - band * u - band * n), cv::Point2f(b + band * u - band * n),
+          cv::Point2f(b + band * u + band * n), cv::Point2f(a - band * u + band * n)};
+      std::vector<cv::Point2f> overlap;
+      if (cv::intersectConvexConvex(hull, strip, overlap) > 0) return true;
+    }
+  }
+  return false;
 }
 
 }  // namespace ps::tracking

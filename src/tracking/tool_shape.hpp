@@ -9,6 +9,7 @@
 //     to the tip, of the layout's stick radii (marker_layout.hpp: "stick_radius",
 //     "stick_tip_radius"; a single marker's 5 mm and 2 mm, as synth draws it).
 #include <Eigen/Core>
+#include <array>
 #include <string>
 #include <vector>
 
@@ -47,5 +48,18 @@ ToolShape toolShape(const SceneConfig& scene, const std::string& family = "tag36
 // Closed surfaces: what lies behind them is hidden whatever their winding.
 std::vector<Eigen::Vector3d> toolTriangles(const ToolShape& shape, const Pose& bodyToTarget,
                                            double scale = 1, int segments = 24);
+
+// Whether the tool, posed at `tool` (camera-from-body), covers part of a marker's outline as the
+// camera sees it: its solid or its stick comes within `bandCells` of the marker's cells
+// (`edgeCells` to its edge) of any edge of the quad `corners` (pixels, the detection's). A
+// marker's corners are fit to its black border's outer edge: whatever lies over that edge or the
+// quiet zone beside it (a dark stick joins the border, a card's edge cuts it) drags them while
+// the tag still decodes, and four corners (two numbers more than a pose has) take the error
+// into a pose with a small reprojection error, often the planar pose's mirror image. What lies
+// over the marker's inside only (its bits) leaves the corners where they were.
+bool toolCoversMarkerOutline(const ToolShape& shape, const Pose& tool,
+                             const CameraCalibration& calib,
+                             const std::array<cv::Point2d, 4>& corners, int edgeCells,
+                             double bandCells = 0.25);
 
 }  // namespace ps::tracking

@@ -8,6 +8,8 @@
 #include "core/input_error.hpp"
 #include "core/named_values.hpp"
 #include "tracking/body_pose.hpp"
+#include "tracking/marker_family.hpp"
+#include "tracking/tool_shape.hpp"
 
 namespace ps::tracking {
 
@@ -173,6 +175,15 @@ bool MarkerTracker::measureBody(std::span<const Detection> detections,
   return true;
 }
 
+bool MarkerTracker::agrees(const Detection& d, const CameraCalibration& calib, double maxTurn,
+                           double maxShift) const {
+  if (!have_ || config_.layout) return false;
+  const auto cands = solveMarkerPose(d.corners, config_.size, calib);
+  const auto choice = choosePose(cands, &last_, config_.ambiguityRatio);
+  return choice.valid && rotationAngle(choice.pose.R, last_.R) <= maxTurn &&
+         (choice.pose.t - last_.t).norm() <= maxShift;
+}
+
 MarkerEstimate MarkerTracker::update(std::span<const Detection> detections,
                                      const CameraCalibration& calib, double time,
                                      bool cameraStill) {
@@ -294,11 +305,18 @@ void SceneConfig::validate() const {
   if (!tipOffset.allFinite()) throw core::InputError("tool tip offset is not finite");
   if (!(touchDistance >= 0) || !std::isfinite(touchDistance))
     throw core::InputError("touch distance = " + num(touchDistance) + " m is not >= 0");
+  if (!(toolCoverBandCells >= 0) || !std::isfinite(toolCoverBandCells))
+    throw core::InputError("tool cover band = " + num(toolCoverBandCells) + " cells is not >= 0");
+  checkPositive(coveredMaxTurn, "covered marker's max turn (rad)");
+  checkPositive(coveredMaxShift, "covered marker's max shift (m)");
 }
 
 SceneTracker::SceneTracker(SceneConfig config)
     : config_(config), planet_(config.planet), tool_(config.tool), tipFilter_(config.tipFilter) {
   config_.validate();
+  if (!config_.planet.layout && config_.toolCoverBandCells > 0)
+    toolShape_ = std::make_shared<const ToolShape>(toolShape(
+        config_, config_.tool.family.empty() ? std::string("tag36h11") : config_.tool.family));
 }
 
 void SceneTracker::reset() {
@@ -335,6 +353,28 @@ SceneFrame SceneTracker::update(const std::vector<Detection>& detections,
   return update(detections, calib, frame, time, hint);
 }
 
+std::string SceneTracker::dropCoveredPlanet(const MarkerEstimate& tool,
+                                            const CameraCalibration& calib,
+                                            std::vector<Detection>& planet) const {
+  // A pose that stays with the planet's is used: the covered corners dragged it too little to
+  // matter (a tool sculpting over the marker covers its outline most of the time).
+  if (!toolShape_ || !tool.usable() || planet.empty()) return "";
+  const Pose& toolPose = tool.measured ? tool.raw : tool.pose;
+  const std::string& family = config_.planet.familyName();
+  std::string note;
+  std::erase_if(planet, [&](const Detection& d) {
+    const std::string f = !d.family.empty() ? d.family : !family.empty() ? family : "tag36h11";
+    if (!toolCoversMarkerOutline(*toolShape_, toolPose, calib, d.corners, familyInfo(f).edgeCells,
+                                 config_.toolCoverBandCells) ||
+        planet_.agrees(d, calib, config_.coveredMaxTurn, config_.coveredMaxShift))
+      return false;
+    note = "id " + std::to_string(d.id) +
+           ": the tool covers its outline and its pose jumps from the planet's; not used";
+    return true;
+  });
+  return note;
+}
+
 SceneFrame SceneTracker::update(const std::vector<Detection>& detections,
                                 const CameraCalibration& calib, int frame, double time,
                                 const BoardHint& hint) {
@@ -351,8 +391,12 @@ SceneFrame SceneTracker::update(const std::vector<Detection>& detections,
     else if (std::find(others.begin(), others.end(), d.id) == others.end())
       others.push_back(d.id);
   }
-  f.planet = planet_.update(p, calib, time, hint);
+  // The tool first: where it stands decides whether the planet marker is seen whole.
   f.tool = tool_.update(t, calib, time);
+  const std::string covered = dropCoveredPlanet(f.tool, calib, p);
+  f.planet = planet_.update(p, calib, time, hint);
+  if (!covered.empty())
+    f.planet.note = covered + (f.planet.note.empty() ? "" : "; ") + f.planet.note;
   if (!f.planet.note.empty()) f.notes.push_back(f.planet.note);
   if (!f.tool.note.empty()) f.notes.push_back(f.tool.note);
   for (int id : others)

@@ -127,6 +127,10 @@ class MarkerTracker {
                         double time, bool cameraStill = false);
   MarkerEstimate update(std::span<const Detection> detections, const CameraCalibration& calib,
                         double time, const BoardHint& hint);
+  // A single marker's detection would give a pose within maxTurn (rad) and maxShift (m) of the
+  // pose it has now (tracked or held); false without one.
+  bool agrees(const Detection& d, const CameraCalibration& calib, double maxTurn,
+              double maxShift) const;
   void reset();
 
  private:
@@ -161,6 +165,15 @@ struct SceneConfig {
   // the stick's length.
   bool filterTip = true;
   OneEuroParams tipFilter{2.0, 400.0, 1.0};  // speed in m/s
+  // A single planet marker whose outline the tool covers (its card or solid and stick, placed
+  // by the tool's pose this frame, within this many of the marker's cells of an edge:
+  // tool_shape.hpp, toolCoversMarkerOutline) is measured only when the pose it gives is within
+  // coveredMaxTurn and coveredMaxShift of the planet's pose now; otherwise (or without a pose)
+  // it is held as when not seen: its corners are dragged by what covers them, and the pose from
+  // them can be its mirror image with a small reprojection error. 0: off.
+  double toolCoverBandCells = 0.25;
+  double coveredMaxTurn = 5.0 * M_PI / 180;  // rad
+  double coveredMaxShift = 0.01;             // m
   void validate() const;                     // InputError naming the field
 };
 
@@ -186,6 +199,8 @@ struct SceneFrame {
   std::vector<std::string> notes;  // other ids seen, duplicates, rejected detections
 };
 
+struct ToolShape;
+
 class SceneTracker {
  public:
   explicit SceneTracker(SceneConfig config);
@@ -209,6 +224,10 @@ class SceneTracker {
   void reset();
 
  private:
+  // Removes the single planet marker's detections whose outline the tool covers
+  // (toolCoverBandCells); returns the note saying so, or "".
+  std::string dropCoveredPlanet(const MarkerEstimate& tool, const CameraCalibration& calib,
+                                std::vector<Detection>& planet) const;
   SceneConfig config_;
   MarkerTracker planet_, tool_;
   OneEuroVector tipFilter_;
@@ -216,6 +235,7 @@ class SceneTracker {
   bool tipHave_ = false;
   SurfaceFn surface_;
   HeightFn heightAbove_;
+  std::shared_ptr<const ToolShape> toolShape_;  // for toolCoverBandCells
 };
 
 }  // namespace ps::tracking
