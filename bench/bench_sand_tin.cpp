@@ -35,6 +35,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <vector>
 
+#include "app/bench_plots.hpp"
 #include "app/plot.hpp"
 #include "bench/bench.hpp"
 #include "bench/bench_util.hpp"
@@ -590,10 +591,6 @@ void drift(const BenchOptions& options, const Scene& scene, std::ostream& out) {
       << std::endl;
 }
 
-double num(const nlohmann::json& j, const char* key) {
-  return j.contains(key) && j[key].is_number() ? j[key].get<double>() : NAN;
-}
-
 void plots(const std::vector<nlohmann::json>& rows, const std::string& outDir) {
   const auto partSeries = [&](const char* experiment, const char* x) {
     std::vector<app::PlotSeries> out;
@@ -605,7 +602,7 @@ void plots(const std::vector<nlohmann::json>& rows, const std::string& outDir) {
       s.colour = app::seriesColour(std::size_t(p));
       for (const auto& r : rows)
         if (r["experiment"] == experiment)
-          s.x.push_back(num(r, x)), s.y.push_back(num(r, parts[p]));
+          s.x.push_back(app::jsonNumber(r, x)), s.y.push_back(app::jsonNumber(r, parts[p]));
       out.push_back(s);
     }
     return out;
@@ -618,7 +615,8 @@ void plots(const std::vector<nlohmann::json>& rows, const std::string& outDir) {
       s.label = keys[p];
       s.colour = app::seriesColour(std::size_t(p));
       for (const auto& r : rows)
-        if (r["experiment"] == experiment) s.x.push_back(num(r, x)), s.y.push_back(num(r, keys[p]));
+        if (r["experiment"] == experiment)
+          s.x.push_back(app::jsonNumber(r, x)), s.y.push_back(app::jsonNumber(r, keys[p]));
       out.push_back(s);
     }
     return out;
@@ -648,7 +646,7 @@ void plots(const std::vector<nlohmann::json>& rows, const std::string& outDir) {
         for (const auto& r : rows)
           if (r["experiment"] == experiment && r["model"] == model &&
               !(skipReference && r.contains("reference") && r["reference"] == "itself"))
-            s.x.push_back(num(r, x)), s.y.push_back(num(r, y));
+            s.x.push_back(app::jsonNumber(r, x)), s.y.push_back(app::jsonNumber(r, y));
         out.push_back(s);
       }
     return out;

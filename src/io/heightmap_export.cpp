@@ -14,6 +14,7 @@
 
 #include "core/chart_factory.hpp"
 #include "core/flat_chart.hpp"
+#include "core/input_error.hpp"
 #include "io/atomic_file.hpp"
 #include "io/gdal_raster.hpp"
 #include "io/png_codec.hpp"
@@ -83,12 +84,6 @@ Raster resampleEquirectangular(const terrain::Terrain& t, int width, int height,
 }
 
 namespace {
-
-std::string decimal(double x) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, "%.17g", x);
-  return buf;
-}
 
 std::string projectionText(const Raster& r) {
   if (r.layout == Raster::Layout::kFlat) return "flat, pixel is point, row 0 at v = m";
@@ -226,12 +221,12 @@ void writeHeightPng16(const Raster& raster, const std::filesystem::path& path) {
       row[x] = std::uint16_t(std::lround(std::clamp((h - minM) / span, 0.0, 1.0) * 65535.0));
     }
   }
-  PngText text = {{"planetsculpt:min_m", decimal(minM)},
-                  {"planetsculpt:max_m", decimal(maxM)},
+  PngText text = {{"planetsculpt:min_m", core::exactNumber(minM)},
+                  {"planetsculpt:max_m", core::exactNumber(maxM)},
                   {"planetsculpt:projection", projectionText(raster)}};
   if (raster.layout == Raster::Layout::kFlat) {
-    text.emplace_back("planetsculpt:pixel_spacing_m",
-                      decimal(raster.pixelWidthM) + " " + decimal(raster.pixelHeightM));
+    text.emplace_back("planetsculpt:pixel_spacing_m", core::exactNumber(raster.pixelWidthM) + " " +
+                                                          core::exactNumber(raster.pixelHeightM));
   }
   const std::vector<unsigned char> png = encodePng(img, {.text = text});
   writeAtomically(path, [&](const std::filesystem::path& tmp) {
