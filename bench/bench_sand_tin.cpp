@@ -130,7 +130,7 @@ struct GridRun {
 };
 
 void gridStamp(GridRun& g, const Scene& scene, const sand::TinStampTool& tool,
-               const Eigen::Vector2d& c, terrain::GridRegion& touched) {
+               const Eigen::Vector2d& c, terrain::VertexBox& touched) {
   const double d = g.chart->dx(), area = d * d;
   const double outer = tool.outerRadius(), reach = tool.reach();
   // Inside the outline (a polygon about c; crossing number).
@@ -197,7 +197,7 @@ GridRun runGrid(const Scene& scene, int n, double trace, bool erosion) {
   std::size_t resident = 0;
   g.ms = timeMs([&] {
     for (const Eigen::Vector2d& c : scene.stroke(trace)) {
-      terrain::GridRegion touched;
+      terrain::VertexBox touched;
       g.stampMs += timeMs([&] {
         field.writeBack(1e9);
         gridStamp(g, scene, tool, c, touched);

@@ -155,7 +155,7 @@ def group_demo():
             "--out", out(f"tin{k}"))
         with open(out(f"tin{k}", "summary.json")) as f:
             s = json.load(f)
-        if s.get("ar_tin_region_frames", 0) < 1 or s["stamps"] < 1:
+        if s.get("ar_stroke_tin_frames", 0) < 1 or s["stamps"] < 1:
             fail(f"replay --tool tin-sand drew no frame with its region TIN: {s}")
         names = sorted(os.listdir(out(f"tin{k}", "ar"))) + ["ar_view.png", "overview.png"]
         # The force path feels the region TIN where the tool is in it (docs/HAPTICS.md).

@@ -252,7 +252,7 @@ TEST(EditBrush, RegionGrowingsDistancesAreTheOnesTheBrushWouldCompute) {
                                   rep.control, {p, 0}, edit::floatAtMost(computed.heightLimit())};
       ASSERT_EQ(ctx.distances, nullptr);
       auto h = computed.mutableHeights();
-      const terrain::GridRegion dirty = brush.apply(ctx, h);
+      const terrain::VertexBox dirty = brush.apply(ctx, h);
       ASSERT_TRUE(dirty.uBegin == rep.dirty.uBegin && dirty.uEnd == rep.dirty.uEnd &&
                   dirty.vBegin == rep.dirty.vBegin && dirty.vEnd == rep.dirty.vEnd)
           << chart->name() << ", stamp " << i;

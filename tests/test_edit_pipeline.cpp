@@ -35,7 +35,7 @@ void checkEdit(const terrain::Terrain& t, const edit::EditPipeline& pipe,
   const auto g = t.grid();
   const edit::Region& region = pipe.lastRegion();
   // The dirty rectangle holds every changed vertex and is tight in v.
-  const terrain::GridRegion& dirty = pipe.lastReport().dirty;
+  const terrain::VertexBox& dirty = pipe.lastReport().dirty;
   std::vector<std::uint8_t> inDirty(g.count(), 0);
   dirty.forEachColumnRange(g, [&](int a, int b) {
     for (int v = dirty.vBegin; v <= dirty.vEnd; ++v) {

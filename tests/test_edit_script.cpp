@@ -169,10 +169,10 @@ TEST(EditScript, RecorderRefusesToolsItCannotWriteBeforeTheyAct) {
     std::string name() const override { return "nudge"; }
     void validate() const override {}
     double radius() const override { return 100e3; }
-    terrain::GridRegion apply(const edit::ToolContext& ctx, std::span<float> h) const override {
+    terrain::VertexBox apply(const edit::ToolContext& ctx, std::span<float> h) const override {
       const auto g = ctx.field.grid();
       h[g.index(ctx.control.u, ctx.control.v)] += 1.0f;
-      return terrain::GridRegion::point(ctx.control);
+      return terrain::VertexBox::point(ctx.control);
     }
   };
   auto t = testkit::bumpyTerrain(6, 1, 1000.0);

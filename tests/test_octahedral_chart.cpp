@@ -203,7 +203,7 @@ TEST(OctahedralChart, LocalBoundUpdatesEqualAFullRebuildBitForBit) {
       if (trial % 4 == 2) u0 = 0, v0 = m - hgt;  // at a corner: the south pole
       u0 = std::clamp(u0, 0, m - w);
       v0 = std::clamp(v0, 0, m - hgt);
-      const terrain::GridRegion region{u0, u0 + w, v0, v0 + hgt};
+      const terrain::VertexBox region{u0, u0 + w, v0, v0 + hgt};
       auto h = t.mutableHeights();
       const float bump = float(50 + rng() % 400);
       for (int v = region.vBegin; v <= region.vEnd; ++v)
@@ -244,7 +244,7 @@ TEST(OctahedralChart, TheLatticeHoldsEveryVertexsCodesTwinsIncluded) {
   }
 }
 
-// An edit whose changed vertices fill a box's octagon (terrain::CutRegion: a triangle in a
+// An edit whose changed vertices fill a box's octagon (terrain::CutBox: a triangle in a
 // corner of the grid, as a disc about the south pole is, a diamond about the centre, as about
 // the north pole, random octagons anywhere): the bounds updated over the cut regions equal a
 // full rebuild bit for bit, and the triangle and the diamond cost less than their boxes.
@@ -256,7 +256,7 @@ TEST(OctahedralChart, CutBoundUpdatesEqualAFullRebuildAndSkipTheBoxsCorners) {
   std::mt19937 rng(23);
   for (int trial = 0; trial < 24; ++trial) {
     const int w = 4 + int(rng() % 40);
-    terrain::CutRegion edit;
+    terrain::CutBox edit;
     if (trial % 3 == 0) {  // the corner (0, 0): u + v <= w
       edit.box = {0, w, 0, w};
       edit.cut.sumMax = w;
@@ -286,7 +286,7 @@ TEST(OctahedralChart, CutBoundUpdatesEqualAFullRebuildAndSkipTheBoxsCorners) {
         ++changed;
       }
     if (changed == 0) continue;
-    const std::vector<terrain::CutRegion> images = terrain::gluedImages(t.chart(), edit, false);
+    const std::vector<terrain::CutBox> images = terrain::gluedImages(t.chart(), edit, false);
     t.commitEdit(images);
     boxed.commitEdit(edit.box);
     terrain::ErrorBounds full;

@@ -110,7 +110,7 @@ TEST(HeightsShadow, FollowsEditsInBoundedCopiesAndEqualsTheTerrainWhenCurrent) {
     auto h = t.mutableHeights();
     const int u = 1 + int(k % 100), v = 3 + int(k % 97);
     h[t.grid().index(u, v)] += 1.0f;
-    t.commitEdit(terrain::GridRegion{u, u, v, v});
+    t.commitEdit(terrain::VertexBox{u, u, v, v});
   }
   shadow.follow(t);
   EXPECT_EQ(shadow.pendingRows(), std::size_t(t.grid().side()));

@@ -110,7 +110,7 @@ class StressRig {
  private:
   double R() const { return terrain_.chart().radius(); }
   // Tells the settler (when there is one) what an edit changed.
-  void edited(const terrain::GridRegion& region) {
+  void edited(const terrain::VertexBox& region) {
     if (settler_) settler_->edited(region, settler_->material());
   }
   int m() const { return terrain_.grid().m(); }
@@ -141,7 +141,7 @@ class StressRig {
     }
     pipe_.endStroke();
     changedSinceStroke_ = false;
-    edited(terrain::GridRegion::all(terrain_.grid()));
+    edited(terrain::VertexBox::all(terrain_.grid()));
     return "brush stroke of " + std::to_string(samples) +
            " samples, r_d=" + std::to_string(s.radius);
   }
@@ -202,7 +202,7 @@ class StressRig {
       pipe_.undo();
       changedSinceStroke_ = true;  // the stroke now on top may have been settled after it
     }
-    edited(terrain::GridRegion::all(terrain_.grid()));
+    edited(terrain::VertexBox::all(terrain_.grid()));
     return "undo/redo";
   }
 

@@ -175,8 +175,8 @@ TEST(StressTinSand, ToolOnAPlanetAtThePolesTheSeamAndRandomPoints) {
       }
       k += int(tool.stamps() - stampsBefore);
       if (tool.stamps() == stampsBefore) continue;
-      ASSERT_NE(tool.region(), nullptr) << "stamp " << k;
-      ASSERT_EQ(tool.region()->sand().tin().validityProblem(), "")
+      ASSERT_NE(tool.strokeTin(), nullptr) << "stamp " << k;
+      ASSERT_EQ(tool.strokeTin()->sand().tin().validityProblem(), "")
           << "stamp " << k << " at " << sLat << ", " << sLon;
       const double drift =
           std::abs(grid.volume(t.heights()) - vBefore) / grid.absVolume(t.heights());

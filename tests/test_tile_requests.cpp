@@ -248,7 +248,7 @@ TEST(TileRequests, TilesAndTheirApronsHoldTheHeightsAcrossFoldsAndSeams) {
     // point, in the tiles across the fold, follows it too.
     for (const auto& [u, v] : {std::pair{1, m / 2 + 37}, std::pair{m / 2 - 53, 1}}) {
       planet.mutableHeights()[planet.grid().index(u, v)] += 700.0f;
-      planet.commitEdit(terrain::GridRegion{u, u, v, v});
+      planet.commitEdit(terrain::VertexBox{u, u, v, v});
     }
     ASSERT_TRUE(cache.sync(planet, tess.tessellate(planet, cam, {}), cam, why)) << why;
     ASSERT_TRUE(check("after single vertices beside the sides"));
@@ -313,7 +313,7 @@ TEST(TileRequests, TorusAndCylinderApronsWrapAcrossTheirSeams) {
     ASSERT_TRUE(check("after an edit"));
     for (const auto& [u, v] : {std::pair{1, 3}, std::pair{3, 1}, std::pair{m - 1, m - 2}}) {
       planet.mutableHeights()[planet.grid().index(u, v)] += 700.0f;
-      planet.commitEdit(terrain::GridRegion{u, u, v, v});
+      planet.commitEdit(terrain::VertexBox{u, u, v, v});
     }
     ASSERT_TRUE(cache.sync(planet, tess.tessellate(planet, cam, {}), cam, why)) << why;
     ASSERT_TRUE(check("after single vertices beside the sides"));

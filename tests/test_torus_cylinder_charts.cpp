@@ -285,7 +285,7 @@ TEST(TorusAndCylinder, LocalBoundUpdatesEqualAFullRebuildBitForBit) {
       if (trial % 5 == 2) u0 = -w / 2;             // across the u seam (unwrapped)
       if (trial % 5 == 3) u0 = m - w / 2, v0 = 0;  // at the corner: across both seams
       v0 = std::clamp(v0, 0, m - hgt);
-      const terrain::GridRegion region{u0, u0 + w, v0, v0 + hgt};
+      const terrain::VertexBox region{u0, u0 + w, v0, v0 + hgt};
       auto h = t.mutableHeights();
       const float bump = float(50 + rng() % 400);
       region.forEachColumnRange(g, [&](int a, int b) {

@@ -466,8 +466,8 @@ void addRecorderOutputs(const ReplayJob& job, ArRecorder* recorder, const std::s
   }
   summary["renderer"] = recorder->renderer();
   summary["render_ms"] = recorder->renderMsTotal();
-  if (recorder->tinRegionFrames() > 0)
-    summary["ar_tin_region_frames"] = recorder->tinRegionFrames();
+  if (recorder->strokeTinFrames() > 0)
+    summary["ar_stroke_tin_frames"] = recorder->strokeTinFrames();
   // AR frames drawn with the camera image over part of the planet (a hand in front of it).
   summary["ar_hand_mask_frames"] = recorder->handMaskFrames();
   if (job.render) {

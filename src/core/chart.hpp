@@ -25,7 +25,7 @@ struct Gluing {
   SideGluing vSides;  // the sides v = 0 and v = m
 };
 
-// An inclusive box of grid vertices; u may be unwrapped across a u seam (terrain::GridRegion's
+// An inclusive box of grid vertices; u may be unwrapped across a u seam (terrain::VertexBox's
 // convention: uBegin < 0 or uEnd > m continue on the other side).
 struct GridBox {
   int uBegin = 0, uEnd = -1, vBegin = 0, vEnd = -1;

@@ -25,11 +25,10 @@ double ms(Clock::time_point a, Clock::time_point b) {
 // is in the footprint and in one of the images, so in that image's cut. On the octahedral
 // chart a disc about a pole is a triangle in each image, or a diamond, half its box. Open cuts
 // without a footprint, and on charts with a u seam (their columns wrap).
-std::vector<terrain::CutRegion> cutImages(const core::Chart& chart,
-                                          const terrain::GridRegion& dirty,
-                                          const Region* footprint) {
-  std::vector<terrain::CutRegion> out;
-  for (const terrain::GridRegion& box : terrain::gluedImages(chart, dirty)) {
+std::vector<terrain::CutBox> cutImages(const core::Chart& chart, const terrain::VertexBox& dirty,
+                                       const Region* footprint) {
+  std::vector<terrain::CutBox> out;
+  for (const terrain::VertexBox& box : terrain::gluedImages(chart, dirty)) {
     terrain::Diagonals cut;
     if (footprint && !chart.wrapsU()) {
       cut = terrain::Diagonals::nothing();
@@ -137,7 +136,7 @@ EditReport EditPipeline::stamp(const Tool& tool, const ToolInput& input) {
     });
   }
   const auto t2 = Clock::now();
-  const terrain::GridRegion dirty = tool.apply(ctx, heights);
+  const terrain::VertexBox dirty = tool.apply(ctx, heights);
   enforceConsistency(chart, heights, dirty);
   const auto t3 = Clock::now();
   if (undoEnabled_) journal_.recordStamp(*footprint, snapshot_, heights, g, dirty, chart.wrapsU());

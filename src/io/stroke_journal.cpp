@@ -278,7 +278,7 @@ void applyJournal(const JournalContents& journal, terrain::Terrain& planet, cons
       vMin = std::min(vMin, v), vMax = std::max(vMax, v);
     }
   }
-  if (uMin <= uMax) planet.commitEdit(terrain::GridRegion{uMin, uMax, vMin, vMax});
+  if (uMin <= uMax) planet.commitEdit(terrain::VertexBox{uMin, uMax, vMin, vMax});
 }
 
 bool journalAlreadyIn(const JournalContents& journal, std::span<const float> heights) {

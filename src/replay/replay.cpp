@@ -214,7 +214,7 @@ std::shared_ptr<const terrain::MeshPatch> FrameStepper::viewPatch() {
   Parts& p = *p_;
   const sand::TinSandTool* tool =
       o_.tool == ReplayTool::kTinSand && p.tinSand ? &*p.tinSand : nullptr;
-  if (!tool || !tool->region()) {
+  if (!tool || !tool->strokeTin()) {
     p.patch.reset();
     p.patchTool = nullptr;
     return nullptr;
@@ -227,8 +227,8 @@ std::shared_ptr<const terrain::MeshPatch> FrameStepper::viewPatch() {
   p.patchRevision = planet_.revision();
   p.patchStamps = tool->stamps();
   p.patch.reset();
-  if (tool->region()->holds(planet_.heights()))
-    p.patch = std::make_shared<const terrain::MeshPatch>(tool->region()->patch());
+  if (tool->strokeTin()->holds(planet_.heights()))
+    p.patch = std::make_shared<const terrain::MeshPatch>(tool->strokeTin()->patch());
   return p.patch;
 }
 

@@ -127,8 +127,8 @@ const edit::Region& DisplacementTool::footprint(const edit::ToolContext& ctx) co
   return grow(ctx);
 }
 
-terrain::GridRegion DisplacementTool::apply(const edit::ToolContext& ctx,
-                                            std::span<float> heights) const {
+terrain::VertexBox DisplacementTool::apply(const edit::ToolContext& ctx,
+                                           std::span<float> heights) const {
   settings_.validate(&ctx.terrain.chart());
   if (ctx.terrain.grid().n() != grid_.grid().n() ||
       ctx.terrain.chart().name() != grid_.chart().name() ||
@@ -186,7 +186,7 @@ terrain::GridRegion DisplacementTool::apply(const edit::ToolContext& ctx,
     }
   });
   const double V = removed.value();
-  if (!(V > 0.0)) return terrain::GridRegion::none();
+  if (!(V > 0.0)) return terrain::VertexBox::none();
 
   // Positive filter: the rampart ring (a, a + w).
   const double w = settings_.rampartWidth * r;
@@ -198,7 +198,7 @@ terrain::GridRegion DisplacementTool::apply(const edit::ToolContext& ctx,
   CompensatedSum weights;
   for (const Entry& e : entries) weights.add(grid_.cellArea(e.u, e.v) * profile(e));
   const double S = weights.value();
-  if (!(S > 0.0)) return terrain::GridRegion::none();  // nowhere to put it (the whole planet)
+  if (!(S > 0.0)) return terrain::VertexBox::none();  // nowhere to put it (the whole planet)
   const double k = V / S;
 
   const double limit = ctx.heightLimit;
@@ -245,7 +245,7 @@ terrain::GridRegion DisplacementTool::apply(const edit::ToolContext& ctx,
   stats_.depositedVolume = deposited.value();
   stats_.floatVolumeChange = floatChange.value();
   stats_.contactRadius = a;
-  terrain::GridRegion dirty = F.bounds();
+  terrain::VertexBox dirty = F.bounds();
   dirty.vBegin = vFirst;
   dirty.vEnd = vLast;
   if (grid_.tube()) {
@@ -260,7 +260,7 @@ terrain::GridRegion DisplacementTool::apply(const edit::ToolContext& ctx,
   if (listener_ && grid_.tube()) {
     // The settler marks what it is told: on the torus the written vertices beyond the centre's
     // half lie in the box's images (across the v seam and the midline), which it is told too.
-    for (const terrain::GridRegion& image : terrain::gluedImages(chart, dirty))
+    for (const terrain::VertexBox& image : terrain::gluedImages(chart, dirty))
       listener_->edited(image, settings_.material);
   } else if (listener_) {
     listener_->edited(dirty, settings_.material);

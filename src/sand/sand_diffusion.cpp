@@ -204,7 +204,7 @@ void SandField::markForce(const PushForce& force) {
     tubeFootUp_ = grid_.tubeNormal(tubeFoot_);
     tubeFootValid_ = true;
     const int uc = int(std::lround((*foot)(0))), vc = int(std::lround((*foot)(1)));
-    terrain::GridRegion r{uc - ru, uc + ru, std::max(0, vc - rv), std::min(m_, vc + rv)};
+    terrain::VertexBox r{uc - ru, uc + ru, std::max(0, vc - rv), std::min(m_, vc + rv)};
     if (2 * ru + 1 >= m_) r.uBegin = 0, r.uEnd = m_;
     mark(r);
     return;
@@ -226,7 +226,7 @@ void SandField::markForce(const PushForce& force) {
   const double spacingV = grid_.sphere() ? grid_.vertical(m_ / 2) : grid_.vertical(0);
   const int dv = int(std::ceil(force.radius / spacingV)) + 2;
   const int vc = int(std::lround((*foot)(1))), uc = int(std::lround((*foot)(0)));
-  terrain::GridRegion r;
+  terrain::VertexBox r;
   r.vBegin = std::max(0, vc - dv);
   r.vEnd = std::min(m_, vc + dv);
   double minH = std::numeric_limits<double>::infinity();

@@ -1,4 +1,4 @@
-#include "sand/tin_region.hpp"
+#include "sand/stroke_tin.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -32,7 +32,7 @@ double smallestSpacing(const core::Chart& chart) {
 
 }  // namespace
 
-TinRegion::TinRegion(const core::Chart& chart, std::span<const float> heights,
+StrokeTin::StrokeTin(const core::Chart& chart, std::span<const float> heights,
                      const edit::Region& F, core::GridPoint centre, double tolerance,
                      const TinSandSettings& sand)
     : chart_(&chart), footprint_(F), frame_(chart, centre) {
@@ -79,7 +79,7 @@ TinRegion::TinRegion(const core::Chart& chart, std::span<const float> heights,
     surface_[k] = sand_->tin().heightAt(points_[k].xy);
 }
 
-std::size_t TinRegion::densify(const Eigen::Vector2d& centre, double radius) {
+std::size_t StrokeTin::densify(const Eigen::Vector2d& centre, double radius) {
   std::size_t added = 0;
   for (std::size_t k = 0; k < points_.size(); ++k) {
     if (vertex_[k] || !candidate_[k] || (points_[k].xy - centre).squaredNorm() > radius * radius)
@@ -96,7 +96,7 @@ std::size_t TinRegion::densify(const Eigen::Vector2d& centre, double radius) {
   return added;
 }
 
-terrain::MeshPatch TinRegion::patch(double marginCells) const {
+terrain::MeshPatch StrokeTin::patch(double marginCells) const {
   terrain::MeshPatch p;
   const tin::Tin t = sand_->tin().toTin();
   const double R = chart_->radius();
@@ -145,19 +145,19 @@ terrain::MeshPatch TinRegion::patch(double marginCells) const {
   return p;
 }
 
-bool TinRegion::holds(std::span<const float> heights) const {
+bool StrokeTin::holds(std::span<const float> heights) const {
   const core::GridSize g = chart_->grid();
   for (std::size_t k = 0; k < points_.size(); ++k)
     if (heights[g.index(points_[k].u, points_[k].v)] != left_[k]) return false;
   return true;
 }
 
-TinRegionWrite TinRegion::writeBack(std::span<float> heights, const SandGrid& cells,
+StrokeTinWrite StrokeTin::writeBack(std::span<float> heights, const SandGrid& cells,
                                     float heightLimit) {
   const core::GridSize g = chart_->grid();
   const int m = g.m();
   const bool sphere = chart_->radius() > 0;
-  TinRegionWrite w;
+  StrokeTinWrite w;
   // The TIN's change at every point, then the grid's own volume (sum A h) put back on the points
   // that changed, then floats with the rounding carried on.
   std::vector<double> next(points_.size()), after(points_.size());

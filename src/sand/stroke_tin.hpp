@@ -1,9 +1,10 @@
 #pragma once
-// The TIN sand tool's region: a TIN of the planet's heights over a disc of the grid, in the
-// tangent plane at the disc's centre (x east, y north, z the height above the reference
-// surface), that persists while the stamps of a stroke stay inside it. Made with the TIN
-// export's error-bounded generation (tin/scattered_tin: every grid point of the region within
-// `tolerance` of it), or from every point (tolerance 0: the TIN the tool made per stamp before).
+// The TIN sand tool's TIN of one stroke (StrokeTin): the planet's heights over a disc of the
+// grid (the stroke's region), in the tangent plane at the disc's centre (x east, y north, z the
+// height above the reference surface), that persists while the stamps of a stroke stay inside it.
+// Made with the TIN export's error-bounded generation (tin/scattered_tin: every grid point of the
+// region within `tolerance` of it), or from every point (tolerance 0: the TIN the tool made per
+// stamp before).
 //
 // Writing back: every grid point takes the change of the TIN's surface since the last write
 // (so the grid's own detail under the tolerance stays, and a point the TIN left out keeps its
@@ -36,16 +37,16 @@ struct TangentFrame {
   }
 };
 
-struct TinRegionWrite {
+struct StrokeTinWrite {
   std::size_t changed = 0;      // grid points whose height changed
   double volumeCorrection = 0;  // m^3 put back after sampling the TIN onto the grid
 };
 
-class TinRegion {
+class StrokeTin {
  public:
   // The region F (grown around `centre`) of `chart`'s grid with `heights`. tolerance: metres,
   // 0 for every point.
-  TinRegion(const core::Chart& chart, std::span<const float> heights, const edit::Region& F,
+  StrokeTin(const core::Chart& chart, std::span<const float> heights, const edit::Region& F,
             core::GridPoint centre, double tolerance, const TinSandSettings& sand);
 
   const edit::Region& footprint() const { return footprint_; }
@@ -78,7 +79,7 @@ class TinRegion {
   // view's kept triangles, which closes the join (docs/RENDERING.md); 0 is for measuring that.
   terrain::MeshPatch patch(double marginCells = 2) const;
 
-  TinRegionWrite writeBack(std::span<float> heights, const SandGrid& cells, float heightLimit);
+  StrokeTinWrite writeBack(std::span<float> heights, const SandGrid& cells, float heightLimit);
 
  private:
   const core::Chart* chart_;
