@@ -235,7 +235,7 @@ TEST(EditBrush, RegionGrowingsDistancesAreTheOnesTheBrushWouldCompute) {
     edit::DistanceField field(chart);
     edit::RegionGrower grower;
     edit::Region region;
-    const double size = chart->radius() > 0 ? chart->radius() : 3e6;
+    const double size = chart->sphereRadius() > 0 ? chart->sphereRadius() : 3e6;
     for (int i = 0; i < 16; ++i) {
       const core::GridPoint c = edittest::randomCentre(rng, chart->grid().m());
       BrushSettings s;

@@ -91,7 +91,7 @@ TEST(TileRequests, EveryTileHasOneIndexAndTheLevelsHalve) {
 // view asks for finer levels; a bias makes every request coarser, down to the one coarsest tile.
 TEST(TileRequests, TheTilesCoverEachTriangleAtItsLevel) {
   const auto planet = reliefPlanet(11);
-  const double R = planet.chart().radius();
+  const double R = planet.chart().sphereRadius();
   const int side = planet.grid().side();
   const auto pyramid = render::TilePyramid::forGrid(planet.grid());
   int previousFinest = pyramid.coarsest + 1;
@@ -131,7 +131,7 @@ TEST(TileRequests, TheTilesCoverEachTriangleAtItsLevel) {
 TEST(TileRequests, PixelsFindTheLevelTheirFootprintAsksFor) {
   SKIP_WITHOUT_GL();
   const auto planet = reliefPlanet(11);
-  const double R = planet.chart().radius();
+  const double R = planet.chart().sphereRadius();
   render::EglContext gl;
   render::PlanetRenderer renderer, starved;
   starved.setHeightCacheBudget(7 * 131 * 131 * sizeof(float));
@@ -180,7 +180,7 @@ TEST(TileRequests, TilesAndTheirApronsHoldTheHeightsAcrossFoldsAndSeams) {
                              : testkit::bumpyTerrain(9, 4, 5000.0);
     const core::Chart& chart = planet.chart();
     const int m = planet.grid().m();
-    const double R = chart.radius();
+    const double R = chart.sphereRadius();
     render::HeightTileCache cache;
     std::string why;
     // Expected height of level-0 position (u, v), one step outside the grid at most per axis.

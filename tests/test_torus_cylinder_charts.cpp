@@ -186,7 +186,7 @@ TEST(TorusAndCylinder, MapsTheGridOntoTheSurfaceAndBack) {
       ASSERT_LT((c.positionAt(uv->x(), uv->y(), 0) - p).norm(), 1e-6) << k.name;
     }
     EXPECT_FALSE(c.inverse(Eigen::Vector3d(0, 0, 5.0)));  // on the axis
-    EXPECT_EQ(c.radius(), 0.0);  // no sphere about the origin: no horizon occluder
+    EXPECT_EQ(c.sphereRadius(), 0.0);  // no sphere about the origin: no horizon occluder
     EXPECT_EQ(c.heightLimit(), 0.25 * r0);
   }
   const core::TorusChart t(core::GridSize(5), kMajor, kMinor);

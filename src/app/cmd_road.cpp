@@ -85,7 +85,7 @@ int runRoad(const RoadArgs& a) {
     planet = io::loadPlanet(a.planet);
     if (!planet->chart().hasPoleRows())
       throw core::InputError(a.planet + ": a stroke's road needs a planet (a lat-long chart)");
-    radius = planet->chart().radius();
+    radius = planet->chart().sphereRadius();
   }
   const bool replayLog = std::filesystem::path(a.strokes).extension() == ".jsonl";
   if (replayLog && !planet)

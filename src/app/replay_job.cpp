@@ -71,7 +71,7 @@ terrain::Camera viewOf(const terrain::Terrain& t, int u, int v) {
   if (east.norm() < 1e-6) east = Eigen::Vector3d::UnitX();
   east.normalize();
   const Eigen::Vector3d north = up.cross(east);
-  const double R = t.chart().radius();
+  const double R = t.chart().sphereRadius();
   if (!(R > 0)) {  // a torus or a cylinder: the same view about the vertex's own normal
     const Eigen::Vector3d target = t.chart().position(u, v, t.height(u, v));
     const Eigen::Vector3d eye =
@@ -87,8 +87,8 @@ terrain::Camera viewOf(const terrain::Terrain& t, int u, int v) {
 // The planet's heights as a picture's raster: a sphere's equirectangular, a torus's or a
 // cylinder's own (u, v) grid (io::resampleTube; the relief and the close-up read it alike).
 io::Raster pictureRaster(const terrain::Terrain& planet, int w, int h) {
-  return planet.chart().radius() > 0 ? io::resampleEquirectangular(planet, w, h)
-                                     : io::resampleTube(planet, w, h);
+  return planet.chart().sphereRadius() > 0 ? io::resampleEquirectangular(planet, w, h)
+                                           : io::resampleTube(planet, w, h);
 }
 
 cv::Mat labelled(cv::Mat img, const std::string& text) {
@@ -248,7 +248,7 @@ void writeReliefPictures(const ReplayJob& job, const terrain::Terrain& planet,
   const int w = kPictureW, h = kPictureH;
   // Metres per pixel along the picture's rows: half a great circle over h on a sphere; on a
   // torus or a cylinder its circumference round the axis over w (the hill shading's scale).
-  const double R = planet.chart().radius();
+  const double R = planet.chart().sphereRadius();
   const double mpp = R > 0 ? std::numbers::pi * R / h
                            : 2 * std::numbers::pi * core::dimsOf(planet.chart()).radius / w;
   const cv::Mat after = io::reliefImage(pictureRaster(planet, w, h), mpp);

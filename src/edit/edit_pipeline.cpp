@@ -216,14 +216,14 @@ StrokeReport EditPipeline::moveTo(const ToolInput& sample) {
 }
 
 double EditPipeline::pathLength(const Eigen::Vector3d& a, const Eigen::Vector3d& b) const {
-  const double R = terrain_.chart().radius();
+  const double R = terrain_.chart().sphereRadius();
   if (R > 0.0) return R * std::atan2(a.cross(b).norm(), a.dot(b));
   return (b - a).norm();
 }
 
 Eigen::Vector3d EditPipeline::pathAt(const Eigen::Vector3d& a, const Eigen::Vector3d& b,
                                      double t) const {
-  const double R = terrain_.chart().radius();
+  const double R = terrain_.chart().sphereRadius();
   // The distance from the centre is interpolated too: a tool held above or below the surface
   // (the displacement sphere) keeps its altitude along the stroke.
   if (R > 0.0)

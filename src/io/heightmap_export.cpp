@@ -40,7 +40,7 @@ Raster resampleSphereChart(const terrain::Terrain& t, Raster r, Interpolation ho
       const double lon = std::numbers::pi * (2.0 * (x + 0.5) / width - 1.0);
       const Eigen::Vector3d d(std::cos(lat) * std::cos(lon), std::cos(lat) * std::sin(lon),
                               std::sin(lat));
-      const Eigen::Vector2d uv = *chart.inverse(chart.radius() * d);
+      const Eigen::Vector2d uv = *chart.inverse(chart.sphereRadius() * d);
       // The interpolation stencil reads up to two steps beyond the grid: continued() maps
       // them back.
       const double u = std::clamp(uv.x(), 0.0, double(m)), v = std::clamp(uv.y(), 0.0, double(m));
@@ -65,7 +65,7 @@ Raster resampleEquirectangular(const terrain::Terrain& t, int width, int height,
                                 chart.name() + "' chart");
   }
   Raster r{width, height, std::vector<float>(std::size_t(width) * std::size_t(height))};
-  r.radiusMetres = chart.radius();
+  r.radiusMetres = chart.sphereRadius();
   if (!chart.hasPoleRows()) return resampleSphereChart(t, std::move(r), how);
   const int m = t.grid().m();
   // Grid vertex (u, v) is sample (u, v): u wraps round the m columns (u = m is u = 0), v clamps

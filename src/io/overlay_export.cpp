@@ -136,7 +136,7 @@ tin::Road placeRoad(const ObjTriangles& obj, const tin::SampleField& field, cons
   if (!(std::abs(at[0]) <= 90 && std::abs(at[1]) <= 180))
     throw core::InputError("--at " + core::exactNumber(at[0]) + "," + core::exactNumber(at[1]) +
                            ": latitude must be within +-90 and longitude within +-180 degrees");
-  const double lat = at[0] * kDeg, lon = at[1] * kDeg, r = field.chart->radius();
+  const double lat = at[0] * kDeg, lon = at[1] * kDeg, r = field.chart->sphereRadius();
   const Eigen::Vector3d up(std::cos(lat) * std::cos(lon), std::cos(lat) * std::sin(lon),
                            std::sin(lat));
   const Eigen::Vector3d east(-std::sin(lon), std::cos(lon), 0);

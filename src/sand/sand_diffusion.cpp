@@ -137,12 +137,12 @@ double profileFlux(const PushForce& force, double zetaInv, const Eigen::Vector3d
 double SandField::driftBetween(const PushForce& force, double zetaInv, const Eigen::Vector3d& pa,
                                const Eigen::Vector3d& pb, double faceLength) const {
   const core::Chart& chart = grid_.chart();
-  const bool sphere = chart.radius() > 0.0;
+  const bool sphere = chart.sphereRadius() > 0.0;
   const Eigen::Vector3d mid = 0.5 * (pa + pb);
   Eigen::Vector3d foot = force.centre;
   if (grid_.tube()) return driftOnTube(force, zetaInv, pa, pb, faceLength);
   if (sphere) {
-    foot = chart.radius() * force.centre.normalized();
+    foot = chart.sphereRadius() * force.centre.normalized();
   } else {
     foot.z() = 0.0;
   }
@@ -213,7 +213,7 @@ void SandField::markForce(const PushForce& force) {
     // A box about the foot at a quarter of lat-long's equatorial spacing (the octahedral
     // charts' smallest is above 0.3 of it), and its images across the folds and midlines
     // (mark() adds the folds'; the midlines' hold the disc's parts in other quadrants).
-    const double spacing = 0.25 * 2.0 * std::numbers::pi * chart.radius() / m_;
+    const double spacing = 0.25 * 2.0 * std::numbers::pi * chart.sphereRadius() / m_;
     const int d = int(std::min(double(m_), std::ceil(force.radius / spacing))) + 2;
     const int uc = int(std::lround((*foot)(0))), vc = int(std::lround((*foot)(1)));
     const core::GridBox box{std::max(0, uc - d), std::min(m_, uc + d), std::max(0, vc - d),

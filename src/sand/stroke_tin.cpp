@@ -24,7 +24,7 @@ namespace {
 // The smallest spacing between grid points at the equator (lat-long: a meridian step) or on a
 // flat grid.
 double smallestSpacing(const core::Chart& chart) {
-  if (chart.radius() > 0) return std::numbers::pi * chart.radius() / chart.grid().m();
+  if (chart.sphereRadius() > 0) return std::numbers::pi * chart.sphereRadius() / chart.grid().m();
   if (const auto* flat = dynamic_cast<const core::FlatChart*>(&chart))
     return std::min(flat->dx(), flat->dy());
   return largestSpacing(chart);
@@ -38,7 +38,7 @@ StrokeTin::StrokeTin(const core::Chart& chart, std::span<const float> heights,
     : chart_(&chart), footprint_(F), frame_(chart, centre) {
   const core::GridSize g = chart.grid();
   const int m = g.m();
-  const bool sphere = chart.radius() > 0;
+  const bool sphere = chart.sphereRadius() > 0;
   // Every distinct point of the region (a pole row once, the seam's u = m as its twin u = 0).
   F.forEachSpan([&](int v, int ub, int ue) {
     for (int u = ub; u <= ue; ++u) {
@@ -99,7 +99,7 @@ std::size_t StrokeTin::densify(const Eigen::Vector2d& centre, double radius) {
 terrain::MeshPatch StrokeTin::patch(double marginCells) const {
   terrain::MeshPatch p;
   const tin::Tin t = sand_->tin().toTin();
-  const double R = chart_->radius();
+  const double R = chart_->sphereRadius();
   const core::GridSize g = chart_->grid();
   p.positions.reserve(t.xy.size());
   p.plane.emplace();
@@ -156,7 +156,7 @@ StrokeTinWrite StrokeTin::writeBack(std::span<float> heights, const SandGrid& ce
                                     float heightLimit) {
   const core::GridSize g = chart_->grid();
   const int m = g.m();
-  const bool sphere = chart_->radius() > 0;
+  const bool sphere = chart_->sphereRadius() > 0;
   StrokeTinWrite w;
   // The TIN's change at every point, then the grid's own volume (sum A h) put back on the points
   // that changed, then floats with the rounding carried on.

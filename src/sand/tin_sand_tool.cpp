@@ -42,7 +42,7 @@ void TinSandToolSettings::validate(const core::Chart* chart) const {
   // a sphere's or a plane's tangent plane; the octahedral chart's folds and the tubes are not
   // handled yet, while the grid sand core's tools work there.
   if (dynamic_cast<const core::OctahedralChart*>(chart) ||
-      (chart->radius() <= 0.0 && !dynamic_cast<const core::FlatChart*>(chart)))
+      (chart->sphereRadius() <= 0.0 && !dynamic_cast<const core::FlatChart*>(chart)))
     throw core::InputError("TIN sand tool: it works on the lat-long and flat charts, not on '" +
                            chart->name() + "'");
   const double cell = largestSpacing(*chart);
@@ -50,7 +50,7 @@ void TinSandToolSettings::validate(const core::Chart* chart) const {
     throw core::InputError("TIN sand tool: radius " + core::exactNumber(radius) +
                            " m is under two grid cells (" + core::exactNumber(2 * cell) + " m)");
   // The region shrinks to a quarter of the planet's radius, never under 2.5 radii.
-  if (chart->radius() > 0 && 2.5 * radius > 0.25 * chart->radius())
+  if (chart->sphereRadius() > 0 && 2.5 * radius > 0.25 * chart->sphereRadius())
     throw core::InputError("TIN sand tool: its region (at least " +
                            core::exactNumber(2.5 * radius) +
                            " m) is over a quarter of the planet's radius, too curved for one "
@@ -62,7 +62,7 @@ TinSandTool::TinSandTool(std::shared_ptr<const core::Chart> chart, TinSandToolSe
 
 double TinSandTool::regionMetres(const core::Chart& chart) const {
   const double r = settings_.regionRadius * settings_.radius;
-  return chart.radius() > 0 ? std::min(r, 0.25 * chart.radius()) : r;
+  return chart.sphereRadius() > 0 ? std::min(r, 0.25 * chart.sphereRadius()) : r;
 }
 
 bool TinSandTool::reusable(const edit::ToolContext& ctx) const {
