@@ -88,7 +88,7 @@ void writeGridPictures(const std::string& dir) {
   cv::Mat panels;
   for (const core::ChartShape shape : {core::ChartShape::kLatLong, core::ChartShape::kOctahedral}) {
     const auto planet = app::makeDefaultPlanet(5, 1, shape);
-    const double R = planet->chart().radius(), lat = 50 * std::numbers::pi / 180;
+    const double R = planet->chart().sphereRadius(), lat = 50 * std::numbers::pi / 180;
     const Eigen::Vector3d eye = 4.0 * R * Eigen::Vector3d(std::cos(lat), 0.0, std::sin(lat));
     const auto camera = terrain::Camera::lookAt(eye, Eigen::Vector3d::Zero(),
                                                 Eigen::Vector3d::UnitZ(), 640, 640, 0.6);

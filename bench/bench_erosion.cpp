@@ -300,7 +300,7 @@ void crater(bool sphere, bool quick, int threads, std::ostream& out, bool octahe
   const double v0 = grid.volume(t.heights());
   Eigen::Vector3d at;
   if (sphere) {
-    at = (chart->radius() + base + r - depth) *
+    at = (chart->sphereRadius() + base + r - depth) *
          Eigen::Vector3d(0.5, 0.5, std::sqrt(0.5)).normalized();
   } else {
     at = Eigen::Vector3d(0.5 * g.m(), 0.5 * g.m(), base + r - depth);

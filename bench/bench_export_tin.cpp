@@ -157,13 +157,13 @@ void overlayRows(const Heightmap& h, const std::string& outDir, std::ostream& ou
     centre.emplace_back(x, 0.45 * h.side + 0.08 * h.side * std::sin(6.0 * x / h.side));
   }
   const tin::Strip strip = tin::stripAlong(centre, 12.0);
-  tin::Track road{strip.xy, {}, strip.triangles};
+  tin::Road road{strip.xy, {}, strip.triangles};
   for (const auto& p : strip.xy) road.h.push_back(field.heightAt(p.x(), p.y()) + 3.0);
   tin::OverlayResult result[2];
   for (const tin::OverlayMode mode : {tin::OverlayMode::kStitch, tin::OverlayMode::kStencil}) {
     const bool stitch = mode == tin::OverlayMode::kStitch;
     tin::OverlayResult& r = result[stitch ? 0 : 1];
-    const double ms = timeMs([&] { r = tin::overlayTrack(field, terrain, road, mode); });
+    const double ms = timeMs([&] { r = tin::overlayRoad(field, terrain, road, mode); });
     const tin::MeshTopology top = tin::meshTopology(r.tin.xy.size(), r.tin.triangles);
     nlohmann::json line = {{"bench", "export"},
                            {"tool", "overlay"},
@@ -171,7 +171,7 @@ void overlayRows(const Heightmap& h, const std::string& outDir, std::ostream& ou
                            {"mode", stitch ? "stitch" : "stencil"},
                            {"error_m", 20.0},
                            {"terrain_triangles", terrain.triangles.size()},
-                           {"track_triangles", road.triangles.size()},
+                           {"road_triangles", road.triangles.size()},
                            {"triangles", r.tin.triangles.size()},
                            {"euler", top.euler()},
                            {"non_manifold_edges", top.nonManifoldEdges},

@@ -71,7 +71,7 @@ haptics::ScriptedDevice::Path strokePath(const terrain::Terrain& planet, double 
   const core::Chart& chart = planet.chart();
   auto surfaceAt = [&](const Eigen::Vector3d& d) {
     const auto uv = chart.inverse(d);
-    return (chart.radius() +
+    return (chart.sphereRadius() +
             planet.height(int(std::lround((*uv)(0))), int(std::lround((*uv)(1))))) /
            scale;
   };
@@ -88,7 +88,7 @@ haptics::ScriptedDevice::Path strokePath(const terrain::Terrain& planet, double 
 void run(bool withEditor, const BenchOptions& options, terrain::Terrain& planet,
          std::ostream& out) {
   const double seconds = options.quick ? 2.0 : 8.0;
-  const double R = planet.chart().radius();
+  const double R = planet.chart().sphereRadius();
   edit::EditPipeline pipe(planet);
   pipe.setUndoEnabled(false);
   sand::Settler settler(planet, sand::Material::sand(), {.cellBudget = std::size_t(1) << 18});
@@ -224,7 +224,7 @@ void tickCompare(const BenchOptions& options, const std::vector<const terrain::T
     for (const terrain::Terrain* planet : planets) {
       Run r;
       r.planet = planet;
-      r.cfg.map.scale = planet->chart().radius() / kGlobe;
+      r.cfg.map.scale = planet->chart().sphereRadius() / kGlobe;
       r.cfg.press.displacement.radius = 60e3;
       r.halfSize = haptics::ForcePath(*planet, nullptr, r.cfg).patchHalfSize();
       runs.push_back(std::move(r));
@@ -344,7 +344,7 @@ void demoReplay(const BenchOptions& options, std::ostream& out) {
   replay::ReplayOptions ro = demoReplayOptions();
   if (options.quick) ro.maxFrames = 150;
   haptics::ForcePathConfig cfg;
-  cfg.map.scale = planet->chart().radius() / ro.scene.planetRadius;
+  cfg.map.scale = planet->chart().sphereRadius() / ro.scene.planetRadius;
   haptics::ForcePath session(*planet, nullptr, cfg);
   std::ostringstream csv;
   session.setLog(&csv);

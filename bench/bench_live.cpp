@@ -74,7 +74,7 @@ LiveRun runSession(terrain::Terrain& planet, double seconds, double autosave, do
   std::mt19937 rng(7);
   terrain::Tessellator tessellator;
   const terrain::TessellationSettings view;
-  const double R = planet.chart().radius();
+  const double R = planet.chart().sphereRadius();
   LiveRun run;
   const int frames = int(seconds * kFps);
   Eigen::Vector3d at = Eigen::Vector3d::UnitX() * R, step = Eigen::Vector3d::Zero();

@@ -50,7 +50,7 @@ void benchRender(const BenchOptions& o, std::ostream& out) {
   if (!gl) return;
   const int level = o.quick ? 10 : 12;
   const auto planet = app::makeDefaultPlanet(level, 1, core::ChartShape::kLatLong);
-  const double R = planet->chart().radius();
+  const double R = planet->chart().sphereRadius();
   render::PlanetRenderer renderer;
   const int repeats = o.quick ? 3 : 9;
   auto draw = [&](const terrain::Camera& cam, double distMaxPx, render::Shading shading, double* ms,

@@ -37,6 +37,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <vector>
 
+#include "app/bench_plots.hpp"
 #include "app/plot.hpp"
 #include "bench/bench.hpp"
 #include "bench/bench_util.hpp"
@@ -131,7 +132,7 @@ struct GridRun {
 };
 
 void gridStamp(GridRun& g, const Scene& scene, const sand::TinStampTool& tool,
-               const Eigen::Vector2d& c, terrain::GridRegion& touched) {
+               const Eigen::Vector2d& c, terrain::VertexBox& touched) {
   const double d = g.chart->dx(), area = d * d;
   const double outer = tool.outerRadius(), reach = tool.reach();
   // Inside the outline (a polygon about c; crossing number).
@@ -198,7 +199,7 @@ GridRun runGrid(const Scene& scene, int n, double trace, bool erosion) {
   std::size_t resident = 0;
   g.ms = timeMs([&] {
     for (const Eigen::Vector2d& c : scene.stroke(trace)) {
-      terrain::GridRegion touched;
+      terrain::VertexBox touched;
       g.stampMs += timeMs([&] {
         field.writeBack(1e9);
         gridStamp(g, scene, tool, c, touched);
@@ -592,10 +593,6 @@ void drift(const BenchOptions& options, const Scene& scene, std::ostream& out) {
       << std::endl;
 }
 
-double num(const nlohmann::json& j, const char* key) {
-  return j.contains(key) && j[key].is_number() ? j[key].get<double>() : NAN;
-}
-
 void plots(const std::vector<nlohmann::json>& rows, const std::string& outDir) {
   const auto partSeries = [&](const char* experiment, const char* x) {
     std::vector<app::PlotSeries> out;
@@ -607,7 +604,7 @@ void plots(const std::vector<nlohmann::json>& rows, const std::string& outDir) {
       s.colour = app::seriesColour(std::size_t(p));
       for (const auto& r : rows)
         if (r["experiment"] == experiment)
-          s.x.push_back(num(r, x)), s.y.push_back(num(r, parts[p]));
+          s.x.push_back(app::jsonNumber(r, x)), s.y.push_back(app::jsonNumber(r, parts[p]));
       out.push_back(s);
     }
     return out;
@@ -620,7 +617,8 @@ void plots(const std::vector<nlohmann::json>& rows, const std::string& outDir) {
       s.label = keys[p];
       s.colour = app::seriesColour(std::size_t(p));
       for (const auto& r : rows)
-        if (r["experiment"] == experiment) s.x.push_back(num(r, x)), s.y.push_back(num(r, keys[p]));
+        if (r["experiment"] == experiment)
+          s.x.push_back(app::jsonNumber(r, x)), s.y.push_back(app::jsonNumber(r, keys[p]));
       out.push_back(s);
     }
     return out;
@@ -650,7 +648,7 @@ void plots(const std::vector<nlohmann::json>& rows, const std::string& outDir) {
         for (const auto& r : rows)
           if (r["experiment"] == experiment && r["model"] == model &&
               !(skipReference && r.contains("reference") && r["reference"] == "itself"))
-            s.x.push_back(num(r, x)), s.y.push_back(num(r, y));
+            s.x.push_back(app::jsonNumber(r, x)), s.y.push_back(app::jsonNumber(r, y));
         out.push_back(s);
       }
     return out;

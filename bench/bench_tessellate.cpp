@@ -43,7 +43,7 @@ View altitudeView(std::string label, double R, double latDeg) {
 }
 
 std::vector<View> standardViews(const terrain::Terrain& t) {
-  const double R = t.chart().radius();
+  const double R = t.chart().sphereRadius();
   // Over land at 30 deg N, 20 deg E looking east-north-east, so every view sees relief.
   const double lat = 30 * std::numbers::pi / 180, lon = 20 * std::numbers::pi / 180;
   const Eigen::Vector3d up(std::cos(lon) * std::cos(lat), std::sin(lon) * std::cos(lat),
@@ -160,7 +160,7 @@ void benchTessellateCharts(const BenchOptions& options, std::ostream& out) {
       options.quick ? std::vector<double>{1, 4} : std::vector<double>{0.5, 1, 2, 4, 8};
   for (const core::ChartShape shape : {core::ChartShape::kLatLong, core::ChartShape::kOctahedral}) {
     const auto planet = app::makeDefaultPlanet(level, 1, shape);
-    const double R = planet->chart().radius();
+    const double R = planet->chart().sphereRadius();
     for (const View& view :
          {altitudeView("pole_1000km", R, 89.0), altitudeView("equator_1000km", R, 0.0)}) {
       for (const double distMax : sweep) {

@@ -48,7 +48,7 @@ cv::Mat drawOverlay(const Heightmap& h, const tin::OverlayResult& r, const Windo
   cv::Mat img = hillshade(h, w.x0, w.y0, w.n, w.scale);
   const auto& tin = r.tin;
   for (std::size_t k = 0; k < tin.triangles.size(); ++k) {
-    if (!r.onTrack[k]) continue;
+    if (!r.onRoad[k]) continue;
     const auto& t = tin.triangles[k];
     std::vector<cv::Point> poly;
     for (const auto v : t) {
@@ -63,7 +63,7 @@ cv::Mat drawOverlay(const Heightmap& h, const tin::OverlayResult& r, const Windo
       const Eigen::Vector2d& a = tin.xy[t[std::size_t(e)]];
       const Eigen::Vector2d& b = tin.xy[t[std::size_t((e + 1) % 3)]];
       if (!w.touches(a, b)) continue;
-      const cv::Scalar colour = r.onTrack[k] ? cv::Scalar(20, 40, 190) : cv::Scalar(90, 60, 40);
+      const cv::Scalar colour = r.onRoad[k] ? cv::Scalar(20, 40, 190) : cv::Scalar(90, 60, 40);
       cv::line(img, w.pixel(a), w.pixel(b), colour, 1, cv::LINE_AA);
     }
   }
@@ -111,10 +111,10 @@ void writeControlMapPicture(const Heightmap& h, const std::vector<bool>& inside,
 
 void writeOverlayPicture(const Heightmap& h, const tin::OverlayResult& stitched,
                          const tin::OverlayResult& stenciled, const std::string& path) {
-  // Around the track: the bounding box of the stitched result's track triangles.
+  // Around the road: the bounding box of the stitched result's road triangles.
   Eigen::Vector2d lo(INFINITY, INFINITY), hi(-INFINITY, -INFINITY);
   for (std::size_t k = 0; k < stitched.tin.triangles.size(); ++k)
-    if (stitched.onTrack[k])
+    if (stitched.onRoad[k])
       for (const auto v : stitched.tin.triangles[k])
         lo = lo.cwiseMin(stitched.tin.xy[v]), hi = hi.cwiseMax(stitched.tin.xy[v]);
   const int n = std::min(h.side, 128), scale = 5;

@@ -14,8 +14,8 @@ namespace ps::bench {
 void writeControlMapPicture(const Heightmap& h, const std::vector<bool>& inside, const tin::Tin& t,
                             const std::string& path);
 
-// A track stitched (left) and stenciled (right) into the same terrain: terrain edges thin, the
-// track's triangles filled, on a window around the track.
+// A road stitched (left) and stenciled (right) into the same terrain: terrain edges thin, the
+// road's triangles filled, on a window around the road.
 void writeOverlayPicture(const Heightmap& h, const tin::OverlayResult& stitched,
                          const tin::OverlayResult& stenciled, const std::string& path);
 

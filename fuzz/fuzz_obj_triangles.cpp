@@ -1,4 +1,4 @@
-// libFuzzer: track meshes for `overlay` (io::parseObjTriangles). Any input must parse or be
+// libFuzzer: road meshes for `overlay` (io::parseObjTriangles). Any input must parse or be
 // refused with core::InputError; what parses has finite vertices, indices in range and no
 // repeated corner, and written back as plain OBJ it parses to the same mesh.
 #include <cmath>

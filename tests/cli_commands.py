@@ -2,7 +2,7 @@
 """ctest cli_*: each `planetsculpt` command end to end on small inputs, its outputs checked.
 
 Usage: cli_commands.py GROUP EXE SOURCE_DIR OUT_DIR [BENCH]
-Groups: demo, import_export, synth_detect, markers, bench (with a benchmark's name), errors. (`live` has live_smoke.sh;
+Groups: demo, import_export, road, synth_detect, markers, bench (with a benchmark's name), errors. (`live` has live_smoke.sh;
 `calibrate` runs from ps_tests, TrackingCalibrate.CommandCalibratesAFolderOfRenderedViews,
 which renders the views it reads.) Python's standard library only: the values are compared
 through the raw float32 format, which needs no image decoder.
@@ -146,12 +146,12 @@ def group_demo():
     frames = [json.loads(l) for l in open(out("demo", "log.jsonl"))]
     if len([l for l in frames if "frame" in l]) < 60:
         fail("log.jsonl holds fewer lines than frames")
-    # A stroke sculpted in the recording becomes a road (a track mesh) that overlay takes.
-    stdout, _ = run("track", out("demo", "log.jsonl"), "--planet", out("demo", "planet.planet"),
+    # A stroke sculpted in the recording becomes a road (a strip mesh) that overlay takes.
+    stdout, _ = run("road", out("demo", "log.jsonl"), "--planet", out("demo", "planet.planet"),
                     "--width", "100000", "--out", out("demo", "stroke_road.obj"))
     road = json.loads(stdout)
     if road["points"] < 2 or road["triangles"] != 2 * (road["points"] - 1):
-        fail(f"track from the demo's log: {road}")
+        fail(f"road from the demo's log: {road}")
     stdout, _ = run("overlay", out("demo", "planet.planet"), out("demo", "stroke_road.obj"), "--at", road["at"],
                     "--mode", "stencil", "--error", "500", "--out", out("demo", "stroke_road_stencil.glb"))
     r = json.loads(stdout)
@@ -167,7 +167,7 @@ def group_demo():
             "--out", out(f"tin{k}"))
         with open(out(f"tin{k}", "summary.json")) as f:
             s = json.load(f)
-        if s.get("ar_tin_region_frames", 0) < 1 or s["stamps"] < 1:
+        if s.get("ar_stroke_tin_frames", 0) < 1 or s["stamps"] < 1:
             fail(f"replay --tool tin-sand drew no frame with its region TIN: {s}")
         names = sorted(os.listdir(out(f"tin{k}", "ar"))) + ["ar_view.png", "overview.png"]
         # The force path feels the region TIN where the tool is in it (docs/HAPTICS.md).
@@ -332,7 +332,7 @@ def group_import_export():
     if not open(out("globe.glb"), "rb").read(4) == b"glTF":
         fail("globe.glb has no glTF magic")
     # TINs: the error measured on every sample of the file as written; a road stitched and
-    # stenciled into the tile (its x, y the tile's metres); a demo stroke as a track on the globe.
+    # stenciled into the tile (its x, y the tile's metres); a demo stroke as a road on the globe.
     stdout, _ = run("export", out("tile.planet"), "--tin", "--max-error", "1", "--out", out("tile_tin.obj"))
     tin = json.loads(stdout)
     if not (tin["tin"] and tin["measured_error_ratio"] <= 1.0 and tin["samples_checked"] == 33 * 33):
@@ -343,14 +343,14 @@ def group_import_export():
         stdout, _ = run("overlay", out("tile.planet"), out("road.obj"), "--mode", mode, "--error", "1",
                         "--out", out(f"road_{mode}.obj"))
         r = json.loads(stdout)
-        if r["euler"] != 1 or r["non_manifold_edges"] != 0 or r["track_group_triangles"] < 2:
+        if r["euler"] != 1 or r["non_manifold_edges"] != 0 or r["road_group_triangles"] < 2:
             fail(f"overlay --mode {mode}: {r}")
         if mode == "stitch" and not (r["crossing_vertices"] > 0 and r["added_vertex_error_m"] < 1e-6):
             fail(f"overlay --mode stitch: {r}")
         if mode == "stencil" and not (r["footprint_error_m"] < 1e-6 and r["outside_error_ratio"] <= 1 + 1e-9):
             fail(f"overlay --mode stencil: {r}")
-        if "g track" not in open(out(f"road_{mode}.obj")).read():
-            fail(f"road_{mode}.obj has no track group")
+        if "g road" not in open(out(f"road_{mode}.obj")).read():
+            fail(f"road_{mode}.obj has no road group")
     # The terrain as a mesh this project wrote (the tile's TIN): stitched, every vertex kept.
     for mode in ("stitch", "stencil"):
         stdout, _ = run("overlay", out("tile_tin.obj"), out("road.obj"), "--mode", mode, "--error", "1",
@@ -364,14 +364,37 @@ def group_import_export():
     _, err = run("overlay", out("globe_tin.obj"), out("road.obj"), "--error", "1", "--out", out("x.obj"), expect=2)
     if "not a heightfield" not in err:
         fail(f"a sphere's mesh as the terrain was not refused as such:\n{err}")
-    stdout, _ = run("track", os.path.join(SRC, "data", "demo-strokes.txt"), "--width", "20000",
-                    "--planet", out("globe.planet"), "--out", out("demo_track.obj"))
-    track = json.loads(stdout)
-    stdout, _ = run("overlay", out("globe.planet"), out("demo_track.obj"), "--at", track["at"],
+    stdout, _ = run("road", os.path.join(SRC, "data", "demo-strokes.txt"), "--width", "20000",
+                    "--planet", out("globe.planet"), "--out", out("demo_road.obj"))
+    road = json.loads(stdout)
+    stdout, _ = run("overlay", out("globe.planet"), out("demo_road.obj"), "--at", road["at"],
                     "--mode", "stitch", "--error", "200", "--out", out("globe_road.ply"))
     r = json.loads(stdout)
-    if r["euler"] != 2 or r["border_edges"] != 0 or r["track_group_triangles"] < track["triangles"]:
+    if r["euler"] != 2 or r["border_edges"] != 0 or r["road_group_triangles"] < road["triangles"]:
         fail(f"a demo stroke overlaid on the globe: {r}")
+
+
+def group_road():
+    # `road` makes a strip mesh from a stroke; `track`, its old name, does the same and says on
+    # stderr, in one line naming `road`, that it is deprecated.
+    strokes = os.path.join(SRC, "data", "demo-strokes.txt")
+    new_out, new_err = run("road", strokes, "--width", "5000", "--stroke", "2", "--out", out("road.obj"))
+    old_out, old_err = run("track", strokes, "--width", "5000", "--stroke", "2", "--out", out("track.obj"))
+    if "deprecated" in new_err:
+        fail(f"road called itself deprecated: {new_err}")
+    lines = old_err.strip().splitlines()
+    if len(lines) != 1 or "deprecated" not in lines[0] or "road" not in lines[0]:
+        fail(f"track did not say, in one line naming road, that it is deprecated: {old_err!r}")
+    new, old = json.loads(new_out), json.loads(old_out)
+    if new["file"] != out("road.obj") or old["file"] != out("track.obj"):
+        fail(f"the summaries name other files: {new['file']}, {old['file']}")
+    del new["file"], old["file"]
+    if new != old or new["stroke"] != 2 or new["triangles"] != 2 * (new["points"] - 1):
+        fail(f"track and road differ or made no strip: {old} vs {new}")
+    if open(out("road.obj"), "rb").read() != open(out("track.obj"), "rb").read():
+        fail("track wrote another mesh than road")
+    if "PlanetSculpt road: stroke 2" not in open(out("road.obj")).read():
+        fail("road.obj does not say what it is")
 
 
 def group_charts():
@@ -428,7 +451,7 @@ def group_charts():
     with open(out("octa_tin", "summary.json")) as f:
         s = json.load(f)
     if (s["chart"] != "octahedral" or s["tool"] != "tin-sand" or s["stamps"] <= 0
-            or s["modified_vertices"] <= 0 or s.get("ar_tin_region_frames", 0) < 1):
+            or s["modified_vertices"] <= 0 or s.get("ar_stroke_tin_frames", 0) < 1):
         fail(f"the octahedral TIN sand replay: {s}")
     # Refusals, named: an unknown chart, --chart with a planet file (it has its own).
     for args, said in ((("--chart", "cube"), "chart 'cube' is not one of"),

@@ -72,7 +72,7 @@ def gone_paths(path, text):
         top = p.split("/", 1)[0]
         if top in LAYERS and top not in TOP:
             # `render/sun.hpp`: a layer's file (only names with an extension are files; `io/` alone
-            # or `tracking/render` in prose is not checked).
+            # or `tracking/synth` in prose is not checked).
             if "." not in p.rsplit("/", 1)[-1]:
                 continue
             p = "src/" + p

@@ -235,7 +235,7 @@ TEST(EditBrush, RegionGrowingsDistancesAreTheOnesTheBrushWouldCompute) {
     edit::DistanceField field(chart);
     edit::RegionGrower grower;
     edit::Region region;
-    const double size = chart->radius() > 0 ? chart->radius() : 3e6;
+    const double size = chart->sphereRadius() > 0 ? chart->sphereRadius() : 3e6;
     for (int i = 0; i < 16; ++i) {
       const core::GridPoint c = edittest::randomCentre(rng, chart->grid().m());
       BrushSettings s;
@@ -252,7 +252,7 @@ TEST(EditBrush, RegionGrowingsDistancesAreTheOnesTheBrushWouldCompute) {
                                   rep.control, {p, 0}, edit::floatAtMost(computed.heightLimit())};
       ASSERT_EQ(ctx.distances, nullptr);
       auto h = computed.mutableHeights();
-      const terrain::GridRegion dirty = brush.apply(ctx, h);
+      const terrain::VertexBox dirty = brush.apply(ctx, h);
       ASSERT_TRUE(dirty.uBegin == rep.dirty.uBegin && dirty.uEnd == rep.dirty.uEnd &&
                   dirty.vBegin == rep.dirty.vBegin && dirty.vEnd == rep.dirty.vEnd)
           << chart->name() << ", stamp " << i;

@@ -35,7 +35,7 @@ void checkEdit(const terrain::Terrain& t, const edit::EditPipeline& pipe,
   const auto g = t.grid();
   const edit::Region& region = pipe.lastRegion();
   // The dirty rectangle holds every changed vertex and is tight in v.
-  const terrain::GridRegion& dirty = pipe.lastReport().dirty;
+  const terrain::VertexBox& dirty = pipe.lastReport().dirty;
   std::vector<std::uint8_t> inDirty(g.count(), 0);
   dirty.forEachColumnRange(g, [&](int a, int b) {
     for (int v = dirty.vBegin; v <= dirty.vEnd; ++v) {
@@ -79,7 +79,7 @@ TEST(EditPipeline, RandomEditsKeepEveryInvariant) {
     edit::EditPipeline pipe(t);
     pipe.setUndoEnabled(false);
     const int m = t.grid().m();
-    const double R = t.chart().radius();
+    const double R = t.chart().sphereRadius();
     std::mt19937 rng(300 + n);
     const int edits = n == 8 ? 8 : 25;
     for (int i = 0; i < edits; ++i) {
@@ -119,7 +119,7 @@ TEST(EditPipeline, GenericChartEditsKeepEveryInvariant) {
   edit::EditPipeline pipe(t);
   std::mt19937 rng(8);
   for (int i = 0; i < 15; ++i) {
-    const BrushSettings s = randomBrush(rng, t.chart().radius(), t.grid().m());
+    const BrushSettings s = randomBrush(rng, t.chart().sphereRadius(), t.grid().m());
     const core::GridPoint c = edittest::randomCentre(rng, t.grid().m());
     const std::vector<float> before(t.heights().begin(), t.heights().end());
     pipe.apply(GaussianBrush(s), {chart->position(c.u, c.v, 0.0), 0.0});

@@ -3,7 +3,10 @@
 #include <random>
 
 #include "app/build_paths.hpp"
+#include "core/cylinder_chart.hpp"
+#include "core/flat_chart.hpp"
 #include "core/input_error.hpp"
+#include "core/torus_chart.hpp"
 #include "edit/brush.hpp"
 #include "edit/control_vertex.hpp"
 #include "edit/edit_pipeline.hpp"
@@ -40,8 +43,37 @@ TEST(EditScript, DemoFileRunsOnAPlanet) {
   EXPECT_TRUE(edittest::boundsEqualFullRebuild(t));
   // The crater straddles the seam: both twins went down together.
   const auto c = edit::nearestVertex(
-      t.chart(), edit::scriptPosition({false, {-20, 179.5, 0}}, t.chart().radius()));
+      t.chart(), edit::scriptPosition({false, {-20, 179.5, 0}}, t.chart().sphereRadius()));
   EXPECT_LT(t.height(c.u, c.v), start[t.grid().index(c.u, c.v)]);
+}
+
+// A LAT LON point is a direction on the chart's sphere: on a torus, a cylinder or a flat grid
+// (sphereRadius() 0, no sphere) it is refused by line before anything is stamped, where taking
+// the 0 as a size would have put the stamp at the origin; an xyz point stamps there as anywhere.
+TEST(EditScript, LatLonPointsAreRefusedOnChartsThatAreNoSphere) {
+  const std::vector<std::shared_ptr<const core::Chart>> charts{
+      std::make_shared<core::TorusChart>(core::GridSize(6), 4.5e6, 1.8e6),
+      std::make_shared<core::CylinderChart>(core::GridSize(6), 3e6, 6e6),
+      std::make_shared<core::FlatChart>(core::GridSize(6), 1e4, 1e4)};
+  for (const auto& chart : charts) {
+    SCOPED_TRACE(chart->name());
+    EXPECT_EQ(chart->sphereRadius(), 0.0);
+    terrain::Terrain t(chart, testkit::bumpyHeights(*chart, 5, 200.0));
+    const std::vector<float> start(t.heights().begin(), t.heights().end());
+    edit::EditPipeline pipe(t);
+    const Eigen::Vector3d p = chart->position(20, 30, 0.0);
+    const int m = chart->grid().m();
+    const double r_km =
+        0.1 * (chart->position(m / 2, m / 2, 0.0) - chart->position(0, 0, 0.0)).norm() / 1e3;
+    const std::string brush = "brush r_km=" + std::to_string(r_km) + " sigma=0.3\n";
+    const std::string xyz = "stamp xyz=" + std::to_string(p.x()) + "," + std::to_string(p.y()) +
+                            "," + std::to_string(p.z()) + "\n";
+    const std::string err = errorOf(brush + xyz + "stamp 10 20\n", pipe);
+    EXPECT_NE(err.find("bad.txt:3: a LAT LON point needs a sphere"), std::string::npos) << err;
+    EXPECT_TRUE(edittest::sameBits(t.heights(), start)) << "a refused script changed heights";
+    EXPECT_EQ(errorOf(brush + xyz, pipe), "");
+    EXPECT_FALSE(edittest::sameBits(t.heights(), start)) << "the xyz stamp changed nothing";
+  }
 }
 
 TEST(EditScript, ErrorsNameTheFileLineAndValueAndTouchNothing) {
@@ -126,7 +158,7 @@ TEST(EditScript, RecordedJournalReplaysToTheSamePlanetBitForBit) {
   pipe.setObserver(&recorder);
   std::mt19937 rng(31);
   edit::GaussianBrush brush;
-  const double R = a.chart().radius();
+  const double R = a.chart().sphereRadius();
   for (int i = 0; i < 8; ++i) {
     edit::BrushSettings s;
     s.radius = 100e3 + 50e3 * double(rng() % 20);
@@ -169,10 +201,10 @@ TEST(EditScript, RecorderRefusesToolsItCannotWriteBeforeTheyAct) {
     std::string name() const override { return "nudge"; }
     void validate() const override {}
     double radius() const override { return 100e3; }
-    terrain::GridRegion apply(const edit::ToolContext& ctx, std::span<float> h) const override {
+    terrain::VertexBox apply(const edit::ToolContext& ctx, std::span<float> h) const override {
       const auto g = ctx.field.grid();
       h[g.index(ctx.control.u, ctx.control.v)] += 1.0f;
-      return terrain::GridRegion::point(ctx.control);
+      return terrain::VertexBox::point(ctx.control);
     }
   };
   auto t = testkit::bumpyTerrain(6, 1, 1000.0);

@@ -39,7 +39,7 @@ class OpaqueChart final : public core::Chart {
   }
   bool wrapsU() const override { return true; }
   bool hasPoleRows() const override { return true; }
-  double radius() const override { return c_->radius(); }
+  double sphereRadius() const override { return c_->sphereRadius(); }
 
  private:
   std::shared_ptr<const core::LatLongChart> c_;
@@ -186,8 +186,8 @@ inline void randomStroke(edit::EditPipeline& pipe, std::mt19937& rng, edit::Gaus
   pipe.beginStroke(brush, {p, 0});
   Eigen::Vector3d q = p;
   for (int k = 0; k < 3; ++k) {
-    q = (q + t.chart().radius() * 0.2 * Eigen::Vector3d::Random()).normalized() *
-        t.chart().radius();
+    q = (q + t.chart().sphereRadius() * 0.2 * Eigen::Vector3d::Random()).normalized() *
+        t.chart().sphereRadius();
     pipe.moveTo({q, 0.05});
   }
   pipe.endStroke();

@@ -17,7 +17,7 @@ using namespace ps;
 using terrain::Diamond;
 using terrain::ErrorRule;
 using terrain::GridPoint;
-using terrain::GridRegion;
+using terrain::VertexBox;
 
 namespace {
 
@@ -156,7 +156,7 @@ TEST_P(BoundsRule, LocalUpdateEqualsFullRebuildBitForBit) {
     if (trial % 4 == 1) v0 = 0;          // touches the south pole
     const int v1 = std::min(m, v0 + hgt);
     auto h = t.mutableHeights();
-    GridRegion region{u0, u0 + w, v0, v1};
+    VertexBox region{u0, u0 + w, v0, v1};
     for (int v = v0; v <= v1; ++v) {
       const bool pole = (v == 0 || v == m);
       for (int du = 0; du <= (pole ? m : w); ++du) {
@@ -164,14 +164,14 @@ TEST_P(BoundsRule, LocalUpdateEqualsFullRebuildBitForBit) {
         h[g.index(u, v)] += 100.0f;
         if (u == 0) h[g.index(m, v)] = h[g.index(0, v)];
       }
-      if (pole) region = region.unite(GridRegion{0, m, v, v}, g, true);
+      if (pole) region = region.unite(VertexBox{0, m, v, v}, g, true);
     }
     // Re-sync: an update that wrapped may have touched column 0 without m or vice versa.
     for (int v = v0; v <= v1; ++v) h[g.index(m, v)] = h[g.index(0, v)];
     if (v0 == 0) {
       for (int u = 0; u <= m; ++u) h[g.index(u, 0)] = h[g.index(0, 0)];
     }
-    t.commitEdit(region.unite(GridRegion{0, 0, v0, v1}, g, true));
+    t.commitEdit(region.unite(VertexBox{0, 0, v0, v1}, g, true));
     terrain::ErrorBounds full;
     full.build(t.chart(), t.heights(), GetParam());
     ASSERT_EQ(full.errorCodes(), t.bounds().errorCodes())
@@ -238,7 +238,7 @@ TEST_P(BoundsRule, WideLocalUpdatesEqualAFullRebuildAcrossKernelRuns) {
       if (trial == 3) v0 = m - hgt;                 // a pole row / the flat chart's top edge
       const int v1 = v0 + hgt;
       auto h = t.mutableHeights();
-      GridRegion region{u0, u0 + w, v0, v1};
+      VertexBox region{u0, u0 + w, v0, v1};
       for (int v = v0; v <= v1; ++v) {
         const bool pole = sphere && (v == 0 || v == m);
         for (int du = 0; du <= (pole ? m : w); ++du) {
@@ -247,11 +247,11 @@ TEST_P(BoundsRule, WideLocalUpdatesEqualAFullRebuildAcrossKernelRuns) {
         }
         if (pole) {
           for (int u = 0; u <= m; ++u) h[g.index(u, v)] = h[g.index(0, v)];
-          region = region.unite(GridRegion{0, m, v, v}, g, sphere);
+          region = region.unite(VertexBox{0, m, v, v}, g, sphere);
         }
         if (sphere) h[g.index(m, v)] = h[g.index(0, v)];
       }
-      if (sphere) region = region.unite(GridRegion{0, 0, v0, v1}, g, true);
+      if (sphere) region = region.unite(VertexBox{0, 0, v0, v1}, g, true);
       t.commitEdit(region);
       ASSERT_TRUE(edittest::boundsEqualFullRebuild(t))
           << t.chart().name() << " trial " << trial << " " << region.describe();
@@ -316,7 +316,7 @@ TEST(ErrorBounds, ErrorsOnlyBuildHasTheFullBuildsErrors) {
       auto h = t->mutableHeights();
       for (int v = 10; v <= 14; ++v)
         for (int u = 20; u <= 23; ++u) h[g.index(u, v)] += 7.0f;
-      t->commitEdit(GridRegion{20, 23, 10, 14});
+      t->commitEdit(VertexBox{20, 23, 10, 14});
     }
     ASSERT_EQ(lean.bounds().errorCodes(), full.bounds().errorCodes());
     EXPECT_FALSE(lean.bounds().hasRadii());

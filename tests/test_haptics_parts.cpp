@@ -342,7 +342,7 @@ TEST(HapticsCore, NewSnapshotUnderATouchingToolIsBlendedNotStepped) {
   for (int k = 0; k < 100; ++k) r = core.tick(time += 1e-3, true, tip, &a);
   EXPECT_NEAR(r.force.z(), 4.0, 1e-6);
   for (float& h : t.mutableHeights()) h = 0.009f;
-  t.commitEdit(terrain::GridRegion::all(t.grid()));
+  t.commitEdit(terrain::VertexBox::all(t.grid()));
   ASSERT_TRUE(b.capture(t, tip, 8));
   ASSERT_NE(a.serial(), b.serial());
   double prev = r.force.z(), maxStep = 0;

@@ -21,7 +21,7 @@
 #include "haptics/haptic_core.hpp"
 #include "haptics/terrain_patch.hpp"
 #include "haptics/triple_buffer.hpp"
-#include "sand/tin_region.hpp"
+#include "sand/stroke_tin.hpp"
 #include "sand/tin_sand_tool.hpp"
 #include "terrain/terrain.hpp"
 #include "test_edit_util.hpp"
@@ -97,8 +97,8 @@ struct Stroked {
     for (double d = 0.2; d <= 2.0 + 1e-9; d += 0.2)
       p.pipe.moveTo({above(10.0, 30.0 + d, r - 300.0), 0.0});
     p.pipe.endStroke();
-    if (tool.region() && tool.region()->holds(p.t.heights()))
-      patch = std::make_shared<const terrain::MeshPatch>(tool.region()->patch());
+    if (tool.strokeTin() && tool.strokeTin()->holds(p.t.heights()))
+      patch = std::make_shared<const terrain::MeshPatch>(tool.strokeTin()->patch());
   }
 };
 
@@ -199,8 +199,8 @@ TEST(HapticsTin, OnAFlatGridTheDepthIsTheTinsHeightMinusZInsideAndTheGridsOutsid
   ts.radius = 8.0;
   sand::TinSandTool tool(chart, ts);
   pipe.apply(tool, {{64.0, 64.0, 20.0 - 4.0 + 8.0}, 0.0});
-  ASSERT_TRUE(tool.region() && tool.region()->holds(t.heights()));
-  const terrain::MeshPatch patch = tool.region()->patch();
+  ASSERT_TRUE(tool.strokeTin() && tool.strokeTin()->holds(t.heights()));
+  const terrain::MeshPatch patch = tool.strokeTin()->patch();
   ASSERT_TRUE(patch.plane);
   EXPECT_EQ(patch.plane->radius, 0.0);
   haptics::TerrainPatch withTin, gridOnly;
@@ -237,10 +237,10 @@ TEST(HapticsTin, AnImprintNarrowerThanAGridCellIsFeltAtItsTinDepth) {
     return s;
   }());
   p.pipe.apply(tool, {above(10.0, 30.0, 900.0), 0.0});
-  ASSERT_TRUE(tool.region());
+  ASSERT_TRUE(tool.strokeTin());
   // A region of our own (the tool's is const), on the same footprint.
   const Eigen::Vector3d at = above(10.0, 30.0, 0.0);
-  sand::TinRegion region(*p.chart, p.t.heights(), tool.region()->footprint(),
+  sand::StrokeTin region(*p.chart, p.t.heights(), tool.strokeTin()->footprint(),
                          edit::nearestVertex(*p.chart, at), 1.2, sand::TinSandSettings{});
   // A press 0.3 cells wide in the middle of a cell: no grid vertex under it.
   const core::GridPoint g = edit::nearestVertex(*p.chart, at);

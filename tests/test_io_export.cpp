@@ -275,8 +275,8 @@ void checkWrittenMeshes(const terrain::Terrain& t, const std::vector<double>& er
       EXPECT_EQ(topo.nonManifoldEdges, 0u) << what;
       EXPECT_EQ(topo.degenerate, 0u) << what;
       EXPECT_EQ(noArea, 0u) << what;
-      EXPECT_EQ(topo.euler(), t.chart().radius() > 0 ? 2 : 1) << what;
-      if (t.chart().radius() > 0) {
+      EXPECT_EQ(topo.euler(), t.chart().sphereRadius() > 0 ? 2 : 1) << what;
+      if (t.chart().sphereRadius() > 0) {
         EXPECT_EQ(topo.borderEdges, 0u) << what;
       } else {
         // Every edge used once runs along the grid's border.
@@ -431,7 +431,7 @@ TEST(IoExport, EquirectangularExportsOfAnySizeReimportCloseToThePlanet) {
     EXPECT_NO_THROW(terrain::Terrain::validateHeights(*r.planet.chart, r.planet.heights));
     if (std::string(ext) != "png") {
       // The GeoTIFF's sphere and the raw sidecar's radius_m carry the planet's radius.
-      EXPECT_EQ(r.planet.chart->radius(), 3389500.0) << ext;
+      EXPECT_EQ(r.planet.chart->sphereRadius(), 3389500.0) << ext;
     }
   }
   fs::remove_all(dir);
@@ -484,7 +484,7 @@ TEST(IoExport, OctahedralPlanetsExportAndReimportEquirectangular) {
     o.gridSide = m + 1;
     const auto back = io::importHeightmap(dir / "e.tif", o);
     ASSERT_EQ(back.planet.chart->name(), chart->name());
-    EXPECT_EQ(back.planet.chart->radius(), 3389500.0);
+    EXPECT_EQ(back.planet.chart->sphereRadius(), 3389500.0);
     EXPECT_NO_THROW(terrain::Terrain::validateHeights(*back.planet.chart, back.planet.heights));
     double worst = 0;
     for (std::size_t i = 0; i < h.size(); ++i)
@@ -581,7 +581,7 @@ TEST(IoFlatChart, PositionsInverseAndLimits) {
   EXPECT_EQ(*c.inverse({-8.0, 1e9, 0.0}), Eigen::Vector2d(0.0, 32.0));
   EXPECT_FALSE(c.wrapsU());
   EXPECT_FALSE(c.hasPoleRows());
-  EXPECT_EQ(c.radius(), 0.0);
+  EXPECT_EQ(c.sphereRadius(), 0.0);
   EXPECT_GT(c.heightLimit(), 1e5);
   EXPECT_THROW(core::FlatChart(core::GridSize(5), 0.0, 1.0), core::InputError);
   EXPECT_THROW(core::FlatChart(core::GridSize(5), 1.0, NAN), core::InputError);

@@ -415,7 +415,7 @@ TEST(IoImport, RealMarsMolaIsAGlobalPlanet) {
   o.westLongitudeDeg = 0.0;
   o.gridSide = 257;
   const auto r = io::importHeightmap(file, o);
-  EXPECT_EQ(r.planet.chart->radius(), 3389500.0);
+  EXPECT_EQ(r.planet.chart->sphereRadius(), 3389500.0);
   const auto [lo, hi] = std::minmax_element(r.planet.heights.begin(), r.planet.heights.end());
   EXPECT_GE(*lo, -8068.0f);
   EXPECT_LE(*hi, 21134.0f);

@@ -92,7 +92,7 @@ TEST(IoPlanetFile, LatLongRoundTripIsBitExactOnDiskAndThroughLoad) {
       std::memcmp(loaded->heights().data(), t.heights().data(), t.heights().size() * sizeof(float)),
       0);
   EXPECT_EQ(loaded->chart().name(), "latlong");
-  EXPECT_EQ(loaded->chart().radius(), t.chart().radius());
+  EXPECT_EQ(loaded->chart().sphereRadius(), t.chart().sphereRadius());
   EXPECT_EQ(loaded->bounds().rule(), terrain::ErrorRule::kWedgie);
   EXPECT_EQ(loaded->bounds().errorCodes(), t.bounds().errorCodes());
   EXPECT_EQ(io::readPlanetFile(dir / "a.planet").metadata.at("author"), "test");
@@ -144,7 +144,7 @@ TEST(IoPlanetFile, OctahedralPlanetsRoundTripAsVersion2AndLatLongStaysVersion1) 
     const auto* oct = dynamic_cast<const core::OctahedralChart*>(d.chart.get());
     ASSERT_NE(oct, nullptr);
     EXPECT_EQ(oct->mapping(), mapping);
-    EXPECT_EQ(oct->radius(), t.chart().radius());
+    EXPECT_EQ(oct->sphereRadius(), t.chart().sphereRadius());
     EXPECT_EQ(oct->grid().side(), t.grid().side());
     EXPECT_EQ(std::memcmp(d.heights.data(), t.heights().data(), t.heights().size() * 4), 0);
     // The same planet through a save and a load: the same bytes again.

@@ -203,7 +203,7 @@ TEST(OctahedralChart, LocalBoundUpdatesEqualAFullRebuildBitForBit) {
       if (trial % 4 == 2) u0 = 0, v0 = m - hgt;  // at a corner: the south pole
       u0 = std::clamp(u0, 0, m - w);
       v0 = std::clamp(v0, 0, m - hgt);
-      const terrain::GridRegion region{u0, u0 + w, v0, v0 + hgt};
+      const terrain::VertexBox region{u0, u0 + w, v0, v0 + hgt};
       auto h = t.mutableHeights();
       const float bump = float(50 + rng() % 400);
       for (int v = region.vBegin; v <= region.vEnd; ++v)
@@ -232,7 +232,7 @@ TEST(OctahedralChart, TheLatticeHoldsEveryVertexsCodesTwinsIncluded) {
     auto t = testkit::bumpyOctahedralTerrain(7, 5, 4000.0, mapping);
     EXPECT_TRUE(edittest::latticeHoldsTheCodes(t)) << "built";
     edit::EditPipeline pipe(t);
-    const double R = t.chart().radius();
+    const double R = t.chart().sphereRadius();
     for (const Eigen::Vector3d& spot :
          {Eigen::Vector3d(0, 0, -1), Eigen::Vector3d(1, 0, -0.2), Eigen::Vector3d(0.3, -1, 0.1)}) {
       edit::BrushSettings b;
@@ -244,7 +244,7 @@ TEST(OctahedralChart, TheLatticeHoldsEveryVertexsCodesTwinsIncluded) {
   }
 }
 
-// An edit whose changed vertices fill a box's octagon (terrain::CutRegion: a triangle in a
+// An edit whose changed vertices fill a box's octagon (terrain::CutBox: a triangle in a
 // corner of the grid, as a disc about the south pole is, a diamond about the centre, as about
 // the north pole, random octagons anywhere): the bounds updated over the cut regions equal a
 // full rebuild bit for bit, and the triangle and the diamond cost less than their boxes.
@@ -256,7 +256,7 @@ TEST(OctahedralChart, CutBoundUpdatesEqualAFullRebuildAndSkipTheBoxsCorners) {
   std::mt19937 rng(23);
   for (int trial = 0; trial < 24; ++trial) {
     const int w = 4 + int(rng() % 40);
-    terrain::CutRegion edit;
+    terrain::CutBox edit;
     if (trial % 3 == 0) {  // the corner (0, 0): u + v <= w
       edit.box = {0, w, 0, w};
       edit.cut.sumMax = w;
@@ -286,7 +286,7 @@ TEST(OctahedralChart, CutBoundUpdatesEqualAFullRebuildAndSkipTheBoxsCorners) {
         ++changed;
       }
     if (changed == 0) continue;
-    const std::vector<terrain::CutRegion> images = terrain::gluedImages(t.chart(), edit, false);
+    const std::vector<terrain::CutBox> images = terrain::gluedImages(t.chart(), edit, false);
     t.commitEdit(images);
     boxed.commitEdit(edit.box);
     terrain::ErrorBounds full;
@@ -308,7 +308,7 @@ TEST(OctahedralChart, CutBoundUpdatesEqualAFullRebuildAndSkipTheBoxsCorners) {
 TEST(OctahedralChart, TessellationsAreCrackFreeAndWithinDistMax) {
   for (const Mapping mapping : kMappings) {
     const auto t = testkit::bumpyOctahedralTerrain(8, 7, 6000.0, mapping);
-    const double R = t.chart().radius();
+    const double R = t.chart().sphereRadius();
     const std::array<Eigen::Vector3d, 5> looks{
         Eigen::Vector3d(0, 0, 1), Eigen::Vector3d(0.05, 0.02, -1),
         Eigen::Vector3d(0.7, 0.01, -0.7),  // the fold of side u = m, south of the equator
@@ -399,7 +399,7 @@ TEST(OctahedralChart, RegionGrowingAcrossTheFoldsEqualsBruteForce) {
       {m / 2, 0},     {m, m / 2}, {m / 2 - 1, 30}, {20, m / 2}, {m / 2 + 3, m - 5}};
   for (int k = 0; k < 12; ++k)
     centres.push_back({int(rng() % std::uint32_t(m + 1)), int(rng() % std::uint32_t(m + 1))});
-  const double R = chart->radius();
+  const double R = chart->sphereRadius();
   std::vector<std::uint8_t> mask;
   for (const core::GridPoint& c : centres) {
     for (double radius : {0.01 * R, 0.1 * R, 0.4 * R, 1.2 * R}) {
@@ -434,7 +434,7 @@ TEST(OctahedralChart, RegionGrowingAcrossTheFoldsEqualsBruteForce) {
 // that changed lies in an image of the reported dirty box, and undo gives the heights back.
 TEST(OctahedralChart, BrushEditsKeepBoundsTwinsAndUndo) {
   auto t = testkit::bumpyOctahedralTerrain(7, 9, 3000.0);
-  const double R = t.chart().radius();
+  const double R = t.chart().sphereRadius();
   const auto g = t.grid();
   const std::vector<float> original(t.heights().begin(), t.heights().end());
   edit::EditPipeline pipe(t);

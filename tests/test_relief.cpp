@@ -58,7 +58,7 @@ class WrappedChart final : public Chart {
   }
   bool wrapsU() const override { return true; }
   bool hasPoleRows() const override { return true; }
-  double radius() const override { return inner_.radius(); }
+  double sphereRadius() const override { return inner_.sphereRadius(); }
 
  private:
   const LatLongChart& inner_;

@@ -88,7 +88,7 @@ testing::AssertionResult matchesGolden(const cv::Mat& image, const cv::Mat& gold
 // The bumpy view the golden image holds (DeterministicAndUploadsOnlyWhatChanged draws it).
 cv::Mat bumpyView(render::PlanetRenderer& renderer, render::Shading shading) {
   auto planet = testkit::bumpyTerrain(8, 5, 8000.0);
-  const auto cam = orbitCamera(1.6 * planet.chart().radius(), 240, 180);
+  const auto cam = orbitCamera(1.6 * planet.chart().sphereRadius(), 240, 180);
   terrain::Tessellator tess;
   render::RenderStyle style;
   style.wireframe = true;
@@ -187,7 +187,7 @@ TEST(StressPlanetScale, FloatPathWithinATenthOfAPixelFrom1mTo100000km) {
 
 TEST(RenderProjection, DepthRangeHoldsTheVisiblePlanet) {
   const auto planet = testkit::bumpyTerrain(7, 2, 8000.0);
-  const double R = planet.chart().radius();
+  const double R = planet.chart().sphereRadius();
   for (double d : {1.2 * R, 3 * R, 100 * R}) {
     const auto cam = orbitCamera(d, 320, 240);
     const auto r = render::depthRangeFor(cam, planet);
@@ -204,7 +204,7 @@ TEST(RenderGl, SilhouetteMatchesTheAnalyticSphere) {
   SKIP_WITHOUT_GL();
   const terrain::Terrain planet = smoothPlanet(8);
   const core::Chart* chart = &planet.chart();
-  const double R = chart->radius();
+  const double R = chart->sphereRadius();
   render::EglContext gl;
   render::PlanetRenderer renderer;
   const auto cam = orbitCamera(3 * R, 320, 240);
@@ -239,7 +239,7 @@ TEST(RenderGl, SilhouetteMatchesTheAnalyticSphere) {
 TEST(RenderGl, DeterministicAndUploadsOnlyWhatChanged) {
   SKIP_WITHOUT_GL();
   auto planet = testkit::bumpyTerrain(8, 5, 8000.0);
-  const double R = planet.chart().radius();
+  const double R = planet.chart().sphereRadius();
   render::EglContext gl;
   render::PlanetRenderer renderer;
   const auto cam = orbitCamera(1.6 * R, 240, 180);
@@ -295,7 +295,7 @@ TEST(RenderGl, AConstantHeightPlanetIsADiscOfTheSpheresProjectedRadius) {
   render::PlanetRenderer renderer;
   for (const float h : {0.0f, 250e3f}) {
     const terrain::Terrain planet = smoothPlanet(8, h);
-    const double r = planet.chart().radius() + h;
+    const double r = planet.chart().sphereRadius() + h;
     const auto cam = orbitCamera(5 * r, 320, 240);
     ASSERT_EQ(cam.fx, cam.fy);
     terrain::Tessellator tess;
@@ -329,7 +329,7 @@ TEST(RenderGl, TheSunLightsTheSideThatFacesIt) {
   render::EglContext gl;
   render::PlanetRenderer renderer;
   const terrain::Terrain planet = smoothPlanet(8);
-  const double R = planet.chart().radius();
+  const double R = planet.chart().sphereRadius();
   const auto cam = orbitCamera(3 * R, 320, 240);
   terrain::Tessellator tess;
   const auto& mesh = tess.tessellate(planet, cam, {});
@@ -383,7 +383,7 @@ TEST(RenderGl, ContourLinesLieWhereTheHeightsCrossTheirLevels) {
       heights[chart->grid().index(u, v)] =
           float(kAmplitude * chart->position(u, v, 0.0).normalized().z());
   const terrain::Terrain planet(chart, heights);
-  const double R = chart->radius();
+  const double R = chart->sphereRadius();
   const auto cam = orbitCamera(3 * R, 320, 240);
   terrain::Tessellator tess;
   const auto& mesh = tess.tessellate(planet, cam, {});
@@ -483,7 +483,7 @@ TEST(RenderGl, CursorRingAndForceArrowAreDrawn) {
   SKIP_WITHOUT_GL();
   const terrain::Terrain planet = smoothPlanet(7);
   const core::Chart* chart = &planet.chart();
-  const double R = chart->radius();
+  const double R = chart->sphereRadius();
   render::EglContext gl;
   render::PlanetRenderer renderer;
   const auto cam = orbitCamera(3 * R, 320, 240);
@@ -522,7 +522,7 @@ TEST(RenderGl, CursorRingAndForceArrowAreDrawn) {
 TEST(RenderGl, TheToolHidesThePlanetExactlyWhereItIsInFront) {
   SKIP_WITHOUT_GL();
   const terrain::Terrain planet = smoothPlanet(7);
-  const double R = planet.chart().radius();
+  const double R = planet.chart().sphereRadius();
   render::EglContext gl;
   render::PlanetRenderer renderer;
   const auto cam = orbitCamera(3 * R, 320, 240);
@@ -613,7 +613,7 @@ std::vector<terrain::Camera> skipViews(double R, int w, int h) {
 TEST(Skips, CullingDrawsTheSameImageAsTheWholePlanet) {
   SKIP_WITHOUT_GL();
   auto planet = testkit::bumpyTerrain(8, 11, 60000.0);
-  const double R = planet.chart().radius();
+  const double R = planet.chart().sphereRadius();
   render::EglContext gl;
   render::PlanetRenderer renderer;
   int view = 0;
@@ -645,7 +645,7 @@ TEST(Skips, SkippedUploadsDrawWhatFreshUploadsDraw) {
   // uploaded) every frame, over frames that hold the view, move it and edit the terrain.
   SKIP_WITHOUT_GL();
   auto planet = testkit::bumpyTerrain(7, 12, 8000.0);
-  const double R = planet.chart().radius();
+  const double R = planet.chart().sphereRadius();
   render::EglContext gl;
   render::PlanetRenderer kept;
   terrain::Tessellator tess;
@@ -673,7 +673,7 @@ TEST(Skips, OverviewEveryFourthFrameIsWhatEveryFrameWouldDraw) {
   // renderer drawing it every frame shows at that frame (nothing carried over goes stale).
   SKIP_WITHOUT_GL();
   auto planet = testkit::bumpyTerrain(7, 13, 8000.0);
-  const double R = planet.chart().radius();
+  const double R = planet.chart().sphereRadius();
   render::EglContext gl;
   render::PlanetRenderer sometimes, always;
   terrain::Tessellator tess;
@@ -695,7 +695,7 @@ TEST(Skips, ChangedChunksDrawWhatAWholeUploadDraws) {
   // bytes than the mesh, and draws what a renderer sent the whole mesh draws.
   SKIP_WITHOUT_GL();
   auto planet = testkit::bumpyTerrain(9, 14, 8000.0);
-  const double R = planet.chart().radius();
+  const double R = planet.chart().sphereRadius();
   render::EglContext gl;
   render::PlanetRenderer partial, whole;
   whole.setPartialUploads(false);

@@ -60,7 +60,7 @@ bool inside(const terrain::Camera& cam, const Eigen::Vector2d& px) {
 TEST(RenderAtmosphere, OffChangesNothing) {
   SKIP_WITHOUT_GL();
   const auto planet = smoothPlanet(8);
-  const double R = planet.chart().radius();
+  const double R = planet.chart().sphereRadius();
   render::EglContext gl;
   const auto cam =
       terrain::Camera::lookAt(R * Eigen::Vector3d(4, 1.5, 2.5), Eigen::Vector3d::Zero(),
@@ -87,7 +87,7 @@ TEST(RenderAtmosphere, OffChangesNothing) {
 TEST(RenderAtmosphere, TheBoardShadowFallsAwayFromTheSun) {
   SKIP_WITHOUT_GL();
   const auto planet = smoothPlanet(8);
-  const double R = planet.chart().radius();
+  const double R = planet.chart().sphereRadius();
   render::EglContext gl;
   render::PlanetRenderer renderer;
   const Eigen::Vector3d sun = render::sunDirection({});
@@ -144,7 +144,7 @@ TEST(RenderAtmosphere, TheBoardShadowFallsAwayFromTheSun) {
 TEST(RenderAtmosphere, TheRimIsAThinGlowOutsideTheSilhouette) {
   SKIP_WITHOUT_GL();
   const auto planet = smoothPlanet(8);
-  const double R = planet.chart().radius();
+  const double R = planet.chart().sphereRadius();
   render::EglContext gl;
   render::PlanetRenderer renderer;
   const double distance = 5;

@@ -72,7 +72,7 @@ TEST(RenderShading, ACoarseMeshShadedPerPixelLooksLikeTheFullSurface) {
   const auto planet = reliefPlanet(10);
   render::EglContext gl;
   render::PlanetRenderer renderer;
-  for (const auto& v : views(planet.chart().radius())) {
+  for (const auto& v : views(planet.chart().sphereRadius())) {
     const cv::Mat reference = draw(renderer, planet, v.camera, 0.1, render::Shading::kPerPixel);
     auto against = [&](const cv::Mat& image) {
       return render::compareImages(image, reference,
@@ -148,7 +148,7 @@ TEST(RenderShading, TorusAndCylinderShadedPerPixelLookLikeTheFullSurface) {
 TEST(RenderShading, AnEditSendsOnlyTheTexelsItChanged) {
   SKIP_WITHOUT_GL();
   auto planet = reliefPlanet(10);
-  const double R = planet.chart().radius();
+  const double R = planet.chart().sphereRadius();
   render::EglContext gl;
   render::PlanetRenderer kept;
   const auto cam = views(R)[1].camera;
@@ -224,7 +224,7 @@ std::vector<terrain::Camera> wanderingViews(double R, int count, unsigned seed) 
 TEST(RenderShading, TheHeightTileCacheKeepsItsBudgetAndThePicture) {
   SKIP_WITHOUT_GL();
   const auto planet = reliefPlanet(11);  // 2049^2: 341 tiles of 128 cells in 5 levels
-  const double R = planet.chart().radius();
+  const double R = planet.chart().sphereRadius();
   render::EglContext gl;
   render::PlanetRenderer roomy, tight;
   const std::size_t slot = 131 * 131 * sizeof(float);
@@ -255,7 +255,7 @@ TEST(RenderShading, ACacheThatWasUsedDrawsWhatAFreshOneDraws) {
   render::EglContext gl;
   render::PlanetRenderer used;
   used.setHeightCacheBudget(40 * 131 * 131 * sizeof(float));
-  for (const auto& cam : wanderingViews(planet.chart().radius(), 10, 9)) {
+  for (const auto& cam : wanderingViews(planet.chart().sphereRadius(), 10, 9)) {
     const cv::Mat a = drawWith(used, planet, cam, render::Shading::kPerPixel);
     render::PlanetRenderer fresh;
     fresh.setHeightCacheBudget(40 * 131 * 131 * sizeof(float));
@@ -273,7 +273,7 @@ TEST(RenderShading, WithoutRoomForTheTilesItDrawsFacetsAndSaysWhy) {
   render::EglContext gl;
   render::PlanetRenderer starved, faceted;
   starved.setHeightCacheBudget(4096);
-  const auto cam = views(planet.chart().radius())[0].camera;
+  const auto cam = views(planet.chart().sphereRadius())[0].camera;
   const cv::Mat image = drawWith(starved, planet, cam, render::Shading::kPerPixel);
   EXPECT_NE(starved.stats().shadingNote.find("drawing facets"), std::string::npos)
       << starved.stats().shadingNote;

@@ -200,7 +200,7 @@ TEST(ReplayStepper, PlanetScaledByHandIsThePlanetConfiguredAtThatSize) {
 // The view draws the TIN tool's region TIN (FrameStepper::viewPatch) from its first stamp,
 // through the stroke and after it, until the grid under it changes: an undo hides it, a redo
 // back to the same floats shows it again, another tool ends it.
-TEST(ReplayStepper, TheViewDrawsTheTinRegionUntilTheGridUnderItChanges) {
+TEST(ReplayStepper, TheViewDrawsTheStrokeTinUntilTheGridUnderItChanges) {
   auto planet = testkit::bumpyTerrain(8, 4, 3000.0);
   auto o = shortSceneOptions();
   o.tool = replay::ReplayTool::kTinSand;

@@ -24,7 +24,7 @@ namespace {
 
 // A point at latitude/longitude (degrees) at altitude h above a sphere chart's reference radius.
 Eigen::Vector3d above(const core::Chart& chart, double latDeg, double lonDeg, double h) {
-  return edittest::latLon(latDeg, lonDeg, chart.radius() + h, 1.0);
+  return edittest::latLon(latDeg, lonDeg, chart.sphereRadius() + h, 1.0);
 }
 
 bool sameFloats(std::span<const float> a, std::span<const float> b) {

@@ -167,8 +167,8 @@ TEST(SandTubes, TheSettlerIsToldOfEveryVertexAStampChanges) {
   // so a stamp across the inner equator's midline (v = m/2) or the v seam changes vertices
   // outside it, in its images, which the listener must be told of as well.
   struct Recorder : sand::EditListener {
-    std::vector<terrain::GridRegion> told;
-    void edited(const terrain::GridRegion& r, const sand::Material&) override { told.push_back(r); }
+    std::vector<terrain::VertexBox> told;
+    void edited(const terrain::VertexBox& r, const sand::Material&) override { told.push_back(r); }
   };
   for (const bool torus : {true, false}) {
     auto chart = tube(torus, 7);
@@ -183,7 +183,7 @@ TEST(SandTubes, TheSettlerIsToldOfEveryVertexAStampChanges) {
       sand::DisplacementTool tool(chart, {.radius = 900.0}, &rec);
       pipe.apply(tool, {chart->position(p.u, p.v, 900.0 - 150.0), 0.0});
       auto told = [&](int u, int v) {
-        for (const terrain::GridRegion& r : rec.told) {
+        for (const terrain::VertexBox& r : rec.told) {
           if (v < r.vBegin || v > r.vEnd) continue;
           for (int k = -1; k <= 1; ++k) {
             if (u + k * m >= r.uBegin && u + k * m <= r.uEnd) return true;

@@ -153,7 +153,7 @@ TEST(PlanetExport, InTheBackgroundFromACopyOfThePlanet) {
   EXPECT_THROW(job.start(planet, dir), core::InputError);  // one at a time
   // The live planet changes while the copy is exported.
   planet.mutableHeights()[planet.grid().index(5, 60)] += 1000.f;
-  planet.commitEdit(terrain::GridRegion::point({5, 60}));
+  planet.commitEdit(terrain::VertexBox::point({5, 60}));
   const auto outcome = job.wait();
   ASSERT_TRUE(outcome.has_value());
   ASSERT_TRUE(outcome->result.has_value()) << outcome->error;

@@ -47,7 +47,7 @@ void writeBytes(const fs::path& p, std::span<const unsigned char> b) {
 void settleSomething(terrain::Terrain& t, SessionStore& store, std::mt19937& rng) {
   const int m = t.grid().m();
   const int u0 = 1 + int(rng() % unsigned(m - 8)), v0 = 2 + int(rng() % unsigned(m - 10));
-  const terrain::GridRegion r{u0, u0 + 4, v0, v0 + 5};
+  const terrain::VertexBox r{u0, u0 + 4, v0, v0 + 5};
   auto h = t.mutableHeights();
   for (int v = r.vBegin; v <= r.vEnd; ++v)
     for (int u = r.uBegin; u <= r.uEnd; ++u) h[t.grid().index(u, v)] += float(rng() % 50) - 25.f;

@@ -54,7 +54,7 @@ void strokeFrom(edit::EditPipeline& pipe, std::mt19937& rng, edit::GaussianBrush
   for (int k = 0; k < 3; ++k) {
     const Eigen::Vector3d d(double(int(rng() % 200) - 100), double(int(rng() % 200) - 100),
                             double(int(rng() % 200) - 100));
-    p = (p + t.chart().radius() * 0.001 * d).normalized() * t.chart().radius();
+    p = (p + t.chart().sphereRadius() * 0.001 * d).normalized() * t.chart().sphereRadius();
     pipe.moveTo({p, 0.05});
   }
   pipe.endStroke();
@@ -110,7 +110,7 @@ TEST(HeightsShadow, FollowsEditsInBoundedCopiesAndEqualsTheTerrainWhenCurrent) {
     auto h = t.mutableHeights();
     const int u = 1 + int(k % 100), v = 3 + int(k % 97);
     h[t.grid().index(u, v)] += 1.0f;
-    t.commitEdit(terrain::GridRegion{u, u, v, v});
+    t.commitEdit(terrain::VertexBox{u, u, v, v});
   }
   shadow.follow(t);
   EXPECT_EQ(shadow.pendingRows(), std::size_t(t.grid().side()));

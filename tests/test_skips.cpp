@@ -37,7 +37,7 @@ namespace {
 
 TEST(Skips, AReusedTessellationIsTheMeshAFreshOneMakes) {
   auto planet = testkit::bumpyTerrain(8, 21, 8000.0);
-  const double R = planet.chart().radius();
+  const double R = planet.chart().sphereRadius();
   const auto cam = terrain::Camera::lookAt({1.4 * R, 0.5 * R, 0.6 * R}, {0, 0, 0},
                                            Eigen::Vector3d::UnitZ(), 320, 240, 0.9);
   terrain::Tessellator kept;

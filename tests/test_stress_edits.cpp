@@ -108,9 +108,9 @@ class StressRig {
   }
 
  private:
-  double R() const { return terrain_.chart().radius(); }
+  double R() const { return terrain_.chart().sphereRadius(); }
   // Tells the settler (when there is one) what an edit changed.
-  void edited(const terrain::GridRegion& region) {
+  void edited(const terrain::VertexBox& region) {
     if (settler_) settler_->edited(region, settler_->material());
   }
   int m() const { return terrain_.grid().m(); }
@@ -141,7 +141,7 @@ class StressRig {
     }
     pipe_.endStroke();
     changedSinceStroke_ = false;
-    edited(terrain::GridRegion::all(terrain_.grid()));
+    edited(terrain::VertexBox::all(terrain_.grid()));
     return "brush stroke of " + std::to_string(samples) +
            " samples, r_d=" + std::to_string(s.radius);
   }
@@ -202,7 +202,7 @@ class StressRig {
       pipe_.undo();
       changedSinceStroke_ = true;  // the stroke now on top may have been settled after it
     }
-    edited(terrain::GridRegion::all(terrain_.grid()));
+    edited(terrain::VertexBox::all(terrain_.grid()));
     return "undo/redo";
   }
 
@@ -298,7 +298,7 @@ TEST(StressEdits, RandomActionsOfEveryToolKeepEveryInvariant) {
       ts.cull = false;
       ts.triangleBudget = 0;
       ts.distMaxPx = logUniform(viewRng, 0.5, 16.0);
-      const auto cam = randomCamera(viewRng, rig.terrain().chart().radius());
+      const auto cam = randomCamera(viewRng, rig.terrain().chart().sphereRadius());
       const auto whole = triangleSet(tess.tessellate(rig.terrain(), cam, ts));
       ASSERT_EQ(testkit::conformityDefect(rig.terrain(), tess.mesh()), "") << what;
       ts.cull = true;
@@ -330,7 +330,7 @@ TEST(StressEdits, RandomBrushActionsOnTheOctahedralChartKeepEveryInvariant) {
       ts.cull = false;
       ts.triangleBudget = 0;
       ts.distMaxPx = logUniform(viewRng, 0.5, 16.0);
-      const auto cam = randomCamera(viewRng, rig.terrain().chart().radius());
+      const auto cam = randomCamera(viewRng, rig.terrain().chart().sphereRadius());
       tess.tessellate(rig.terrain(), cam, ts);
       ASSERT_EQ(testkit::conformityDefect(rig.terrain(), tess.mesh()), "") << what;
     }
@@ -346,7 +346,7 @@ TEST(StressEdits, RandomBrushActionsOnTheOctahedralChartKeepEveryInvariant) {
 TEST(StressEdits, OctahedralBrushesOfEveryRadiusAtEveryVertexKeepTheBounds) {
   auto t = testkit::bumpyOctahedralTerrain(5, 3, 8000.0);
   edit::EditPipeline pipe(t);
-  const double R = t.chart().radius();
+  const double R = t.chart().sphereRadius();
   const int m = t.grid().m(), step = testkit::underAsan() ? 3 : 1;
   for (const double radius : {0.3 * R, 1.1 * R, 2.05 * R}) {
     for (int v = 0; v <= m; v += step) {

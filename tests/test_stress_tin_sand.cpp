@@ -179,8 +179,8 @@ TEST(StressTinSand, ToolOnAPlanetAtThePolesTheSeamAndRandomPoints) {
       }
       k += int(tool.stamps() - stampsBefore);
       if (tool.stamps() == stampsBefore) continue;
-      ASSERT_NE(tool.region(), nullptr) << "stamp " << k;
-      ASSERT_EQ(tool.region()->sand().tin().validityProblem(), "")
+      ASSERT_NE(tool.strokeTin(), nullptr) << "stamp " << k;
+      ASSERT_EQ(tool.strokeTin()->sand().tin().validityProblem(), "")
           << "stamp " << k << " at " << sLat << ", " << sLon;
       const double drift =
           std::abs(grid.volume(t.heights()) - vBefore) / grid.absVolume(t.heights());
@@ -284,8 +284,8 @@ TEST(StressTinSand, ToolOnTheGluedChartsAcrossFoldsAndSeams) {
         }
         k += int(tool.stamps() - stampsBefore);
         if (tool.stamps() == stampsBefore) continue;
-        ASSERT_NE(tool.region(), nullptr) << "stamp " << k;
-        ASSERT_EQ(tool.region()->sand().tin().validityProblem(), "")
+        ASSERT_NE(tool.strokeTin(), nullptr) << "stamp " << k;
+        ASSERT_EQ(tool.strokeTin()->sand().tin().validityProblem(), "")
             << "stamp " << k << " at (" << p.u << ", " << p.v << ")";
         const double drift =
             std::abs(grid.volume(t.heights()) - vBefore) / grid.absVolume(t.heights());

@@ -91,7 +91,7 @@ TEST(TileRequests, EveryTileHasOneIndexAndTheLevelsHalve) {
 // view asks for finer levels; a bias makes every request coarser, down to the one coarsest tile.
 TEST(TileRequests, TheTilesCoverEachTriangleAtItsLevel) {
   const auto planet = reliefPlanet(11);
-  const double R = planet.chart().radius();
+  const double R = planet.chart().sphereRadius();
   const int side = planet.grid().side();
   const auto pyramid = render::TilePyramid::forGrid(planet.grid());
   int previousFinest = pyramid.coarsest + 1;
@@ -131,7 +131,7 @@ TEST(TileRequests, TheTilesCoverEachTriangleAtItsLevel) {
 TEST(TileRequests, PixelsFindTheLevelTheirFootprintAsksFor) {
   SKIP_WITHOUT_GL();
   const auto planet = reliefPlanet(11);
-  const double R = planet.chart().radius();
+  const double R = planet.chart().sphereRadius();
   render::EglContext gl;
   render::PlanetRenderer renderer, starved;
   starved.setHeightCacheBudget(7 * 131 * 131 * sizeof(float));
@@ -180,7 +180,7 @@ TEST(TileRequests, TilesAndTheirApronsHoldTheHeightsAcrossFoldsAndSeams) {
                              : testkit::bumpyTerrain(9, 4, 5000.0);
     const core::Chart& chart = planet.chart();
     const int m = planet.grid().m();
-    const double R = chart.radius();
+    const double R = chart.sphereRadius();
     render::HeightTileCache cache;
     std::string why;
     // Expected height of level-0 position (u, v), one step outside the grid at most per axis.
@@ -248,7 +248,7 @@ TEST(TileRequests, TilesAndTheirApronsHoldTheHeightsAcrossFoldsAndSeams) {
     // point, in the tiles across the fold, follows it too.
     for (const auto& [u, v] : {std::pair{1, m / 2 + 37}, std::pair{m / 2 - 53, 1}}) {
       planet.mutableHeights()[planet.grid().index(u, v)] += 700.0f;
-      planet.commitEdit(terrain::GridRegion{u, u, v, v});
+      planet.commitEdit(terrain::VertexBox{u, u, v, v});
     }
     ASSERT_TRUE(cache.sync(planet, tess.tessellate(planet, cam, {}), cam, why)) << why;
     ASSERT_TRUE(check("after single vertices beside the sides"));
@@ -313,7 +313,7 @@ TEST(TileRequests, TorusAndCylinderApronsWrapAcrossTheirSeams) {
     ASSERT_TRUE(check("after an edit"));
     for (const auto& [u, v] : {std::pair{1, 3}, std::pair{3, 1}, std::pair{m - 1, m - 2}}) {
       planet.mutableHeights()[planet.grid().index(u, v)] += 700.0f;
-      planet.commitEdit(terrain::GridRegion{u, u, v, v});
+      planet.commitEdit(terrain::VertexBox{u, u, v, v});
     }
     ASSERT_TRUE(cache.sync(planet, tess.tessellate(planet, cam, {}), cam, why)) << why;
     ASSERT_TRUE(check("after single vertices beside the sides"));

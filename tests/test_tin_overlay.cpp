@@ -1,6 +1,6 @@
-// Tracks stitched and stenciled into a terrain TIN (tin/overlay): the surface kept (stitch) or
-// the track's kept and the ground within its error (stencil), every input edge present, the
-// mesh a manifold; refusals of tracks that are not proper meshes; the OBJ track reader.
+// Roads stitched and stenciled into a terrain TIN (tin/overlay): the surface kept (stitch) or
+// the road's kept and the ground within its error (stencil), every input edge present, the
+// mesh a manifold; refusals of roads that are not proper meshes; the OBJ road reader.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -50,9 +50,9 @@ Scene makeScene(double tolerance, std::uint32_t seed) {
 }
 
 // A road: a strip of quads (two triangles each) along a curve, `width` lattice units wide.
-Track road(const std::vector<Eigen::Vector2d>& centre, double width, double lift,
-           const SampleField& field) {
-  Track t;
+Road roadAlong(const std::vector<Eigen::Vector2d>& centre, double width, double lift,
+               const SampleField& field) {
+  Road t;
   for (std::size_t k = 0; k < centre.size(); ++k) {
     const Eigen::Vector2d d =
         (centre[std::min(k + 1, centre.size() - 1)] - centre[k == 0 ? 0 : k - 1]).normalized();
@@ -118,8 +118,8 @@ double heightOn(const Tin& tin, const TinLocator& where, const Eigen::Vector2d& 
 
 TEST(TinOverlay, StitchingKeepsTheSurfaceAndEveryEdgeOfBoth) {
   const Scene s = makeScene(2.0, 3);
-  const Track track = road(curve(4.3, 55.1, 20.2, 14), 3.0, 0.0, s.field);
-  const OverlayResult r = overlayTrack(s.field, s.terrain, track, OverlayMode::kStitch);
+  const Road road = roadAlong(curve(4.3, 55.1, 20.2, 14), 3.0, 0.0, s.field);
+  const OverlayResult r = overlayRoad(s.field, s.terrain, road, OverlayMode::kStitch);
   EXPECT_GT(r.report.crossingVertices, 20u);
   EXPECT_LE(r.report.addedVertexErrorM, 1e-9);
   // The surface is the terrain's: every sample at the same height on both, and the result's
@@ -138,44 +138,44 @@ TEST(TinOverlay, StitchingKeepsTheSurfaceAndEveryEdgeOfBoth) {
                  &b = s.terrain.xy[t[std::size_t((k + 1) % 3)]];
       ASSERT_NEAR(coveredLength(a, b, r.tin), (b - a).norm(), 1e-6);
     }
-  for (const auto& t : track.triangles)
+  for (const auto& t : road.triangles)
     for (int k = 0; k < 3; ++k) {
-      const auto &a = track.xy[t[std::size_t(k)]], &b = track.xy[t[std::size_t((k + 1) % 3)]];
+      const auto &a = road.xy[t[std::size_t(k)]], &b = road.xy[t[std::size_t((k + 1) % 3)]];
       ASSERT_NEAR(coveredLength(a, b, r.tin), (b - a).norm(), 1e-6);
     }
   const MeshTopology top = meshTopology(r.tin.xy.size(), r.tin.triangles);
   EXPECT_EQ(top.nonManifoldEdges, 0u);
   EXPECT_EQ(top.degenerate, 0u);
   EXPECT_EQ(top.euler(), 1);
-  std::size_t onTrack = 0;
-  for (const auto f : r.onTrack) onTrack += f;
-  EXPECT_GE(onTrack, track.triangles.size());
+  std::size_t onRoad = 0;
+  for (const auto f : r.onRoad) onRoad += f;
+  EXPECT_GE(onRoad, road.triangles.size());
 }
 
-TEST(TinOverlay, StencilingKeepsTheTrackAndTheGroundWithinItsError) {
+TEST(TinOverlay, StencilingKeepsTheRoadAndTheGroundWithinItsError) {
   const Scene s = makeScene(0.8, 5);
-  const Track track = road(curve(6.1, 50.3, 22.6, 12), 4.0, 2.5, s.field);  // a raised road
-  const OverlayResult r = overlayTrack(s.field, s.terrain, track, OverlayMode::kStencil);
+  const Road road = roadAlong(curve(6.1, 50.3, 22.6, 12), 4.0, 2.5, s.field);  // a raised road
+  const OverlayResult r = overlayRoad(s.field, s.terrain, road, OverlayMode::kStencil);
   EXPECT_GT(r.report.removedTerrainVertices, 0u);
   EXPECT_LE(r.report.footprintErrorM, 1e-9);
   EXPECT_LE(r.report.outsideErrorRatio, 1.0 + kCheckSlack);
-  // The track's vertices are in the result with the track's heights.
-  for (std::size_t v = 0; v < track.xy.size(); ++v) {
+  // The road's vertices are in the result with the road's heights.
+  for (std::size_t v = 0; v < road.xy.size(); ++v) {
     bool found = false;
     for (std::size_t w = 0; w < r.tin.xy.size(); ++w)
-      if ((r.tin.xy[w] - track.xy[v]).norm() < 1e-12) {
+      if ((r.tin.xy[w] - road.xy[v]).norm() < 1e-12) {
         found = true;
-        EXPECT_DOUBLE_EQ(r.tin.h[w], track.h[v]);
+        EXPECT_DOUBLE_EQ(r.tin.h[w], road.h[v]);
       }
-    EXPECT_TRUE(found) << "track vertex " << v;
+    EXPECT_TRUE(found) << "road vertex " << v;
   }
   // No terrain sample vertex is left strictly inside the footprint.
-  const TinLocator footprint(track.xy, track.triangles, s.w, s.h);
+  const TinLocator footprint(road.xy, road.triangles, s.w, s.h);
   for (std::size_t w = 0; w < r.tin.xy.size(); ++w) {
     const Eigen::Vector2d& p = r.tin.xy[w];
-    const bool trackVertex = std::any_of(track.xy.begin(), track.xy.end(),
-                                         [&](const auto& q) { return (q - p).norm() < 1e-12; });
-    if (!trackVertex) {
+    const bool roadVertex = std::any_of(road.xy.begin(), road.xy.end(),
+                                        [&](const auto& q) { return (q - p).norm() < 1e-12; });
+    if (!roadVertex) {
       EXPECT_FALSE(footprint.contains(p, -1e-9)) << "vertex " << w;
     }
   }
@@ -184,12 +184,12 @@ TEST(TinOverlay, StencilingKeepsTheTrackAndTheGroundWithinItsError) {
   EXPECT_EQ(top.euler(), 1);
 }
 
-TEST(TinOverlay, ATrackLeavingTheTerrainIsClippedAtItsBorder) {
+TEST(TinOverlay, ARoadLeavingTheTerrainIsClippedAtItsBorder) {
   const Scene s = makeScene(1.0, 8);
-  const Track track = road(curve(-10.0, 30.0, 10.0, 9), 3.0, 0.0, s.field);
+  const Road road = roadAlong(curve(-10.0, 30.0, 10.0, 9), 3.0, 0.0, s.field);
   for (const OverlayMode mode : {OverlayMode::kStitch, OverlayMode::kStencil}) {
-    const OverlayResult r = overlayTrack(s.field, s.terrain, track, mode);
-    EXPECT_GT(r.report.clippedTrackTriangles, 0u);
+    const OverlayResult r = overlayRoad(s.field, s.terrain, road, mode);
+    EXPECT_GT(r.report.clippedRoadTriangles, 0u);
     for (const auto& p : r.tin.xy) {
       EXPECT_GE(p.x(), 0.0);
       EXPECT_GE(p.y(), 0.0);
@@ -200,32 +200,32 @@ TEST(TinOverlay, ATrackLeavingTheTerrainIsClippedAtItsBorder) {
   }
 }
 
-TEST(TinOverlay, RefusesTracksThatAreNotProperMeshes) {
+TEST(TinOverlay, RefusesRoadsThatAreNotProperMeshes) {
   const Scene s = makeScene(2.0, 1);
-  auto expectRefused = [&](const Track& t, const std::string& expected) {
+  auto expectRefused = [&](const Road& t, const std::string& expected) {
     try {
-      overlayTrack(s.field, s.terrain, t, OverlayMode::kStitch);
+      overlayRoad(s.field, s.terrain, t, OverlayMode::kStitch);
       ADD_FAILURE() << "accepted; expected: " << expected;
     } catch (const core::InputError& e) {
       EXPECT_NE(std::string(e.what()).find(expected), std::string::npos) << e.what();
     }
   };
-  Track bowTie;  // two triangles whose edges cross
+  Road bowTie;  // two triangles whose edges cross
   bowTie.xy = {{10, 10}, {20, 10}, {15, 20}, {10, 16}, {20, 16}, {15, 6}};
   bowTie.h.assign(6, 0.0);
   bowTie.triangles = {{0, 1, 2}, {3, 5, 4}};
   expectRefused(bowTie, "crosses itself");
-  Track twice;
+  Road twice;
   twice.xy = {{10, 10}, {20, 10}, {15, 20}};
   twice.h.assign(3, 0.0);
   twice.triangles = {{0, 1, 2}, {0, 1, 2}};
   expectRefused(twice, "overlaps itself");
-  Track flat;
+  Road flat;
   flat.xy = {{10, 10}, {20, 10}, {30, 10}};
   flat.h.assign(3, 0.0);
   flat.triangles = {{0, 1, 2}};
   expectRefused(flat, "degenerate");
-  Track away = twice;
+  Road away = twice;
   away.triangles = {{0, 1, 2}};
   for (auto& p : away.xy) p += Eigen::Vector2d(500, 500);
   expectRefused(away, "wholly outside");
@@ -243,13 +243,13 @@ TEST(TinOverlay, AJitteryStrokeThatDoublesBackStillMakesAProperStrip) {
   }
   const Strip strip = stripAlong(path, 3.0);
   EXPECT_LT(strip.xy.size(), path.size()) << "the jitter is simplified away";
-  Track track{strip.xy, std::vector<double>(strip.xy.size(), 0.0), strip.triangles};
-  EXPECT_NO_THROW(overlayTrack(s.field, s.terrain, track, OverlayMode::kStitch));
+  Road road{strip.xy, std::vector<double>(strip.xy.size(), 0.0), strip.triangles};
+  EXPECT_NO_THROW(overlayRoad(s.field, s.terrain, road, OverlayMode::kStitch));
   EXPECT_THROW(stripAlong({{1, 1}, {1, 1}}, 2.0), core::InputError);
   EXPECT_THROW(stripAlong(path, 0.0), core::InputError);
 }
 
-TEST(TinOverlay, ObjTracksAreReadOrRefusedWithTheLine) {
+TEST(TinOverlay, ObjRoadsAreReadOrRefusedWithTheLine) {
   const io::ObjTriangles ok = io::parseObjTriangles(
       "# road\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvn 0 0 1\ng road\nf 1/1/1 2/2/1 3//1\nf -4 -2 "
       "-1\n",
@@ -272,7 +272,7 @@ TEST(TinOverlay, ObjTracksAreReadOrRefusedWithTheLine) {
   refused("v 0 0 0\nv 1 1 1\nl 1 2\n", "not a triangle mesh");
 }
 
-TEST(TinOverlay, APlanetKeepsItsClosedSurfaceWithATrackStitchedIn) {
+TEST(TinOverlay, APlanetKeepsItsClosedSurfaceWithARoadStitchedIn) {
   const auto dir = testkit::freshDir("tin_overlay_planet");
   const terrain::Terrain t = testkit::bumpyTerrain(6, 2, 20000.0);
   io::savePlanet(t, dir / "p.planet");
@@ -291,7 +291,7 @@ TEST(TinOverlay, APlanetKeepsItsClosedSurfaceWithATrackStitchedIn) {
     EXPECT_EQ(s["euler"], 2) << s.dump();
     EXPECT_EQ(s["border_edges"], 0);
     EXPECT_EQ(s["non_manifold_edges"], 0);
-    EXPECT_GT(s["track_group_triangles"].get<int>(), 0);
+    EXPECT_GT(s["road_group_triangles"].get<int>(), 0);
   }
   io::OverlayOptions o;
   o.errorM = 2000.0;

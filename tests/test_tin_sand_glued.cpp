@@ -20,7 +20,7 @@
 #include "core/torus_chart.hpp"
 #include "edit/edit_pipeline.hpp"
 #include "sand/sand_grid.hpp"
-#include "sand/tin_region.hpp"
+#include "sand/stroke_tin.hpp"
 #include "sand/tin_sand_tool.hpp"
 #include "terrain/mesh_patch.hpp"
 #include "terrain/terrain.hpp"
@@ -245,8 +245,8 @@ TEST(TinSandGlued, ATubesRegionPatchLiesOnTheTube) {
     const sand::SandGrid cells(c.chart);
     const core::GridPoint at = c.special[c.name == "cylinder" ? 0 : 2];  // on the u seam
     (void)stampAt(t, pipe, tool, cells, at, c.radius);
-    ASSERT_NE(tool.region(), nullptr);
-    const sand::TinRegion& region = *tool.region();
+    ASSERT_NE(tool.strokeTin(), nullptr);
+    const sand::StrokeTin& region = *tool.strokeTin();
     const terrain::MeshPatch p = region.patch();
     EXPECT_FALSE(p.plane.has_value());
     const tin::Tin tin = region.sand().tin().toTin();

@@ -30,7 +30,7 @@ sand::TinSandToolSettings settings(double radius, int segments = 24, double regi
 }
 
 Eigen::Vector3d above(const core::Chart& chart, double latDeg, double lonDeg, double h) {
-  return edittest::latLon(latDeg, lonDeg, chart.radius() + h, 1.0);
+  return edittest::latLon(latDeg, lonDeg, chart.sphereRadius() + h, 1.0);
 }
 
 TEST(TinSandTool, PressesAFlatBoxKeepingItsVolumeAndUndoesBitForBit) {

@@ -186,7 +186,7 @@ TEST(TorusAndCylinder, MapsTheGridOntoTheSurfaceAndBack) {
       ASSERT_LT((c.positionAt(uv->x(), uv->y(), 0) - p).norm(), 1e-6) << k.name;
     }
     EXPECT_FALSE(c.inverse(Eigen::Vector3d(0, 0, 5.0)));  // on the axis
-    EXPECT_EQ(c.radius(), 0.0);  // no sphere about the origin: no horizon occluder
+    EXPECT_EQ(c.sphereRadius(), 0.0);  // no sphere about the origin: no horizon occluder
     EXPECT_EQ(c.heightLimit(), 0.25 * r0);
   }
   const core::TorusChart t(core::GridSize(5), kMajor, kMinor);
@@ -285,7 +285,7 @@ TEST(TorusAndCylinder, LocalBoundUpdatesEqualAFullRebuildBitForBit) {
       if (trial % 5 == 2) u0 = -w / 2;             // across the u seam (unwrapped)
       if (trial % 5 == 3) u0 = m - w / 2, v0 = 0;  // at the corner: across both seams
       v0 = std::clamp(v0, 0, m - hgt);
-      const terrain::GridRegion region{u0, u0 + w, v0, v0 + hgt};
+      const terrain::VertexBox region{u0, u0 + w, v0, v0 + hgt};
       auto h = t.mutableHeights();
       const float bump = float(50 + rng() % 400);
       region.forEachColumnRange(g, [&](int a, int b) {

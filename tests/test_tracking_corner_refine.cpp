@@ -11,7 +11,7 @@
 #include "tracking/corner_refine.hpp"
 #include "tracking/detector.hpp"
 #include "tracking/marker_family.hpp"
-#include "tracking/render.hpp"
+#include "tracking/textured_quad.hpp"
 
 using namespace ps;
 

@@ -16,8 +16,8 @@
 #include "tracking/detector.hpp"
 #include "tracking/marker_family.hpp"
 #include "tracking/marker_layout.hpp"
-#include "tracking/render.hpp"
 #include "tracking/synth.hpp"
+#include "tracking/textured_quad.hpp"
 
 using namespace ps;
 using tracking::Backend;

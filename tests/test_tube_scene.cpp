@@ -159,7 +159,7 @@ TEST(TubeScene, CylinderEndsAndDegeneratePoints) {
 // hypot(radius, length / 2). Every frame's tip height is the surface contact's, scaled.
 TEST(TubeScene, StepperScalesByTheBoundingSphereAndMeasuresTheTipsHeight) {
   const auto ll = std::make_shared<core::LatLongChart>(core::GridSize(6), 6372790.0);
-  EXPECT_EQ(core::boundingRadius(*ll), ll->radius());
+  EXPECT_EQ(core::boundingRadius(*ll), ll->sphereRadius());
   for (const auto& tube : tubes(7)) {
     SCOPED_TRACE(tube.name);
     terrain::Terrain t = withRelief(tube.chart);

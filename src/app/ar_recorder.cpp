@@ -74,7 +74,7 @@ void ArRecorder::onFrame(const replay::FrameContext& f, const Eigen::Vector3d& f
     // patch's overlap ring (docs/RENDERING.md: no background through the join without skirts).
     const auto& mesh =
         spliced_.view(tessellator_.tessellate(f.planet, cam, ts), f.patch, f.planet.chart());
-    tinRegionFrames_ += f.patch ? 1 : 0;
+    strokeTinFrames_ += f.patch ? 1 : 0;
     render::RenderStyle style;
     style.wireframe = settings_.wireframe;
     // The board's frame in the planet's: the planet frame is the board's turned by the user's

@@ -51,7 +51,7 @@ class ArRecorder {
   std::string renderer() const { return context_.renderer(); }
   double renderMsTotal() const { return renderMs_; }
   // Frames rendered with the sand TIN's region spliced in (FrameContext::patch).
-  int tinRegionFrames() const { return tinRegionFrames_; }
+  int strokeTinFrames() const { return strokeTinFrames_; }
   int handMaskFrames() const { return handMaskFrames_; }
 
  private:
@@ -65,7 +65,7 @@ class ArRecorder {
   // Frames whose AR view showed the camera image over part of the planet (a hand in front).
   int handMaskFrames_ = 0;
   int written_ = 0;
-  int tinRegionFrames_ = 0;
+  int strokeTinFrames_ = 0;
   double renderMs_ = 0;
   // The current touching run's frames and the best (longest) run's middle frame.
   std::vector<std::pair<cv::Mat, cv::Mat>> run_;

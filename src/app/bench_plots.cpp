@@ -12,11 +12,6 @@ namespace ps::app {
 
 namespace {
 
-double num(const nlohmann::json& j, const char* key) {
-  const auto it = j.find(key);
-  return it != j.end() && it->is_number() ? it->get<double>() : std::nan("");
-}
-
 std::string str(const nlohmann::json& j, const char* key) {
   const auto it = j.find(key);
   return it != j.end() && it->is_string() ? it->get<std::string>() : "";
@@ -48,7 +43,7 @@ PlotSeries series(const std::string& label, const std::vector<nlohmann::json>& r
   s.colour = seriesColour(colour);
   s.lines = lines;
   std::vector<std::pair<double, double>> pts;
-  for (const auto& r : rs) pts.emplace_back(num(r, x), num(r, y));
+  for (const auto& r : rs) pts.emplace_back(jsonNumber(r, x), jsonNumber(r, y));
   if (lines) std::sort(pts.begin(), pts.end());
   for (const auto& [a, b] : pts) s.x.push_back(a), s.y.push_back(b);
   return s;
@@ -99,7 +94,7 @@ void tessellationPlots(const std::vector<nlohmann::json>& records, const SavePlo
       tris.series.push_back(
           series(tess[i].first, tess[i].second, "max_screen_error_px", "triangles", i));
       for (const auto& r : tess[i].second) {
-        lo = std::min(lo, num(r, "dist_max")), hi = std::max(hi, num(r, "dist_max"));
+        lo = std::min(lo, jsonNumber(r, "dist_max")), hi = std::max(hi, jsonNumber(r, "dist_max"));
       }
     }
     err.series.push_back(bound("bound: error = dist_max", lo, hi));
@@ -141,7 +136,7 @@ void exportPlots(const std::vector<nlohmann::json>& records, const SavePlot& sav
   const auto exp = groups(
       records, "export",
       [](const auto& r) {
-        const double threads = num(r, "threads");
+        const double threads = jsonNumber(r, "threads");
         return str(r, "tool") + (threads > 1 ? " 2 threads " : " ") + str(r, "heightmap");
       },
       [](const auto& r) {
@@ -159,8 +154,8 @@ void exportPlots(const std::vector<nlohmann::json>& records, const SavePlot& sav
       err.series.push_back(
           series(exp[i].first, exp[i].second, "requested_error_m", "true_error_m", i));
       for (const auto& r : exp[i].second) {
-        lo = std::min(lo, num(r, "requested_error_m"));
-        hi = std::max(hi, num(r, "requested_error_m"));
+        lo = std::min(lo, jsonNumber(r, "requested_error_m"));
+        hi = std::max(hi, jsonNumber(r, "requested_error_m"));
       }
     }
     err.series.push_back(bound("bound (planetsculpt): true <= requested", lo, hi));
@@ -192,8 +187,8 @@ void erosionPlots(const std::vector<nlohmann::json>& records, const SavePlot& sa
     for (std::size_t i = 0; i < ero.size(); ++i) {
       auto rs = ero[i].second;
       for (auto& r : rs) {
-        r["mcs"] = num(r, "cell_steps_per_s") / 1e6;
-        r["drift_shown"] = std::max(std::abs(num(r, "volume_drift")), 1e-17);
+        r["mcs"] = jsonNumber(r, "cell_steps_per_s") / 1e6;
+        r["drift_shown"] = std::max(std::abs(jsonNumber(r, "volume_drift")), 1e-17);
       }
       rate.series.push_back(series(ero[i].first, rs, "threads", "mcs", i));
       drift.series.push_back(series(ero[i].first, rs, "ms_per_step", "drift_shown", i, false));
@@ -212,7 +207,8 @@ void erosionPlots(const std::vector<nlohmann::json>& records, const SavePlot& sa
     double lo = 1e30, hi = 0;
     for (const auto& g : ero)
       for (const auto& r : g.second)
-        lo = std::min(lo, num(r, "ms_per_step")), hi = std::max(hi, num(r, "ms_per_step"));
+        lo = std::min(lo, jsonNumber(r, "ms_per_step")),
+        hi = std::max(hi, jsonNumber(r, "ms_per_step"));
     limit.x = {lo, hi};
     limit.y = {1e-9, 1e-9};
     drift.series.push_back(limit);
@@ -247,6 +243,11 @@ void trackingPlots(const std::vector<nlohmann::json>& records, const SavePlot& s
 }
 
 }  // namespace
+
+double jsonNumber(const nlohmann::json& record, const char* key) {
+  const auto it = record.find(key);
+  return it != record.end() && it->is_number() ? it->get<double>() : std::nan("");
+}
 
 std::vector<std::filesystem::path> writeBenchPlots(const std::vector<nlohmann::json>& records,
                                                    const std::filesystem::path& dir) {

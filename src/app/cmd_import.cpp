@@ -54,7 +54,8 @@ int runImport(const ImportArgs& a) {
   const auto [lo, hi] = std::minmax_element(r.planet.heights.begin(), r.planet.heights.end());
   std::cout << "wrote " << a.output << ": " << r.planet.chart->name() << " planet, "
             << r.planet.chart->grid().label() << " grid, heights " << *lo << " .. " << *hi << " m";
-  if (r.planet.chart->radius() > 0) std::cout << ", radius " << r.planet.chart->radius() << " m";
+  if (r.planet.chart->sphereRadius() > 0)
+    std::cout << ", radius " << r.planet.chart->sphereRadius() << " m";
   if (r.noDataPixels > 0) std::cout << ", " << r.noDataPixels << " no-data pixels filled";
   std::cout << "\n";
   return 0;

@@ -1,5 +1,5 @@
-// `planetsculpt overlay TERRAIN TRACK.obj --mode stitch|stencil --error E --out FILE`: a track
-// (a triangle mesh: a road, a path) stitched or stenciled into the terrain's TIN (paper 001).
+// `planetsculpt overlay TERRAIN ROAD.obj --mode stitch|stencil --error E --out FILE`: a road
+// (any triangle mesh: a road, a path) stitched or stenciled into the terrain's TIN (paper 001).
 #include <iostream>
 #include <memory>
 #include <sstream>
@@ -13,7 +13,7 @@ namespace ps::app {
 namespace {
 
 struct OverlayArgs {
-  std::string terrain, track, output, mode = "stitch", at, format, encoding = "stored";
+  std::string terrain, road, output, mode = "stitch", at, format, encoding = "stored";
   std::optional<double> error, spacing, scale, offset;
 };
 
@@ -61,7 +61,7 @@ int runOverlay(const OverlayArgs& a) {
       a.format.empty() ? io::exportFormatFromPath(a.output) : io::exportFormatFromName(a.format);
   std::vector<std::string> notes;
   const nlohmann::json summary =
-      io::overlayFromFiles(a.terrain, heightmap, a.track, a.output, format, o, notes);
+      io::overlayFromFiles(a.terrain, heightmap, a.road, a.output, format, o, notes);
   for (const auto& note : notes) std::cerr << "overlay: " << a.terrain << ": " << note << "\n";
   std::cout << summary.dump() << "\n";
   return 0;
@@ -70,28 +70,26 @@ int runOverlay(const OverlayArgs& a) {
 const CommandRegistration kOverlay([](CLI::App& root, CLI::App*& sub) -> CommandAction {
   auto a = std::make_shared<OverlayArgs>();
   sub = root.add_subcommand("overlay",
-                            "Stitch or stencil a track (a triangle mesh OBJ) into a terrain's TIN");
+                            "Stitch or stencil a road (a triangle mesh OBJ) into a terrain's TIN");
   sub->add_option("terrain", a->terrain,
                   "Planet file, a heightmap (its own samples), or a flat terrain mesh (.obj, as "
                   "`export --tin` writes for a heightmap: kept as it is)")
       ->required();
-  sub->add_option("track", a->track,
-                  "Track mesh (OBJ triangles): x, y metres in its own frame, z height above the "
+  sub->add_option("road", a->road,
+                  "Road mesh (OBJ triangles): x, y metres in its own frame, z height above the "
                   "terrain's datum (stencil keeps it; stitch takes the terrain's)")
       ->required();
-  sub->add_option("--out", a->output,
-                  "Output mesh (.obj with groups terrain and track, .ply, .glb)")
+  sub->add_option("--out", a->output, "Output mesh (.obj with groups terrain and road, .ply, .glb)")
       ->required();
-  sub->add_option(
-         "--mode", a->mode,
-         "stitch (every edge of both kept, split where they cross, heights from the "
-         "terrain) or stencil (the track's geometry kept, the terrain re-meshed around it)")
+  sub->add_option("--mode", a->mode,
+                  "stitch (every edge of both kept, split where they cross, heights from the "
+                  "terrain) or stencil (the road's geometry kept, the terrain re-meshed around it)")
       ->capture_default_str();
   sub->add_option(
       "--error", a->error,
-      "The terrain TIN's largest error in metres (the stencil keeps it around the track)");
+      "The terrain TIN's largest error in metres (the stencil keeps it around the road)");
   sub->add_option("--at", a->at,
-                  "Planets: LAT,LON[,HEADING] in degrees of the track's origin (heading of its +y "
+                  "Planets: LAT,LON[,HEADING] in degrees of the road's origin (heading of its +y "
                   "axis, clockwise from north); flat terrains: X,Y[,HEADING] in metres (default "
                   "0,0,0)");
   sub->add_option("--format", a->format, "obj | ply | glb (overrides the extension)");

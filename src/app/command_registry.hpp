@@ -1,5 +1,5 @@
 #pragma once
-// Subcommands register themselves (one static CommandRegistration per cmd_*.cpp), so adding a
+// Subcommands register themselves (static CommandRegistrations in each cmd_*.cpp), so adding a
 // command never touches main.cpp. A registrar adds its CLI11 subcommand and returns the action
 // to run when that subcommand was chosen; the action returns the process exit code.
 #include <CLI/CLI.hpp>

@@ -1,7 +1,6 @@
 #include "app/default_planet.hpp"
 
 #include <cmath>
-#include <sstream>
 
 #include "app/progress.hpp"
 #include "core/input_error.hpp"
@@ -12,10 +11,7 @@ namespace ps::app {
 namespace {
 
 std::string metres(double v) {
-  std::ostringstream s;
-  s.precision(10);
-  s << v << " m";
-  return s.str();
+  return core::formatNumber(v, 10) + " m";
 }
 
 double positive(const std::optional<double>& v, double fallback, const std::string& option) {

@@ -72,7 +72,7 @@ std::vector<double> ticks(const Axis& a) {
   return t;
 }
 
-void drawPanel(cv::Mat img, const PlotPanel& p) {
+void drawPlotPanel(cv::Mat img, const PlotPanel& p) {
   const int W = img.cols, H = img.rows;
   const int left = 70, right = 16, top = 44, bottom = 52;
   const cv::Rect box(left, top, W - left - right, H - top - bottom);
@@ -144,7 +144,7 @@ cv::Mat drawPlots(const std::vector<PlotPanel>& panels, int width, int height) {
   cv::Mat img(height, width * int(std::max<std::size_t>(1, panels.size())), CV_8UC3,
               cv::Scalar::all(255));
   for (std::size_t i = 0; i < panels.size(); ++i)
-    drawPanel(img(cv::Rect(int(i) * width, 0, width, height)), panels[i]);
+    drawPlotPanel(img(cv::Rect(int(i) * width, 0, width, height)), panels[i]);
   return img;
 }
 

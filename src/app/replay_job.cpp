@@ -49,7 +49,7 @@ struct Change {
 Change findChange(const terrain::Terrain& t, const std::vector<float>& before, int w, int h) {
   Change c;
   const int side = t.grid().side(), m = t.grid().m();
-  const bool byDirection = t.chart().radius() > 0 && !t.chart().hasPoleRows();
+  const bool byDirection = t.chart().sphereRadius() > 0 && !t.chart().hasPoleRows();
   int x0 = w, x1 = -1, y0 = h, y1 = -1;
   const auto now = t.heights();
   for (int v = 0; v < side; ++v) {
@@ -81,7 +81,7 @@ terrain::Camera viewOf(const terrain::Terrain& t, int u, int v) {
   if (east.norm() < 1e-6) east = Eigen::Vector3d::UnitX();
   east.normalize();
   const Eigen::Vector3d north = up.cross(east);
-  const double R = t.chart().radius();
+  const double R = t.chart().sphereRadius();
   if (!(R > 0)) {  // a torus or a cylinder: the same view about the vertex's own normal
     const Eigen::Vector3d target = t.chart().position(u, v, t.height(u, v));
     const Eigen::Vector3d eye =
@@ -97,8 +97,8 @@ terrain::Camera viewOf(const terrain::Terrain& t, int u, int v) {
 // The planet's heights as a picture's raster: a sphere's equirectangular, a torus's or a
 // cylinder's own (u, v) grid (io::resampleTube; the relief and the close-up read it alike).
 io::Raster pictureRaster(const terrain::Terrain& planet, int w, int h) {
-  return planet.chart().radius() > 0 ? io::resampleEquirectangular(planet, w, h)
-                                     : io::resampleTube(planet, w, h);
+  return planet.chart().sphereRadius() > 0 ? io::resampleEquirectangular(planet, w, h)
+                                           : io::resampleTube(planet, w, h);
 }
 
 cv::Mat labelled(cv::Mat img, const std::string& text) {
@@ -264,7 +264,7 @@ void writeReliefPictures(const ReplayJob& job, const terrain::Terrain& planet,
   const int w = kPictureW, h = kPictureH;
   // Metres per pixel along the picture's rows: half a great circle over h on a sphere; on a
   // torus or a cylinder its circumference round the axis over w (the hill shading's scale).
-  const double R = planet.chart().radius();
+  const double R = planet.chart().sphereRadius();
   const double mpp = R > 0 ? std::numbers::pi * R / h
                            : 2 * std::numbers::pi * core::dimsOf(planet.chart()).radius / w;
   const cv::Mat after = io::reliefImage(pictureRaster(planet, w, h), mpp);
@@ -492,8 +492,8 @@ void addRecorderOutputs(const ReplayJob& job, ArRecorder* recorder, const std::s
   }
   summary["renderer"] = recorder->renderer();
   summary["render_ms"] = recorder->renderMsTotal();
-  if (recorder->tinRegionFrames() > 0)
-    summary["ar_tin_region_frames"] = recorder->tinRegionFrames();
+  if (recorder->strokeTinFrames() > 0)
+    summary["ar_stroke_tin_frames"] = recorder->strokeTinFrames();
   // AR frames drawn with the camera image over part of the planet (a hand in front of it).
   summary["ar_hand_mask_frames"] = recorder->handMaskFrames();
   if (job.render) {

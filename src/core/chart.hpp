@@ -25,7 +25,7 @@ struct Gluing {
   SideGluing vSides;  // the sides v = 0 and v = m
 };
 
-// An inclusive box of grid vertices; u may be unwrapped across a u seam (terrain::GridRegion's
+// An inclusive box of grid vertices; u may be unwrapped across a u seam (terrain::VertexBox's
 // convention: uBegin < 0 or uEnd > m continue on the other side).
 struct GridBox {
   int uBegin = 0, uEnd = -1, vBegin = 0, vEnd = -1;
@@ -204,15 +204,18 @@ class Chart {
   }
 
   // The radius of the sphere about the origin that the surface is at height 0, heights measured
-  // from it; 0 where the surface is no such sphere (the flat chart, the torus, the cylinder).
-  // Layers read radius() > 0 as "a sphere about the origin": the tessellator's horizon occluder
-  // (a solid ball of radius() + the lowest height), great-circle stroke paths, radial up in the
-  // renderer, the planet's shadow; a torus or an open tube has no such ball, so they say 0 and
-  // give their own lengths (TorusChart::minorRadius, CylinderChart::tubeRadius).
-  virtual double radius() const = 0;
+  // from it (lat-long, octahedral); 0 where the surface is no such sphere (the flat chart, the
+  // torus, the cylinder). It is no size of the planet: a torus's or a cylinder's 0 says "not a
+  // sphere", not "small". Layers read sphereRadius() > 0 as "a sphere about the origin": the
+  // tessellator's horizon occluder (a solid ball of sphereRadius() + the lowest height),
+  // great-circle stroke paths, radial up in the renderer, the planet's shadow, LAT LON points of
+  // a stroke script; a torus or an open tube has no such ball. What needs a size on every chart
+  // takes core::boundingRadius (chart_factory.hpp) or the shape's own lengths
+  // (TorusChart::majorRadius/minorRadius, CylinderChart::tubeRadius/length).
+  virtual double sphereRadius() const = 0;
   // Heights beyond +-heightLimit() are refused on load and saturate in edits. A sphere's is a
-  // quarter of its radius (relief beyond that is not terrain); charts without a radius override.
-  virtual double heightLimit() const { return 0.25 * radius(); }
+  // quarter of its radius (relief beyond that is not terrain); charts that are no sphere override.
+  virtual double heightLimit() const { return 0.25 * sphereRadius(); }
 
  protected:
   explicit Chart(GridSize grid) : grid_(grid) {}

@@ -51,7 +51,7 @@ ChartDims dimsOf(const Chart& chart) {
     d.radius = tube->tubeRadius();
     d.length = tube->length();
   } else {
-    d.radius = chart.radius();
+    d.radius = chart.sphereRadius();
   }
   return d;
 }
@@ -61,7 +61,7 @@ double boundingRadius(const Chart& chart) {
     return torus->majorRadius() + torus->minorRadius();
   if (const auto* tube = dynamic_cast<const CylinderChart*>(&chart))
     return std::hypot(tube->tubeRadius(), 0.5 * tube->length());
-  return chart.radius();  // a sphere's radius, the flat chart's 0
+  return chart.sphereRadius();  // a sphere's radius, the flat chart's 0
 }
 
 }  // namespace ps::core

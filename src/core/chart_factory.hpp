@@ -50,7 +50,7 @@ ChartShape shapeOf(const Chart& chart);
 ChartDims dimsOf(const Chart& chart);
 
 // The radius of the smallest sphere about the origin that holds the surface at height 0: a
-// sphere's radius() (the same double), a torus's major + minor radius, a cylinder's
+// sphere's sphereRadius() (the same double), a torus's major + minor radius, a cylinder's
 // hypot(radius, length / 2); 0 for the flat chart (no centre). What the AR scene sizes a planet
 // by (its displayed radius, `--planet-radius`) and what the overview camera stands back from.
 double boundingRadius(const Chart& chart);

@@ -13,7 +13,7 @@ namespace ps::core {
 // welded mesh's only border edges). m (m + 1) distinct points, an annulus: Euler
 // characteristic 0.
 //
-// radius() is 0, as the torus's (core/torus_chart.hpp): an open tube is no sphere about the
+// sphereRadius() is 0, as the torus's (core/torus_chart.hpp): an open tube is no sphere about the
 // origin, and its inside is seen through its ends, so no ball about the origin is a solid
 // occluder. The lengths are tubeRadius() and length(); heights are limited to a quarter of the
 // tube's radius.
@@ -59,7 +59,7 @@ class CylinderChart final : public Chart {
   std::optional<Eigen::Vector2d> inverse(const Eigen::Vector3d& p) const override;
   bool wrapsU() const override { return true; }
   bool hasPoleRows() const override { return false; }
-  double radius() const override { return 0.0; }
+  double sphereRadius() const override { return 0.0; }
   double heightLimit() const override { return 0.25 * radius_; }
 
   double tubeRadius() const { return radius_; }

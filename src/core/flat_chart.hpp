@@ -6,7 +6,7 @@ namespace ps::core {
 // A flat heightmap (a terrain tile, paper 001's setting): grid vertex (u, v) sits at
 // (u * dx, v * dy) in the plane z = 0 and a height displaces it along +z:
 //   position = (u * dx, v * dy, h),   up = (0, 0, 1).
-// No seam (wrapsU() is false), no pole rows, radius() is 0. Triangles that are CCW in (u, v)
+// No seam (wrapsU() is false), no pole rows, sphereRadius() is 0. Triangles that are CCW in (u, v)
 // face +z. When a flat chart comes from an image, row 0 of the image is v = m (north up).
 class FlatChart final : public Chart {
  public:
@@ -36,7 +36,7 @@ class FlatChart final : public Chart {
   std::optional<Eigen::Vector2d> inverse(const Eigen::Vector3d& p) const override;
   bool wrapsU() const override { return false; }
   bool hasPoleRows() const override { return false; }
-  double radius() const override { return 0.0; }
+  double sphereRadius() const override { return 0.0; }
 
   // Heights are refused (and edits saturate) beyond +-kHeightLimit metres: a flat chart has no
   // radius to take a quarter of, so it names its own limit.

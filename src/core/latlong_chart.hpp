@@ -43,7 +43,7 @@ class LatLongChart final : public Chart {
   std::optional<Eigen::Vector2d> inverse(const Eigen::Vector3d& p) const override;
   bool wrapsU() const override { return true; }
   bool hasPoleRows() const override { return true; }
-  double radius() const override { return radius_; }
+  double sphereRadius() const override { return radius_; }
 
   // Unit direction of grid vertex (u, v); exact at the poles and on the seam.
   Eigen::Vector3d direction(int u, int v) const {

@@ -45,7 +45,7 @@ class OctahedralChart final : public Chart {
   Gluing gluing() const override { return {SideGluing::kMirror, SideGluing::kMirror}; }
   GridPoint canonical(int u, int v) const override;
   int twins(int u, int v, GridPoint out[4]) const override;
-  double radius() const override { return radius_; }
+  double sphereRadius() const override { return radius_; }
   Mapping mapping() const { return mapping_; }
 
   // Unit direction of grid vertex (u, v), computed at its canonical vertex, so that the grid

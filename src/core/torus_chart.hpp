@@ -14,10 +14,10 @@ namespace ps::core {
 // translation (a seam, as lat-long's), rows 0 and m likewise; the four corners are one point.
 // m^2 distinct points, Euler characteristic 0.
 //
-// radius() is 0: the surface is no sphere about the origin, and the layers that read radius() >
-// 0 as one (the tessellator's horizon occluder, great-circle strokes) must not treat the hole's
-// ball as solid. The lengths are majorRadius() and minorRadius(); heights are limited to a
-// quarter of the minor radius.
+// sphereRadius() is 0: the surface is no sphere about the origin, and the layers that read
+// sphereRadius() > 0 as one (the tessellator's horizon occluder, great-circle strokes) must not
+// treat the hole's ball as solid. The lengths are majorRadius() and minorRadius(); heights are
+// limited to a quarter of the minor radius.
 //
 // Per-column and per-row sines and cosines are tabulated, symmetric bit for bit (entry m is
 // entry 0, entry m - k mirrors entry k), so twins are one point bit for bit and the grid's
@@ -72,7 +72,7 @@ class TorusChart final : public Chart {
     return {u == m ? 0 : u, v == m ? 0 : v};
   }
   int twins(int u, int v, GridPoint out[4]) const override;
-  double radius() const override { return 0.0; }
+  double sphereRadius() const override { return 0.0; }
   double heightLimit() const override { return 0.25 * minor_; }
 
   double majorRadius() const { return major_; }

@@ -114,15 +114,15 @@ struct SetToward {
 };
 
 // The seam-wrapped rectangle of the columns within folded distance k of column uc, rows v0..v1.
-terrain::GridRegion symmetricBounds(int uc, int k, int v0, int v1, int m) {
-  terrain::GridRegion r{0, m, v0, v1};
+terrain::VertexBox symmetricBounds(int uc, int k, int v0, int v1, int m) {
+  terrain::VertexBox r{0, m, v0, v1};
   if (2 * k + 1 >= m) return r;
   r.uBegin = uc - k;
   r.uEnd = uc + k;
   if (r.uEnd >= m) r.uBegin -= m, r.uEnd -= m;  // wrap through u = m / 0: both twins included
   if (r.uBegin == 0) {                          // column 0 without wrapping: name u = m as well
     if (r.uEnd == 0) {
-      r.uBegin = -1;  // {0, m} alone has no GridRegion: take m - 1 too
+      r.uBegin = -1;  // {0, m} alone has no VertexBox: take m - 1 too
     } else {
       r.uBegin = m, r.uEnd += m;  // u = m, then 0 .. uEnd
     }
@@ -134,8 +134,8 @@ terrain::GridRegion symmetricBounds(int uc, int k, int v0, int v1, int m) {
 // (bitwise): far out, where the Gaussian is below half a float step, heights stay as they were
 // and the bounds above them need no update.
 template <class Op>
-terrain::GridRegion applyRows(const ToolContext& ctx, const GaussianProfile& profile, double amount,
-                              const Op& op, std::span<float> heights) {
+terrain::VertexBox applyRows(const ToolContext& ctx, const GaussianProfile& profile, double amount,
+                             const Op& op, std::span<float> heights) {
   const Region& region = ctx.region;
   const DistanceField& field = ctx.field;
   const core::GridSize g = field.grid();
@@ -236,7 +236,7 @@ terrain::GridRegion applyRows(const ToolContext& ctx, const GaussianProfile& pro
     last = v;
     kMax = std::max(kMax, k);
   }
-  if (first < 0) return terrain::GridRegion::none();
+  if (first < 0) return terrain::VertexBox::none();
   if (field.latLong() && region.symmetric()) {
     return symmetricBounds(region.centreU(), kMax, first, last, g.m());
   }
@@ -246,7 +246,7 @@ terrain::GridRegion applyRows(const ToolContext& ctx, const GaussianProfile& pro
   // box; whether a float changed is not (a small amount rounds away on a large height and not
   // on a small one), so the box is kept whole there (found by StressEdits.RandomBrushActions
   // OnTheOctahedralChartKeepEveryInvariant).
-  terrain::GridRegion r = region.bounds();
+  terrain::VertexBox r = region.bounds();
   if (!ctx.terrain.chart().gluesSidesBeyondSeam() &&
       std::max(r.vBegin, first) <= std::min(r.vEnd, last)) {
     r.vBegin = std::max(r.vBegin, first);
@@ -257,14 +257,14 @@ terrain::GridRegion applyRows(const ToolContext& ctx, const GaussianProfile& pro
 
 }  // namespace
 
-terrain::GridRegion GaussianBrush::apply(const ToolContext& ctx, std::span<float> heights) const {
+terrain::VertexBox GaussianBrush::apply(const ToolContext& ctx, std::span<float> heights) const {
   settings_.validate();
   const GaussianProfile profile(settings_.radius, settings_.sigma, settings_.mu);
   // Capped so that amount * shape can overflow to inf (which clamps) but never be inf * 0 = NaN.
   const double amount =
       std::min(settings_.rate ? settings_.strength * ctx.input.dt : settings_.strength,
                std::numeric_limits<double>::max());
-  if (ctx.region.empty()) return terrain::GridRegion::none();
+  if (ctx.region.empty()) return terrain::VertexBox::none();
   switch (settings_.mode) {
     case BrushMode::kRaise:
       return applyRows(ctx, profile, amount, Raise{}, heights);

@@ -89,7 +89,7 @@ class GaussianBrush final : public Tool {
   double radius() const override { return settings_.radius; }
   double spacing() const override { return settings_.spacing * settings_.radius; }
   bool rateBased() const override { return settings_.rate; }
-  terrain::GridRegion apply(const ToolContext& ctx, std::span<float> heights) const override;
+  terrain::VertexBox apply(const ToolContext& ctx, std::span<float> heights) const override;
 
  private:
   BrushSettings settings_;

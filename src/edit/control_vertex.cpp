@@ -70,7 +70,7 @@ core::GridPoint nearestVertex(const core::Chart& chart, const Eigen::Vector3d& p
   if (const auto* ll = dynamic_cast<const core::LatLongChart*>(&chart)) {
     // Only the direction matters: rescale so that neither tiny nor huge |p| over- or underflows.
     const double scale = p.cwiseAbs().maxCoeff();
-    if (!(scale > 0.0) || p.norm() < 1e-12 * chart.radius()) throw atCentre();
+    if (!(scale > 0.0) || p.norm() < 1e-12 * chart.sphereRadius()) throw atCentre();
     const Eigen::Vector3d q = p / scale;
     const auto uv = chart.inverse(q);
     if (!uv) throw atCentre();

@@ -14,7 +14,7 @@ DistanceField::DistanceField(std::shared_ptr<const core::Chart> chart)
   if (!chart_) throw core::InputError("distance field needs a chart");
   latLong_ = dynamic_cast<const core::LatLongChart*>(chart_.get());
   m_ = grid_.m();
-  radius_ = chart_->radius();
+  radius_ = chart_->sphereRadius();
   r2_ = radius_ * radius_;
   if (latLong_) {
     z_.resize(std::size_t(m_) + 1);

@@ -25,11 +25,10 @@ double ms(Clock::time_point a, Clock::time_point b) {
 // is in the footprint and in one of the images, so in that image's cut. On the octahedral
 // chart a disc about a pole is a triangle in each image, or a diamond, half its box. Open cuts
 // without a footprint, and on charts with a u seam (their columns wrap).
-std::vector<terrain::CutRegion> cutImages(const core::Chart& chart,
-                                          const terrain::GridRegion& dirty,
-                                          const Region* footprint) {
-  std::vector<terrain::CutRegion> out;
-  for (const terrain::GridRegion& box : terrain::gluedImages(chart, dirty)) {
+std::vector<terrain::CutBox> cutImages(const core::Chart& chart, const terrain::VertexBox& dirty,
+                                       const Region* footprint) {
+  std::vector<terrain::CutBox> out;
+  for (const terrain::VertexBox& box : terrain::gluedImages(chart, dirty)) {
     terrain::Diagonals cut;
     if (footprint && !chart.wrapsU()) {
       cut = terrain::Diagonals::nothing();
@@ -137,7 +136,7 @@ EditReport EditPipeline::stamp(const Tool& tool, const ToolInput& input) {
     });
   }
   const auto t2 = Clock::now();
-  const terrain::GridRegion dirty = tool.apply(ctx, heights);
+  const terrain::VertexBox dirty = tool.apply(ctx, heights);
   enforceConsistency(chart, heights, dirty);
   const auto t3 = Clock::now();
   if (undoEnabled_) journal_.recordStamp(*footprint, snapshot_, heights, g, dirty, chart.wrapsU());
@@ -217,14 +216,14 @@ StrokeReport EditPipeline::moveTo(const ToolInput& sample) {
 }
 
 double EditPipeline::pathLength(const Eigen::Vector3d& a, const Eigen::Vector3d& b) const {
-  const double R = terrain_.chart().radius();
+  const double R = terrain_.chart().sphereRadius();
   if (R > 0.0) return R * std::atan2(a.cross(b).norm(), a.dot(b));
   return (b - a).norm();
 }
 
 Eigen::Vector3d EditPipeline::pathAt(const Eigen::Vector3d& a, const Eigen::Vector3d& b,
                                      double t) const {
-  const double R = terrain_.chart().radius();
+  const double R = terrain_.chart().sphereRadius();
   // The distance from the centre is interpolated too: a tool held above or below the surface
   // (the displacement sphere) keeps its altitude along the stroke.
   if (R > 0.0)

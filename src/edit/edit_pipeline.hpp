@@ -8,8 +8,8 @@
 #include "edit/region_growing.hpp"
 #include "edit/tool.hpp"
 #include "edit/undo_journal.hpp"
-#include "terrain/grid_region.hpp"
 #include "terrain/terrain.hpp"
+#include "terrain/vertex_box.hpp"
 
 namespace ps::edit {
 
@@ -19,7 +19,7 @@ struct EditReport {
   std::size_t modifiedVertices =
       0;  // |V_d| in grid entries (seam twins and pole-row entries counted)
   std::size_t modifiedPoints = 0;  // |V_d| in distinct points of the sphere
-  terrain::GridRegion dirty;       // what the bounds update was told
+  terrain::VertexBox dirty;        // what the bounds update was told
   std::size_t boundsVertices = 0;  // bound vertices the update recomputed
   double growMs = 0;               // control vertex + region growing
   double heightsMs = 0;            // the tool + seam/pole consistency

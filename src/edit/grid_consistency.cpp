@@ -17,7 +17,7 @@ void applyToVertex(const core::Chart& chart, std::span<float> heights, int u, in
 }
 
 void enforceConsistency(const core::Chart& chart, std::span<float> heights,
-                        const terrain::GridRegion& region) {
+                        const terrain::VertexBox& region) {
   if (region.empty()) return;
   const core::GridSize g = chart.grid();
   const int m = g.m();

@@ -2,7 +2,7 @@
 #include <span>
 
 #include "core/chart.hpp"
-#include "terrain/grid_region.hpp"
+#include "terrain/vertex_box.hpp"
 
 namespace ps::edit {
 
@@ -17,6 +17,6 @@ void applyToVertex(const core::Chart& chart, std::span<float> heights, int u, in
 // torus's v seam) the region's side vertices give their height to their twins. O(rows + m). The
 // edit pipeline runs it after every tool.
 void enforceConsistency(const core::Chart& chart, std::span<float> heights,
-                        const terrain::GridRegion& region);
+                        const terrain::VertexBox& region);
 
 }  // namespace ps::edit

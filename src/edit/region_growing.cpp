@@ -255,7 +255,7 @@ void Region::clear() {
   spans_.clear();
   halfWidth_.clear();
   vertexCount_ = pointCount_ = 0;
-  bounds_ = terrain::GridRegion::none();
+  bounds_ = terrain::VertexBox::none();
   symmetric_ = false;
   centreU_ = 0;
 }
@@ -288,14 +288,14 @@ void Region::clipRows(int vFirst, int vLast) {
   for (int v = std::max(vBegin_, vFirst); v <= std::min(vEnd_, vLast); ++v)
     if (!row(v).empty()) a = std::min(a, v), z = std::max(z, v);
   if (a > z) {
-    bounds_ = terrain::GridRegion::none();
+    bounds_ = terrain::VertexBox::none();
     return;
   }
   bounds_.vBegin = a, bounds_.vEnd = z;
 }
 
-void Region::clipBounds(const terrain::GridRegion& box) {
-  terrain::GridRegion b{box.uEnd + 1, box.uBegin - 1, box.vEnd + 1, box.vBegin - 1};
+void Region::clipBounds(const terrain::VertexBox& box) {
+  terrain::VertexBox b{box.uEnd + 1, box.uBegin - 1, box.vEnd + 1, box.vBegin - 1};
   for (int v = std::max(vBegin_, box.vBegin); v <= std::min(vEnd_, box.vEnd); ++v)
     for (const Span& s : row(v)) {
       const int a = std::max(s.uBegin, box.uBegin), z = std::min(s.uEnd, box.uEnd);
@@ -303,7 +303,7 @@ void Region::clipBounds(const terrain::GridRegion& box) {
       b.uBegin = std::min(b.uBegin, a), b.uEnd = std::max(b.uEnd, z);
       b.vBegin = std::min(b.vBegin, v), b.vEnd = std::max(b.vEnd, v);
     }
-  bounds_ = b.uBegin <= b.uEnd ? b : terrain::GridRegion::none();
+  bounds_ = b.uBegin <= b.uEnd ? b : terrain::VertexBox::none();
 }
 
 void Region::finish(const core::GridSize& g, bool wrapsU, bool hasPoleRows, bool symmetric,
@@ -325,10 +325,10 @@ void Region::finish(const core::GridSize& g, bool wrapsU, bool hasPoleRows, bool
     }
   }
   if (spans_.empty()) {
-    bounds_ = terrain::GridRegion::none();
+    bounds_ = terrain::VertexBox::none();
     return;
   }
-  terrain::GridRegion b;
+  terrain::VertexBox b;
   b.vBegin = vBegin_;
   b.vEnd = vEnd_;
   if (!wrapsU) {
@@ -360,9 +360,9 @@ void Region::finish(const core::GridSize& g, bool wrapsU, bool hasPoleRows, bool
   } else {
     const int end = coverStart + len - 1;
     if (coverStart == 0 && end == 0) {
-      b.uBegin = -1, b.uEnd = 0;  // u = 0 and m (plus m - 1: {0, m} alone has no GridRegion)
+      b.uBegin = -1, b.uEnd = 0;  // u = 0 and m (plus m - 1: {0, m} alone has no VertexBox)
     } else if (coverStart == 0) {
-      b.uBegin = m, b.uEnd = m + end;  // u = m and 0 .. end (see GridRegion::forEachColumnRange)
+      b.uBegin = m, b.uEnd = m + end;  // u = m and 0 .. end (see VertexBox::forEachColumnRange)
     } else if (end >= m) {
       b.uBegin = coverStart - m, b.uEnd = end - m;  // coverStart .. m and 0 .. end - m
     } else {
@@ -372,7 +372,7 @@ void Region::finish(const core::GridSize& g, bool wrapsU, bool hasPoleRows, bool
   bounds_ = b;
 }
 
-Region Region::fromRectangle(const terrain::GridRegion& r, const core::GridSize& g, bool wrapsU,
+Region Region::fromRectangle(const terrain::VertexBox& r, const core::GridSize& g, bool wrapsU,
                              bool hasPoleRows) {
   Region out;
   out.clear();

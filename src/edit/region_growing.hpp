@@ -6,7 +6,7 @@
 
 #include "core/grid.hpp"
 #include "edit/distance_field.hpp"
-#include "terrain/grid_region.hpp"
+#include "terrain/vertex_box.hpp"
 
 namespace ps::edit {
 
@@ -48,9 +48,9 @@ class Region {
   // chart that glues its sides beyond a u seam: the box of the vertices in the centre's part of
   // the grid (the octahedral chart's quadrant, the torus's half in v), whose images
   // (terrain::gluedImages) hold the rest (RegionGrower::grow sets it).
-  const terrain::GridRegion& bounds() const { return bounds_; }
+  const terrain::VertexBox& bounds() const { return bounds_; }
   // Makes bounds() the box of the region's vertices within `box`.
-  void clipBounds(const terrain::GridRegion& box);
+  void clipBounds(const terrain::VertexBox& box);
   // Keeps bounds()' columns (seam-wrapped) and makes its rows those of the region's rows within
   // [vFirst, vLast] that hold vertices.
   void clipRows(int vFirst, int vLast);
@@ -76,7 +76,7 @@ class Region {
   void finish(const core::GridSize& g, bool wrapsU, bool hasPoleRows, bool symmetric, int centreU);
 
   // A whole rectangle (for tools that declare a rectangular footprint).
-  static Region fromRectangle(const terrain::GridRegion& r, const core::GridSize& g, bool wrapsU,
+  static Region fromRectangle(const terrain::VertexBox& r, const core::GridSize& g, bool wrapsU,
                               bool hasPoleRows);
 
  private:
@@ -85,7 +85,7 @@ class Region {
   std::vector<Span> spans_;
   std::vector<int> halfWidth_;
   std::size_t vertexCount_ = 0, pointCount_ = 0;
-  terrain::GridRegion bounds_;
+  terrain::VertexBox bounds_;
   bool symmetric_ = false;
   int centreU_ = 0;
 };

@@ -163,6 +163,12 @@ void checkPoint(const ScriptCommand& c, const core::Chart& chart) {
     (void)nearestVertex(chart, c.point.value);  // throws for non-finite or the centre
     return;
   }
+  // LAT LON is a direction on the reference sphere: a chart that is no sphere (a torus, a
+  // cylinder, the flat grid: sphereRadius() 0) would put every such point at the origin.
+  if (!(chart.sphereRadius() > 0.0)) {
+    throw core::InputError("a LAT LON point needs a sphere, and this planet's " + chart.name() +
+                           " chart is none: give the point as xyz=X,Y,Z (metres)");
+  }
   const double lat = c.point.value.x(), lon = c.point.value.y();
   if (!std::isfinite(lat) || lat < -90.0 || lat > 90.0) {
     throw core::InputError("latitude " + core::exactNumber(lat) + " degrees is outside [-90, 90]");
@@ -351,7 +357,7 @@ ScriptRunReport runStrokeScript(const StrokeScript& script, EditPipeline& pipeli
   validateStrokeScript(script, pipeline);
   ScriptRunReport rep;
   GaussianBrush brush;
-  const double radius = pipeline.terrain().chart().radius();
+  const double radius = pipeline.terrain().chart().sphereRadius();
   // Undo steps the script relies on must not be forgotten mid-run.
   UndoJournal& journal = pipeline.journal();
   const std::size_t cap = journal.maxBytes();

@@ -23,7 +23,8 @@
 //   redo [N]
 //
 // POINT is either `LAT LON` in degrees (latitude -90..90, longitude -360..360; the seam u = 0 is
-// longitude -180, the north pole latitude 90) on the reference sphere, or `xyz=X,Y,Z`, a point of
+// longitude -180, the north pole latitude 90) on the reference sphere (lat-long and octahedral
+// planets only: a torus, a cylinder or a flat grid has none), or `xyz=X,Y,Z`, a point of
 // the planet frame in metres (what the recorder writes, so a replay is bit-for-bit). dt is in
 // seconds (default 0) and matters only for rate brushes.
 //

@@ -15,7 +15,7 @@ std::optional<SurfaceContact> surfaceContact(const terrain::Terrain& planet,
   if (!p.allFinite() || !chart.inverse(p)) return std::nullopt;
   const auto* torus = dynamic_cast<const core::TorusChart*>(&chart);
   const auto* tube = dynamic_cast<const core::CylinderChart*>(&chart);
-  if (!torus && !tube && !(chart.radius() > 0)) return std::nullopt;  // the flat chart
+  if (!torus && !tube && !(chart.sphereRadius() > 0)) return std::nullopt;  // the flat chart
   SurfaceContact c;
   try {
     c.control = nearestVertex(chart, p);
@@ -31,7 +31,7 @@ std::optional<SurfaceContact> surfaceContact(const terrain::Terrain& planet,
     const double out = rho - tube->tubeRadius() - h;
     c.height = beyond > 0 ? std::hypot(out, beyond) : out;
   } else {
-    c.height = p.norm() - chart.radius() - h;
+    c.height = p.norm() - chart.sphereRadius() - h;
   }
   return c;
 }

@@ -6,8 +6,8 @@
 #include "core/grid.hpp"
 #include "edit/distance_field.hpp"
 #include "edit/region_growing.hpp"
-#include "terrain/grid_region.hpp"
 #include "terrain/terrain.hpp"
+#include "terrain/vertex_box.hpp"
 
 namespace ps::edit {
 
@@ -70,7 +70,7 @@ class Tool {
   // a recording replayed from any stroke gives the same planet).
   virtual void beginStroke() const {}
 
-  virtual terrain::GridRegion apply(const ToolContext& ctx, std::span<float> heights) const = 0;
+  virtual terrain::VertexBox apply(const ToolContext& ctx, std::span<float> heights) const = 0;
 };
 
 }  // namespace ps::edit

@@ -12,14 +12,14 @@ void UndoJournal::beginStroke() {
   open_ = true;
   pending_.clear();
   compacted_ = 0;
-  pendingDirty_ = terrain::GridRegion::none();
+  pendingDirty_ = terrain::VertexBox::none();
   for (const Stroke& s : undone_) bytes_ -= s.bytes();
   undone_.clear();
 }
 
 void UndoJournal::recordStamp(const Region& footprint, std::span<const float> before,
                               std::span<const float> heights, const core::GridSize& grid,
-                              const terrain::GridRegion& dirty, bool wrapsU) {
+                              const terrain::VertexBox& dirty, bool wrapsU) {
   if (!open_) throw core::InputError("undo journal: recordStamp outside a stroke");
   std::size_t i = 0;
   footprint.forEachSpan([&](int v, int a, int b) {

@@ -6,8 +6,8 @@
 #include <vector>
 
 #include "edit/region_growing.hpp"
-#include "terrain/grid_region.hpp"
 #include "terrain/terrain.hpp"
+#include "terrain/vertex_box.hpp"
 
 namespace ps::edit {
 
@@ -54,7 +54,7 @@ class UndoJournal {
   // as they were before the stamp, `heights` the current ones; changed vertices are recorded.
   void recordStamp(const Region& footprint, std::span<const float> before,
                    std::span<const float> heights, const core::GridSize& grid,
-                   const terrain::GridRegion& dirty, bool wrapsU);
+                   const terrain::VertexBox& dirty, bool wrapsU);
   // Closes the stroke and returns its changed-vertex count. A stroke that changed nothing is still
   // one undo step (so "undo" always takes back the user's last stroke).
   std::size_t endStroke(const core::GridSize& grid);
@@ -81,7 +81,7 @@ class UndoJournal {
  private:
   struct Stroke {
     std::vector<HeightChange> changes;  // sorted by index, unique
-    terrain::GridRegion dirty;
+    terrain::VertexBox dirty;
     std::size_t gridCount = 0;
     std::size_t bytes() const { return changes.capacity() * sizeof(HeightChange) + sizeof(Stroke); }
   };
@@ -94,7 +94,7 @@ class UndoJournal {
   bool open_ = false;
   std::vector<HeightChange> pending_;
   std::size_t compacted_ = 0;  // pending_.size() after the last compact()
-  terrain::GridRegion pendingDirty_;
+  terrain::VertexBox pendingDirty_;
   std::deque<Stroke> done_;
   std::vector<Stroke> undone_;
   JournalListener* listener_ = nullptr;

@@ -14,6 +14,7 @@
 
 #include "core/chart_factory.hpp"
 #include "core/flat_chart.hpp"
+#include "core/input_error.hpp"
 #include "io/atomic_file.hpp"
 #include "io/gdal_raster.hpp"
 #include "io/png_codec.hpp"
@@ -39,7 +40,7 @@ Raster resampleSphereChart(const terrain::Terrain& t, Raster r, Interpolation ho
       const double lon = std::numbers::pi * (2.0 * (x + 0.5) / width - 1.0);
       const Eigen::Vector3d d(std::cos(lat) * std::cos(lon), std::cos(lat) * std::sin(lon),
                               std::sin(lat));
-      const Eigen::Vector2d uv = *chart.inverse(chart.radius() * d);
+      const Eigen::Vector2d uv = *chart.inverse(chart.sphereRadius() * d);
       // The interpolation stencil reads up to two steps beyond the grid: continued() maps
       // them back.
       const double u = std::clamp(uv.x(), 0.0, double(m)), v = std::clamp(uv.y(), 0.0, double(m));
@@ -64,7 +65,7 @@ Raster resampleEquirectangular(const terrain::Terrain& t, int width, int height,
                                 chart.name() + "' chart");
   }
   Raster r{width, height, std::vector<float>(std::size_t(width) * std::size_t(height))};
-  r.radiusMetres = chart.radius();
+  r.radiusMetres = chart.sphereRadius();
   if (!chart.hasPoleRows()) return resampleSphereChart(t, std::move(r), how);
   const int m = t.grid().m();
   // Grid vertex (u, v) is sample (u, v): u wraps round the m columns (u = m is u = 0), v clamps
@@ -83,12 +84,6 @@ Raster resampleEquirectangular(const terrain::Terrain& t, int width, int height,
 }
 
 namespace {
-
-std::string decimal(double x) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, "%.17g", x);
-  return buf;
-}
 
 std::string projectionText(const Raster& r) {
   if (r.layout == Raster::Layout::kFlat) return "flat, pixel is point, row 0 at v = m";
@@ -226,12 +221,12 @@ void writeHeightPng16(const Raster& raster, const std::filesystem::path& path) {
       row[x] = std::uint16_t(std::lround(std::clamp((h - minM) / span, 0.0, 1.0) * 65535.0));
     }
   }
-  PngText text = {{"planetsculpt:min_m", decimal(minM)},
-                  {"planetsculpt:max_m", decimal(maxM)},
+  PngText text = {{"planetsculpt:min_m", core::exactNumber(minM)},
+                  {"planetsculpt:max_m", core::exactNumber(maxM)},
                   {"planetsculpt:projection", projectionText(raster)}};
   if (raster.layout == Raster::Layout::kFlat) {
-    text.emplace_back("planetsculpt:pixel_spacing_m",
-                      decimal(raster.pixelWidthM) + " " + decimal(raster.pixelHeightM));
+    text.emplace_back("planetsculpt:pixel_spacing_m", core::exactNumber(raster.pixelWidthM) + " " +
+                                                          core::exactNumber(raster.pixelHeightM));
   }
   const std::vector<unsigned char> png = encodePng(img, {.text = text});
   writeAtomically(path, [&](const std::filesystem::path& tmp) {

@@ -47,7 +47,7 @@ ImportResult importHeightImage(HeightImage img, const ImportOptions& o, const st
     fail(name, std::string("a ") + (o.chart == ChartKind::kTorus ? "torus" : "cylinder") +
                    " needs its radius: --radius METRES");
   if ((core::isSphere(o.chart) || tube) && (!std::isfinite(radius) || radius <= 0)) {
-    fail(name, "radius " + num(radius) + " m must be positive and finite");
+    fail(name, "radius " + core::formatNumber(radius, 10) + " m must be positive and finite");
   }
   if (core::isSphere(o.chart)) checkCoversTheGlobe(img, o.chart, name);
 
@@ -122,9 +122,9 @@ HeightSamples heightSamples(HeightImage img, const ImportOptions& options,
   const PixelSpacing spacing = flatSpacing(img, o, name);
   out.dx = spacing.x;
   out.dy = spacing.y;
-  out.notes.push_back("flat: " + num(spacing.x) + " x " + num(spacing.y) +
-                      " m between pixels, from " + spacing.from +
-                      "; the image's own samples, none resampled");
+  out.notes.push_back("flat: " + core::formatNumber(spacing.x, 10) + " x " +
+                      core::formatNumber(spacing.y, 10) + " m between pixels, from " +
+                      spacing.from + "; the image's own samples, none resampled");
   out.width = w;
   out.height = h;
   out.geo = img.geo;
@@ -135,8 +135,8 @@ HeightSamples heightSamples(HeightImage img, const ImportOptions& options,
   }
   for (const float x : out.heights)
     if (!std::isfinite(x) || std::abs(x) > core::FlatChart::kHeightLimit)
-      fail(name, "height " + num(x) + " m is not finite or beyond +-" +
-                     num(core::FlatChart::kHeightLimit) + " m");
+      fail(name, "height " + core::formatNumber(x, 10) + " m is not finite or beyond +-" +
+                     core::formatNumber(core::FlatChart::kHeightLimit, 10) + " m");
   return out;
 }
 

@@ -43,7 +43,7 @@ EquirectangularSource equirectangularSource(const HeightImage& img, const Import
     e.west = img.geo->originX;
   }
   if (!std::isfinite(e.west)) fail(name, "western longitude must be finite");
-  res.notes.push_back("equirectangular: column 0 starts at " + num(e.west) +
+  res.notes.push_back("equirectangular: column 0 starts at " + core::formatNumber(e.west, 10) +
                       " deg longitude, row 0 at 90 deg N");
   source["column0_longitude_deg"] = e.west;
   e.values = img.values;
@@ -70,7 +70,7 @@ std::pair<int, int> averagedSize(ChartKind chart, int m) {
 }
 
 void noteRadius(double radius, const ImportOptions& o, const HeightImage& img, ImportResult& res) {
-  res.notes.push_back("radius " + num(radius) + " m, " +
+  res.notes.push_back("radius " + core::formatNumber(radius, 10) + " m, " +
                       (o.radius           ? "as given"
                        : img.radiusMetres ? "from the file"
                                           : "the default (--radius sets it)"));
@@ -170,8 +170,10 @@ void checkCoversTheGlobe(const HeightImage& img, core::ChartShape chart, const s
   const double tolX = std::abs(img.geo->pixelScaleX), tolY = std::abs(img.geo->pixelScaleY);
   if (std::abs(spanX - 360.0) > tolX || std::abs(spanY - 180.0) > tolY ||
       std::abs(img.geo->originY - 90.0) > tolY) {
-    fail(name, "it covers " + num(spanX) + " x " + num(spanY) + " degrees from (" +
-                   num(img.geo->originX) + ", " + num(img.geo->originY) + "):" + onto);
+    fail(name, "it covers " + core::formatNumber(spanX, 10) + " x " +
+                   core::formatNumber(spanY, 10) + " degrees from (" +
+                   core::formatNumber(img.geo->originX, 10) + ", " +
+                   core::formatNumber(img.geo->originY, 10) + "):" + onto);
   }
 }
 
@@ -191,7 +193,7 @@ PixelSpacing flatSpacing(const HeightImage& img, const ImportOptions& o, const s
       const double k = kEarthMean * std::numbers::pi / 180.0;
       s = {img.geo->pixelScaleX * k * std::cos(latC * std::numbers::pi / 180.0),
            img.geo->pixelScaleY * k,
-           "the file's georeferencing in degrees, at latitude " + num(latC) +
+           "the file's georeferencing in degrees, at latitude " + core::formatNumber(latC, 10) +
                " on the Earth's mean sphere"};
     } else {
       s = {img.geo->pixelScaleX, img.geo->pixelScaleY,
@@ -199,7 +201,8 @@ PixelSpacing flatSpacing(const HeightImage& img, const ImportOptions& o, const s
     }
   }
   if (!std::isfinite(s.x) || s.x <= 0 || !std::isfinite(s.y) || s.y <= 0) {
-    fail(name, "pixel spacing " + num(s.x) + " x " + num(s.y) + " m must be positive and finite");
+    fail(name, "pixel spacing " + core::formatNumber(s.x, 10) + " x " +
+                   core::formatNumber(s.y, 10) + " m must be positive and finite");
   }
   return s;
 }
@@ -212,8 +215,9 @@ void resampleFlat(const HeightImage& img, const ImportOptions& o, const core::Gr
   const std::vector<float>& v = img.values;
   const PixelSpacing spacing = flatSpacing(img, o, name);
   const double sx = spacing.x, sy = spacing.y;
-  res.notes.push_back("flat: " + num(sx) + " x " + num(sy) + " m between pixels, from " +
-                      spacing.from + "; image row 0 is the north (v = m) edge");
+  res.notes.push_back("flat: " + core::formatNumber(sx, 10) + " x " + core::formatNumber(sy, 10) +
+                      " m between pixels, from " + spacing.from +
+                      "; image row 0 is the north (v = m) edge");
   const double kx = w > 1 ? double(w - 1) / m : 0.0, ky = h > 1 ? double(h - 1) / m : 0.0;
   for (int gv = 0; gv <= m; ++gv) {
     for (int gu = 0; gu <= m; ++gu) {

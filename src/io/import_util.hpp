@@ -1,7 +1,6 @@
 #pragma once
 // Helpers the heightmap import's files share (heightmap_import.cpp, import_values.cpp,
 // import_resample.cpp, import_options.cpp); not part of the io layer's interface.
-#include <sstream>
 #include <string>
 #include <vector>
 
@@ -12,13 +11,6 @@ namespace ps::io::import_detail {
 
 [[noreturn]] inline void fail(const std::string& name, const std::string& what) {
   throw core::InputError(name + ": " + what);
-}
-
-inline std::string num(double x) {
-  std::ostringstream os;
-  os.precision(10);
-  os << x;
-  return os.str();
 }
 
 inline int levelFor(long long cells) {

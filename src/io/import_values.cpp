@@ -49,10 +49,11 @@ NoDataScan scanNoData(const HeightImage& img, const ImportOptions& o, const std:
              "--nodata-value nan");
   }
   if (r.holes == n)
-    fail(name, "every pixel is no-data (value " + num(*r.value) + ", " + r.source + ")");
+    fail(name, "every pixel is no-data (value " + core::formatNumber(*r.value, 10) + ", " +
+                   r.source + ")");
   if (r.holes > 0 && o.noData == NoDataPolicy::kRefuse) {
-    fail(name, std::to_string(r.holes) + " pixels are no-data (value " + num(*r.value) + ", " +
-                   r.source +
+    fail(name, std::to_string(r.holes) + " pixels are no-data (value " +
+                   core::formatNumber(*r.value, 10) + ", " + r.source +
                    "); refused as asked (--nodata refuse); --nodata fill fills them from their "
                    "surroundings");
   }
@@ -69,16 +70,19 @@ std::pair<double, double> toMetres(HeightImage& img, const ImportOptions& o,
   if (o.scale || o.offset) {
     scale = o.scale.value_or(1.0);
     offset = o.offset.value_or(0.0);
-    notes.push_back("heights: value x " + num(scale) + " + " + num(offset) + " m");
+    notes.push_back("heights: value x " + core::formatNumber(scale, 10) + " + " +
+                    core::formatNumber(offset, 10) + " m");
   } else if (img.value0Metres && img.value65535Metres && img.kind == "16-bit grey PNG") {
     offset = *img.value0Metres;
     scale = (*img.value65535Metres - *img.value0Metres) / 65535.0;
-    notes.push_back("heights: the PNG's PlanetSculpt text chunks map 0 to " + num(offset) +
-                    " m and 65535 to " + num(*img.value65535Metres) + " m");
+    notes.push_back("heights: the PNG's PlanetSculpt text chunks map 0 to " +
+                    core::formatNumber(offset, 10) + " m and 65535 to " +
+                    core::formatNumber(*img.value65535Metres, 10) + " m");
   } else if (img.fileScale || img.fileOffset) {
     scale = img.fileScale.value_or(1.0);
     offset = img.fileOffset.value_or(0.0);
-    notes.push_back("heights: value x " + num(scale) + " + " + num(offset) +
+    notes.push_back("heights: value x " + core::formatNumber(scale, 10) + " + " +
+                    core::formatNumber(offset, 10) +
                     " m, the file's own scale and offset (--scale and --offset override them)");
   } else {
     notes.push_back(
@@ -86,8 +90,8 @@ std::pair<double, double> toMetres(HeightImage& img, const ImportOptions& o,
         "--scale and --offset map them otherwise");
   }
   if (!std::isfinite(scale) || scale == 0 || !std::isfinite(offset)) {
-    fail(name, "height scale " + num(scale) + " and offset " + num(offset) +
-                   " must be finite, scale non-zero");
+    fail(name, "height scale " + core::formatNumber(scale, 10) + " and offset " +
+                   core::formatNumber(offset, 10) + " must be finite, scale non-zero");
   }
   std::vector<float>& v = img.values;
   for (std::size_t i = 0; i < v.size(); ++i) {
@@ -95,8 +99,8 @@ std::pair<double, double> toMetres(HeightImage& img, const ImportOptions& o,
     const double m = double(v[i]) * scale + offset;
     if (!std::isfinite(float(m))) {
       fail(name, "pixel (x=" + std::to_string(i % std::size_t(w)) +
-                     ", y=" + std::to_string(i / std::size_t(w)) + ") becomes " + num(m) +
-                     " m after scale and offset, beyond float range");
+                     ", y=" + std::to_string(i / std::size_t(w)) + ") becomes " +
+                     core::formatNumber(m, 10) + " m after scale and offset, beyond float range");
     }
     v[i] = float(m);
   }
@@ -118,8 +122,9 @@ void radiiToHeights(std::vector<float>& v, const std::vector<std::uint8_t>& hole
   if (!(double(*mid) > 0.5 * radius)) return;
   for (std::size_t i = 0; i < v.size(); ++i)
     if (hole.empty() || !hole[i]) v[i] = float(double(v[i]) - radius);
-  notes.push_back("heights: the values are distances from the centre (median " + num(*mid) +
-                  " m), so the radius " + num(radius) + " m is subtracted");
+  notes.push_back("heights: the values are distances from the centre (median " +
+                  core::formatNumber(*mid, 10) + " m), so the radius " +
+                  core::formatNumber(radius, 10) + " m is subtracted");
 }
 
 }  // namespace
@@ -136,10 +141,11 @@ MetresReport toFilledMetres(HeightImage& img, const ImportOptions& o, double rad
   if (sphere) radiiToHeights(v, r.noData.hole, radius, notes);
   if (r.noData.holes > 0) {
     const FillReport fr = fillHoles(v, img.width, img.height, r.noData.hole, sphere);
-    notes.push_back(
-        std::to_string(r.noData.holes) + " no-data pixels (value " + num(*r.noData.value) + ", " +
-        r.noData.source + ") filled by harmonic interpolation from the surrounding heights (" +
-        std::to_string(fr.sweeps) + " relaxation sweeps); none of them became a height as stored");
+    notes.push_back(std::to_string(r.noData.holes) + " no-data pixels (value " +
+                    core::formatNumber(*r.noData.value, 10) + ", " + r.noData.source +
+                    ") filled by harmonic interpolation from the surrounding heights (" +
+                    std::to_string(fr.sweeps) +
+                    " relaxation sweeps); none of them became a height as stored");
   }
   return r;
 }

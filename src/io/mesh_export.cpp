@@ -113,7 +113,7 @@ double coordinateRoundingBound(const terrain::Terrain& t, MeshFormat format) {
   if (const auto* flat = dynamic_cast<const core::FlatChart*>(&t.chart())) {
     bound = std::max({flat->dx() * t.grid().m(), flat->dy() * t.grid().m(), hMax});
   } else if (core::isSphere(core::shapeOf(t.chart()))) {
-    bound = t.chart().radius() + hMax;
+    bound = t.chart().sphereRadius() + hMax;
   } else {
     bound = 0;
     for (int v = 0; v <= t.grid().m(); ++v) {

@@ -55,7 +55,7 @@ ObjTriangles parseObjTriangles(std::string_view text, const std::string& name) {
       if (w.size() != 4)
         fail(name, lineNo,
              "a face with " + std::to_string(w.size() - 1) +
-                 " corners: a track must be a triangle mesh (triangulate it before export)");
+                 " corners: a road must be a triangle mesh (triangulate it before export)");
       std::array<std::uint32_t, 3> t{};
       for (int k = 0; k < 3; ++k) {
         std::string_view s = w[std::size_t(k + 1)];
@@ -80,7 +80,7 @@ ObjTriangles parseObjTriangles(std::string_view text, const std::string& name) {
     }
   }
   if (out.triangles.empty())
-    throw core::InputError(name + ": no triangles (a track is a mesh of triangles)");
+    throw core::InputError(name + ": no triangles (a road is a mesh of triangles)");
   return out;
 }
 

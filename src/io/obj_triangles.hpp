@@ -1,5 +1,5 @@
 #pragma once
-// Reading a triangle mesh from a Wavefront OBJ (a track for `overlay`): `v x y z` and
+// Reading a triangle mesh from a Wavefront OBJ (a road for `overlay`): `v x y z` and
 // `f a b c` lines (a/b/c forms and negative, relative indices as OBJ allows); everything else
 // OBJ may hold (normals, texture coordinates, groups, materials, comments) is skipped.
 #include <array>

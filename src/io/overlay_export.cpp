@@ -115,28 +115,28 @@ MeshTerrain meshTerrain(const ObjTriangles& mesh, std::optional<double> spacing,
 
 }  // namespace
 
-tin::Track placeTrack(const ObjTriangles& obj, const tin::SampleField& field,
-                      const OverlayOptions& o, const std::string& name) {
-  tin::Track track;
-  track.triangles = obj.triangles;
+tin::Road placeRoad(const ObjTriangles& obj, const tin::SampleField& field, const OverlayOptions& o,
+                    const std::string& name) {
+  tin::Road road;
+  road.triangles = obj.triangles;
   const std::array<double, 3> at = o.at.value_or(std::array<double, 3>{0, 0, 0});
   const double heading = at[2] * kDeg;
-  // The track's +y axis points at azimuth `heading`, its +x axis 90 degrees clockwise from it.
+  // The road's +y axis points at azimuth `heading`, its +x axis 90 degrees clockwise from it.
   const double ch = std::cos(heading), sh = std::sin(heading);
   if (field.metric == tin::ErrorMetric::kVertical) {
     for (const Eigen::Vector3d& p : obj.vertices) {
       const double east = at[0] + p.x() * ch + p.y() * sh;
       const double north = at[1] - p.x() * sh + p.y() * ch;
-      track.xy.emplace_back(east / field.dx, north / field.dy);
-      track.h.push_back(p.z());
+      road.xy.emplace_back(east / field.dx, north / field.dy);
+      road.h.push_back(p.z());
     }
-    return track;
+    return road;
   }
-  if (!o.at) throw core::InputError(name + ": on a planet the track needs --at LAT,LON[,HEADING]");
+  if (!o.at) throw core::InputError(name + ": on a planet the road needs --at LAT,LON[,HEADING]");
   if (!(std::abs(at[0]) <= 90 && std::abs(at[1]) <= 180))
     throw core::InputError("--at " + core::exactNumber(at[0]) + "," + core::exactNumber(at[1]) +
                            ": latitude must be within +-90 and longitude within +-180 degrees");
-  const double lat = at[0] * kDeg, lon = at[1] * kDeg, r = field.chart->radius();
+  const double lat = at[0] * kDeg, lon = at[1] * kDeg, r = field.chart->sphereRadius();
   const Eigen::Vector3d up(std::cos(lat) * std::cos(lon), std::cos(lat) * std::sin(lon),
                            std::sin(lat));
   const Eigen::Vector3d east(-std::sin(lon), std::cos(lon), 0);
@@ -148,25 +148,25 @@ tin::Track placeTrack(const ObjTriangles& obj, const tin::SampleField& field,
     // Onto the sphere through its centre (the tangent plane's gnomonic projection).
     const Eigen::Vector3d onPlane = r * up + p.x() * xAxis + p.y() * yAxis;
     const auto uv = field.chart->inverse(onPlane);
-    if (!uv) throw core::InputError(name + ": a track vertex has no place on the planet");
+    if (!uv) throw core::InputError(name + ": a road vertex has no place on the planet");
     if (uv->y() < 1 || uv->y() > m - 1)
       throw core::InputError(name +
-                             ": the track reaches a pole's row of the lat-long chart; "
+                             ": the road reaches a pole's row of the lat-long chart; "
                              "place it away from the poles");
     uLo = std::min(uLo, uv->x()), uHi = std::max(uHi, uv->x());
-    track.xy.push_back(*uv - Eigen::Vector2d(field.i0, field.j0));
-    track.h.push_back(p.z());
+    road.xy.push_back(*uv - Eigen::Vector2d(field.i0, field.j0));
+    road.h.push_back(p.z());
   }
   if (uHi - uLo > 0.5 * m)
     throw core::InputError(name +
-                           ": the track crosses the +-180 degree meridian (the chart's "
+                           ": the road crosses the +-180 degree meridian (the chart's "
                            "seam); place it elsewhere");
-  return track;
+  return road;
 }
 
 nlohmann::json overlayFromFiles(const std::filesystem::path& terrainPath,
                                 const ImportOptions& heightmapOptions,
-                                const std::filesystem::path& trackPath,
+                                const std::filesystem::path& roadPath,
                                 const std::filesystem::path& out, ExportFormat format,
                                 const OverlayOptions& o, std::vector<std::string>& notes) {
   if (!isMeshFormat(format))
@@ -174,7 +174,7 @@ nlohmann::json overlayFromFiles(const std::filesystem::path& terrainPath,
   if (!(std::isfinite(o.errorM) && o.errorM > 0))
     throw core::InputError("--error " + core::exactNumber(o.errorM) +
                            " m: the terrain's TIN needs an error above 0");
-  const ObjTriangles trackObj = readObjTriangles(trackPath);
+  const ObjTriangles roadObj = readObjTriangles(roadPath);
   std::unique_ptr<terrain::Terrain> planet;
   HeightSamples samples;
   tin::SampleField field;
@@ -198,13 +198,13 @@ nlohmann::json overlayFromFiles(const std::filesystem::path& terrainPath,
     field = heightSampleField(samples);
   }
   field.uniformTolerance = o.errorM;
-  const tin::Track track = placeTrack(trackObj, field, o, trackPath.string());
+  const tin::Road road = placeRoad(roadObj, field, o, roadPath.string());
   const tin::Tin terrainTin = meshTin ? *meshTin : tin::buildTin(field, {});
   tin::OverlayResult r;
   try {
-    r = tin::overlayTrack(field, terrainTin, track, o.mode);
+    r = tin::overlayRoad(field, terrainTin, road, o.mode);
   } catch (const core::InputError& e) {
-    throw core::InputError(trackPath.string() + ": " + e.what());
+    throw core::InputError(roadPath.string() + ": " + e.what());
   }
 
   const tin::WeldedMesh welded = tin::weldTin(field, r.tin);
@@ -213,17 +213,17 @@ nlohmann::json overlayFromFiles(const std::filesystem::path& terrainPath,
   mesh.positions.assign(welded.vertices, Eigen::Vector3d::Zero());
   for (std::size_t v = 0; v < r.tin.xy.size(); ++v)
     mesh.positions[welded.vertexOf[v]] = r.positions[v];
-  std::size_t onTrack = 0;
+  std::size_t onRoad = 0;
   for (std::size_t k = 0; k < welded.triangles.size(); ++k) {
     const auto& t = welded.triangles[k];
     mesh.indices.insert(mesh.indices.end(), t.begin(), t.end());
-    const std::uint8_t g = r.onTrack[welded.sourceTriangle[k]];
+    const std::uint8_t g = r.onRoad[welded.sourceTriangle[k]];
     mesh.triangleGroup.push_back(g);
-    onTrack += g;
+    onRoad += g;
   }
-  mesh.groupNames = {"terrain", "track"};
+  mesh.groupNames = {"terrain", "road"};
   const bool stitch = o.mode == tin::OverlayMode::kStitch;
-  mesh.description = "PlanetSculpt TIN with a track " +
+  mesh.description = "PlanetSculpt TIN with a road " +
                      std::string(stitch ? "stitched" : "stenciled") +
                      " in: " + std::to_string(welded.vertices) + " vertices, " +
                      std::to_string(welded.triangles.size()) + " triangles, metres";
@@ -233,12 +233,12 @@ nlohmann::json overlayFromFiles(const std::filesystem::path& terrainPath,
                             {"mode", stitch ? "stitch" : "stencil"},
                             {"error_m", o.errorM},
                             {"terrain_tin_vertices", rep.terrainVertices},
-                            {"track_vertices", rep.trackVertices},
-                            {"track_triangles", rep.trackTriangles},
-                            {"track_triangles_clipped", rep.clippedTrackTriangles},
+                            {"road_vertices", rep.roadVertices},
+                            {"road_triangles", rep.roadTriangles},
+                            {"road_triangles_clipped", rep.clippedRoadTriangles},
                             {"vertices", welded.vertices},
                             {"triangles", welded.triangles.size()},
-                            {"track_group_triangles", onTrack},
+                            {"road_group_triangles", onRoad},
                             {"euler", top.euler()},
                             {"border_edges", top.borderEdges},
                             {"non_manifold_edges", top.nonManifoldEdges}};

@@ -1,7 +1,7 @@
 #pragma once
-// `planetsculpt overlay TERRAIN TRACK.obj --mode stitch|stencil --error E --out FILE`: a track
+// `planetsculpt overlay TERRAIN ROAD.obj --mode stitch|stencil --error E --out FILE`: a road
 // mesh placed on a planet or a flat heightmap, stitched or stenciled into the terrain's TIN
-// (tin/overlay.hpp), written as OBJ (groups "terrain" and "track"), PLY or GLB.
+// (tin/overlay.hpp), written as OBJ (groups "terrain" and "road"), PLY or GLB.
 #include <filesystem>
 #include <nlohmann/json.hpp>
 #include <optional>
@@ -18,22 +18,22 @@ namespace ps::io {
 struct OverlayOptions {
   tin::OverlayMode mode = tin::OverlayMode::kStitch;
   double errorM = 0;  // the terrain TIN's error, which the stencil's re-meshing keeps too
-  // Planets (required): latitude and longitude in degrees of the track's origin, and the
+  // Planets (required): latitude and longitude in degrees of the road's origin, and the
   // heading of its +y axis (degrees clockwise from north). Flat terrains (optional): the origin
   // in the terrain's metres (x east, y north) and the heading; default 0, 0, 0.
   std::optional<std::array<double, 3>> at = {};
 };
 
-// The track's vertices (x, y: metres in its own frame; z: height in metres above the terrain's
+// The road's vertices (x, y: metres in its own frame; z: height in metres above the terrain's
 // datum) in the terrain's lattice coordinates. Throws core::InputError for a placement off the
 // lattice's usable part (a planet's pole rows, across its seam).
-tin::Track placeTrack(const ObjTriangles& track, const tin::SampleField& field,
-                      const OverlayOptions& options, const std::string& name);
+tin::Road placeRoad(const ObjTriangles& road, const tin::SampleField& field,
+                    const OverlayOptions& options, const std::string& name);
 
 nlohmann::json overlayFromFiles(const std::filesystem::path& terrain,
                                 const ImportOptions& heightmapOptions,
-                                const std::filesystem::path& track,
-                                const std::filesystem::path& out, ExportFormat format,
-                                const OverlayOptions& options, std::vector<std::string>& notes);
+                                const std::filesystem::path& road, const std::filesystem::path& out,
+                                ExportFormat format, const OverlayOptions& options,
+                                std::vector<std::string>& notes);
 
 }  // namespace ps::io

@@ -8,7 +8,6 @@
 #include <cmath>
 #include <cstring>
 #include <fstream>
-#include <sstream>
 
 #include "core/chart_factory.hpp"
 #include "core/input_error.hpp"
@@ -115,13 +114,6 @@ std::size_t sampleBytes(HeightEncoding e) {
 // "a latlong", "an octahedral": a chart's name as a message puts it before "planet".
 std::string withArticle(const std::string& chart) {
   return (chart.rfind('o', 0) == 0 ? "an " : "a ") + chart;
-}
-
-std::string num(double x) {
-  std::ostringstream os;
-  os.precision(17);
-  os << x;
-  return os.str();
 }
 
 // Heights in the file's encoding (little-endian bytes) plus the scale and offset they need.
@@ -328,34 +320,35 @@ Header parseHeader(const unsigned char* p, std::size_t available, const std::str
     fail(name, withArticle(h.chart) + " planet must store 0 in the second length field");
   if (torus || tube) {
     if (!std::isfinite(h.radius) || h.radius <= 0)
-      fail(name, "radius " + num(h.radius) + " m must be positive and finite");
+      fail(name, "radius " + core::exactNumber(h.radius) + " m must be positive and finite");
     if (!std::isfinite(h.second) || h.second <= 0)
-      fail(name, std::string(torus ? "minor radius " : "length ") + num(h.second) +
+      fail(name, std::string(torus ? "minor radius " : "length ") + core::exactNumber(h.second) +
                      " m must be positive and finite");
     if (torus && h.second >= h.radius)
-      fail(name, "minor radius " + num(h.second) + " m must be below the major radius " +
-                     num(h.radius) + " m");
+      fail(name, "minor radius " + core::exactNumber(h.second) +
+                     " m must be below the major radius " + core::exactNumber(h.radius) + " m");
     if (h.dx != 0 || h.dy != 0)
       fail(name, withArticle(h.chart) + " planet must store 0 in the flat spacing fields");
   } else if (core::isSphere(h.shape)) {
     if (!std::isfinite(h.radius) || h.radius <= 0) {
-      fail(name, "radius " + num(h.radius) + " m must be positive and finite");
+      fail(name, "radius " + core::exactNumber(h.radius) + " m must be positive and finite");
     }
     if (h.dx != 0 || h.dy != 0)
       fail(name, withArticle(h.chart) + " planet must store 0 in the flat spacing fields");
   } else {
     if (!std::isfinite(h.dx) || h.dx <= 0 || !std::isfinite(h.dy) || h.dy <= 0) {
-      fail(name,
-           "flat grid spacing " + num(h.dx) + " x " + num(h.dy) + " m must be positive and finite");
+      fail(name, "flat grid spacing " + core::exactNumber(h.dx) + " x " + core::exactNumber(h.dy) +
+                     " m must be positive and finite");
     }
     if (h.radius != 0) fail(name, "a flat planet must store radius 0");
   }
   h.scale = get<double>(p + kOffScale);
   h.offset = get<double>(p + kOffOffset);
   if (!std::isfinite(h.scale) || h.scale <= 0) {
-    fail(name, "height scale " + num(h.scale) + " must be positive and finite");
+    fail(name, "height scale " + core::exactNumber(h.scale) + " must be positive and finite");
   }
-  if (!std::isfinite(h.offset)) fail(name, "height offset " + num(h.offset) + " must be finite");
+  if (!std::isfinite(h.offset))
+    fail(name, "height offset " + core::exactNumber(h.offset) + " must be finite");
   const std::uint32_t rule = get<std::uint32_t>(p + kOffRule);
   if (rule > 1)
     fail(name, "unknown error rule " + std::to_string(rule) + " (0 = wedgie, 1 = hybrid-exact)");

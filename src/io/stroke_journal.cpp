@@ -95,7 +95,7 @@ std::uint32_t heightsChecksum(std::span<const float> heights) {
 JournalBase journalBaseOf(const terrain::Terrain& planet, std::uint64_t generation) {
   JournalBase b;
   b.side = std::uint32_t(planet.grid().side());
-  b.radius = planet.chart().radius();
+  b.radius = planet.chart().sphereRadius();
   b.heightsCrc = heightsChecksum(planet.heights());
   b.generation = generation;
   return b;
@@ -278,7 +278,7 @@ void applyJournal(const JournalContents& journal, terrain::Terrain& planet, cons
       vMin = std::min(vMin, v), vMax = std::max(vMax, v);
     }
   }
-  if (uMin <= uMax) planet.commitEdit(terrain::GridRegion{uMin, uMax, vMin, vMax});
+  if (uMin <= uMax) planet.commitEdit(terrain::VertexBox{uMin, uMax, vMin, vMax});
 }
 
 bool journalAlreadyIn(const JournalContents& journal, std::span<const float> heights) {

@@ -282,7 +282,7 @@ nlohmann::json exportTerrainTin(const terrain::Terrain& t, const std::filesystem
   if (field.metric == tin::ErrorMetric::kVertical) {
     area = field.dx * field.dy;
     maxCoordinate = std::max({field.dx * m, field.dy * m, hMax});
-  } else if (const double r = t.chart().radius(); r > 0) {
+  } else if (const double r = t.chart().sphereRadius(); r > 0) {
     // A lattice cell's area at the equator, where cells are largest.
     area = (2 * std::numbers::pi * r / m) * (std::numbers::pi * r / m);
     maxCoordinate = r + hMax;

@@ -171,7 +171,7 @@ void applyShortcuts(PanelSettings& s, PanelActions& a) {
   }
 }
 
-float drawPanel(PanelSettings& s, PanelActions& a, const PanelStatus& st) {
+float drawControlPanel(PanelSettings& s, PanelActions& a, const PanelStatus& st) {
   // Docked in the column at the right (live/window_layout.hpp), beside the AR view.
   const ImVec2 display = ImGui::GetIO().DisplaySize;
   ImGui::SetNextWindowPos(ImVec2(display.x - kSideColumnWidth + 4, 4), ImGuiCond_Always);

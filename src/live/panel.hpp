@@ -91,6 +91,6 @@ void applyShortcuts(PanelSettings& settings, PanelActions& actions);
 
 // Draws the panel (and the help window when settings.showHelp).
 // Returns the panel's bottom edge (display units), for what goes below it in its column.
-float drawPanel(PanelSettings& settings, PanelActions& actions, const PanelStatus& status);
+float drawControlPanel(PanelSettings& settings, PanelActions& actions, const PanelStatus& status);
 
 }  // namespace ps::live

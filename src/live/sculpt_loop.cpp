@@ -117,7 +117,7 @@ class SculptLoop {
     followForces();
     keepFiles();
     const cv::Size fb = drawView();
-    const PanelActions actions = drawPanel(fb);
+    const PanelActions actions = drawInterface(fb);
     applySettings();
     applyActions(actions);
     const double ms = msSince(t0);
@@ -274,7 +274,7 @@ class SculptLoop {
                                        cam ? std::span<const Eigen::Vector3d>(toolTriangles_)
                                            : std::span<const Eigen::Vector3d>());
     // A hand in front of the planet: the camera image over it, drawn over the blitted view by
-    // drawPanel (render/occlusion_composite.hpp; the renderer's framebuffer is left as it is).
+    // drawInterface (render/occlusion_composite.hpp; the renderer's framebuffer is left as it is).
     if (cam) render::clearToolFromMask(handMask_, *cam, toolTriangles_);
     showHandView_ = cam && !handMask_.empty();
     if (showHandView_)
@@ -285,7 +285,7 @@ class SculptLoop {
 
   // The panel, the overview inset and the input's message over the view; returns what the
   // user (or the script) asked for.
-  PanelActions drawPanel(cv::Size fb) {
+  PanelActions drawInterface(cv::Size fb) {
     shell_.imgui.newFrame();
     if (showHandView_ && handView_.valid()) {
       const ImVec2 display = ImGui::GetIO().DisplaySize;
@@ -298,7 +298,7 @@ class SculptLoop {
     applyShortcuts(panel_, actions);
     status_.undoCount = stepper_.pipeline().journal().undoCount();
     status_.redoCount = stepper_.pipeline().journal().redoCount();
-    const float panelBottom = live::drawPanel(panel_, actions, status_);
+    const float panelBottom = live::drawControlPanel(panel_, actions, status_);
     applyScript(settings_.script, result_.frames, actions, panel_);
     if (actions.crash) std::raise(SIGKILL);     // a scripted crash: nothing saved, nothing flushed
     if (actions.interrupt) std::raise(SIGINT);  // handled as a Ctrl-C from outside is

@@ -171,10 +171,10 @@ void HeightTileCache::sendChanges(const terrain::Terrain& planet) {
   // On a chart that glues its sides beyond a u seam, a changed vertex near a side is also the
   // apron texel of the tiles across it: each changed region is looked at from there too, as the
   // region it is beyond that side (outside the grid; core::Chart::continued maps it back).
-  std::vector<terrain::GridRegion> looked(changed_.begin(), changed_.end());
+  std::vector<terrain::VertexBox> looked(changed_.begin(), changed_.end());
   const core::Gluing gl = planet.chart().gluing();
   const int m = planet.grid().m();
-  for (const terrain::GridRegion& r : changed_) {
+  for (const terrain::VertexBox& r : changed_) {
     if (gl.vSides == core::SideGluing::kMirror) {
       looked.push_back({m - r.uEnd, m - r.uBegin, -r.vEnd, -r.vBegin});
       looked.push_back({m - r.uEnd, m - r.uBegin, 2 * m - r.vEnd, 2 * m - r.vBegin});
@@ -187,7 +187,7 @@ void HeightTileCache::sendChanges(const terrain::Terrain& planet) {
       looked.push_back({2 * m - r.uEnd, 2 * m - r.uBegin, m - r.vEnd, m - r.vBegin});
     }
   }
-  for (const terrain::GridRegion& r : looked) {
+  for (const terrain::VertexBox& r : looked) {
     const auto columns = [&](auto&& f) {
       if (r.uBegin < 0 || r.uEnd > planet.grid().m()) {
         if (!planet.chart().wrapsU()) return f(r.uBegin, r.uEnd);  // beyond a fold: as is

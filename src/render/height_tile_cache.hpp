@@ -89,7 +89,7 @@ class HeightTileCache {
   bool pageTableDirty_ = false;
   std::vector<std::uint16_t> pageScratch_;
   std::vector<float> texels_;
-  std::vector<terrain::GridRegion> changed_;
+  std::vector<terrain::VertexBox> changed_;
 };
 
 }  // namespace ps::render

@@ -272,7 +272,7 @@ void PlanetRenderer::syncHeights(const terrain::Terrain& planet, const terrain::
   Gl& g = *gl_;
   // The shader's up: a sphere's, a torus's and a cylinder's from each pixel's position.
   const core::ChartShape shape = core::shapeOf(planet.chart());
-  upKind_ = planet.chart().radius() > 0            ? 1
+  upKind_ = planet.chart().sphereRadius() > 0      ? 1
             : shape == core::ChartShape::kTorus    ? 2
             : shape == core::ChartShape::kCylinder ? 3
                                                    : 0;
@@ -481,7 +481,7 @@ cv::Mat PlanetRenderer::renderAR(const cv::Mat& background, const terrain::Terra
     glDrawArrays(GL_TRIANGLES, 0, 3);
     glBindVertexArray(0);
   }
-  drawBoardShadowAndRim(camera, planet.chart().radius(), style);
+  drawBoardShadowAndRim(camera, planet.chart().sphereRadius(), style);
   const DepthRange depth = depthRangeFor(camera, planet);
   const Eigen::Matrix4d clip = clipFromCamera(camera, depth.nearZ, depth.farZ);
   // The tool's depth (and the camera image over the shadow and rim where it stands), before the

@@ -13,7 +13,7 @@ namespace ps::render {
 
 void PlanetRenderer::drawCursor(const terrain::Terrain& planet, const Cursor& cursor,
                                 const terrain::Camera& camera, const Eigen::Matrix4d& clip) {
-  if (!(planet.chart().radius() > 0)) {
+  if (!(planet.chart().sphereRadius() > 0)) {
     drawSurfaceCursor(planet, cursor, camera, clip);
     return;
   }
@@ -21,7 +21,7 @@ void PlanetRenderer::drawCursor(const terrain::Terrain& planet, const Cursor& cu
   // it stays above the facets, and a cross at the control vertex.
   const core::Chart& chart = planet.chart();
   const Eigen::Vector3d n = chart.up(cursor.control.u, cursor.control.v);
-  const double R = chart.radius();
+  const double R = chart.sphereRadius();
   const double h = planet.height(cursor.control.u, cursor.control.v);
   Eigen::Vector3d e1 = n.unitOrthogonal(), e2 = n.cross(e1);
   const double angle = cursor.radius / R;

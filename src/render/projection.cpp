@@ -79,7 +79,7 @@ DepthRange depthRangeFor(const terrain::Camera& camera, const terrain::Terrain& 
   const core::ChartShape shape = core::shapeOf(planet.chart());
   if (shape == core::ChartShape::kTorus || shape == core::ChartShape::kCylinder)
     return tubeDepthRange(camera, planet, shape);
-  const double R = planet.chart().radius();
+  const double R = planet.chart().sphereRadius();
   const double hi = std::max(0.0, double(planet.maxHeight()));
   const double lo = std::min(0.0, double(planet.minHeight()));
   const double shell = R + hi, core = R + lo;  // spheres holding all of the surface

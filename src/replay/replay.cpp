@@ -177,13 +177,13 @@ FrameStepper::FrameStepper(const tracking::CameraCalibration& calib, terrain::Te
       p_->boardPlane = o_.scene.planet.layout->markers.front().inBody();
     }
   }
-  if (chart.radius() > 0) {
+  if (chart.sphereRadius() > 0) {
     p_->scene.setSurface([this](const Eigen::Vector3d& tracked) {
       if (!(tracked.norm() > 0)) return o_.scene.planetRadius;
       const Eigen::Vector3d p =
           rotated_ ? Eigen::Vector3d(userRotation_.transpose() * tracked) : tracked;
       const auto c = edit::nearestVertex(planet_.chart(), p);
-      return (planet_.chart().radius() + planet_.height(c.u, c.v)) / scale_;
+      return (planet_.chart().sphereRadius() + planet_.height(c.u, c.v)) / scale_;
     });
   } else {
     // A torus or a cylinder: the height along the surface's normal (edit/surface_height.hpp);
@@ -214,7 +214,7 @@ std::shared_ptr<const terrain::MeshPatch> FrameStepper::viewPatch() {
   Parts& p = *p_;
   const sand::TinSandTool* tool =
       o_.tool == ReplayTool::kTinSand && p.tinSand ? &*p.tinSand : nullptr;
-  if (!tool || !tool->region()) {
+  if (!tool || !tool->strokeTin()) {
     p.patch.reset();
     p.patchTool = nullptr;
     return nullptr;
@@ -227,8 +227,8 @@ std::shared_ptr<const terrain::MeshPatch> FrameStepper::viewPatch() {
   p.patchRevision = planet_.revision();
   p.patchStamps = tool->stamps();
   p.patch.reset();
-  if (tool->region()->holds(planet_.heights()))
-    p.patch = std::make_shared<const terrain::MeshPatch>(tool->region()->patch());
+  if (tool->strokeTin()->holds(planet_.heights()))
+    p.patch = std::make_shared<const terrain::MeshPatch>(tool->strokeTin()->patch());
   return p.patch;
 }
 
@@ -351,7 +351,7 @@ tracking::BoardHint FrameStepper::Parts::boardHint(const cv::Mat& grey,
 
 StepResult FrameStepper::step(const cv::Mat& image, int frame, double time) {
   const core::Chart& chart = planet_.chart();
-  const double R = chart.radius();
+  const double R = chart.sphereRadius();
   const double scale = scale_;
   const ReplayOptions& o = o_;
   edit::EditPipeline& pipeline = p_->pipeline;

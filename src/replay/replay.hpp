@@ -120,7 +120,7 @@ struct StepResult {
   std::string stroke = "none";  // none, begin, move, end
   // Heights sand settling changed this frame, outside the undo journal (displace tool); the
   // live app journals them (session/session_store.hpp).
-  terrain::GridRegion settled;
+  terrain::VertexBox settled;
   std::string logLine;  // the replay log's JSON line for this frame (no newline)
   StepTimes times;
   // The tool's solid and stick (tracking/tool_shape.hpp) as triangles in the planet frame

@@ -27,7 +27,7 @@ double largestSpacing(const core::Chart& chart) {
   // charts` at 8193^2: octahedral at most 0.84x, its central projection 0.78x): the same bound.
   if (dynamic_cast<const core::LatLongChart*>(&chart) ||
       dynamic_cast<const core::OctahedralChart*>(&chart)) {
-    return 2.0 * std::numbers::pi * chart.radius() / chart.grid().m();
+    return 2.0 * std::numbers::pi * chart.sphereRadius() / chart.grid().m();
   }
   if (const auto* flat = dynamic_cast<const core::FlatChart*>(&chart)) {
     return std::max(flat->dx(), flat->dy());
@@ -67,11 +67,11 @@ void DisplacementSettings::validate(const core::Chart* chart) const {
       throw core::InputError("tool radius r = " + core::exactNumber(radius) +
                              " m is below one grid cell (" + core::exactNumber(cell) + " m)");
     }
-    if (chart->radius() > 0.0) {
-      if (radius > chart->radius()) {
+    if (chart->sphereRadius() > 0.0) {
+      if (radius > chart->sphereRadius()) {
         throw core::InputError("tool radius r = " + core::exactNumber(radius) +
                                " m is larger than the planet (radius " +
-                               core::exactNumber(chart->radius()) + " m)");
+                               core::exactNumber(chart->sphereRadius()) + " m)");
       }
     } else if (const double tube = tubeRadius(*chart); tube > 0.0) {
       // A sphere wider than the tube would press through it (and, on a torus, across the hole).
@@ -106,7 +106,7 @@ DisplacementTool::DisplacementTool(std::shared_ptr<const core::Chart> chart,
 
 double DisplacementTool::reach(const edit::ToolContext& ctx) const {
   const double r = settings_.radius;
-  const double R = grid_.chart().radius();
+  const double R = grid_.chart().sphereRadius();
   if (!(R > 0.0)) return r;
   const double L = ctx.input.position.norm();
   if (!(L > r)) return 2.0 * R;  // the sphere holds the planet's centre: it can reach anywhere
@@ -117,7 +117,7 @@ double DisplacementTool::reach(const edit::ToolContext& ctx) const {
 const edit::Region& DisplacementTool::grow(const edit::ToolContext& ctx) const {
   double radius =
       reach(ctx) + settings_.rampartWidth * settings_.radius + 2.0 * largestSpacing(grid_.chart());
-  const double R = grid_.chart().radius();
+  const double R = grid_.chart().sphereRadius();
   if (R > 0.0) radius = std::min(radius, 2.05 * R);
   grower_.grow(ctx.field, radius, footprint_);
   return footprint_;
@@ -127,12 +127,12 @@ const edit::Region& DisplacementTool::footprint(const edit::ToolContext& ctx) co
   return grow(ctx);
 }
 
-terrain::GridRegion DisplacementTool::apply(const edit::ToolContext& ctx,
-                                            std::span<float> heights) const {
+terrain::VertexBox DisplacementTool::apply(const edit::ToolContext& ctx,
+                                           std::span<float> heights) const {
   settings_.validate(&ctx.terrain.chart());
   if (ctx.terrain.grid().n() != grid_.grid().n() ||
       ctx.terrain.chart().name() != grid_.chart().name() ||
-      ctx.terrain.chart().radius() != grid_.chart().radius()) {
+      ctx.terrain.chart().sphereRadius() != grid_.chart().sphereRadius()) {
     throw core::InputError("displacement tool: made for a " + grid_.chart().name() + " " +
                            grid_.grid().label() + " chart, applied to a " +
                            ctx.terrain.chart().name() + " " + ctx.terrain.grid().label() + " one");
@@ -186,7 +186,7 @@ terrain::GridRegion DisplacementTool::apply(const edit::ToolContext& ctx,
     }
   });
   const double V = removed.value();
-  if (!(V > 0.0)) return terrain::GridRegion::none();
+  if (!(V > 0.0)) return terrain::VertexBox::none();
 
   // Positive filter: the rampart ring (a, a + w).
   const double w = settings_.rampartWidth * r;
@@ -198,7 +198,7 @@ terrain::GridRegion DisplacementTool::apply(const edit::ToolContext& ctx,
   CompensatedSum weights;
   for (const Entry& e : entries) weights.add(grid_.cellArea(e.u, e.v) * profile(e));
   const double S = weights.value();
-  if (!(S > 0.0)) return terrain::GridRegion::none();  // nowhere to put it (the whole planet)
+  if (!(S > 0.0)) return terrain::VertexBox::none();  // nowhere to put it (the whole planet)
   const double k = V / S;
 
   const double limit = ctx.heightLimit;
@@ -245,7 +245,7 @@ terrain::GridRegion DisplacementTool::apply(const edit::ToolContext& ctx,
   stats_.depositedVolume = deposited.value();
   stats_.floatVolumeChange = floatChange.value();
   stats_.contactRadius = a;
-  terrain::GridRegion dirty = F.bounds();
+  terrain::VertexBox dirty = F.bounds();
   dirty.vBegin = vFirst;
   dirty.vEnd = vLast;
   if (grid_.tube()) {
@@ -260,7 +260,7 @@ terrain::GridRegion DisplacementTool::apply(const edit::ToolContext& ctx,
   if (listener_ && grid_.tube()) {
     // The settler marks what it is told: on the torus the written vertices beyond the centre's
     // half lie in the box's images (across the v seam and the midline), which it is told too.
-    for (const terrain::GridRegion& image : terrain::gluedImages(chart, dirty))
+    for (const terrain::VertexBox& image : terrain::gluedImages(chart, dirty))
       listener_->edited(image, settings_.material);
   } else if (listener_) {
     listener_->edited(dirty, settings_.material);

@@ -71,7 +71,7 @@ class DisplacementTool final : public edit::Tool {
   double spacing() const override { return settings_.spacing * settings_.radius; }
   const edit::Region& footprint(const edit::ToolContext& ctx) const override;
   bool footprintIsRegion() const override { return false; }
-  terrain::GridRegion apply(const edit::ToolContext& ctx, std::span<float> heights) const override;
+  terrain::VertexBox apply(const edit::ToolContext& ctx, std::span<float> heights) const override;
 
  private:
   // Distance (chord on the reference surface) from the control vertex within which the sphere

@@ -1,6 +1,6 @@
 #pragma once
 #include "sand/material.hpp"
-#include "terrain/grid_region.hpp"
+#include "terrain/vertex_box.hpp"
 
 namespace ps::sand {
 
@@ -9,7 +9,7 @@ namespace ps::sand {
 class EditListener {
  public:
   virtual ~EditListener() = default;
-  virtual void edited(const terrain::GridRegion& region, const Material& material) = 0;
+  virtual void edited(const terrain::VertexBox& region, const Material& material) = 0;
 };
 
 }  // namespace ps::sand

@@ -8,7 +8,7 @@ namespace ps::sand {
 // ---------------------------------------------------------------------------------------------
 // Activity
 
-void SandField::mark(const terrain::GridRegion& region) {
+void SandField::mark(const terrain::VertexBox& region) {
   if (region.empty()) return;
   if (grid_.glued()) {
     // A change at a twin on a glued side is a change at its point: the region's images across
@@ -35,7 +35,7 @@ void SandField::mark(const terrain::GridRegion& region) {
   markRegion(region);
 }
 
-void SandField::markRegion(const terrain::GridRegion& region) {
+void SandField::markRegion(const terrain::VertexBox& region) {
   if (region.empty()) return;
   const core::GridSize& g = grid_.grid();
   const int v0 = std::max(0, region.vBegin), v1 = std::min(m_, region.vEnd);
@@ -76,7 +76,7 @@ void SandField::markRegion(const terrain::GridRegion& region) {
   if (grid_.sphere()) {
     bool seam = false;
     region.forEachColumnRange(g, [&](int a, int b) { seam |= (b == m_ || a == m_); });
-    if (seam) markRegion(terrain::GridRegion{0, 0, v0, v1});
+    if (seam) markRegion(terrain::VertexBox{0, 0, v0, v1});
   }
 }
 

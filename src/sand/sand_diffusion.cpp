@@ -137,12 +137,12 @@ double profileFlux(const PushForce& force, double zetaInv, const Eigen::Vector3d
 double SandField::driftBetween(const PushForce& force, double zetaInv, const Eigen::Vector3d& pa,
                                const Eigen::Vector3d& pb, double faceLength) const {
   const core::Chart& chart = grid_.chart();
-  const bool sphere = chart.radius() > 0.0;
+  const bool sphere = chart.sphereRadius() > 0.0;
   const Eigen::Vector3d mid = 0.5 * (pa + pb);
   Eigen::Vector3d foot = force.centre;
   if (grid_.tube()) return driftOnTube(force, zetaInv, pa, pb, faceLength);
   if (sphere) {
-    foot = chart.radius() * force.centre.normalized();
+    foot = chart.sphereRadius() * force.centre.normalized();
   } else {
     foot.z() = 0.0;
   }
@@ -204,7 +204,7 @@ void SandField::markForce(const PushForce& force) {
     tubeFootUp_ = grid_.tubeNormal(tubeFoot_);
     tubeFootValid_ = true;
     const int uc = int(std::lround((*foot)(0))), vc = int(std::lround((*foot)(1)));
-    terrain::GridRegion r{uc - ru, uc + ru, std::max(0, vc - rv), std::min(m_, vc + rv)};
+    terrain::VertexBox r{uc - ru, uc + ru, std::max(0, vc - rv), std::min(m_, vc + rv)};
     if (2 * ru + 1 >= m_) r.uBegin = 0, r.uEnd = m_;
     mark(r);
     return;
@@ -213,7 +213,7 @@ void SandField::markForce(const PushForce& force) {
     // A box about the foot at a quarter of lat-long's equatorial spacing (the octahedral
     // charts' smallest is above 0.3 of it), and its images across the folds and midlines
     // (mark() adds the folds'; the midlines' hold the disc's parts in other quadrants).
-    const double spacing = 0.25 * 2.0 * std::numbers::pi * chart.radius() / m_;
+    const double spacing = 0.25 * 2.0 * std::numbers::pi * chart.sphereRadius() / m_;
     const int d = int(std::min(double(m_), std::ceil(force.radius / spacing))) + 2;
     const int uc = int(std::lround((*foot)(0))), vc = int(std::lround((*foot)(1)));
     const core::GridBox box{std::max(0, uc - d), std::min(m_, uc + d), std::max(0, vc - d),
@@ -226,7 +226,7 @@ void SandField::markForce(const PushForce& force) {
   const double spacingV = grid_.sphere() ? grid_.vertical(m_ / 2) : grid_.vertical(0);
   const int dv = int(std::ceil(force.radius / spacingV)) + 2;
   const int vc = int(std::lround((*foot)(1))), uc = int(std::lround((*foot)(0)));
-  terrain::GridRegion r;
+  terrain::VertexBox r;
   r.vBegin = std::max(0, vc - dv);
   r.vEnd = std::min(m_, vc + dv);
   double minH = std::numeric_limits<double>::infinity();

@@ -193,10 +193,10 @@ void SandField::gather(int tu, int tv, double* hs) const {
 // ---------------------------------------------------------------------------------------------
 // Output
 
-terrain::GridRegion SandField::writeBack(double limit) {
+terrain::VertexBox SandField::writeBack(double limit) {
   const core::GridSize& g = grid_.grid();
   const bool sphere = grid_.sphere(), glued = grid_.glued();
-  terrain::GridRegion dirty = terrain::GridRegion::none();
+  terrain::VertexBox dirty = terrain::VertexBox::none();
   // Each height is rounded to float with the volume its rounding loses carried to the next one
   // (error diffusion, carry_ kept from one write-back to the next): the floats' volume then
   // stays within a few cells' rounding of the volume the steps conserve (in the doubles, which
@@ -241,9 +241,9 @@ terrain::GridRegion SandField::writeBack(double limit) {
       }
     });
     if (vb < 0) continue;
-    terrain::GridRegion r{ua, ub, va, vb};
+    terrain::VertexBox r{ua, ub, va, vb};
     const bool seam = sphere || grid_.tube();  // u = m is the point at u = 0
-    if (seam && ua == 0) r = terrain::GridRegion{m_, m_ + ub, va, vb};  // names u = m too
+    if (seam && ua == 0) r = terrain::VertexBox{m_, m_ + ub, va, vb};  // names u = m too
     dirty = dirty.unite(r, g, seam);
   }
   if (sphere) {
@@ -255,14 +255,14 @@ terrain::GridRegion SandField::writeBack(double limit) {
       const float f = round(0, v, pole.h);
       bool changed = false;
       for (int u = 0; u <= m_; ++u) changed |= store(u, v, f);
-      if (changed) dirty = dirty.unite(terrain::GridRegion{0, m_, v, v}, g, sphere);
+      if (changed) dirty = dirty.unite(terrain::VertexBox{0, m_, v, v}, g, sphere);
     }
   }
   return dirty;
 }
 
-terrain::GridRegion SandField::release(double limit) {
-  const terrain::GridRegion dirty = writeBack(limit);
+terrain::VertexBox SandField::release(double limit) {
+  const terrain::VertexBox dirty = writeBack(limit);
   for (std::size_t t = 0; t < tiles_.size(); ++t) {
     if (busy_[t] || marked_[t]) continue;
     tiles_[t].reset();

@@ -12,7 +12,7 @@
 #include "core/chart.hpp"
 #include "sand/material.hpp"
 #include "sand/sand_grid.hpp"
-#include "terrain/grid_region.hpp"
+#include "terrain/vertex_box.hpp"
 
 namespace ps::sand {
 
@@ -77,7 +77,7 @@ class SandField {
 
   // The floats in `region` changed outside the field: resident cells there are reloaded and the
   // region's tiles are visited by the next step.
-  void mark(const terrain::GridRegion& region);
+  void mark(const terrain::VertexBox& region);
   // Every tile (and pole) is visited by the next step.
   void markAll();
   // Compares every resident cell with its float; reloads and marks those that differ. Returns
@@ -110,7 +110,7 @@ class SandField {
   // Writes the floats of every tile changed since the last write-back (rounded to nearest,
   // clamped to +-limit; seam twins and whole pole rows) and returns the rectangle of floats
   // that changed (empty when none did).
-  terrain::GridRegion writeBack(double limit);
+  terrain::VertexBox writeBack(double limit);
 
   // Current height (double) of a grid vertex.
   double height(int u, int v) const;
@@ -120,7 +120,7 @@ class SandField {
   double volume() const;
 
   // Writes back and forgets every resident tile that has nothing pending (frees memory).
-  terrain::GridRegion release(double limit);
+  terrain::VertexBox release(double limit);
   std::size_t residentTiles() const;
   std::size_t residentBytes() const;
 
@@ -169,7 +169,7 @@ class SandField {
 
   // The octahedral chart (sand_glued.cpp): per-cell geometry, a one-cell halo read across the
   // glued sides through the chart's gluing, the thermal step in two passes over the tiles.
-  void markRegion(const terrain::GridRegion& region);
+  void markRegion(const terrain::VertexBox& region);
   void loadGeometry(Tile& tile, int t);
   // Fills the kGeoPlanes planes of tile t's cells into geo; returns min A / sum_f (L_f / d_f).
   double computeGeometry(int t, double* geo) const;

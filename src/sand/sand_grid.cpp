@@ -51,7 +51,7 @@ SandGrid::SandGrid(std::shared_ptr<const core::Chart> chart)
   if (const auto* ll = dynamic_cast<const core::LatLongChart*>(chart_.get())) {
     sphere_ = true;
     columns_ = m_;
-    const double R = ll->radius();
+    const double R = ll->sphereRadius();
     const double dlat = kPi / m_, dlon = 2.0 * kPi / m_;
     cellSize_ = R * dlat;
     // Evaluated from the nearer pole so that the two hemispheres get bitwise mirrored values.
@@ -101,7 +101,7 @@ SandGrid::SandGrid(std::shared_ptr<const core::Chart> chart)
     return;
   }
   if (const auto* oct = dynamic_cast<const core::OctahedralChart*>(chart_.get())) {
-    buildGlued(oct->radius());
+    buildGlued(oct->sphereRadius());
     return;
   }
   if (const auto* torus = dynamic_cast<const core::TorusChart*>(chart_.get())) {

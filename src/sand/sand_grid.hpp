@@ -9,8 +9,8 @@
 
 namespace ps::sand {
 
-// The cells the sand core moves material between, and their geometry, on the two charts it
-// knows (docs/SAND.md, "Cells, areas and the poles"):
+// The cells the sand core moves material between, and their geometry, on each of the five
+// charts (docs/SAND.md, "Cells, areas and the poles"):
 //
 // * Lat-long (a sphere of radius R): a vertex (u, v), 0 < v < m, owns the cell
 //   [lat - dlat/2, lat + dlat/2] x [lon - dlon/2, lon + dlon/2] with the exact spherical area

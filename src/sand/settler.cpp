@@ -57,7 +57,7 @@ Settler::Settler(terrain::Terrain& terrain, Material material, SettleSettings se
   settings_.validate();
 }
 
-void Settler::edited(const terrain::GridRegion& region, const Material& material) {
+void Settler::edited(const terrain::VertexBox& region, const Material& material) {
   material.validate();
   material_ = material;
   if (!region.empty()) pending_.push_back(region);
@@ -83,7 +83,7 @@ FrameReport Settler::frame() {
   // Heights changed outside: what the field holds is re-read where it differs (and settles
   // there); the reported regions settle.
   if (terrain_.revision() != expectedRevision_) field_.resync();
-  for (const terrain::GridRegion& r : pending_) field_.mark(r);
+  for (const terrain::VertexBox& r : pending_) field_.mark(r);
   pending_.clear();
   const PushForce* force = force_ ? &*force_ : nullptr;
   while (rep.steps < settings_.maxStepsPerFrame && (!field_.atRest() || force)) {

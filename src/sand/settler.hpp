@@ -9,8 +9,8 @@
 #include "sand/listener.hpp"
 #include "sand/material.hpp"
 #include "sand/sand_field.hpp"
-#include "terrain/grid_region.hpp"
 #include "terrain/terrain.hpp"
+#include "terrain/vertex_box.hpp"
 
 namespace ps::sand {
 
@@ -39,7 +39,7 @@ struct SettleSettings {
 struct FrameReport {
   int steps = 0;
   std::size_t cellSteps = 0;
-  terrain::GridRegion dirty;  // floats that changed (what Terrain::commitEdit was told)
+  terrain::VertexBox dirty;  // floats that changed (what Terrain::commitEdit was told)
   std::size_t boundsVertices = 0;
   bool atRest = false;
   double simulateMs = 0, writeMs = 0, boundsMs = 0, totalMs = 0;
@@ -60,7 +60,7 @@ class Settler final : public EditListener {
                    SettleSettings settings = {});
 
   // From a tool (or the app): `region` changed and settles as `material` from now on.
-  void edited(const terrain::GridRegion& region, const Material& material) override;
+  void edited(const terrain::VertexBox& region, const Material& material) override;
   // Settle everything (e.g. a terrain loaded from a file).
   void settleAll();
 
@@ -83,7 +83,7 @@ class Settler final : public EditListener {
   Material material_;
   SettleSettings settings_;
   std::optional<PushForce> force_;
-  std::vector<terrain::GridRegion> pending_;
+  std::vector<terrain::VertexBox> pending_;
   std::uint64_t expectedRevision_ = 0;
   float limit_ = 0;
 };

@@ -14,7 +14,7 @@
 namespace ps::sand {
 
 double smallestCurvatureRadius(const core::Chart& chart) {
-  if (chart.radius() > 0) return chart.radius();
+  if (chart.sphereRadius() > 0) return chart.sphereRadius();
   if (const auto* torus = dynamic_cast<const core::TorusChart*>(&chart))
     return std::min(torus->minorRadius(), torus->majorRadius() - torus->minorRadius());
   if (const auto* tube = dynamic_cast<const core::CylinderChart*>(&chart))
@@ -66,7 +66,7 @@ void TinSandToolSettings::validate(const core::Chart* chart) const {
   if (std::isfinite(curvature) && 2.5 * radius > 0.25 * curvature)
     throw core::InputError("TIN sand tool: its region (at least " +
                            core::exactNumber(2.5 * radius) + " m) is over " +
-                           (chart->radius() > 0 ? std::string("a quarter of the planet's radius")
+                           (chart->sphereRadius() > 0 ? std::string("a quarter of the planet's radius")
                                                 : "a quarter of the " + chart->name() +
                                                       "'s smallest radius of "
                                                       "curvature (" +
@@ -83,36 +83,36 @@ double TinSandTool::regionMetres(const core::Chart& chart) const {
 }
 
 bool TinSandTool::reusable(const edit::ToolContext& ctx) const {
-  if (!settings_.persistent || !region_ || !(regionSettings_ == settings_)) return false;
+  if (!settings_.persistent || !strokeTin_ || !(strokeTinSettings_ == settings_)) return false;
   const core::Chart& chart = ctx.terrain.chart();
   const Eigen::Vector2d c =
-      region_->frame().project(chart.position(ctx.control.u, ctx.control.v, 0.0));
-  return region_->sand().tin().depthInside(c) >= kReuseDepth * settings_.radius &&
-         region_->holds(ctx.terrain.heights());
+      strokeTin_->frame().project(chart.position(ctx.control.u, ctx.control.v, 0.0));
+  return strokeTin_->sand().tin().depthInside(c) >= kReuseDepth * settings_.radius &&
+         strokeTin_->holds(ctx.terrain.heights());
 }
 
 const edit::Region& TinSandTool::footprint(const edit::ToolContext& ctx) const {
-  if (reusable(ctx)) return region_->footprint();
+  if (reusable(ctx)) return strokeTin_->footprint();
   grower_.grow(ctx.field, regionMetres(ctx.terrain.chart()), footprint_);
   return footprint_;
 }
 
-terrain::GridRegion TinSandTool::apply(const edit::ToolContext& ctx,
-                                       std::span<float> heights) const {
+terrain::VertexBox TinSandTool::apply(const edit::ToolContext& ctx,
+                                      std::span<float> heights) const {
   settings_.validate(&ctx.terrain.chart());
   stats_ = {};
   ++stamps_;
   const core::Chart& chart = ctx.terrain.chart();
   if (!reusable(ctx)) {
     const edit::Region& F = footprint(ctx);
-    region_.reset();  // its TIN's memory back before the next is made
-    region_.emplace(chart, heights, F, ctx.control, settings_.tolerance * settings_.radius,
-                    settings_.sand);
-    regionSettings_ = settings_;
+    strokeTin_.reset();  // its TIN's memory back before the next is made
+    strokeTin_.emplace(chart, heights, F, ctx.control, settings_.tolerance * settings_.radius,
+                       settings_.sand);
+    strokeTinSettings_ = settings_;
     ++tinsMade_;
     stats_.madeTin = true;
   }
-  TinRegion& region = *region_;
+  StrokeTin& region = *strokeTin_;
   TinSand& sand = region.sand();
   stats_.generation = region.generation();
   stats_.gridVertices = region.gridPoints();
@@ -134,11 +134,11 @@ terrain::GridRegion TinSandTool::apply(const edit::ToolContext& ctx,
   stats_.tinVertices = sand.tin().vertexCount();
   stats_.tinTriangles = sand.tin().triangleCount();
 
-  const TinRegionWrite w = region.writeBack(heights, cells_, ctx.heightLimit);
+  const StrokeTinWrite w = region.writeBack(heights, cells_, ctx.heightLimit);
   stats_.changed = w.changed;
   stats_.gridVolumeCorrection = w.volumeCorrection;
-  const terrain::GridRegion dirty = region.footprint().bounds();
-  if (!settings_.persistent) region_.reset();
+  const terrain::VertexBox dirty = region.footprint().bounds();
+  if (!settings_.persistent) strokeTin_.reset();
   return dirty;
 }
 

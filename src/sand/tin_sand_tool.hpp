@@ -1,6 +1,6 @@
 #pragma once
 // The sand TIN as an edit tool: a TIN of the region around a stroke's first stamp, made from
-// the terrain's heights with the TIN export's error-bounded generation (sand/tin_region: in the
+// the terrain's heights with the TIN export's error-bounded generation (sand/stroke_tin: in the
 // tangent plane at that stamp, so it works the same at a pole, across lat-long's seam, across
 // the octahedral chart's folds and the torus's and the cylinder's seams, and on a flat grid),
 // persists while the stroke's stamps stay inside it; each stamp presses the tool into
@@ -20,7 +20,7 @@
 #include "edit/region_growing.hpp"
 #include "edit/tool.hpp"
 #include "sand/sand_grid.hpp"
-#include "sand/tin_region.hpp"
+#include "sand/stroke_tin.hpp"
 #include "sand/tin_sand.hpp"
 
 namespace ps::sand {
@@ -42,7 +42,7 @@ struct TinSandToolSettings {
   // grid point a vertex, error 0).
   double tolerance = 1e-3;
   // Around each stamp, within this x radius, the region TIN takes every grid point at the
-  // grid's height before the stamp (TinRegion::densify; 0: none), [0, 8]. 2.05: the stamp's
+  // grid's height before the stamp (StrokeTin::densify; 0: none), [0, 8]. 2.05: the stamp's
   // reach, so a stamp and its erosion act on the grid's every point as on the all-points TIN
   // (one stamp without erosion: 0.06 m RMS from it; 1.25: 6.6 m; 0: 8.5 m, and with erosion
   // on a coarse TIN 53 m: its long edges flow otherwise).
@@ -98,7 +98,7 @@ class TinSandTool final : public edit::Tool {
   std::size_t stamps() const { return stamps_; }
   // The region's TIN as the last stamp left it (null before the first stamp, and after a
   // stroke's start until its first stamp).
-  const TinRegion* region() const { return region_ ? &*region_ : nullptr; }
+  const StrokeTin* strokeTin() const { return strokeTin_ ? &*strokeTin_ : nullptr; }
   // The region's radius (m) on `chart`: regionRadius x radius, at most a quarter of the
   // surface's smallest radius of curvature (smallestCurvatureRadius).
   double regionMetres(const core::Chart& chart) const;
@@ -109,8 +109,8 @@ class TinSandTool final : public edit::Tool {
   double spacing() const override { return settings_.spacing * settings_.radius; }
   const edit::Region& footprint(const edit::ToolContext& ctx) const override;
   bool footprintIsRegion() const override { return false; }
-  terrain::GridRegion apply(const edit::ToolContext& ctx, std::span<float> heights) const override;
-  void beginStroke() const override { region_.reset(); }
+  terrain::VertexBox apply(const edit::ToolContext& ctx, std::span<float> heights) const override;
+  void beginStroke() const override { strokeTin_.reset(); }
 
  private:
   // Whether the stamp at ctx can use the region TIN as it is.
@@ -122,8 +122,8 @@ class TinSandTool final : public edit::Tool {
   mutable edit::RegionGrower grower_;
   mutable edit::Region footprint_;
   mutable TinSandToolStats stats_;
-  mutable std::optional<TinRegion> region_;
-  mutable TinSandToolSettings regionSettings_;  // the settings region_ was made with
+  mutable std::optional<StrokeTin> strokeTin_;
+  mutable TinSandToolSettings strokeTinSettings_;  // the settings strokeTin_ was made with
   mutable std::size_t tinsMade_ = 0;
   mutable std::size_t stamps_ = 0;
 };

@@ -14,10 +14,10 @@ HeightsShadow::HeightsShadow(const terrain::Terrain& planet)
       revision_(planet.revision()) {}
 
 void HeightsShadow::noteAll() {
-  for (int v = 0; v < side_; ++v) note(terrain::GridRegion{0, side_ - 1, v, v});
+  for (int v = 0; v < side_; ++v) note(terrain::VertexBox{0, side_ - 1, v, v});
 }
 
-void HeightsShadow::note(const terrain::GridRegion& region) {
+void HeightsShadow::note(const terrain::VertexBox& region) {
   if (region.empty()) return;
   region.forEachColumnRange(grid_, [&](int u0, int u1) {
     for (int v = std::max(0, region.vBegin); v <= std::min(side_ - 1, region.vEnd); ++v) {
@@ -36,7 +36,7 @@ void HeightsShadow::note(const terrain::GridRegion& region) {
 void HeightsShadow::follow(const terrain::Terrain& planet) {
   if (planet.revision() == revision_) return;
   if (planet.changedSince(revision_, scratch_)) {
-    for (const terrain::GridRegion& r : scratch_) note(r);
+    for (const terrain::VertexBox& r : scratch_) note(r);
   } else {
     noteAll();
   }

@@ -32,7 +32,7 @@ class HeightsShadow {
 
  private:
   void noteAll();
-  void note(const terrain::GridRegion& region);
+  void note(const terrain::VertexBox& region);
 
   core::GridSize grid_;
   int side_ = 0;
@@ -42,7 +42,7 @@ class HeightsShadow {
   std::size_t dirtyRows_ = 0;
   int lowRow_ = 0, highRow_ = -1;  // the noted rows lie within [lowRow_, highRow_]
   std::uint64_t revision_ = 0;
-  std::vector<terrain::GridRegion> scratch_;
+  std::vector<terrain::VertexBox> scratch_;
 };
 
 }  // namespace ps::session

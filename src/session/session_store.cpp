@@ -202,7 +202,7 @@ void SessionStore::onCommitted(edit::JournalEvent event,
   append(kind, options_.syncRecords);
 }
 
-void SessionStore::recordRegion(const terrain::GridRegion& region) noexcept {
+void SessionStore::recordRegion(const terrain::VertexBox& region) noexcept {
   if (region.empty()) return;
   scratch_.clear();
   const core::GridSize& g = planet_.grid();

@@ -17,8 +17,8 @@
 #include "io/stroke_journal.hpp"
 #include "session/heights_shadow.hpp"
 #include "session/session_writer.hpp"
-#include "terrain/grid_region.hpp"
 #include "terrain/terrain.hpp"
+#include "terrain/vertex_box.hpp"
 
 namespace ps::session {
 
@@ -89,7 +89,7 @@ class SessionStore final : public edit::JournalListener {
                    std::span<const edit::HeightChange> changes) noexcept override;
   // Heights changed outside the undo journal (sand settling): the rectangle's heights are
   // journaled as they are now (written, flushed to disk with the next stroke record).
-  void recordRegion(const terrain::GridRegion& region) noexcept;
+  void recordRegion(const terrain::VertexBox& region) noexcept;
 
   // Once a frame: brings the save's copy of the heights up to date (a bounded copy) and starts
   // a save in the background when the autosave interval has passed since the last one (or one

@@ -173,7 +173,7 @@ void SessionWriter::doSave(const Job& job) {
     serviceRecords();
     io::JournalBase base;
     base.side = std::uint32_t(chart_->grid().side());
-    base.radius = chart_->radius();
+    base.radius = chart_->sphereRadius();
     base.heightsCrc = crc;
     base.generation = job.generation;
     try {

@@ -58,7 +58,7 @@ class BoundKernels {
   // level reads rows v - s .. v + s each). Call at the start of each work item: the heights may
   // have changed since the rows were read.
   void forgetRows() const {
-    for (Strip& strip : scratch().rows) strip.v = -1;
+    for (CachedRow& row : scratch().rows) row.v = -1;
   }
   // Level 0 or 1: the vertices uFirst, uFirst + 2, ..., uLast of row v, 1 <= v < m,
   // 1 <= uFirst <= uLast < m (all four neighbours in the grid).
@@ -68,7 +68,7 @@ class BoundKernels {
   void stencilRow(int v, int uFirst, std::size_t count) const;
 
  private:
-  struct Strip {  // positions of row v's columns uLo .. uHi
+  struct CachedRow {  // positions of row v's columns uLo .. uHi, kept for the next runs
     int v = -1, uLo = 0, uHi = -1;
     std::vector<double> x, y, z;
   };
@@ -77,9 +77,9 @@ class BoundKernels {
   struct Positions {
     const double *x, *y, *z;
   };
-  struct Scratch {               // per thread, reused from run to run
-    std::array<Strip, 16> rows;  // row v in rows[v % 16]: the 2s + 1 <= 9 rows a run reads
-                                 // and the next run's are distinct
+  struct Scratch {                   // per thread, reused from run to run
+    std::array<CachedRow, 16> rows;  // row v in rows[v % 16]: the 2s + 1 <= 9 rows a run reads
+                                     // and the next run's are distinct
     std::array<std::vector<double>, 5> distances;  // children, then the error
     std::array<std::vector<double>, 9> frame;      // a triangle's corner and edge vectors
     std::vector<double> radii;
@@ -96,18 +96,18 @@ class BoundKernels {
       const PositionBoxes::Row r = boxes_->row(v, uLo, uHi);
       if (r.x) return {r.x, r.y, r.z};
     }
-    Strip& strip = scratch().rows[std::size_t(v) & 15];
-    if (strip.v != v || strip.uLo > uLo || strip.uHi < uHi) {
+    CachedRow& kept = scratch().rows[std::size_t(v) & 15];
+    if (kept.v != v || kept.uLo > uLo || kept.uHi < uHi) {
       // One column more on each side: level 0's rows of the other parity ask one column
       // further along.
-      strip.v = v, strip.uLo = std::max(0, uLo - 1), strip.uHi = std::min(g_.m(), uHi + 1);
-      const std::size_t n = std::size_t(strip.uHi - strip.uLo + 1);
-      strip.x.resize(n), strip.y.resize(n), strip.z.resize(n);
-      chart_.rowPositions(v, strip.uLo, strip.uHi, heights_ + g_.index(0, v),
-                          {strip.x.data(), strip.y.data(), strip.z.data()});
+      kept.v = v, kept.uLo = std::max(0, uLo - 1), kept.uHi = std::min(g_.m(), uHi + 1);
+      const std::size_t n = std::size_t(kept.uHi - kept.uLo + 1);
+      kept.x.resize(n), kept.y.resize(n), kept.z.resize(n);
+      chart_.rowPositions(v, kept.uLo, kept.uHi, heights_ + g_.index(0, v),
+                          {kept.x.data(), kept.y.data(), kept.z.data()});
     }
-    const std::size_t shift = std::size_t(uLo - strip.uLo);
-    return {strip.x.data() + shift, strip.y.data() + shift, strip.z.data() + shift};
+    const std::size_t shift = std::size_t(uLo - kept.uLo);
+    return {kept.x.data() + shift, kept.y.data() + shift, kept.z.data() + shift};
   }
   static double dist2(double x0, double y0, double z0, double x1, double y1, double z1) {
     const double dx = x0 - x1, dy = y0 - y1, dz = z0 - z1;
@@ -188,7 +188,7 @@ void BoundKernels<ChartT>::fineRow(int v, int uFirst, int uLast) const {
   const double *bx = below.x, *by = below.y, *bz = below.z;
   const double *rx = here.x, *ry = here.y, *rz = here.z;
   const double *ax = above.x, *ay = above.y, *az = above.z;
-  // Vertex k sits at strip index 2k + 1; its neighbours left, right, below and above.
+  // Vertex k sits at the row's index 2k + 1; its neighbours left, right, below and above.
   double* left = w.distances[0].data();
   double* right = w.distances[1].data();
   double* down = w.distances[2].data();
@@ -305,7 +305,7 @@ void BoundKernels<ChartT>::stencilRun(const Rows& rows, int v, int runFirst, std
     // The triangle being scanned: corner a, edge vectors d0 = b0 - a and d1 = b1 - a. With s = 4
     // (9-21 points per triangle) they are written once per triangle, vertex by vertex
     // (contiguous: every scanned point reads them); with s = 2 (1-3 points) that costs more
-    // than it saves and the points read the corners from the strips. The same arithmetic.
+    // than it saves and the points read the corners from the cached rows. The same arithmetic.
     const bool framed = s >= 4;
     Positions A{}, E0{}, E1{};
     auto setFrame = [&](const Positions& a, const Positions& e0, const Positions& e1) {

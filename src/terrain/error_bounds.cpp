@@ -80,7 +80,7 @@ class LevelPass {
 
   // Seam twins hold the combined values of both halves of their diamond. Returns the vertices
   // computed (none when the region does not reach the seam).
-  std::size_t seamTwins(const core::GridSize& g, const GridRegion& region) const {
+  std::size_t seamTwins(const core::GridSize& g, const VertexBox& region) const {
     if (!seamTwinsLater_) return 0;
     const int m = plan_.m, s = plan_.s;
     bool touchesSeam = region.coversAllColumns(g);
@@ -216,7 +216,7 @@ class LevelPass {
 template <class ChartT>
 std::size_t gluedTwins(const ChartT& chart, const detail::VertexBounds<ChartT>& vertices,
                        BoundCodes* codes, const LatticeCopy& lattice, int s,
-                       const std::vector<CutRegion>& regions) {
+                       const std::vector<CutBox>& regions) {
   const core::GridSize g = chart.grid();
   const int m = g.m();
   const core::Gluing gl = chart.gluing();
@@ -226,9 +226,9 @@ std::size_t gluedTwins(const ChartT& chart, const detail::VertexBounds<ChartT>& 
   // The level's side vertices (k / s odd along the side) that a region reaches, each point once
   // (by its canonical vertex).
   std::vector<std::pair<int, int>> points;  // (v, u) of the canonical vertex
-  for (const CutRegion& region : regions) {
+  for (const CutBox& region : regions) {
     // (Named, not bound: clang 14 cannot capture structured bindings.)
-    const GridRegion& r = region.box;
+    const VertexBox& r = region.box;
     const Diagonals& cut = region.cut;
     // The side's vertices from a to b within the region's cut: along a row v = fixed its
     // columns, along a column u = fixed the rows where u + v and u - v are within the limits.
@@ -288,9 +288,9 @@ namespace {
 // Sorts regions and replaces those whose boxes overlap or touch by the box around both, cut by
 // the hull of both cuts, until none overlap: one pass over their union instead of one per
 // region (a corner's four images, grown over the upper levels).
-void mergeBoxes(std::vector<CutRegion>& regions) {
-  std::sort(regions.begin(), regions.end(), [](const CutRegion& x, const CutRegion& y) {
-    const GridRegion &a = x.box, &b = y.box;
+void mergeBoxes(std::vector<CutBox>& regions) {
+  std::sort(regions.begin(), regions.end(), [](const CutBox& x, const CutBox& y) {
+    const VertexBox &a = x.box, &b = y.box;
     return std::tie(a.vBegin, a.uBegin, a.vEnd, a.uEnd) <
            std::tie(b.vBegin, b.uBegin, b.vEnd, b.uEnd);
   });
@@ -298,7 +298,7 @@ void mergeBoxes(std::vector<CutRegion>& regions) {
     merged = false;
     for (std::size_t i = 0; i < regions.size() && !merged; ++i)
       for (std::size_t j = i + 1; j < regions.size() && !merged; ++j) {
-        const GridRegion &a = regions[i].box, &b = regions[j].box;
+        const VertexBox &a = regions[i].box, &b = regions[j].box;
         if (a.uBegin > b.uEnd + 1 || b.uBegin > a.uEnd + 1 || a.vBegin > b.vEnd + 1 ||
             b.vBegin > a.vEnd + 1)
           continue;
@@ -318,23 +318,23 @@ void mergeBoxes(std::vector<CutRegion>& regions) {
 // computed as before. None for a larger edit (the buffer stays with the thread).
 template <class ChartT>
 detail::PositionBoxes positionBoxes(const ChartT& chart, std::span<const float> heights,
-                                    const std::vector<CutRegion>& dirty) {
+                                    const std::vector<CutBox>& dirty) {
   constexpr std::size_t kMaxVertices = std::size_t(1) << 22;  // 96 MB of positions
   const core::GridSize g = chart.grid();
   int reach = ErrorBounds::kExactMaxHalfSize + 1;
   for (int l = 0; levelHalfSize(l) <= ErrorBounds::kExactMaxHalfSize; ++l)
     reach += levelHalfSize(l);
-  std::vector<CutRegion> areas;
-  for (const CutRegion& r : dirty) {
-    const CutRegion grown{r.box.grown(reach, g, false), r.cut.grown(reach)};
-    const std::vector<CutRegion> images = gluedImages(chart, grown, false);
+  std::vector<CutBox> areas;
+  for (const CutBox& r : dirty) {
+    const CutBox grown{r.box.grown(reach, g, false), r.cut.grown(reach)};
+    const std::vector<CutBox> images = gluedImages(chart, grown, false);
     areas.insert(areas.end(), images.begin(), images.end());
   }
   mergeBoxes(areas);
   std::size_t total = 0;
   std::vector<std::pair<std::size_t, int>> rows;  // (box, v)
   for (std::size_t b = 0; b < areas.size(); ++b) {
-    const GridRegion& a = areas[b].box;
+    const VertexBox& a = areas[b].box;
     total += std::size_t(a.uEnd - a.uBegin + 1) * std::size_t(a.vEnd - a.vBegin + 1);
     for (int v = a.vBegin; v <= a.vEnd; ++v) rows.push_back({b, v});
   }
@@ -376,15 +376,15 @@ detail::PositionBoxes positionBoxes(const ChartT& chart, std::span<const float> 
 
 template <class ChartT>
 void ErrorBounds::computeLevel(const ChartT& chart, std::span<const float> heights, int level,
-                               std::span<const CutRegion> regions,
-                               const std::vector<CutRegion>* gluedRegions,
+                               std::span<const CutBox> regions,
+                               const std::vector<CutBox>* gluedRegions,
                                const detail::PositionBoxes* boxes) {
   static_assert(kExactMaxHalfSize < (1 << kLatticeShift),
                 "the row kernels' levels hold no lattice vertex: they do not copy to it");
   const core::GridSize g = chart.grid();
   std::vector<detail::LevelPlan> plans;
   plans.reserve(regions.size());
-  for (const CutRegion& r : regions) plans.emplace_back(g, level, r);
+  for (const CutBox& r : regions) plans.emplace_back(g, level, r);
   BoundCodes* codes = codes_.data();
   const detail::VertexBounds<ChartT> vertices(chart, heights.data(), codes, level, rule_,
                                               hasRadii(), boxes);
@@ -496,31 +496,31 @@ void ErrorBounds::build(const core::Chart& chart, std::span<const float> heights
     lattice_ = Lattice{};
   }
   lastUpdateCount_ = 0;
-  const std::vector<CutRegion> all{{GridRegion::all(g), {}}};
-  const std::vector<CutRegion>* glued = chart.gluesSidesBeyondSeam() ? &all : nullptr;
+  const std::vector<CutBox> all{{VertexBox::all(g), {}}};
+  const std::vector<CutBox>* glued = chart.gluesSidesBeyondSeam() ? &all : nullptr;
   dispatchChart(chart, [&](const auto& c) {
     for (int level = 0; level < levelCount(g); ++level) computeLevel(c, heights, level, all, glued);
   });
 }
 
 void ErrorBounds::update(const core::Chart& chart, std::span<const float> heights,
-                         const GridRegion& dirty) {
-  update(chart, heights, std::span<const GridRegion>(&dirty, 1));
+                         const VertexBox& dirty) {
+  update(chart, heights, std::span<const VertexBox>(&dirty, 1));
 }
 
 void ErrorBounds::update(const core::Chart& chart, std::span<const float> heights,
-                         std::span<const GridRegion> dirty) {
-  std::vector<CutRegion> regions;
-  for (const GridRegion& r : dirty) regions.push_back({r, {}});
+                         std::span<const VertexBox> dirty) {
+  std::vector<CutBox> regions;
+  for (const VertexBox& r : dirty) regions.push_back({r, {}});
   update(chart, heights, regions);
 }
 
 void ErrorBounds::update(const core::Chart& chart, std::span<const float> heights,
-                         std::span<const CutRegion> dirty) {
+                         std::span<const CutBox> dirty) {
   const core::GridSize g = chart.grid();
   lastUpdateCount_ = 0;
-  std::vector<CutRegion> regions;
-  for (const CutRegion& r : dirty) {
+  std::vector<CutBox> regions;
+  for (const CutBox& r : dirty) {
     if (r.box.empty() || r.cut.holdsNothing()) continue;
     regions.push_back(r);
     if (chart.wrapsU()) regions.back().cut = {};  // unwrapped columns: the cut would not fit
@@ -534,17 +534,17 @@ void ErrorBounds::update(const core::Chart& chart, std::span<const float> height
     if constexpr (std::is_same_v<std::decay_t<decltype(c)>, core::OctahedralChart>)
       boxes = positionBoxes(c, heights, regions);
     const detail::PositionBoxes* kernelBoxes = boxes.boxes.empty() ? nullptr : &boxes;
-    std::vector<CutRegion> level;
+    std::vector<CutBox> level;
     for (int l = 0; l < levelCount(g); ++l) {
       // A vertex of this level reads heights and children within its half-size s.
-      for (CutRegion& r : regions) {
+      for (CutBox& r : regions) {
         r.box = r.box.grown(levelHalfSize(l), g, c.wrapsU());
         r.cut = r.cut.grown(levelHalfSize(l));
       }
       if (!glued) {
         // One region at a time: dirty regions may overlap (two passes may not write one vertex).
-        for (const CutRegion& r : regions)
-          computeLevel(c, heights, l, std::span<const CutRegion>(&r, 1), nullptr, kernelBoxes);
+        for (const CutBox& r : regions)
+          computeLevel(c, heights, l, std::span<const CutBox>(&r, 1), nullptr, kernelBoxes);
         continue;
       }
       // Where a region reaches a glued side, the grid beyond it changed too: the region's
@@ -552,8 +552,8 @@ void ErrorBounds::update(const core::Chart& chart, std::span<const float> height
       // torus's v -> m - v) are computed as well, and the touched sides' twins combined once,
       // after all of them.
       level.clear();
-      for (const CutRegion& r : regions) {
-        const std::vector<CutRegion> images = gluedImages(c, r, false);
+      for (const CutBox& r : regions) {
+        const std::vector<CutBox> images = gluedImages(c, r, false);
         level.insert(level.end(), images.begin(), images.end());
       }
       mergeBoxes(level);  // disjoint: their passes may run together

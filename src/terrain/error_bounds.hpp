@@ -8,7 +8,7 @@
 #include "core/chart.hpp"
 #include "core/huge_page_allocator.hpp"
 #include "terrain/bound_code.hpp"
-#include "terrain/grid_region.hpp"
+#include "terrain/vertex_box.hpp"
 
 namespace ps::terrain {
 
@@ -75,15 +75,15 @@ class ErrorBounds {
              BoundsContent content = BoundsContent::kErrorsAndRadii);
   // Recomputes only the vertices whose bounds can depend on heights inside `dirty`, level by
   // level up to the root. Bit-for-bit equal to build() on the same heights.
-  void update(const core::Chart& chart, std::span<const float> heights, const GridRegion& dirty);
+  void update(const core::Chart& chart, std::span<const float> heights, const VertexBox& dirty);
   // The same over several dirty rectangles at once (a chart that folds its sides: an edit's
   // box and its images, terrain::gluedImages).
   void update(const core::Chart& chart, std::span<const float> heights,
-              std::span<const GridRegion> dirty);
-  // The same over rectangles with their corners cut (CutRegion: every changed height inside
+              std::span<const VertexBox> dirty);
+  // The same over rectangles with their corners cut (CutBox: every changed height inside
   // one of them). On a chart with a u seam the cuts are not used (its regions' columns wrap).
   void update(const core::Chart& chart, std::span<const float> heights,
-              std::span<const CutRegion> dirty);
+              std::span<const CutBox> dirty);
 
   ErrorRule rule() const { return rule_; }
   bool hasRadii() const { return content_ == BoundsContent::kErrorsAndRadii; }
@@ -133,8 +133,8 @@ class ErrorBounds {
   // computing them (null: none).
   template <class ChartT>
   void computeLevel(const ChartT& chart, std::span<const float> heights, int level,
-                    std::span<const CutRegion> regions,
-                    const std::vector<CutRegion>* gluedRegions = nullptr,
+                    std::span<const CutBox> regions,
+                    const std::vector<CutBox>* gluedRegions = nullptr,
                     const detail::PositionBoxes* boxes = nullptr);
 
   ErrorRule rule_ = ErrorRule::kHybridExact;

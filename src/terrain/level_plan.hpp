@@ -11,7 +11,7 @@
 #include "core/grid.hpp"
 #include "terrain/diamond.hpp"
 #include "terrain/error_bounds.hpp"
-#include "terrain/grid_region.hpp"
+#include "terrain/vertex_box.hpp"
 
 namespace ps::terrain::detail {
 
@@ -33,14 +33,14 @@ struct LevelPlan {
   // one thread when counted as kernel vertices.
   static constexpr double kScalarVertexWork = 4.0;
 
-  LevelPlan(const core::GridSize& g, int level, const CutRegion& cutRegion)
+  LevelPlan(const core::GridSize& g, int level, const CutBox& cutBox)
       : m(g.m()),
         s(levelHalfSize(level)),
         centre(levelIsCentre(level)),
         kernelLevel(s <= ErrorBounds::kExactMaxHalfSize),
         band(kernelLevel ? kBand : 1),
-        cut(cutRegion.cut) {
-    const GridRegion& region = cutRegion.box;
+        cut(cutBox.cut) {
+    const VertexBox& region = cutBox.box;
     const int vFirst = ((region.vBegin + s - 1) / s) * s;
     for (int v = vFirst; v <= region.vEnd; v += s) {
       const bool vOdd = ((v / s) & 1) != 0;

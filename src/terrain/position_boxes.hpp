@@ -5,7 +5,7 @@
 #include <cstddef>
 #include <vector>
 
-#include "terrain/grid_region.hpp"
+#include "terrain/vertex_box.hpp"
 
 namespace ps::terrain::detail {
 
@@ -17,8 +17,8 @@ namespace ps::terrain::detail {
 // are position()'s bit for bit, so the codes are the same whichever path computed them.
 struct PositionBoxes {
   struct Box {
-    GridRegion area;  // within the grid
-    Diagonals cut;    // the area's positions within the cut were computed (open: all)
+    VertexBox area;  // within the grid
+    Diagonals cut;   // the area's positions within the cut were computed (open: all)
     const double *x, *y, *z;
   };
   std::vector<Box> boxes;
@@ -29,7 +29,7 @@ struct PositionBoxes {
   };
   Row row(int v, int uLo, int uHi) const {
     for (const Box& b : boxes) {
-      const GridRegion& a = b.area;
+      const VertexBox& a = b.area;
       if (v < a.vBegin || v > a.vEnd || uLo < std::max(a.uBegin, b.cut.firstColumn(v)) ||
           uHi > std::min(a.uEnd, b.cut.lastColumn(v)))
         continue;

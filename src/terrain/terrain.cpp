@@ -115,25 +115,25 @@ void Terrain::refreshHeightRange() {
   maxHeight_ = *std::max_element(hi.begin(), hi.end());
 }
 
-void Terrain::commitEdit(const GridRegion& changed) {
+void Terrain::commitEdit(const VertexBox& changed) {
   if (changed.empty()) return;
   // On a chart that glues its sides beyond a u seam an edit's box stands for its images too.
-  std::vector<CutRegion> regions;
-  for (const GridRegion& r : gluedImages(*chart_, changed)) regions.push_back({r, {}});
+  std::vector<CutBox> regions;
+  for (const VertexBox& r : gluedImages(*chart_, changed)) regions.push_back({r, {}});
   commitEdit(regions);
 }
 
-void Terrain::commitEdit(std::span<const CutRegion> changed) {
-  std::vector<GridRegion> regions;
-  for (const CutRegion& r : changed)
+void Terrain::commitEdit(std::span<const CutBox> changed) {
+  std::vector<VertexBox> regions;
+  for (const CutBox& r : changed)
     if (!r.box.empty() && !r.cut.holdsNothing()) regions.push_back(r.box);
   if (regions.empty()) return;
   bounds_.update(*chart_, heights_, changed);
   // The global range only widens cheaply; a full scan is O(N^2) and the range is only used as
   // a conservative occluder, so track it incrementally over the changed region.
-  for (const CutRegion& c : changed) {
+  for (const CutBox& c : changed) {
     // (Named, not bound: clang 14 cannot capture structured bindings.)
-    const GridRegion& r = c.box;
+    const VertexBox& r = c.box;
     const Diagonals& cut = c.cut;
     if (r.empty()) continue;
     // (A cut's columns are in the grid: none on a chart with a u seam, whose columns wrap.)
@@ -151,7 +151,7 @@ void Terrain::commitEdit(std::span<const CutRegion> changed) {
     });
   }
   revision_ = nextRevision();
-  for (const GridRegion& r : regions) recordChange(r);
+  for (const VertexBox& r : regions) recordChange(r);
 }
 
 void Terrain::rebuildBounds(ErrorRule rule, BoundsContent content) {
@@ -159,10 +159,10 @@ void Terrain::rebuildBounds(ErrorRule rule, BoundsContent content) {
   refreshHeightRange();
   revision_ = nextRevision();
   // Called after heights changed wholesale as often as for a new rule: all may have changed.
-  recordChange(GridRegion::all(grid()));
+  recordChange(VertexBox::all(grid()));
 }
 
-void Terrain::recordChange(const GridRegion& region) {
+void Terrain::recordChange(const VertexBox& region) {
   changes_.push_back({revision_, region});
   if (changes_.size() > kKeptChanges) {
     oldestKnown_ = changes_.front().revision;
@@ -170,7 +170,7 @@ void Terrain::recordChange(const GridRegion& region) {
   }
 }
 
-bool Terrain::changedSince(std::uint64_t revision, std::vector<GridRegion>& regions) const {
+bool Terrain::changedSince(std::uint64_t revision, std::vector<VertexBox>& regions) const {
   regions.clear();
   if (revision < oldestKnown_ || revision > revision_) return false;
   // Revisions are unique across terrains: one this terrain never had is another's.

@@ -8,7 +8,7 @@
 #include "core/chart.hpp"
 #include "core/huge_page_allocator.hpp"
 #include "terrain/error_bounds.hpp"
-#include "terrain/grid_region.hpp"
+#include "terrain/vertex_box.hpp"
 
 namespace ps::terrain {
 
@@ -37,10 +37,10 @@ class Terrain {
   // commitEdit(); the bounds are updated above that region only and the revision advances.
   // Editors keep seam twins and pole rows consistent (see edit::applyToVertex).
   std::span<float> mutableHeights() { return heights_; }
-  void commitEdit(const GridRegion& changed);
+  void commitEdit(const VertexBox& changed);
   // The same for an edit whose changed heights all lie in `changed`, images across glued sides
   // already among them (gluedImages), each cut to its part of the edit (edit::EditPipeline).
-  void commitEdit(std::span<const CutRegion> changed);
+  void commitEdit(std::span<const CutBox> changed);
   void rebuildBounds(ErrorRule rule, BoundsContent content = BoundsContent::kErrorsAndRadii);
 
   // Unique across all terrains of the process and renewed whenever heights or bounds change:
@@ -52,7 +52,7 @@ class Terrain {
   // revision is older than the changes kept (the last kKeptChanges) or not this terrain's:
   // then anything may have changed.
   static constexpr std::size_t kKeptChanges = 256;
-  bool changedSince(std::uint64_t revision, std::vector<GridRegion>& regions) const;
+  bool changedSince(std::uint64_t revision, std::vector<VertexBox>& regions) const;
 
   // Lowest and highest height, refreshed on commitEdit (used by horizon culling).
   float minHeight() const { return minHeight_; }
@@ -74,11 +74,11 @@ class Terrain {
   // this list is complete.
   struct Change {
     std::uint64_t revision;
-    GridRegion region;
+    VertexBox region;
   };
   std::deque<Change> changes_;
   std::uint64_t oldestKnown_ = 0;
-  void recordChange(const GridRegion& region);
+  void recordChange(const VertexBox& region);
   float minHeight_ = 0, maxHeight_ = 0;
 };
 

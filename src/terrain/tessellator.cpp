@@ -179,7 +179,8 @@ bool Tessellator::pass(const ChartT& chart, const Terrain& terrain, const Camera
   const ErrorBounds& bounds = terrain.bounds();
   // The occluder is the ball under the lowest height of a sphere about the origin; a chart
   // that is no such sphere (radius() 0: flat, torus, cylinder) has none, whatever its heights.
-  const double occluder = chart.radius() > 0 ? chart.radius() + terrain.minHeight() : 0.0;
+  const double occluder =
+      chart.sphereRadius() > 0 ? chart.sphereRadius() + terrain.minHeight() : 0.0;
   const ViewGeometry view = makeView(camera, occluder, distMax);
   const Eigen::Matrix3d& R = camera.rotation;
   const Eigen::Vector3d forward = R.row(2).transpose();

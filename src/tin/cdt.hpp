@@ -26,7 +26,7 @@ using VertexBase = CGAL::Delaunay_mesh_vertex_base_2<
     Kernel, CGAL::Triangulation_vertex_base_with_info_2<VertexData, Kernel>>;
 using FaceBase = CGAL::Delaunay_mesh_face_base_2<Kernel>;
 using Tds = CGAL::Triangulation_data_structure_2<VertexBase, FaceBase>;
-// Exact_predicates_tag: constraints may cross (tracks over break lines); their intersections
+// Exact_predicates_tag: constraints may cross (roads over break lines); their intersections
 // are constructed in doubles.
 using Cdt = CGAL::Constrained_Delaunay_triangulation_2<Kernel, Tds, CGAL::Exact_predicates_tag>;
 using Point = Cdt::Point;

@@ -1,6 +1,6 @@
 #pragma once
 // Greedy insertion into a CGAL triangulation (tin/cdt.hpp: include from .cpp files only), shared
-// by the TIN mesher and the overlay's re-meshing around a stenciled track.
+// by the TIN mesher and the overlay's re-meshing around a stenciled road.
 #include <algorithm>
 #include <array>
 #include <cmath>

@@ -45,10 +45,10 @@ double signedArea(const Eigen::Vector2d& a, const Eigen::Vector2d& b, const Eige
   return 0.5 * ((b - a).x() * (c - a).y() - (b - a).y() * (c - a).x());
 }
 
-// The track's part inside [0, xMax] x [0, yMax]: triangles wholly inside kept, the others cut
+// The road's part inside [0, xMax] x [0, yMax]: triangles wholly inside kept, the others cut
 // (fan-triangulated) or dropped; vertices shared by exact coordinates.
-Track clipTrack(const Track& in, double xMax, double yMax, std::size_t& clipped) {
-  Track out;
+Road clipRoad(const Road& in, double xMax, double yMax, std::size_t& clipped) {
+  Road out;
   std::map<std::pair<double, double>, std::uint32_t> index;
   auto vertex = [&](const PolyVertex& v) {
     const auto [it, fresh] =
@@ -88,22 +88,22 @@ std::set<std::pair<std::uint32_t, std::uint32_t>> edgesOf(
   return edges;
 }
 
-// A track must be a proper mesh in the plane: no degenerate triangle (checked as given, before
-// clipping), no two edges crossing, no two triangles overlapping (checked on the clipped track).
-void refuseDegenerateTriangles(const Track& t) {
+// A road must be a proper mesh in the plane: no degenerate triangle (checked as given, before
+// clipping), no two edges crossing, no two triangles overlapping (checked on the clipped road).
+void refuseDegenerateTriangles(const Road& t) {
   for (std::size_t k = 0; k < t.triangles.size(); ++k) {
     const auto& tri = t.triangles[k];
     for (const auto v : tri)
       if (v >= t.xy.size() || v >= t.h.size())
-        throw core::InputError("track triangle " + std::to_string(k + 1) + " names vertex " +
+        throw core::InputError("road triangle " + std::to_string(k + 1) + " names vertex " +
                                std::to_string(v + 1) + " of " + std::to_string(t.xy.size()));
     if (std::abs(signedArea(t.xy[tri[0]], t.xy[tri[1]], t.xy[tri[2]])) < 1e-12)
-      throw core::InputError("track triangle " + std::to_string(k + 1) +
+      throw core::InputError("road triangle " + std::to_string(k + 1) +
                              " is degenerate (its corners are collinear or repeated)");
   }
 }
 
-void refuseSelfIntersection(const Track& t, const TinLocator& footprint) {
+void refuseSelfIntersection(const Road& t, const TinLocator& footprint) {
   Cdt cdt;
   std::vector<VertexHandle> v;
   for (const auto& p : t.xy) v.push_back(cdt.insert(Point(p.x(), p.y())));
@@ -111,39 +111,39 @@ void refuseSelfIntersection(const Track& t, const TinLocator& footprint) {
   for (const auto& [a, b] : edgesOf(t.triangles)) cdt.insert_constraint(v[a], v[b]);
   if (cdt.number_of_vertices() != distinct)
     throw core::InputError(
-        "the track crosses itself: " + std::to_string(cdt.number_of_vertices() - distinct) +
+        "the road crosses itself: " + std::to_string(cdt.number_of_vertices() - distinct) +
         " points where its edges cross (seen from above)");
-  double trackArea = 0, covered = 0;
+  double roadArea = 0, covered = 0;
   for (const auto& tri : t.triangles)
-    trackArea += std::abs(signedArea(t.xy[tri[0]], t.xy[tri[1]], t.xy[tri[2]]));
+    roadArea += std::abs(signedArea(t.xy[tri[0]], t.xy[tri[1]], t.xy[tri[2]]));
   for (auto f = cdt.finite_faces_begin(); f != cdt.finite_faces_end(); ++f) {
     const Eigen::Vector2d a(f->vertex(0)->point().x(), f->vertex(0)->point().y());
     const Eigen::Vector2d b(f->vertex(1)->point().x(), f->vertex(1)->point().y());
     const Eigen::Vector2d c(f->vertex(2)->point().x(), f->vertex(2)->point().y());
     if (footprint.contains((a + b + c) / 3.0, 0.0)) covered += std::abs(signedArea(a, b, c));
   }
-  if (trackArea > covered * (1 + 1e-9) + 1e-12)
-    throw core::InputError("the track overlaps itself: its triangles cover " +
-                           core::exactNumber(trackArea) + " lattice units^2 but only " +
+  if (roadArea > covered * (1 + 1e-9) + 1e-12)
+    throw core::InputError("the road overlaps itself: its triangles cover " +
+                           core::exactNumber(roadArea) + " lattice units^2 but only " +
                            core::exactNumber(covered) + " of ground");
 }
 
 }  // namespace
 
-OverlayResult overlayTrack(const SampleField& field, const Tin& terrain, const Track& trackIn,
-                           OverlayMode mode) {
+OverlayResult overlayRoad(const SampleField& field, const Tin& terrain, const Road& roadIn,
+                          OverlayMode mode) {
   field.validate("overlay");
   OverlayResult result;
   OverlayReport& rep = result.report;
   rep.terrainVertices = terrain.xy.size();
-  rep.trackVertices = trackIn.xy.size();
-  rep.trackTriangles = trackIn.triangles.size();
+  rep.roadVertices = roadIn.xy.size();
+  rep.roadTriangles = roadIn.triangles.size();
   const double xMax = field.width - 1, yMax = field.height - 1;
-  refuseDegenerateTriangles(trackIn);
-  const Track track = clipTrack(trackIn, xMax, yMax, rep.clippedTrackTriangles);
-  if (track.triangles.empty()) throw core::InputError("the track lies wholly outside the terrain");
-  const TinLocator footprint(track.xy, track.triangles, field.width, field.height);
-  refuseSelfIntersection(track, footprint);
+  refuseDegenerateTriangles(roadIn);
+  const Road road = clipRoad(roadIn, xMax, yMax, rep.clippedRoadTriangles);
+  if (road.triangles.empty()) throw core::InputError("the road lies wholly outside the terrain");
+  const TinLocator footprint(road.xy, road.triangles, field.width, field.height);
+  refuseSelfIntersection(road, footprint);
   const TinLocator onTerrain(terrain.xy, terrain.triangles, field.width, field.height);
   std::vector<Eigen::Vector3d> terrainCorner(terrain.xy.size());
   for (std::size_t v = 0; v < terrain.xy.size(); ++v)
@@ -169,17 +169,17 @@ OverlayResult overlayTrack(const SampleField& field, const Tin& terrain, const T
       }
     }
   }
-  std::vector<VertexHandle> trackVertex(track.xy.size());
-  for (std::size_t v = 0; v < track.xy.size(); ++v) {
-    trackVertex[v] = cdt.insert(Point(track.xy[v].x(), track.xy[v].y()));
-    if (mode == OverlayMode::kStencil) trackVertex[v]->info().height = track.h[v];
+  std::vector<VertexHandle> roadVertex(road.xy.size());
+  for (std::size_t v = 0; v < road.xy.size(); ++v) {
+    roadVertex[v] = cdt.insert(Point(road.xy[v].x(), road.xy[v].y()));
+    if (mode == OverlayMode::kStencil) roadVertex[v]->info().height = road.h[v];
   }
-  for (const auto& [a, b] : edgesOf(track.triangles))
-    cdt.insert_constraint(trackVertex[a], trackVertex[b]);
+  for (const auto& [a, b] : edgesOf(road.triangles))
+    cdt.insert_constraint(roadVertex[a], roadVertex[b]);
 
   std::vector<float> tolerance;
   if (mode == OverlayMode::kStencil) {
-    // The ground outside the footprint, meshed again to the error; the footprint is the track's.
+    // The ground outside the footprint, meshed again to the error; the footprint is the road's.
     const std::size_t before = cdt.number_of_vertices();
     tolerance.resize(field.heights.size());
     for (int j = 0; j < field.height; ++j)
@@ -195,8 +195,8 @@ OverlayResult overlayTrack(const SampleField& field, const Tin& terrain, const T
     rep.refillVertices = cdt.number_of_vertices() - before;
   }
 
-  // Vertices out: a stitch's added ones (track corners, crossings) sit on the terrain mesh.
-  std::set<VertexHandle> fromTrack(trackVertex.begin(), trackVertex.end());
+  // Vertices out: a stitch's added ones (road corners, crossings) sit on the terrain mesh.
+  std::set<VertexHandle> fromRoad(roadVertex.begin(), roadVertex.end());
   std::uint32_t next = 0;
   for (auto v = cdt.finite_vertices_begin(); v != cdt.finite_vertices_end(); ++v) {
     v->info().index = next++;
@@ -207,7 +207,7 @@ OverlayResult overlayTrack(const SampleField& field, const Tin& terrain, const T
       onTerrain.visit(p, [&](const TinLocator::Hit& hit) {
         if (!host) host = hit;
       });
-      if (!host) throw std::logic_error("overlay: a track vertex lies outside the terrain mesh");
+      if (!host) throw std::logic_error("overlay: a road vertex lies outside the terrain mesh");
       const auto& tri = terrain.triangles[host->triangle];
       v->info().height = host->l0 * terrain.h[tri[0]] + host->l1 * terrain.h[tri[1]] +
                          host->l2 * terrain.h[tri[2]];
@@ -217,7 +217,7 @@ OverlayResult overlayTrack(const SampleField& field, const Tin& terrain, const T
           std::max(rep.addedVertexErrorM,
                    pointTriangleDistance(position, terrainCorner[tri[0]], terrainCorner[tri[1]],
                                          terrainCorner[tri[2]]));
-      if (!fromTrack.count(v)) ++rep.crossingVertices;
+      if (!fromRoad.count(v)) ++rep.crossingVertices;
     } else {
       position = field.positionAt(p.x(), p.y(), v->info().height);
     }
@@ -231,26 +231,25 @@ OverlayResult overlayTrack(const SampleField& field, const Tin& terrain, const T
     result.tin.triangles.push_back(t);
     const Eigen::Vector2d centroid =
         (result.tin.xy[t[0]] + result.tin.xy[t[1]] + result.tin.xy[t[2]]) / 3.0;
-    result.onTrack.push_back(footprint.contains(centroid, 0.0) ? 1 : 0);
+    result.onRoad.push_back(footprint.contains(centroid, 0.0) ? 1 : 0);
   }
 
   if (mode == OverlayMode::kStencil) {
-    // Inside the footprint: the track's surface against the result's, sample by sample.
-    std::vector<Eigen::Vector3d> trackCorner(track.xy.size());
-    for (std::size_t v = 0; v < track.xy.size(); ++v)
-      trackCorner[v] = field.positionAt(track.xy[v].x(), track.xy[v].y(), track.h[v]);
+    // Inside the footprint: the road's surface against the result's, sample by sample.
+    std::vector<Eigen::Vector3d> roadCorner(road.xy.size());
+    for (std::size_t v = 0; v < road.xy.size(); ++v)
+      roadCorner[v] = field.positionAt(road.xy[v].x(), road.xy[v].y(), road.h[v]);
     const TinLocator onResult(result.tin.xy, result.tin.triangles, field.width, field.height);
     for (int j = 0; j < field.height; ++j)
       for (int i = 0; i < field.width; ++i) {
-        std::optional<TinLocator::Hit> inTrack;
+        std::optional<TinLocator::Hit> inRoad;
         footprint.visit({i, j}, [&](const TinLocator::Hit& hit) {
-          if (!inTrack) inTrack = hit;
+          if (!inRoad) inRoad = hit;
         });
-        if (!inTrack) continue;
-        const auto& tt = track.triangles[inTrack->triangle];
-        const Eigen::Vector3d q = inTrack->l0 * trackCorner[tt[0]] +
-                                  inTrack->l1 * trackCorner[tt[1]] +
-                                  inTrack->l2 * trackCorner[tt[2]];
+        if (!inRoad) continue;
+        const auto& tt = road.triangles[inRoad->triangle];
+        const Eigen::Vector3d q = inRoad->l0 * roadCorner[tt[0]] + inRoad->l1 * roadCorner[tt[1]] +
+                                  inRoad->l2 * roadCorner[tt[2]];
         double best = INFINITY;
         onResult.visit({i, j}, [&](const TinLocator::Hit& hit) {
           const auto& rt = result.tin.triangles[hit.triangle];

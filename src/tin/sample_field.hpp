@@ -4,7 +4,7 @@
 //
 // Lattice coordinates: sample (i, j) sits at (x, y) = (i, j); j grows northwards (a flat chart's
 // v, an image's rows counted from the bottom). A TIN's vertices live in these coordinates, at
-// samples or (Steiner points, track points) between them.
+// samples or (Steiner points, road points) between them.
 #include <Eigen/Core>
 #include <cstdint>
 #include <span>
@@ -44,7 +44,7 @@ struct SampleField {
   double tolerance(std::size_t k) const {
     return perSampleTolerance.empty() ? uniformTolerance : double(perSampleTolerance[k]);
   }
-  // The surface between samples: bilinear (what Steiner and track points take as their height).
+  // The surface between samples: bilinear (what Steiner and road points take as their height).
   double heightAt(double x, double y) const;
   // Where the lattice point (x, y) with height h lies in the output's frame (metres): the flat
   // terrain's (x dx, y dy, h), or the chart's position.

@@ -1,5 +1,5 @@
 #pragma once
-// A strip of a given width along a polyline: what a stroke becomes as a track (a road along a
+// A strip of a given width along a polyline: what a stroke becomes as a road (say, along a
 // sculpted ridge), in any plane frame.
 #include <Eigen/Core>
 #include <array>

@@ -1,7 +1,7 @@
 #pragma once
 // Which triangles of a triangle soup hold a point: a bucket grid over the triangles' bounding
 // boxes and barycentric tests. Independent of CGAL's point location on purpose: the checks use
-// it to verify what the triangulation built, and the overlay to test a track's footprint.
+// it to verify what the triangulation built, and the overlay to test a road's footprint.
 #include <Eigen/Core>
 #include <array>
 #include <cstdint>

@@ -9,7 +9,6 @@
 #include <fstream>
 #include <iterator>
 #include <nlohmann/json.hpp>
-#include <sstream>
 #include <stdexcept>
 #include <string_view>
 
@@ -18,13 +17,6 @@
 namespace ps::tracking {
 
 namespace {
-
-std::string fmt(double v) {
-  std::ostringstream s;
-  s.precision(10);
-  s << v;
-  return s.str();
-}
 
 bool allFinite(const cv::Mat& m) {
   for (int i = 0; i < m.rows; ++i)
@@ -47,8 +39,9 @@ void CameraCalibration::validate() const {
   const cv::Mat k(K);
   if (!allFinite(k)) throw core::InputError(source + ": camera_matrix is not finite");
   if (!(K(0, 0) > 0) || !(K(1, 1) > 0))
-    throw core::InputError(source + ": camera_matrix has focal lengths fx = " + fmt(K(0, 0)) +
-                           ", fy = " + fmt(K(1, 1)) + " (must be > 0)");
+    throw core::InputError(
+        source + ": camera_matrix has focal lengths fx = " + core::formatNumber(K(0, 0), 10) +
+        ", fy = " + core::formatNumber(K(1, 1), 10) + " (must be > 0)");
   if (K(1, 0) != 0 || K(2, 0) != 0 || K(2, 1) != 0 || K(2, 2) != 1)
     throw core::InputError(source + ": camera_matrix is not of the form [fx s cx; 0 fy cy; 0 0 1]");
   const int n = int(distortion.total());

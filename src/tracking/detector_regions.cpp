@@ -1,4 +1,5 @@
-// Region tracking around a back end (detector.hpp, DetectorConfig::regions).
+// Search boxes around where markers were, each searched by a back end (detector.hpp,
+// DetectorConfig::regions).
 #include <algorithm>
 #include <cmath>
 #include <map>
@@ -58,7 +59,7 @@ class RegionDetector final : public Detector {
     ++frameNo_;
     std::vector<Detection> found;
     // 1. Where each marker was, moved on by its last motion.
-    std::vector<Region> boxes, coarseBoxes;
+    std::vector<SearchBox> boxes, coarseBoxes;
     for (const auto& [id, d] : last_) {
       Detection p = d;
       const auto prev = previous_.find(id);
@@ -99,7 +100,7 @@ class RegionDetector final : public Detector {
     const int since = frameNo_ - lastSearch_;
     if ((missing && since >= config_.searchEvery) || (partial && since >= config_.setSearchEvery)) {
       lastSearch_ = frameNo_;
-      std::vector<Region> fresh;
+      std::vector<SearchBox> fresh;
       for (const auto& d : finder_->detect(grey)) {
         if (!wanted(d.id) || known(found, d)) continue;
         fresh.push_back({box(d, frame), 1});
@@ -153,11 +154,11 @@ class RegionDetector final : public Detector {
     return r & frame;
   }
   // A box to search and how many markers were expected in it.
-  struct Region {
+  struct SearchBox {
     cv::Rect rect;
     int markers = 1;
   };
-  static std::vector<Region> mergeBoxes(std::vector<Region> boxes) {
+  static std::vector<SearchBox> mergeBoxes(std::vector<SearchBox> boxes) {
     bool merged = true;
     while (merged) {
       merged = false;
@@ -170,7 +171,8 @@ class RegionDetector final : public Detector {
             merged = true;
           }
     }
-    std::erase_if(boxes, [](const Region& r) { return r.rect.width < 16 || r.rect.height < 16; });
+    std::erase_if(boxes,
+                  [](const SearchBox& r) { return r.rect.width < 16 || r.rect.height < 16; });
     return boxes;
   }
   // Whether `id` belongs to a rigid set large enough for a coarse search.
@@ -181,9 +183,9 @@ class RegionDetector final : public Detector {
              std::find(set.begin(), set.end(), id) != set.end();
     });
   }
-  void addFrom(const cv::Mat& grey, const Region& region, std::vector<Detection>& found,
+  void addFrom(const cv::Mat& grey, const SearchBox& searchBox, std::vector<Detection>& found,
                bool coarse) {
-    const cv::Rect& r = region.rect;
+    const cv::Rect& r = searchBox.rect;
     Detector& search = coarse ? *coarseRefiner_ : *refiner_;
     for (auto d : search.detect(grey(r))) {
       for (auto& c : d.corners) c += cv::Point2d(r.x, r.y);
@@ -191,7 +193,7 @@ class RegionDetector final : public Detector {
     }
   }
 
-  // The region boxes follow the detector's own corners (last_); only what is returned is refined.
+  // The search boxes follow the detector's own corners (last_); only what is returned is refined.
   void refineLoneMarkers(const cv::Mat& grey, std::map<int, int>& count,
                          std::vector<Detection>& found) {
     for (const auto& set : config_.sets) {

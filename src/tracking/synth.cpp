@@ -8,8 +8,8 @@
 
 #include "core/input_error.hpp"
 #include "tracking/marker_family.hpp"
-#include "tracking/render.hpp"
 #include "tracking/synth_internal.hpp"
+#include "tracking/textured_quad.hpp"
 
 namespace ps::tracking {
 

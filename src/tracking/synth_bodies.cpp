@@ -5,9 +5,9 @@
 #include <algorithm>
 #include <cmath>
 
-#include "tracking/render.hpp"
 #include "tracking/synth.hpp"
 #include "tracking/synth_internal.hpp"
+#include "tracking/textured_quad.hpp"
 #include "tracking/tool_shape.hpp"
 
 namespace ps::tracking {

@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <sstream>
 
 #include "core/input_error.hpp"
 #include "core/named_values.hpp"
@@ -22,20 +21,15 @@ constexpr double kRigidSetRestartTurn = 8.0 * M_PI / 180.0;
 // A tool solid's hold ends once its tip would have drifted 5 mm at the speed it last had.
 constexpr double kToolHoldMaxDrift = 0.005;
 
-std::string num(double v) {
-  std::ostringstream s;
-  s.precision(6);
-  s << v;
-  return s.str();
-}
 void checkPositive(double v, const std::string& what) {
-  if (!(v > 0) || !std::isfinite(v)) throw core::InputError(what + " = " + num(v) + " is not > 0");
+  if (!(v > 0) || !std::isfinite(v))
+    throw core::InputError(what + " = " + core::formatNumber(v, 6) + " is not > 0");
 }
 void checkParams(const OneEuroParams& p, const std::string& what) {
   checkPositive(p.minCutoff, what + " min cutoff (Hz)");
   checkPositive(p.dCutoff, what + " speed cutoff (Hz)");
   if (!(p.beta >= 0) || !std::isfinite(p.beta))
-    throw core::InputError(what + " beta = " + num(p.beta) + " is not >= 0");
+    throw core::InputError(what + " beta = " + core::formatNumber(p.beta, 6) + " is not >= 0");
 }
 Eigen::Vector2d centre(const std::array<cv::Point2d, 4>& c) {
   return {0.25 * (c[0].x + c[1].x + c[2].x + c[3].x), 0.25 * (c[0].y + c[1].y + c[2].y + c[3].y)};
@@ -55,16 +49,18 @@ void MarkerTrackerConfig::validate() const {
   checkPositive(size, "marker " + std::to_string(id) + " size (m)");
   checkParams(translation, "translation filter");
   checkParams(rotation, "rotation filter");
-  if (!(holdSeconds >= 0)) throw core::InputError("hold = " + num(holdSeconds) + " s is not >= 0");
+  if (!(holdSeconds >= 0))
+    throw core::InputError("hold = " + core::formatNumber(holdSeconds, 6) + " s is not >= 0");
   if (!(ambiguityRatio >= 1))
-    throw core::InputError("ambiguity ratio = " + num(ambiguityRatio) + " is not >= 1");
+    throw core::InputError("ambiguity ratio = " + core::formatNumber(ambiguityRatio, 6) +
+                           " is not >= 1");
   checkPositive(maxReprojectionPx, "max reprojection error (px)");
   for (const auto& [v, what] :
        {std::pair{restartJump, "filter restart jump (m)"},
         std::pair{restartTurn, "filter restart turn (rad)"},
         std::pair{holdMaxDrift, "hold max drift (m)"}, std::pair{driftRadius, "drift radius (m)"}})
     if (!(v >= 0) || !std::isfinite(v))
-      throw core::InputError(std::string(what) + " = " + num(v) + " is not >= 0");
+      throw core::InputError(std::string(what) + " = " + core::formatNumber(v, 6) + " is not >= 0");
   if (layout && layout->markers.empty())
     throw core::InputError(layout->source + ": the layout has no markers");
 }
@@ -142,8 +138,8 @@ bool MarkerTracker::measure(std::span<const Detection> detections, const CameraC
   }
   if (cands.rms[std::size_t(choice.candidate)] > config_.maxReprojectionPx) {
     e.note = "id " + std::to_string(config_.id) + ": reprojection error " +
-             num(cands.rms[std::size_t(choice.candidate)]) + " px > " +
-             num(config_.maxReprojectionPx) + " px; not used";
+             core::formatNumber(cands.rms[std::size_t(choice.candidate)], 6) + " px > " +
+             core::formatNumber(config_.maxReprojectionPx, 6) + " px; not used";
     return false;
   }
   e.raw = choice.pose;
@@ -163,8 +159,9 @@ bool MarkerTracker::measureBody(std::span<const Detection> detections,
   e.note = r.note;
   if (!r.valid) return false;
   if (r.rms > config_.maxReprojectionPx) {
-    e.note += (e.note.empty() ? "" : "; ") + config_.name() + ": reprojection error " + num(r.rms) +
-              " px > " + num(config_.maxReprojectionPx) + " px; not used";
+    e.note += (e.note.empty() ? "" : "; ") + config_.name() + ": reprojection error " +
+              core::formatNumber(r.rms, 6) + " px > " +
+              core::formatNumber(config_.maxReprojectionPx, 6) + " px; not used";
     return false;
   }
   e.raw = r.pose;
@@ -304,9 +301,11 @@ void SceneConfig::validate() const {
   checkParams(tipFilter, "tip filter");
   if (!tipOffset.allFinite()) throw core::InputError("tool tip offset is not finite");
   if (!(touchDistance >= 0) || !std::isfinite(touchDistance))
-    throw core::InputError("touch distance = " + num(touchDistance) + " m is not >= 0");
+    throw core::InputError("touch distance = " + core::formatNumber(touchDistance, 6) +
+                           " m is not >= 0");
   if (!(toolCoverBandCells >= 0) || !std::isfinite(toolCoverBandCells))
-    throw core::InputError("tool cover band = " + num(toolCoverBandCells) + " cells is not >= 0");
+    throw core::InputError("tool cover band = " + core::formatNumber(toolCoverBandCells, 6) +
+                           " cells is not >= 0");
   checkPositive(coveredMaxTurn, "covered marker's max turn (rad)");
   checkPositive(coveredMaxShift, "covered marker's max shift (m)");
 }

@@ -41,7 +41,7 @@ bool hits(const terrain::Mesh& mesh, const Eigen::Vector3d& o, const Eigen::Vect
   return false;
 }
 
-TEST(TinRegionView, TheSplicedViewLeaksNoBackgroundThroughTheJoin) {
+TEST(StrokeTinView, TheSplicedViewLeaksNoBackgroundThroughTheJoin) {
   const double R = 20e3;
   auto chart = sandtest::sphereChart(9, R);  // 513^2, 245 m cells
   terrain::Terrain t(chart, testkit::bumpyHeights(*chart, 3, 100.0));
@@ -53,8 +53,8 @@ TEST(TinRegionView, TheSplicedViewLeaksNoBackgroundThroughTheJoin) {
   pipe.beginStroke(tool, {edittest::latLon(lat, lon, R + 900.0, 1.0), 0.0});
   pipe.moveTo({edittest::latLon(lat, lon + 2.0, R + 900.0, 1.0), 0.0});
   pipe.endStroke();
-  ASSERT_NE(tool.region(), nullptr);
-  const terrain::MeshPatch patch = tool.region()->patch();
+  ASSERT_NE(tool.strokeTin(), nullptr);
+  const terrain::MeshPatch patch = tool.strokeTin()->patch();
 
   std::size_t allLeaksNone = 0, allLeaksSkirts = 0;
   // Grazing cameras 9 km from the stroke's middle, from four sides, 1.5 km and 0.6 km above it.
@@ -75,7 +75,7 @@ TEST(TinRegionView, TheSplicedViewLeaksNoBackgroundThroughTheJoin) {
 
     // Rays through the pixels around every region point near the TIN's border (where the join
     // is), 3 x 3 pixels each.
-    const auto& region = *tool.region();
+    const auto& region = *tool.strokeTin();
     const double cell = M_PI * R / chart->grid().m();
     std::vector<Eigen::Vector2d> pixels;
     for (const auto& q : region.points()) {

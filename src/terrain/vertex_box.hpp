@@ -11,29 +11,29 @@ namespace ps::terrain {
 // A rectangle of grid vertices that may wrap across the u = 0 / u = m seam. u is kept
 // "unwrapped": uBegin may be negative or uEnd beyond m, meaning the rectangle continues on the
 // other side of the seam. Rows are clamped to [0, m]. Empty when vBegin > vEnd.
-struct GridRegion {
+struct VertexBox {
   int uBegin = 0, uEnd = -1;  // inclusive, unwrapped
   int vBegin = 0, vEnd = -1;  // inclusive, within [0, m]
 
-  static GridRegion none() { return {}; }
-  static GridRegion all(const core::GridSize& g) { return {0, g.m(), 0, g.m()}; }
-  static GridRegion point(core::GridPoint p) { return {p.u, p.u, p.v, p.v}; }
+  static VertexBox none() { return {}; }
+  static VertexBox all(const core::GridSize& g) { return {0, g.m(), 0, g.m()}; }
+  static VertexBox point(core::GridPoint p) { return {p.u, p.u, p.v, p.v}; }
 
   bool empty() const { return vBegin > vEnd || uBegin > uEnd; }
   bool coversAllColumns(const core::GridSize& g) const { return uEnd - uBegin >= g.m(); }
 
   // Chebyshev dilation by d vertices; wraps in u on a seamed chart, clamps in v.
-  GridRegion grown(int d, const core::GridSize& g, bool wrapsU) const {
+  VertexBox grown(int d, const core::GridSize& g, bool wrapsU) const {
     if (empty()) return *this;
-    GridRegion r{uBegin - d, uEnd + d, std::max(0, vBegin - d), std::min(g.m(), vEnd + d)};
+    VertexBox r{uBegin - d, uEnd + d, std::max(0, vBegin - d), std::min(g.m(), vEnd + d)};
     normalise(r, g, wrapsU);
     return r;
   }
 
-  GridRegion unite(const GridRegion& o, const core::GridSize& g, bool wrapsU) const {
+  VertexBox unite(const VertexBox& o, const core::GridSize& g, bool wrapsU) const {
     if (empty()) return o;
     if (o.empty()) return *this;
-    GridRegion r;
+    VertexBox r;
     r.vBegin = std::min(vBegin, o.vBegin);
     r.vEnd = std::max(vEnd, o.vEnd);
     if (coversAllColumns(g) || o.coversAllColumns(g)) {
@@ -75,7 +75,7 @@ struct GridRegion {
   }
 
  private:
-  static void normalise(GridRegion& r, const core::GridSize& g, bool wrapsU) {
+  static void normalise(VertexBox& r, const core::GridSize& g, bool wrapsU) {
     const int m = g.m();
     if (!wrapsU) {
       r.uBegin = std::max(0, r.uBegin), r.uEnd = std::min(m, r.uEnd);
@@ -129,8 +129,8 @@ struct Diagonals {
 };
 
 // A rectangle with its corners cut by diagonals (open: the rectangle).
-struct CutRegion {
-  GridRegion box;
+struct CutBox {
+  VertexBox box;
   Diagonals cut;
 };
 
@@ -138,13 +138,13 @@ struct CutRegion {
 // sides, a seam between the rows v = 0 and v = m): on the octahedral chart and the torus an
 // edit's dirty box stands for its images too, and the error bounds compute a level's regions'
 // images where they reach such a side (`acrossMidlines` false). On other charts: the region.
-inline std::vector<GridRegion> gluedImages(const core::Chart& chart, const GridRegion& r,
-                                           bool acrossMidlines = true) {
+inline std::vector<VertexBox> gluedImages(const core::Chart& chart, const VertexBox& r,
+                                          bool acrossMidlines = true) {
   if (r.empty()) return {};
   if (!chart.gluesSidesBeyondSeam()) return {r};
   core::GridBox boxes[4];
   const int n = chart.gluedImages({r.uBegin, r.uEnd, r.vBegin, r.vEnd}, acrossMidlines, boxes);
-  std::vector<GridRegion> out;
+  std::vector<VertexBox> out;
   out.reserve(std::size_t(n));
   for (int k = 0; k < n; ++k)
     out.push_back({boxes[k].uBegin, boxes[k].uEnd, boxes[k].vBegin, boxes[k].vEnd});
@@ -152,15 +152,15 @@ inline std::vector<GridRegion> gluedImages(const core::Chart& chart, const GridR
 }
 
 // The same for a cut region: each image's diagonals flipped as its rectangle is.
-inline std::vector<CutRegion> gluedImages(const core::Chart& chart, const CutRegion& r,
-                                          bool acrossMidlines = true) {
+inline std::vector<CutBox> gluedImages(const core::Chart& chart, const CutBox& r,
+                                       bool acrossMidlines = true) {
   if (r.box.empty()) return {};
   if (!chart.gluesSidesBeyondSeam()) return {r};
   core::GridBox boxes[4];
   core::Chart::Flips flips[4];
   const int n = chart.gluedImages({r.box.uBegin, r.box.uEnd, r.box.vBegin, r.box.vEnd},
                                   acrossMidlines, boxes, flips);
-  std::vector<CutRegion> out;
+  std::vector<CutBox> out;
   out.reserve(std::size_t(n));
   for (int k = 0; k < n; ++k)
     out.push_back({{boxes[k].uBegin, boxes[k].uEnd, boxes[k].vBegin, boxes[k].vEnd},

@@ -121,11 +121,11 @@ cv::Mat backgroundMask(const cv::Mat& image, const cv::Vec3b& bg) {
 
 }  // namespace
 
-TEST(TinRegionRender, InsideTheRegionTheDepthIsTheTinSurfaceNotTheGrids) {
+TEST(StrokeTinRender, InsideTheRegionTheDepthIsTheTinSurfaceNotTheGrids) {
   SKIP_WITHOUT_GL();
   Scene& s = scene();
-  ASSERT_NE(s.tool.region(), nullptr);
-  const auto patch = std::make_shared<const terrain::MeshPatch>(s.tool.region()->patch());
+  ASSERT_NE(s.tool.strokeTin(), nullptr);
+  const auto patch = std::make_shared<const terrain::MeshPatch>(s.tool.strokeTin()->patch());
   render::EglContext ctx;
   render::PlanetRenderer renderer;
   std::size_t inside = 0, differ = 0, gridWins = 0;
@@ -143,7 +143,7 @@ TEST(TinRegionRender, InsideTheRegionTheDepthIsTheTinSurfaceNotTheGrids) {
     ASSERT_EQ(depth.type(), CV_32F);
     const render::DepthRange range = render::depthRangeFor(cam, s.planet);
     const Eigen::Matrix4d P = render::clipFromCamera(cam, range.nearZ, range.farZ);
-    const auto& region = *s.tool.region();
+    const auto& region = *s.tool.strokeTin();
     const double cell = M_PI * kR / s.chart->grid().m();
     const Eigen::Vector3d o = cam.eye - mesh.eye;
     for (int y = 0; y < cam.height; y += 3) {
@@ -191,10 +191,10 @@ TEST(TinRegionRender, InsideTheRegionTheDepthIsTheTinSurfaceNotTheGrids) {
 // facet, mesh_shaders.hpp) is the facet's own normal: per-pixel and faceted pictures of the
 // patch agree. A wrong gradient (a sign, the 1 / (1 - g.up) factor, the grid's tiles read
 // instead) shows as a difference on the furrow's walls.
-TEST(TinRegionRender, ThePatchsPerPixelLightIsItsFacetsSlope) {
+TEST(StrokeTinRender, ThePatchsPerPixelLightIsItsFacetsSlope) {
   SKIP_WITHOUT_GL();
   Scene& s = scene();
-  const auto patch = std::make_shared<const terrain::MeshPatch>(s.tool.region()->patch());
+  const auto patch = std::make_shared<const terrain::MeshPatch>(s.tool.strokeTin()->patch());
   render::EglContext ctx;
   render::PlanetRenderer renderer;
   const terrain::Camera cam = cameraAt(0.4, 4000.0, 5000.0);
@@ -207,7 +207,7 @@ TEST(TinRegionRender, ThePatchsPerPixelLightIsItsFacetsSlope) {
   style.shading = render::Shading::kFaceted;
   const cv::Mat faceted = renderer.renderAR({}, s.planet, mesh, cam, style);
   // The pixels whose nearest surface is a patch triangle well inside the region.
-  const auto& region = *s.tool.region();
+  const auto& region = *s.tool.strokeTin();
   const double cell = M_PI * kR / s.chart->grid().m();
   const Eigen::Vector3d o = cam.eye - mesh.eye;
   double sum = 0, worst = 0;
@@ -240,7 +240,7 @@ TEST(TinRegionRender, ThePatchsPerPixelLightIsItsFacetsSlope) {
 // drawn as background leaked through the join. A ray that stays above it (past the
 // silhouette, where the TIN lies lower than the grid's mesh did) shows the background rightly.
 double depthUnderTheTin(const terrain::Camera& cam, int x, int y) {
-  const auto& region = *scene().tool.region();
+  const auto& region = *scene().tool.strokeTin();
   const Eigen::Vector3d d = rayOf(cam, x, y).normalized();
   double deepest = 0;
   for (double t = 0; t < 20e3; t += 2.0) {
@@ -256,7 +256,7 @@ double depthUnderTheTin(const terrain::Camera& cam, int x, int y) {
 // passes under the TIN's surface is a leak. Measured for the patch with and without its
 // overlap ring, with and without skirts; the default (the ring, no skirts) must leak nothing.
 // PS_TIN_VIEW_PICTURES=DIR writes one view of each.
-TEST(TinRegionRender, NoBackgroundLeaksThroughTheJoinInTheRenderedPicture) {
+TEST(StrokeTinRender, NoBackgroundLeaksThroughTheJoinInTheRenderedPicture) {
   SKIP_WITHOUT_GL();
   Scene& s = scene();
   struct Join {
@@ -281,7 +281,7 @@ TEST(TinRegionRender, NoBackgroundLeaksThroughTheJoinInTheRenderedPicture) {
   // under the surface by far more (kilometres, in the views without the overlap).
   double slack = 0.5;
   {
-    const terrain::MeshPatch p = s.tool.region()->patch();
+    const terrain::MeshPatch p = s.tool.strokeTin()->patch();
     for (std::size_t t = 0; t < p.indices.size(); ++t) {
       const std::size_t next = t % 3 == 2 ? t - 2 : t + 1;
       const double L = (p.positions[p.indices[t]] - p.positions[p.indices[next]]).norm();
@@ -300,7 +300,7 @@ TEST(TinRegionRender, NoBackgroundLeaksThroughTheJoinInTheRenderedPicture) {
     planetPixels += std::size_t(plain.total()) - std::size_t(cv::countNonZero(plainBg));
     for (Join& j : joins) {
       const auto patch =
-          std::make_shared<const terrain::MeshPatch>(s.tool.region()->patch(j.marginCells));
+          std::make_shared<const terrain::MeshPatch>(s.tool.strokeTin()->patch(j.marginCells));
       terrain::SplicedView spliced;
       const terrain::Mesh& mesh = spliced.view(grid, patch, *s.chart, j.join, 20.0);
       const cv::Mat img = renderer.renderAR(bg, s.planet, mesh, cam, plainStyle());
@@ -324,8 +324,8 @@ TEST(TinRegionRender, NoBackgroundLeaksThroughTheJoinInTheRenderedPicture) {
     }
     if (dir && view == 1) {
       cv::imwrite((std::filesystem::path(dir) / "join_grid.png").string(), plain);
-      // The grid's view | the spliced one (docs/images/tin_region_view.png).
-      const auto patch = std::make_shared<const terrain::MeshPatch>(s.tool.region()->patch());
+      // The grid's view | the spliced one (docs/images/stroke_tin_view.png).
+      const auto patch = std::make_shared<const terrain::MeshPatch>(s.tool.strokeTin()->patch());
       terrain::SplicedView spliced;
       cv::Mat both;
       cv::hconcat(
@@ -349,7 +349,7 @@ TEST(TinRegionRender, NoBackgroundLeaksThroughTheJoinInTheRenderedPicture) {
 
 // The same scene drawn by two renderers, and by one twice after drawing another view between:
 // bit-identical pictures (replays write the same frames every time).
-TEST(TinRegionRender, TheSplicedViewDrawsTheSamePictureEveryTime) {
+TEST(StrokeTinRender, TheSplicedViewDrawsTheSamePictureEveryTime) {
   SKIP_WITHOUT_GL();
   Scene& s = scene();
   render::EglContext ctx;
@@ -357,7 +357,7 @@ TEST(TinRegionRender, TheSplicedViewDrawsTheSamePictureEveryTime) {
   const terrain::Camera other = cameraAt(3.0, 9000.0, 1500.0);
   terrain::Tessellator tess;
   terrain::SplicedView spliced;
-  const auto patch = std::make_shared<const terrain::MeshPatch>(s.tool.region()->patch());
+  const auto patch = std::make_shared<const terrain::MeshPatch>(s.tool.strokeTin()->patch());
   render::PlanetRenderer a;
   const cv::Mat first = a.renderAR(
       {}, s.planet, spliced.view(tessellate(tess, cam), patch, *s.chart), cam, plainStyle());
@@ -373,7 +373,7 @@ TEST(TinRegionRender, TheSplicedViewDrawsTheSamePictureEveryTime) {
   render::PlanetRenderer b;
   terrain::Tessellator tess3;
   terrain::SplicedView spliced3;
-  const auto patch2 = std::make_shared<const terrain::MeshPatch>(s.tool.region()->patch());
+  const auto patch2 = std::make_shared<const terrain::MeshPatch>(s.tool.strokeTin()->patch());
   const cv::Mat fresh = b.renderAR(
       {}, s.planet, spliced3.view(tessellate(tess3, cam), patch2, *s.chart), cam, plainStyle());
   EXPECT_EQ(cv::norm(first, again, cv::NORM_INF), 0.0);

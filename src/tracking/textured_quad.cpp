@@ -1,4 +1,4 @@
-#include "tracking/render.hpp"
+#include "tracking/textured_quad.hpp"
 
 #include <algorithm>
 #include <cmath>

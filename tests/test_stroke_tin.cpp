@@ -14,7 +14,7 @@
 #include "core/input_error.hpp"
 #include "edit/edit_pipeline.hpp"
 #include "sand/sand_grid.hpp"
-#include "sand/tin_region.hpp"
+#include "sand/stroke_tin.hpp"
 #include "sand/tin_sand_tool.hpp"
 #include "terrain/terrain.hpp"
 #include "test_edit_util.hpp"
@@ -221,7 +221,7 @@ TEST(TinSandTool, ARegionIsStaleOnceTheGridChangesUnderIt) {
   edit::Region F;
   grower.grow(field, 5 * 1200.0, F);
   std::vector<float> h(p.t.heights().begin(), p.t.heights().end());
-  const sand::TinRegion region(*p.chart, h, F, c, 1.2, s.sand);
+  const sand::StrokeTin region(*p.chart, h, F, c, 1.2, s.sand);
   EXPECT_TRUE(region.holds(h));
   const auto& q = region.points()[region.points().size() / 2];
   h[p.chart->grid().index(q.u, q.v)] += 1e-3f;

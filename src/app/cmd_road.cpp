@@ -1,6 +1,7 @@
-// `planetsculpt track STROKES --width M --out TRACK.obj [--stroke N] [--planet P]`: a stroke
+// `planetsculpt road STROKES --width M --out ROAD.obj [--stroke N] [--planet P]`: a stroke
 // sculpted in a recording (a replay's log.jsonl) or of a stroke file as a strip of the given width:
-// a track mesh that `overlay ... --at LAT,LON` stitches or stencils into a planet's TIN.
+// a road mesh that `overlay ... --at LAT,LON` stitches or stencils into a planet's TIN. `track`,
+// its name before issue 44 (which keeps "track" for markers), still runs it and says so.
 #include <Eigen/Geometry>
 #include <cmath>
 #include <cstdio>
@@ -22,7 +23,7 @@ namespace ps::app {
 
 namespace {
 
-struct TrackArgs {
+struct RoadArgs {
   std::string strokes, output, planet;
   double width = 0;
   int stroke = 1;
@@ -77,19 +78,19 @@ std::vector<std::vector<Eigen::Vector3d>> logPaths(const std::string& file,
   return paths;
 }
 
-int runTrack(const TrackArgs& a) {
+int runRoad(const RoadArgs& a) {
   std::unique_ptr<terrain::Terrain> planet;
   double radius = io::kDefaultImportRadius;
   if (!a.planet.empty()) {
     planet = io::loadPlanet(a.planet);
     // Any sphere: the track is laid on the tangent plane and read back through the chart's
     // inverse (the default planet is octahedral).
-    if (!(planet->chart().radius() > 0))
+    if (!(planet->chart().sphereRadius() > 0))
       throw core::InputError(a.planet +
                              ": a stroke's track needs a sphere (a lat-long or "
                              "octahedral planet), not a " +
                              planet->chart().name() + " one");
-    radius = planet->chart().radius();
+    radius = planet->chart().sphereRadius();
   }
   const bool replayLog = std::filesystem::path(a.strokes).extension() == ".jsonl";
   if (replayLog && !planet)
@@ -102,7 +103,7 @@ int runTrack(const TrackArgs& a) {
     throw core::InputError(a.strokes + ": --stroke " + std::to_string(a.stroke) +
                            ": the file has " + std::to_string(paths.size()) + " strokes");
   const auto& path = paths[std::size_t(a.stroke - 1)];
-  // The track's frame: the tangent plane at the stroke's start (x east, y north), points taken
+  // The road's frame: the tangent plane at the stroke's start (x east, y north), points taken
   // onto it through the planet's centre, as `overlay --at` puts them back.
   const Eigen::Vector3d up = path.front().normalized();
   const Eigen::Vector3d east = Eigen::Vector3d::UnitZ().cross(up).norm() > 1e-9
@@ -116,7 +117,7 @@ int runTrack(const TrackArgs& a) {
     if (d.dot(up) < 0.2)
       throw core::InputError(
           a.strokes + ": stroke " + std::to_string(a.stroke) +
-          " reaches more than 78 degrees from its start; one track cannot hold it");
+          " reaches more than 78 degrees from its start; one road cannot hold it");
     const Eigen::Vector3d q = radius * d / d.dot(up) - radius * up;
     if (!centre.empty())
       length += (Eigen::Vector2d(q.dot(east), q.dot(north)) - centre.back()).norm();
@@ -144,7 +145,7 @@ int runTrack(const TrackArgs& a) {
   char at[96];
   std::snprintf(at, sizeof at, "%.10g,%.10g,0", lat, lon);
   mesh.description =
-      "PlanetSculpt track: stroke " + std::to_string(a.stroke) + " of " + a.strokes + ", " +
+      "PlanetSculpt road: stroke " + std::to_string(a.stroke) + " of " + a.strokes + ", " +
       core::exactNumber(a.width) + " m wide; x east, y north in metres on the tangent plane at " +
       std::string(at) + " (overlay --at " + std::string(at) + "); z height above the datum";
   io::writeObjFile(mesh, a.output);
@@ -161,21 +162,37 @@ int runTrack(const TrackArgs& a) {
   return 0;
 }
 
-const CommandRegistration kTrack([](CLI::App& root, CLI::App*& sub) -> CommandAction {
-  auto a = std::make_shared<TrackArgs>();
-  sub = root.add_subcommand(
-      "track", "A stroke of a stroke file as a strip (a track mesh OBJ for `overlay`)");
-  sub->add_option("strokes", a->strokes,
-                  "A replay's log (OUT/log.jsonl of `replay`/`demo`: the strokes sculpted in the "
-                  "recording; needs --planet) or a stroke file (data/demo-strokes.txt, ...)")
+void addRoadOptions(CLI::App& sub, RoadArgs& a) {
+  sub.add_option("strokes", a.strokes,
+                 "A replay's log (OUT/log.jsonl of `replay`/`demo`: the strokes sculpted in the "
+                 "recording; needs --planet) or a stroke file (data/demo-strokes.txt, ...)")
       ->required();
-  sub->add_option("--out", a->output, "Track mesh (.obj)")->required();
-  sub->add_option("--width", a->width, "Strip width in metres")->required();
-  sub->add_option("--stroke", a->stroke, "Which stroke, counted from 1")->capture_default_str();
-  sub->add_option("--planet", a->planet,
-                  "The planet the strokes were sculpted on: its radius, and the strip's heights "
-                  "(else the default radius and heights 0)");
-  return [a] { return runTrack(*a); };
+  sub.add_option("--out", a.output, "Road mesh (.obj)")->required();
+  sub.add_option("--width", a.width, "Strip width in metres")->required();
+  sub.add_option("--stroke", a.stroke, "Which stroke, counted from 1")->capture_default_str();
+  sub.add_option("--planet", a.planet,
+                 "The planet the strokes were sculpted on: its radius, and the strip's heights "
+                 "(else the default radius and heights 0)");
+}
+
+const CommandRegistration kRoad([](CLI::App& root, CLI::App*& sub) -> CommandAction {
+  auto a = std::make_shared<RoadArgs>();
+  sub = root.add_subcommand("road",
+                            "A stroke of a stroke file as a strip (a road mesh OBJ for `overlay`)");
+  addRoadOptions(*sub, *a);
+  return [a] { return runRoad(*a); };
+});
+
+// The old name: the same options and output, and one line on stderr saying it is deprecated.
+const CommandRegistration kTrackAlias([](CLI::App& root, CLI::App*& sub) -> CommandAction {
+  auto a = std::make_shared<RoadArgs>();
+  sub = root.add_subcommand("track", "Deprecated: the old name of `road` (the same options)");
+  addRoadOptions(*sub, *a);
+  return [a] {
+    std::cerr << "planetsculpt: `track` is deprecated, use `planetsculpt road` (the same "
+                 "options; \"track\" now names marker tracking only)\n";
+    return runRoad(*a);
+  };
 });
 
 }  // namespace

@@ -1,4 +1,4 @@
-#include "sand/tin_region.hpp"
+#include "sand/stroke_tin.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -27,7 +27,7 @@ namespace {
 // charts (octahedral, torus, cylinder; no pole crowds their rows) the shorter of the two grid
 // steps at the region's centre, the grid continued across a fold or a seam.
 double latticeSpacing(const core::Chart& chart, core::GridPoint centre) {
-  if (chart.hasPoleRows()) return std::numbers::pi * chart.radius() / chart.grid().m();
+  if (chart.hasPoleRows()) return std::numbers::pi * chart.sphereRadius() / chart.grid().m();
   if (const auto* flat = dynamic_cast<const core::FlatChart*>(&chart))
     return std::min(flat->dx(), flat->dy());
   const Eigen::Vector3d c = chart.position(centre.u, centre.v, 0.0);
@@ -64,7 +64,7 @@ Eigen::Vector3d tubePointAt(const core::Chart& chart, const TangentFrame& frame,
 
 }  // namespace
 
-TinRegion::TinRegion(const core::Chart& chart, std::span<const float> heights,
+StrokeTin::StrokeTin(const core::Chart& chart, std::span<const float> heights,
                      const edit::Region& F, core::GridPoint centre, double tolerance,
                      const TinSandSettings& sand)
     : chart_(&chart),
@@ -122,7 +122,7 @@ TinRegion::TinRegion(const core::Chart& chart, std::span<const float> heights,
     surface_[k] = sand_->tin().heightAt(points_[k].xy);
 }
 
-std::size_t TinRegion::densify(const Eigen::Vector2d& centre, double radius) {
+std::size_t StrokeTin::densify(const Eigen::Vector2d& centre, double radius) {
   std::size_t added = 0;
   for (std::size_t k = 0; k < points_.size(); ++k) {
     if (vertex_[k] || !candidate_[k] || (points_[k].xy - centre).squaredNorm() > radius * radius)
@@ -139,10 +139,10 @@ std::size_t TinRegion::densify(const Eigen::Vector2d& centre, double radius) {
   return added;
 }
 
-terrain::MeshPatch TinRegion::patch(double marginCells) const {
+terrain::MeshPatch StrokeTin::patch(double marginCells) const {
   terrain::MeshPatch p;
   const tin::Tin t = sand_->tin().toTin();
-  const double R = chart_->radius();
+  const double R = chart_->sphereRadius();
   const core::GridSize g = chart_->grid();
   // A tube's surface is no sphere and no plane: its patch is drawn, and the haptic path feels
   // the grid under it (what the TIN wrote back), as a patch without a plane is.
@@ -198,16 +198,16 @@ terrain::MeshPatch TinRegion::patch(double marginCells) const {
   return p;
 }
 
-bool TinRegion::holds(std::span<const float> heights) const {
+bool StrokeTin::holds(std::span<const float> heights) const {
   const core::GridSize g = chart_->grid();
   for (std::size_t k = 0; k < points_.size(); ++k)
     if (heights[g.index(points_[k].u, points_[k].v)] != left_[k]) return false;
   return true;
 }
 
-TinRegionWrite TinRegion::writeBack(std::span<float> heights, const SandGrid& cells,
+StrokeTinWrite StrokeTin::writeBack(std::span<float> heights, const SandGrid& cells,
                                     float heightLimit) {
-  TinRegionWrite w;
+  StrokeTinWrite w;
   // The TIN's change at every point, then the grid's own volume (sum A h) put back on the points
   // that changed, then floats with the rounding carried on.
   std::vector<double> next(points_.size()), after(points_.size());

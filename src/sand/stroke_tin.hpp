@@ -41,16 +41,16 @@ struct TangentFrame {
   }
 };
 
-struct TinRegionWrite {
+struct StrokeTinWrite {
   std::size_t changed = 0;      // grid points whose height changed
   double volumeCorrection = 0;  // m^3 put back after sampling the TIN onto the grid
 };
 
-class TinRegion {
+class StrokeTin {
  public:
   // The region F (grown around `centre`) of `chart`'s grid with `heights`. tolerance: metres,
   // 0 for every point.
-  TinRegion(const core::Chart& chart, std::span<const float> heights, const edit::Region& F,
+  StrokeTin(const core::Chart& chart, std::span<const float> heights, const edit::Region& F,
             core::GridPoint centre, double tolerance, const TinSandSettings& sand);
 
   const edit::Region& footprint() const { return footprint_; }
@@ -85,7 +85,7 @@ class TinRegion {
   // (docs/RENDERING.md); 0 is for measuring that.
   terrain::MeshPatch patch(double marginCells = 2) const;
 
-  TinRegionWrite writeBack(std::span<float> heights, const SandGrid& cells, float heightLimit);
+  StrokeTinWrite writeBack(std::span<float> heights, const SandGrid& cells, float heightLimit);
 
  private:
   const core::Chart* chart_;
