@@ -67,13 +67,6 @@ std::vector<float> pileAt(const core::Chart& chart, core::GridPoint p, double ra
   return h;
 }
 
-double absVolume(const sand::SandField& f) {
-  std::vector<double> h;
-  f.copyHeights(h);
-  std::vector<float> hf(h.begin(), h.end());
-  return f.grid().absVolume(hf);
-}
-
 // Largest |h(u, v) - h(canonical(u, v))| over the grid.
 double twinSpread(const core::Chart& chart, const std::vector<double>& h) {
   const core::GridSize g = chart.grid();
@@ -87,10 +80,6 @@ double twinSpread(const core::Chart& chart, const std::vector<double>& h) {
   return worst;
 }
 
-bool sameDoubles(const std::vector<double>& a, const std::vector<double>& b) {
-  return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(double)) == 0;
-}
-
 }  // namespace
 
 // Random materials, piles on every spot, dt from half the explicit bound to 1000 times it:
@@ -102,7 +91,6 @@ TEST(SandGluedImplicit, RandomSettingsKeepVolumeRangeAndTwinsAtAnyStep) {
   const double factors[3] = {0.5, 30.0, 1000.0};
   double worstDrift = 0.0;
   for (const GluedCase& c : cases()) {
-    const core::GridSize g = c.chart->grid();
     for (std::size_t s = 0; s < c.spots.size(); ++s) {
       sand::Material mat = sand::Material::sand();
       mat.diffusion = 0.2 + 2.0 * uni(rng);
@@ -115,25 +103,17 @@ TEST(SandGluedImplicit, RandomSettingsKeepVolumeRangeAndTwinsAtAnyStep) {
       auto h2 = h;
       sand::SandField a(c.chart, h), b(c.chart, h2);
       // a: the pile's cells marked (the active set grows across the folds and seams); b: all.
-      for (int v = 0; v <= g.m(); ++v) {
-        for (int u = 0; u <= g.m(); ++u) {
-          if (h[g.index(u, v)] != 0.0f) a.mark({u, u, v, v});
-        }
-      }
-      const double v0 = a.volume(), scale = absVolume(a);
+      sandtest::markNonZero(a, *c.chart, h);
+      const double v0 = a.volume(), scale = sandtest::absVolume(a);
       const double dt = factor * a.explicitBound(mat);
       ASSERT_TRUE(std::isfinite(dt) && dt > 0.0);
-      std::vector<double> ha, hb;
-      for (int step = 0; step < 25; ++step) {
-        b.markAll();
-        a.diffusionStep(mat, dt, sand::DiffusionScheme::kSemiImplicit);
-        b.diffusionStep(mat, dt, sand::DiffusionScheme::kSemiImplicit);
-      }
-      a.copyHeights(ha);
-      b.copyHeights(hb);
       const std::string what =
           c.name + " spot " + std::to_string(s) + " dt x" + std::to_string(factor);
-      EXPECT_TRUE(sameDoubles(ha, hb)) << what;
+      EXPECT_TRUE(sandtest::diffusionSideBySide(a, b, mat, dt, sand::DiffusionScheme::kSemiImplicit,
+                                                sand::StepPolicy::kClamp, 25))
+          << what;
+      std::vector<double> ha;
+      a.copyHeights(ha);
       EXPECT_TRUE(sandtest::allFinite(a)) << what;
       const double drift = std::abs(a.volume() - v0) / scale;
       worstDrift = std::max(worstDrift, drift);
@@ -160,20 +140,7 @@ TEST(SandGluedImplicit, ASmallStepEqualsTheExplicitStep) {
   std::uniform_real_distribution<double> uni(0.0, 1.0);
   const sand::Material mat = sand::Material::sand();
   for (const GluedCase& c : cases()) {
-    const core::GridSize g = c.chart->grid();
-    std::vector<float> h0(g.count());
-    for (int v = 0; v <= g.m(); ++v) {
-      for (int u = 0; u <= g.m(); ++u) {
-        const core::GridPoint p = c.chart->canonical(u, v);
-        if (p.u == u && p.v == v) h0[g.index(u, v)] = float(400.0 * uni(rng));
-      }
-    }
-    for (int v = 0; v <= g.m(); ++v) {
-      for (int u = 0; u <= g.m(); ++u) {
-        const core::GridPoint p = c.chart->canonical(u, v);
-        h0[g.index(u, v)] = h0[g.index(p.u, p.v)];
-      }
-    }
+    const std::vector<float> h0 = sandtest::twinNoise(*c.chart, [&] { return 400.0 * uni(rng); });
     double diff[2] = {0, 0}, change[2] = {0, 0};
     double bound = 0.0;
     for (int half = 0; half < 2; ++half) {
@@ -208,7 +175,6 @@ TEST(SandGluedImplicit, ASmallStepEqualsTheExplicitStep) {
 // octahedral chart, the torus's corner and the cylinder's seam at a rim: volume kept, a rut
 // under the tool on both sides of the fold or seam, the marked step equal to the whole grid's.
 TEST(SandGluedImplicit, APushForceAcrossAFoldOrSeamKeepsVolume) {
-  const sand::Material mat = sand::Material::sand();
   for (const GluedCase& c : cases()) {
     const int m = c.chart->grid().m();
     const bool octahedral = c.name.rfind("octahedral", 0) == 0;
@@ -216,33 +182,25 @@ TEST(SandGluedImplicit, APushForceAcrossAFoldOrSeamKeepsVolume) {
         octahedral ? std::vector<core::GridPoint>{{0, m / 4}, {0, 0}}
                    : std::vector<core::GridPoint>{{0, c.name == "torus" ? 0 : m / 2}};
     for (const core::GridPoint p : where) {
-      std::vector<float> h(c.chart->grid().count(), 10.0f), h2 = h;
-      sand::SandField a(c.chart, h), b(c.chart, h2);
-      const double v0 = a.volume();
-      const sand::PushForce force{c.chart->position(p.u, p.v, 10.0), 1.5 * c.pileRadius, 2e4};
-      const double dt = 30.0 * a.explicitBound(mat);
-      for (int i = 0; i < 10; ++i) {
-        b.markAll();
-        a.diffusionStep(mat, dt, sand::DiffusionScheme::kSemiImplicit, sand::StepPolicy::kClamp,
-                        &force);
-        b.diffusionStep(mat, dt, sand::DiffusionScheme::kSemiImplicit, sand::StepPolicy::kClamp,
-                        &force);
-      }
-      std::vector<double> ha, hb;
-      a.copyHeights(ha);
-      b.copyHeights(hb);
       const std::string what = c.name + " " + std::to_string(p.u) + "," + std::to_string(p.v);
-      EXPECT_TRUE(sameDoubles(ha, hb)) << what;
-      EXPECT_TRUE(sandtest::allFinite(a)) << what;
-      EXPECT_LE(std::abs(a.volume() - v0) / v0, 1e-12) << what;
-      EXPECT_LT(a.height(p.u, p.v), 10.0 - 0.5) << what;  // the rut under the tool
-      EXPECT_EQ(twinSpread(*c.chart, ha), 0.0) << what;
-      // Both sides of the fold or seam moved: (1, v) and, across it, (1, m - v) on the
-      // octahedral chart, (m - 1, v) on a tube.
-      EXPECT_NE(a.height(1, p.v), 10.0) << what;
-      const core::GridPoint across =
-          octahedral ? core::GridPoint{1, m - p.v} : core::GridPoint{m - 1, p.v};
-      EXPECT_NE(a.height(across.u, across.v), 10.0) << what;
+      const sandtest::PushCase push{.at = p,
+                                    .radius = 1.5 * c.pileRadius,
+                                    .scheme = sand::DiffusionScheme::kSemiImplicit,
+                                    .boundFactor = 30.0,
+                                    .steps = 10,
+                                    .volumeTolerance = 1e-12};
+      sandtest::pushTheLayer(
+          c.chart, push, what, [&](const sand::SandField& a, const sand::SandField&) {
+            std::vector<double> ha;
+            a.copyHeights(ha);
+            EXPECT_EQ(twinSpread(*c.chart, ha), 0.0) << what;
+            // Both sides of the fold or seam moved: (1, v) and, across it, (1, m - v) on the
+            // octahedral chart, (m - 1, v) on a tube.
+            EXPECT_NE(a.height(1, p.v), 10.0) << what;
+            const core::GridPoint across =
+                octahedral ? core::GridPoint{1, m - p.v} : core::GridPoint{m - 1, p.v};
+            EXPECT_NE(a.height(across.u, across.v), 10.0) << what;
+          });
     }
   }
 }

@@ -50,27 +50,6 @@ std::vector<float> heightsOfDirection(const core::Chart& chart,
   return h;
 }
 
-// Marks every cell whose height is not 0 (the edit a field is told about).
-void markNonZero(sand::SandField& f, const core::Chart& chart, std::span<const float> h) {
-  const core::GridSize g = chart.grid();
-  for (int v = 0; v <= g.m(); ++v) {
-    for (int u = 0; u <= g.m(); ++u) {
-      if (h[g.index(u, v)] != 0.0f) f.mark({u, u, v, v});
-    }
-  }
-}
-
-double absVolume(const sand::SandField& f) {
-  std::vector<double> h;
-  f.copyHeights(h);
-  std::vector<float> hf(h.begin(), h.end());
-  return f.grid().absVolume(hf);
-}
-
-bool sameDoubles(const std::vector<double>& a, const std::vector<double>& b) {
-  return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(double)) == 0;
-}
-
 // The grid points the tests put piles and stamps on: the south pole (the four corners), a side
 // (a fold, south of the equator), a side's midpoint (a cone point, on the equator) on each of
 // the two kinds of side, the north pole (the centre), a crease.
@@ -126,44 +105,15 @@ TEST(SandOctahedral, CellAreasSumToTheSphereArePositiveAndLinksAreSymmetric) {
       if (n > 6) continue;
       // Links: i -> j as often as j -> i, with bitwise the same chords and faces; cone points
       // have 4, every other cell 8.
-      std::map<std::pair<std::size_t, std::size_t>, std::vector<std::pair<double, double>>> links;
-      const core::GridSize gs = g.grid();
-      for (int v = 0; v <= m; ++v) {
-        for (int u = 0; u <= m; ++u) {
-          if (!g.isCell(u, v)) continue;
-          const bool cone =
-              (u == m / 2 && (v == 0 || v == m)) || (v == m / 2 && (u == 0 || u == m));
-          EXPECT_EQ(g.linkCount(u, v), cone ? 4 : 8);
-          int count = 0;
-          for (int k = 0; k < 8; ++k) {
-            const core::GridPoint nb = g.neighbour(u, v, k);
-            if (nb.u < 0) continue;
-            ++count;
-            ASSERT_TRUE(g.isCell(nb.u, nb.v));
-            ASSERT_FALSE(nb.u == u && nb.v == v);
-            const double d = g.chord(u, v, k);
-            ASSERT_GT(d, 0.0);
-            ASSERT_LT(d, 4.0 * 2 * std::numbers::pi * R / m);
-            const double L = k < 4 ? g.face(u, v, k) : -1.0;
-            if (k < 4) {
-              ASSERT_GT(L, 0.0);
-            }
-            links[{gs.index(u, v), gs.index(nb.u, nb.v)}].push_back({d, L});
-          }
-          EXPECT_EQ(count, g.linkCount(u, v));
-        }
-      }
-      for (auto& [key, list] : links) {
-        auto back = links.find({key.second, key.first});
-        ASSERT_NE(back, links.end());
-        auto a = list, b = back->second;
-        std::sort(a.begin(), a.end());
-        std::sort(b.begin(), b.end());
-        ASSERT_EQ(a.size(), b.size()) << key.first << " " << key.second;
-        for (std::size_t i = 0; i < a.size(); ++i) {
-          ASSERT_EQ(std::memcmp(&a[i], &b[i], sizeof(a[i])), 0) << key.first << " " << key.second;
-        }
-      }
+      ASSERT_NO_FATAL_FAILURE(sandtest::checkLinksSymmetric(
+          g, 4.0 * 2 * std::numbers::pi * R / m,
+          [&](int u, int v) {
+            const bool cone =
+                (u == m / 2 && (v == 0 || v == m)) || (v == m / 2 && (u == 0 || u == m));
+            EXPECT_EQ(g.linkCount(u, v), cone ? 4 : 8);
+            return g.linkCount(u, v);
+          },
+          std::string(nameOf(mapping)) + " n " + std::to_string(n)));
     }
   }
 }
@@ -172,8 +122,7 @@ TEST(SandOctahedral, ThermalKeepsVolumeAndTheActiveSetStepEqualsTheWholeGridStep
   // A 1 km planet on 65^2 (cells ~55 m): a crater or a pile on each spot (a 300 m step: far past
   // the talus), settled from the marked cells only and from the whole grid, step by step.
   const sand::Material mat = sand::Material::sand();
-  double worstDrift = 0;
-  int mostSteps = 0;
+  sandtest::SettleFigures figures;
   for (Mapping mapping : kMappings) {
     auto chart = octa(6, 1000.0, mapping);
     const int m = chart->grid().m();
@@ -184,37 +133,9 @@ TEST(SandOctahedral, ThermalKeepsVolumeAndTheActiveSetStepEqualsTheWholeGridStep
       auto h = heightsOfDirection(*chart, [&](const Eigen::Vector3d& d) {
         return (d - c).norm() < 0.16 ? sign * 300.0 : 0.0;
       });
-      auto h2 = h;
-      sand::SandField a(chart, h), b(chart, h2);
-      markNonZero(a, *chart, h);
-      const double v0 = a.volume(), scale = absVolume(a);
-      std::vector<double> ha, hb;
-      for (int step = 0; step < 150; ++step) {
-        b.markAll();
-        const auto ra = a.thermalStep(mat);
-        const auto rb = b.thermalStep(mat);
-        ASSERT_LE(ra.cells, rb.cells);
-        if (step % 25 == 0 || step == 149) {
-          a.copyHeights(ha);
-          b.copyHeights(hb);
-          ASSERT_TRUE(sameDoubles(ha, hb)) << nameOf(mapping) << " spot " << s << " step " << step;
-        }
-      }
-      EXPECT_TRUE(sandtest::allFinite(a));
-      EXPECT_LE(std::abs(a.volume() - v0) / scale, 1e-13) << nameOf(mapping) << " spot " << s;
-      int more = 0;
-      while (!a.atRest() && more < 20000) {
-        a.thermalStep(mat);
-        ++more;
-      }
-      EXPECT_TRUE(a.atRest()) << nameOf(mapping) << " spot " << s;
-      EXPECT_LE(sandtest::worstTalusExcess(a, mat), mat.talusTolerance * (1 + 1e-9))
-          << nameOf(mapping) << " spot " << s;
-      EXPECT_LE(std::abs(a.volume() - v0) / scale, 1e-12) << nameOf(mapping) << " spot " << s;
-      worstDrift = std::max(worstDrift, std::abs(a.volume() - v0) / scale);
-      mostSteps = std::max(mostSteps, 150 + more);
+      const std::string what = std::string(nameOf(mapping)) + " spot " + std::to_string(s);
+      ASSERT_NO_FATAL_FAILURE(sandtest::settlePile(chart, h, mat, what, figures));
       // Written back: twins hold one float.
-      a.writeBack(1e30);
       for (int v = 0; v <= m; ++v) {
         for (int u = 0; u <= m; ++u) {
           const core::GridPoint p = chart->canonical(u, v);
@@ -225,7 +146,7 @@ TEST(SandOctahedral, ThermalKeepsVolumeAndTheActiveSetStepEqualsTheWholeGridStep
   }
   std::printf(
       "thermal, 16 piles and craters settled (at most %d steps): volume drift at most %.3g\n",
-      mostSteps, worstDrift);
+      figures.mostSteps, figures.worstDrift);
 }
 
 TEST(SandOctahedral, ExplicitDiffusionKeepsVolumeAndTheActiveSetStepEqualsTheWholeGridStep) {
@@ -238,43 +159,14 @@ TEST(SandOctahedral, ExplicitDiffusionKeepsVolumeAndTheActiveSetStepEqualsTheWho
       const Eigen::Vector3d c = chart->up(where[s].u, where[s].v);
       auto h = heightsOfDirection(
           *chart, [&](const Eigen::Vector3d& d) { return (d - c).norm() < 0.16 ? -300.0 : 0.0; });
-      auto h2 = h;
-      sand::SandField a(chart, h), b(chart, h2);
-      markNonZero(a, *chart, h);
-      const double v0 = a.volume(), scale = absVolume(a);
-      const double dt = a.explicitBound(mat);
-      ASSERT_TRUE(std::isfinite(dt) && dt > 0.0);
-      std::vector<double> ha, hb;
-      for (int step = 0; step < 60; ++step) {
-        b.markAll();
-        a.diffusionStep(mat, dt, sand::DiffusionScheme::kExplicit, sand::StepPolicy::kRefuse);
-        b.diffusionStep(mat, dt, sand::DiffusionScheme::kExplicit, sand::StepPolicy::kRefuse);
-      }
-      a.copyHeights(ha);
-      b.copyHeights(hb);
-      EXPECT_TRUE(sameDoubles(ha, hb)) << nameOf(mapping) << " spot " << s;
-      EXPECT_TRUE(sandtest::allFinite(a));
-      EXPECT_LE(std::abs(a.volume() - v0) / scale, 1e-13) << nameOf(mapping) << " spot " << s;
-      // The crater's wall moved, and the range did not grow (the maximum principle).
-      double lo = 1e300, hi = -1e300;
-      int between = 0;
-      for (double x : ha) {
-        lo = std::min(lo, x), hi = std::max(hi, x);
-        between += (x > -300.0 && x < 0.0) ? 1 : 0;
-      }
-      EXPECT_GE(lo, -300.0);
-      EXPECT_LE(hi, 0.0);
-      EXPECT_GT(between, 0);
+      ASSERT_NO_FATAL_FAILURE(sandtest::explicitCraterDiffuses(
+          chart, h, mat, std::string(nameOf(mapping)) + " spot " + std::to_string(s)));
     }
     // Past the bound: refused, naming it.
     auto h = heightsOfDirection(
         *chart, [&](const Eigen::Vector3d& d) { return d.z() > 0.9 ? 100.0 : 0.0; });
     sand::SandField f(chart, h);
-    f.markAll();
-    const double bound = f.explicitBound(mat);
-    EXPECT_THROW(f.diffusionStep(mat, 2 * bound, sand::DiffusionScheme::kExplicit,
-                                 sand::StepPolicy::kRefuse),
-                 core::InputError);
+    const double bound = sandtest::refusesTwiceTheExplicitBound(f, mat);
     // A step past the bound with the default policy (clamp) stays finite and in range.
     for (int step = 0; step < 200; ++step)
       f.diffusionStep(mat, 10 * bound, sand::DiffusionScheme::kExplicit);
@@ -287,37 +179,25 @@ TEST(SandOctahedral, ExplicitDiffusionKeepsVolumeAndTheActiveSetStepEqualsTheWho
 TEST(SandOctahedral, APushForceAcrossAFoldKeepsVolumeAndTheActiveSetEqualsTheWholeGrid) {
   // Paper 002's drift under a tool on a fold and on the south pole: the rut reaches both sides of
   // the fold, the volume is kept, and stepping the marked tiles equals stepping every tile.
-  const sand::Material mat = sand::Material::sand();
   for (Mapping mapping : kMappings) {
     auto chart = octa(6, 1000.0, mapping);
     const int m = chart->grid().m();
     for (const core::GridPoint p : {core::GridPoint{0, m / 4}, core::GridPoint{0, 0}}) {
-      std::vector<float> h(chart->grid().count(), 10.0f), h2 = h;
-      sand::SandField a(chart, h), b(chart, h2);
-      const double v0 = a.volume();
-      const sand::PushForce force{chart->position(p.u, p.v, 10.0), 220.0, 2e4};
-      for (int i = 0; i < 20; ++i) {
-        b.markAll();
-        a.diffusionStep(mat, 0.2, sand::DiffusionScheme::kExplicit, sand::StepPolicy::kClamp,
-                        &force);
-        b.diffusionStep(mat, 0.2, sand::DiffusionScheme::kExplicit, sand::StepPolicy::kClamp,
-                        &force);
-      }
-      std::vector<double> ha, hb;
-      a.copyHeights(ha);
-      b.copyHeights(hb);
-      EXPECT_TRUE(sameDoubles(ha, hb)) << nameOf(mapping) << " " << p.u << "," << p.v;
-      EXPECT_TRUE(sandtest::allFinite(a));
-      EXPECT_LE(std::abs(a.volume() - v0) / v0, 1e-13) << nameOf(mapping);
-      EXPECT_LT(a.height(p.u, p.v), 10.0 - 0.5) << nameOf(mapping);  // the rut under the tool
-      // Both sides of the fold moved: (1, v) and, across it, (1, m - v) (at the corner: (1, 0)
-      // and (1, m), beside the twins (0, 0) and (0, m)).
-      EXPECT_NE(a.height(1, p.v), 10.0);
-      EXPECT_NE(a.height(1, m - p.v), 10.0);
-      // The north pole, far away, untouched (before the drift was kept to the tool's hemisphere,
-      // a ghost of the force pushed at its antipode in whole-grid steps).
-      EXPECT_EQ(b.height(m / 2, m / 2), 10.0);
-      EXPECT_EQ(b.height(3 * m / 4, m / 2), 10.0);
+      const std::string what =
+          std::string(nameOf(mapping)) + " " + std::to_string(p.u) + "," + std::to_string(p.v);
+      sandtest::pushTheLayer(chart, {.at = p, .radius = 220.0}, what,
+                             [&](const sand::SandField& a, const sand::SandField& b) {
+                               // Both sides of the fold moved: (1, v) and, across it, (1, m - v)
+                               // (at the corner: (1, 0) and (1, m), beside the twins (0, 0) and (0,
+                               // m)).
+                               EXPECT_NE(a.height(1, p.v), 10.0);
+                               EXPECT_NE(a.height(1, m - p.v), 10.0);
+                               // The north pole, far away, untouched (before the drift was kept to
+                               // the tool's hemisphere, a ghost of the force pushed at its antipode
+                               // in whole-grid steps).
+                               EXPECT_EQ(b.height(m / 2, m / 2), 10.0);
+                               EXPECT_EQ(b.height(3 * m / 4, m / 2), 10.0);
+                             });
     }
   }
 }
@@ -327,20 +207,7 @@ TEST(SandOctahedral, ThreadCountDoesNotChangeTheResult) {
   auto chart = octa(8, 256 / std::numbers::pi, Mapping::kEqualArea);
   std::mt19937 rng(3);
   std::uniform_real_distribution<double> noise(0.0, 30.0);
-  const core::GridSize g = chart->grid();
-  std::vector<float> h(g.count());
-  for (int v = 0; v <= g.m(); ++v) {
-    for (int u = 0; u <= g.m(); ++u) {
-      const core::GridPoint c = chart->canonical(u, v);
-      h[g.index(u, v)] = c.u == u && c.v == v ? float(noise(rng)) : 0.0f;
-    }
-  }
-  for (int v = 0; v <= g.m(); ++v) {
-    for (int u = 0; u <= g.m(); ++u) {
-      const core::GridPoint c = chart->canonical(u, v);
-      h[g.index(u, v)] = h[g.index(c.u, c.v)];
-    }
-  }
+  const std::vector<float> h = sandtest::twinNoise(*chart, [&] { return noise(rng); });
   const sand::Material mat = sand::Material::sand();
   const int threads = omp_get_max_threads();
   for (const bool thermal : {true, false}) {
@@ -364,7 +231,7 @@ TEST(SandOctahedral, ThreadCountDoesNotChangeTheResult) {
     std::vector<double> ha, hb;
     a.copyHeights(ha);
     b.copyHeights(hb);
-    EXPECT_TRUE(sameDoubles(ha, hb)) << (thermal ? "thermal" : "diffusion");
+    EXPECT_TRUE(sandtest::sameDoubles(ha, hb)) << (thermal ? "thermal" : "diffusion");
   }
 }
 

@@ -9,28 +9,18 @@
 #include "core/input_error.hpp"
 #include "sand/sand_field.hpp"
 #include "sand/sand_grid.hpp"
-#include "stress_util.hpp"
 #include "test_sand_util.hpp"
 
 using namespace ps;
 using sandtest::flatChart;
 using sandtest::heightsFrom;
+using sandtest::settle;
 using sandtest::sphereChart;
 
 namespace {
 
 double relDrift(double before, double after, double scale) {
   return std::abs(after - before) / scale;
-}
-
-// Runs thermal steps until rest (or maxSteps); returns the steps run.
-int settle(sand::SandField& f, const sand::Material& mat, int maxSteps) {
-  int steps = 0;
-  while (!f.atRest() && steps < maxSteps) {
-    f.thermalStep(mat);
-    ++steps;
-  }
-  return steps;
 }
 
 }  // namespace
@@ -130,19 +120,8 @@ TEST(SandThermal, ActiveSetStepEqualsWholeGridStepBitForBit) {
     sand::SandField a(chart, h), b(chart, h2);
     const sand::Material mat = sand::Material::sand();
     a.mark({cu - 5, cu + 5, cv - 5, std::min(m, cv + 5)});
-    std::vector<double> ha, hb;
-    for (int step = 0; step < 150; ++step) {
-      b.markAll();
-      const auto ra = a.thermalStep(mat);
-      const auto rb = b.thermalStep(mat);
-      ASSERT_LE(ra.cells, rb.cells);
-      if (step % 25 == 0 || step == 149) {
-        a.copyHeights(ha);
-        b.copyHeights(hb);
-        ASSERT_EQ(std::memcmp(ha.data(), hb.data(), ha.size() * sizeof(double)), 0)
-            << "step " << step << " sphere " << sphere;
-      }
-    }
+    ASSERT_NO_FATAL_FAILURE(
+        sandtest::thermalSideBySide(a, b, mat, 150, sphere ? "sphere" : "flat"));
     const int more = settle(a, mat, 20000);
     EXPECT_TRUE(a.atRest()) << "sphere " << sphere << " after " << more << " more steps";
     EXPECT_LE(sandtest::worstTalusExcess(a, mat), mat.talusTolerance * (1 + 1e-9));
@@ -174,33 +153,11 @@ TEST(SandThermal, ThreadCountDoesNotChangeTheResult) {
 TEST(StressSand, ThermalNoNaNAfter1e5StepsAtTheLargestRate) {
   // c = 1 (the largest accepted rate) on extreme noise, kicked again every 25000 steps: heights
   // stay finite and inside the initial range (the step obeys a maximum principle).
-  auto chart = flatChart(5);
-  std::mt19937 rng(11);
-  std::uniform_real_distribution<double> noise(-1e4, 1e4);
-  auto h = heightsFrom(*chart, [&](int, int) { return noise(rng); });
-  const auto [lo, hi] = std::minmax_element(h.begin(), h.end());
-  const double lo0 = *lo, hi0 = *hi;
-  sand::SandField f(chart, h);
   sand::Material mat = sand::Material::sand();
   mat.erosionRate = 1.0;
   mat.talusDeg = 45.0;
-  f.markAll();
-  for (int i = 0; i < 100000 * testkit::stressScale(); ++i) {
-    if (i % 25000 == 24999) {  // a spike somewhere (within the initial range)
-      f.writeBack(1e30);
-      const int u = int(rng() % 33), v = int(rng() % 33);
-      h[chart->grid().index(u, v)] = float(0.01 * noise(rng));
-      f.mark({u, u, v, v});
-    }
-    f.thermalStep(mat);
-  }
-  std::vector<double> x;
-  f.copyHeights(x);
-  for (double y : x) {
-    ASSERT_TRUE(std::isfinite(y));
-    ASSERT_GE(y, lo0 - 1e-6);
-    ASSERT_LE(y, hi0 + 1e-6);
-  }
+  EXPECT_TRUE(
+      sandtest::kickedNoiseKeepsItsRange(11, 1e4, [&](sand::SandField& f) { f.thermalStep(mat); }));
 }
 
 TEST(SandThermal, PileOnAPoleSettlesAndThePoleRowStaysOnePoint) {

@@ -56,26 +56,6 @@ std::vector<float> heightsOfPoint(const core::Chart& chart,
   return h;
 }
 
-void markNonZero(sand::SandField& f, const core::Chart& chart, std::span<const float> h) {
-  const core::GridSize g = chart.grid();
-  for (int v = 0; v <= g.m(); ++v) {
-    for (int u = 0; u <= g.m(); ++u) {
-      if (h[g.index(u, v)] != 0.0f) f.mark({u, u, v, v});
-    }
-  }
-}
-
-double absVolume(const sand::SandField& f) {
-  std::vector<double> h;
-  f.copyHeights(h);
-  std::vector<float> hf(h.begin(), h.end());
-  return f.grid().absVolume(hf);
-}
-
-bool sameDoubles(const std::vector<double>& a, const std::vector<double>& b) {
-  return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(double)) == 0;
-}
-
 // Where the tests put piles and stamps: the torus's corner (both seams), its u seam, its v seam
 // (the outer equator), its inner equator, its top; the cylinder's seam, both rims (one on the
 // seam), its middle.
@@ -117,52 +97,16 @@ TEST(SandTubes, CellAreasSumToTheSurfaceAndLinksAreSymmetric) {
       if (n > 6) continue;
       // Links: i -> j as often as j -> i, with bitwise the same chords and faces; none across a
       // cylinder's rim (5 links on a rim cell), 8 everywhere else.
-      std::map<std::pair<std::size_t, std::size_t>, std::vector<std::pair<double, double>>> links;
-      const core::GridSize gs = g.grid();
-      for (int v = 0; v <= m; ++v) {
-        for (int u = 0; u <= m; ++u) {
-          if (!g.isCell(u, v)) continue;
-          int count = 0;
-          for (int k = 0; k < 8; ++k) {
-            const core::GridPoint nb = g.neighbour(u, v, k);
-            if (nb.u < 0) {
-              EXPECT_EQ(g.chord(u, v, k), std::numeric_limits<double>::infinity());
-              continue;
-            }
-            ++count;
-            ASSERT_TRUE(g.isCell(nb.u, nb.v));
-            const double d = g.chord(u, v, k);
-            ASSERT_GT(d, 0.0);
-            ASSERT_LT(d, 2.0 * sand::largestSpacing(*chart));
-            const double L = k < 4 ? g.face(u, v, k) : -1.0;
-            if (k < 4) {
-              ASSERT_GT(L, 0.0);
-            }
-            links[{gs.index(u, v), gs.index(nb.u, nb.v)}].push_back({d, L});
-          }
-          const bool rim = !torus && (v == 0 || v == m);
-          EXPECT_EQ(count, rim ? 5 : 8) << nameOf(torus) << " " << u << "," << v;
-        }
-      }
-      for (auto& [key, list] : links) {
-        auto back = links.find({key.second, key.first});
-        ASSERT_NE(back, links.end());
-        auto a = list, b = back->second;
-        std::sort(a.begin(), a.end());
-        std::sort(b.begin(), b.end());
-        ASSERT_EQ(a.size(), b.size());
-        for (std::size_t i = 0; i < a.size(); ++i) {
-          ASSERT_EQ(std::memcmp(&a[i], &b[i], sizeof(a[i])), 0) << key.first << " " << key.second;
-        }
-      }
+      ASSERT_NO_FATAL_FAILURE(sandtest::checkLinksSymmetric(
+          g, 2.0 * sand::largestSpacing(*chart),
+          [&](int, int v) { return !torus && (v == 0 || v == m) ? 5 : 8; }, nameOf(torus)));
     }
   }
 }
 
 TEST(SandTubes, ThermalKeepsVolumeAndTheActiveSetStepEqualsTheWholeGridStep) {
   const sand::Material mat = sand::Material::sand();
-  double worstDrift = 0;
-  int mostSteps = 0;
+  sandtest::SettleFigures figures;
   for (const bool torus : {true, false}) {
     auto chart = tube(torus, 6);
     const int m = chart->grid().m();
@@ -173,57 +117,31 @@ TEST(SandTubes, ThermalKeepsVolumeAndTheActiveSetStepEqualsTheWholeGridStep) {
       auto h = heightsOfPoint(*chart, [&](const Eigen::Vector3d& p) {
         return (p - c).norm() < 450.0 ? sign * 300.0 : 0.0;
       });
-      auto h2 = h;
-      sand::SandField a(chart, h), b(chart, h2);
-      markNonZero(a, *chart, h);
-      const double v0 = a.volume(), scale = absVolume(a);
-      std::vector<double> ha, hb;
-      for (int step = 0; step < 150; ++step) {
-        b.markAll();
-        const auto ra = a.thermalStep(mat);
-        const auto rb = b.thermalStep(mat);
-        ASSERT_LE(ra.cells, rb.cells);
-        if (step % 25 == 0 || step == 149) {
-          a.copyHeights(ha);
-          b.copyHeights(hb);
-          ASSERT_TRUE(sameDoubles(ha, hb)) << nameOf(torus) << " spot " << s << " step " << step;
-        }
-      }
-      EXPECT_LE(std::abs(a.volume() - v0) / scale, 1e-13) << nameOf(torus) << " spot " << s;
-      int more = 0;
-      while (!a.atRest() && more < 20000) {
-        a.thermalStep(mat);
-        ++more;
-      }
-      EXPECT_TRUE(a.atRest()) << nameOf(torus) << " spot " << s;
-      EXPECT_TRUE(sandtest::allFinite(a));
-      EXPECT_LE(sandtest::worstTalusExcess(a, mat), mat.talusTolerance * (1 + 1e-9))
-          << nameOf(torus) << " spot " << s;
-      EXPECT_LE(std::abs(a.volume() - v0) / scale, 1e-12) << nameOf(torus) << " spot " << s;
-      worstDrift = std::max(worstDrift, std::abs(a.volume() - v0) / scale);
-      mostSteps = std::max(mostSteps, 150 + more);
+      const std::string what = std::string(nameOf(torus)) + " spot " + std::to_string(s);
       // The pile or crater spread across the seams: beside every twin, inside the grid, some
       // neighbour moved (the steep links are those round the tube, the shorter ones).
-      core::GridPoint tw[4];
-      const int nt = chart->twins(where[s].u, where[s].v, tw);
-      for (int k = 0; k < nt; ++k) {
-        int moved = 0;
-        for (int dv = -1; dv <= 1; ++dv) {
-          for (int du = -1; du <= 1; ++du) {
-            const int u = tw[k].u + du, v = tw[k].v + dv;
-            if (u < 0 || u > m || v < 0 || v > m || (du == 0 && dv == 0)) continue;
-            moved += a.height(u, v) != 0.0;
+      auto movedBesideTwins = [&](const sand::SandField& a) {
+        core::GridPoint tw[4];
+        const int nt = chart->twins(where[s].u, where[s].v, tw);
+        for (int k = 0; k < nt; ++k) {
+          int moved = 0;
+          for (int dv = -1; dv <= 1; ++dv) {
+            for (int du = -1; du <= 1; ++du) {
+              const int u = tw[k].u + du, v = tw[k].v + dv;
+              if (u < 0 || u > m || v < 0 || v > m || (du == 0 && dv == 0)) continue;
+              moved += a.height(u, v) != 0.0;
+            }
           }
+          EXPECT_GT(moved, 0) << what << " (" << tw[k].u << "," << tw[k].v << ")";
         }
-        EXPECT_GT(moved, 0) << nameOf(torus) << " (" << tw[k].u << "," << tw[k].v << ")";
-      }
-      a.writeBack(1e30);
+      };
+      ASSERT_NO_FATAL_FAILURE(sandtest::settlePile(chart, h, mat, what, figures, movedBesideTwins));
       EXPECT_TRUE(edittest::consistentHeights(terrain::Terrain(chart, h)));
     }
   }
   std::printf(
       "thermal, 10 piles and craters settled (at most %d steps): volume drift at most %.3g\n",
-      mostSteps, worstDrift);
+      figures.mostSteps, figures.worstDrift);
 }
 
 TEST(SandTubes, ExplicitDiffusionKeepsVolumeAndTheActiveSetStepEqualsTheWholeGridStep) {
@@ -236,77 +154,37 @@ TEST(SandTubes, ExplicitDiffusionKeepsVolumeAndTheActiveSetStepEqualsTheWholeGri
       const Eigen::Vector3d c = chart->position(where[s].u, where[s].v, 0.0);
       auto h = heightsOfPoint(
           *chart, [&](const Eigen::Vector3d& p) { return (p - c).norm() < 450.0 ? -300.0 : 0.0; });
-      auto h2 = h;
-      sand::SandField a(chart, h), b(chart, h2);
-      markNonZero(a, *chart, h);
-      const double v0 = a.volume(), scale = absVolume(a);
-      const double dt = a.explicitBound(mat);
-      ASSERT_TRUE(std::isfinite(dt) && dt > 0.0);
-      for (int step = 0; step < 60; ++step) {
-        b.markAll();
-        a.diffusionStep(mat, dt, sand::DiffusionScheme::kExplicit, sand::StepPolicy::kRefuse);
-        b.diffusionStep(mat, dt, sand::DiffusionScheme::kExplicit, sand::StepPolicy::kRefuse);
-      }
-      std::vector<double> ha, hb;
-      a.copyHeights(ha);
-      b.copyHeights(hb);
-      EXPECT_TRUE(sameDoubles(ha, hb)) << nameOf(torus) << " spot " << s;
-      EXPECT_LE(std::abs(a.volume() - v0) / scale, 1e-13) << nameOf(torus) << " spot " << s;
-      double lo = 1e300, hi = -1e300;
-      int between = 0;
-      for (double x : ha) {
-        lo = std::min(lo, x), hi = std::max(hi, x);
-        between += (x > -300.0 && x < 0.0) ? 1 : 0;
-      }
-      EXPECT_GE(lo, -300.0);
-      EXPECT_LE(hi, 0.0);
-      EXPECT_GT(between, 0);
+      ASSERT_NO_FATAL_FAILURE(sandtest::explicitCraterDiffuses(
+          chart, h, mat, std::string(nameOf(torus)) + " spot " + std::to_string(s)));
     }
     // Past the bound: refused.
     std::vector<float> ones(chart->grid().count(), 1.0f);
     sand::SandField f(chart, ones);
-    f.markAll();
-    const double bound = f.explicitBound(mat);
-    EXPECT_THROW(f.diffusionStep(mat, 2 * bound, sand::DiffusionScheme::kExplicit,
-                                 sand::StepPolicy::kRefuse),
-                 core::InputError);
+    sandtest::refusesTwiceTheExplicitBound(f, mat);
   }
 }
 
 TEST(SandTubes, APushForceAcrossTheSeamKeepsVolumeAndTouchesNothingAcrossTheTube) {
-  const sand::Material mat = sand::Material::sand();
   for (const bool torus : {true, false}) {
     auto chart = tube(torus, 6);
     const int m = chart->grid().m();
     const core::GridPoint p = torus ? core::GridPoint{0, 0} : core::GridPoint{0, m / 2};
-    std::vector<float> h(chart->grid().count(), 10.0f), h2 = h;
-    sand::SandField a(chart, h), b(chart, h2);
-    const double v0 = a.volume();
-    const sand::PushForce force{chart->position(p.u, p.v, 10.0), 1200.0, 2e4};
-    for (int i = 0; i < 20; ++i) {
-      b.markAll();
-      a.diffusionStep(mat, 0.2, sand::DiffusionScheme::kExplicit, sand::StepPolicy::kClamp, &force);
-      b.diffusionStep(mat, 0.2, sand::DiffusionScheme::kExplicit, sand::StepPolicy::kClamp, &force);
-    }
-    std::vector<double> ha, hb;
-    a.copyHeights(ha);
-    b.copyHeights(hb);
-    EXPECT_TRUE(sameDoubles(ha, hb)) << nameOf(torus);
-    EXPECT_TRUE(sandtest::allFinite(a));
-    EXPECT_LE(std::abs(a.volume() - v0) / v0, 1e-13) << nameOf(torus);
-    EXPECT_LT(a.height(p.u, p.v), 10.0 - 0.5) << nameOf(torus);
-    // Both sides of the u seam moved (and of the torus's v seam).
-    EXPECT_NE(a.height(2, p.v), 10.0);
-    EXPECT_NE(a.height(m - 2, p.v), 10.0);
-    if (torus) {
-      EXPECT_NE(a.height(0, 2), 10.0);
-      EXPECT_NE(a.height(0, m - 2), 10.0);
-    }
-    // The far side of the tube and, on the torus, the inner equator across the hole: untouched.
-    EXPECT_EQ(b.height(m / 2, p.v), 10.0);
-    if (torus) {
-      EXPECT_EQ(b.height(0, m / 2), 10.0);
-    }
+    sandtest::pushTheLayer(chart, {.at = p, .radius = 1200.0}, nameOf(torus),
+                           [&](const sand::SandField& a, const sand::SandField& b) {
+                             // Both sides of the u seam moved (and of the torus's v seam).
+                             EXPECT_NE(a.height(2, p.v), 10.0);
+                             EXPECT_NE(a.height(m - 2, p.v), 10.0);
+                             if (torus) {
+                               EXPECT_NE(a.height(0, 2), 10.0);
+                               EXPECT_NE(a.height(0, m - 2), 10.0);
+                             }
+                             // The far side of the tube and, on the torus, the inner equator across
+                             // the hole: untouched.
+                             EXPECT_EQ(b.height(m / 2, p.v), 10.0);
+                             if (torus) {
+                               EXPECT_EQ(b.height(0, m / 2), 10.0);
+                             }
+                           });
   }
 }
 

@@ -2,18 +2,26 @@
 // Helpers shared by the sand tests (tests/test_sand_*.cpp).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <functional>
+#include <limits>
+#include <map>
 #include <memory>
 #include <random>
+#include <span>
+#include <string>
+#include <utility>
 #include <vector>
 
 #include "core/flat_chart.hpp"
+#include "core/input_error.hpp"
 #include "core/latlong_chart.hpp"
 #include "sand/material.hpp"
 #include "sand/sand_field.hpp"
 #include "sand/sand_grid.hpp"
+#include "stress_util.hpp"
 
 namespace ps::sandtest {
 
@@ -44,6 +52,75 @@ inline std::vector<float> heightsFrom(const core::Chart& chart,
     }
   }
   return h;
+}
+
+// Heights drawn by `draw` at each of the chart's distinct points (in grid order), copied to their
+// twins.
+inline std::vector<float> twinNoise(const core::Chart& chart, const std::function<double()>& draw) {
+  const core::GridSize g = chart.grid();
+  std::vector<float> h(g.count(), 0.0f);
+  for (int v = 0; v <= g.m(); ++v) {
+    for (int u = 0; u <= g.m(); ++u) {
+      const core::GridPoint c = chart.canonical(u, v);
+      if (c.u == u && c.v == v) h[g.index(u, v)] = float(draw());
+    }
+  }
+  for (int v = 0; v <= g.m(); ++v) {
+    for (int u = 0; u <= g.m(); ++u) {
+      const core::GridPoint c = chart.canonical(u, v);
+      h[g.index(u, v)] = h[g.index(c.u, c.v)];
+    }
+  }
+  return h;
+}
+
+// The links of every cell of a glued grid: each to another cell, with a chord in (0, maxChord)
+// and, on the 4 axis links, a face > 0; an infinite chord where a link is missing;
+// `expectedLinks(u, v)` links at cell (u, v); i -> j as often as j -> i, with bitwise the same
+// chords and faces. Call it inside ASSERT_NO_FATAL_FAILURE.
+inline void checkLinksSymmetric(const sand::SandGrid& g, double maxChord,
+                                const std::function<int(int, int)>& expectedLinks,
+                                const std::string& what) {
+  std::map<std::pair<std::size_t, std::size_t>, std::vector<std::pair<double, double>>> links;
+  const core::GridSize gs = g.grid();
+  const int m = g.m();
+  for (int v = 0; v <= m; ++v) {
+    for (int u = 0; u <= m; ++u) {
+      if (!g.isCell(u, v)) continue;
+      int count = 0;
+      for (int k = 0; k < 8; ++k) {
+        const core::GridPoint nb = g.neighbour(u, v, k);
+        if (nb.u < 0) {
+          EXPECT_EQ(g.chord(u, v, k), std::numeric_limits<double>::infinity()) << what;
+          continue;
+        }
+        ++count;
+        ASSERT_TRUE(g.isCell(nb.u, nb.v)) << what;
+        ASSERT_FALSE(nb.u == u && nb.v == v) << what;
+        const double d = g.chord(u, v, k);
+        ASSERT_GT(d, 0.0) << what;
+        ASSERT_LT(d, maxChord) << what;
+        const double L = k < 4 ? g.face(u, v, k) : -1.0;
+        if (k < 4) {
+          ASSERT_GT(L, 0.0) << what;
+        }
+        links[{gs.index(u, v), gs.index(nb.u, nb.v)}].push_back({d, L});
+      }
+      EXPECT_EQ(count, expectedLinks(u, v)) << what << " " << u << "," << v;
+    }
+  }
+  for (auto& [key, list] : links) {
+    auto back = links.find({key.second, key.first});
+    ASSERT_NE(back, links.end()) << what;
+    auto a = list, b = back->second;
+    std::sort(a.begin(), a.end());
+    std::sort(b.begin(), b.end());
+    ASSERT_EQ(a.size(), b.size()) << what << " " << key.first << " " << key.second;
+    for (std::size_t i = 0; i < a.size(); ++i) {
+      ASSERT_EQ(std::memcmp(&a[i], &b[i], sizeof(a[i])), 0)
+          << what << " " << key.first << " " << key.second;
+    }
+  }
 }
 
 // Largest excess (height difference minus the talus threshold) over all 8-neighbour links of the
@@ -98,6 +175,215 @@ inline bool allFinite(const sand::SandField& f) {
     if (!std::isfinite(x)) return false;
   }
   return true;
+}
+
+// Marks every cell whose height is not 0 (the edit a field is told about).
+inline void markNonZero(sand::SandField& f, const core::Chart& chart, std::span<const float> h) {
+  const core::GridSize g = chart.grid();
+  for (int v = 0; v <= g.m(); ++v) {
+    for (int u = 0; u <= g.m(); ++u) {
+      if (h[g.index(u, v)] != 0.0f) f.mark({u, u, v, v});
+    }
+  }
+}
+
+// The field's sum over cells of area times |height|: the scale its volume drift is told against.
+inline double absVolume(const sand::SandField& f) {
+  std::vector<double> h;
+  f.copyHeights(h);
+  std::vector<float> hf(h.begin(), h.end());
+  return f.grid().absVolume(hf);
+}
+
+inline bool sameDoubles(const std::vector<double>& a, const std::vector<double>& b) {
+  return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(double)) == 0;
+}
+
+// Runs thermal steps until rest (or maxSteps); returns the steps run.
+inline int settle(sand::SandField& f, const sand::Material& mat, int maxSteps) {
+  int steps = 0;
+  while (!f.atRest() && steps < maxSteps) {
+    f.thermalStep(mat);
+    ++steps;
+  }
+  return steps;
+}
+
+// Steps `a` (the cells marked in it) and `b` (every cell, marked before each step) `steps`
+// thermal steps side by side: a visits no more cells than b, and at every 25th step and the last
+// both hold the same heights bit for bit. Call it inside ASSERT_NO_FATAL_FAILURE.
+inline void thermalSideBySide(sand::SandField& a, sand::SandField& b, const sand::Material& mat,
+                              int steps, const std::string& what) {
+  std::vector<double> ha, hb;
+  for (int step = 0; step < steps; ++step) {
+    b.markAll();
+    const auto ra = a.thermalStep(mat);
+    const auto rb = b.thermalStep(mat);
+    ASSERT_LE(ra.cells, rb.cells) << what << " step " << step;
+    if (step % 25 == 0 || step == steps - 1) {
+      a.copyHeights(ha);
+      b.copyHeights(hb);
+      ASSERT_TRUE(sameDoubles(ha, hb)) << what << " step " << step;
+    }
+  }
+}
+
+// Steps `a` (the cells marked in it) and `b` (every cell, marked before each step) `steps`
+// diffusion steps side by side; true when they then hold the same heights bit for bit.
+inline bool diffusionSideBySide(sand::SandField& a, sand::SandField& b, const sand::Material& mat,
+                                double dt, sand::DiffusionScheme scheme, sand::StepPolicy policy,
+                                int steps, const sand::PushForce* force = nullptr) {
+  for (int step = 0; step < steps; ++step) {
+    b.markAll();
+    a.diffusionStep(mat, dt, scheme, policy, force);
+    b.diffusionStep(mat, dt, scheme, policy, force);
+  }
+  std::vector<double> ha, hb;
+  a.copyHeights(ha);
+  b.copyHeights(hb);
+  return sameDoubles(ha, hb);
+}
+
+// Success when every height of the field is finite and within [lo, hi]; else the first that is
+// not.
+inline ::testing::AssertionResult heightsWithin(const sand::SandField& f, double lo, double hi) {
+  std::vector<double> x;
+  f.copyHeights(x);
+  for (std::size_t i = 0; i < x.size(); ++i) {
+    if (!std::isfinite(x[i]) || x[i] < lo || x[i] > hi) {
+      return ::testing::AssertionFailure()
+             << "height " << i << " is " << x[i] << ", outside [" << lo << ", " << hi << "]";
+    }
+  }
+  return ::testing::AssertionSuccess();
+}
+
+// The largest volume drift and the most steps to rest of the piles settled by settlePile.
+struct SettleFigures {
+  double worstDrift = 0.0;
+  int mostSteps = 0;
+};
+
+// A pile or crater (heights h, 0 off it) settled by thermal steps from its marked cells: the
+// first 150 beside a field stepping every cell (thermalSideBySide), then to rest: finite, at the
+// talus, its volume kept to 1e-13 after 150 steps and 1e-12 at rest. `atRest` sees the settled
+// field; then it is written back into h. Call it inside ASSERT_NO_FATAL_FAILURE.
+inline void settlePile(const std::shared_ptr<const core::Chart>& chart, std::vector<float>& h,
+                       const sand::Material& mat, const std::string& what, SettleFigures& figures,
+                       const std::function<void(const sand::SandField&)>& atRest = {}) {
+  auto h2 = h;
+  sand::SandField a(chart, h), b(chart, h2);
+  markNonZero(a, *chart, h);
+  const double v0 = a.volume(), scale = absVolume(a);
+  ASSERT_NO_FATAL_FAILURE(thermalSideBySide(a, b, mat, 150, what));
+  EXPECT_TRUE(allFinite(a)) << what;
+  EXPECT_LE(std::abs(a.volume() - v0) / scale, 1e-13) << what;
+  const int more = settle(a, mat, 20000);
+  EXPECT_TRUE(a.atRest()) << what;
+  EXPECT_LE(worstTalusExcess(a, mat), mat.talusTolerance * (1 + 1e-9)) << what;
+  EXPECT_LE(std::abs(a.volume() - v0) / scale, 1e-12) << what;
+  figures.worstDrift = std::max(figures.worstDrift, std::abs(a.volume() - v0) / scale);
+  figures.mostSteps = std::max(figures.mostSteps, 150 + more);
+  if (atRest) atRest(a);
+  a.writeBack(1e30);
+}
+
+// Marks every cell of f and checks that an explicit step of twice the bound is refused; returns
+// the bound.
+inline double refusesTwiceTheExplicitBound(sand::SandField& f, const sand::Material& mat) {
+  f.markAll();
+  const double bound = f.explicitBound(mat);
+  EXPECT_THROW(
+      f.diffusionStep(mat, 2 * bound, sand::DiffusionScheme::kExplicit, sand::StepPolicy::kRefuse),
+      core::InputError);
+  return bound;
+}
+
+// A push force on a flat layer 10 m deep (planet frame: the tool at grid point `at`, 10 m up).
+struct PushCase {
+  core::GridPoint at;
+  double radius = 0.0;  // m
+  sand::DiffusionScheme scheme = sand::DiffusionScheme::kExplicit;
+  double dt = 0.2;           // s
+  double boundFactor = 0.0;  // > 0: dt is this many explicit bounds instead
+  int steps = 20;
+  double volumeTolerance = 1e-13;  // relative
+};
+
+// The layer pushed from its marked tiles and from every tile side by side: the same bit for bit,
+// finite, its volume kept, a rut of more than 0.5 m under the tool. `check` then sees both
+// fields (marked, whole).
+inline void pushTheLayer(
+    const std::shared_ptr<const core::Chart>& chart, const PushCase& c, const std::string& what,
+    const std::function<void(const sand::SandField&, const sand::SandField&)>& check) {
+  const sand::Material mat = sand::Material::sand();
+  std::vector<float> h(chart->grid().count(), 10.0f), h2 = h;
+  sand::SandField a(chart, h), b(chart, h2);
+  const double v0 = a.volume();
+  const sand::PushForce force{chart->position(c.at.u, c.at.v, 10.0), c.radius, 2e4};
+  const double dt = c.boundFactor > 0.0 ? c.boundFactor * a.explicitBound(mat) : c.dt;
+  EXPECT_TRUE(
+      diffusionSideBySide(a, b, mat, dt, c.scheme, sand::StepPolicy::kClamp, c.steps, &force))
+      << what;
+  EXPECT_TRUE(allFinite(a)) << what;
+  EXPECT_LE(std::abs(a.volume() - v0) / v0, c.volumeTolerance) << what;
+  EXPECT_LT(a.height(c.at.u, c.at.v), 10.0 - 0.5) << what;  // the rut under the tool
+  check(a, b);
+}
+
+// A 300 m deep crater (heights 0 or -300 in h, its cells marked from them) diffused 60 explicit
+// steps at the bound from its marked cells and from the whole grid: the same bit for bit, finite,
+// its volume kept to 1e-13, the range not grown (the maximum principle), the wall moved.
+inline void explicitCraterDiffuses(const std::shared_ptr<const core::Chart>& chart,
+                                   std::vector<float> h, const sand::Material& mat,
+                                   const std::string& what) {
+  auto h2 = h;
+  sand::SandField a(chart, h), b(chart, h2);
+  markNonZero(a, *chart, h);
+  const double v0 = a.volume(), scale = absVolume(a);
+  const double dt = a.explicitBound(mat);
+  ASSERT_TRUE(std::isfinite(dt) && dt > 0.0) << what;
+  EXPECT_TRUE(diffusionSideBySide(a, b, mat, dt, sand::DiffusionScheme::kExplicit,
+                                  sand::StepPolicy::kRefuse, 60))
+      << what;
+  EXPECT_TRUE(allFinite(a)) << what;
+  EXPECT_LE(std::abs(a.volume() - v0) / scale, 1e-13) << what;
+  std::vector<double> ha;
+  a.copyHeights(ha);
+  double lo = 1e300, hi = -1e300;
+  int between = 0;
+  for (double x : ha) {
+    lo = std::min(lo, x), hi = std::max(hi, x);
+    between += (x > -300.0 && x < 0.0) ? 1 : 0;
+  }
+  EXPECT_GE(lo, -300.0) << what;
+  EXPECT_LE(hi, 0.0) << what;
+  EXPECT_GT(between, 0) << what;
+}
+
+// 1e5 steps (times the stress scale) of `step` on a flat 33^2 field of noise in +-amplitude
+// (every cell marked), kicked every 25000 steps by a spike within the initial range: success
+// when the heights then are finite and within that range (the step obeys a maximum principle).
+inline ::testing::AssertionResult kickedNoiseKeepsItsRange(
+    unsigned seed, double amplitude, const std::function<void(sand::SandField&)>& step) {
+  auto chart = flatChart(5);
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> noise(-amplitude, amplitude);
+  auto h = heightsFrom(*chart, [&](int, int) { return noise(rng); });
+  const auto [lo, hi] = std::minmax_element(h.begin(), h.end());
+  const double lo0 = *lo, hi0 = *hi;
+  sand::SandField f(chart, h);
+  f.markAll();
+  for (int i = 0; i < 100000 * testkit::stressScale(); ++i) {
+    if (i % 25000 == 24999) {  // a spike somewhere (within the initial range)
+      f.writeBack(1e30);
+      const int u = int(rng() % 33), v = int(rng() % 33);
+      h[chart->grid().index(u, v)] = float(0.01 * noise(rng));
+      f.mark({u, u, v, v});
+    }
+    step(f);
+  }
+  return heightsWithin(f, lo0 - 1e-6, hi0 + 1e-6);
 }
 
 }  // namespace ps::sandtest
