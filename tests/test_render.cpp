@@ -51,13 +51,51 @@ terrain::Terrain smoothPlanet(int n, float h = 0.0f) {
 
 // Where pixel (x, y)'s ray meets the sphere of radius r about the origin (the nearer point), or
 // nothing: the reference the renderer's pictures are checked against.
+// The unit direction (planet frame) of the ray through pixel (x, y)'s centre.
+Eigen::Vector3d pixelRay(const terrain::Camera& cam, int x, int y) {
+  return (cam.rotation.transpose() *
+          Eigen::Vector3d((x - cam.cx) / cam.fx, (y - cam.cy) / cam.fy, 1))
+      .normalized();
+}
+
 std::optional<Eigen::Vector3d> sphereHit(const terrain::Camera& cam, double r, int x, int y) {
-  const Eigen::Vector3d d =
-      (cam.rotation.transpose() * Eigen::Vector3d((x - cam.cx) / cam.fx, (y - cam.cy) / cam.fy, 1))
-          .normalized();
+  const Eigen::Vector3d d = pixelRay(cam, x, y);
   const double along = -cam.eye.dot(d), miss2 = (cam.eye + along * d).squaredNorm();
   if (along <= 0 || miss2 >= r * r) return std::nullopt;
   return cam.eye + (along - std::sqrt(r * r - miss2)) * d;
+}
+
+// The smooth planet of 2^n + 1 squared heights from 3 radii away at 320 x 240, with a GL
+// context, a renderer and a tessellator (make it after SKIP_WITHOUT_GL).
+struct SmoothScene {
+  explicit SmoothScene(int n)
+      : planet(smoothPlanet(n)),
+        R(planet.chart().sphereRadius()),
+        cam(orbitCamera(3 * R, 320, 240)) {}
+  const terrain::Terrain planet;
+  const double R;
+  const terrain::Camera cam;
+  render::EglContext gl;
+  render::PlanetRenderer renderer;
+  terrain::Tessellator tess;
+};
+
+// A bumpy planet (testkit::bumpyTerrain(n, seed, amplitude)) with a GL context (make it after
+// SKIP_WITHOUT_GL).
+struct BumpyScene {
+  BumpyScene(int n, std::uint32_t seed, double amplitude)
+      : planet(testkit::bumpyTerrain(n, seed, amplitude)), R(planet.chart().sphereRadius()) {}
+  terrain::Terrain planet;
+  const double R;
+  render::EglContext gl;
+};
+
+// Settings fine enough that the outline is the sphere's within a fraction of a pixel.
+terrain::TessellationSettings fineSettings() {
+  terrain::TessellationSettings ts;
+  ts.distMaxPx = 0.25;
+  ts.triangleBudget = 0;
+  return ts;
 }
 
 cv::Mat luma(const cv::Mat& bgr) {
@@ -202,30 +240,13 @@ TEST(RenderProjection, DepthRangeHoldsTheVisiblePlanet) {
 // more than a pixel outside it.
 TEST(RenderGl, SilhouetteMatchesTheAnalyticSphere) {
   SKIP_WITHOUT_GL();
-  const terrain::Terrain planet = smoothPlanet(8);
-  const core::Chart* chart = &planet.chart();
-  const double R = chart->sphereRadius();
-  render::EglContext gl;
-  render::PlanetRenderer renderer;
-  const auto cam = orbitCamera(3 * R, 320, 240);
-  terrain::Tessellator tess;
-  terrain::TessellationSettings ts;
-  ts.distMaxPx = 0.25;
-  ts.triangleBudget = 0;
-  const auto& mesh = tess.tessellate(planet, cam, ts);
-  const cv::Mat img = renderer.renderAR({}, planet, mesh, cam, {});
-  cv::Mat drawn, analytic(cam.height, cam.width, CV_8U);
-  cv::cvtColor(img, drawn, cv::COLOR_BGR2GRAY);
-  drawn = drawn > 0;
-  const Eigen::Matrix3d Rt = cam.rotation.transpose();
-  for (int y = 0; y < cam.height; ++y)
-    for (int x = 0; x < cam.width; ++x) {
-      const Eigen::Vector3d d =
-          (Rt * Eigen::Vector3d((x - cam.cx) / cam.fx, (y - cam.cy) / cam.fy, 1)).normalized();
-      const double along = -cam.eye.dot(d);
-      const double miss = (cam.eye + along * d).norm();
-      analytic.at<uchar>(y, x) = (along > 0 && miss < R) ? 255 : 0;
-    }
+  SmoothScene scene(8);
+  const auto& mesh = scene.tess.tessellate(scene.planet, scene.cam, fineSettings());
+  const cv::Mat drawn = luma(scene.renderer.renderAR({}, scene.planet, mesh, scene.cam, {})) > 0;
+  cv::Mat analytic(scene.cam.height, scene.cam.width, CV_8U);
+  for (int y = 0; y < scene.cam.height; ++y)
+    for (int x = 0; x < scene.cam.width; ++x)
+      analytic.at<uchar>(y, x) = sphereHit(scene.cam, scene.R, x, y) ? 255 : 0;
   cv::Mat grown, shrunk, outside, missing;
   cv::dilate(analytic, grown, cv::Mat::ones(3, 3, CV_8U));
   cv::erode(analytic, shrunk, cv::Mat::ones(3, 3, CV_8U));
@@ -238,31 +259,32 @@ TEST(RenderGl, SilhouetteMatchesTheAnalyticSphere) {
 
 TEST(RenderGl, DeterministicAndUploadsOnlyWhatChanged) {
   SKIP_WITHOUT_GL();
-  auto planet = testkit::bumpyTerrain(8, 5, 8000.0);
-  const double R = planet.chart().sphereRadius();
-  render::EglContext gl;
+  BumpyScene scene(8, 5, 8000.0);
   render::PlanetRenderer renderer;
-  const auto cam = orbitCamera(1.6 * R, 240, 180);
+  const auto cam = orbitCamera(1.6 * scene.R, 240, 180);
   terrain::Tessellator tess;
   render::RenderStyle style;
   style.wireframe = true;
   style.contours = true;
-  const cv::Mat a = renderer.renderAR({}, planet, tess.tessellate(planet, cam, {}), cam, style);
+  const cv::Mat a =
+      renderer.renderAR({}, scene.planet, tess.tessellate(scene.planet, cam, {}), cam, style);
   EXPECT_EQ(renderer.stats().uploads, 1u);
-  const cv::Mat b = renderer.renderAR({}, planet, tess.tessellate(planet, cam, {}), cam, style);
+  const cv::Mat b =
+      renderer.renderAR({}, scene.planet, tess.tessellate(scene.planet, cam, {}), cam, style);
   EXPECT_TRUE(tess.stats().reused);
   EXPECT_EQ(renderer.stats().uploads, 1u);  // same view, same terrain: nothing sent
   EXPECT_FALSE(renderer.stats().uploadedThisFrame);
   EXPECT_EQ(cv::norm(a, b, cv::NORM_INF), 0.0);
   // A changed view re-tessellates and uploads; the image changes.
-  const auto cam2 = orbitCamera(1.5 * R, 240, 180);
-  const cv::Mat c = renderer.renderAR({}, planet, tess.tessellate(planet, cam2, {}), cam2, style);
+  const auto cam2 = orbitCamera(1.5 * scene.R, 240, 180);
+  const cv::Mat c =
+      renderer.renderAR({}, scene.planet, tess.tessellate(scene.planet, cam2, {}), cam2, style);
   EXPECT_EQ(renderer.stats().uploads, 2u);
   EXPECT_GT(cv::norm(a, c, cv::NORM_L1), 0.0);
 
   // The golden image (llvmpipe) detects changes only; what the picture must be is checked
   // against the sphere below. Regenerate it with PS_UPDATE_GOLDEN=1 after an intended change.
-  if (!drawnByLlvmpipe(gl)) return;
+  if (!drawnByLlvmpipe(scene.gl)) return;
   if (std::getenv("PS_UPDATE_GOLDEN"))
     cv::imwrite((ps::app::sourceDir() / "tests/golden/render_bumpy.png").string(), a);
   const cv::Mat g = goldenImage();
@@ -299,11 +321,9 @@ TEST(RenderGl, AConstantHeightPlanetIsADiscOfTheSpheresProjectedRadius) {
     const auto cam = orbitCamera(5 * r, 320, 240);
     ASSERT_EQ(cam.fx, cam.fy);
     terrain::Tessellator tess;
-    terrain::TessellationSettings ts;
-    ts.distMaxPx = 0.25;
-    ts.triangleBudget = 0;
     const cv::Mat drawn =
-        luma(renderer.renderAR({}, planet, tess.tessellate(planet, cam, ts), cam, {})) > 0;
+        luma(renderer.renderAR({}, planet, tess.tessellate(planet, cam, fineSettings()), cam, {})) >
+        0;
     const double rho = cam.fx * std::tan(std::asin(r / cam.eye.norm()));
     int inside = 0, outside = 0, count = 0;
     for (int y = 0; y < cam.height; ++y)
@@ -326,25 +346,20 @@ TEST(RenderGl, AConstantHeightPlanetIsADiscOfTheSpheresProjectedRadius) {
 // picture round.
 TEST(RenderGl, TheSunLightsTheSideThatFacesIt) {
   SKIP_WITHOUT_GL();
-  render::EglContext gl;
-  render::PlanetRenderer renderer;
-  const terrain::Terrain planet = smoothPlanet(8);
-  const double R = planet.chart().sphereRadius();
-  const auto cam = orbitCamera(3 * R, 320, 240);
-  terrain::Tessellator tess;
-  const auto& mesh = tess.tessellate(planet, cam, {});
-  const Eigen::Vector3d side = cam.eye.cross(Eigen::Vector3d::UnitZ()).normalized();
+  SmoothScene scene(8);
+  const auto& mesh = scene.tess.tessellate(scene.planet, scene.cam, {});
+  const Eigen::Vector3d side = scene.cam.eye.cross(Eigen::Vector3d::UnitZ()).normalized();
   for (const double sign : {1.0, -1.0}) {
     render::RenderStyle style;
     style.sun = sign * side;
-    const cv::Mat grey = luma(renderer.renderAR({}, planet, mesh, cam, style));
+    const cv::Mat grey = luma(scene.renderer.renderAR({}, scene.planet, mesh, scene.cam, style));
     double facing = 0, far = 0;
     int nFacing = 0, nFar = 0;
     std::vector<double> lambert, value;
-    for (int y = 0; y < cam.height; ++y)
-      for (int x = 0; x < cam.width; ++x) {
-        if (!sphereHit(cam, 0.98 * R, x, y)) continue;  // inside the limb by a margin
-        const auto p = sphereHit(cam, R, x, y);
+    for (int y = 0; y < scene.cam.height; ++y)
+      for (int x = 0; x < scene.cam.width; ++x) {
+        if (!sphereHit(scene.cam, 0.98 * scene.R, x, y)) continue;  // inside the limb by a margin
+        const auto p = sphereHit(scene.cam, scene.R, x, y);
         const double c = p->normalized().dot(style.sun), g = grey.at<uchar>(y, x);
         if (c > 0.5) facing += g, ++nFacing;
         if (c < -0.2) far += g, ++nFar;
@@ -481,28 +496,23 @@ TEST(RenderGl, PlanetAnchorLandsOnTheDetectedMarker) {
 // they are (the arrow across the view, in its own colour).
 TEST(RenderGl, CursorRingAndForceArrowAreDrawn) {
   SKIP_WITHOUT_GL();
-  const terrain::Terrain planet = smoothPlanet(7);
-  const core::Chart* chart = &planet.chart();
-  const double R = chart->sphereRadius();
-  render::EglContext gl;
-  render::PlanetRenderer renderer;
-  const auto cam = orbitCamera(3 * R, 320, 240);
-  terrain::Tessellator tess;
-  const auto& mesh = tess.tessellate(planet, cam, {});
+  SmoothScene scene(7);
+  const core::Chart* chart = &scene.planet.chart();
+  const auto& mesh = scene.tess.tessellate(scene.planet, scene.cam, {});
   // The vertex facing the camera most directly.
   const int side = chart->grid().side();
   core::GridPoint best;
   double bestDot = -2;
   for (int v = 1; v < side - 1; v += 4)
     for (int u = 0; u < side - 1; u += 4) {
-      const double d = chart->up(u, v).dot(cam.eye.normalized());
+      const double d = chart->up(u, v).dot(scene.cam.eye.normalized());
       if (d > bestDot) bestDot = d, best = {u, v};
     }
-  render::Cursor c{best, 0.2 * R};
+  render::Cursor c{best, 0.2 * scene.R};
   const Eigen::Vector3d n = chart->up(best.u, best.v);
-  c.arrowFrom = R * n;
-  c.arrow = 0.5 * R * n.cross(Eigen::Vector3d::UnitZ()).normalized();  // across the view
-  const cv::Mat img = renderer.renderAR({}, planet, mesh, cam, {}, c);
+  c.arrowFrom = scene.R * n;
+  c.arrow = 0.5 * scene.R * n.cross(Eigen::Vector3d::UnitZ()).normalized();  // across the view
+  const cv::Mat img = scene.renderer.renderAR({}, scene.planet, mesh, scene.cam, {}, c);
   cv::Mat ring, arrow;
   cv::inRange(img, cv::Scalar(0, 200, 240), cv::Scalar(60, 240, 255), ring);   // (1, .85, .1)
   cv::inRange(img, cv::Scalar(50, 240, 30), cv::Scalar(100, 255, 80), arrow);  // (.2, 1, .3)
@@ -510,7 +520,7 @@ TEST(RenderGl, CursorRingAndForceArrowAreDrawn) {
   EXPECT_GT(cv::countNonZero(arrow), 40);
   // Without an arrow, no arrow colour anywhere.
   c.arrow.setZero();
-  const cv::Mat none = renderer.renderAR({}, planet, mesh, cam, {}, c);
+  const cv::Mat none = scene.renderer.renderAR({}, scene.planet, mesh, scene.cam, {}, c);
   cv::inRange(none, cv::Scalar(50, 240, 30), cv::Scalar(100, 255, 80), arrow);
   EXPECT_EQ(cv::countNonZero(arrow), 0);
 }
@@ -521,62 +531,57 @@ TEST(RenderGl, CursorRingAndForceArrowAreDrawn) {
 // planet, or nearer the camera than the planet's near plane, is judged the same way.
 TEST(RenderGl, TheToolHidesThePlanetExactlyWhereItIsInFront) {
   SKIP_WITHOUT_GL();
-  const terrain::Terrain planet = smoothPlanet(7);
-  const double R = planet.chart().sphereRadius();
-  render::EglContext gl;
-  render::PlanetRenderer renderer;
-  const auto cam = orbitCamera(3 * R, 320, 240);
-  terrain::Tessellator tess;
+  SmoothScene scene(7);
   terrain::TessellationSettings ts;
   ts.distMaxPx = 0.5;
-  const auto& mesh = tess.tessellate(planet, cam, ts);
+  const auto& mesh = scene.tess.tessellate(scene.planet, scene.cam, ts);
   const cv::Vec3b camColour(255, 0, 255);  // the "camera image": no planet pixel has it
-  const cv::Mat background(cam.height, cam.width, CV_8UC3, cv::Scalar(camColour));
-  const cv::Mat bare = renderer.renderAR(background, planet, mesh, cam, {});
+  const cv::Mat background(scene.cam.height, scene.cam.width, CV_8UC3, cv::Scalar(camColour));
+  const cv::Mat bare = scene.renderer.renderAR(background, scene.planet, mesh, scene.cam, {});
   cv::Mat planetPixels;
   cv::inRange(bare, cv::Scalar(camColour), cv::Scalar(camColour), planetPixels);
   planetPixels = ~planetPixels;
   ASSERT_GT(cv::countNonZero(planetPixels), 5000);
-  const Eigen::Matrix3d Rt = cam.rotation.transpose();
-  const Eigen::Vector3d toCam = cam.eye.normalized();
+  const Eigen::Vector3d toCam = scene.cam.eye.normalized();
   const Eigen::Vector3d across = toCam.cross(Eigen::Vector3d::UnitZ()).normalized();
-  const double radius = 0.04 * R;
+  const double radius = 0.04 * scene.R;
   // `distance`: the stick's axis from the camera along the line to the planet's centre.
   auto check = [&](double distance, const char* what) {
     SCOPED_TRACE(what);
-    const Eigen::Vector3d mid = cam.eye - distance * toCam, a = mid - 3 * R * across,
-                          b = mid + 3 * R * across + 0.2 * R * Eigen::Vector3d::UnitZ();
+    const Eigen::Vector3d mid = scene.cam.eye - distance * toCam, a = mid - 3 * scene.R * across,
+                          b = mid + 3 * scene.R * across + 0.2 * scene.R * Eigen::Vector3d::UnitZ();
     tracking::ToolShape shape;  // a tiny box at one end, out of view; the stick across it
     shape.boxCentre = a;
-    shape.boxHalf = Eigen::Vector3d::Constant(1e-3 * R);
+    shape.boxHalf = Eigen::Vector3d::Constant(1e-3 * scene.R);
     shape.stickBase = a;
     shape.tip = b;
     shape.baseRadius = shape.tipRadius = radius;
     const auto triangles = tracking::toolTriangles(shape, tracking::Pose{}, 1.0, 48);
-    const cv::Mat img =
-        renderer.renderAR(background, planet, mesh, cam, {}, std::nullopt, triangles);
+    const cv::Mat img = scene.renderer.renderAR(background, scene.planet, mesh, scene.cam, {},
+                                                std::nullopt, triangles);
     cv::Mat grown, shrunk;
     cv::dilate(planetPixels, grown, cv::Mat::ones(3, 3, CV_8U));
     cv::erode(planetPixels, shrunk, cv::Mat::ones(3, 3, CV_8U));
     int hidden = 0, shown = 0;
-    for (int y = 0; y < cam.height; ++y)
-      for (int x = 0; x < cam.width; ++x) {
-        const Eigen::Vector3d d =
-            (Rt * Eigen::Vector3d((x - cam.cx) / cam.fx, (y - cam.cy) / cam.fy, 1)).normalized();
+    for (int y = 0; y < scene.cam.height; ++y)
+      for (int x = 0; x < scene.cam.width; ++x) {
+        const Eigen::Vector3d d = pixelRay(scene.cam, x, y);
         // The ray's closest approach to the stick's axis, and where it meets the sphere.
-        const Eigen::Vector3d u = (b - a).normalized(), w = cam.eye - a;
+        const Eigen::Vector3d u = (b - a).normalized(), w = scene.cam.eye - a;
         const double dd = d.dot(u), den = 1 - dd * dd;
         const double s = (dd * u.dot(w) - d.dot(w)) / den;  // along the ray
-        const double gap = (cam.eye + s * d - a - (cam.eye + s * d - a).dot(u) * u).norm();
-        const double along = -cam.eye.dot(d), miss = (cam.eye + along * d).norm();
-        const double hitSphere = miss < R ? along - std::sqrt(R * R - miss * miss) : 1e300;
-        const double pixel = s / cam.fx;  // a pixel's width at the stick (planet metres)
+        const double gap =
+            (scene.cam.eye + s * d - a - (scene.cam.eye + s * d - a).dot(u) * u).norm();
+        const double along = -scene.cam.eye.dot(d), miss = (scene.cam.eye + along * d).norm();
+        const double hitSphere =
+            miss < scene.R ? along - std::sqrt(scene.R * scene.R - miss * miss) : 1e300;
+        const double pixel = s / scene.cam.fx;  // a pixel's width at the stick (planet metres)
         const cv::Vec3b got = img.at<cv::Vec3b>(y, x), was = bare.at<cv::Vec3b>(y, x);
         if (gap < radius - 1.5 * pixel && s < hitSphere) {
           // On the stick in front: the camera image, wherever the planet was or not.
           EXPECT_EQ(got, camColour) << x << "," << y;
           hidden += shrunk.at<uchar>(y, x) ? 1 : 0;
-        } else if (gap > radius + 1.5 * pixel || s > hitSphere + 0.01 * R) {
+        } else if (gap > radius + 1.5 * pixel || s > hitSphere + 0.01 * scene.R) {
           // Off the stick, or the stick behind the surface: the picture without the tool.
           if (gap > radius + 1.5 * pixel || shrunk.at<uchar>(y, x)) {
             EXPECT_EQ(got, was) << x << "," << y;
@@ -587,14 +592,14 @@ TEST(RenderGl, TheToolHidesThePlanetExactlyWhereItIsInFront) {
     return std::make_pair(hidden, shown);
   };
   // In front, between the camera and the planet (2R away from it: its near plane is at R).
-  const auto front = check(1.5 * R, "in front");
+  const auto front = check(1.5 * scene.R, "in front");
   EXPECT_GT(front.first, 500);
   EXPECT_GT(front.second, 5000);
   // Nearer the camera than the planet's near plane: clamped, it still hides the planet.
-  const auto near = check(0.5 * R, "nearer than the near plane");
+  const auto near = check(0.5 * scene.R, "nearer than the near plane");
   EXPECT_GT(near.first, 500);
   // Behind the planet: it hides nothing of it.
-  const auto behind = check(3.5 * R, "behind");
+  const auto behind = check(3.5 * scene.R, "behind");
   EXPECT_EQ(behind.first, 0);
   EXPECT_GT(behind.second, 5000);
 }
@@ -612,25 +617,23 @@ std::vector<terrain::Camera> skipViews(double R, int w, int h) {
 
 TEST(Skips, CullingDrawsTheSameImageAsTheWholePlanet) {
   SKIP_WITHOUT_GL();
-  auto planet = testkit::bumpyTerrain(8, 11, 60000.0);
-  const double R = planet.chart().sphereRadius();
-  render::EglContext gl;
+  BumpyScene scene(8, 11, 60000.0);
   render::PlanetRenderer renderer;
   int view = 0;
-  for (const auto& cam : skipViews(R, 240, 180)) {
+  for (const auto& cam : skipViews(scene.R, 240, 180)) {
     terrain::TessellationSettings ts;
     ts.triangleBudget = 0;
     ts.cull = true;
     terrain::Tessellator culledTess, wholeTess;
-    const auto& culled = culledTess.tessellate(planet, cam, ts);
+    const auto& culled = culledTess.tessellate(scene.planet, cam, ts);
     ts.cull = false;
-    const auto& whole = wholeTess.tessellate(planet, cam, ts);
+    const auto& whole = wholeTess.tessellate(scene.planet, cam, ts);
     ASSERT_LT(culled.triangleCount(), whole.triangleCount()) << "view " << view << " culls nothing";
     for (bool wire : {false, true}) {
       render::RenderStyle style;
       style.wireframe = wire;
-      const cv::Mat a = renderer.renderAR({}, planet, culled, cam, style);
-      const cv::Mat b = renderer.renderAR({}, planet, whole, cam, style);
+      const cv::Mat a = renderer.renderAR({}, scene.planet, culled, cam, style);
+      const cv::Mat b = renderer.renderAR({}, scene.planet, whole, cam, style);
       EXPECT_EQ(cv::norm(a, b, cv::NORM_INF), 0.0)
           << "view " << view << " wireframe " << wire << ": culling changed "
           << cv::countNonZero(cv::Mat(a != b).reshape(1)) << " pixel channels";
@@ -644,25 +647,23 @@ TEST(Skips, SkippedUploadsDrawWhatFreshUploadsDraw) {
   // One renderer that uploads only when the mesh changed, against a new renderer (everything
   // uploaded) every frame, over frames that hold the view, move it and edit the terrain.
   SKIP_WITHOUT_GL();
-  auto planet = testkit::bumpyTerrain(7, 12, 8000.0);
-  const double R = planet.chart().sphereRadius();
-  render::EglContext gl;
+  BumpyScene scene(7, 12, 8000.0);
   render::PlanetRenderer kept;
   terrain::Tessellator tess;
-  const auto views = skipViews(R, 200, 150);
+  const auto views = skipViews(scene.R, 200, 150);
   int skipped = 0;
   for (int frame = 0; frame < 9; ++frame) {
     const auto& cam = views[std::size_t(frame / 3)];
     if (frame == 4) {  // an edit under a held view: the mesh changes, the view does not
-      std::vector<float> h(planet.heights().begin(), planet.heights().end());
+      std::vector<float> h(scene.planet.heights().begin(), scene.planet.heights().end());
       for (float& x : h) x *= 1.5f;
-      planet = terrain::Terrain(planet.chartPtr(), std::move(h));
+      scene.planet = terrain::Terrain(scene.planet.chartPtr(), std::move(h));
     }
-    const auto& mesh = tess.tessellate(planet, cam, {});
-    const cv::Mat a = kept.renderAR({}, planet, mesh, cam, {});
+    const auto& mesh = tess.tessellate(scene.planet, cam, {});
+    const cv::Mat a = kept.renderAR({}, scene.planet, mesh, cam, {});
     skipped += !kept.stats().uploadedThisFrame;
     render::PlanetRenderer fresh;
-    const cv::Mat b = fresh.renderAR({}, planet, mesh, cam, {});
+    const cv::Mat b = fresh.renderAR({}, scene.planet, mesh, cam, {});
     EXPECT_EQ(cv::norm(a, b, cv::NORM_INF), 0.0) << "frame " << frame;
   }
   EXPECT_GE(skipped, 4);  // frames 1, 2, 7, 8 held view and terrain
@@ -672,20 +673,18 @@ TEST(Skips, OverviewEveryFourthFrameIsWhatEveryFrameWouldDraw) {
   // The live app draws the overview every 4th frame: when it does, the image is the one a
   // renderer drawing it every frame shows at that frame (nothing carried over goes stale).
   SKIP_WITHOUT_GL();
-  auto planet = testkit::bumpyTerrain(7, 13, 8000.0);
-  const double R = planet.chart().sphereRadius();
-  render::EglContext gl;
+  BumpyScene scene(7, 13, 8000.0);
   render::PlanetRenderer sometimes, always;
   terrain::Tessellator tess;
-  const auto views = skipViews(R, 160, 120);
+  const auto views = skipViews(scene.R, 160, 120);
   for (int frame = 0; frame < 9; ++frame) {
     const auto& cam = views[std::size_t(frame % 3)];
-    const auto& mesh = tess.tessellate(planet, cam, {});
-    sometimes.renderAR({}, planet, mesh, cam, {});
-    always.renderAR({}, planet, mesh, cam, {});
-    const cv::Mat every = always.renderOverview(planet, mesh, cam, 120, 120);
+    const auto& mesh = tess.tessellate(scene.planet, cam, {});
+    sometimes.renderAR({}, scene.planet, mesh, cam, {});
+    always.renderAR({}, scene.planet, mesh, cam, {});
+    const cv::Mat every = always.renderOverview(scene.planet, mesh, cam, 120, 120);
     if (frame % 4 != 0) continue;
-    const cv::Mat fourth = sometimes.renderOverview(planet, mesh, cam, 120, 120);
+    const cv::Mat fourth = sometimes.renderOverview(scene.planet, mesh, cam, 120, 120);
     EXPECT_EQ(cv::norm(every, fourth, cv::NORM_INF), 0.0) << "frame " << frame;
   }
 }
@@ -694,32 +693,30 @@ TEST(Skips, ChangedChunksDrawWhatAWholeUploadDraws) {
   // A local edit under a held view: the renderer sends only the mesh's changed chunks, fewer
   // bytes than the mesh, and draws what a renderer sent the whole mesh draws.
   SKIP_WITHOUT_GL();
-  auto planet = testkit::bumpyTerrain(9, 14, 8000.0);
-  const double R = planet.chart().sphereRadius();
-  render::EglContext gl;
+  BumpyScene scene(9, 14, 8000.0);
   render::PlanetRenderer partial, whole;
   whole.setPartialUploads(false);
-  const auto cam = orbitCamera(1.8 * R, 480, 360);
+  const auto cam = orbitCamera(1.8 * scene.R, 480, 360);
   terrain::TessellationSettings ts;
   ts.distMaxPx = 0.25;
   terrain::Tessellator tess;
-  partial.renderAR({}, planet, tess.tessellate(planet, cam, ts), cam, {});
-  whole.renderAR({}, planet, tess.mesh(), cam, {});
+  partial.renderAR({}, scene.planet, tess.tessellate(scene.planet, cam, ts), cam, {});
+  whole.renderAR({}, scene.planet, tess.mesh(), cam, {});
   // Bumps 2 % of the radius across beside the visible disc's centre: a 5 m one changes
   // heights but no split (only the chunks holding its vertices are sent), a 20 km one changes
   // the tessellation (its triangles shift everything after them in the bintree's order).
   const Eigen::Vector3d towardCamera = cam.eye.normalized();
   const Eigen::Vector3d spot =
-      R * (towardCamera + 0.4 * towardCamera.unitOrthogonal()).normalized();
-  edit::EditPipeline pipe(planet);
+      scene.R * (towardCamera + 0.4 * towardCamera.unitOrthogonal()).normalized();
+  edit::EditPipeline pipe(scene.planet);
   for (double strength : {5.0, 20000.0}) {
     edit::BrushSettings b;
-    b.radius = 0.02 * R;
+    b.radius = 0.02 * scene.R;
     b.strength = strength;
     pipe.apply(edit::GaussianBrush(b), {spot, 0.0});
-    const auto& mesh = tess.tessellate(planet, cam, ts);
-    const cv::Mat a = partial.renderAR({}, planet, mesh, cam, {});
-    const cv::Mat c = whole.renderAR({}, planet, mesh, cam, {});
+    const auto& mesh = tess.tessellate(scene.planet, cam, ts);
+    const cv::Mat a = partial.renderAR({}, scene.planet, mesh, cam, {});
+    const cv::Mat c = whole.renderAR({}, scene.planet, mesh, cam, {});
     EXPECT_EQ(cv::norm(a, c, cv::NORM_INF), 0.0) << strength;
     EXPECT_EQ(whole.stats().uploadedBytes, whole.stats().meshBytes);
     EXPECT_GT(partial.stats().uploadedBytes, 0u) << strength;
