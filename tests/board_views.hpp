@@ -1,12 +1,16 @@
 #pragma once
 // Views of a printed calibration board (a ChArUco board, a chessboard) through a known camera
 // with distortion, rendered exactly: the calibration tests' ground truth.
+#include <gtest/gtest.h>
+
 #include <cmath>
 #include <cstdint>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
+#include <string>
 #include <vector>
 
+#include "tracking/calibration.hpp"
 #include "tracking/charuco_calibration.hpp"
 #include "tracking/chessboard_calibration.hpp"
 
@@ -124,6 +128,58 @@ inline cv::Mat standardView(const ViewRenderer& r, int i) {
   const double az = deg(-30 + 13 * i % 60);
   const double z = 0.40 + 0.015 * (i % 11);
   return r.view(px, py, z, ax, ay, az, std::uint64_t(i + 1));
+}
+
+// A calibration of the synthetic views against the true camera: no problems, acceptable, RMS
+// below maxRms; fx, fy, cx, cy within 3 px of the truth and within three of the standard
+// deviations the solver reports (plus `slack` px), which are positive; k1 and the image size
+// right. Call it inside ASSERT_NO_FATAL_FAILURE.
+inline void expectTrueIntrinsics(const tracking::CalibrationResult& res, const TrueCamera& cam,
+                                 double maxRms, double slack) {
+  for (const auto& p : res.problems) ADD_FAILURE() << p;
+  EXPECT_TRUE(res.acceptable);
+  EXPECT_LT(res.rms, maxRms);
+  const auto& K = res.calibration.K;
+  ASSERT_GE(res.stdDeviations.size(), 4u);
+  const double truth[4] = {cam.K(0, 0), cam.K(1, 1), cam.K(0, 2), cam.K(1, 2)};
+  const double found[4] = {K(0, 0), K(1, 1), K(0, 2), K(1, 2)};
+  for (int i = 0; i < 4; ++i) {
+    const double sd = res.stdDeviations[std::size_t(i)];
+    EXPECT_NEAR(found[i], truth[i], 3.0) << "parameter " << i << " (fx, fy, cx, cy)";
+    EXPECT_LE(std::abs(found[i] - truth[i]), 3 * sd + slack) << "parameter " << i;
+    EXPECT_GT(sd, 0.0);
+  }
+  EXPECT_NEAR(res.calibration.distortion.at<double>(0), -0.12, 0.02);
+  EXPECT_EQ(res.calibration.imageSize, cam.size);
+}
+
+// A calibration file written by the calibrate command from the synthetic views: fx, fy, cx, cy
+// within 3 px of the true camera's, k1 within 0.02.
+inline void expectNearTheTrueCamera(const tracking::CameraCalibration& c, const TrueCamera& cam) {
+  EXPECT_NEAR(c.K(0, 0), cam.K(0, 0), 3.0);
+  EXPECT_NEAR(c.K(1, 1), cam.K(1, 1), 3.0);
+  EXPECT_NEAR(c.K(0, 2), cam.K(0, 2), 3.0);
+  EXPECT_NEAR(c.K(1, 2), cam.K(1, 2), 3.0);
+  EXPECT_NEAR(c.distortion.at<double>(0), -0.12, 0.02);
+}
+
+// View i (0-3) of four at the image's middle: too few views, covering too little.
+inline cv::Mat middleView(const ViewRenderer& r, int i) {
+  return r.view(320, 240, 0.5, deg(i % 2 ? 25 : -25), deg(i < 2 ? 20 : -20), 0,
+                std::uint64_t(i + 1));
+}
+
+// The calibration of the four middle views: not acceptable, its problems naming the 4 views and
+// the coverage.
+inline void expectTooFewAndUncovered(const tracking::CalibrationResult& res) {
+  EXPECT_FALSE(res.acceptable);
+  bool views = false, coverage = false;
+  for (const auto& p : res.problems) {
+    views |= p.find("4 views") != std::string::npos;
+    coverage |= p.find("covered") != std::string::npos;
+  }
+  EXPECT_TRUE(views);
+  EXPECT_TRUE(coverage);
 }
 
 }  // namespace ps::testkit

@@ -115,6 +115,42 @@ io::ImportOptions heightmapOptions(double spacing) {
   return o;
 }
 
+// The exported mesh m of planet t: closed (no border, manifold, no degenerate triangle, Euler 2),
+// facing outwards, every height sample within maxError of it.
+void expectClosedOutwardSphere(const ObjMesh& m, const terrain::Terrain& t, double maxError,
+                               const std::string& what) {
+  const tin::MeshTopology top = tin::meshTopology(m.v.size(), m.f);
+  EXPECT_EQ(top.borderEdges, 0u) << what;
+  EXPECT_EQ(top.nonManifoldEdges, 0u) << what;
+  EXPECT_EQ(top.degenerate, 0u) << what;
+  EXPECT_EQ(top.euler(), 2) << what;
+  double volume6 = 0;
+  for (const auto& f : m.f) volume6 += m.v[f[0]].dot(m.v[f[1]].cross(m.v[f[2]]));
+  EXPECT_GT(volume6, 0) << "triangles face outwards " << what;
+  double worst = 0;
+  const int side = t.grid().side();
+  for (int v = 0; v < side; ++v)
+    for (int u = 0; u < side; ++u)
+      worst = std::max(worst, distanceToMesh(t.chart().position(u, v, t.height(u, v)), m));
+  EXPECT_LE(worst, maxError) << what;
+}
+
+// The charts with glued sides on 2^n + 1 squared heights, each with the Euler characteristic of
+// its closed (or, for the cylinder, open-ended) surface.
+struct GluedCase {
+  std::shared_ptr<const core::Chart> chart;
+  int euler;
+  bool openEnds;
+};
+
+std::vector<GluedCase> gluedCases(int n) {
+  const core::GridSize g(n);
+  return {{testkit::octahedralChart(n), 2, false},
+          {testkit::octahedralChart(n, core::OctahedralChart::Mapping::kCentral), 2, false},
+          {std::make_shared<core::TorusChart>(g, 4.0e6, 1.5e6), 0, false},
+          {std::make_shared<core::CylinderChart>(g, 2.0e6, 8.0e6), 0, true}};
+}
+
 TEST(TinExport, AHeightmapIsMeshedOnItsOwnSamplesWithinTheErrorAsWritten) {
   const fs::path dir = testkit::freshDir("tin_heightmap");
   const int w = 37, h = 29;
@@ -173,23 +209,7 @@ TEST(TinExport, APlanetTinIsAClosedOutwardSphereWithinTheErrorOfEverySample) {
   const nlohmann::json s = io::exportTinFromFile(dir / "p.planet", io::ImportOptions{},
                                                  dir / "p.obj", io::ExportFormat::kObj, o, notes);
   EXPECT_EQ(s["error_metric"], "3d");
-  const ObjMesh m = readObj(dir / "p.obj");
-  const tin::MeshTopology top = tin::meshTopology(m.v.size(), m.f);
-  EXPECT_EQ(top.borderEdges, 0u);
-  EXPECT_EQ(top.nonManifoldEdges, 0u);
-  EXPECT_EQ(top.degenerate, 0u);
-  EXPECT_EQ(top.euler(), 2);
-  double volume6 = 0;
-  for (const auto& f : m.f) volume6 += m.v[f[0]].dot(m.v[f[1]].cross(m.v[f[2]]));
-  EXPECT_GT(volume6, 0) << "triangles face outwards";
-  double worst = 0;
-  const int side = t.grid().side();
-  for (int v = 0; v < side; ++v)
-    for (int u = 0; u < side; ++u) {
-      const Eigen::Vector3d p = t.chart().position(u, v, t.height(u, v));
-      worst = std::max(worst, distanceToMesh(p, m));
-    }
-  EXPECT_LE(worst, o.maxErrorM);
+  expectClosedOutwardSphere(readObj(dir / "p.obj"), t, o.maxErrorM, "");
 }
 
 // Every chart's planet TIN is welded by the chart's topology (issue 28): a side vertex goes in
@@ -199,18 +219,7 @@ TEST(TinExport, APlanetTinIsAClosedOutwardSphereWithinTheErrorOfEverySample) {
 // every sample within the error, as exported. The quality TIN (a minimum angle) likewise.
 TEST(TinExport, EveryChartsPlanetTinIsWeldedByItsTopology) {
   const fs::path dir = testkit::freshDir("tin_charts");
-  struct Case {
-    std::shared_ptr<const core::Chart> chart;
-    int euler;
-    bool openEnds;
-  };
-  const core::GridSize g(5);
-  const std::vector<Case> cases{
-      {testkit::octahedralChart(5), 2, false},
-      {testkit::octahedralChart(5, core::OctahedralChart::Mapping::kCentral), 2, false},
-      {std::make_shared<core::TorusChart>(g, 4.0e6, 1.5e6), 0, false},
-      {std::make_shared<core::CylinderChart>(g, 2.0e6, 8.0e6), 0, true}};
-  for (const Case& c : cases) {
+  for (const GluedCase& c : gluedCases(5)) {
     const terrain::Terrain t(c.chart, testkit::bumpyHeights(*c.chart, 3, 30000.0));
     const std::string name = c.chart->name();
     io::savePlanet(t, dir / (name + ".planet"));
@@ -251,18 +260,7 @@ TEST(TinExport, EveryChartsPlanetTinIsWeldedByItsTopology) {
 // twins, so the welded mesh closes as the fewest-triangles one does; the angle holds in the
 // lattice and every sample is within the error.
 TEST(TinExport, EveryChartsQualityTinKeepsItsAngleAndCloses) {
-  struct Case {
-    std::shared_ptr<const core::Chart> chart;
-    int euler;
-    bool openEnds;
-  };
-  const core::GridSize g(7);
-  const std::vector<Case> cases{
-      {testkit::octahedralChart(7), 2, false},
-      {testkit::octahedralChart(7, core::OctahedralChart::Mapping::kCentral), 2, false},
-      {std::make_shared<core::TorusChart>(g, 4.0e6, 1.5e6), 0, false},
-      {std::make_shared<core::CylinderChart>(g, 2.0e6, 8.0e6), 0, true}};
-  for (const Case& c : cases) {
+  for (const GluedCase& c : gluedCases(7)) {
     const terrain::Terrain t(c.chart, testkit::bumpyHeights(*c.chart, 3, 30000.0));
     const std::string name = c.chart->name();
     const double last = t.grid().m();
@@ -314,21 +312,8 @@ TEST(TinExport, AQualityTinOfAnOctahedralPlanetIsClosedAndKeepsItsAngle) {
     EXPECT_LE(s["measured_error_ratio"].get<double>(), 1.0) << angle;
     EXPECT_TRUE(s["angle_met"].get<bool>()) << angle;
     EXPECT_GE(s["smallest_angle_deg"].get<double>(), angle - 1e-6);
-    const ObjMesh m = readObj(dir / "q.obj");
-    const tin::MeshTopology top = tin::meshTopology(m.v.size(), m.f);
-    EXPECT_EQ(top.borderEdges, 0u) << angle;
-    EXPECT_EQ(top.nonManifoldEdges, 0u) << angle;
-    EXPECT_EQ(top.degenerate, 0u) << angle;
-    EXPECT_EQ(top.euler(), 2) << angle;
-    double volume6 = 0;
-    for (const auto& f : m.f) volume6 += m.v[f[0]].dot(m.v[f[1]].cross(m.v[f[2]]));
-    EXPECT_GT(volume6, 0) << "triangles face outwards";
-    double worst = 0;
-    const int side = t.grid().side();
-    for (int v = 0; v < side; ++v)
-      for (int u = 0; u < side; ++u)
-        worst = std::max(worst, distanceToMesh(t.chart().position(u, v, t.height(u, v)), m));
-    EXPECT_LE(worst, o.maxErrorM) << angle;
+    expectClosedOutwardSphere(readObj(dir / "q.obj"), t, o.maxErrorM,
+                              "angle " + std::to_string(angle));
   }
 }
 

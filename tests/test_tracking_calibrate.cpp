@@ -71,24 +71,11 @@ TEST(TrackingCalibrate, RecoversAKnownCameraFromSyntheticViews) {
   addStandardViews(calibrator, renderer, 24);
   ASSERT_EQ(calibrator.views(), 24);
   const auto res = calibrator.calibrate();
-  for (const auto& p : res.problems) ADD_FAILURE() << p;
-  EXPECT_TRUE(res.acceptable);
-  EXPECT_LT(res.rms, 0.5);
-  const auto& K = res.calibration.K;
-  ASSERT_GE(res.stdDeviations.size(), 4u);
-  const double truth[4] = {cam.K(0, 0), cam.K(1, 1), cam.K(0, 2), cam.K(1, 2)};
-  const double found[4] = {K(0, 0), K(1, 1), K(0, 2), K(1, 2)};
   // Tolerance: fx, fy within 0.5 % (3 px), cx, cy within 3 px; and each within three of the
   // standard deviations the solver reports (which must be small: under 4 px).
-  for (int i = 0; i < 4; ++i) {
-    const double sd = res.stdDeviations[std::size_t(i)];
-    EXPECT_NEAR(found[i], truth[i], 3.0) << "parameter " << i << " (fx, fy, cx, cy)";
-    EXPECT_LE(std::abs(found[i] - truth[i]), 3 * sd) << "parameter " << i;
-    EXPECT_GT(sd, 0.0);
-    EXPECT_LT(sd, 4.0);
-  }
-  EXPECT_NEAR(res.calibration.distortion.at<double>(0), -0.12, 0.02);
-  EXPECT_EQ(res.calibration.imageSize, cam.size);
+  ASSERT_NO_FATAL_FAILURE(testkit::expectTrueIntrinsics(res, cam, 0.5, 0.0));
+  for (int i = 0; i < 4; ++i) EXPECT_LT(res.stdDeviations[std::size_t(i)], 4.0);
+  const auto& K = res.calibration.K;
   EXPECT_EQ(int(res.perViewRms.size()), 24);
   EXPECT_GE(res.coverage, th.minCoverage);
   // The written file reads back as the same camera, and no temporary file is left.
@@ -112,19 +99,10 @@ TEST(TrackingCalibrate, RefusesTooFewViewsAndPoorCoverage) {
   tracking::CharucoCalibrator calibrator(spec, {});
   EXPECT_THROW(calibrator.calibrate(), core::InputError);  // nothing at all
   // Four views, all at the image's middle.
-  for (int i = 0; i < 4; ++i)
-    calibrator.addImage(renderer.view(320, 240, 0.5, deg(i % 2 ? 25 : -25), deg(i < 2 ? 20 : -20),
-                                      0, std::uint64_t(i + 1)));
+  for (int i = 0; i < 4; ++i) calibrator.addImage(testkit::middleView(renderer, i));
   ASSERT_EQ(calibrator.views(), 4);
   const auto res = calibrator.calibrate();
-  EXPECT_FALSE(res.acceptable);
-  bool views = false, coverage = false;
-  for (const auto& p : res.problems) {
-    views |= p.find("4 views") != std::string::npos;
-    coverage |= p.find("covered") != std::string::npos;
-  }
-  EXPECT_TRUE(views);
-  EXPECT_TRUE(coverage);
+  testkit::expectTooFewAndUncovered(res);
   EXPECT_LT(res.coverage, 0.6);
   // The coverage map shows the empty cells.
   const auto map = calibrator.coverage().map();
@@ -191,11 +169,7 @@ TEST(TrackingCalibrate, CommandCalibratesAFolderOfRenderedViews) {
                               (dir / "log.txt").string() + "' 2>&1";
   ASSERT_EQ(std::system(command.c_str()), 0) << command;
   const auto c = tracking::loadCalibration(dir / "cam.yml");
-  EXPECT_NEAR(c.K(0, 0), cam.K(0, 0), 3.0);
-  EXPECT_NEAR(c.K(1, 1), cam.K(1, 1), 3.0);
-  EXPECT_NEAR(c.K(0, 2), cam.K(0, 2), 3.0);
-  EXPECT_NEAR(c.K(1, 2), cam.K(1, 2), 3.0);
-  EXPECT_NEAR(c.distortion.at<double>(0), -0.12, 0.02);
+  testkit::expectNearTheTrueCamera(c, cam);
   EXPECT_EQ(c.imageSize, cam.size);
   EXPECT_LT(c.rms, 0.5);
   std::filesystem::remove_all(dir);
