@@ -130,58 +130,28 @@ TEST(HapticsForcePath, PressesAcrossAFoldOfTheOctahedralChart) {
   const Eigen::Vector3d c = chart->up(0, m / 4);
   const Eigen::Vector3d across = (chart->up(1, m / 4) - chart->up(1, m - m / 4)).normalized();
   auto run = [&] {
-    terrain::Terrain t(chart, std::vector<float>(chart->grid().count(), 2000.0f));
-    edit::EditPipeline pipe(t);
-    pipe.setUndoEnabled(false);
-    ForcePath s(t, &pipe, globeConfig());
-    std::ostringstream log;
-    s.setLog(&log);
-    const double scale = kR / kGlobe, above = 0.003 * scale, below = -0.0015 * scale;
-    for (int f = 0; f <= 90; ++f) {
-      const double time = f / 30.0;
-      double alt, x = -1.0;
-      if (time < 1) {
-        alt = above + (below - above) * time;
-      } else if (time < 2) {
-        alt = below, x = -1.0 + 2.0 * (time - 1);
-      } else {
-        alt = below + (above - below) * std::min(1.0, time - 2), x = 1.0;
-      }
+    return haptictest::pressDragLift(chart, 2000.0f, kR / kGlobe, [&](double alt, double x) {
       const Eigen::Vector3d dir = (c + 0.03 * x * across).normalized();  // +-1.7 degrees
-      s.onFrame(dir * (kR + 2000.0 + alt), time);
-    }
-    EXPECT_GT(s.totalStamps(), 3u);
-    EXPECT_TRUE(edittest::consistentHeights(t));
-    EXPECT_TRUE(edittest::boundsEqualFullRebuild(t));
-    return std::pair{log.str(), std::vector<float>(t.heights().begin(), t.heights().end())};
+      return Eigen::Vector3d(dir * (kR + 2000.0 + alt));
+    });
   };
-  const auto [logA, heightsA] = run();
-  std::istringstream in(logA);
-  const std::vector<ForceRecord> rs = readForceLog(in);
-  int touching = 0;
-  double maxF = 0;
-  for (const ForceRecord& r : rs) {
-    touching += r.touching;
-    maxF = std::max(maxF, r.force.norm());
-  }
-  EXPECT_GT(touching, 1000);
-  EXPECT_GT(maxF, 1.0);
-  const sand::SandGrid grid(chart);
-  const std::vector<float> before(chart->grid().count(), 2000.0f);
-  EXPECT_LT(std::abs(grid.volume(heightsA) - grid.volume(before)) / grid.absVolume(before), 1e-6);
+  const haptictest::StrokeOutcome a = run();
+  EXPECT_GT(a.touching, 1000);
+  EXPECT_GT(a.maxForce, 1.0);
+  EXPECT_LT(a.volumeDrift, 1e-6);
   const core::GridSize g = chart->grid();
   auto changedNear = [&](int u0, int v0) {
     int n = 0;
     for (int v = v0 - 8; v <= v0 + 8; ++v) {
-      for (int u = u0; u <= u0 + 8; ++u) n += heightsA[g.index(u, v)] != 2000.0f;
+      for (int u = u0; u <= u0 + 8; ++u) n += a.heights[g.index(u, v)] != 2000.0f;
     }
     return n;
   };
   EXPECT_GT(changedNear(1, m / 4), 0);      // this side of the fold
   EXPECT_GT(changedNear(1, m - m / 4), 0);  // across it
-  const auto [logB, heightsB] = run();
-  EXPECT_EQ(logA, logB);
-  EXPECT_EQ(heightsA, heightsB);
+  const haptictest::StrokeOutcome b = run();
+  EXPECT_EQ(a.log, b.log);
+  EXPECT_EQ(a.heights, b.heights);
 }
 
 TEST(HapticsForcePath, DeeperPushesMoveMoreSand) {

@@ -16,6 +16,7 @@
 #include "sand/sand_grid.hpp"
 #include "terrain/terrain.hpp"
 #include "test_edit_util.hpp"
+#include "test_haptics_util.hpp"
 #include "test_terrains.hpp"
 
 using namespace ps;
@@ -87,57 +88,23 @@ TEST(HapticsForcePath, PressesAcrossTheTorussSeams) {
   const int m = chart->grid().m();
   const double scale = 6.3e6 / 0.06;  // the bounding sphere on a 6 cm globe
   auto run = [&] {
-    terrain::Terrain t(chart, std::vector<float>(chart->grid().count(), 20e3f));
-    edit::EditPipeline pipe(t);
-    pipe.setUndoEnabled(false);
-    ForcePathConfig cfg;
-    cfg.map.scale = scale;
-    ForcePath s(t, &pipe, cfg);
-    std::ostringstream log;
-    s.setLog(&log);
-    const double above = 0.003 * scale, below = -0.0015 * scale;
-    for (int f = 0; f <= 90; ++f) {
-      const double time = f / 30.0;
-      double alt, x = -1.0;
-      if (time < 1) {
-        alt = above + (below - above) * time;
-      } else if (time < 2) {
-        alt = below, x = -1.0 + 2.0 * (time - 1);
-      } else {
-        alt = below + (above - below) * std::min(1.0, time - 2), x = 1.0;
-      }
+    return haptictest::pressDragLift(chart, 20e3f, scale, [&](double alt, double x) {
       // From (-4, -3) cells to (+4, +3) cells about the corner: across both seams.
       const double u = 4.0 * x, v = 3.0 * x;
       const double uu = u < 0 ? u + m : u, vv = v < 0 ? v + m : v;
-      const Eigen::Vector3d tip = chart->positionAt(uu, vv, 20e3 + alt);
-      s.onFrame(tip, time);
-    }
-    EXPECT_GT(s.totalStamps(), 3u);
-    EXPECT_TRUE(edittest::consistentHeights(t));
-    EXPECT_TRUE(edittest::boundsEqualFullRebuild(t));
-    return std::pair{log.str(), std::vector<float>(t.heights().begin(), t.heights().end())};
+      return chart->positionAt(uu, vv, 20e3 + alt);
+    });
   };
-  const auto [logA, heightsA] = run();
-  std::istringstream in(logA);
-  const std::vector<ForceRecord> rs = readForceLog(in);
-  int touching = 0, faults = 0;
-  double maxF = 0;
-  for (const ForceRecord& r : rs) {
-    touching += r.touching;
-    faults += r.time > 0 && r.fault != Fault::kNone;  // the first tick: no sample yet
-    maxF = std::max(maxF, r.force.norm());
-  }
-  EXPECT_GT(touching, 1000);
-  EXPECT_EQ(faults, 0);
-  EXPECT_GT(maxF, 1.0);
-  const sand::SandGrid grid(chart);
-  const std::vector<float> before(chart->grid().count(), 20e3f);
-  EXPECT_LT(std::abs(grid.volume(heightsA) - grid.volume(before)) / grid.absVolume(before), 1e-9);
+  const haptictest::StrokeOutcome a = run();
+  EXPECT_GT(a.touching, 1000);
+  EXPECT_EQ(a.faults, 0);
+  EXPECT_GT(a.maxForce, 1.0);
+  EXPECT_LT(a.volumeDrift, 1e-9);
   const core::GridSize g = chart->grid();
-  auto changed = [&](int u, int v) { return heightsA[g.index(u, v)] != 20e3f; };
+  auto changed = [&](int u, int v) { return a.heights[g.index(u, v)] != 20e3f; };
   EXPECT_TRUE(changed(2, 2));          // beyond both seams
   EXPECT_TRUE(changed(m - 2, m - 2));  // before them
-  const auto [logB, heightsB] = run();
-  EXPECT_EQ(logA, logB);
-  EXPECT_EQ(heightsA, heightsB);
+  const haptictest::StrokeOutcome b = run();
+  EXPECT_EQ(a.log, b.log);
+  EXPECT_EQ(a.heights, b.heights);
 }
