@@ -1,5 +1,7 @@
 #pragma once
 // Invariant checks shared by the tessellator, edit and stress tests.
+#include <cmath>
+#include <limits>
 #include <map>
 #include <string>
 #include <utility>
@@ -45,6 +47,27 @@ inline std::string conformityDefect(const terrain::Terrain& t, const terrain::Me
     }
   }
   return "";
+}
+
+// Moller-Trumbore: where the ray o + t d meets the mesh's triangle at indices[first] (first a
+// multiple of 3): t > 0, or infinity where it does not (o relative to the mesh's eye).
+inline double rayMeetsTriangle(const terrain::Mesh& mesh, std::size_t first,
+                               const Eigen::Vector3d& o, const Eigen::Vector3d& d) {
+  constexpr double kMiss = std::numeric_limits<double>::infinity();
+  const Eigen::Vector3d a = mesh.positions[mesh.indices[first]].cast<double>();
+  const Eigen::Vector3d e1 = mesh.positions[mesh.indices[first + 1]].cast<double>() - a;
+  const Eigen::Vector3d e2 = mesh.positions[mesh.indices[first + 2]].cast<double>() - a;
+  const Eigen::Vector3d p = d.cross(e2);
+  const double det = e1.dot(p);
+  if (std::abs(det) < 1e-18) return kMiss;
+  const Eigen::Vector3d s = o - a;
+  const double u = s.dot(p) / det;
+  if (u < 0 || u > 1) return kMiss;
+  const Eigen::Vector3d q = s.cross(e1);
+  const double v = d.dot(q) / det;
+  if (v < 0 || u + v > 1) return kMiss;
+  const double t = e2.dot(q) / det;
+  return t > 0 ? t : kMiss;
 }
 
 }  // namespace ps::testkit

@@ -17,6 +17,7 @@
 
 #include "edit/edit_pipeline.hpp"
 #include "gl_test.hpp"
+#include "mesh_checks.hpp"
 #include "render/planet_renderer.hpp"
 #include "render/projection.hpp"
 #include "sand/tin_sand_tool.hpp"
@@ -81,28 +82,14 @@ Eigen::Vector3d rayOf(const terrain::Camera& cam, double px, double py) {
   return cam.rotation.transpose() * c;
 }
 
-// Moller-Trumbore over triangles [from, to) of the mesh: the nearest ray parameter t (ray
+// The triangles [from, to) of the mesh: the nearest ray parameter t (ray
 // o + t d, o relative to the mesh's eye), or infinity.
 double nearestHit(const terrain::Mesh& mesh, const Eigen::Vector3d& o, const Eigen::Vector3d& d,
                   std::size_t from = 0, std::size_t to = std::numeric_limits<std::size_t>::max()) {
   double best = std::numeric_limits<double>::infinity();
   to = std::min(to, mesh.indices.size());
-  for (std::size_t t = from; t + 2 < to; t += 3) {
-    const Eigen::Vector3d a = mesh.positions[mesh.indices[t]].cast<double>();
-    const Eigen::Vector3d e1 = mesh.positions[mesh.indices[t + 1]].cast<double>() - a;
-    const Eigen::Vector3d e2 = mesh.positions[mesh.indices[t + 2]].cast<double>() - a;
-    const Eigen::Vector3d p = d.cross(e2);
-    const double det = e1.dot(p);
-    if (std::abs(det) < 1e-18) continue;
-    const Eigen::Vector3d s = o - a;
-    const double u = s.dot(p) / det;
-    if (u < 0 || u > 1) continue;
-    const Eigen::Vector3d q = s.cross(e1);
-    const double v = d.dot(q) / det;
-    if (v < 0 || u + v > 1) continue;
-    const double t0 = e2.dot(q) / det;
-    if (t0 > 0) best = std::min(best, t0);
-  }
+  for (std::size_t t = from; t + 2 < to; t += 3)
+    best = std::min(best, testkit::rayMeetsTriangle(mesh, t, o, d));
   return best;
 }
 

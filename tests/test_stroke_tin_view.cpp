@@ -7,8 +7,10 @@
 #include <algorithm>
 #include <cmath>
 #include <iostream>
+#include <limits>
 
 #include "edit/edit_pipeline.hpp"
+#include "mesh_checks.hpp"
 #include "sand/tin_sand_tool.hpp"
 #include "terrain/mesh_patch.hpp"
 #include "terrain/terrain.hpp"
@@ -21,22 +23,11 @@ using namespace ps;
 
 namespace {
 
-// Moller-Trumbore: whether the ray o + t d (t > 0) meets any triangle of the mesh.
+// Whether the ray o + t d (t > 0) meets any triangle of the mesh.
 bool hits(const terrain::Mesh& mesh, const Eigen::Vector3d& o, const Eigen::Vector3d& d) {
   for (std::size_t t = 0; t + 2 < mesh.indices.size(); t += 3) {
-    const Eigen::Vector3d a = mesh.positions[mesh.indices[t]].cast<double>();
-    const Eigen::Vector3d e1 = mesh.positions[mesh.indices[t + 1]].cast<double>() - a;
-    const Eigen::Vector3d e2 = mesh.positions[mesh.indices[t + 2]].cast<double>() - a;
-    const Eigen::Vector3d p = d.cross(e2);
-    const double det = e1.dot(p);
-    if (std::abs(det) < 1e-18) continue;
-    const Eigen::Vector3d s = o - a;
-    const double u = s.dot(p) / det;
-    if (u < 0 || u > 1) continue;
-    const Eigen::Vector3d q = s.cross(e1);
-    const double v = d.dot(q) / det;
-    if (v < 0 || u + v > 1) continue;
-    if (e2.dot(q) / det > 0) return true;
+    if (testkit::rayMeetsTriangle(mesh, t, o, d) < std::numeric_limits<double>::infinity())
+      return true;
   }
   return false;
 }
