@@ -115,31 +115,6 @@ std::vector<Recording> recordings(bool quick) {
   return out;
 }
 
-// The hand's disc in front of the planet's sphere, per pixel (the scene's geometry).
-cv::Mat truthMask(const tracking::SynthScript& s, const tracking::SynthKey& k,
-                  const tracking::Pose& camera) {
-  cv::Mat out = cv::Mat::zeros(s.size, CV_8U);
-  if (!(k.handRadius > 0)) return out;
-  const Eigen::Vector3d C = camera.inverse().t, S = s.planetCentre();
-  const cv::Matx33d& K = s.camera.K;
-  for (int v = 0; v < s.size.height; ++v)
-    for (int u = 0; u < s.size.width; ++u) {
-      const Eigen::Vector3d d =
-          camera.R.transpose() *
-          Eigen::Vector3d((u - K(0, 2)) / K(0, 0), (v - K(1, 2)) / K(1, 1), 1.0).normalized();
-      const Eigen::Vector3d oc = C - S;
-      const double b = oc.dot(d), c = oc.squaredNorm() - s.planetRadius * s.planetRadius;
-      if (b * b - c < 0 || -b <= 0) continue;  // misses the sphere
-      const double tSphere = -b - std::sqrt(b * b - c);
-      if (std::abs(d.z()) < 1e-9) continue;
-      const double tHand = (k.handHeight - C.z()) / d.z();
-      if (!(tHand > 0) || tHand >= tSphere) continue;
-      const Eigen::Vector3d p = C + tHand * d;
-      if (std::hypot(p.x() - k.handX, p.y() - k.handY) <= k.handRadius) out.at<uchar>(v, u) = 255;
-    }
-  return out;
-}
-
 // A soft-edged shadow (55 % light) crossing the planet from left to right over the recording.
 void castShadow(cv::Mat& image, double progress, const Eigen::Vector3d& centreCamera,
                 const cv::Matx33d& K) {
@@ -250,7 +225,7 @@ void runRecording(const Recording& rec, const BenchOptions& o, const HandBenchSe
       k.handHeight = a.handHeight + s * (b.handHeight - a.handHeight);
       break;
     }
-    const cv::Mat truth = truthMask(rec.script, k, t.camera);
+    const cv::Mat truth = tracking::handInFrontOfPlanet(rec.script, k, t.camera);
     const tracking::Pose trueBoard = t.camera;  // the board's frame is the world
     const auto t0 = std::chrono::steady_clock::now();
     const auto mt =

@@ -8,6 +8,8 @@
 #include <functional>
 #include <numbers>
 #include <opencv2/imgproc.hpp>
+#include <utility>
+#include <vector>
 
 #include "app/build_paths.hpp"
 #include "core/input_error.hpp"
@@ -42,29 +44,6 @@ tracking::SynthScript boardScript(std::vector<tracking::SynthKey> keys) {
   s.seed = 7;
   s.keys = std::move(keys);
   return s;
-}
-
-// Pixels where the hand's disc is met before the planet's sphere (the scene's geometry).
-cv::Mat handInFront(const tracking::SynthScript& s, const tracking::SynthKey& k,
-                    const tracking::Pose& camera) {
-  cv::Mat out = cv::Mat::zeros(s.size, CV_8U);
-  const Eigen::Vector3d C = camera.inverse().t, S = s.planetCentre();
-  const cv::Matx33d& K = s.camera.K;
-  for (int v = 0; v < s.size.height; ++v)
-    for (int u = 0; u < s.size.width; ++u) {
-      const Eigen::Vector3d d =
-          camera.R.transpose() *
-          Eigen::Vector3d((u - K(0, 2)) / K(0, 0), (v - K(1, 2)) / K(1, 1), 1.0).normalized();
-      const Eigen::Vector3d oc = C - S;
-      const double b = oc.dot(d), c = oc.squaredNorm() - s.planetRadius * s.planetRadius;
-      if (b * b - c < 0 || b >= 0) continue;
-      const double tSphere = -b - std::sqrt(b * b - c);
-      const double tHand = (k.handHeight - C.z()) / d.z();
-      if (!(tHand > 0) || tHand >= tSphere) continue;
-      const Eigen::Vector3d p = C + tHand * d;
-      if (std::hypot(p.x() - k.handX, p.y() - k.handY) <= k.handRadius) out.at<uchar>(v, u) = 255;
-    }
-  return out;
 }
 
 // Runs the masker over every frame of the script (true poses); returns the last frame's mask.
@@ -111,7 +90,8 @@ TEST(HandMask, FindsAHandInFrontOfThePlanet) {
     tracking::HandMasker masker;
     const MaskRun run = runFrames(s, masker);
     const tracking::SynthRenderer renderer(s);
-    const cv::Mat truth = handInFront(s, k, renderer.truth(10).camera) & run.last.silhouette;
+    const cv::Mat truth =
+        tracking::handInFrontOfPlanet(s, k, renderer.truth(10).camera) & run.last.silhouette;
     const cv::Mat found = (run.last.soft >= 0.5f) & run.last.silhouette;
     ASSERT_GT(cv::countNonZero(truth), 0.1 * cv::countNonZero(run.last.silhouette));
     const double iou = double(cv::countNonZero(truth & found)) / cv::countNonZero(truth | found);
@@ -180,33 +160,23 @@ TEST(HandMask, RefusesBadSettingsByName) {
       EXPECT_NE(std::string(e.what()).find(field), std::string::npos) << e.what();
     }
   };
-  tracking::HandMaskConfig c;
-  c.appearance.texelM = 0;
-  refused(c, "texel_m");
-  c = {};
-  c.appearance.textureWindow = 4;
-  refused(c, "texture_window");
-  c = {};
-  c.appearance.learnRate = 1.5;
-  refused(c, "learn_rate");
-  c = {};
-  c.appearance.shadowRatio = std::nan("");
-  refused(c, "shadow_ratio");
-  c = {};
-  c.appearance.learnBrightnessTolerance = 0;
-  refused(c, "learn_brightness_tolerance");
-  c = {};
-  c.appearance.forgetAfterFrames = 0;
-  refused(c, "forget_after_frames");
-  c = {};
-  c.featherPx = -1;
-  refused(c, "feather_px");
-  c = {};
-  c.ringFraction = 0;
-  refused(c, "ring_fraction");
-  c = {};
-  c.minAreaFraction = 1;
-  refused(c, "min_area_fraction");
+  // Each setting made bad on its own, and its name in the file.
+  using Config = tracking::HandMaskConfig;
+  const std::vector<std::pair<void (*)(Config&), const char*>> bad = {
+      {[](Config& c) { c.appearance.texelM = 0; }, "texel_m"},
+      {[](Config& c) { c.appearance.textureWindow = 4; }, "texture_window"},
+      {[](Config& c) { c.appearance.learnRate = 1.5; }, "learn_rate"},
+      {[](Config& c) { c.appearance.shadowRatio = std::nan(""); }, "shadow_ratio"},
+      {[](Config& c) { c.appearance.learnBrightnessTolerance = 0; }, "learn_brightness_tolerance"},
+      {[](Config& c) { c.appearance.forgetAfterFrames = 0; }, "forget_after_frames"},
+      {[](Config& c) { c.featherPx = -1; }, "feather_px"},
+      {[](Config& c) { c.ringFraction = 0; }, "ring_fraction"},
+      {[](Config& c) { c.minAreaFraction = 1; }, "min_area_fraction"}};
+  for (const auto& [spoil, field] : bad) {
+    Config c;
+    spoil(c);
+    refused(c, field);
+  }
   EXPECT_NO_THROW(tracking::HandMasker{tracking::HandMaskConfig{}});
 }
 

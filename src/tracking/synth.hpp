@@ -134,6 +134,10 @@ struct FrameTruth {
   nlohmann::json toJson() const;
 };
 
+// The pixels (255) where the hand's disc of key k is met before the planet's sphere, seen by
+// `camera` (world -> camera): the scene's geometry, the truth a hand mask is measured against.
+cv::Mat handInFrontOfPlanet(const SynthScript& s, const SynthKey& k, const Pose& camera);
+
 class SynthRenderer {
  public:
   explicit SynthRenderer(SynthScript script);

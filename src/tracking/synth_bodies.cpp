@@ -109,6 +109,29 @@ double visibleFraction(const Pose& marker, double edge, const CameraCalibration&
 
 }  // namespace
 
+cv::Mat handInFrontOfPlanet(const SynthScript& s, const SynthKey& k, const Pose& camera) {
+  cv::Mat out = cv::Mat::zeros(s.size, CV_8U);
+  if (!(k.handRadius > 0)) return out;
+  const Eigen::Vector3d C = camera.inverse().t, S = s.planetCentre();
+  const cv::Matx33d& K = s.camera.K;
+  for (int v = 0; v < s.size.height; ++v)
+    for (int u = 0; u < s.size.width; ++u) {
+      const Eigen::Vector3d d =
+          camera.R.transpose() *
+          Eigen::Vector3d((u - K(0, 2)) / K(0, 0), (v - K(1, 2)) / K(1, 1), 1.0).normalized();
+      const Eigen::Vector3d oc = C - S;
+      const double b = oc.dot(d), c = oc.squaredNorm() - s.planetRadius * s.planetRadius;
+      if (b * b - c < 0 || -b <= 0) continue;  // misses the sphere
+      const double tSphere = -b - std::sqrt(b * b - c);
+      if (std::abs(d.z()) < 1e-9) continue;
+      const double tHand = (k.handHeight - C.z()) / d.z();
+      if (!(tHand > 0) || tHand >= tSphere) continue;
+      const Eigen::Vector3d p = C + tHand * d;
+      if (std::hypot(p.x() - k.handX, p.y() - k.handY) <= k.handRadius) out.at<uchar>(v, u) = 255;
+    }
+  return out;
+}
+
 std::vector<cv::Point2d> SynthRenderer::handPolygon(const SynthKey& k, const Pose& camera) const {
   if (!(k.handRadius > 0)) return {};
   std::vector<Eigen::Vector3d> pts;
