@@ -12,6 +12,7 @@
 #include <iostream>
 #include <memory>
 #include <random>
+#include <string>
 
 #include "core/cylinder_chart.hpp"
 #include "core/input_error.hpp"
@@ -41,6 +42,49 @@ ps::tin::DynamicTin randomTin(int n, double side, std::mt19937& rng) {
       points.emplace_back(x, y, 2.0 + 0.5 * std::sin(0.9 * x) * std::cos(0.6 * y) + noise(rng));
     }
   return ps::tin::DynamicTin(points);
+}
+
+// The tool's smallest valid radius on the chart, within 1 %, into r (`largest` must be valid).
+// Call it inside ASSERT_NO_FATAL_FAILURE.
+void smallestValidRadius(const ps::core::Chart& chart, double largest, double& r) {
+  ps::sand::TinSandToolSettings settings;
+  const auto valid = [&](double radius) {
+    settings.radius = radius;
+    try {
+      settings.validate(&chart);
+      return true;
+    } catch (const ps::core::InputError&) {
+      return false;
+    }
+  };
+  r = largest;
+  ASSERT_TRUE(valid(largest)) << largest << " m";
+  while (valid(r * 0.99)) r *= 0.99;
+}
+
+// Begins the stroke at `input` (first) or moves it there, adding the stamps made to k. Where it
+// stamped (`stamped`), the stroke's TIN is valid and the volume kept to 1e-9 of the planet's
+// sum of A |h| (the largest such drift in worstDrift). Call it inside ASSERT_NO_FATAL_FAILURE.
+void strokeTo(ps::edit::EditPipeline& pipe, ps::sand::TinSandTool& tool,
+              const ps::terrain::Terrain& t, const ps::sand::SandGrid& grid,
+              const ps::edit::ToolInput& input, bool first, const std::string& where, int& k,
+              bool& stamped, double& worstDrift) {
+  const double vBefore = grid.volume(t.heights());
+  const std::size_t stampsBefore = tool.stamps();
+  if (first) {
+    pipe.beginStroke(tool, input);
+  } else {
+    pipe.moveTo(input);
+  }
+  k += int(tool.stamps() - stampsBefore);
+  stamped = tool.stamps() != stampsBefore;
+  if (!stamped) return;
+  ASSERT_NE(tool.strokeTin(), nullptr) << "stamp " << k;
+  ASSERT_EQ(tool.strokeTin()->sand().tin().validityProblem(), "")
+      << "stamp " << k << " at " << where;
+  const double drift = std::abs(grid.volume(t.heights()) - vBefore) / grid.absVolume(t.heights());
+  worstDrift = std::max(worstDrift, drift);
+  ASSERT_LE(drift, 1e-9) << "stamp " << k << " at " << where;
 }
 
 TEST(StressTinSand, RandomStampsKeepTheTriangulationValidAndTheVolume) {
@@ -119,19 +163,9 @@ TEST(StressTinSand, ToolOnAPlanetAtThePolesTheSeamAndRandomPoints) {
   ps::sand::TinSandToolSettings settings;
   // The tool's valid radii on this grid: from two cells to a region of 2.5 radii reaching a
   // quarter of the planet's radius (the region shrinks to that).
-  const auto valid = [&](double r) {
-    settings.radius = r;
-    try {
-      settings.validate(chart.get());
-      return true;
-    } catch (const ps::core::InputError&) {
-      return false;
-    }
-  };
-  double rMin = 0.25 * R / 2.5;
-  ASSERT_TRUE(valid(rMin));
-  while (valid(rMin * 0.99)) rMin *= 0.99;
   const double rMax = 0.25 * R / 2.5;
+  double rMin = 0;
+  ASSERT_NO_FATAL_FAILURE(smallestValidRadius(*chart, rMax, rMin));
   ASSERT_LT(rMin, rMax);
   const ps::sand::SandGrid grid(chart);
   std::mt19937 rng(27);
@@ -170,22 +204,11 @@ TEST(StressTinSand, ToolOnAPlanetAtThePolesTheSeamAndRandomPoints) {
       const double depth = 0.5 * settings.radius * uni(rng);
       const ps::edit::ToolInput input{ps::edittest::latLon(sLat, sLon, R + settings.radius - depth),
                                       0.0};
-      const double vBefore = grid.volume(t.heights());
-      const std::size_t stampsBefore = tool.stamps();
-      if (s == 0) {
-        pipe.beginStroke(tool, input);
-      } else {
-        pipe.moveTo(input);
-      }
-      k += int(tool.stamps() - stampsBefore);
-      if (tool.stamps() == stampsBefore) continue;
-      ASSERT_NE(tool.strokeTin(), nullptr) << "stamp " << k;
-      ASSERT_EQ(tool.strokeTin()->sand().tin().validityProblem(), "")
-          << "stamp " << k << " at " << sLat << ", " << sLon;
-      const double drift =
-          std::abs(grid.volume(t.heights()) - vBefore) / grid.absVolume(t.heights());
-      worstDrift = std::max(worstDrift, drift);
-      ASSERT_LE(drift, 1e-9) << "stamp " << k << " at " << sLat << ", " << sLon;
+      const std::string where = std::to_string(sLat) + ", " + std::to_string(sLon);
+      bool stamped = false;
+      ASSERT_NO_FATAL_FAILURE(
+          strokeTo(pipe, tool, t, grid, input, s == 0, where, k, stamped, worstDrift));
+      if (!stamped) continue;
       if (stamps >= 10000 && k >= nextReport) {
         std::cerr << "planet stress: " << k << " of " << stamps << " stamps, "
                   << std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count()
@@ -233,19 +256,9 @@ TEST(StressTinSand, ToolOnTheGluedChartsAcrossFoldsAndSeams) {
     ps::edit::EditPipeline pipe(t);
     pipe.setUndoEnabled(false);
     ps::sand::TinSandToolSettings settings;
-    const auto valid = [&](double r) {
-      settings.radius = r;
-      try {
-        settings.validate(c.chart.get());
-        return true;
-      } catch (const ps::core::InputError&) {
-        return false;
-      }
-    };
     const double rMax = 0.25 * c.curvature / 2.5;
-    ASSERT_TRUE(valid(rMax));
-    double rMin = rMax;
-    while (valid(rMin * 0.99)) rMin *= 0.99;
+    double rMin = 0;
+    ASSERT_NO_FATAL_FAILURE(smallestValidRadius(*c.chart, rMax, rMin));
     const ps::sand::SandGrid grid(c.chart);
     const ps::core::Chart& chart = *c.chart;
     const int m = chart.grid().m();
@@ -275,21 +288,12 @@ TEST(StressTinSand, ToolOnTheGluedChartsAcrossFoldsAndSeams) {
         const double depth = 0.5 * settings.radius * uni(rng);
         const ps::edit::ToolInput input{
             chart.position(p.u, p.v, 0.0) + (settings.radius - depth) * chart.up(p.u, p.v), 0.0};
-        const double vBefore = grid.volume(t.heights());
-        const std::size_t stampsBefore = tool.stamps();
-        if (s == 0) {
-          pipe.beginStroke(tool, input);
-        } else {
-          pipe.moveTo(input);
-        }
-        k += int(tool.stamps() - stampsBefore);
-        if (tool.stamps() == stampsBefore) continue;
-        ASSERT_NE(tool.strokeTin(), nullptr) << "stamp " << k;
-        ASSERT_EQ(tool.strokeTin()->sand().tin().validityProblem(), "")
-            << "stamp " << k << " at (" << p.u << ", " << p.v << ")";
-        const double drift =
-            std::abs(grid.volume(t.heights()) - vBefore) / grid.absVolume(t.heights());
-        ASSERT_LE(drift, 1e-9) << "stamp " << k << " at (" << p.u << ", " << p.v << ")";
+        const std::string where = "(" + std::to_string(p.u) + ", " + std::to_string(p.v) + ")";
+        bool stamped = false;
+        double worstDrift = 0;
+        ASSERT_NO_FATAL_FAILURE(
+            strokeTo(pipe, tool, t, grid, input, s == 0, where, k, stamped, worstDrift));
+        if (!stamped) continue;
         ASSERT_TRUE(ps::edittest::consistentHeights(t)) << "after stamp " << k;
       }
       pipe.endStroke();
