@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstring>
+#include <string>
 #include <vector>
 
 #include "core/input_error.hpp"
@@ -49,24 +50,30 @@ std::vector<terrain::CutBox> cutImages(const core::Chart& chart, const terrain::
 
 }  // namespace
 
+namespace {
+
+// The vertices and times of a stamp's report (EditReport) or a stroke's (StrokeReport) added to
+// a stroke's.
+template <class Report>
+void addCounts(StrokeReport& to, const Report& r) {
+  to.modifiedVertices += r.modifiedVertices;
+  to.growMs += r.growMs;
+  to.heightsMs += r.heightsMs;
+  to.errorsMs += r.errorsMs;
+  to.journalMs += r.journalMs;
+  to.totalMs += r.totalMs;
+}
+
+}  // namespace
+
 void StrokeReport::add(const EditReport& r) {
   ++stamps;
-  modifiedVertices += r.modifiedVertices;
-  growMs += r.growMs;
-  heightsMs += r.heightsMs;
-  errorsMs += r.errorsMs;
-  journalMs += r.journalMs;
-  totalMs += r.totalMs;
+  addCounts(*this, r);
 }
 
 void StrokeReport::add(const StrokeReport& r) {
   stamps += r.stamps;
-  modifiedVertices += r.modifiedVertices;
-  growMs += r.growMs;
-  heightsMs += r.heightsMs;
-  errorsMs += r.errorsMs;
-  journalMs += r.journalMs;
-  totalMs += r.totalMs;
+  addCounts(*this, r);
 }
 
 Eigen::Vector3d slerpUnit(const Eigen::Vector3d& a, const Eigen::Vector3d& b, double t) {
@@ -238,18 +245,26 @@ void EditPipeline::endStroke() {
   if (undoEnabled_) journal_.endStroke(terrain_.grid());
 }
 
+namespace {
+
+// Throws InputError naming why an undo or a redo (`what`) cannot run: a stroke open, undo off,
+// nothing journalled to take back (`available` strokes).
+void checkJournalMove(const char* what, bool inStroke, bool undoEnabled, std::size_t available) {
+  if (inStroke) throw core::InputError(std::string("cannot ") + what + " while a stroke is open");
+  if (!undoEnabled) throw core::InputError("undo is disabled on this edit pipeline");
+  if (available == 0) throw core::InputError(std::string("nothing to ") + what);
+}
+
+}  // namespace
+
 void EditPipeline::undo() {
-  if (inStroke()) throw core::InputError("cannot undo while a stroke is open");
-  if (!undoEnabled_) throw core::InputError("undo is disabled on this edit pipeline");
-  if (journal_.undoCount() == 0) throw core::InputError("nothing to undo");
+  checkJournalMove("undo", inStroke(), undoEnabled_, journal_.undoCount());
   if (observer_) observer_->onUndo();
   journal_.undo(terrain_);
 }
 
 void EditPipeline::redo() {
-  if (inStroke()) throw core::InputError("cannot redo while a stroke is open");
-  if (!undoEnabled_) throw core::InputError("undo is disabled on this edit pipeline");
-  if (journal_.redoCount() == 0) throw core::InputError("nothing to redo");
+  checkJournalMove("redo", inStroke(), undoEnabled_, journal_.redoCount());
   if (observer_) observer_->onRedo();
   journal_.redo(terrain_);
 }
