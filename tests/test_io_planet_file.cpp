@@ -27,10 +27,6 @@ namespace fs = std::filesystem;
 
 namespace {
 
-fs::path freshDir(const std::string& name) {
-  return testkit::freshDir("io_" + name);
-}
-
 using testkit::readAll;
 
 void writeAll(const fs::path& p, const std::vector<unsigned char>& b) {
@@ -79,7 +75,7 @@ std::vector<unsigned char> goodFile(int n = 5) {
 }  // namespace
 
 TEST(IoPlanetFile, LatLongRoundTripIsBitExactOnDiskAndThroughLoad) {
-  const fs::path dir = freshDir("roundtrip");
+  const fs::path dir = testkit::freshDir("io_roundtrip");
   const auto t = testkit::bumpyTerrain(6, 4, 9000.0, terrain::ErrorRule::kWedgie);
   io::PlanetSaveOptions opts;
   opts.metadata = {{"author", "test"}};
@@ -295,7 +291,7 @@ TEST(IoPlanetFile, HugeDimensionsAreRefusedBeforeAnyAllocation) {
   fixHeaderCrc(b);
   expectRefused(b, "truncated: " + std::to_string(b.size()) + " bytes, the header announces");
   // Same through the file reader (which must not allocate 4 GiB either).
-  const fs::path dir = freshDir("huge");
+  const fs::path dir = testkit::freshDir("io_huge");
   writeAll(dir / "huge.planet", b);
   try {
     io::readPlanetFile(dir / "huge.planet");
@@ -340,7 +336,7 @@ TEST(IoPlanetFile, WrongChecksumNaNAndBrokenRulesAreRefused) {
 }
 
 TEST(IoPlanetFile, MissingFileAndDirectoryAreNamed) {
-  const fs::path dir = freshDir("missing");
+  const fs::path dir = testkit::freshDir("io_missing");
   for (const fs::path& p : {dir / "nope.planet", dir}) {
     try {
       io::readPlanetFile(p);
@@ -360,7 +356,7 @@ TEST(IoPlanetFile, MissingFileAndDirectoryAreNamed) {
 // or the one it was saving; it must load; and no kill may leave a partial file under the real
 // name.
 TEST(IoPlanetFile, KilledSavesLeaveTheLastGoodFileIntact) {
-  const fs::path dir = freshDir("kill");
+  const fs::path dir = testkit::freshDir("io_kill");
   const fs::path path = dir / "world.planet";
   auto chart = testkit::earthChart(8);  // 257^2: 264 kB per save
   const auto base = testkit::bumpyHeights(*chart, 5, 3000.0);
