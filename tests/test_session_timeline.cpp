@@ -106,19 +106,21 @@ replay::ReplaySummary replayFiles(const std::filesystem::path& video, terrain::T
                            log, nullptr, {}, {}, timeline);
 }
 
+// A sidecar at `path` holding only the writer's header for a session of the short scene's camera
+// and options on `planet`.
+void writeSidecarHeader(const std::filesystem::path& path, const terrain::Terrain& planet) {
+  replay::TimelineWriter w;
+  w.open(path,
+         replay::SessionStart::of(planet, "", planet.grid().side(), 1, testkit::shortSceneCamera(),
+                                  "synthetic", testkit::shortSceneOptions(), 30, 0),
+         replay::SessionSettings::of(testkit::shortSceneOptions()));
+}
+
 std::filesystem::path sidecarWith(const std::filesystem::path& dir, const std::string& name,
                                   const std::vector<std::string>& lines, bool lastNewline = true) {
   // A real header from the writer, then the given lines.
   const auto path = dir / name;
-  {
-    auto planet = testkit::bumpyTerrain(5, 4, 3000.0);
-    replay::TimelineWriter w;
-    w.open(
-        path,
-        replay::SessionStart::of(planet, "", planet.grid().side(), 1, testkit::shortSceneCamera(),
-                                 "synthetic", testkit::shortSceneOptions(), 30, 0),
-        replay::SessionSettings::of(testkit::shortSceneOptions()));
-  }
+  writeSidecarHeader(path, testkit::bumpyTerrain(5, 4, 3000.0));
   std::ofstream f(path, std::ios::app);
   for (std::size_t i = 0; i < lines.size(); ++i)
     f << lines[i] << (i + 1 < lines.size() || lastNewline ? "\n" : "");
@@ -137,13 +139,28 @@ void expectRefused(const std::filesystem::path& path, const std::string& where,
   }
 }
 
+// A session of `script` recorded into a fresh folder `name` on the sessions' planet (bumpy, 129^2):
+// the planet it started from, the planet it left, its video.
+struct Recorded {
+  std::filesystem::path dir;
+  terrain::Terrain start, live;
+  std::filesystem::path video;
+};
+
+Recorded recordOnTheSessionsPlanet(const std::string& name, const Script& script) {
+  Recorded r{testkit::freshDir(name),
+             testkit::bumpyTerrain(7, 4, 3000.0),
+             testkit::bumpyTerrain(7, 4, 3000.0),
+             {}};
+  r.video = recordSession(r.dir, r.live, script);
+  return r;
+}
+
 }  // namespace
 
 TEST(SessionTimeline, ScriptedLiveSessionReplaysFromItsFilesBitForBit) {
-  const auto dir = testkit::freshDir("timeline_replay");
-  auto live = testkit::bumpyTerrain(7, 4, 3000.0);
-  const auto start = live;
-  const auto video = recordSession(dir, live, changesOfEveryKind());
+  auto [dir, start, live, video] =
+      recordOnTheSessionsPlanet("timeline_replay", changesOfEveryKind());
   ASSERT_FALSE(sameHeights(live, start)) << "the session sculpted nothing";
 
   const auto timeline = replay::readSessionTimeline(replay::sessionSidecarPath(video));
@@ -209,10 +226,7 @@ TEST(SessionTimeline, CameraClockIsRecordedAndReplayedWithARateBrush) {
 }
 
 TEST(SessionTimeline, ConstantSessionWritesOnlyItsHeaderAndReplaysAsBefore) {
-  const auto dir = testkit::freshDir("timeline_constant");
-  auto live = testkit::bumpyTerrain(7, 4, 3000.0);
-  const auto start = live;
-  const auto video = recordSession(dir, live, {});
+  const auto [dir, start, live, video] = recordOnTheSessionsPlanet("timeline_constant", {});
   const auto timeline = replay::readSessionTimeline(replay::sessionSidecarPath(video));
   EXPECT_TRUE(timeline.entries.empty());
   auto with = start, without = start;
@@ -224,10 +238,7 @@ TEST(SessionTimeline, ConstantSessionWritesOnlyItsHeaderAndReplaysAsBefore) {
 
 TEST(SessionTimeline, UndoOfAStrokeBeforeTheRecordingIsAWarningNamingTheLine) {
   // (A Ctrl+R recording that undoes a stroke made before it started.)
-  const auto dir = testkit::freshDir("timeline_refused");
-  auto live = testkit::bumpyTerrain(7, 4, 3000.0);
-  const auto start = live;
-  const auto video = recordSession(dir, live, {});
+  const auto [dir, start, live, video] = recordOnTheSessionsPlanet("timeline_refused", {});
   const auto path = replay::sessionSidecarPath(video);
   std::ofstream(path, std::ios::app) << R"({"frame": 1, "event": "undo"})"
                                      << "\n";
@@ -243,9 +254,8 @@ TEST(SessionTimeline, UndoOfAStrokeBeforeTheRecordingIsAWarningNamingTheLine) {
 }
 
 TEST(SessionTimeline, AnotherStartPlanetOrCalibrationIsRefusedNamingTheSidecar) {
-  const auto dir = testkit::freshDir("timeline_start");
-  auto live = testkit::bumpyTerrain(7, 4, 3000.0);
-  const auto video = recordSession(dir, live, {});
+  const auto recorded = recordOnTheSessionsPlanet("timeline_start", {});
+  const auto& video = recorded.video;
   const auto path = replay::sessionSidecarPath(video);
   const auto timeline = replay::readSessionTimeline(path);
   const auto calib = testkit::shortSceneCamera().forImageSize({320, 240});
@@ -379,12 +389,7 @@ TEST(SessionTimeline, SidecarsNameTheirChartAndOnesThatNameNoneAreLatLong) {
   const auto dir = testkit::freshDir("timeline_chart");
   auto write = [&](const terrain::Terrain& planet, const std::string& name) {
     const auto path = dir / name;
-    replay::TimelineWriter w;
-    w.open(
-        path,
-        replay::SessionStart::of(planet, "", planet.grid().side(), 1, testkit::shortSceneCamera(),
-                                 "synthetic", testkit::shortSceneOptions(), 30, 0),
-        replay::SessionSettings::of(testkit::shortSceneOptions()));
+    writeSidecarHeader(path, planet);
     return path;
   };
   const auto latlong = replay::readSessionTimeline(write(testkit::bumpyTerrain(5, 4), "ll.jsonl"));
