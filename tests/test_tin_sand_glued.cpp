@@ -101,6 +101,25 @@ std::vector<GluedCase> gluedCases() {
   return out;
 }
 
+// A case's chart under a flat layer kDepth deep, its edit pipeline, a sand tool of the case's
+// radius and the grid's cells.
+struct SandScene {
+  explicit SandScene(const GluedCase& c)
+      : t(c.chart, std::vector<float>(c.chart->grid().count(), float(kDepth))),
+        pipe(t),
+        tool(c.chart, settingsOf(c.radius)),
+        cells(c.chart) {}
+  static sand::TinSandToolSettings settingsOf(double radius) {
+    sand::TinSandToolSettings s;
+    s.radius = radius;
+    return s;
+  }
+  terrain::Terrain t;
+  edit::EditPipeline pipe;
+  const sand::TinSandTool tool;
+  const sand::SandGrid cells;
+};
+
 // What one stamp did: the grid's volume change and the volume moved, ring by ring.
 struct StampOutcome {
   double volumeDrift = 0;  // |after - before| / sum A |h|
@@ -199,12 +218,8 @@ TEST(TinSandGlued, AStampAcrossAFoldOrASeamKeepsVolumeTwinsAndItsProfile) {
 TEST(TinSandGlued, AStrokeAcrossAFoldOrASeamReusesItsRegionTin) {
   for (const GluedCase& c : gluedCases()) {
     SCOPED_TRACE(c.name);
-    terrain::Terrain t(c.chart, std::vector<float>(c.chart->grid().count(), float(kDepth)));
-    edit::EditPipeline pipe(t);
-    sand::TinSandToolSettings s;
-    s.radius = c.radius;
-    const sand::TinSandTool tool(c.chart, s);
-    const sand::SandGrid cells(c.chart);
+    SandScene scene(c);
+    auto& [t, pipe, tool, cells] = scene;
     // Across u = 0 (the octahedral chart's fold, the tubes' u seam), four cells.
     const core::GridPoint mid = c.special[c.name == "cylinder" ? 0 : 2];
     const core::Chart& chart = *c.chart;
@@ -237,12 +252,8 @@ TEST(TinSandGlued, ATubesRegionPatchLiesOnTheTube) {
   for (const GluedCase& c : gluedCases()) {
     if (c.name == "octahedral") continue;
     SCOPED_TRACE(c.name);
-    terrain::Terrain t(c.chart, std::vector<float>(c.chart->grid().count(), float(kDepth)));
-    edit::EditPipeline pipe(t);
-    sand::TinSandToolSettings s;
-    s.radius = c.radius;
-    const sand::TinSandTool tool(c.chart, s);
-    const sand::SandGrid cells(c.chart);
+    SandScene scene(c);
+    auto& [t, pipe, tool, cells] = scene;
     const core::GridPoint at = c.special[c.name == "cylinder" ? 0 : 2];  // on the u seam
     (void)stampAt(t, pipe, tool, cells, at, c.radius);
     ASSERT_NE(tool.strokeTin(), nullptr);
