@@ -50,6 +50,14 @@ std::vector<float> heightsOfDirection(const core::Chart& chart,
   return h;
 }
 
+// A pile (height > 0) or a crater (< 0) with vertical walls: `height` within 0.16 radians of
+// the spot's direction, 0 elsewhere.
+std::vector<float> columnOn(const core::Chart& chart, core::GridPoint spot, double height) {
+  const Eigen::Vector3d c = chart.up(spot.u, spot.v);
+  return heightsOfDirection(
+      chart, [&](const Eigen::Vector3d& d) { return (d - c).norm() < 0.16 ? height : 0.0; });
+}
+
 // The grid points the tests put piles and stamps on: the south pole (the four corners), a side
 // (a fold, south of the equator), a side's midpoint (a cone point, on the equator) on each of
 // the two kinds of side, the north pole (the centre), a crease.
@@ -128,11 +136,7 @@ TEST(SandOctahedral, ThermalKeepsVolumeAndTheActiveSetStepEqualsTheWholeGridStep
     const int m = chart->grid().m();
     const auto where = spots(m);
     for (std::size_t s = 0; s < where.size(); ++s) {
-      const Eigen::Vector3d c = chart->up(where[s].u, where[s].v);
-      const double sign = s % 2 ? 1.0 : -1.0;
-      auto h = heightsOfDirection(*chart, [&](const Eigen::Vector3d& d) {
-        return (d - c).norm() < 0.16 ? sign * 300.0 : 0.0;
-      });
+      auto h = columnOn(*chart, where[s], s % 2 ? 300.0 : -300.0);
       const std::string what = std::string(nameOf(mapping)) + " spot " + std::to_string(s);
       ASSERT_NO_FATAL_FAILURE(sandtest::settlePile(chart, h, mat, what, figures));
       // Written back: twins hold one float.
@@ -156,9 +160,7 @@ TEST(SandOctahedral, ExplicitDiffusionKeepsVolumeAndTheActiveSetStepEqualsTheWho
     const int m = chart->grid().m();
     const auto where = spots(m);
     for (std::size_t s = 0; s < where.size(); ++s) {
-      const Eigen::Vector3d c = chart->up(where[s].u, where[s].v);
-      auto h = heightsOfDirection(
-          *chart, [&](const Eigen::Vector3d& d) { return (d - c).norm() < 0.16 ? -300.0 : 0.0; });
+      auto h = columnOn(*chart, where[s], -300.0);
       ASSERT_NO_FATAL_FAILURE(sandtest::explicitCraterDiffuses(
           chart, h, mat, std::string(nameOf(mapping)) + " spot " + std::to_string(s)));
     }

@@ -56,6 +56,14 @@ std::vector<float> heightsOfPoint(const core::Chart& chart,
   return h;
 }
 
+// A pile (height > 0) or a crater (< 0) with vertical walls: `height` within 450 m of the
+// spot's point, 0 elsewhere.
+std::vector<float> columnOn(const core::Chart& chart, core::GridPoint spot, double height) {
+  const Eigen::Vector3d c = chart.position(spot.u, spot.v, 0.0);
+  return heightsOfPoint(
+      chart, [&](const Eigen::Vector3d& p) { return (p - c).norm() < 450.0 ? height : 0.0; });
+}
+
 // Where the tests put piles and stamps: the torus's corner (both seams), its u seam, its v seam
 // (the outer equator), its inner equator, its top; the cylinder's seam, both rims (one on the
 // seam), its middle.
@@ -112,11 +120,7 @@ TEST(SandTubes, ThermalKeepsVolumeAndTheActiveSetStepEqualsTheWholeGridStep) {
     const int m = chart->grid().m();
     const auto where = spots(torus, m);
     for (std::size_t s = 0; s < where.size(); ++s) {
-      const Eigen::Vector3d c = chart->position(where[s].u, where[s].v, 0.0);
-      const double sign = s % 2 ? 1.0 : -1.0;
-      auto h = heightsOfPoint(*chart, [&](const Eigen::Vector3d& p) {
-        return (p - c).norm() < 450.0 ? sign * 300.0 : 0.0;
-      });
+      auto h = columnOn(*chart, where[s], s % 2 ? 300.0 : -300.0);
       const std::string what = std::string(nameOf(torus)) + " spot " + std::to_string(s);
       // The pile or crater spread across the seams: beside every twin, inside the grid, some
       // neighbour moved (the steep links are those round the tube, the shorter ones).
@@ -151,9 +155,7 @@ TEST(SandTubes, ExplicitDiffusionKeepsVolumeAndTheActiveSetStepEqualsTheWholeGri
     const int m = chart->grid().m();
     const auto where = spots(torus, m);
     for (std::size_t s = 0; s < where.size(); ++s) {
-      const Eigen::Vector3d c = chart->position(where[s].u, where[s].v, 0.0);
-      auto h = heightsOfPoint(
-          *chart, [&](const Eigen::Vector3d& p) { return (p - c).norm() < 450.0 ? -300.0 : 0.0; });
+      auto h = columnOn(*chart, where[s], -300.0);
       ASSERT_NO_FATAL_FAILURE(sandtest::explicitCraterDiffuses(
           chart, h, mat, std::string(nameOf(torus)) + " spot " + std::to_string(s)));
     }
