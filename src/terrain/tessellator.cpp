@@ -128,6 +128,30 @@ __attribute__((target_clones("avx512f", "avx2", "default"))) std::size_t decideS
   return splitting;
 }
 
+// A triangle at the view's edges: its ball (w = centre - eye, radius r) culled by a frustum plane
+// or the horizon, or the planes it lies wholly inside learned into `inside` (its children
+// inherit them).
+enum class EdgeTest { kKept, kCulledFrustum, kCulledHorizon };
+inline EdgeTest testAtViewEdges(const ViewGeometry& view, const Eigen::Matrix3d& R,
+                                const Eigen::Vector3d& w, double r, std::uint8_t& inside) {
+  const Eigen::Vector3d cam = R * w;
+  for (int p = 0; p < 5; ++p) {
+    if (inside & (1u << p)) continue;
+    const double d = view.planes[p].dot(cam) - (p == 4 ? kNear : 0.0);
+    if (d < -r) return EdgeTest::kCulledFrustum;
+    if (d >= r) inside |= std::uint8_t(1u << p);
+  }
+  if (!(inside & kHorizonClear)) {
+    const double along = view.horizonCull ? w.dot(view.towardCentre) : 0.0;
+    if (!view.horizonCull || along + r < view.horizonPlaneDist) {
+      inside |= kHorizonClear;  // wholly in front of the horizon plane: children too
+    } else if (behindHorizon(view, w, along, r)) {
+      return EdgeTest::kCulledHorizon;
+    }
+  }
+  return EdgeTest::kKept;
+}
+
 }  // namespace
 
 void Tessellator::SplitVertices::growTo(std::size_t n) {
@@ -169,16 +193,60 @@ std::uint32_t Tessellator::vertexFor(std::uint64_t gridIndex,
   return index;
 }
 
+bool Tessellator::loadSplitVertices(const Terrain& terrain, int depth) {
+  const std::vector<Node>& level = levelNodes_;
+  const std::size_t count = level.size();
+  split_.growTo(count);
+  std::int32_t* su = split_.u.data();
+  std::int32_t* sv = split_.v.data();
+  float* height = split_.height.data();
+  std::uint16_t* errorCode = split_.error.data();
+  std::uint16_t* radiusCode = split_.radius.data();
+  std::uint16_t* childCode = split_.childError.data();
+  const core::GridSize g = terrain.grid();
+  const int halfSize = g.m() >> (depth / 2 + 1);
+  // Lattice entries know their children's largest error; the full arrays do not.
+  const bool childrenKnown = halfSize >= (1 << ErrorBounds::kLatticeShift);
+  if (childrenKnown) {
+    const ErrorBounds::LatticeLevel lattice =
+        terrain.bounds().latticeLevel(halfSize, depth % 2 == 0);
+    for (std::size_t i = 0; i < count; ++i) {
+      const Node& n = level[i];
+      const int cu = (n.b0.u + n.b1.u) / 2, cv = (n.b0.v + n.b1.v) / 2;
+      const LatticeEntry& e = lattice.at(cu, cv);
+      su[i] = cu, sv[i] = cv;
+      height[i] = e.height;
+      errorCode[i] = e.codes.error, radiusCode[i] = e.codes.radius;
+      childCode[i] = e.childError;
+    }
+  } else {
+    const float* h = terrain.heights().data();
+    const BoundCodes* codes = terrain.bounds().codes().data();
+    for (std::size_t i = 0; i < count; ++i) {
+      const Node& n = level[i];
+      const int uu = n.b0.u + n.b1.u, vv = n.b0.v + n.b1.v;
+      const bool onGrid = ((uu | vv) & 1) == 0;  // the hypotenuse has a midpoint on the grid
+      const std::size_t ci = onGrid ? g.index(uu / 2, vv / 2) : 0;
+      su[i] = uu / 2, sv[i] = vv / 2;
+      height[i] = h[ci];
+      // Off the grid, a zero error: the triangle cannot split.
+      errorCode[i] = onGrid ? codes[ci].error : 0;
+      radiusCode[i] = codes[ci].radius;
+      childCode[i] = 0;
+    }
+  }
+  return childrenKnown;
+}
+
 template <class ChartT>
 bool Tessellator::pass(const ChartT& chart, const Terrain& terrain, const Camera& camera,
                        double distMax, bool cull, std::size_t abortAbove) {
   const core::GridSize g = chart.grid();
   const int m = g.m();
   const float* h = terrain.heights().data();
-  const BoundCodes* codes = terrain.bounds().codes().data();
-  const ErrorBounds& bounds = terrain.bounds();
   // The occluder is the ball under the lowest height of a sphere about the origin; a chart
-  // that is no such sphere (radius() 0: flat, torus, cylinder) has none, whatever its heights.
+  // that is no such sphere (sphereRadius() 0: flat, torus, cylinder) has none, whatever its
+  // heights.
   const double occluder =
       chart.sphereRadius() > 0 ? chart.sphereRadius() + terrain.minHeight() : 0.0;
   const ViewGeometry view = makeView(camera, occluder, distMax);
@@ -216,54 +284,23 @@ bool Tessellator::pass(const ChartT& chart, const Terrain& terrain, const Camera
   // edges of that half-size.
   for (int depth = 0; !level.empty(); ++depth) {
     const std::size_t count = level.size();
-    split_.growTo(count);
-    std::int32_t* su = split_.u.data();
-    std::int32_t* sv = split_.v.data();
-    float* height = split_.height.data();
-    std::uint16_t* errorCode = split_.error.data();
-    std::uint16_t* radiusCode = split_.radius.data();
-    std::uint16_t* childCode = split_.childError.data();
-    const int halfSize = m >> (depth / 2 + 1);
-    // Lattice entries know their children's largest error; the full arrays do not.
-    const bool childrenKnown = halfSize >= (1 << ErrorBounds::kLatticeShift);
-    // Every triangle's split vertex, in one tight loop of independent loads.
-    if (childrenKnown) {
-      const ErrorBounds::LatticeLevel lattice = bounds.latticeLevel(halfSize, depth % 2 == 0);
-      for (std::size_t i = 0; i < count; ++i) {
-        const Node& n = level[i];
-        const int cu = (n.b0.u + n.b1.u) / 2, cv = (n.b0.v + n.b1.v) / 2;
-        const LatticeEntry& e = lattice.at(cu, cv);
-        su[i] = cu, sv[i] = cv;
-        height[i] = e.height;
-        errorCode[i] = e.codes.error, radiusCode[i] = e.codes.radius;
-        childCode[i] = e.childError;
-      }
-    } else {
-      for (std::size_t i = 0; i < count; ++i) {
-        const Node& n = level[i];
-        const int uu = n.b0.u + n.b1.u, vv = n.b0.v + n.b1.v;
-        const bool onGrid = ((uu | vv) & 1) == 0;  // the hypotenuse has a midpoint on the grid
-        const std::size_t ci = onGrid ? g.index(uu / 2, vv / 2) : 0;
-        su[i] = uu / 2, sv[i] = vv / 2;
-        height[i] = h[ci];
-        // Off the grid, a zero error: the triangle cannot split.
-        errorCode[i] = onGrid ? codes[ci].error : 0;
-        radiusCode[i] = codes[ci].radius;
-        childCode[i] = 0;
-      }
-    }
+    const bool childrenKnown = loadSplitVertices(terrain, depth);
+    const std::int32_t* su = split_.u.data();
+    const std::int32_t* sv = split_.v.data();
+    const std::uint16_t* errorCode = split_.error.data();
+    const std::uint16_t* radiusCode = split_.radius.data();
     double* x = split_.x.data();
     double* y = split_.y.data();
     double* z = split_.z.data();
-    chart.scatteredPositions(su, sv, height, count, {x, y, z});
+    chart.scatteredPositions(su, sv, split_.height.data(), count, {x, y, z});
     const SplitTest test{{forward.x(), forward.y(), forward.z()},
                          view.focalKappa,
                          view.focal,
                          distMax,
                          childrenKnown};
     std::uint8_t* decision = split_.decision.data();
-    const std::size_t splitting =
-        decideSplits(test, eye, count, x, y, z, errorCode, radiusCode, childCode, decision);
+    const std::size_t splitting = decideSplits(test, eye, count, x, y, z, errorCode, radiusCode,
+                                               split_.childError.data(), decision);
 
     next.clear();
     startLevelHash(splitting);
@@ -274,34 +311,13 @@ bool Tessellator::pass(const ChartT& chart, const Terrain& terrain, const Camera
       std::uint8_t inside = n.inside;
       const bool onGrid = (((n.b0.u + n.b1.u) | (n.b0.v + n.b1.v)) & 1) == 0;
       if (inside != (kAllPlanes | kHorizonClear) && onGrid) {
-        // At the view's edges: cull the ball (w = centre - eye, radius r) or learn which
-        // planes it lies wholly inside, which its children inherit.
-        const Eigen::Vector3d w(x[i], y[i], z[i]);
         const double r =
             double(BoundCode::decode(radiusCode[i])) + double(BoundCode::decode(errorCode[i]));
-        const Eigen::Vector3d cam = R * w;
-        bool outside = false;
-        for (int p = 0; p < 5 && !outside; ++p) {
-          if (inside & (1u << p)) continue;
-          const double d = view.planes[p].dot(cam) - (p == 4 ? kNear : 0.0);
-          if (d < -r) {
-            outside = true;
-          } else if (d >= r) {
-            inside |= std::uint8_t(1u << p);
-          }
-        }
-        if (outside) {
-          ++stats_.culledFrustum;
+        const EdgeTest edge =
+            testAtViewEdges(view, R, Eigen::Vector3d(x[i], y[i], z[i]), r, inside);
+        if (edge != EdgeTest::kKept) {
+          ++(edge == EdgeTest::kCulledFrustum ? stats_.culledFrustum : stats_.culledHorizon);
           continue;
-        }
-        if (!(inside & kHorizonClear)) {
-          const double along = view.horizonCull ? w.dot(view.towardCentre) : 0.0;
-          if (!view.horizonCull || along + r < view.horizonPlaneDist) {
-            inside |= kHorizonClear;  // wholly in front of the horizon plane: children too
-          } else if (behindHorizon(view, w, along, r)) {
-            ++stats_.culledHorizon;
-            continue;
-          }
         }
         // Children emitted without a visit skip their own culling: only where none is left.
         if (split == kSplitLeafChildren && inside != (kAllPlanes | kHorizonClear)) split = kSplit;

@@ -60,6 +60,10 @@ class Tessellator {
   // Empties the vertex hash for a level where `nodes` triangles split (each adds one vertex at
   // most).
   void startLevelHash(std::size_t nodes);
+  // Every triangle of levelNodes_ (level `depth` of the bintree): its split vertex's grid point,
+  // height and bound codes into split_, in one tight loop of independent loads; true where the
+  // level's lattice also gives the children's largest error.
+  bool loadSplitVertices(const Terrain& terrain, int depth);
   std::size_t hashSlot(std::uint32_t key) const {
     return std::size_t((key * 0x9E3779B97F4A7C15ull) >> 20) & hashMask_;
   }
