@@ -19,7 +19,7 @@ if [ ! -f build/fuzz/build.ninja ]; then
   # sanitizers (docs/CI.md).
   cmake -S . -B build/fuzz -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_COMPILER=clang++ \
         "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O1 -g1 -DNDEBUG" \
-        -DPS_FUZZ=ON -DPS_WERROR=OFF -DPS_BUILD_TESTS=OFF -DPS_PCH=OFF >/dev/null
+        -DPS_FUZZ=ON -DPS_WERROR=OFF -DPS_BUILD_TESTS=OFF >/dev/null
 fi
 cmake --build build/fuzz -j"$(nproc)" --target $(printf 'fuzz_%s ' "${targets[@]}")
 mkdir -p build/fuzz/artifacts

@@ -1,7 +1,9 @@
 #!/usr/bin/env bash
-# README command 2: install what is missing, build, and run every test twice: an optimised
-# build with warnings as errors, then the ASan+UBSan build; then each parser's libFuzzer target
-# for 20 s (fuzz/run.sh, clang). `--quick` skips the sanitizer and fuzz passes.
+# README command 2: install what is missing, build, and run the tests: an optimised build with
+# warnings as errors and every test (the commands end to end and the benchmarks' quick runs
+# included), then the ASan+UBSan build of the layers and their tests; then each parser's
+# libFuzzer target for 10 s (fuzz/run.sh, clang). `--quick` skips the sanitizer and fuzz passes.
+# What each pass checks and why: docs/CI.md.
 # Prints each step's wall time at the end (CI's budget: docs/CI.md).
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -43,7 +45,7 @@ for preset in release asan; do
   timed "${preset}: tests" ctest --preset "${preset}" -j"${jobs}"
 done
 if [ "${1:-}" != "--quick" ]; then
-  echo "== fuzz: every parser, 20 s each" >&2
-  timed "fuzz: build and run" fuzz/run.sh 20
+  echo "== fuzz: every parser, 10 s each" >&2
+  timed "fuzz: build and run" fuzz/run.sh 10
 fi
 echo "== all tests passed" >&2
