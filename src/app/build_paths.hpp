@@ -12,7 +12,8 @@ namespace ps::app {
 
 std::filesystem::path sourceDir();
 std::filesystem::path sharedDir();
-// This build's `planetsculpt` (the tests that run a command end to end).
+// This build's `planetsculpt` (the tests that run a command end to end); empty where the build
+// has no program (PS_BUILD_APP=OFF).
 std::filesystem::path commandPath();
 
 }  // namespace ps::app
