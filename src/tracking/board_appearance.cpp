@@ -239,18 +239,18 @@ cv::Matx33d BoardAppearance::place(const cv::Matx33d& K, const Pose& board,
 }
 
 cv::Rect BoardAppearance::texelsSeenIn(const cv::Matx33d& imageFromTexel,
-                                       const cv::Rect& imageBox) const {
+                                       const std::vector<cv::Point>& outline) const {
   const cv::Matx33d texelFromImage = imageFromTexel.inv();
   double x0 = 1e18, y0 = 1e18, x1 = -1e18, y1 = -1e18;
-  // A homography maps the box (convex) onto the quadrilateral of its corners' images, when every
-  // corner's ray meets the plane ahead of the camera (w > 0: the texel's 1 / camera z).
-  for (int i = 0; i < 4; ++i) {
-    const cv::Vec3d p = texelFromImage * cv::Vec3d(imageBox.x + (i & 1 ? imageBox.width : 0),
-                                                   imageBox.y + (i & 2 ? imageBox.height : 0), 1);
+  // A homography maps a convex region onto a convex one bounded by its outline's images, when
+  // every outline point's ray meets the plane ahead of the camera (w > 0: 1 / camera z).
+  for (const cv::Point& q : outline) {
+    const cv::Vec3d p = texelFromImage * cv::Vec3d(q.x, q.y, 1);
     if (!(p[2] > 1e-9)) return square();
     x0 = std::min(x0, p[0] / p[2]), x1 = std::max(x1, p[0] / p[2]);
     y0 = std::min(y0, p[1] / p[2]), y1 = std::max(y1, p[1] / p[2]);
   }
+  if (outline.empty()) return {};
   const auto clampTo = [this](double v) { return int(std::clamp(v, 0.0, double(side_))); };
   const int l = clampTo(std::floor(x0) - 1), r = clampTo(std::ceil(x1) + 2);
   const int t = clampTo(std::floor(y0) - 1), b = clampTo(std::ceil(y1) + 2);

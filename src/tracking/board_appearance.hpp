@@ -24,6 +24,7 @@
 // sample of the whole square.
 #include <Eigen/Core>
 #include <opencv2/core.hpp>
+#include <vector>
 
 #include "tracking/pose.hpp"
 
@@ -88,9 +89,11 @@ class BoardAppearance {
   // foot on the board (m, board frame): the square's centre. A centre more than a quarter of the
   // square from the model's forgets the model.
   cv::Matx33d place(const cv::Matx33d& K, const Pose& board, const Eigen::Vector2d& centreOnBoard);
-  // The texels (a box within the square) that the pixels of `imageBox` see on the board plane;
-  // the whole square where a pixel of the box sees no plane (the horizon is in the box).
-  cv::Rect texelsSeenIn(const cv::Matx33d& imageFromTexel, const cv::Rect& imageBox) const;
+  // The texels (a box within the square) that the pixels of a convex region of the image see on
+  // the board plane, from the points of its outline; the whole square where one of them sees no
+  // plane (the horizon is in the region).
+  cv::Rect texelsSeenIn(const cv::Matx33d& imageFromTexel,
+                        const std::vector<cv::Point>& outline) const;
   // How far around a region a view must reach for the region's scores (and for learning within
   // it shrunk by one texel) to be those of a view of the whole square.
   int margin() const;

@@ -102,6 +102,21 @@ cv::Rect shrunkWithin(const cv::Rect& r, int by, const cv::Rect& square) {
   return rr > l && b > t ? cv::Rect(l, t, rr - l, b - t) : cv::Rect();
 }
 
+// The first and last pixel of each row of `mask` (CV_8U) within `box`: a convex region's outline.
+std::vector<cv::Point> rowEnds(const cv::Mat& mask, const cv::Rect& box) {
+  std::vector<cv::Point> ends;
+  for (int v = box.y; v < box.y + box.height; ++v) {
+    const auto* row = mask.ptr<uchar>(v);
+    int first = box.x, last = box.x + box.width - 1;
+    while (first <= last && !row[first]) ++first;
+    while (last >= first && !row[last]) --last;
+    if (first > last) continue;
+    ends.emplace_back(first, v);
+    ends.emplace_back(last, v);
+  }
+  return ends;
+}
+
 }  // namespace
 
 cv::Mat sphereSilhouette(cv::Size size, const cv::Matx33d& K, const Eigen::Vector3d& c,
@@ -180,7 +195,7 @@ HandMaskFrame HandMasker::update(const cv::Mat& image, const cv::Matx33d& K, con
   PlaneView view;
   ForegroundScore fg;
   if (box.area() > 0) {
-    behind = appearance_.texelsSeenIn(imageFromTexel, box);
+    behind = appearance_.texelsSeenIn(imageFromTexel, rowEnds(search, box));
     view = appearance_.view(image, imageFromTexel, grownWithin(behind, margin, square));
     fg = appearance_.foreground(view, gain.gain);
     learnt = shrunkWithin(view.region, margin - 1, square);
