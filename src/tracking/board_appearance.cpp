@@ -18,21 +18,11 @@ void require(bool ok, const std::string& field, const std::string& rule, double 
                            core::exactNumber(value) + ")");
 }
 
-// The image at a pixel (bilinear), as b, g, r: `image` 8-bit BGR or grey, (u, v) at least one
-// pixel inside its border.
-cv::Vec3f bilinear(const cv::Mat& image, double u, double v) {
-  const int x = int(u), y = int(v);
-  const float fx = float(u - x), fy = float(v - y);
-  const float w00 = (1 - fx) * (1 - fy), w01 = fx * (1 - fy), w10 = (1 - fx) * fy, w11 = fx * fy;
-  cv::Vec3f out;
+// The image at the pixel nearest (u, v), as b, g, r: `image` 8-bit BGR or grey, (u, v) inside.
+cv::Vec3f nearestPixel(const cv::Mat& image, double u, double v) {
   const int n = image.channels();
-  const uchar* a = image.ptr<uchar>(y) + x * n;
-  const uchar* b = image.ptr<uchar>(y + 1) + x * n;
-  for (int c = 0; c < 3; ++c) {
-    const int k = n == 1 ? 0 : c;
-    out[c] = w00 * a[k] + w01 * a[k + n] + w10 * b[k] + w11 * b[k + n];
-  }
-  return out;
+  const uchar* p = image.ptr<uchar>(int(v + 0.5)) + int(u + 0.5) * n;
+  return n == 1 ? cv::Vec3f(p[0], p[0], p[0]) : cv::Vec3f(p[0], p[1], p[2]);
 }
 
 // Per-channel median of frame / model over learned texels bright enough to measure (every 4th
@@ -41,6 +31,8 @@ cv::Vec3f bilinear(const cv::Mat& image, double u, double v) {
 FrameGain medianGain(const cv::Mat& image, const cv::Matx33d& H, const cv::Mat& model,
                      const cv::Mat& count) {
   std::vector<float> ratio[3];
+  for (auto& r : ratio)
+    r.reserve(std::size_t(model.rows / 4 + 1) * std::size_t(model.cols / 4 + 1));
   const double maxU = image.cols - 3, maxV = image.rows - 3;  // a texel's footprint inside
   for (int y = 0; y < model.rows; y += 4) {
     const auto* m = model.ptr<cv::Vec3f>(y);
@@ -52,7 +44,7 @@ FrameGain medianGain(const cv::Mat& image, const cv::Matx33d& H, const cv::Mat& 
       const double u = (H(0, 0) * x + H(0, 1) * y + H(0, 2)) / w;
       const double v = (H(1, 0) * x + H(1, 1) * y + H(1, 2)) / w;
       if (!(u >= 2 && u <= maxU && v >= 2 && v <= maxV)) continue;
-      const cv::Vec3f in = bilinear(image, u, v);
+      const cv::Vec3f in = nearestPixel(image, u, v);
       for (int c = 0; c < 3; ++c) ratio[c].push_back(in[c] / m[x][c]);
     }
   }

@@ -68,22 +68,28 @@ cv::Rect silhouetteBounds(cv::Size size, const cv::Matx33d& K, const Eigen::Vect
 
 namespace {
 
-// The sphere's silhouette drawn into `out` (CV_8U at the image's size, 255 inside) within `within`.
-void drawSilhouette(cv::Mat& out, const cv::Rect& within, const cv::Matx33d& K,
-                    const Eigen::Vector3d& c, double radius) {
-  const double cc = c.squaredNorm(), r2 = radius * radius;
-  if (!(c.z() > 0) || !(radius > 0) || !std::isfinite(cc)) return;
-  const cv::Rect box = silhouetteBounds(out.size(), K, c, radius) & within;
+// Silhouettes of concentric spheres (radii ascending) drawn into `out` (CV_8U at the image's
+// size, 255 inside), in one pass over the largest one's bounds.
+void drawSilhouettes(const std::vector<cv::Mat*>& out, const std::vector<double>& radii,
+                     const cv::Matx33d& K, const Eigen::Vector3d& c) {
+  const double cc = c.squaredNorm();
+  if (!(c.z() > 0) || !(radii.back() > 0) || !std::isfinite(cc)) return;
+  const cv::Rect box = silhouetteBounds(out.back()->size(), K, c, radii.back());
   const double fx = K(0, 0), fy = K(1, 1), cx = K(0, 2), cy = K(1, 2);
+  std::vector<double> k;  // |c|² - r² per sphere
+  for (const double r : radii) k.push_back(cc - r * r);
   for (int v = box.y; v < box.y + box.height; ++v) {
-    auto* row = out.ptr<uchar>(v);
     const double dy = (v - cy) / fy;
     for (int u = box.x; u < box.x + box.width; ++u) {
       const double dx = (u - cx) / fx;
       // The ray t·d meets the sphere when (d·c)² >= |d|²(|c|² - r²), ahead of the camera.
       const double dc = dx * c.x() + dy * c.y() + c.z();
       const double dd = dx * dx + dy * dy + 1.0;
-      if (dc > 0 && dc * dc >= dd * (cc - r2)) row[u] = 255;
+      if (!(dc > 0)) continue;
+      for (std::size_t i = out.size(); i-- > 0;) {
+        if (!(radii[i] > 0) || dc * dc < dd * k[i]) break;  // outside this one, so the smaller
+        out[i]->at<uchar>(v, u) = 255;
+      }
     }
   }
 }
@@ -122,7 +128,7 @@ std::vector<cv::Point> rowEnds(const cv::Mat& mask, const cv::Rect& box) {
 cv::Mat sphereSilhouette(cv::Size size, const cv::Matx33d& K, const Eigen::Vector3d& c,
                          double radius) {
   cv::Mat out = cv::Mat::zeros(size, CV_8U);
-  drawSilhouette(out, cv::Rect(0, 0, size.width, size.height), K, c, radius);
+  drawSilhouettes({&out}, {radius}, K, c);
   return out;
 }
 
@@ -173,15 +179,17 @@ HandMaskFrame HandMasker::update(const cv::Mat& image, const cv::Matx33d& K, con
   HandMaskFrame out;
   const cv::Size size = image.size();
   out.soft = cv::Mat::zeros(size, CV_32F);
-  out.silhouette = sphereSilhouette(size, K, planetCentreCamera, radius);
+  out.silhouette = cv::Mat::zeros(size, CV_8U);
+  // The planet's silhouette, the grown one searched for a hand, and the band around it.
+  const double grown = radius * (1 + config_.silhouetteMargin);
+  cv::Mat grownSilhouette = cv::Mat::zeros(size, CV_8U), search = cv::Mat::zeros(size, CV_8U);
+  drawSilhouettes({&out.silhouette, &grownSilhouette, &search},
+                  {radius, grown, grown + radius * config_.ringFraction}, K, planetCentreCamera);
   // A pose that is not one (the tracker reports none such; a caller might): nothing masked,
   // nothing learned.
   if (!board.finite() || !planetCentreCamera.allFinite() || !(radius > 0) ||
       !std::isfinite(radius) || image.empty())
     return out;
-  const double grown = radius * (1 + config_.silhouetteMargin);
-  cv::Mat search =
-      sphereSilhouette(size, K, planetCentreCamera, grown + radius * config_.ringFraction);
   const cv::Rect box = cv::boundingRect(search);
   // The model's texels behind the searched box (worked on with their margin; learned there),
   // and this frame's tile of the rest of the square (learned outside the former).
@@ -215,8 +223,6 @@ HandMaskFrame HandMasker::update(const cv::Mat& image, const cv::Matx33d& K, con
   cv::Mat score;
   cv::warpPerspective(fg.score, score, shift * imageFromTexel * fromView, box.size(),
                       cv::INTER_LINEAR, cv::BORDER_CONSTANT);
-  cv::Mat grownSilhouette = cv::Mat::zeros(size, CV_8U);
-  drawSilhouette(grownSilhouette, box, K, planetCentreCamera, grown);
   const cv::Mat kept = keepComponents(score, grownSilhouette(box), search(box), out.components);
   cv::Mat soft;
   kept.convertTo(soft, CV_32F, 1.0 / 255);
