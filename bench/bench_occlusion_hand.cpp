@@ -301,4 +301,15 @@ void benchOcclusionHand(const BenchOptions& o, const HandBenchSettings& settings
       runRecording(rec, o, settings, out);
 }
 
+// The hand rows alone, without the tool rows' GL context and renders: the mask's own figures
+// (and its time beside the tracking's) in a minute, on a machine without a display too.
+static const BenchRegistration kRegistered(
+    "occlusion-hand", "The hand rows of `bench occlusion` alone (no GL context needed)",
+    [](CLI::App& command) -> BenchFunction {
+      auto hand = std::make_shared<HandBenchSettings>();
+      addHandOptions(command, *hand);
+      return
+          [hand](const BenchOptions& o, std::ostream& out) { benchOcclusionHand(o, *hand, out); };
+    });
+
 }  // namespace ps::bench

@@ -280,3 +280,83 @@ TEST(OcclusionComposite, TheToolsProjectionIsLeftToTheDepthPass) {
   render::clearToolFromMask(untouched, camera, behind, 3);
   EXPECT_EQ(cv::countNonZero(untouched != 1.0f), 0);
 }
+
+// The mask works on the texels behind the planet only (BoardAppearance::margin() around them):
+// there, the scores and the steadiness of a view of a region are those of a view of the whole
+// square, in a frame with a hand over part of the region after the board was learned.
+TEST(HandMask, ARegionsScoresAreThoseOfTheWholeSquare) {
+  auto keys = learning(8, -90);
+  tracking::SynthKey k = frameKey(8, -90, 0.9, 1.0);
+  k.handX = 0.08;
+  k.handY = -0.03;
+  k.handRadius = 0.05;
+  k.handHeight = 0.16;
+  keys.push_back(k);
+  const auto s = boardScript(keys);
+  const tracking::SynthRenderer renderer(s);
+  tracking::BoardAppearance model;
+  const cv::Rect square = model.square();
+  const int m = model.margin();
+  for (int f = 0; f < renderer.frames(); ++f) {
+    const auto t = renderer.truth(f);
+    const cv::Mat image = renderer.render(f);
+    const Eigen::Vector3d foot = t.camera.inverse().apply(t.planetCentreCamera);
+    const cv::Matx33d H = model.place(s.camera.K, t.camera, foot.head<2>());
+    const cv::Vec3d gain = model.gain(image, H).gain;
+    const auto whole = model.view(image, H, square);
+    const auto wholeFg = model.foreground(whole, gain);
+    if (f + 1 < renderer.frames()) {
+      model.learn(whole, wholeFg, square);
+      continue;
+    }
+    // The box of the hand's texels (inside the square), a region on its edge, one in a corner.
+    const cv::Rect hand = cv::boundingRect(wholeFg.score > 1.0f) &
+                          cv::Rect(2 * m, 2 * m, square.width - 4 * m, square.height - 4 * m);
+    ASSERT_GT(hand.area(), 400);
+    for (const cv::Rect region : {hand, cv::Rect(0, 140, 50, 40),
+                                  cv::Rect(square.width - 30, square.height - 30, 30, 30)}) {
+      const cv::Rect grown =
+          cv::Rect(region.x - m, region.y - m, region.width + 2 * m, region.height + 2 * m) &
+          square;
+      const auto part = model.view(image, H, grown);
+      const auto partFg = model.foreground(part, gain);
+      const cv::Rect inPart = region - grown.tl();
+      ASSERT_EQ(cv::countNonZero(part.valid(inPart) != whole.valid(region)), 0);
+      ASSERT_EQ(cv::countNonZero(partFg.steady(inPart) != wholeFg.steady(region)), 0);
+      cv::Mat diff;
+      cv::absdiff(partFg.score(inPart), wholeFg.score(region), diff);
+      double worst = 0;
+      cv::minMaxLoc(diff, nullptr, &worst);
+      EXPECT_LT(worst, 1e-3) << region;
+      // The region holds a change: the comparison is not of zeros.
+      if (region == hand) {
+        EXPECT_GT(cv::countNonZero(wholeFg.score(region) > 1.0f), 100);
+      }
+    }
+  }
+}
+
+// The rest of the square is learned one tile a frame: after learnTiles² frames of a still
+// board, every texel the camera shows has been learned, and after the first only some.
+TEST(HandMask, LearnsEveryTexelInSightInTurn) {
+  const auto s = boardScript(learning(36, -80));
+  tracking::HandMasker masker;
+  ASSERT_EQ(masker.config().appearance.learnTiles * masker.config().appearance.learnTiles, 36);
+  const tracking::SynthRenderer renderer(s);
+  int afterFirst = 0;
+  for (int f = 0; f < renderer.frames(); ++f) {
+    const auto t = renderer.truth(f);
+    masker.update(renderer.render(f), s.camera.K, t.camera, t.planetCentreCamera, s.planetRadius);
+    if (f == 0) afterFirst = masker.appearance().learnedTexels();
+  }
+  // The texels in sight: a whole-square view of the last frame.
+  const auto t = renderer.truth(renderer.frames() - 1);
+  tracking::BoardAppearance probe;
+  const Eigen::Vector3d foot = t.camera.inverse().apply(t.planetCentreCamera);
+  const cv::Matx33d H = probe.place(s.camera.K, t.camera, foot.head<2>());
+  const int inSight =
+      cv::countNonZero(probe.view(renderer.render(renderer.frames() - 1), H, probe.square()).valid);
+  ASSERT_GT(inSight, 1000);
+  EXPECT_EQ(masker.appearance().learnedTexels(), inSight);
+  EXPECT_LT(afterFirst, inSight / 2);
+}

@@ -32,7 +32,7 @@ std::string optionsSummary(const std::vector<std::pair<std::string, CLI::App*>>&
     for (const CLI::Option* option : command->get_options())
       if (option->get_name() != "--help") line += " " + option->get_name();
     if (!line.empty())
-      text += "\n  " + name + std::string(std::max<std::size_t>(1, 12 - name.size()), ' ') +
+      text += "\n  " + name + std::string(name.size() < 12 ? 12 - name.size() : 1, ' ') +
               line.substr(1);
   }
   return text;

@@ -92,6 +92,9 @@ const CommandRegistration kLive([](CLI::App& root, CLI::App*& sub) -> CommandAct
     a->settings.options = job.options;
     a->settings.start = {job.planetFile.string(), job.seed, job.calibration.string()};
     a->settings.out = job.out;
+    a->settings.boardShadow = job.boardShadow;
+    a->settings.atmosphere = job.atmosphere;
+    a->settings.handMask = job.handMask;
     a->settings.journal = a->recover   ? live::JournalChoice::kRecover
                           : a->discard ? live::JournalChoice::kDiscard
                                        : live::JournalChoice::kAsk;

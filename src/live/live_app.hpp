@@ -35,6 +35,8 @@ struct LiveSettings {
   int frames = 0;         // stop after this many window frames (0: until closed)
   int overviewEvery = 4;  // the overview inset is rendered every Nth frame
   double distMaxPx = 4.0;
+  // The panel's toggles at start (`live --no-shadow`, `--no-atmosphere`, `--no-hand-mask`).
+  bool boardShadow = true, atmosphere = true, handMask = true;
   std::size_t triangleBudget = 70000;
   // With `frames`: the window's last frame (AR view, inset, panel) as a PNG here.
   std::filesystem::path screenshot;

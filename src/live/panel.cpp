@@ -230,6 +230,7 @@ float drawControlPanel(PanelSettings& s, PanelActions& a, const PanelStatus& st)
   ImGui::Checkbox("board shadow", &s.boardShadow);
   ImGui::SameLine(ImGui::GetWindowWidth() * 0.5f);
   ImGui::Checkbox("atmosphere", &s.atmosphere);
+  ImGui::Checkbox("hand mask", &s.handMask);
   ImGui::SliderFloat("spin (Left/Right)", &s.spinDeg, -180, 180, "%.0f deg");
   ImGui::SliderFloat("tilt (Up/Down)", &s.tiltDeg, -90, 90, "%.0f deg");
   if (ImGui::Button("reset")) s.spinDeg = s.tiltDeg = 0;

@@ -29,7 +29,8 @@ struct PanelSettings {
   // point): 45, 35 is the renderer's default sun (1, 1, 1).
   float sunLonDeg = 45, sunLatDeg = 35.26f;
   bool boardShadow = true, atmosphere = true;  // the planet's shadow on the board, the rim
-  float planetSizeCm = 6;                      // the planet's radius on its marker, scaled by hand
+  bool handMask = true;    // the camera image over the planet where a hand is in front of it
+  float planetSizeCm = 6;  // the planet's radius on its marker, scaled by hand
   bool operator==(const PanelSettings&) const = default;
 };
 

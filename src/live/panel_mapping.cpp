@@ -16,6 +16,9 @@ PanelSettings panelFrom(const LiveSettings& s) {
   p.distMaxPx = float(s.distMaxPx);
   p.triangleBudget = int(s.triangleBudget);
   p.planetSizeCm = float(o.scene.planetRadius * 100);
+  p.boardShadow = s.boardShadow;
+  p.atmosphere = s.atmosphere;
+  p.handMask = s.handMask;
   return p;
 }
 

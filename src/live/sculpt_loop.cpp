@@ -165,6 +165,14 @@ class SculptLoop {
   // from every tracked frame, the mask kept for drawView.
   void maskHands(const replay::StepResult& r) {
     handMask_.release();
+    // Off in the panel: nothing learned meanwhile, so the model starts afresh when it is on again
+    // (what it held may have changed while it was off).
+    if (!panel_.handMask) {
+      handMaskOn_ = false;
+      return;
+    }
+    if (!handMaskOn_) handMasker_.reset();
+    handMaskOn_ = true;
     // Only with this frame's board pose (measured, or held while the camera stands still).
     const auto& board = r.scene.planet;
     if (!pose_ || !board.usable() || !(board.measured || board.heldStill)) return;
@@ -497,6 +505,7 @@ class SculptLoop {
   cv::Mat handMask_;  // this frame's, empty when nothing is in front of the planet
   Texture handView_;  // the AR view with the camera image over the hand
   bool showHandView_ = false;
+  bool handMaskOn_ = false;  // the panel's toggle at the last frame masked
   session::SessionStore store_;
   std::uint64_t savesSeen_ = 1;  // the store's save at the start
   replay::SettingsControl settingsControl_;

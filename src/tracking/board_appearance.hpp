@@ -14,8 +14,17 @@
 // than the deepest shadow allowed, or (c) the model's texture (normalised cross-correlation over
 // a window) is not there; each test is tolerant of one texel of misregistration and scaled by
 // the camera's noise.
+//
+// Only the texels that matter are worked on (the mask reads the score where the planet is): the
+// caller names a region of the square (the texels seen behind the planet's silhouette), and a
+// view, its scores and its learning cover that region grown by margin() texels, so that the
+// region's scores and learning are those the whole square would give. The rest of the square is
+// learned one tile a frame (learnTiles² tiles in turn), so that a texel that comes behind the
+// planet as the camera moves has been learned already. The frame's gain is measured on a sparse
+// sample of the whole square.
 #include <Eigen/Core>
 #include <opencv2/core.hpp>
+#include <vector>
 
 #include "tracking/pose.hpp"
 
@@ -42,22 +51,30 @@ struct BoardAppearanceConfig {
   // there has left (a hand over the board when it was first seen) or the light there changed
   // for good. A hand held still over the planet for that long is taken as the board.
   int forgetAfterFrames = 300;
+  // Outside the region the caller works on, the square is learned in learnTiles x learnTiles
+  // tiles, one a frame: a texel there is learned (and counted toward forgetAfterFrames) once
+  // every learnTiles² frames.
+  int learnTiles = 6;
   // InputError "board appearance: FIELD ..." naming the first bad field.
   void validate() const;
 };
 
-// One camera frame seen in the board plane's rectified frame.
+// One camera frame seen in the board plane's rectified frame, over a region of the square.
 struct PlaneView {
-  cv::Mat image;               // CV_32FC3 (b, g, r), the camera image on the texels
+  cv::Rect region;             // the texels held (of the side() x side() square)
+  cv::Mat image;               // CV_32FC3 (b, g, r) over the region, the camera image on the texels
   cv::Mat valid;               // CV_8U, 255 where the texel is in the image, in front of it
-  cv::Matx33d imageFromTexel;  // texel (column, row, 1) -> camera pixel (homogeneous)
+  cv::Matx33d imageFromTexel;  // texel (column, row, 1) of the square -> camera pixel (homogeneous)
 };
 
 struct ForegroundScore {
-  cv::Mat score;    // CV_32F per texel: > 1 differs from the board; 0 where not yet learned
-  cv::Mat steady;   // CV_8U, 255 where the brightness is the model's times the gain
-  cv::Vec3d gain;   // per channel, this frame over the model (b, g, r)
-  int gainSamples;  // texels the gain was measured on
+  cv::Mat score;   // CV_32F per texel of the view: > 1 differs from the board; 0 where not learned
+  cv::Mat steady;  // CV_8U, 255 where the brightness is the model's times the gain
+};
+
+struct FrameGain {
+  cv::Vec3d gain{1, 1, 1};  // per channel, this frame over the model (b, g, r)
+  int samples = 0;          // texels the gain was measured on
 };
 
 class BoardAppearance {
@@ -65,16 +82,34 @@ class BoardAppearance {
   explicit BoardAppearance(BoardAppearanceConfig config = {});
   const BoardAppearanceConfig& config() const { return config_; }
   int side() const { return side_; }
+  cv::Rect square() const { return {0, 0, side_, side_}; }
 
-  // `image`: BGR or grey 8-bit, undistorted (the pinhole K); `board`: board -> camera;
-  // `centreOnBoard`: the planet's foot on the board (m, board frame): the square's centre.
-  // A centre more than a quarter of the square from the model's forgets the model.
-  PlaneView view(const cv::Mat& image, const cv::Matx33d& K, const Pose& board,
-                 const Eigen::Vector2d& centreOnBoard);
-  ForegroundScore foreground(const PlaneView& view) const;
-  // Learns the frame where `fg` says it shows the board, unshadowed (texels never seen take
-  // the frame).
-  void learn(const PlaneView& view, const ForegroundScore& fg);
+  // Places the square for this frame and returns its texel -> image homography. `K` the
+  // pinhole of the undistorted image; `board`: board -> camera; `centreOnBoard`: the planet's
+  // foot on the board (m, board frame): the square's centre. A centre more than a quarter of the
+  // square from the model's forgets the model.
+  cv::Matx33d place(const cv::Matx33d& K, const Pose& board, const Eigen::Vector2d& centreOnBoard);
+  // The texels (a box within the square) that the pixels of a convex region of the image see on
+  // the board plane, from the points of its outline; the whole square where one of them sees no
+  // plane (the horizon is in the region).
+  cv::Rect texelsSeenIn(const cv::Matx33d& imageFromTexel,
+                        const std::vector<cv::Point>& outline) const;
+  // How far around a region a view must reach for the region's scores (and for learning within
+  // it shrunk by one texel) to be those of a view of the whole square.
+  int margin() const;
+  // The frame's gain and white balance over the model: the per-channel median ratio over a
+  // sparse sample of the square's learned texels. `image`: BGR or grey 8-bit, undistorted.
+  FrameGain gain(const cv::Mat& image, const cv::Matx33d& imageFromTexel) const;
+  // The camera image on the texels of `region` (within the square).
+  PlaneView view(const cv::Mat& image, const cv::Matx33d& imageFromTexel, cv::Rect region);
+  ForegroundScore foreground(const PlaneView& view, const cv::Vec3d& gain) const;
+  // Learns the frame within `where` (square texels, within the view's region), except within
+  // `skip`, where `fg` says it shows the board, unshadowed (texels never seen take the frame).
+  void learn(const PlaneView& view, const ForegroundScore& fg, const cv::Rect& where,
+             const cv::Rect& skip = {});
+  // This frame's tile of the square for learning beyond the worked region (one per call, in
+  // turn).
+  cv::Rect nextTile();
   void reset();
   // Texels learned at least once.
   int learnedTexels() const;
@@ -82,11 +117,13 @@ class BoardAppearance {
  private:
   BoardAppearanceConfig config_;
   int side_ = 0;
+  int tile_ = 0;  // the next tile to learn
   Eigen::Vector2d centre_ = Eigen::Vector2d::Zero();
   bool centred_ = false;
-  cv::Mat mean_;   // CV_32FC3
-  cv::Mat count_;  // CV_32F, frames learned
-  cv::Mat kept_;   // CV_32F, frames in a row kept from learning
+  cv::Mat mean_;    // CV_32FC3
+  cv::Mat count_;   // CV_32F, frames learned
+  cv::Mat kept_;    // CV_32F, frames in a row kept from learning
+  cv::Mat inside_;  // CV_8U 255 at the last image's size: warped to tell texels in the image
 };
 
 }  // namespace ps::tracking

@@ -66,24 +66,69 @@ cv::Rect silhouetteBounds(cv::Size size, const cv::Matx33d& K, const Eigen::Vect
 
 }  // namespace
 
-cv::Mat sphereSilhouette(cv::Size size, const cv::Matx33d& K, const Eigen::Vector3d& c,
-                         double radius) {
-  cv::Mat out = cv::Mat::zeros(size, CV_8U);
-  const double cc = c.squaredNorm(), r2 = radius * radius;
-  if (!(c.z() > 0) || !(radius > 0) || !std::isfinite(cc)) return out;
-  const cv::Rect box = silhouetteBounds(size, K, c, radius);
+namespace {
+
+// Silhouettes of concentric spheres (radii ascending) drawn into `out` (CV_8U at the image's
+// size, 255 inside), in one pass over the largest one's bounds.
+void drawSilhouettes(const std::vector<cv::Mat*>& out, const std::vector<double>& radii,
+                     const cv::Matx33d& K, const Eigen::Vector3d& c) {
+  const double cc = c.squaredNorm();
+  if (!(c.z() > 0) || !(radii.back() > 0) || !std::isfinite(cc)) return;
+  const cv::Rect box = silhouetteBounds(out.back()->size(), K, c, radii.back());
   const double fx = K(0, 0), fy = K(1, 1), cx = K(0, 2), cy = K(1, 2);
+  std::vector<double> k;  // |c|² - r² per sphere
+  for (const double r : radii) k.push_back(cc - r * r);
   for (int v = box.y; v < box.y + box.height; ++v) {
-    auto* row = out.ptr<uchar>(v);
     const double dy = (v - cy) / fy;
     for (int u = box.x; u < box.x + box.width; ++u) {
       const double dx = (u - cx) / fx;
       // The ray t·d meets the sphere when (d·c)² >= |d|²(|c|² - r²), ahead of the camera.
       const double dc = dx * c.x() + dy * c.y() + c.z();
       const double dd = dx * dx + dy * dy + 1.0;
-      if (dc > 0 && dc * dc >= dd * (cc - r2)) row[u] = 255;
+      if (!(dc > 0)) continue;
+      for (std::size_t i = out.size(); i-- > 0;) {
+        if (!(radii[i] > 0) || dc * dc < dd * k[i]) break;  // outside this one, so the smaller
+        out[i]->at<uchar>(v, u) = 255;
+      }
     }
   }
+}
+
+// The grown square `r` by `by` texels on each side, except on the sides where it reaches the
+// edge of `square` (none to read beyond there), within it.
+cv::Rect grownWithin(const cv::Rect& r, int by, const cv::Rect& square) {
+  return cv::Rect(r.x - by, r.y - by, r.width + 2 * by, r.height + 2 * by) & square;
+}
+
+// `r` shrunk by `by` on the sides that are not on the edge of `square`.
+cv::Rect shrunkWithin(const cv::Rect& r, int by, const cv::Rect& square) {
+  const int l = r.x > square.x ? r.x + by : r.x, t = r.y > square.y ? r.y + by : r.y;
+  const int rr = r.br().x < square.br().x ? r.br().x - by : r.br().x;
+  const int b = r.br().y < square.br().y ? r.br().y - by : r.br().y;
+  return rr > l && b > t ? cv::Rect(l, t, rr - l, b - t) : cv::Rect();
+}
+
+// The first and last pixel of each row of `mask` (CV_8U) within `box`: a convex region's outline.
+std::vector<cv::Point> rowEnds(const cv::Mat& mask, const cv::Rect& box) {
+  std::vector<cv::Point> ends;
+  for (int v = box.y; v < box.y + box.height; ++v) {
+    const auto* row = mask.ptr<uchar>(v);
+    int first = box.x, last = box.x + box.width - 1;
+    while (first <= last && !row[first]) ++first;
+    while (last >= first && !row[last]) --last;
+    if (first > last) continue;
+    ends.emplace_back(first, v);
+    ends.emplace_back(last, v);
+  }
+  return ends;
+}
+
+}  // namespace
+
+cv::Mat sphereSilhouette(cv::Size size, const cv::Matx33d& K, const Eigen::Vector3d& c,
+                         double radius) {
+  cv::Mat out = cv::Mat::zeros(size, CV_8U);
+  drawSilhouettes({&out}, {radius}, K, c);
   return out;
 }
 
@@ -91,7 +136,7 @@ HandMasker::HandMasker(HandMaskConfig config)
     : config_(config), appearance_((config.validate(), config.appearance)) {}
 
 cv::Mat HandMasker::keepComponents(const cv::Mat& score, const cv::Mat& silhouette,
-                                   const cv::Mat& search) const {
+                                   const cv::Mat& search, int& keptCount) const {
   cv::Mat weak = (score > 1.0) & search;
   if (config_.openPx > 0) cv::morphologyEx(weak, weak, cv::MORPH_OPEN, disc(config_.openPx));
   if (config_.closePx > 0) cv::morphologyEx(weak, weak, cv::MORPH_CLOSE, disc(config_.closePx));
@@ -111,6 +156,7 @@ cv::Mat HandMasker::keepComponents(const cv::Mat& score, const cv::Mat& silhouet
     }
   }
   cv::Mat kept = cv::Mat::zeros(score.size(), CV_8U);
+  keptCount = 0;
   for (int i = 1; i < n; ++i) {
     const int area = stats.at<int>(i, cv::CC_STAT_AREA);
     const bool entering = outside[std::size_t(i)] > 0 && strong[std::size_t(i)] > 0 &&
@@ -118,6 +164,7 @@ cv::Mat HandMasker::keepComponents(const cv::Mat& score, const cv::Mat& silhouet
     const bool large = strong[std::size_t(i)] >= config_.minAreaFraction * silArea &&
                        area >= config_.minInteriorAreaFraction * silArea;
     if (!entering && !large) continue;
+    ++keptCount;
     // The component with its holes filled: a hand's uniform middle may score low in places.
     cv::Mat mine = labels == i;
     std::vector<std::vector<cv::Point>> contours;
@@ -132,37 +179,58 @@ HandMaskFrame HandMasker::update(const cv::Mat& image, const cv::Matx33d& K, con
   HandMaskFrame out;
   const cv::Size size = image.size();
   out.soft = cv::Mat::zeros(size, CV_32F);
-  out.silhouette = sphereSilhouette(size, K, planetCentreCamera, radius);
+  out.silhouette = cv::Mat::zeros(size, CV_8U);
+  // The planet's silhouette, the grown one searched for a hand, and the band around it.
+  const double grown = radius * (1 + config_.silhouetteMargin);
+  cv::Mat grownSilhouette = cv::Mat::zeros(size, CV_8U), search = cv::Mat::zeros(size, CV_8U);
+  drawSilhouettes({&out.silhouette, &grownSilhouette, &search},
+                  {radius, grown, grown + radius * config_.ringFraction}, K, planetCentreCamera);
   // A pose that is not one (the tracker reports none such; a caller might): nothing masked,
   // nothing learned.
   if (!board.finite() || !planetCentreCamera.allFinite() || !(radius > 0) ||
       !std::isfinite(radius) || image.empty())
     return out;
-  const Eigen::Vector3d foot = board.inverse().apply(planetCentreCamera);
-  const PlaneView view = appearance_.view(image, K, board, foot.head<2>());
-  const ForegroundScore fg = appearance_.foreground(view);
-  out.gain = fg.gain;
-  appearance_.learn(view, fg);
-  const double grown = radius * (1 + config_.silhouetteMargin);
-  const cv::Mat search =
-      sphereSilhouette(size, K, planetCentreCamera, grown + radius * config_.ringFraction);
   const cv::Rect box = cv::boundingRect(search);
+  // The model's texels behind the searched box (worked on with their margin; learned there),
+  // and this frame's tile of the rest of the square (learned outside the former).
+  const Eigen::Vector3d foot = board.inverse().apply(planetCentreCamera);
+  const cv::Matx33d imageFromTexel = appearance_.place(K, board, foot.head<2>());
+  const FrameGain gain = appearance_.gain(image, imageFromTexel);
+  out.gain = gain.gain;
+  const cv::Rect square = appearance_.square();
+  const int margin = appearance_.margin();
+  cv::Rect behind, learnt;
+  PlaneView view;
+  ForegroundScore fg;
+  if (box.area() > 0) {
+    behind = appearance_.texelsSeenIn(imageFromTexel, rowEnds(search, box));
+    view = appearance_.view(image, imageFromTexel, grownWithin(behind, margin, square));
+    fg = appearance_.foreground(view, gain.gain);
+    learnt = shrunkWithin(view.region, margin - 1, square);
+  }
+  const cv::Rect tile = appearance_.nextTile();
+  if ((tile & learnt) != tile) {
+    const PlaneView tileView =
+        appearance_.view(image, imageFromTexel, grownWithin(tile, margin, square));
+    const ForegroundScore tileFg = appearance_.foreground(tileView, gain.gain);
+    appearance_.learn(tileView, tileFg, tile, learnt);
+  }
   if (box.area() == 0) return out;
+  appearance_.learn(view, fg, learnt);
   // The texels' scores in the searched box of the image.
   const cv::Matx33d shift(1, 0, -box.x, 0, 1, -box.y, 0, 0, 1);
+  const cv::Matx33d fromView(1, 0, view.region.x, 0, 1, view.region.y, 0, 0, 1);
   cv::Mat score;
-  cv::warpPerspective(fg.score, score, shift * view.imageFromTexel, box.size(), cv::INTER_LINEAR,
-                      cv::BORDER_CONSTANT);
-  const cv::Mat grownSilhouette = sphereSilhouette(size, K, planetCentreCamera, grown)(box);
-  const cv::Mat kept = keepComponents(score, grownSilhouette, search(box));
+  cv::warpPerspective(fg.score, score, shift * imageFromTexel * fromView, box.size(),
+                      cv::INTER_LINEAR, cv::BORDER_CONSTANT);
+  const cv::Mat kept = keepComponents(score, grownSilhouette(box), search(box), out.components);
   cv::Mat soft;
   kept.convertTo(soft, CV_32F, 1.0 / 255);
   if (config_.featherPx > 0) cv::GaussianBlur(soft, soft, cv::Size(0, 0), config_.featherPx);
   soft.copyTo(out.soft(box));
-  out.coverage = cv::mean(out.soft, out.silhouette)[0];
-  if (cv::countNonZero(out.silhouette) == 0) out.coverage = 0;
-  cv::Mat labels;
-  out.components = cv::connectedComponents(kept, labels, 8) - 1;
+  // The planet's silhouette lies within the searched box.
+  if (cv::countNonZero(out.silhouette(box)) > 0)
+    out.coverage = cv::mean(out.soft(box), out.silhouette(box))[0];
   return out;
 }
 

@@ -57,8 +57,8 @@ class HandMasker {
   const BoardAppearance& appearance() const { return appearance_; }
 
  private:
-  cv::Mat keepComponents(const cv::Mat& score, const cv::Mat& silhouette,
-                         const cv::Mat& search) const;
+  cv::Mat keepComponents(const cv::Mat& score, const cv::Mat& silhouette, const cv::Mat& search,
+                         int& keptCount) const;
   HandMaskConfig config_;
   BoardAppearance appearance_;
 };
