@@ -243,7 +243,6 @@ TEST(HapticsLoop, LiveThreadFeedsTheEditorWithoutEditingItself) {
   std::vector<FrameForces> frames;
   double lastTime = -1;
   std::uint64_t rev = t.revision();
-  int ticks = 0;
   // Editor frames every 10 loop ticks, for 1,000 ticks: what the loop has done ends the test, not
   // a clock. On the tick clock the 1,000th tick is at 1.0 s, past the script's 0.8 s, and the
   // press covers ticks 200-800 however loaded the machine (the wall clock would skip missed
@@ -257,7 +256,6 @@ TEST(HapticsLoop, LiveThreadFeedsTheEditorWithoutEditingItself) {
     EXPECT_EQ(t.revision(), rev);
     frames.push_back(s.editorFrame());
     rev = t.revision();
-    ticks += frames.back().ticks;
     if (frames.back().last) {
       EXPECT_GT(frames.back().last->time, lastTime);
       lastTime = frames.back().last->time;
