@@ -1,13 +1,14 @@
 #pragma once
-// Scratch folders for tests, and reading a file back: TMP/ps_test_<name>_<pid>, emptied first and removed when the test
-// process ends (named per process, they would otherwise pile up in TMP run after run). A process
-// with a failed test keeps them, as evidence.
+// Scratch folders for tests, and reading and writing a file's bytes: TMP/ps_test_<name>_<pid>,
+// emptied first and removed when the test process ends (named per process, they would otherwise
+// pile up in TMP run after run). A process with a failed test keeps them, as evidence.
 #include <gtest/gtest.h>
 #include <unistd.h>
 
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <span>
 #include <string>
 #include <system_error>
 #include <vector>
@@ -46,6 +47,16 @@ inline std::filesystem::path freshDir(const std::string& name) {
 inline std::vector<unsigned char> readAll(const std::filesystem::path& p) {
   std::ifstream f(p, std::ios::binary);
   return {std::istreambuf_iterator<char>(f), std::istreambuf_iterator<char>()};
+}
+
+// Writes `bytes` to p, replacing it.
+inline void writeAll(const std::filesystem::path& p, std::span<const unsigned char> bytes) {
+  std::ofstream f(p, std::ios::binary | std::ios::trunc);
+  f.write(reinterpret_cast<const char*>(bytes.data()), std::streamsize(bytes.size()));
+}
+
+inline void writeText(const std::filesystem::path& p, const std::string& text) {
+  std::ofstream(p) << text;
 }
 
 }  // namespace ps::testkit

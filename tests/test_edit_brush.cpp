@@ -21,11 +21,6 @@ using edit::GaussianProfile;
 
 namespace {
 
-terrain::Terrain flatPlanet(int n, float h = 0.0f) {
-  auto chart = testkit::earthChart(n);
-  return terrain::Terrain(chart, std::vector<float>(chart->grid().count(), h));
-}
-
 // Paper 003's equation 7.
 double paperGaussian(double x, double sigma, double mu) {
   return std::exp(-(x - mu) * (x - mu) / (2 * sigma * sigma)) /
@@ -92,7 +87,7 @@ TEST(EditBrush, RejectsBadSettingsNamingTheValue) {
 }
 
 TEST(EditBrush, RaiseLowerAndSet) {
-  auto t = flatPlanet(7);
+  auto t = testkit::levelTerrain(7);
   edit::EditPipeline pipe(t);
   const auto g = t.grid();
   const int m = g.m();
@@ -142,7 +137,7 @@ TEST(EditBrush, RaiseLowerAndSet) {
 }
 
 TEST(EditBrush, RateModeScalesWithDt) {
-  auto t = flatPlanet(6);
+  auto t = testkit::levelTerrain(6);
   edit::EditPipeline pipe(t);
   const int m = t.grid().m();
   BrushSettings s;
@@ -171,7 +166,7 @@ TEST(EditBrush, RateModeScalesWithDt) {
 }
 
 TEST(EditBrush, ClampsToTheHeightLimit) {
-  auto t = flatPlanet(6);
+  auto t = testkit::levelTerrain(6);
   edit::EditPipeline pipe(t);
   BrushSettings s;
   s.radius = 2000e3;
@@ -286,7 +281,7 @@ TEST(EditBrush, RegionGrowingsDistancesAreTheOnesTheBrushWouldCompute) {
 }
 
 TEST(EditBrush, ExtremeButValidSettingsNeverProduceNaN) {
-  auto t = flatPlanet(6, 10.0f);
+  auto t = testkit::levelTerrain(6, 10.0f);
   edit::EditPipeline pipe(t);
   const Eigen::Vector3d at = t.chart().position(11, 40, 0.0);
   std::vector<BrushSettings> list;

@@ -18,7 +18,7 @@ using namespace ps;
 using edit::ScriptCommand;
 
 namespace {
-std::string errorOf(const std::string& text, edit::EditPipeline& pipe) {
+std::string scriptErrorOf(const std::string& text, edit::EditPipeline& pipe) {
   try {
     edit::runStrokeScript(edit::parseStrokeScript(text, "bad.txt"), pipe);
   } catch (const core::InputError& e) {
@@ -68,10 +68,10 @@ TEST(EditScript, LatLonPointsAreRefusedOnChartsThatAreNoSphere) {
     const std::string brush = "brush r_km=" + std::to_string(r_km) + " sigma=0.3\n";
     const std::string xyz = "stamp xyz=" + std::to_string(p.x()) + "," + std::to_string(p.y()) +
                             "," + std::to_string(p.z()) + "\n";
-    const std::string err = errorOf(brush + xyz + "stamp 10 20\n", pipe);
+    const std::string err = scriptErrorOf(brush + xyz + "stamp 10 20\n", pipe);
     EXPECT_NE(err.find("bad.txt:3: a LAT LON point needs a sphere"), std::string::npos) << err;
     EXPECT_TRUE(edittest::sameBits(t.heights(), start)) << "a refused script changed heights";
-    EXPECT_EQ(errorOf(brush + xyz, pipe), "");
+    EXPECT_EQ(scriptErrorOf(brush + xyz, pipe), "");
     EXPECT_FALSE(edittest::sameBits(t.heights(), start)) << "the xyz stamp changed nothing";
   }
 }
@@ -109,7 +109,7 @@ TEST(EditScript, ErrorsNameTheFileLineAndValueAndTouchNothing) {
       {ok + "sculpt 1 2\n", "bad.txt:4: unknown command 'sculpt'"},
   };
   for (const auto& [text, expect] : cases) {
-    const std::string e = errorOf(text, pipe);
+    const std::string e = scriptErrorOf(text, pipe);
     EXPECT_NE(e.find(expect), std::string::npos) << "got: '" << e << "'\nexpected: " << expect;
     ASSERT_TRUE(edittest::sameBits(t.heights(), start)) << "planet changed by: " << text;
     ASSERT_EQ(t.revision(), revision);
@@ -117,7 +117,7 @@ TEST(EditScript, ErrorsNameTheFileLineAndValueAndTouchNothing) {
   }
   EXPECT_THROW(edit::loadStrokeScript("/nonexistent/strokes.txt"), core::InputError);
   pipe.setUndoEnabled(false);
-  EXPECT_NE(errorOf(ok + "undo\n", pipe).find("bad.txt:4: undo needs the undo journal"),
+  EXPECT_NE(scriptErrorOf(ok + "undo\n", pipe).find("bad.txt:4: undo needs the undo journal"),
             std::string::npos);
 }
 

@@ -166,6 +166,12 @@ inline Eigen::Vector3d latLon(double latDeg, double lonDeg, double R, double k =
          Eigen::Vector3d(std::cos(lo) * std::cos(la), std::sin(lo) * std::cos(la), std::sin(la));
 }
 
+// The point h metres above the chart's sphere at (latDeg, lonDeg).
+inline Eigen::Vector3d pointAbove(const core::Chart& chart, double latDeg, double lonDeg,
+                                  double h) {
+  return latLon(latDeg, lonDeg, chart.sphereRadius() + h, 1.0);
+}
+
 // A random stroke: a single stamp or a few samples, anywhere (poles and seam included).
 inline void randomStroke(edit::EditPipeline& pipe, std::mt19937& rng, edit::GaussianBrush& brush) {
   const auto& t = pipe.terrain();

@@ -21,24 +21,20 @@ using namespace ps::haptics;
 
 namespace {
 
-using haptictest::flatPlanet;
-using haptictest::kGlobe;
-using haptictest::kR;
-
 Eigen::Vector3d dirAt(double latDeg, double lonDeg) {
   return haptictest::latLon(latDeg, lonDeg);
 }
 
 ForcePathConfig globeConfig() {
   ForcePathConfig c;
-  c.map.scale = kR / kGlobe;
+  c.map.scale = haptictest::kR / haptictest::kGlobe;
   return c;
 }
 
 // The demo-like stroke, in the planet frame: down from 3 mm (device) above the surface to
 // `depth` below it in 1 s, dragged 5 degrees east in 1 s, back up in 1 s.
 Eigen::Vector3d strokeTip(double t, double surfaceR, double depthDevice) {
-  const double scale = kR / kGlobe;
+  const double scale = haptictest::kR / haptictest::kGlobe;
   const double above = 0.003 * scale, below = -depthDevice * scale;
   double alt, lon = 40;
   if (t < 1) {
@@ -61,7 +57,7 @@ struct StrokeRun {
 };
 
 StrokeRun runStroke(double depthDevice, const std::function<bool(double)>& tracked = {}) {
-  terrain::Terrain t = flatPlanet(9);
+  terrain::Terrain t = haptictest::flatPlanet(9);
   edit::EditPipeline pipe(t);
   pipe.setUndoEnabled(false);
   ForcePath s(t, &pipe, globeConfig());
@@ -70,7 +66,7 @@ StrokeRun runStroke(double depthDevice, const std::function<bool(double)>& track
   StrokeRun r;
   for (int f = 0; f <= 90; ++f) {
     const double time = f / 30.0;
-    std::optional<Eigen::Vector3d> tip = strokeTip(time, kR + 2000.0, depthDevice);
+    std::optional<Eigen::Vector3d> tip = strokeTip(time, haptictest::kR + 2000.0, depthDevice);
     if (tracked && !tracked(time)) tip.reset();
     r.frames.push_back(s.onFrame(tip, time));
   }
@@ -106,9 +102,9 @@ TEST(HapticsForcePath, ReplayStrokeIsLoggedDeterministicallyAndSculptsThroughThe
   EXPECT_GT(maxF, 1.0);
   EXPECT_GT(a.stamps, 3u);
   // The displacement keeps volume (sand/displacement.hpp), and moved something.
-  auto chart = sandtest::sphereChart(9, kR);
+  auto chart = sandtest::sphereChart(9, haptictest::kR);
   const sand::SandGrid grid(chart);
-  const terrain::Terrain before = flatPlanet(9);
+  const terrain::Terrain before = haptictest::flatPlanet(9);
   const double v0 = grid.volume(before.heights()), v1 = grid.volume(a.heights);
   double moved = 0;
   for (std::size_t i = 0; i < a.heights.size(); ++i)
@@ -125,15 +121,16 @@ TEST(HapticsForcePath, PressesAcrossAFoldOfTheOctahedralChart) {
   // The demo-like stroke dragged across the fold u = 0 of an octahedral planet (513^2, 2 km of
   // sand): forces felt, sand displaced on both sides of the fold, the volume kept, twins one
   // height, the same log and planet twice.
-  auto chart = std::make_shared<core::OctahedralChart>(core::GridSize(9), kR);
+  auto chart = std::make_shared<core::OctahedralChart>(core::GridSize(9), haptictest::kR);
   const int m = chart->grid().m();
   const Eigen::Vector3d c = chart->up(0, m / 4);
   const Eigen::Vector3d across = (chart->up(1, m / 4) - chart->up(1, m - m / 4)).normalized();
   auto run = [&] {
-    return haptictest::pressDragLift(chart, 2000.0f, kR / kGlobe, [&](double alt, double x) {
-      const Eigen::Vector3d dir = (c + 0.03 * x * across).normalized();  // +-1.7 degrees
-      return Eigen::Vector3d(dir * (kR + 2000.0 + alt));
-    });
+    return haptictest::pressDragLift(
+        chart, 2000.0f, haptictest::kR / haptictest::kGlobe, [&](double alt, double x) {
+          const Eigen::Vector3d dir = (c + 0.03 * x * across).normalized();  // +-1.7 degrees
+          return Eigen::Vector3d(dir * (haptictest::kR + 2000.0 + alt));
+        });
   };
   const haptictest::StrokeOutcome a = run();
   EXPECT_GT(a.touching, 1000);
@@ -155,7 +152,7 @@ TEST(HapticsForcePath, PressesAcrossAFoldOfTheOctahedralChart) {
 }
 
 TEST(HapticsForcePath, DeeperPushesMoveMoreSand) {
-  const terrain::Terrain base = flatPlanet(9);
+  const terrain::Terrain base = haptictest::flatPlanet(9);
   auto removed = [&](const StrokeRun& r) {
     double sum = 0;
     for (std::size_t i = 0; i < r.heights.size(); ++i)
@@ -194,7 +191,7 @@ TEST(HapticsForcePath, LostTrackingGivesZeroForceAndTheSessionContinues) {
 }
 
 TEST(HapticsForcePath, BadConfigurationNamesTheParameter) {
-  terrain::Terrain t = flatPlanet(9);
+  terrain::Terrain t = haptictest::flatPlanet(9);
   auto expectNamed = [&](ForcePathConfig c, const std::string& name) {
     try {
       ForcePath s(t, nullptr, c);
@@ -220,25 +217,25 @@ TEST(HapticsForcePath, BadConfigurationNamesTheParameter) {
   expectNamed(c, "workspace scale");
   // A non-finite frame time is a note, not an exception.
   ForcePath s(t, nullptr, globeConfig());
-  const FrameForces f = s.onFrame(Eigen::Vector3d(kR, 0, 0), std::nan(""));
+  const FrameForces f = s.onFrame(Eigen::Vector3d(haptictest::kR, 0, 0), std::nan(""));
   EXPECT_EQ(f.ticks, 0);
   EXPECT_FALSE(f.notes.empty());
 }
 
 TEST(HapticsLoop, LiveThreadFeedsTheEditorWithoutEditingItself) {
-  terrain::Terrain t = flatPlanet(9);
+  terrain::Terrain t = haptictest::flatPlanet(9);
   edit::EditPipeline pipe(t);
   pipe.setUndoEnabled(false);
   ForcePath s(t, &pipe, globeConfig());
-  const double scale = kR / kGlobe;
-  const double surface = (kR + 2000.0) / scale;  // device metres from the centre
+  const double scale = haptictest::kR / haptictest::kGlobe;
+  const double surface = (haptictest::kR + 2000.0) / scale;  // device metres from the centre
   const Eigen::Vector3d d0 = dirAt(20, 40), d1 = dirAt(20, 41);
   // Device script (device frame = planet frame / scale): hover, press 1 mm in, drag, lift.
   ScriptedDevice device(ScriptedDevice::keyframes({{0.0, d0 * (surface + 0.002)},
                                                    {0.2, d0 * (surface - 0.001)},
                                                    {0.6, d1 * (surface - 0.001)},
                                                    {0.8, d1 * (surface + 0.002)}}));
-  s.focus(d0 * (kR + 2000.0));
+  s.focus(d0 * (haptictest::kR + 2000.0));
   LoopOptions opt;
   opt.realtimePriority = false;
   opt.tickClock = true;  // the device's time is ticks x 1 ms: a loaded machine cannot skip any
@@ -246,7 +243,6 @@ TEST(HapticsLoop, LiveThreadFeedsTheEditorWithoutEditingItself) {
   std::vector<FrameForces> frames;
   double lastTime = -1;
   std::uint64_t rev = t.revision();
-  int ticks = 0;
   // Editor frames every 10 loop ticks, for 1,000 ticks: what the loop has done ends the test, not
   // a clock. On the tick clock the 1,000th tick is at 1.0 s, past the script's 0.8 s, and the
   // press covers ticks 200-800 however loaded the machine (the wall clock would skip missed
@@ -260,7 +256,6 @@ TEST(HapticsLoop, LiveThreadFeedsTheEditorWithoutEditingItself) {
     EXPECT_EQ(t.revision(), rev);
     frames.push_back(s.editorFrame());
     rev = t.revision();
-    ticks += frames.back().ticks;
     if (frames.back().last) {
       EXPECT_GT(frames.back().last->time, lastTime);
       lastTime = frames.back().last->time;

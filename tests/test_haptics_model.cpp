@@ -18,11 +18,6 @@ using namespace ps::haptics;
 
 namespace {
 
-using haptictest::flatInput;
-using haptictest::kInf;
-using haptictest::kNaN;
-using haptictest::softSand;
-
 // Expects an InputError whose message names `name`.
 template <class F>
 void expectNamed(F&& f, const std::string& name) {
@@ -60,17 +55,23 @@ TEST(HapticsSettings, BadConstantsAndRatesNameTheParameter) {
   expectNamed([&] { with([](HapticSettings& s) { s.constants.ks = 0; }).validate(); }, "k_s");
   expectNamed([&] { with([](HapticSettings& s) { s.constants.ks = -1e3; }).validate(); }, "k_s");
   expectNamed([&] { with([](HapticSettings& s) { s.constants.kc = -0.5; }).validate(); }, "k_c");
-  expectNamed([&] { with([](HapticSettings& s) { s.constants.kc = kInf; }).validate(); }, "k_c");
-  expectNamed([&] { with([](HapticSettings& s) { s.constants.kf = kNaN; }).validate(); }, "k_f");
+  expectNamed(
+      [&] { with([](HapticSettings& s) { s.constants.kc = haptictest::kInf; }).validate(); },
+      "k_c");
+  expectNamed(
+      [&] { with([](HapticSettings& s) { s.constants.kf = haptictest::kNaN; }).validate(); },
+      "k_f");
   expectNamed([&] { with([](HapticSettings& s) { s.rateHz = 99.9; }).validate(); }, "rate");
   expectNamed([&] { with([](HapticSettings& s) { s.rateHz = 10001; }).validate(); }, "rate");
-  expectNamed([&] { with([](HapticSettings& s) { s.rateHz = kNaN; }).validate(); }, "rate");
+  expectNamed([&] { with([](HapticSettings& s) { s.rateHz = haptictest::kNaN; }).validate(); },
+              "rate");
   expectNamed([&] { with([](HapticSettings& s) { s.limits.maxForce = 0; }).validate(); },
               "max force");
   expectNamed([&] { with([](HapticSettings& s) { s.limits.maxStiffness = -1; }).validate(); },
               "max stiffness");
-  expectNamed([&] { with([](HapticSettings& s) { s.limits.maxDamping = kNaN; }).validate(); },
-              "max damping");
+  expectNamed(
+      [&] { with([](HapticSettings& s) { s.limits.maxDamping = haptictest::kNaN; }).validate(); },
+      "max damping");
   expectNamed([&] { with([](HapticSettings& s) { s.limits.maxForceRate = 0; }).validate(); },
               "max force rate");
   expectNamed([&] { with([](HapticSettings& s) { s.safety.rampTime = -0.1; }).validate(); },
@@ -102,16 +103,16 @@ TEST(HapticsSettings, BadConstantsAndRatesNameTheParameter) {
 }
 
 TEST(HapticsModel, RepulseLawFollowsPaperUntilStiffnessLimitThenLinear) {
-  HapticSettings s = softSand();
+  HapticSettings s = haptictest::softSand();
   s.limits.maxForce = 100;  // above the knee's 18 N
   const RepulseLaw law(s.constants, s.limits);
   const double knee = std::log(2000.0 / 200.0) / 100.0;
   EXPECT_NEAR(law.kneeDepth(), knee, 1e-15);
   EXPECT_EQ(law(0.0), 0.0);
   EXPECT_EQ(law(-1.0), 0.0);
-  EXPECT_EQ(law(kNaN), 0.0);
-  EXPECT_EQ(law(-kInf), 0.0);
-  EXPECT_EQ(law(kInf), s.limits.maxForce);
+  EXPECT_EQ(law(haptictest::kNaN), 0.0);
+  EXPECT_EQ(law(-haptictest::kInf), 0.0);
+  EXPECT_EQ(law(haptictest::kInf), s.limits.maxForce);
   for (double d = 1e-4; d < knee; d += 1e-3)
     EXPECT_NEAR(law(d), 2.0 * std::expm1(100.0 * d), 1e-12);  // the paper's eq. (1)
   // Beyond the knee: continuous, slope exactly the limit, up to the force limit.
@@ -129,25 +130,26 @@ TEST(HapticsModel, RepulseLawFollowsPaperUntilStiffnessLimitThenLinear) {
 }
 
 TEST(HapticsModel, ZeroForceAboveTheSurface) {
-  ForceModel model(softSand());
+  ForceModel model(haptictest::softSand());
   std::mt19937 rng(7);
   std::uniform_real_distribution<double> step(-4e-4, 4e-4);
   // Push in first, so that the ramp is full and the velocity filter is moving: above the surface
   // the force must still be exactly zero.
   double t = 0;
   TickOutput o;
-  for (int k = 0; k <= 100; ++k) o = model.tick(flatInput(t += 1e-3, {0, 0, -1e-4 * k}));
+  for (int k = 0; k <= 100; ++k)
+    o = model.tick(haptictest::flatInput(t += 1e-3, {0, 0, -1e-4 * k}));
   EXPECT_GT(o.force.norm(), 1.0);
   EXPECT_EQ(o.ramp, 1.0);
   Eigen::Vector3d p(0, 0, -0.01);
   for (int k = 0; k < 20; ++k)
-    o = model.tick(flatInput(t += 1e-3, p += Eigen::Vector3d(0, 0, 5.5e-4)));
+    o = model.tick(haptictest::flatInput(t += 1e-3, p += Eigen::Vector3d(0, 0, 5.5e-4)));
   EXPECT_GT(p.z(), 0.0);
   // A random walk above the surface and exactly on it (z = 0 every 97th tick).
   for (int k = 0; k < 20000; ++k) {
     p += Eigen::Vector3d(step(rng), step(rng), step(rng));
     p.z() = k % 97 == 0 ? 0.0 : std::clamp(p.z(), 0.0, 0.002);
-    o = model.tick(flatInput(t += 1e-3, p));
+    o = model.tick(haptictest::flatInput(t += 1e-3, p));
     ASSERT_EQ(o.fault, Fault::kNone) << "tick " << k;
     ASSERT_FALSE(o.touching) << p.transpose();
     ASSERT_EQ(o.force, Eigen::Vector3d::Zero()) << "tick " << k << " at " << p.transpose();
@@ -162,7 +164,7 @@ TEST(HapticsModel, ForceIsContinuousAlongAContinuousPath) {
   // (the repulse law's slope is at most K; the damping min(k_f F_r, B) changes by at most
   // k_f K |dd| and multiplies |v|; the ramp adds at most F_max dt / T; the force clamp is a
   // projection, which does not increase differences).
-  for (const HapticSettings& s : {softSand(), HapticSettings{}}) {
+  for (const HapticSettings& s : {haptictest::softSand(), HapticSettings{}}) {
     ForceModel model(s);
     const double dt = s.period();
     const DeviceLimits& L = s.limits;
@@ -173,7 +175,7 @@ TEST(HapticsModel, ForceIsContinuousAlongAContinuousPath) {
       const double t = k * dt;
       const Eigen::Vector3d p(0.03 * std::sin(2.1 * t), 0.02 * std::cos(1.3 * t),
                               0.002 - 0.006 * std::sin(3.0 * t) * std::sin(3.0 * t));
-      const TickOutput o = model.tick(flatInput(t, p));
+      const TickOutput o = model.tick(haptictest::flatInput(t, p));
       ASSERT_EQ(o.fault, Fault::kNone);
       ASSERT_FALSE(o.slewLimited) << "tick " << k;
       touching += o.touching;
@@ -198,13 +200,14 @@ TEST(HapticsModel, ForceIsContinuousAlongAContinuousPath) {
 }
 
 TEST(HapticsModel, ClampsHoldForAnyInputIncludingNaNAndTeleports) {
-  HapticSettings s = softSand();
+  HapticSettings s = haptictest::softSand();
   s.limits.maxForce = 5.0;
   s.limits.maxForceRate = 1000.0;
   ForceModel model(s);
   std::mt19937 rng(42);
   std::uniform_real_distribution<double> u01(0.0, 1.0), sym(-1.0, 1.0);
-  const double specials[] = {kNaN, kInf, -kInf, 1e300, -1e300, 0.0, 1e-300};
+  const double specials[] = {
+      haptictest::kNaN, haptictest::kInf, -haptictest::kInf, 1e300, -1e300, 0.0, 1e-300};
   auto pick = [&](double normal) {
     const double r = u01(rng);
     if (r < 0.05) return specials[std::size_t(u01(rng) * 7) % 7];
@@ -263,26 +266,26 @@ TEST(HapticsModel, ClampsHoldForAnyInputIncludingNaNAndTeleports) {
 }
 
 TEST(HapticsModel, TeleportGivesZeroForceThenRampsBackIn) {
-  HapticSettings s = softSand();
+  HapticSettings s = haptictest::softSand();
   ForceModel model(s);
   double t = 0;
   TickOutput o;
-  for (int k = 0; k < 300; ++k) o = model.tick(flatInput(t += 1e-3, {0, 0, -0.01}));
+  for (int k = 0; k < 300; ++k) o = model.tick(haptictest::flatInput(t += 1e-3, {0, 0, -0.01}));
   EXPECT_EQ(o.ramp, 1.0);
   const double full = o.force.norm();
   EXPECT_NEAR(full, 2.0 * std::expm1(1.0), 1e-9);
   // 5 cm in one tick (50 m/s): a jump.
-  o = model.tick(flatInput(t += 1e-3, {0.05, 0, -0.01}));
+  o = model.tick(haptictest::flatInput(t += 1e-3, {0.05, 0, -0.01}));
   EXPECT_EQ(o.fault, Fault::kJump);
   EXPECT_EQ(o.force, Eigen::Vector3d::Zero());
   // NaN: zero.
-  o = model.tick(flatInput(t += 1e-3, {kNaN, 0, -0.01}));
+  o = model.tick(haptictest::flatInput(t += 1e-3, {haptictest::kNaN, 0, -0.01}));
   EXPECT_EQ(o.fault, Fault::kNonFinite);
   EXPECT_EQ(o.force, Eigen::Vector3d::Zero());
   // Back at the same depth: the force comes back over the ramp time, never a kick.
   double prevF = 0;
   for (int k = 1; k <= 60; ++k) {
-    o = model.tick(flatInput(t += 1e-3, {0.05, 0, -0.01}));
+    o = model.tick(haptictest::flatInput(t += 1e-3, {0.05, 0, -0.01}));
     ASSERT_EQ(o.fault, Fault::kNone);
     EXPECT_NEAR(o.force.norm(), std::min(1.0, k * 1e-3 / s.safety.rampTime) * full, 1e-9);
     EXPECT_LE(o.force.norm() - prevF, full * 1e-3 / s.safety.rampTime + 1e-12);
@@ -315,7 +318,7 @@ EnergyResult pushAndPull(const HapticSettings& s, double depth, double period, i
     const double t = k * dt;
     const double ph = std::sin(std::numbers::pi * t / period);
     const Eigen::Vector3d x(0.01 * std::sin(0.5 * t), 0.0, 0.001 - (depth + 0.001) * ph * ph);
-    const TickOutput o = model.tick(flatInput(t, x));
+    const TickOutput o = model.tick(haptictest::flatInput(t, x));
     EXPECT_EQ(o.fault, Fault::kNone);
     if (k > 0) {
       e.work += o0.force.dot(x - x0);  // zero-order hold: o0.force acts while moving x0 -> x
@@ -345,7 +348,7 @@ TEST(HapticsEnergy, PushAndPullInjectsNoNetEnergy) {
   // friction absorbs). The ramp may add at most the energy stored when it completes. Without
   // drag the net work must stay within that sum; with the paper's drag it must be negative.
   for (bool drag : {false, true}) {
-    for (const HapticSettings& base : {softSand(), HapticSettings{}}) {
+    for (const HapticSettings& base : {haptictest::softSand(), HapticSettings{}}) {
       HapticSettings s = base;
       if (!drag) s.constants.kf = 1e-12;  // conservative law alone
       const EnergyResult e = pushAndPull(s, 0.004, 1.0, 5);

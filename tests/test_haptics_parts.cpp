@@ -29,20 +29,11 @@
 using namespace ps;
 using namespace ps::haptics;
 
-namespace {
-
-using haptictest::kNaN;
-using haptictest::kR;
-using haptictest::latLon;
-using haptictest::reliefPlanet;
-
-}  // namespace
-
 TEST(HapticsPatch, BilinearHeightsMatchTheTerrainAtGridPoints) {
-  const terrain::Terrain t = reliefPlanet(8);
+  const terrain::Terrain t = haptictest::reliefPlanet(8);
   const int m = t.grid().m();
   TerrainPatch p;
-  ASSERT_TRUE(p.capture(t, latLon(20, 30, kR), 10));
+  ASSERT_TRUE(p.capture(t, haptictest::latLon(20, 30, haptictest::kR), 10));
   EXPECT_EQ(p.revision(), t.revision());
   int checked = 0;
   for (int v = p.v0(); v < p.v0() + p.rows(); ++v) {
@@ -56,17 +47,17 @@ TEST(HapticsPatch, BilinearHeightsMatchTheTerrainAtGridPoints) {
   EXPECT_GT(checked, 400);
   EXPECT_FALSE(p.heightAt(p.u0() - 1.5, p.v0() + 2));  // outside
   EXPECT_FALSE(p.heightAt(p.u0() + 2, p.v0() + p.rows() + 0.5));
-  EXPECT_FALSE(p.heightAt(kNaN, 3));
+  EXPECT_FALSE(p.heightAt(haptictest::kNaN, 3));
 }
 
 TEST(HapticsPatch, ProbeIsRadialDepthAndContinuousAcrossTheSeamAndPoles) {
-  const terrain::Terrain t = reliefPlanet(8);
+  const terrain::Terrain t = haptictest::reliefPlanet(8);
   // Depth on a sphere: R + h(foot point) - |p|.
   for (double lon : {-180.0, -179.9, 179.9, 0.0, 45.0}) {
     for (double lat : {-89.95, -60.0, 0.0, 30.0, 89.99}) {
-      const Eigen::Vector3d dir = latLon(lat, lon, 1.0);
+      const Eigen::Vector3d dir = haptictest::latLon(lat, lon, 1.0);
       TerrainPatch p;
-      ASSERT_TRUE(p.capture(t, dir * kR, 16));
+      ASSERT_TRUE(p.capture(t, dir * haptictest::kR, 16));
       const auto uv = t.chart().inverse(dir);
       // Bilinear height from the full terrain at the foot point.
       const double u = (*uv)(0), v = (*uv)(1);
@@ -75,29 +66,31 @@ TEST(HapticsPatch, ProbeIsRadialDepthAndContinuousAcrossTheSeamAndPoles) {
       const double h = (1 - b) * ((1 - a) * t.height(iu, iv) + a * t.height(iu + 1, iv)) +
                        b * ((1 - a) * t.height(iu, iv + 1) + a * t.height(iu + 1, iv + 1));
       for (double alt : {-2000.0, 0.0, 4000.0}) {
-        const auto s = p.probe(dir * (kR + alt));
+        const auto s = p.probe(dir * (haptictest::kR + alt));
         ASSERT_TRUE(s) << lat << " " << lon;
-        EXPECT_NEAR(s->depth, h - alt, 1e-6 * kR * 1e-3) << lat << " " << lon << " " << alt;
+        EXPECT_NEAR(s->depth, h - alt, 1e-6 * haptictest::kR * 1e-3)
+            << lat << " " << lon << " " << alt;
         EXPECT_NEAR((s->up - dir).norm(), 0.0, 1e-9);
       }
     }
   }
   // Walking across the seam at 1 km steps: depth changes by at most (1 + slope) x step.
   TerrainPatch p;
-  ASSERT_TRUE(p.capture(t, latLon(10, 180, kR), 32));
-  double prev = p.probe(latLon(10, 179.5, kR))->depth;
-  const double stepDeg = 1000.0 / kR * 180 / std::numbers::pi;
+  ASSERT_TRUE(p.capture(t, haptictest::latLon(10, 180, haptictest::kR), 32));
+  double prev = p.probe(haptictest::latLon(10, 179.5, haptictest::kR))->depth;
+  const double stepDeg = 1000.0 / haptictest::kR * 180 / std::numbers::pi;
   for (double lon = 179.5 + stepDeg; lon < 180.5; lon += stepDeg) {
-    const auto s = p.probe(latLon(10, lon, kR));
+    const auto s = p.probe(haptictest::latLon(10, lon, haptictest::kR));
     ASSERT_TRUE(s) << lon;
     // slope of the relief <= 3000 * 3 / R * 2 (lon derivative, bilinear) < 0.01
     EXPECT_LE(std::abs(s->depth - prev), 1000.0 * 0.01 + 1e-3) << lon;
     prev = s->depth;
   }
   // Next to a pole the patch holds whole rows.
-  ASSERT_TRUE(p.capture(t, latLon(89.5, 10, kR), 4));
+  ASSERT_TRUE(p.capture(t, haptictest::latLon(89.5, 10, haptictest::kR), 4));
   EXPECT_EQ(p.cols(), t.grid().side());
-  for (double lon = -180; lon <= 180; lon += 7) EXPECT_TRUE(p.probe(latLon(89.6, lon, kR)));
+  for (double lon = -180; lon <= 180; lon += 7)
+    EXPECT_TRUE(p.probe(haptictest::latLon(89.6, lon, haptictest::kR)));
 }
 
 TEST(HapticsPatch, OctahedralPatchesReachAcrossTheFolds) {
@@ -114,13 +107,13 @@ TEST(HapticsPatch, OctahedralPatchesReachAcrossTheFolds) {
     const double a = u - iu, b = v - iv;
     const double h = (1 - b) * ((1 - a) * t.height(iu, iv) + a * t.height(iu + 1, iv)) +
                      b * ((1 - a) * t.height(iu, iv + 1) + a * t.height(iu + 1, iv + 1));
-    return kR + h - p.norm();
+    return haptictest::kR + h - p.norm();
   };
   for (const core::GridPoint at : {core::GridPoint{0, m / 4}, core::GridPoint{0, 0},
                                    core::GridPoint{m / 2, 0}, core::GridPoint{m / 3, m}}) {
     const Eigen::Vector3d c = chart.up(at.u, at.v);
     TerrainPatch p;
-    ASSERT_TRUE(p.capture(t, c * kR, 6));
+    ASSERT_TRUE(p.capture(t, c * haptictest::kR, 6));
     EXPECT_GT(p.images(), 0);
     // A ring of points about the tool, 3 cells away: half of it lies across the fold.
     const Eigen::Vector3d e1 = c.unitOrthogonal(), e2 = c.cross(e1);
@@ -130,9 +123,9 @@ TEST(HapticsPatch, OctahedralPatchesReachAcrossTheFolds) {
       const Eigen::Vector3d d =
           (std::cos(ang) * c + std::sin(ang) * (std::cos(phi) * e1 + std::sin(phi) * e2))
               .normalized();
-      const auto s = p.probe(d * (kR + 100.0));
+      const auto s = p.probe(d * (haptictest::kR + 100.0));
       ASSERT_TRUE(s) << at.u << "," << at.v << " k " << k;
-      EXPECT_NEAR(s->depth, fullDepth(d * (kR + 100.0)), 1e-6 * kR * 1e-3)
+      EXPECT_NEAR(s->depth, fullDepth(d * (haptictest::kR + 100.0)), 1e-6 * haptictest::kR * 1e-3)
           << at.u << "," << at.v << " k " << k;
     }
   }
@@ -265,7 +258,7 @@ TEST(HapticsDevices, TrackedMarkerIsContinuousOneFrameLateAndTimesOut) {
   // No sample for longer than the timeout: not answering.
   EXPECT_FALSE(d.read(frame / fps + 0.2, p));
   // A lost marker (NaN) stops the device at once.
-  d.push({kNaN, 0, 0}, frame / fps + 0.01);
+  d.push({haptictest::kNaN, 0, 0}, frame / fps + 0.01);
   EXPECT_FALSE(d.read(frame / fps + 0.011, p));
   EXPECT_THROW(TrackedMarkerDevice(0.0), core::InputError);
 }
@@ -284,7 +277,7 @@ TEST(HapticsLog, WritesAndReadsBackEveryColumn) {
   a.touching = true;
   ForceRecord b;
   b.time = 1.251;
-  b.tipPlanet.setConstant(kNaN);
+  b.tipPlanet.setConstant(haptictest::kNaN);
   b.fault = Fault::kDeviceLost;
   w.write(a);
   w.write(b);
@@ -305,16 +298,16 @@ TEST(HapticsLog, WritesAndReadsBackEveryColumn) {
 
 TEST(HapticsCore, MapsDeviceSpaceToThePlanetAndForcesBack) {
   // A planet 6,372.79 km in radius shown as a 6 cm globe: 1.06e8 planet m per device m.
-  const terrain::Terrain t = reliefPlanet(8);
+  const terrain::Terrain t = haptictest::reliefPlanet(8);
   WorkspaceMap map;
-  map.scale = kR / 0.06;
-  const Eigen::Vector3d dir = latLon(0, 0, 1);
+  map.scale = haptictest::kR / 0.06;
+  const Eigen::Vector3d dir = haptictest::latLon(0, 0, 1);
   const double h = t.height(t.grid().m() / 2, t.grid().m() / 2);
   HapticCore core(HapticSettings{}, map);
   TerrainPatch p;
-  ASSERT_TRUE(p.capture(t, dir * kR, 8));
+  ASSERT_TRUE(p.capture(t, dir * haptictest::kR, 8));
   // 1 mm (device) below the surface: 2 N with the paper's sand at the 2000 N/m limit.
-  const Eigen::Vector3d tipDevice = dir * ((kR + h) / map.scale - 0.001);
+  const Eigen::Vector3d tipDevice = dir * ((haptictest::kR + h) / map.scale - 0.001);
   ForceRecord r;
   for (int k = 0; k < 100; ++k) r = core.tick(k * 1e-3, true, tipDevice, &p);
   EXPECT_NEAR(r.depth, 0.001, 1e-9);

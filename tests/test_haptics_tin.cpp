@@ -23,6 +23,7 @@
 #include "haptics/triple_buffer.hpp"
 #include "sand/stroke_tin.hpp"
 #include "sand/tin_sand_tool.hpp"
+#include "small_planet.hpp"
 #include "terrain/terrain.hpp"
 #include "test_edit_util.hpp"
 #include "test_sand_util.hpp"
@@ -68,23 +69,15 @@ using namespace ps;
 
 namespace {
 
-constexpr double kR = 20e3;
-
-struct Planet {
-  std::shared_ptr<const core::LatLongChart> chart = sandtest::sphereChart(8, kR);  // 490 m cells
-  terrain::Terrain t{chart, testkit::bumpyHeights(*chart, 3, 100.0)};
-  edit::EditPipeline pipe{t};
-};
-
-Eigen::Vector3d above(double latDeg, double lonDeg, double h) {
-  return edittest::latLon(latDeg, lonDeg, kR + h, 1.0);
-}
+using testkit::aboveSmallPlanet;
+using testkit::kSmallPlanetRadius;
+using testkit::SmallPlanet;
 
 // A short stroke of the TIN sand tool (1,200 m stamps pressed 300 m) from 10 N 30 E to 32 E
 // (690 m): the region TIN it leaves (a quarter of this 20 km planet's radius: 5 km, 14 degrees)
 // and its patch as the view draws it.
 struct Stroked {
-  Planet p;
+  SmallPlanet p;
   sand::TinSandTool tool{p.chart, [] {
                            sand::TinSandToolSettings s;
                            s.radius = 1200.0;
@@ -93,9 +86,9 @@ struct Stroked {
   std::shared_ptr<const terrain::MeshPatch> patch;
   Stroked() {
     const double r = tool.settings().radius;
-    p.pipe.beginStroke(tool, {above(10.0, 30.0, r - 300.0), 0.0});
+    p.pipe.beginStroke(tool, {aboveSmallPlanet(10.0, 30.0, r - 300.0), 0.0});
     for (double d = 0.2; d <= 2.0 + 1e-9; d += 0.2)
-      p.pipe.moveTo({above(10.0, 30.0 + d, r - 300.0), 0.0});
+      p.pipe.moveTo({aboveSmallPlanet(10.0, 30.0 + d, r - 300.0), 0.0});
     p.pipe.endStroke();
     if (tool.strokeTin() && tool.strokeTin()->holds(p.t.heights()))
       patch = std::make_shared<const terrain::MeshPatch>(tool.strokeTin()->patch());
@@ -128,8 +121,8 @@ Eigen::Vector2d planeXY(const terrain::MeshPatch& m, const Eigen::Vector3d& p) {
 TEST(HapticsTin, DepthIsTheTinsInsideTheRegionAndTheGridsBitForBitOutside) {
   Stroked s;
   ASSERT_TRUE(s.patch && s.patch->plane) << "the stroke left a region TIN the grid holds";
-  EXPECT_DOUBLE_EQ(s.patch->plane->radius, kR);
-  const Eigen::Vector3d centre = above(10.0, 31.0, 0.0);
+  EXPECT_DOUBLE_EQ(s.patch->plane->radius, kSmallPlanetRadius);
+  const Eigen::Vector3d centre = aboveSmallPlanet(10.0, 31.0, 0.0);
   haptics::TerrainPatch withTin, gridOnly;
   ASSERT_TRUE(withTin.capture(s.p.t, centre, 40, s.patch.get()));
   ASSERT_TRUE(gridOnly.capture(s.p.t, centre, 40));
@@ -142,13 +135,13 @@ TEST(HapticsTin, DepthIsTheTinsInsideTheRegionAndTheGridsBitForBitOutside) {
   int inside = 0, outside = 0, differ = 0;
   double worst = 0;
   for (int k = 0; k < 20000; ++k) {
-    const Eigen::Vector3d p = above(lat(rng), lon(rng), h(rng));
+    const Eigen::Vector3d p = aboveSmallPlanet(lat(rng), lon(rng), h(rng));
     const auto probe = withTin.probe(p);
     const auto grid = gridOnly.probe(p);
     ASSERT_TRUE(probe && grid);
     if (const auto th = bruteHeight(*s.patch, planeXY(*s.patch, p))) {
       ++inside;
-      const double expected = kR + *th - p.norm();
+      const double expected = kSmallPlanetRadius + *th - p.norm();
       worst = std::max(worst, std::abs(probe->depth - expected));
       ASSERT_NEAR(probe->depth, expected, 1e-7) << "at " << p.transpose();
       ASSERT_LT((probe->up - p.normalized()).norm(), 1e-12) << "radial";
@@ -169,12 +162,12 @@ TEST(HapticsTin, DepthIsTheTinsInsideTheRegionAndTheGridsBitForBitOutside) {
 
   // Across the region's border the two surfaces agree as far as the TIN's heights and the
   // grid's bilinear surface agree there: a walk out along the parallel steps by no more.
-  const Eigen::Vector3d start = above(10.0, 31.0, -20.0);
+  const Eigen::Vector3d start = aboveSmallPlanet(10.0, 31.0, -20.0);
   double lastDepth = withTin.probe(start)->depth, largestStep = 0;
   bool wasInside = true;
   int crossings = 0;
   for (double d = 0.05; d <= 25.0; d += 0.05) {
-    const Eigen::Vector3d p = above(10.0, 31.0 + d, -20.0);
+    const Eigen::Vector3d p = aboveSmallPlanet(10.0, 31.0 + d, -20.0);
     const bool in = bool(bruteHeight(*s.patch, planeXY(*s.patch, p)));
     const double depth = withTin.probe(p)->depth;
     if (in != wasInside) {
@@ -230,23 +223,23 @@ TEST(HapticsTin, OnAFlatGridTheDepthIsTheTinsHeightMinusZInsideAndTheGridsOutsid
 }
 
 TEST(HapticsTin, AnImprintNarrowerThanAGridCellIsFeltAtItsTinDepth) {
-  Planet p;
+  SmallPlanet p;
   sand::TinSandTool tool(p.chart, [] {
     sand::TinSandToolSettings s;
     s.radius = 1200.0;
     return s;
   }());
-  p.pipe.apply(tool, {above(10.0, 30.0, 900.0), 0.0});
+  p.pipe.apply(tool, {aboveSmallPlanet(10.0, 30.0, 900.0), 0.0});
   ASSERT_TRUE(tool.strokeTin());
   // A region of our own (the tool's is const), on the same footprint.
-  const Eigen::Vector3d at = above(10.0, 30.0, 0.0);
+  const Eigen::Vector3d at = aboveSmallPlanet(10.0, 30.0, 0.0);
   sand::StrokeTin region(*p.chart, p.t.heights(), tool.strokeTin()->footprint(),
                          edit::nearestVertex(*p.chart, at), 1.2, sand::TinSandSettings{});
   // A press 0.3 cells wide in the middle of a cell: no grid vertex under it.
   const core::GridPoint g = edit::nearestVertex(*p.chart, at);
   const Eigen::Vector2d mid =
       region.frame().project(p.chart->positionAt(g.u + 0.5, g.v + 0.5, 0.0));
-  const double cell = std::numbers::pi * kR / p.chart->grid().m();
+  const double cell = std::numbers::pi * kSmallPlanetRadius / p.chart->grid().m();
   const double before = region.sand().tin().heightAt(mid);
   const double bottom = before - 50.0;
   sand::TinStampTool disc = sand::TinStampTool::disc(0.3 * cell);
@@ -258,11 +251,12 @@ TEST(HapticsTin, AnImprintNarrowerThanAGridCellIsFeltAtItsTinDepth) {
   haptics::TerrainPatch withTin, gridOnly;
   ASSERT_TRUE(withTin.capture(p.t, at, 10, patch.get()));
   ASSERT_TRUE(gridOnly.capture(p.t, at, 10));
-  const Eigen::Vector3d dir = (mid.x() * region.frame().east + mid.y() * region.frame().north +
-                               std::sqrt(kR * kR - mid.squaredNorm()) * region.frame().up)
-                                  .normalized();
+  const Eigen::Vector3d dir =
+      (mid.x() * region.frame().east + mid.y() * region.frame().north +
+       std::sqrt(kSmallPlanetRadius * kSmallPlanetRadius - mid.squaredNorm()) * region.frame().up)
+          .normalized();
   for (const double above_bottom : {-5.0, 10.0}) {
-    const Eigen::Vector3d tip = dir * (kR + bottom + above_bottom);
+    const Eigen::Vector3d tip = dir * (kSmallPlanetRadius + bottom + above_bottom);
     const auto tin = withTin.probe(tip);
     const auto grid = gridOnly.probe(tip);
     ASSERT_TRUE(tin && grid);
@@ -279,7 +273,7 @@ TEST(HapticsTin, TheHapticThreadsWorkAllocatesNothingOverTheTin) {
   Stroked s;
   ASSERT_TRUE(s.patch);
   haptics::TripleBuffer<haptics::TerrainPatch> buffer;
-  const Eigen::Vector3d centre = above(10.0, 31.0, 0.0);
+  const Eigen::Vector3d centre = aboveSmallPlanet(10.0, 31.0, 0.0);
   ASSERT_TRUE(buffer.back().capture(s.p.t, centre, 40, s.patch.get()));
   buffer.publish();
   haptics::WorkspaceMap map;
@@ -295,7 +289,7 @@ TEST(HapticsTin, TheHapticThreadsWorkAllocatesNothingOverTheTin) {
     const haptics::TerrainPatch& patch = buffer.front();
     // In and out of the sand along the stroke, across the region's border.
     const double lonDeg = 30.5 + 20.0 * k / 5000.0, depth = 150.0 + 250.0 * std::sin(k * 0.01);
-    const Eigen::Vector3d tip = above(10.0 + wobble(rng) * 0.01, lonDeg, -depth);
+    const Eigen::Vector3d tip = aboveSmallPlanet(10.0 + wobble(rng) * 0.01, lonDeg, -depth);
     const auto rec = core.tick(k * 1e-3, true, map.toDevice(tip), &patch);
     touching += rec.touching;
     const auto probe = patch.probe(tip);
@@ -310,7 +304,7 @@ TEST(HapticsTin, TheHapticThreadsWorkAllocatesNothingOverTheTin) {
   ASSERT_TRUE(slot.capture(s.p.t, centre, 40, s.patch.get()));
   gAllocations = 0;
   tCountAllocations = true;
-  const bool again = slot.capture(s.p.t, above(10.0, 31.01, 0.0), 40, s.patch.get());
+  const bool again = slot.capture(s.p.t, aboveSmallPlanet(10.0, 31.01, 0.0), 40, s.patch.get());
   tCountAllocations = false;
   EXPECT_TRUE(again);
   EXPECT_EQ(gAllocations.load(), 0) << "a capture of the same size allocates nothing";
@@ -331,7 +325,7 @@ TEST(HapticsTin, ForcePathOverTheTinLogsTheSameTwice) {
     for (int f = 0; f < 90; ++f) {
       const double d = f / 90.0;
       const double h = 100.0 - 500.0 * std::sin(std::numbers::pi * d);
-      const auto ff = path.onFrame(above(10.0, 30.5 + d, h), f / 30.0);
+      const auto ff = path.onFrame(aboveSmallPlanet(10.0, 30.5 + d, h), f / 30.0);
       touching += ff.touchingTicks;
     }
     path.setLog(nullptr);

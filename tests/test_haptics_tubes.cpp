@@ -25,7 +25,7 @@ using namespace ps::haptics;
 namespace {
 
 // The default torus and cylinder of the AR scene (app/default_planet.hpp).
-std::shared_ptr<const core::Chart> tube(bool torus, int n) {
+std::shared_ptr<const core::Chart> sceneTube(bool torus, int n) {
   if (torus) return std::make_shared<core::TorusChart>(core::GridSize(n), 4.5e6, 1.8e6);
   return std::make_shared<core::CylinderChart>(core::GridSize(n), 6e6, 4e6);
 }
@@ -52,7 +52,7 @@ TEST(HapticsPatch, TorusAndCylinderPatchesReachAcrossTheSeams) {
   // over the cylinder's seam and beside a rim: a ring of points 4 largest cells about it is in the
   // patch, at the full terrain's depth.
   for (const bool torus : {true, false}) {
-    auto chart = tube(torus, 7);
+    auto chart = sceneTube(torus, 7);
     const terrain::Terrain t(chart, testkit::bumpyHeights(*chart, 4, 20e3));
     const int m = t.grid().m();
     const double cell = 2.0 * std::numbers::pi * (torus ? 6.3e6 : 6e6) / m;
@@ -84,7 +84,7 @@ TEST(HapticsForcePath, PressesAcrossTheTorussSeams) {
   // A stroke pushed in at the torus's corner and dragged along its outer equator across the u
   // seam and back over the v seam: forces felt, sand displaced on both sides of each seam, the
   // volume kept, twins one height, the same log and planet twice.
-  auto chart = tube(true, 9);  // cells of 77 km (u, outer equator) and 22 km (v)
+  auto chart = sceneTube(true, 9);  // cells of 77 km (u, outer equator) and 22 km (v)
   const int m = chart->grid().m();
   const double scale = 6.3e6 / 0.06;  // the bounding sphere on a 6 cm globe
   auto run = [&] {

@@ -32,10 +32,6 @@ namespace fs = std::filesystem;
 
 namespace {
 
-fs::path freshDir(const std::string& name) {
-  return testkit::freshDir("io_" + name);
-}
-
 using testkit::readAll;
 
 template <class T>
@@ -226,7 +222,7 @@ ReadMesh readObj(const fs::path& p) {
 
 void checkWrittenMeshes(const terrain::Terrain& t, const std::vector<double>& errors,
                         const std::string& label) {
-  const fs::path dir = freshDir("mesh_" + label);
+  const fs::path dir = testkit::freshDir("io_mesh_" + label);
   for (const auto format : {io::MeshFormat::kObj, io::MeshFormat::kPly, io::MeshFormat::kGlb}) {
     for (const double maxErr : errors) {
       const fs::path file = dir / ("m." + io::toString(format));
@@ -335,7 +331,7 @@ TEST(IoExport, ZeroErrorFlatMeshIsTheFullGridAndExact) {
 // shading seam), as Chart::canonical says.
 TEST(IoExport, GlbNormalsPointOutwardAndTheSeamIsOneVertex) {
   const auto t = testkit::bumpyTerrain(6, 2, 3000.0);
-  const fs::path dir = freshDir("glbnormals");
+  const fs::path dir = testkit::freshDir("io_glbnormals");
   terrain::Mesh mesh;
   io::exportMesh(t, 5000.0, io::MeshFormat::kGlb, dir / "p.glb", &mesh);
   const ReadMesh r = readGlb(dir / "p.glb");
@@ -361,7 +357,7 @@ TEST(IoExport, GlbNormalsPointOutwardAndTheSeamIsOneVertex) {
 
 TEST(IoExport, BadRequestsAreRefused) {
   const auto t = testkit::bumpyTerrain(5, 1, 1000.0);
-  const fs::path dir = freshDir("badexport");
+  const fs::path dir = testkit::freshDir("io_badexport");
   // float32 cannot place a vertex of a 6,372 km planet closer than ~0.66 m.
   EXPECT_THROW(io::exportMesh(t, 0.1, io::MeshFormat::kGlb, dir / "x.glb"), core::InputError);
   EXPECT_NO_THROW(io::exportMesh(t, 0.1, io::MeshFormat::kObj, dir / "x.obj"));
@@ -377,7 +373,7 @@ TEST(IoExport, BadRequestsAreRefused) {
 
 TEST(IoExport, FlatHeightmapsAtGridSizeAreExactAndCarryTheirSpacing) {
   const auto t = flatTerrain(6, 25.0);
-  const fs::path dir = freshDir("flatmaps");
+  const fs::path dir = testkit::freshDir("io_flatmaps");
   for (const char* ext : {"raw", "tif", "png"}) {
     const fs::path file = dir / (std::string("h.") + ext);
     io::exportTerrain(t, file, {});
@@ -414,7 +410,7 @@ TEST(IoExport, EquirectangularExportsOfAnySizeReimportCloseToThePlanet) {
     }
   }
   const terrain::Terrain t(chart, h);
-  const fs::path dir = freshDir("equirect");
+  const fs::path dir = testkit::freshDir("io_equirect");
   for (const char* ext : {"tif", "raw", "png"}) {
     const fs::path file = dir / (std::string("e.") + ext);
     io::ExportOptions eo;
@@ -474,7 +470,7 @@ TEST(IoExport, OctahedralPlanetsExportAndReimportEquirectangular) {
       std::printf("%s export, %s: worst %.2f m\n", chart->name().c_str(), io::toString(how).c_str(),
                   worst);
     }
-    const fs::path dir = freshDir("octa_equirect");
+    const fs::path dir = testkit::freshDir("io_octa_equirect");
     io::ExportOptions eo;
     eo.width = 512;
     eo.height = 256;
@@ -521,7 +517,7 @@ TEST(IoExport, TorusAndCylinderHeightmapsAreTheirGridAndComeBackExactly) {
         h[g.index(u, v)] = float(field(c.u, c.v));
       }
     const terrain::Terrain t(chart, h);
-    const fs::path dir = freshDir(std::string("tube_") + chart->name());
+    const fs::path dir = testkit::freshDir(std::string("io_tube_") + chart->name());
     for (const char* ext : {"raw", "tif"}) {
       const fs::path file = dir / (std::string("h.") + ext);
       const auto summary = io::exportTerrain(t, file, {});

@@ -30,20 +30,9 @@ namespace fs = std::filesystem;
 
 namespace {
 
-fs::path freshDir(const std::string& name) {
-  return testkit::freshDir("io_" + name);
-}
-
-void writeAll(const fs::path& p, const std::vector<unsigned char>& b) {
-  std::ofstream f(p, std::ios::binary | std::ios::trunc);
-  f.write(reinterpret_cast<const char*>(b.data()), std::streamsize(b.size()));
-}
-
-void writeText(const fs::path& p, const std::string& s) {
-  std::ofstream(p) << s;
-}
-
 using testkit::readAll;
+using testkit::writeAll;
+using testkit::writeText;
 
 // Expects importing `file` to fail with a message that starts with the file's name and
 // contains `what`.
@@ -162,7 +151,7 @@ io::ImportOptions flatOptions(long long grid = 0) {
 }  // namespace
 
 TEST(IoImport, EightBitPngBecomesALatLongPlanetWithSeamAndPolesConsistent) {
-  const fs::path dir = freshDir("png8");
+  const fs::path dir = testkit::freshDir("io_png8");
   // Brightness grows from north (row 0) to south and with longitude: neither seam nor pole
   // rows are consistent in the image itself.
   cv::Mat img(64, 128, CV_8UC1);
@@ -188,7 +177,7 @@ TEST(IoImport, EightBitPngBecomesALatLongPlanetWithSeamAndPolesConsistent) {
 }
 
 TEST(IoImport, GeoTiffNoDataIsFilledNeverBecomesAHeightAndTheUserIsTold) {
-  const fs::path dir = freshDir("nodata");
+  const fs::path dir = testkit::freshDir("io_nodata");
   const int w = 65, h = 65;
   std::vector<std::int16_t> v(std::size_t(w * h));
   for (int y = 0; y < h; ++y) {
@@ -228,7 +217,7 @@ TEST(IoImport, GeoTiffNoDataIsFilledNeverBecomesAHeightAndTheUserIsTold) {
 }
 
 TEST(IoImport, FloatTiffWithNaNIsRefusedUnlessDeclaredNoData) {
-  const fs::path dir = freshDir("nan");
+  const fs::path dir = testkit::freshDir("io_nan");
   std::vector<float> v(40 * 30, 12.5f);
   v[3 * 40 + 7] = std::nanf("");
   v[9 * 40 + 1] = std::nanf("");
@@ -244,7 +233,7 @@ TEST(IoImport, FloatTiffWithNaNIsRefusedUnlessDeclaredNoData) {
 }
 
 TEST(IoImport, EmptyTruncatedAndWrongTypeFilesAreRefusedByName) {
-  const fs::path dir = freshDir("badimport");
+  const fs::path dir = testkit::freshDir("io_badimport");
   writeAll(dir / "empty.png", {});
   expectImportError(dir / "empty.png", "empty file");
   expectImportError(dir / "missing.png", "no such file");
@@ -279,7 +268,7 @@ TEST(IoImport, EmptyTruncatedAndWrongTypeFilesAreRefusedByName) {
 }
 
 TEST(IoImport, HugeDimensionsAreRefusedBeforeDecoding) {
-  const fs::path dir = freshDir("huge");
+  const fs::path dir = testkit::freshDir("io_huge");
   writeAll(dir / "huge.png", pngHeaderOnly(1000000, 1000000));
   expectImportError(dir / "huge.png", "image is 1000000x1000000 pixels (1000000000000), more than");
   writeAll(dir / "huge.tif", tiffHeaderOnly(1000000, 1000000));
@@ -299,7 +288,7 @@ TEST(IoImport, HugeDimensionsAreRefusedBeforeDecoding) {
 // TIFF tiles larger than the image, uncompressed TIFF samples that cannot fit in the file, and
 // PNG rows that deflate (at most 1032:1) cannot have squeezed into the file.
 TEST(IoImport, FilesThatWouldAllocateForPixelsThatDoNotExistAreRefused) {
-  const fs::path dir = freshDir("allocguard");
+  const fs::path dir = testkit::freshDir("io_allocguard");
   writeAll(dir / "claims.png", pngHeaderOnly(4096, 4096));
   expectImportError(dir / "claims.png",
                     "truncated PNG: 45 bytes cannot hold the 4096x4096 pixels its header declares");
@@ -337,7 +326,7 @@ TEST(IoImport, FilesThatWouldAllocateForPixelsThatDoNotExistAreRefused) {
 }
 
 TEST(IoImport, RawSidecarsAreCheckedFieldByField) {
-  const fs::path dir = freshDir("raw");
+  const fs::path dir = testkit::freshDir("io_raw");
   std::vector<unsigned char> data(8 * 4 * 4, 0);
   writeAll(dir / "h.raw", data);
   auto expectSidecar = [&](const std::string& json, const std::string& what) {

@@ -28,11 +28,7 @@ namespace fs = std::filesystem;
 namespace {
 
 using testkit::readAll;
-
-void writeAll(const fs::path& p, const std::vector<unsigned char>& b) {
-  std::ofstream f(p, std::ios::binary | std::ios::trunc);
-  f.write(reinterpret_cast<const char*>(b.data()), std::streamsize(b.size()));
-}
+using testkit::writeAll;
 
 // Re-stamps the header CRC after a deliberate header edit, so the check under test is reached.
 // zlib's CRC-32 (the format's checksum) over bytes [from, to) of b.

@@ -34,7 +34,7 @@ struct ObjMesh {
   std::vector<std::array<std::uint32_t, 3>> f;
 };
 
-ObjMesh readObj(const fs::path& p) {
+ObjMesh readObjTriangles(const fs::path& p) {
   std::ifstream in(p);
   ObjMesh m;
   std::string tag;
@@ -137,13 +137,13 @@ void expectClosedOutwardSphere(const ObjMesh& m, const terrain::Terrain& t, doub
 
 // The charts with glued sides on 2^n + 1 squared heights, each with the Euler characteristic of
 // its closed (or, for the cylinder, open-ended) surface.
-struct GluedCase {
+struct GluedSurface {
   std::shared_ptr<const core::Chart> chart;
   int euler;
   bool openEnds;
 };
 
-std::vector<GluedCase> gluedCases(int n) {
+std::vector<GluedSurface> gluedSurfaces(int n) {
   const core::GridSize g(n);
   return {{testkit::octahedralChart(n), 2, false},
           {testkit::octahedralChart(n, core::OctahedralChart::Mapping::kCentral), 2, false},
@@ -163,7 +163,7 @@ TEST(TinExport, AHeightmapIsMeshedOnItsOwnSamplesWithinTheErrorAsWritten) {
                                                  io::ExportFormat::kObj, o, notes);
   EXPECT_LE(s["measured_error_m"].get<double>(), maxError);
   EXPECT_EQ(s["samples_checked"].get<std::size_t>(), std::size_t(w * h));
-  const ObjMesh m = readObj(dir / "t.obj");
+  const ObjMesh m = readObjTriangles(dir / "t.obj");
   EXPECT_EQ(m.v.size(), s["vertices"].get<std::size_t>());
   EXPECT_LT(m.v.size(), std::size_t(w * h));
   // Every vertex sits on one of the image's own samples (no resampling).
@@ -209,7 +209,7 @@ TEST(TinExport, APlanetTinIsAClosedOutwardSphereWithinTheErrorOfEverySample) {
   const nlohmann::json s = io::exportTinFromFile(dir / "p.planet", io::ImportOptions{},
                                                  dir / "p.obj", io::ExportFormat::kObj, o, notes);
   EXPECT_EQ(s["error_metric"], "3d");
-  expectClosedOutwardSphere(readObj(dir / "p.obj"), t, o.maxErrorM, "");
+  expectClosedOutwardSphere(readObjTriangles(dir / "p.obj"), t, o.maxErrorM, "");
 }
 
 // Every chart's planet TIN is welded by the chart's topology (issue 28): a side vertex goes in
@@ -219,7 +219,7 @@ TEST(TinExport, APlanetTinIsAClosedOutwardSphereWithinTheErrorOfEverySample) {
 // every sample within the error, as exported. The quality TIN (a minimum angle) likewise.
 TEST(TinExport, EveryChartsPlanetTinIsWeldedByItsTopology) {
   const fs::path dir = testkit::freshDir("tin_charts");
-  for (const GluedCase& c : gluedCases(5)) {
+  for (const GluedSurface& c : gluedSurfaces(5)) {
     const terrain::Terrain t(c.chart, testkit::bumpyHeights(*c.chart, 3, 30000.0));
     const std::string name = c.chart->name();
     io::savePlanet(t, dir / (name + ".planet"));
@@ -230,7 +230,7 @@ TEST(TinExport, EveryChartsPlanetTinIsWeldedByItsTopology) {
         io::exportTinFromFile(dir / (name + ".planet"), io::ImportOptions{}, dir / (name + ".obj"),
                               io::ExportFormat::kObj, o, notes);
     EXPECT_LE(s["measured_error_m"].get<double>(), o.maxErrorM) << name;
-    const ObjMesh m = readObj(dir / (name + ".obj"));
+    const ObjMesh m = readObjTriangles(dir / (name + ".obj"));
     const tin::MeshTopology top = tin::meshTopology(m.v.size(), m.f);
     EXPECT_EQ(top.nonManifoldEdges, 0u) << name;
     EXPECT_EQ(top.degenerate, 0u) << name;
@@ -260,7 +260,7 @@ TEST(TinExport, EveryChartsPlanetTinIsWeldedByItsTopology) {
 // twins, so the welded mesh closes as the fewest-triangles one does; the angle holds in the
 // lattice and every sample is within the error.
 TEST(TinExport, EveryChartsQualityTinKeepsItsAngleAndCloses) {
-  for (const GluedCase& c : gluedCases(7)) {
+  for (const GluedSurface& c : gluedSurfaces(7)) {
     const terrain::Terrain t(c.chart, testkit::bumpyHeights(*c.chart, 3, 30000.0));
     const std::string name = c.chart->name();
     const double last = t.grid().m();
@@ -312,7 +312,7 @@ TEST(TinExport, AQualityTinOfAnOctahedralPlanetIsClosedAndKeepsItsAngle) {
     EXPECT_LE(s["measured_error_ratio"].get<double>(), 1.0) << angle;
     EXPECT_TRUE(s["angle_met"].get<bool>()) << angle;
     EXPECT_GE(s["smallest_angle_deg"].get<double>(), angle - 1e-6);
-    expectClosedOutwardSphere(readObj(dir / "q.obj"), t, o.maxErrorM,
+    expectClosedOutwardSphere(readObjTriangles(dir / "q.obj"), t, o.maxErrorM,
                               "angle " + std::to_string(angle));
   }
 }
@@ -328,7 +328,7 @@ TEST(TinExport, APlanetRegionIsMeshedAloneWithinItsError) {
   const nlohmann::json s = io::exportTinFromFile(dir / "p.planet", io::ImportOptions{},
                                                  dir / "r.obj", io::ExportFormat::kObj, o, notes);
   EXPECT_LE(s["measured_error_ratio"].get<double>(), 1.0);
-  const ObjMesh m = readObj(dir / "r.obj");
+  const ObjMesh m = readObjTriangles(dir / "r.obj");
   const tin::MeshTopology top = tin::meshTopology(m.v.size(), m.f);
   EXPECT_EQ(top.euler(), 1) << "a patch of the sphere";
   EXPECT_GT(top.borderEdges, 0u);

@@ -36,14 +36,14 @@ using Mapping = core::OctahedralChart::Mapping;
 
 namespace {
 
-const std::array<Mapping, 2> kMappings{Mapping::kEqualArea, Mapping::kCentral};
+using testkit::kOctahedralMappings;
 
 }  // namespace
 
 // The centre is the north pole, the corners the south pole, the sides' midpoints the equator;
 // every grid vertex lands on the unit sphere and the inverse gives its grid coordinates back.
 TEST(OctahedralChart, MapsTheSquareOntoTheSphereAndBack) {
-  for (const Mapping mapping : kMappings) {
+  for (const Mapping mapping : kOctahedralMappings) {
     const core::OctahedralChart c(core::GridSize(6), 1000.0, mapping);
     const int m = c.grid().m();
     EXPECT_LT((c.up(m / 2, m / 2) - Eigen::Vector3d::UnitZ()).norm(), 1e-15);
@@ -77,7 +77,7 @@ TEST(OctahedralChart, MapsTheSquareOntoTheSphereAndBack) {
 // The sides fold onto themselves: twins are one point bit for bit, share one canonical
 // vertex, and every vertex of the grid that is not on a side is its own.
 TEST(OctahedralChart, TwinsAreOnePointAndShareTheirCanonicalVertex) {
-  for (const Mapping mapping : kMappings) {
+  for (const Mapping mapping : kOctahedralMappings) {
     const core::OctahedralChart c(core::GridSize(5), 6.4e6, mapping);
     const int m = c.grid().m();
     std::set<std::pair<int, int>> canonicals;
@@ -109,7 +109,7 @@ TEST(OctahedralChart, TwinsAreOnePointAndShareTheirCanonicalVertex) {
 // on the sides and inside; every vertex scattered, in an order that mixes rows.
 TEST(OctahedralChart, RowAndScatteredPositionsAreBitwisePositions) {
   auto bits = [](double x) { return std::bit_cast<std::uint64_t>(x); };
-  for (const Mapping mapping : kMappings) {
+  for (const Mapping mapping : kOctahedralMappings) {
     const core::OctahedralChart c(core::GridSize(6), 6372790.0, mapping);
     const int m = c.grid().m();
     std::mt19937 rng(11);
@@ -157,7 +157,7 @@ TEST(OctahedralChart, RowAndScatteredPositionsAreBitwisePositions) {
 // Equal area: every cell of the grid covers the same area of the sphere (to the chord
 // quadrilateral's approximation); the central projection's cells differ by about 5x.
 TEST(OctahedralChart, EqualAreaCellsAreEqualAndCentralOnesAreNot) {
-  for (const Mapping mapping : kMappings) {
+  for (const Mapping mapping : kOctahedralMappings) {
     const core::OctahedralChart c(core::GridSize(7), 1.0, mapping);
     const int m = c.grid().m();
     double lo = INFINITY, hi = 0;
@@ -190,7 +190,7 @@ TEST(OctahedralChart, EqualAreaCellsAreEqualAndCentralOnesAreNot) {
 // the edit's rectangle equal a full rebuild bit for bit (the update computes the rectangle's
 // mirror images where it reaches a side, and combines the twins).
 TEST(OctahedralChart, LocalBoundUpdatesEqualAFullRebuildBitForBit) {
-  for (const Mapping mapping : kMappings) {
+  for (const Mapping mapping : kOctahedralMappings) {
     auto t = testkit::bumpyOctahedralTerrain(7, 5, 4000.0, mapping);
     const auto g = t.grid();
     const int m = g.m();
@@ -228,7 +228,7 @@ TEST(OctahedralChart, LocalBoundUpdatesEqualAFullRebuildBitForBit) {
 // coarse view cracked along the fold (StressEdits.RandomBrushActionsOnTheOctahedralChart... at
 // 8x its size, action 5489: the side u = m split at (m, 3m/4) and not at (m, m/4)).
 TEST(OctahedralChart, TheLatticeHoldsEveryVertexsCodesTwinsIncluded) {
-  for (const Mapping mapping : kMappings) {
+  for (const Mapping mapping : kOctahedralMappings) {
     auto t = testkit::bumpyOctahedralTerrain(7, 5, 4000.0, mapping);
     EXPECT_TRUE(edittest::latticeHoldsTheCodes(t)) << "built";
     edit::EditPipeline pipe(t);
@@ -306,7 +306,7 @@ TEST(OctahedralChart, CutBoundUpdatesEqualAFullRebuildAndSkipTheBoxsCorners) {
 // the tessellation is crack-free across every fold and its measured screen error is never above
 // dist_max.
 TEST(OctahedralChart, TessellationsAreCrackFreeAndWithinDistMax) {
-  for (const Mapping mapping : kMappings) {
+  for (const Mapping mapping : kOctahedralMappings) {
     const auto t = testkit::bumpyOctahedralTerrain(8, 7, 6000.0, mapping);
     const double R = t.chart().sphereRadius();
     const std::array<Eigen::Vector3d, 5> looks{
@@ -340,7 +340,7 @@ TEST(OctahedralChart, TessellationsAreCrackFreeAndWithinDistMax) {
 // A whole planet meshed to an error and welded by the chart: a closed 2-manifold, Euler 2, every
 // full-resolution vertex within the error.
 TEST(OctahedralChart, WholePlanetMeshesAreWeldedSpheres) {
-  for (const Mapping mapping : kMappings) {
+  for (const Mapping mapping : kOctahedralMappings) {
     const auto t = testkit::bumpyOctahedralTerrain(7, 2, 5000.0, mapping);
     for (double error : {20000.0, 2000.0}) {
       const terrain::Mesh mesh = terrain::meshToError(t, error);
@@ -362,7 +362,7 @@ TEST(OctahedralChart, WholePlanetMeshesAreWeldedSpheres) {
 // by the chart's row positions): they must be distance2()'s bit for bit, or the region would
 // differ from brute force at its rim. Whole rows and pieces, the sides and corners included.
 TEST(OctahedralChart, RowDistancesAreBitwiseDistances) {
-  for (const Mapping mapping : kMappings) {
+  for (const Mapping mapping : kOctahedralMappings) {
     const auto chart = std::make_shared<core::OctahedralChart>(core::GridSize(6), 6.4e6, mapping);
     const int m = chart->grid().m();
     edit::DistanceField field(chart);

@@ -22,12 +22,6 @@ using namespace ps;
 
 namespace {
 
-// A sphere with every height 0: its silhouette and its shadow are known exactly.
-terrain::Terrain smoothPlanet(int n) {
-  auto chart = testkit::earthChart(n);
-  return terrain::Terrain(chart, std::vector<float>(chart->grid().count(), 0.0f));
-}
-
 const cv::Scalar kGrey(128, 128, 128);
 
 cv::Mat draw(render::PlanetRenderer& r, const terrain::Terrain& planet, const terrain::Camera& cam,
@@ -59,7 +53,7 @@ bool inside(const terrain::Camera& cam, const Eigen::Vector2d& px) {
 // nothing to draw (the sun below the board).
 TEST(RenderAtmosphere, OffChangesNothing) {
   SKIP_WITHOUT_GL();
-  const auto planet = smoothPlanet(8);
+  const auto planet = testkit::levelTerrain(8);
   const double R = planet.chart().sphereRadius();
   render::EglContext gl;
   const auto cam =
@@ -86,7 +80,7 @@ TEST(RenderAtmosphere, OffChangesNothing) {
 // grey exactly; with the sun below the board the image is the one without the shadow.
 TEST(RenderAtmosphere, TheBoardShadowFallsAwayFromTheSun) {
   SKIP_WITHOUT_GL();
-  const auto planet = smoothPlanet(8);
+  const auto planet = testkit::levelTerrain(8);
   const double R = planet.chart().sphereRadius();
   render::EglContext gl;
   render::PlanetRenderer renderer;
@@ -143,7 +137,7 @@ TEST(RenderAtmosphere, TheBoardShadowFallsAwayFromTheSun) {
 // exactly.
 TEST(RenderAtmosphere, TheRimIsAThinGlowOutsideTheSilhouette) {
   SKIP_WITHOUT_GL();
-  const auto planet = smoothPlanet(8);
+  const auto planet = testkit::levelTerrain(8);
   const double R = planet.chart().sphereRadius();
   render::EglContext gl;
   render::PlanetRenderer renderer;

@@ -28,10 +28,6 @@ using namespace ps;
 
 namespace {
 
-terrain::Terrain reliefPlanet(int n) {
-  return testkit::reliefTerrain(n, 3);
-}
-
 struct View {
   const char* name;
   terrain::Camera camera;
@@ -69,7 +65,7 @@ cv::Mat draw(render::PlanetRenderer& r, const terrain::Terrain& planet, const te
 // levels); at 16 px per pixel still beats facets at 1 px.
 TEST(RenderShading, ACoarseMeshShadedPerPixelLooksLikeTheFullSurface) {
   SKIP_WITHOUT_GL();
-  const auto planet = reliefPlanet(10);
+  const auto planet = testkit::reliefTerrain(10, 3);
   render::EglContext gl;
   render::PlanetRenderer renderer;
   for (const auto& v : views(planet.chart().sphereRadius())) {
@@ -147,7 +143,7 @@ TEST(RenderShading, TorusAndCylinderShadedPerPixelLookLikeTheFullSurface) {
 // renderer that uploads everything afresh draws; the texture holds one float per grid vertex.
 TEST(RenderShading, AnEditSendsOnlyTheTexelsItChanged) {
   SKIP_WITHOUT_GL();
-  auto planet = reliefPlanet(10);
+  auto planet = testkit::reliefTerrain(10, 3);
   const double R = planet.chart().sphereRadius();
   render::EglContext gl;
   render::PlanetRenderer kept;
@@ -223,7 +219,7 @@ std::vector<terrain::Camera> wanderingViews(double R, int count, unsigned seed) 
 // cache), and the default budget holds far fewer tiles than the pyramid has.
 TEST(RenderShading, TheHeightTileCacheKeepsItsBudgetAndThePicture) {
   SKIP_WITHOUT_GL();
-  const auto planet = reliefPlanet(11);  // 2049^2: 341 tiles of 128 cells in 5 levels
+  const auto planet = testkit::reliefTerrain(11, 3);  // 2049^2: 341 tiles of 128 cells in 5 levels
   const double R = planet.chart().sphereRadius();
   render::EglContext gl;
   render::PlanetRenderer roomy, tight;
@@ -251,7 +247,7 @@ TEST(RenderShading, TheHeightTileCacheKeepsItsBudgetAndThePicture) {
 // same view: a cache's history may only hold finer tiles a pixel could use, never wrong ones.
 TEST(RenderShading, ACacheThatWasUsedDrawsWhatAFreshOneDraws) {
   SKIP_WITHOUT_GL();
-  const auto planet = reliefPlanet(11);
+  const auto planet = testkit::reliefTerrain(11, 3);
   render::EglContext gl;
   render::PlanetRenderer used;
   used.setHeightCacheBudget(40 * 131 * 131 * sizeof(float));
@@ -269,7 +265,7 @@ TEST(RenderShading, ACacheThatWasUsedDrawsWhatAFreshOneDraws) {
 // A budget that cannot hold the coarsest levels: facets, the reason said, never a black planet.
 TEST(RenderShading, WithoutRoomForTheTilesItDrawsFacetsAndSaysWhy) {
   SKIP_WITHOUT_GL();
-  const auto planet = reliefPlanet(10);
+  const auto planet = testkit::reliefTerrain(10, 3);
   render::EglContext gl;
   render::PlanetRenderer starved, faceted;
   starved.setHeightCacheBudget(4096);

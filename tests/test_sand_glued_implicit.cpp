@@ -21,7 +21,7 @@ using namespace ps;
 
 namespace {
 
-struct GluedCase {
+struct PileCase {
   std::string name;
   std::shared_ptr<const core::Chart> chart;
   double pileRadius;                   // m: a few cells
@@ -30,7 +30,7 @@ struct GluedCase {
 
 // 65^2 grids: a 1 km octahedral planet (cells of about 40 m), the tubes' tests' torus (R = 4 km,
 // r = 1.5 km) and cylinder (R = 2 km, L = 8 km).
-std::vector<GluedCase> cases() {
+std::vector<PileCase> pileCases() {
   using Mapping = core::OctahedralChart::Mapping;
   const core::GridSize g(6);
   const int m = g.m();
@@ -90,7 +90,7 @@ TEST(SandGluedImplicit, RandomSettingsKeepVolumeRangeAndTwinsAtAnyStep) {
   std::uniform_real_distribution<double> uni(0.0, 1.0);
   const double factors[3] = {0.5, 30.0, 1000.0};
   double worstDrift = 0.0;
-  for (const GluedCase& c : cases()) {
+  for (const PileCase& c : pileCases()) {
     for (std::size_t s = 0; s < c.spots.size(); ++s) {
       sand::Material mat = sand::Material::sand();
       mat.diffusion = 0.2 + 2.0 * uni(rng);
@@ -139,7 +139,7 @@ TEST(SandGluedImplicit, ASmallStepEqualsTheExplicitStep) {
   std::mt19937 rng(77);
   std::uniform_real_distribution<double> uni(0.0, 1.0);
   const sand::Material mat = sand::Material::sand();
-  for (const GluedCase& c : cases()) {
+  for (const PileCase& c : pileCases()) {
     const std::vector<float> h0 = sandtest::twinNoise(*c.chart, [&] { return 400.0 * uni(rng); });
     double diff[2] = {0, 0}, change[2] = {0, 0};
     double bound = 0.0;
@@ -175,7 +175,7 @@ TEST(SandGluedImplicit, ASmallStepEqualsTheExplicitStep) {
 // octahedral chart, the torus's corner and the cylinder's seam at a rim: volume kept, a rut
 // under the tool on both sides of the fold or seam, the marked step equal to the whole grid's.
 TEST(SandGluedImplicit, APushForceAcrossAFoldOrSeamKeepsVolume) {
-  for (const GluedCase& c : cases()) {
+  for (const PileCase& c : pileCases()) {
     const int m = c.chart->grid().m();
     const bool octahedral = c.name.rfind("octahedral", 0) == 0;
     const std::vector<core::GridPoint> where =

@@ -29,7 +29,7 @@ using Mapping = core::OctahedralChart::Mapping;
 
 namespace {
 
-constexpr Mapping kMappings[2] = {Mapping::kEqualArea, Mapping::kCentral};
+using testkit::kOctahedralMappings;
 
 std::shared_ptr<const core::OctahedralChart> octa(int n, double R, Mapping mapping) {
   return std::make_shared<core::OctahedralChart>(core::GridSize(n), R, mapping);
@@ -52,7 +52,7 @@ std::vector<float> heightsOfDirection(const core::Chart& chart,
 
 // A pile (height > 0) or a crater (< 0) with vertical walls: `height` within 0.16 radians of
 // the spot's direction, 0 elsewhere.
-std::vector<float> columnOn(const core::Chart& chart, core::GridPoint spot, double height) {
+std::vector<float> angularColumnOn(const core::Chart& chart, core::GridPoint spot, double height) {
   const Eigen::Vector3d c = chart.up(spot.u, spot.v);
   return heightsOfDirection(
       chart, [&](const Eigen::Vector3d& d) { return (d - c).norm() < 0.16 ? height : 0.0; });
@@ -70,7 +70,7 @@ std::vector<core::GridPoint> spots(int m) {
 
 TEST(SandOctahedral, CellAreasSumToTheSphereArePositiveAndLinksAreSymmetric) {
   const double R = 6372790.0;
-  for (Mapping mapping : kMappings) {
+  for (Mapping mapping : kOctahedralMappings) {
     for (int n : {5, 6, 8}) {
       auto chart = octa(n, R, mapping);
       const sand::SandGrid g(chart);
@@ -131,12 +131,12 @@ TEST(SandOctahedral, ThermalKeepsVolumeAndTheActiveSetStepEqualsTheWholeGridStep
   // the talus), settled from the marked cells only and from the whole grid, step by step.
   const sand::Material mat = sand::Material::sand();
   sandtest::SettleFigures figures;
-  for (Mapping mapping : kMappings) {
+  for (Mapping mapping : kOctahedralMappings) {
     auto chart = octa(6, 1000.0, mapping);
     const int m = chart->grid().m();
     const auto where = spots(m);
     for (std::size_t s = 0; s < where.size(); ++s) {
-      auto h = columnOn(*chart, where[s], s % 2 ? 300.0 : -300.0);
+      auto h = angularColumnOn(*chart, where[s], s % 2 ? 300.0 : -300.0);
       const std::string what = std::string(nameOf(mapping)) + " spot " + std::to_string(s);
       ASSERT_NO_FATAL_FAILURE(sandtest::settlePile(chart, h, mat, what, figures));
       // Written back: twins hold one float.
@@ -155,12 +155,12 @@ TEST(SandOctahedral, ThermalKeepsVolumeAndTheActiveSetStepEqualsTheWholeGridStep
 
 TEST(SandOctahedral, ExplicitDiffusionKeepsVolumeAndTheActiveSetStepEqualsTheWholeGridStep) {
   const sand::Material mat = sand::Material::sand();
-  for (Mapping mapping : kMappings) {
+  for (Mapping mapping : kOctahedralMappings) {
     auto chart = octa(6, 1000.0, mapping);
     const int m = chart->grid().m();
     const auto where = spots(m);
     for (std::size_t s = 0; s < where.size(); ++s) {
-      auto h = columnOn(*chart, where[s], -300.0);
+      auto h = angularColumnOn(*chart, where[s], -300.0);
       ASSERT_NO_FATAL_FAILURE(sandtest::explicitCraterDiffuses(
           chart, h, mat, std::string(nameOf(mapping)) + " spot " + std::to_string(s)));
     }
@@ -181,7 +181,7 @@ TEST(SandOctahedral, ExplicitDiffusionKeepsVolumeAndTheActiveSetStepEqualsTheWho
 TEST(SandOctahedral, APushForceAcrossAFoldKeepsVolumeAndTheActiveSetEqualsTheWholeGrid) {
   // Paper 002's drift under a tool on a fold and on the south pole: the rut reaches both sides of
   // the fold, the volume is kept, and stepping the marked tiles equals stepping every tile.
-  for (Mapping mapping : kMappings) {
+  for (Mapping mapping : kOctahedralMappings) {
     auto chart = octa(6, 1000.0, mapping);
     const int m = chart->grid().m();
     for (const core::GridPoint p : {core::GridPoint{0, m / 4}, core::GridPoint{0, 0}}) {
@@ -239,7 +239,7 @@ TEST(SandOctahedral, ThreadCountDoesNotChangeTheResult) {
 
 TEST(SandOctahedral, MaterialCrossesTheFoldsAndAPileOnAMirrorSettlesSymmetrically) {
   const sand::Material mat = sand::Material::sand();
-  for (Mapping mapping : kMappings) {
+  for (Mapping mapping : kOctahedralMappings) {
     auto chart = octa(6, 1000.0, mapping);
     const int m = chart->grid().m();
     const core::GridSize g = chart->grid();
@@ -307,7 +307,7 @@ TEST(SandOctahedral, MaterialCrossesTheFoldsAndAPileOnAMirrorSettlesSymmetricall
 TEST(SandOctahedral, DisplacementKeepsTheVolumeAtTheFoldsCornersAndConePoints) {
   // A 20 km planet on 129^2 (cells ~0.5 km), stamps of 4 km pressed 1.5 km deep on the spots
   // and at 24 random places within 6 cells of a side.
-  for (Mapping mapping : kMappings) {
+  for (Mapping mapping : kOctahedralMappings) {
     auto chart = octa(7, 20e3, mapping);
     const int m = chart->grid().m();
     terrain::Terrain t(chart, testkit::bumpyHeights(*chart, 3, 100.0));

@@ -22,10 +22,7 @@ using sandtest::sphereChart;
 
 namespace {
 
-// A point at latitude/longitude (degrees) at altitude h above a sphere chart's reference radius.
-Eigen::Vector3d above(const core::Chart& chart, double latDeg, double lonDeg, double h) {
-  return edittest::latLon(latDeg, lonDeg, chart.sphereRadius() + h, 1.0);
-}
+using edittest::pointAbove;
 
 bool sameFloats(std::span<const float> a, std::span<const float> b) {
   return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(float)) == 0;
@@ -102,7 +99,7 @@ TEST(SandDisplacement, RemovedVolumeEqualsDepositedVolumeOnFlatAndSphere) {
   const sand::SandGrid grid(chart);
   for (auto [lat, lon] : {std::pair{0.0, 10.0}, {5.0, 180.0}, {-86.0, 40.0}, {90.0, 0.0}}) {
     const double vBefore = grid.volume(t.heights());
-    pipe.apply(tool, {above(*chart, lat, lon, 4000.0 - 1500.0), 0.0});
+    pipe.apply(tool, {pointAbove(*chart, lat, lon, 4000.0 - 1500.0), 0.0});
     const sand::DisplacementStats& s = tool.lastStats();
     EXPECT_GT(s.removedVolume, 1e9) << lat << " " << lon;
     EXPECT_NEAR(s.depositedVolume, s.removedVolume, 1e-12 * s.removedVolume) << lat << " " << lon;
@@ -120,7 +117,7 @@ TEST(SandDisplacement, FootprintHoldsEveryChangeAndUndoRestoresBitForBit) {
   const std::vector<float> before(t.heights().begin(), t.heights().end());
   edit::EditPipeline pipe(t);
   sand::DisplacementTool tool(chart, {.radius = 3000.0, .rampartWidth = 1.5});
-  pipe.apply(tool, {above(*chart, 30.0, 179.0, 2000.0), 0.0});
+  pipe.apply(tool, {pointAbove(*chart, 30.0, 179.0, 2000.0), 0.0});
   EXPECT_FALSE(sameFloats(t.heights(), before));
   // The journal snapshots footprint() only: undo restores everything only if every change was
   // inside it (the rampart reaches beyond V_d).
@@ -187,7 +184,7 @@ TEST(SandDisplacement, BadInputIsRefusedNamingTheParameterAndLeavesTheTerrainUnc
   auto expectRefused = [&](sand::DisplacementSettings s, const std::string& word) {
     sand::DisplacementTool tool(chart, s);
     try {
-      pipe.apply(tool, {above(*chart, 10, 10, 0), 0.0});
+      pipe.apply(tool, {pointAbove(*chart, 10, 10, 0), 0.0});
       ADD_FAILURE() << word << ": accepted";
     } catch (const core::InputError& e) {
       EXPECT_NE(std::string(e.what()).find(word), std::string::npos) << e.what();
@@ -235,8 +232,8 @@ TEST(SandSettler, CraterSettlesOverSeveralFramesUpdatingBoundsOnlyWhereItChanged
   sand::DisplacementTool tool(chart, {.radius = 4000.0}, &settler);
   const sand::SandGrid grid(chart);
   const double v0 = grid.volume(t.heights());
-  pipe.apply(tool, {above(*chart, 20.0, 180.0, 4000.0 - 2000.0), 0.0});
-  pipe.apply(tool, {above(*chart, 90.0, 0.0, 4000.0 - 2000.0), 0.0});
+  pipe.apply(tool, {pointAbove(*chart, 20.0, 180.0, 4000.0 - 2000.0), 0.0});
+  pipe.apply(tool, {pointAbove(*chart, 90.0, 0.0, 4000.0 - 2000.0), 0.0});
   std::size_t over = 0;
   std::size_t largestDirty = 0;
   int frames = 0;
@@ -288,7 +285,7 @@ TEST(SandSettler, DiffusionSettlingKeepsVolumeAndBoundsOnFlatAndSphere) {
         // The explicit step near a pole is held to a tiny dt by the ring cells (docs/SAND.md):
         // explicit at 30 degrees, semi-implicit on the pole.
         const double lat = method == sand::SettleMethod::kDiffusionExplicit ? 30.0 : 88.0;
-        pipe.apply(tool, {above(*chart, lat, 180.0, 20.0 + r - depth), 0.0});
+        pipe.apply(tool, {pointAbove(*chart, lat, 180.0, 20.0 + r - depth), 0.0});
       } else {
         pipe.apply(tool, {{50.0, 70.0, 20.0 + r - depth}, 0.0});
       }

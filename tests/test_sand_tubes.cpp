@@ -30,16 +30,8 @@ namespace {
 
 constexpr double kPi = std::numbers::pi;
 
-// A torus of R = 4 km, r = 1.5 km and a cylinder of radius 2 km, length 8 km (the charts'
-// tests' shapes at a thousandth: cells of tens of metres at 2^6).
-std::shared_ptr<const core::Chart> tube(bool torus, int n) {
-  if (torus) return std::make_shared<core::TorusChart>(core::GridSize(n), 4000.0, 1500.0);
-  return std::make_shared<core::CylinderChart>(core::GridSize(n), 2000.0, 8000.0);
-}
-
-const char* nameOf(bool torus) {
-  return torus ? "torus" : "cylinder";
-}
+using sandtest::smallTube;
+using sandtest::tubeName;
 
 double exactArea(bool torus) {
   return torus ? 4 * kPi * kPi * 4000.0 * 1500.0 : 2 * kPi * 2000.0 * 8000.0;
@@ -77,7 +69,7 @@ std::vector<core::GridPoint> spots(bool torus, int m) {
 TEST(SandTubes, CellAreasSumToTheSurfaceAndLinksAreSymmetric) {
   for (const bool torus : {true, false}) {
     for (int n : {5, 6, 8}) {
-      auto chart = tube(torus, n);
+      auto chart = smallTube(torus, n);
       const sand::SandGrid g(chart);
       const int m = g.m();
       ASSERT_TRUE(g.glued());
@@ -95,11 +87,11 @@ TEST(SandTubes, CellAreasSumToTheSurfaceAndLinksAreSymmetric) {
           ++cells;
         }
       }
-      EXPECT_EQ(cells, torus ? m * m : m * (m + 1)) << nameOf(torus);  // the distinct points
+      EXPECT_EQ(cells, torus ? m * m : m * (m + 1)) << tubeName(torus);  // the distinct points
       const double rel = total.value() / exactArea(torus) - 1;
-      EXPECT_LE(std::abs(rel), 1e-12) << nameOf(torus) << " n " << n;
+      EXPECT_LE(std::abs(rel), 1e-12) << tubeName(torus) << " n " << n;
       EXPECT_LE(std::abs(g.surfaceArea() / exactArea(torus) - 1), 1e-15);
-      std::printf("%s %d: %d cells, area sum / exact - 1 = %.3g\n", nameOf(torus), n, cells, rel);
+      std::printf("%s %d: %d cells, area sum / exact - 1 = %.3g\n", tubeName(torus), n, cells, rel);
       EXPECT_NEAR(g.volume(std::vector<float>(g.grid().count(), 2.0f)) / (2 * exactArea(torus)),
                   1.0, 1e-12);
       if (n > 6) continue;
@@ -107,7 +99,7 @@ TEST(SandTubes, CellAreasSumToTheSurfaceAndLinksAreSymmetric) {
       // cylinder's rim (5 links on a rim cell), 8 everywhere else.
       ASSERT_NO_FATAL_FAILURE(sandtest::checkLinksSymmetric(
           g, 2.0 * sand::largestSpacing(*chart),
-          [&](int, int v) { return !torus && (v == 0 || v == m) ? 5 : 8; }, nameOf(torus)));
+          [&](int, int v) { return !torus && (v == 0 || v == m) ? 5 : 8; }, tubeName(torus)));
     }
   }
 }
@@ -116,12 +108,12 @@ TEST(SandTubes, ThermalKeepsVolumeAndTheActiveSetStepEqualsTheWholeGridStep) {
   const sand::Material mat = sand::Material::sand();
   sandtest::SettleFigures figures;
   for (const bool torus : {true, false}) {
-    auto chart = tube(torus, 6);
+    auto chart = smallTube(torus, 6);
     const int m = chart->grid().m();
     const auto where = spots(torus, m);
     for (std::size_t s = 0; s < where.size(); ++s) {
       auto h = columnOn(*chart, where[s], s % 2 ? 300.0 : -300.0);
-      const std::string what = std::string(nameOf(torus)) + " spot " + std::to_string(s);
+      const std::string what = std::string(tubeName(torus)) + " spot " + std::to_string(s);
       // The pile or crater spread across the seams: beside every twin, inside the grid, some
       // neighbour moved (the steep links are those round the tube, the shorter ones).
       auto movedBesideTwins = [&](const sand::SandField& a) {
@@ -151,13 +143,13 @@ TEST(SandTubes, ThermalKeepsVolumeAndTheActiveSetStepEqualsTheWholeGridStep) {
 TEST(SandTubes, ExplicitDiffusionKeepsVolumeAndTheActiveSetStepEqualsTheWholeGridStep) {
   const sand::Material mat = sand::Material::sand();
   for (const bool torus : {true, false}) {
-    auto chart = tube(torus, 6);
+    auto chart = smallTube(torus, 6);
     const int m = chart->grid().m();
     const auto where = spots(torus, m);
     for (std::size_t s = 0; s < where.size(); ++s) {
       auto h = columnOn(*chart, where[s], -300.0);
       ASSERT_NO_FATAL_FAILURE(sandtest::explicitCraterDiffuses(
-          chart, h, mat, std::string(nameOf(torus)) + " spot " + std::to_string(s)));
+          chart, h, mat, std::string(tubeName(torus)) + " spot " + std::to_string(s)));
     }
     // Past the bound: refused.
     std::vector<float> ones(chart->grid().count(), 1.0f);
@@ -168,10 +160,10 @@ TEST(SandTubes, ExplicitDiffusionKeepsVolumeAndTheActiveSetStepEqualsTheWholeGri
 
 TEST(SandTubes, APushForceAcrossTheSeamKeepsVolumeAndTouchesNothingAcrossTheTube) {
   for (const bool torus : {true, false}) {
-    auto chart = tube(torus, 6);
+    auto chart = smallTube(torus, 6);
     const int m = chart->grid().m();
     const core::GridPoint p = torus ? core::GridPoint{0, 0} : core::GridPoint{0, m / 2};
-    sandtest::pushTheLayer(chart, {.at = p, .radius = 1200.0}, nameOf(torus),
+    sandtest::pushTheLayer(chart, {.at = p, .radius = 1200.0}, tubeName(torus),
                            [&](const sand::SandField& a, const sand::SandField& b) {
                              // Both sides of the u seam moved (and of the torus's v seam).
                              EXPECT_NE(a.height(2, p.v), 10.0);
@@ -192,7 +184,7 @@ TEST(SandTubes, APushForceAcrossTheSeamKeepsVolumeAndTouchesNothingAcrossTheTube
 
 TEST(SandTubes, DisplacementAtTheSeamsAndRimsKeepsTheVolumeAndUndoes) {
   for (const bool torus : {true, false}) {
-    auto chart = tube(torus, 7);  // cells of 98-258 m (torus), 98 / 62 m (cylinder)
+    auto chart = smallTube(torus, 7);  // cells of 98-258 m (torus), 98 / 62 m (cylinder)
     const int m = chart->grid().m();
     terrain::Terrain t(chart, testkit::bumpyHeights(*chart, 3, 20.0));
     edit::EditPipeline pipe(t);
@@ -215,7 +207,7 @@ TEST(SandTubes, DisplacementAtTheSeamsAndRimsKeepsTheVolumeAndUndoes) {
       // where clamping would lose volume by design.
       pipe.apply(tool, {chart->position(p.u, p.v, 600.0 - 120.0), 0.0});
       const sand::DisplacementStats& s = tool.lastStats();
-      ASSERT_GT(s.removedVolume, 1e5) << nameOf(torus) << " " << p.u << "," << p.v;
+      ASSERT_GT(s.removedVolume, 1e5) << tubeName(torus) << " " << p.u << "," << p.v;
       EXPECT_NEAR(s.depositedVolume, s.removedVolume, 1e-12 * s.removedVolume);
       const double dv = grid.volume(t.heights()) - vBefore;
       EXPECT_NEAR(dv, s.floatVolumeChange, 1e-9 * s.removedVolume) << p.u << "," << p.v;
@@ -224,20 +216,20 @@ TEST(SandTubes, DisplacementAtTheSeamsAndRimsKeepsTheVolumeAndUndoes) {
       EXPECT_LE(std::abs(dv), 1e-7 * s.removedVolume) << p.u << "," << p.v;
       worst = std::max(worst, std::abs(dv) / grid.absVolume(t.heights()));
       worstOfRemoved = std::max(worstOfRemoved, std::abs(dv) / s.removedVolume);
-      ASSERT_TRUE(edittest::consistentHeights(t)) << nameOf(torus) << " " << p.u << "," << p.v;
+      ASSERT_TRUE(edittest::consistentHeights(t)) << tubeName(torus) << " " << p.u << "," << p.v;
     }
-    EXPECT_LE(worst, 1e-9) << nameOf(torus);
+    EXPECT_LE(worst, 1e-9) << tubeName(torus);
     std::printf(
         "%s: %zu stamps, float volume change at most %.3g of the planet's (sum A |h|), "
         "%.3g of the removed volume\n",
-        nameOf(torus), where.size(), worst, worstOfRemoved);
-    EXPECT_TRUE(edittest::boundsEqualFullRebuild(t)) << nameOf(torus);
+        tubeName(torus), where.size(), worst, worstOfRemoved);
+    EXPECT_TRUE(edittest::boundsEqualFullRebuild(t)) << tubeName(torus);
     // A tool wider than the tube: refused, naming it.
     sand::DisplacementTool wide(chart, {.radius = torus ? 1600.0 : 2100.0});
     EXPECT_THROW(pipe.apply(wide, {chart->position(0, 0, 0.0), 0.0}), core::InputError);
   }
   // A stamp on the torus's corner changes all four quadrants of the grid; undo restores it.
-  auto chart = tube(true, 7);
+  auto chart = smallTube(true, 7);
   const int m = chart->grid().m();
   terrain::Terrain t(chart, testkit::bumpyHeights(*chart, 5, 20.0));
   const std::vector<float> before(t.heights().begin(), t.heights().end());

@@ -22,14 +22,8 @@ using namespace ps;
 
 namespace {
 
-std::shared_ptr<const core::Chart> tube(bool torus, int n) {
-  if (torus) return std::make_shared<core::TorusChart>(core::GridSize(n), 4000.0, 1500.0);
-  return std::make_shared<core::CylinderChart>(core::GridSize(n), 2000.0, 8000.0);
-}
-
-const char* nameOf(bool torus) {
-  return torus ? "torus" : "cylinder";
-}
+using sandtest::smallTube;
+using sandtest::tubeName;
 
 // Heights of v alone (both surfaces are the same in every column): a ripple along v.
 std::vector<float> rowHeights(const core::Chart& chart) {
@@ -52,7 +46,7 @@ TEST(SandTubes, TheSettlerSettlesStampsAcrossTheSeamsKeepingBoundsAndVolume) {
     for (const sand::SettleMethod method :
          {sand::SettleMethod::kThermal, sand::SettleMethod::kDiffusionExplicit,
           sand::SettleMethod::kDiffusionSemiImplicit}) {
-      auto chart = tube(torus, 7);
+      auto chart = smallTube(torus, 7);
       const int m = chart->grid().m();
       terrain::Terrain t(chart, rowHeights(*chart));
       edit::EditPipeline pipe(t);
@@ -69,17 +63,17 @@ TEST(SandTubes, TheSettlerSettlesStampsAcrossTheSeamsKeepingBoundsAndVolume) {
         ++frames;
         if (r.atRest) break;
       }
-      EXPECT_TRUE(settler.atRest()) << nameOf(torus) << " " << int(method);
+      EXPECT_TRUE(settler.atRest()) << tubeName(torus) << " " << int(method);
       EXPECT_GT(frames, 1);
-      EXPECT_TRUE(edittest::consistentHeights(t)) << nameOf(torus);
-      EXPECT_TRUE(edittest::boundsEqualFullRebuild(t)) << nameOf(torus);
+      EXPECT_TRUE(edittest::consistentHeights(t)) << tubeName(torus);
+      EXPECT_TRUE(edittest::boundsEqualFullRebuild(t)) << tubeName(torus);
       if (method == sand::SettleMethod::kThermal) {
         EXPECT_LE(sandtest::worstTalusExcess(settler.field(), settler.material()),
                   settler.material().talusTolerance * (1 + 1e-9));
       }
       const double drift = std::abs(grid.volume(t.heights()) - v0) / grid.absVolume(t.heights());
-      EXPECT_LE(drift, 1e-9) << nameOf(torus) << " " << int(method);
-      std::printf("%s, %s: settled in %d frames, float volume drift %.3g\n", nameOf(torus),
+      EXPECT_LE(drift, 1e-9) << tubeName(torus) << " " << int(method);
+      std::printf("%s, %s: settled in %d frames, float volume drift %.3g\n", tubeName(torus),
                   sand::toString(method).c_str(), frames, drift);
       const auto revision = t.revision();
       EXPECT_EQ(settler.frame().cellSteps, 0u);
@@ -92,7 +86,7 @@ TEST(SandTubes, RandomStampsAndErosionKeepTheVolume) {
   // Random stamps anywhere (a third on or beside the seams and rims), each followed by a few
   // settler frames of thermal erosion: the floats' volume sum_i A_i h_i stays the first one.
   for (const bool torus : {true, false}) {
-    auto chart = tube(torus, 7);
+    auto chart = smallTube(torus, 7);
     const int m = chart->grid().m();
     terrain::Terrain t(chart, rowHeights(*chart));
     edit::EditPipeline pipe(t);
@@ -115,11 +109,11 @@ TEST(SandTubes, RandomStampsAndErosionKeepTheVolume) {
       pipe.apply(tool, {chart->position(p.u, p.v, r - press(rng)), 0.0});
       for (int f = 0; f < 3; ++f) settler.frame();
       worst = std::max(worst, std::abs(grid.volume(t.heights()) - v0) / scale);
-      ASSERT_LE(worst, 1e-9) << nameOf(torus) << " stamp " << i;
+      ASSERT_LE(worst, 1e-9) << tubeName(torus) << " stamp " << i;
     }
     EXPECT_TRUE(edittest::consistentHeights(t));
     EXPECT_TRUE(edittest::boundsEqualFullRebuild(t));
-    std::printf("%s: 60 random stamps with erosion, volume drift at most %.3g\n", nameOf(torus),
+    std::printf("%s: 60 random stamps with erosion, volume drift at most %.3g\n", tubeName(torus),
                 worst);
   }
 }
@@ -129,7 +123,7 @@ TEST(SandTubes, AStampAcrossTheSeamEqualsTheSameStampAwayFromIt) {
   // stamp half-way round with the grid shifted by m/2 columns (to rounding: the columns'
   // sines and cosines are not shifted bit for bit).
   for (const bool torus : {true, false}) {
-    auto chart = tube(torus, 7);
+    auto chart = smallTube(torus, 7);
     const int m = chart->grid().m();
     const core::GridSize g = chart->grid();
     const int v = torus ? m / 8 : m / 2;
@@ -153,12 +147,12 @@ TEST(SandTubes, AStampAcrossTheSeamEqualsTheSameStampAwayFromIt) {
         depth = std::max(depth, double(std::abs(a - flat[g.index(u, vv)])));
       }
     }
-    EXPECT_GT(depth, 100.0) << nameOf(torus);
-    EXPECT_LE(worst, 1e-4 * depth) << nameOf(torus);
+    EXPECT_GT(depth, 100.0) << tubeName(torus);
+    EXPECT_LE(worst, 1e-4 * depth) << tubeName(torus);
     std::printf(
         "%s: a stamp on the seam against the same stamp shifted by m/2: %.3g m apart "
         "(%.0f m deep)\n",
-        nameOf(torus), worst, depth);
+        tubeName(torus), worst, depth);
   }
 }
 
@@ -171,7 +165,7 @@ TEST(SandTubes, TheSettlerIsToldOfEveryVertexAStampChanges) {
     void edited(const terrain::VertexBox& r, const sand::Material&) override { told.push_back(r); }
   };
   for (const bool torus : {true, false}) {
-    auto chart = tube(torus, 7);
+    auto chart = smallTube(torus, 7);
     const int m = chart->grid().m();
     const core::GridSize g = chart->grid();
     for (const core::GridPoint p :
@@ -198,10 +192,10 @@ TEST(SandTubes, TheSettlerIsToldOfEveryVertexAStampChanges) {
           ++changed;
           const core::GridPoint c = chart->canonical(u, v);
           EXPECT_TRUE(told(u, v) || told(c.u, c.v))
-              << nameOf(torus) << " stamp " << p.u << "," << p.v << ": " << u << "," << v;
+              << tubeName(torus) << " stamp " << p.u << "," << p.v << ": " << u << "," << v;
         }
       }
-      EXPECT_GT(changed, 20) << nameOf(torus);
+      EXPECT_GT(changed, 20) << tubeName(torus);
     }
   }
 }

@@ -15,9 +15,11 @@
 #include <utility>
 #include <vector>
 
+#include "core/cylinder_chart.hpp"
 #include "core/flat_chart.hpp"
 #include "core/input_error.hpp"
 #include "core/latlong_chart.hpp"
+#include "core/torus_chart.hpp"
 #include "sand/material.hpp"
 #include "sand/sand_field.hpp"
 #include "sand/sand_grid.hpp"
@@ -35,6 +37,17 @@ inline std::shared_ptr<const core::LatLongChart> sphereChart(int n, double R = 6
 
 // Heights from a function of (u, v); on a sphere chart seam twins and pole rows are made one
 // point (u = m copies u = 0, a pole row takes its u = 0 value).
+// A torus of R = 4 km, r = 1.5 km or a cylinder of radius 2 km, length 8 km (the charts'
+// tests' shapes at a thousandth: cells of tens of metres at 2^6).
+inline std::shared_ptr<const core::Chart> smallTube(bool torus, int n) {
+  if (torus) return std::make_shared<core::TorusChart>(core::GridSize(n), 4000.0, 1500.0);
+  return std::make_shared<core::CylinderChart>(core::GridSize(n), 2000.0, 8000.0);
+}
+
+inline const char* tubeName(bool torus) {
+  return torus ? "torus" : "cylinder";
+}
+
 inline std::vector<float> heightsFrom(const core::Chart& chart,
                                       const std::function<double(int, int)>& f) {
   const core::GridSize g = chart.grid();

@@ -21,10 +21,6 @@ namespace fs = std::filesystem;
 
 namespace {
 
-fs::path freshDir(const std::string& name) {
-  return testkit::freshDir("session_" + name);
-}
-
 // Frames a codec cannot cheat on: noise, a moving gradient, a flat field, saturated pixels.
 std::vector<cv::Mat> syntheticFrames(int n, bool colour) {
   std::vector<cv::Mat> frames;
@@ -42,7 +38,7 @@ std::vector<cv::Mat> syntheticFrames(int n, bool colour) {
 }  // namespace
 
 TEST(FrameRecorder, RecordedFramesReadBackPixelIdentical) {
-  const fs::path dir = freshDir("record");
+  const fs::path dir = testkit::freshDir("session_record");
   for (bool colour : {false, true}) {
     const auto frames = syntheticFrames(12, colour);
     session::FrameRecorder rec;
@@ -82,7 +78,7 @@ TEST(FrameRecorder, RecordedFramesReadBackPixelIdentical) {
 }
 
 TEST(FrameRecorder, RefusesAFrameOfAnotherSizeAndStops) {
-  const fs::path dir = freshDir("record_bad");
+  const fs::path dir = testkit::freshDir("session_record_bad");
   session::FrameRecorder rec;
   rec.start(dir / "a.mkv", 30);
   rec.write(cv::Mat(48, 64, CV_8UC3, cv::Scalar(1, 2, 3)));
@@ -94,7 +90,7 @@ TEST(FrameRecorder, RefusesAFrameOfAnotherSizeAndStops) {
 }
 
 TEST(PlanetExport, WritesHeightmapSidecarAndMeshUnderTheNextFreeName) {
-  const fs::path dir = freshDir("export") / "exports";
+  const fs::path dir = testkit::freshDir("session_export") / "exports";
   const auto planet = testkit::bumpyTerrain(7, 3, 4000.0);
   const auto a = session::exportPlanet(planet, dir);
   EXPECT_EQ(a.heightmap, dir / "planet-001.png");
@@ -142,7 +138,7 @@ TEST(PlanetExport, WritesHeightmapSidecarAndMeshUnderTheNextFreeName) {
 }
 
 TEST(PlanetExport, InTheBackgroundFromACopyOfThePlanet) {
-  const fs::path dir = freshDir("export_bg") / "exports";
+  const fs::path dir = testkit::freshDir("session_export_bg") / "exports";
   auto planet = testkit::bumpyTerrain(7, 3, 4000.0);
   const auto reference = session::exportPlanet(planet, dir / "ref");
   session::BackgroundExport job;

@@ -29,18 +29,8 @@ using session::SessionStore;
 
 namespace {
 
-fs::path freshDir(const std::string& name) {
-  return testkit::freshDir("session_" + name);
-}
-
-std::vector<unsigned char> fileBytes(const fs::path& p) {
-  std::ifstream f(p, std::ios::binary);
-  return {std::istreambuf_iterator<char>(f), std::istreambuf_iterator<char>()};
-}
-void writeBytes(const fs::path& p, std::span<const unsigned char> b) {
-  std::ofstream f(p, std::ios::binary | std::ios::trunc);
-  f.write(reinterpret_cast<const char*>(b.data()), std::streamsize(b.size()));
-}
+using testkit::readAll;
+using testkit::writeAll;
 
 // Heights changed behind the undo journal's back, as sand settling does: a rectangle away from
 // the seam and the poles, journaled by recordRegion.
@@ -62,7 +52,7 @@ bool sameHeights(std::span<const float> a, std::span<const float> b) {
 }  // namespace
 
 TEST(SessionStore, CrashAfterRandomStrokesRecoversTheLiveHeightsBitForBit) {
-  const fs::path dir = freshDir("crash");
+  const fs::path dir = testkit::freshDir("session_crash");
   for (std::uint32_t seed : {1u, 2u, 3u}) {
     auto t = testkit::bumpyTerrain(7, seed, 5000.0);
     edit::EditPipeline pipe(t);
@@ -114,7 +104,7 @@ TEST(SessionStore, CrashAfterRandomStrokesRecoversTheLiveHeightsBitForBit) {
 }
 
 TEST(SessionStore, UndoIsJournaledAsTheHeightsBefore) {
-  const fs::path dir = freshDir("undo");
+  const fs::path dir = testkit::freshDir("session_undo");
   auto t = testkit::bumpyTerrain(6, 4, 3000.0);
   const std::vector<float> start(t.heights().begin(), t.heights().end());
   edit::EditPipeline pipe(t);
@@ -143,7 +133,7 @@ TEST(SessionStore, UndoIsJournaledAsTheHeightsBefore) {
 }
 
 TEST(SessionStore, AutosaveWaitsForTheIntervalAChangeAndTheEndOfAStroke) {
-  const fs::path dir = freshDir("autosave");
+  const fs::path dir = testkit::freshDir("session_autosave");
   auto t = testkit::bumpyTerrain(6, 4, 3000.0);
   edit::EditPipeline pipe(t);
   edit::GaussianBrush brush;
@@ -173,7 +163,7 @@ TEST(SessionStore, AutosaveWaitsForTheIntervalAChangeAndTheEndOfAStroke) {
 }
 
 TEST(StrokeJournal, TornLastRecordAtEveryByteRecoversTheCompleteStrokes) {
-  const fs::path dir = freshDir("torn");
+  const fs::path dir = testkit::freshDir("session_torn");
   auto t = testkit::bumpyTerrain(6, 7, 3000.0);
   edit::EditPipeline pipe(t);
   edit::GaussianBrush brush;
@@ -188,7 +178,7 @@ TEST(StrokeJournal, TornLastRecordAtEveryByteRecoversTheCompleteStrokes) {
   }
   pipe.journal().setListener(nullptr);
   store->flush();
-  const auto full = fileBytes(dir / "planet.journal");
+  const auto full = readAll(dir / "planet.journal");
   const auto whole = io::parseStrokeJournal(full, "j");
   ASSERT_EQ(whole.records.size(), 4u);
   ASSERT_TRUE(whole.warning.empty()) << whole.warning;
@@ -215,7 +205,7 @@ TEST(StrokeJournal, TornLastRecordAtEveryByteRecoversTheCompleteStrokes) {
     for (int garbage = 0; garbage < 2; ++garbage) {
       std::vector<unsigned char> b(full.begin(), full.begin() + std::ptrdiff_t(cut));
       if (garbage) b.resize(full.size(), 0xA5);
-      writeBytes(dir / "planet.journal", b);
+      writeAll(dir / "planet.journal", b);
       const Recovery rec = Recovery::inspect(SessionFiles::in(dir));
       ASSERT_EQ(rec.state(), Recovery::State::kRecoverable) << rec.message();
       EXPECT_EQ(rec.records(), 3u);
@@ -244,7 +234,7 @@ TEST(StrokeJournal, TornLastRecordAtEveryByteRecoversTheCompleteStrokes) {
 }
 
 TEST(Recovery, AnotherPlanetsJournalIsRefusedNamingTheFile) {
-  const fs::path dir = freshDir("foreign");
+  const fs::path dir = testkit::freshDir("session_foreign");
   const SessionFiles files = SessionFiles::in(dir);
   auto t = testkit::bumpyTerrain(6, 4, 3000.0);
   edit::EditPipeline pipe(t);
@@ -257,7 +247,7 @@ TEST(Recovery, AnotherPlanetsJournalIsRefusedNamingTheFile) {
     edittest::randomStroke(pipe, rng, brush);
     pipe.journal().setListener(nullptr);
   }
-  const auto journalBytes = fileBytes(files.journal);
+  const auto journalBytes = readAll(files.journal);
 
   // Another planet in the planet file (same grid, other heights).
   io::savePlanet(testkit::bumpyTerrain(6, 5, 3000.0), files.planet);
@@ -272,7 +262,7 @@ TEST(Recovery, AnotherPlanetsJournalIsRefusedNamingTheFile) {
   EXPECT_FALSE(fs::exists(files.journal));
 
   // Another grid.
-  writeBytes(files.journal, journalBytes);
+  writeAll(files.journal, journalBytes);
   io::savePlanet(testkit::bumpyTerrain(5, 4, 3000.0), files.planet);
   rec = Recovery::inspect(files);
   EXPECT_EQ(rec.state(), Recovery::State::kRefused);
@@ -291,7 +281,7 @@ TEST(Recovery, AnotherPlanetsJournalIsRefusedNamingTheFile) {
   EXPECT_EQ(rec.state(), Recovery::State::kAlreadySaved) << rec.message();
 
   // Not a journal at all.
-  writeBytes(files.journal, std::vector<unsigned char>(100, 'x'));
+  writeAll(files.journal, std::vector<unsigned char>(100, 'x'));
   rec = Recovery::inspect(files);
   EXPECT_EQ(rec.state(), Recovery::State::kRefused);
   EXPECT_NE(rec.message().find("not a PlanetSculpt stroke journal"), std::string::npos)
@@ -310,7 +300,7 @@ TEST(SessionStore, DisplacedAndSettledSandThroughTheStepperRecoversBitForBit) {
   // Without autosave every record since the start is applied (settling interleaved with the
   // stroke's stamps); with it, the scene crosses an autosave at the stroke's end.
   for (const double autosave : {0.0, 4.0}) {
-    const fs::path dir = freshDir("stepper" + std::to_string(int(autosave)));
+    const fs::path dir = testkit::freshDir("session_stepper" + std::to_string(int(autosave)));
     // Cells of about 20 km and a deep press: steep enough for the sand to slide.
     auto t = testkit::bumpyTerrain(10, 4, 3000.0);
     replay::ReplayOptions o = testkit::shortSceneOptions();

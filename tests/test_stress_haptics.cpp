@@ -25,11 +25,6 @@
 
 using namespace ps;
 using namespace ps::haptics;
-using haptictest::kGlobe;
-using haptictest::kInf;
-using haptictest::kNaN;
-using haptictest::kR;
-using haptictest::latLon;
 
 namespace {
 
@@ -49,7 +44,7 @@ Eigen::Vector3d perpendicular(const Eigen::Vector3d& d, double heading) {
 
 WorkspaceMap globeMap() {
   WorkspaceMap m;
-  m.scale = kR / kGlobe;  // 1.06e8 planet m per device m
+  m.scale = haptictest::kR / haptictest::kGlobe;  // 1.06e8 planet m per device m
   return m;
 }
 
@@ -68,7 +63,7 @@ const char* kKindNames[kKinds] = {"teleports", "nyquist", "plunge",       "seam"
 TEST(StressHaptics, AdversarialPathsKeepForcesFiniteAndWithinLimits) {
   const terrain::Terrain planet = haptictest::reliefPlanet(8);
   const WorkspaceMap map = globeMap();
-  const double rs = kGlobe;  // surface radius (device m), within the relief's 30 um
+  const double rs = haptictest::kGlobe;  // surface radius (device m), within the relief's 30 um
   HapticSettings soft = haptictest::softSand();
   soft.limits.maxForce = 5.0;
   soft.limits.maxForceRate = 1000.0;
@@ -80,7 +75,8 @@ TEST(StressHaptics, AdversarialPathsKeepForcesFiniteAndWithinLimits) {
     HapticCore core(s, map);
     std::mt19937 rng(1234 + variant++);
     std::uniform_real_distribution<double> u01(0, 1), sym(-1, 1);
-    const double specials[] = {kNaN, kInf, -kInf, 1e300, -1e300, 0.0, 1e-300, 1e12};
+    const double specials[] = {
+        haptictest::kNaN, haptictest::kInf, -haptictest::kInf, 1e300, -1e300, 0.0, 1e-300, 1e12};
     auto special = [&] { return specials[std::size_t(u01(rng) * 8) % 8]; };
     TerrainPatch patch;
     const TerrainPatch* use = nullptr;
@@ -97,7 +93,7 @@ TEST(StressHaptics, AdversarialPathsKeepForcesFiniteAndWithinLimits) {
       if (kind == kSeam) lon = 180 - 0.5 * u01(rng), heading = std::numbers::pi / 2;
       if (kind == kPole) lat = u01(rng) < 0.5 ? 90 : -90, lon = 0;
       const Eigen::Vector3d dir0 =
-          kind == kPole ? Eigen::Vector3d(0, 0, lat > 0 ? 1 : -1) : latLon(lat, lon);
+          kind == kPole ? Eigen::Vector3d(0, 0, lat > 0 ? 1 : -1) : haptictest::latLon(lat, lon);
       const Eigen::Vector3d axis = perpendicular(dir0, heading);
       const double depth0 = -0.002 + 0.012 * u01(rng);  // m (device), mostly inside
       const double amp = std::exp(std::log(1e-6) + u01(rng) * std::log(1.4e-3 / 1e-6));
@@ -110,7 +106,7 @@ TEST(StressHaptics, AdversarialPathsKeepForcesFiniteAndWithinLimits) {
         switch (kind) {
           case kTeleports:
             if (u01(rng) < 0.03) {
-              walk = latLon(90 * sym(rng), 180 * sym(rng), rs * (1 + 0.25 * sym(rng)));
+              walk = haptictest::latLon(90 * sym(rng), 180 * sym(rng), rs * (1 + 0.25 * sym(rng)));
             } else {
               walk += 3e-4 * Eigen::Vector3d(sym(rng), sym(rng), sym(rng));
             }
@@ -318,7 +314,7 @@ CycleEnergy pushPull(const HapticSettings& s, const terrain::Terrain& planet, do
 // back, and a real push (>= 2 mm, several newtons) of 0.3 s or more takes energy out of the hand.
 TEST(StressHaptics, RandomClosedPushPullCyclesInjectNoEnergy) {
   const terrain::Terrain planet = haptictest::flatPlanet(8);
-  const double rs = (kR + 2000.0) / (kR / kGlobe);
+  const double rs = (haptictest::kR + 2000.0) / (haptictest::kR / haptictest::kGlobe);
   const int cycles = 30 * testkit::stressScale();
   std::mt19937 rng(77);
   std::uniform_real_distribution<double> u01(0, 1), sym(-1, 1);
@@ -335,7 +331,7 @@ TEST(StressHaptics, RandomClosedPushPullCyclesInjectNoEnergy) {
       lat = (u01(rng) < 0.5 ? 1 : -1) * (89.5 + 0.4 * u01(rng));
       heading = lat > 0 ? 0.0 : std::numbers::pi;
     }
-    const Eigen::Vector3d dir0 = latLon(lat, lon);
+    const Eigen::Vector3d dir0 = haptictest::latLon(lat, lon);
     const Eigen::Vector3d axis = perpendicular(dir0, heading);
     const double depth = std::exp(std::log(3e-4) + u01(rng) * std::log(25e-3 / 3e-4));
     const double minPeriod = std::numbers::pi * (depth + 0.001) / 1.9;
@@ -389,9 +385,9 @@ TEST(StressHaptics, RandomClosedPushPullCyclesInjectNoEnergy) {
 // dissipative (the test above).
 TEST(StressHaptics, NyquistRateOscillationStaysWithinTheSampledDataBounds) {
   const terrain::Terrain planet = haptictest::flatPlanet(8);
-  const double rs = (kR + 2000.0) / (kR / kGlobe);
+  const double rs = (haptictest::kR + 2000.0) / (haptictest::kR / haptictest::kGlobe);
   const WorkspaceMap map = globeMap();
-  const Eigen::Vector3d dir = latLon(20, 30);
+  const Eigen::Vector3d dir = haptictest::latLon(20, 30);
   TerrainPatch patch;
   ASSERT_TRUE(patch.capture(planet, map.toPlanet(dir * rs), 8));
   double worstSpring = -1e300, worstDrag = -1e300;  // net work beyond the bound's terms, N s/m

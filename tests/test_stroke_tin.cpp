@@ -16,6 +16,7 @@
 #include "sand/sand_grid.hpp"
 #include "sand/stroke_tin.hpp"
 #include "sand/tin_sand_tool.hpp"
+#include "small_planet.hpp"
 #include "terrain/terrain.hpp"
 #include "test_edit_util.hpp"
 #include "test_sand_util.hpp"
@@ -78,33 +79,25 @@ sand::TinSandToolSettings perStampSettings(double radius) {
   return s;
 }
 
-struct Planet {
-  explicit Planet(int level = 8) : chart(sandtest::sphereChart(level, 20e3)) {}
-  std::shared_ptr<const core::LatLongChart> chart;  // level 8: 257^2, 490 m cells
-  terrain::Terrain t{chart, testkit::bumpyHeights(*chart, 3, 100.0)};
-  edit::EditPipeline pipe{t};
-};
-
-Eigen::Vector3d above(double latDeg, double lonDeg, double h) {
-  return edittest::latLon(latDeg, lonDeg, 20e3 + h, 1.0);
-}
+using testkit::aboveSmallPlanet;
+using testkit::SmallPlanet;
 
 // A stroke along the parallel at `lat` from `lon0` over `degrees`, the tool's lowest point
 // `press` under the reference surface plus 100 m, a sample every 0.2 degrees.
 void stroke(edit::EditPipeline& pipe, const sand::TinSandTool& tool, double lat, double lon0,
             double degrees, double press, const std::function<void()>& afterSample = {}) {
   const double r = tool.settings().radius;
-  pipe.beginStroke(tool, {above(lat, lon0, r - press), 0.0});
+  pipe.beginStroke(tool, {aboveSmallPlanet(lat, lon0, r - press), 0.0});
   if (afterSample) afterSample();
   for (double d = 0.2; d <= degrees + 1e-9; d += 0.2) {
-    pipe.moveTo({above(lat, lon0 + d, r - press), 0.0});
+    pipe.moveTo({aboveSmallPlanet(lat, lon0 + d, r - press), 0.0});
     if (afterSample) afterSample();
   }
   pipe.endStroke();
 }
 
 TEST(TinSandTool, AStrokesStampsReuseOneRegionTinKeepingTheVolume) {
-  Planet p;
+  SmallPlanet p;
   const sand::SandGrid grid(p.chart);
   sand::TinSandTool tool(p.chart, toolSettings(1200.0));
   std::size_t stamps = 0;
@@ -135,7 +128,7 @@ struct Difference {
 };
 
 // The heights of a and b over the grid entries either changed.
-Difference differ(const Planet& a, const Planet& b) {
+Difference differ(const SmallPlanet& a, const SmallPlanet& b) {
   Difference d;
   const auto start = testkit::bumpyHeights(*a.chart, 3, 100.0);
   const auto& ha = a.t.heights();
@@ -155,12 +148,12 @@ Difference differ(const Planet& a, const Planet& b) {
 // One stamp, no erosion: the region TIN (coarse, but every grid point within the stamp's reach)
 // presses what the all-points TIN pressed.
 TEST(TinSandTool, OneStampOnTheRegionTinPressesWhatTheAllPointsTinPressed) {
-  Planet a(10), b(10);  // 1025^2, 123 m cells: 10 a radius
+  SmallPlanet a(10), b(10);  // 1025^2, 123 m cells: 10 a radius
   sand::TinSandToolSettings sa = toolSettings(1200.0), sb = perStampSettings(1200.0);
   sa.erosionSteps = sb.erosionSteps = 0;
   sand::TinSandTool region(a.chart, sa), perStamp(b.chart, sb);
-  a.pipe.apply(region, {above(-20.0, 100.0, 900.0), 0.0});
-  b.pipe.apply(perStamp, {above(-20.0, 100.0, 900.0), 0.0});
+  a.pipe.apply(region, {aboveSmallPlanet(-20.0, 100.0, 900.0), 0.0});
+  b.pipe.apply(perStamp, {aboveSmallPlanet(-20.0, 100.0, 900.0), 0.0});
   EXPECT_LT(region.lastStats().tinVertices, perStamp.lastStats().tinVertices);
   const Difference d = differ(a, b);
   std::cout << "one stamp, no erosion: region TIN " << region.lastStats().tinVertices
@@ -173,7 +166,7 @@ TEST(TinSandTool, OneStampOnTheRegionTinPressesWhatTheAllPointsTinPressed) {
 }
 
 TEST(TinSandTool, AStrokesRegionTinIsSmallerThanThePerStampTinsAndMeasuredAgainstThem) {
-  Planet a(10), b(10);
+  SmallPlanet a(10), b(10);
   sand::TinSandTool region(a.chart, toolSettings(1200.0));
   sand::TinSandTool perStamp(b.chart, perStampSettings(1200.0));
   std::size_t perStampLargest = 0;
@@ -196,7 +189,7 @@ TEST(TinSandTool, AStrokesRegionTinIsSmallerThanThePerStampTinsAndMeasuredAgains
 }
 
 TEST(TinSandTool, AStampLeavingTheRegionMakesANewOne) {
-  Planet p;
+  SmallPlanet p;
   const sand::SandGrid grid(p.chart);
   sand::TinSandTool tool(p.chart, toolSettings(1200.0));
   const double v0 = grid.volume(p.t.heights());
@@ -212,7 +205,7 @@ TEST(TinSandTool, AStampLeavingTheRegionMakesANewOne) {
 }
 
 TEST(TinSandTool, ARegionIsStaleOnceTheGridChangesUnderIt) {
-  Planet p;
+  SmallPlanet p;
   const sand::TinSandToolSettings s = toolSettings(1200.0);
   edit::RegionGrower grower;
   edit::DistanceField field(p.chart);
@@ -229,7 +222,7 @@ TEST(TinSandTool, ARegionIsStaleOnceTheGridChangesUnderIt) {
 }
 
 std::vector<float> strokes(bool oneTool) {
-  Planet p;
+  SmallPlanet p;
   sand::TinSandTool first(p.chart, toolSettings(1200.0));
   sand::TinSandTool second(p.chart, toolSettings(1200.0));
   stroke(p.pipe, first, 60.0, 10.0, 6.0, 300.0);

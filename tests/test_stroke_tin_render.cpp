@@ -21,6 +21,7 @@
 #include "render/planet_renderer.hpp"
 #include "render/projection.hpp"
 #include "sand/tin_sand_tool.hpp"
+#include "small_planet.hpp"
 #include "terrain/mesh_patch.hpp"
 #include "terrain/terrain.hpp"
 #include "terrain/tessellator.hpp"
@@ -32,13 +33,13 @@ using namespace ps;
 
 namespace {
 
-constexpr double kR = 20e3;
+using testkit::kSmallPlanetRadius;
 constexpr double kLat = 15.0, kLon = 40.0;
 
 // A 513^2 planet of 20 km radius (245 m cells) after a 2-stamp stroke of 1,200 m stamps pressed
 // 300 m: the TIN's walls are a rim wide, the grid's a cell.
 struct Scene {
-  std::shared_ptr<const core::Chart> chart = sandtest::sphereChart(9, kR);
+  std::shared_ptr<const core::Chart> chart = sandtest::sphereChart(9, kSmallPlanetRadius);
   terrain::Terrain planet{chart, testkit::bumpyHeights(*chart, 3, 100.0)};
   sand::TinSandTool tool{chart, [] {
                            sand::TinSandToolSettings s;
@@ -47,8 +48,8 @@ struct Scene {
                          }()};
   Scene() {
     edit::EditPipeline pipe(planet);
-    pipe.beginStroke(tool, {edittest::latLon(kLat, kLon, kR + 900.0, 1.0), 0.0});
-    pipe.moveTo({edittest::latLon(kLat, kLon + 2.0, kR + 900.0, 1.0), 0.0});
+    pipe.beginStroke(tool, {edittest::latLon(kLat, kLon, kSmallPlanetRadius + 900.0, 1.0), 0.0});
+    pipe.moveTo({edittest::latLon(kLat, kLon + 2.0, kSmallPlanetRadius + 900.0, 1.0), 0.0});
     pipe.endStroke();
   }
 };
@@ -61,7 +62,7 @@ Scene& scene() {
 // A camera `dist` m from the stroke's middle, `above` m over it, from azimuth `az` (radians,
 // from east toward north).
 terrain::Camera cameraAt(double az, double dist, double above, int w = 320, int h = 240) {
-  const Eigen::Vector3d target = edittest::latLon(kLat, kLon + 1.0, kR, 1.0);
+  const Eigen::Vector3d target = edittest::latLon(kLat, kLon + 1.0, kSmallPlanetRadius, 1.0);
   const Eigen::Vector3d up = target.normalized();
   const Eigen::Vector3d east = Eigen::Vector3d::UnitZ().cross(up).normalized();
   const Eigen::Vector3d north = up.cross(east);
@@ -131,7 +132,7 @@ TEST(StrokeTinRender, InsideTheRegionTheDepthIsTheTinSurfaceNotTheGrids) {
     const render::DepthRange range = render::depthRangeFor(cam, s.planet);
     const Eigen::Matrix4d P = render::clipFromCamera(cam, range.nearZ, range.farZ);
     const auto& region = *s.tool.strokeTin();
-    const double cell = M_PI * kR / s.chart->grid().m();
+    const double cell = M_PI * kSmallPlanetRadius / s.chart->grid().m();
     const Eigen::Vector3d o = cam.eye - mesh.eye;
     for (int y = 0; y < cam.height; y += 3) {
       for (int x = 0; x < cam.width; x += 3) {
@@ -141,8 +142,8 @@ TEST(StrokeTinRender, InsideTheRegionTheDepthIsTheTinSurfaceNotTheGrids) {
         // Well inside the TIN's domain (four cells in from its border: past the overlap ring,
         // where the view's kept triangles may lie nearer).
         const Eigen::Vector3d hit = mesh.eye + o + tTin * d;
-        if (region.sand().tin().depthInside(region.frame().project(hit.normalized() * kR)) <
-            4 * cell)
+        if (region.sand().tin().depthInside(
+                region.frame().project(hit.normalized() * kSmallPlanetRadius)) < 4 * cell)
           continue;
         const double tGrid = nearestHit(grid, o, d);
         ASSERT_TRUE(std::isfinite(tGrid));
@@ -195,7 +196,7 @@ TEST(StrokeTinRender, ThePatchsPerPixelLightIsItsFacetsSlope) {
   const cv::Mat faceted = renderer.renderAR({}, s.planet, mesh, cam, style);
   // The pixels whose nearest surface is a patch triangle well inside the region.
   const auto& region = *s.tool.strokeTin();
-  const double cell = M_PI * kR / s.chart->grid().m();
+  const double cell = M_PI * kSmallPlanetRadius / s.chart->grid().m();
   const Eigen::Vector3d o = cam.eye - mesh.eye;
   double sum = 0, worst = 0;
   std::size_t n = 0;
@@ -205,7 +206,8 @@ TEST(StrokeTinRender, ThePatchsPerPixelLightIsItsFacetsSlope) {
       const double t = nearestHit(mesh, o, d, mesh.patchIndexBegin);
       if (!std::isfinite(t) || nearestHit(mesh, o, d, 0, mesh.patchIndexBegin) < t) continue;
       const Eigen::Vector3d hit = mesh.eye + o + t * d;
-      if (region.sand().tin().depthInside(region.frame().project(hit.normalized() * kR)) < 4 * cell)
+      if (region.sand().tin().depthInside(
+              region.frame().project(hit.normalized() * kSmallPlanetRadius)) < 4 * cell)
         continue;
       const cv::Vec3b a = perPixel.at<cv::Vec3b>(y, x), b = faceted.at<cv::Vec3b>(y, x);
       double diff = 0;
@@ -232,9 +234,9 @@ double depthUnderTheTin(const terrain::Camera& cam, int x, int y) {
   double deepest = 0;
   for (double t = 0; t < 20e3; t += 2.0) {
     const Eigen::Vector3d p = cam.eye + t * d;
-    const Eigen::Vector2d xy = region.frame().project(p.normalized() * kR);
+    const Eigen::Vector2d xy = region.frame().project(p.normalized() * kSmallPlanetRadius);
     const double h = region.sand().tin().heightAt(xy);
-    if (!std::isnan(h)) deepest = std::max(deepest, h - (p.norm() - kR));
+    if (!std::isnan(h)) deepest = std::max(deepest, h - (p.norm() - kSmallPlanetRadius));
   }
   return deepest;
 }
@@ -272,7 +274,7 @@ TEST(StrokeTinRender, NoBackgroundLeaksThroughTheJoinInTheRenderedPicture) {
     for (std::size_t t = 0; t < p.indices.size(); ++t) {
       const std::size_t next = t % 3 == 2 ? t - 2 : t + 1;
       const double L = (p.positions[p.indices[t]] - p.positions[p.indices[next]]).norm();
-      slack = std::max(slack, 0.5 + L * L / (8 * kR));
+      slack = std::max(slack, 0.5 + L * L / (8 * kSmallPlanetRadius));
     }
   }
   // From four sides, 9 km away: 3 km up (the region in front of the horizon), 1.5 km and

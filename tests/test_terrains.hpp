@@ -1,6 +1,7 @@
 #pragma once
 // Terrains for tests: rough, deterministic relief computed from each vertex's 3D direction (so
 // seam twins and pole rows are consistent), independent of the production relief generator.
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <memory>
@@ -50,6 +51,13 @@ inline std::shared_ptr<const core::LatLongChart> earthChart(int n) {
   return std::make_shared<core::LatLongChart>(core::GridSize(n), kEarthRadius);
 }
 
+// An Earth-sized lat-long planet with every height h: a sphere, whose silhouette, shadow and
+// surface are known exactly.
+inline terrain::Terrain levelTerrain(int n, float h = 0.0f) {
+  auto chart = earthChart(n);
+  return terrain::Terrain(chart, std::vector<float>(chart->grid().count(), h));
+}
+
 inline terrain::Terrain bumpyTerrain(int n, std::uint32_t seed = 1, double amplitude = 8000.0,
                                      terrain::ErrorRule rule = terrain::ErrorRule::kHybridExact) {
   auto chart = earthChart(n);
@@ -63,6 +71,10 @@ inline terrain::Terrain reliefTerrain(int n, std::uint64_t seed) {
   p.seed = seed;
   return terrain::Terrain(chart, terrain::generateRelief(*chart, p));
 }
+
+// Both of the octahedral chart's mappings, for tests that run on each.
+inline constexpr std::array<core::OctahedralChart::Mapping, 2> kOctahedralMappings{
+    core::OctahedralChart::Mapping::kEqualArea, core::OctahedralChart::Mapping::kCentral};
 
 inline std::shared_ptr<const core::OctahedralChart> octahedralChart(
     int n, core::OctahedralChart::Mapping mapping = core::OctahedralChart::Mapping::kEqualArea) {

@@ -22,7 +22,7 @@ namespace {
 
 // A random camera: some from orbit, some skimming the surface, some looking at a pole or
 // along the seam.
-Camera randomCamera(std::mt19937& rng, double R, int width = 640, int height = 480) {
+Camera randomCameraAnyAltitude(std::mt19937& rng, double R, int width = 640, int height = 480) {
   std::uniform_real_distribution<double> uni(-1, 1), unit(0, 1);
   Eigen::Vector3d dir(uni(rng), uni(rng), uni(rng));
   const int kind = int(rng() % 4);
@@ -48,7 +48,7 @@ TEST(Tessellator, WholePlanetMeshIsCrackFreeForManyViews) {
     std::mt19937 rng(100 + n);
     Tessellator tess;
     for (int i = 0; i < 25; ++i) {
-      const Camera cam = randomCamera(rng, testkit::kEarthRadius);
+      const Camera cam = randomCameraAnyAltitude(rng, testkit::kEarthRadius);
       TessellationSettings s;
       s.cull = false;
       s.triangleBudget = 0;
@@ -82,7 +82,7 @@ TEST(Tessellator, MeasuredScreenErrorNeverExceedsDistMax) {
   Tessellator tess;
   int meaningful = 0;
   for (int i = 0; i < 40; ++i) {
-    const Camera cam = randomCamera(rng, testkit::kEarthRadius);
+    const Camera cam = randomCameraAnyAltitude(rng, testkit::kEarthRadius);
     TessellationSettings s;
     s.triangleBudget = 0;
     s.distMaxPx = std::pow(2.0, -1 + int(rng() % 6));  // 0.5 .. 16 px
@@ -144,7 +144,7 @@ std::vector<std::array<std::uint64_t, 3>> referenceMesh(const terrain::Terrain& 
   return out;
 }
 
-std::vector<std::array<std::uint64_t, 3>> triangleSet(const terrain::Mesh& mesh) {
+std::vector<std::array<std::uint64_t, 3>> sortedTriangles(const terrain::Mesh& mesh) {
   std::vector<std::array<std::uint64_t, 3>> out;
   for (std::size_t k = 0; k < mesh.triangleCount(); ++k) {
     std::array<std::uint64_t, 3> tri{mesh.gridIndex[mesh.indices[3 * k]],
@@ -168,13 +168,13 @@ TEST(Tessellator, EmitsExactlyTheSplitRulesTriangles) {
   Tessellator tess;
   std::size_t unvisited = 0;
   for (int i = 0; i < 12; ++i) {
-    const Camera cam = randomCamera(rng, testkit::kEarthRadius);
+    const Camera cam = randomCameraAnyAltitude(rng, testkit::kEarthRadius);
     TessellationSettings s;
     s.cull = false;
     s.triangleBudget = 0;
     s.distMaxPx = std::pow(2.0, -1 + int(rng() % 5));  // 0.5 .. 8 px
     const auto& mesh = tess.tessellate(t, cam, s);
-    ASSERT_EQ(triangleSet(mesh), referenceMesh(t, cam, s.distMaxPx))
+    ASSERT_EQ(sortedTriangles(mesh), referenceMesh(t, cam, s.distMaxPx))
         << "view " << i << ", " << mesh.triangleCount() << " triangles";
     unvisited += tess.stats().leafPairsUnvisited;
   }

@@ -56,10 +56,6 @@ void forEachHeldTexel(const render::HeightTileCache& cache, F&& f) {
   }
 }
 
-terrain::Terrain reliefPlanet(int n) {
-  return testkit::reliefTerrain(n, 11);
-}
-
 terrain::Camera above(double R, double altitude, int width = 320, int height = 240) {
   const Eigen::Vector3d dir = Eigen::Vector3d(1, 0.3, 0.4).normalized();
   const Eigen::Vector3d ahead = dir.cross(Eigen::Vector3d::UnitZ()).normalized();
@@ -90,7 +86,7 @@ TEST(TileRequests, EveryTileHasOneIndexAndTheLevelsHalve) {
 // Every vertex of a triangle lies in a tile the view asks for at the triangle's level; a closer
 // view asks for finer levels; a bias makes every request coarser, down to the one coarsest tile.
 TEST(TileRequests, TheTilesCoverEachTriangleAtItsLevel) {
-  const auto planet = reliefPlanet(11);
+  const auto planet = testkit::reliefTerrain(11, 11);
   const double R = planet.chart().sphereRadius();
   const int side = planet.grid().side();
   const auto pyramid = render::TilePyramid::forGrid(planet.grid());
@@ -130,7 +126,7 @@ TEST(TileRequests, TheTilesCoverEachTriangleAtItsLevel) {
 // budget too small for the view, the same count sees the pixels that had to go coarser.
 TEST(TileRequests, PixelsFindTheLevelTheirFootprintAsksFor) {
   SKIP_WITHOUT_GL();
-  const auto planet = reliefPlanet(11);
+  const auto planet = testkit::reliefTerrain(11, 11);
   const double R = planet.chart().sphereRadius();
   render::EglContext gl;
   render::PlanetRenderer renderer, starved;

@@ -32,7 +32,7 @@ namespace {
 
 constexpr double kDepth = 400.0;  // m of sand everywhere before the stamp
 
-struct GluedCase {
+struct StampCase {
   std::string name;
   std::shared_ptr<const core::Chart> chart;
   double radius;  // the stamp's (m)
@@ -42,8 +42,8 @@ struct GluedCase {
   std::vector<core::GridPoint> special;  // on folds, seams, corners
 };
 
-std::vector<GluedCase> gluedCases() {
-  std::vector<GluedCase> out;
+std::vector<StampCase> stampCases() {
+  std::vector<StampCase> out;
   {  // A 20 km sphere, 257^2 (~250 m cells): the lat-long tests' planet and stamp.
     auto c = std::make_shared<core::OctahedralChart>(core::GridSize(8), 20e3);
     const int m = c->grid().m();
@@ -104,7 +104,7 @@ std::vector<GluedCase> gluedCases() {
 // A case's chart under a flat layer kDepth deep, its edit pipeline, a sand tool of the case's
 // radius and the grid's cells.
 struct SandScene {
-  explicit SandScene(const GluedCase& c)
+  explicit SandScene(const StampCase& c)
       : t(c.chart, std::vector<float>(c.chart->grid().count(), float(kDepth))),
         pipe(t),
         tool(c.chart, settingsOf(c.radius)),
@@ -167,7 +167,7 @@ double profileDifference(const StampOutcome& a, const StampOutcome& ref) {
 
 TEST(TinSandGlued, AStampAcrossAFoldOrASeamKeepsVolumeTwinsAndItsProfile) {
   std::mt19937 rng(43);
-  for (const GluedCase& c : gluedCases()) {
+  for (const StampCase& c : stampCases()) {
     SCOPED_TRACE(c.name);
     terrain::Terrain t(c.chart, std::vector<float>(c.chart->grid().count(), float(kDepth)));
     edit::EditPipeline pipe(t);
@@ -216,7 +216,7 @@ TEST(TinSandGlued, AStampAcrossAFoldOrASeamKeepsVolumeTwinsAndItsProfile) {
 // A stroke that crosses a fold or a seam reuses one region TIN across it: the volume kept and the
 // twins one height after every stamp.
 TEST(TinSandGlued, AStrokeAcrossAFoldOrASeamReusesItsRegionTin) {
-  for (const GluedCase& c : gluedCases()) {
+  for (const StampCase& c : stampCases()) {
     SCOPED_TRACE(c.name);
     SandScene scene(c);
     auto& [t, pipe, tool, cells] = scene;
@@ -249,7 +249,7 @@ TEST(TinSandGlued, AStrokeAcrossAFoldOrASeamReusesItsRegionTin) {
 // the TIN's (x, y)) raised by its height along the normal, and the patch stands for both twins
 // of a seam's points. It has no plane (the haptic path feels the grid there).
 TEST(TinSandGlued, ATubesRegionPatchLiesOnTheTube) {
-  for (const GluedCase& c : gluedCases()) {
+  for (const StampCase& c : stampCases()) {
     if (c.name == "octahedral") continue;
     SCOPED_TRACE(c.name);
     SandScene scene(c);

@@ -29,9 +29,7 @@ sand::TinSandToolSettings settings(double radius, int segments = 24, double regi
   return s;
 }
 
-Eigen::Vector3d above(const core::Chart& chart, double latDeg, double lonDeg, double h) {
-  return edittest::latLon(latDeg, lonDeg, chart.sphereRadius() + h, 1.0);
-}
+using edittest::pointAbove;
 
 TEST(TinSandTool, PressesAFlatBoxKeepingItsVolumeAndUndoesBitForBit) {
   auto chart = sandtest::flatChart(7);  // 129^2, 1 m cells
@@ -63,7 +61,7 @@ TEST(TinSandTool, WorksOnThePlanetAtTheEquatorTheSeamAndThePoles) {
   const sand::SandGrid grid(chart);
   for (auto [lat, lon] : {std::pair{0.0, 10.0}, {5.0, 180.0}, {-86.0, 40.0}, {90.0, 0.0}}) {
     const double vBefore = grid.volume(t.heights());
-    pipe.apply(tool, {above(*chart, lat, lon, 1200.0 - 300.0), 0.0});
+    pipe.apply(tool, {pointAbove(*chart, lat, lon, 1200.0 - 300.0), 0.0});
     const auto& s = tool.lastStats();
     EXPECT_GT(s.displacedVolume, 1e8) << lat << " " << lon;
     EXPECT_GT(s.gridVertices, 30u) << lat << " " << lon;
@@ -86,7 +84,7 @@ TEST(TinSandTool, TheSameStrokeGivesTheSameHeights) {
     edit::EditPipeline pipe(t);
     sand::TinSandTool tool(chart, settings(1200.0));
     for (int k = 0; k < 6; ++k)
-      pipe.apply(tool, {above(*chart, 30.0, 176.0 + 1.5 * k, 1200.0 - 300.0), 0.0});
+      pipe.apply(tool, {pointAbove(*chart, 30.0, 176.0 + 1.5 * k, 1200.0 - 300.0), 0.0});
     return std::vector<float>(t.heights().begin(), t.heights().end());
   };
   const auto a = run(), b = run();

@@ -75,11 +75,12 @@ terrain::Terrain bumpy(std::shared_ptr<const core::Chart> chart, std::uint32_t s
   return terrain::Terrain(std::move(chart), std::move(h));
 }
 
-struct Case {
+struct TubeChartCase {
   const char* name;
   std::shared_ptr<const core::Chart> (*make)(int);
 };
-const std::array<Case, 2> kCases{Case{"torus", torus}, Case{"cylinder", cylinder}};
+const std::array<TubeChartCase, 2> kTubeChartCases{TubeChartCase{"torus", torus},
+                                                   TubeChartCase{"cylinder", cylinder}};
 
 bool isTorus(const core::Chart& c) {
   return c.name() == "torus";
@@ -152,7 +153,7 @@ std::size_t borderEdgesOffTheEnds(const terrain::Terrain& t, const terrain::Mesh
 // circle; the cylinder: at its radius from the axis), up() is the outward normal, and the
 // inverse gives a point back; random points of the surface go to the grid and back.
 TEST(TorusAndCylinder, MapsTheGridOntoTheSurfaceAndBack) {
-  for (const Case& k : kCases) {
+  for (const TubeChartCase& k : kTubeChartCases) {
     const auto chart = k.make(6);
     const core::Chart& c = *chart;
     const int m = c.grid().m();
@@ -216,7 +217,7 @@ TEST(TorusAndCylinder, RefusesRadiiThatAreNoRingTorus) {
 // Twins are one point bit for bit and share one canonical vertex; the torus has m^2 distinct
 // points (V - E + F = m^2 - 3 m^2 + 2 m^2 = 0), the cylinder m (m + 1) (an annulus: 0 too).
 TEST(TorusAndCylinder, TwinsAreOnePointAndShareTheirCanonicalVertex) {
-  for (const Case& k : kCases) {
+  for (const TubeChartCase& k : kTubeChartCases) {
     const auto chart = k.make(5);
     const core::Chart& c = *chart;
     const int m = c.grid().m();
@@ -272,7 +273,7 @@ TEST(TorusAndCylinder, TheGridsMirrorIsTheTorussMirror) {
 // Random edits, across both seams and at the torus's corner (the seams' crossing): the bounds
 // updated over the edit's rectangle equal a full rebuild bit for bit.
 TEST(TorusAndCylinder, LocalBoundUpdatesEqualAFullRebuildBitForBit) {
-  for (const Case& k : kCases) {
+  for (const TubeChartCase& k : kTubeChartCases) {
     auto t = bumpy(k.make(7), 5, 4000.0);
     const auto g = t.grid();
     const int m = g.m();
@@ -325,7 +326,7 @@ TEST(TorusAndCylinder, LocalBoundUpdatesEqualAFullRebuildBitForBit) {
 // seams, at the corner, at the torus's inner and outer equators and anywhere; radii from a cell
 // to across the hole. Every vertex lies in an image of the dirty box.
 TEST(TorusAndCylinder, RegionGrowingEqualsBruteForce) {
-  for (const Case& k : kCases) {
+  for (const TubeChartCase& k : kTubeChartCases) {
     const auto chart = k.make(7);
     const int m = chart->grid().m();
     edit::DistanceField field(chart);
@@ -374,7 +375,7 @@ TEST(TorusAndCylinder, RegionGrowingEqualsBruteForce) {
 // hole) and elsewhere: the whole surface's mesh has no crack (welded by canonical; the
 // cylinder's ends are its only border), and the culled view's screen error is within dist_max.
 TEST(TorusAndCylinder, TessellationsAreCrackFreeAndWithinDistMax) {
-  for (const Case& k : kCases) {
+  for (const TubeChartCase& k : kTubeChartCases) {
     const auto t = bumpy(k.make(8), 7, 6000.0);
     const core::Chart& c = t.chart();
     const int m = t.grid().m();
@@ -408,7 +409,7 @@ TEST(TorusAndCylinder, TessellationsAreCrackFreeAndWithinDistMax) {
 TEST(TorusAndCylinder, WholeMeshesAreWeldedTorusAndTube) {
   const auto dir = std::filesystem::temp_directory_path() / "ps_torus_cylinder_meshes";
   std::filesystem::create_directories(dir);
-  for (const Case& k : kCases) {
+  for (const TubeChartCase& k : kTubeChartCases) {
     const auto t = bumpy(k.make(7), 2, 5000.0);
     const bool tor = isTorus(t.chart());
     for (double error : {20000.0, 2000.0}) {
@@ -453,7 +454,7 @@ TEST(TorusAndCylinder, WholeMeshesAreWeldedTorusAndTube) {
 // every vertex that changed lies in an image of the reported dirty box, and undo gives the
 // heights back bit for bit.
 TEST(TorusAndCylinder, BrushEditsKeepBoundsTwinsAndUndo) {
-  for (const Case& k : kCases) {
+  for (const TubeChartCase& k : kTubeChartCases) {
     auto t = bumpy(k.make(7), 9, 3000.0);
     const core::Chart& c = t.chart();
     const auto g = t.grid();
@@ -509,7 +510,7 @@ TEST(TorusAndCylinder, BrushEditsKeepBoundsTwinsAndUndo) {
 // heights bit for bit.
 TEST(StressTubeEdits, RandomBrushActionsKeepEveryInvariant) {
   const int actions = (testkit::underAsan() ? 60 : 240) * testkit::stressScale();
-  for (const Case& k : kCases) {
+  for (const TubeChartCase& k : kTubeChartCases) {
     auto t = bumpy(k.make(6), 17, 3000.0);
     const core::Chart& c = t.chart();
     const int m = t.grid().m();

@@ -32,7 +32,6 @@ using tracking::Pose;
 
 namespace {
 
-const std::filesystem::path kRoot = ps::app::sourceDir();
 // AprilTag's corners on sharp synthetic markers are within 0.07-0.10 px (field notes); twice
 // that here.
 constexpr double kCornerNoisePx = 0.2;
@@ -90,13 +89,15 @@ std::vector<tracking::Detection> detect(const MarkerLayout& l, const Pose& body,
 }  // namespace
 
 TEST(TrackingBoard, CommittedLayoutsAreValid) {
-  const MarkerLayout board = tracking::loadMarkerLayout(tracking::defaultBoardPath(kRoot));
+  const MarkerLayout board =
+      tracking::loadMarkerLayout(tracking::defaultBoardPath(app::sourceDir()));
   EXPECT_EQ(board.family, "tag36h11");
   EXPECT_GE(board.markers.size(), 4u);
   EXPECT_TRUE(board.planar());
   ASSERT_TRUE(board.planetCentre.has_value());
   EXPECT_GT(board.planetCentre->z(), 0.0);  // above the printed face
-  const MarkerLayout tool = tracking::loadMarkerLayout(tracking::defaultToolLayoutPath(kRoot));
+  const MarkerLayout tool =
+      tracking::loadMarkerLayout(tracking::defaultToolLayoutPath(app::sourceDir()));
   EXPECT_FALSE(tool.planar());
   ASSERT_TRUE(tool.tip.has_value());
   // No id in both: the tracker tells board from tool by id alone.
@@ -113,7 +114,8 @@ TEST(TrackingBoard, CommittedLayoutsAreValid) {
 }
 
 TEST(TrackingBoard, LayoutRoundTripsThroughJson) {
-  const MarkerLayout a = tracking::loadMarkerLayout(tracking::defaultToolLayoutPath(kRoot));
+  const MarkerLayout a =
+      tracking::loadMarkerLayout(tracking::defaultToolLayoutPath(app::sourceDir()));
   const MarkerLayout b = tracking::parseMarkerLayout(tracking::toJson(a), "again");
   ASSERT_EQ(a.markers.size(), b.markers.size());
   for (std::size_t i = 0; i < a.markers.size(); ++i) {
@@ -171,7 +173,8 @@ TEST(TrackingBoard, MalformedLayoutsAreRefusedNamingFileAndEntry) {
 // The tool's stick in its layout file: the committed cube's radii, the default, millimetres,
 // and every bad value refused naming the file; the tool's shape follows from it.
 TEST(TrackingBoard, ToolStickRadiusIsReadDefaultedAndRefused) {
-  const MarkerLayout cube = tracking::loadMarkerLayout(tracking::defaultToolLayoutPath(kRoot));
+  const MarkerLayout cube =
+      tracking::loadMarkerLayout(tracking::defaultToolLayoutPath(app::sourceDir()));
   ASSERT_TRUE(cube.stickRadius && cube.stickTipRadius);
   EXPECT_DOUBLE_EQ(cube.stickBaseRadius(), 0.005);
   EXPECT_DOUBLE_EQ(cube.stickEndRadius(), 0.002);
@@ -256,7 +259,8 @@ TEST(TrackingBoard, SingleMarkerLayoutMatchesTheMarkerSolver) {
 // kCornerNoisePx, random subsets of 1..all markers.
 TEST(TrackingBoard, AnyVisibleSubsetGivesThePlanetCentre) {
   const auto cam = tracking::SynthScript::syntheticCamera({640, 480});
-  const MarkerLayout board = tracking::loadMarkerLayout(tracking::defaultBoardPath(kRoot));
+  const MarkerLayout board =
+      tracking::loadMarkerLayout(tracking::defaultBoardPath(app::sourceDir()));
   std::mt19937 rng(11);
   std::uniform_real_distribution<double> u(0, 1);
   std::vector<double> errOne, errMany;
@@ -302,7 +306,8 @@ TEST(TrackingBoard, AnyVisibleSubsetGivesThePlanetCentre) {
 // The cube is seen from every side: random rotations show one to three faces; the tip stays.
 TEST(TrackingBoard, ToolCubeTipFromAnySide) {
   const auto cam = tracking::SynthScript::syntheticCamera({640, 480});
-  const MarkerLayout cube = tracking::loadMarkerLayout(tracking::defaultToolLayoutPath(kRoot));
+  const MarkerLayout cube =
+      tracking::loadMarkerLayout(tracking::defaultToolLayoutPath(app::sourceDir()));
   std::mt19937 rng(3);
   std::uniform_real_distribution<double> u(0, 1);
   std::vector<double> err;
@@ -388,7 +393,7 @@ HoldRun hideSpinningCube(const tracking::MarkerTrackerConfig& config, double spi
 TEST(TrackingBoard, AToolSpunTooFastToReadIsLostNotHeldWhereItWas) {
   tracking::SceneConfig sc;
   sc.useToolLayout(std::make_shared<const MarkerLayout>(
-      tracking::loadMarkerLayout(tracking::defaultToolLayoutPath(kRoot))));
+      tracking::loadMarkerLayout(tracking::defaultToolLayoutPath(app::sourceDir()))));
   ASSERT_GT(sc.tool.holdMaxDrift, 0);
   EXPECT_NEAR(sc.tool.driftRadius, 0.105, 1e-9) << "the tip's distance from the cube's centre";
 
@@ -421,9 +426,9 @@ TEST(TrackingBoard, AToolSpunTooFastToReadIsLostNotHeldWhereItWas) {
 TEST(TrackingBoard, ACutRestartsTheRigidSetsFilters) {
   const auto cam = tracking::SynthScript::syntheticCamera({640, 480});
   const auto board = std::make_shared<const MarkerLayout>(
-      tracking::loadMarkerLayout(tracking::defaultBoardPath(kRoot)));
+      tracking::loadMarkerLayout(tracking::defaultBoardPath(app::sourceDir())));
   const auto cube = std::make_shared<const MarkerLayout>(
-      tracking::loadMarkerLayout(tracking::defaultToolLayoutPath(kRoot)));
+      tracking::loadMarkerLayout(tracking::defaultToolLayoutPath(app::sourceDir())));
   tracking::SceneConfig sc;
   sc.useBoard(board);
   sc.useToolLayout(cube);
@@ -490,8 +495,10 @@ std::vector<tracking::Detection> readSheet(const tracking::Sheet& sheet, double 
 // The printed board reads back with every id at its place: marker centres as far apart on the
 // paper (px / dpi) as in the layout, corners where the sheet says.
 TEST(TrackingBoard, BoardAndCubeSheetsReadBackAsTheirLayouts) {
-  const MarkerLayout board = tracking::loadMarkerLayout(tracking::defaultBoardPath(kRoot));
-  const MarkerLayout cube = tracking::loadMarkerLayout(tracking::defaultToolLayoutPath(kRoot));
+  const MarkerLayout board =
+      tracking::loadMarkerLayout(tracking::defaultBoardPath(app::sourceDir()));
+  const MarkerLayout cube =
+      tracking::loadMarkerLayout(tracking::defaultToolLayoutPath(app::sourceDir()));
   const double scale = 0.25;  // 75 dpi
   for (const auto& paper : {tracking::paperA4(), tracking::paperLetter()}) {
     SCOPED_TRACE(paper.name);
@@ -546,9 +553,9 @@ TEST(TrackingBoard, SessionSidecarCarriesTheLayouts) {
   start.distortion = {0, 0, 0, 0, 0};
   start.family = "tag36h11";
   start.board = std::make_shared<const MarkerLayout>(
-      tracking::loadMarkerLayout(tracking::defaultBoardPath(kRoot)));
+      tracking::loadMarkerLayout(tracking::defaultBoardPath(app::sourceDir())));
   start.toolLayout = std::make_shared<const MarkerLayout>(
-      tracking::loadMarkerLayout(tracking::defaultToolLayoutPath(kRoot)));
+      tracking::loadMarkerLayout(tracking::defaultToolLayoutPath(app::sourceDir())));
   start.tipOffset = *start.toolLayout->tip;
   const auto dir = testkit::freshDir("board_sidecar");
   const auto path = dir / "rec.mkv.session.jsonl";

@@ -8,6 +8,7 @@
 #include <random>
 #include <tuple>
 
+#include "median.hpp"
 #include "tracking/corner_refine.hpp"
 #include "tracking/detector.hpp"
 #include "tracking/marker_family.hpp"
@@ -64,10 +65,7 @@ double maxError(const Quad& a, const Quad& b) {
   return e;
 }
 
-double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  return v[v.size() / 2];
-}
+using testkit::median;
 
 }  // namespace
 

@@ -77,8 +77,9 @@ TEST(TrackingDetect, RealPhotographsMatchOpenCVsExpectedCorners) {
     const double tol = expected["tolerance_px"].get<double>();
     EXPECT_EQ(found.size(), expected["markers"].size()) << name;
     for (const auto& [id, xy] : expected["markers"].items()) {
-      const auto it = std::find_if(found.begin(), found.end(),
-                                   [&](const auto& d) { return d.id == std::stoi(id); });
+      const int wanted = std::stoi(id);  // clang 14 cannot capture a structured binding
+      const auto it =
+          std::find_if(found.begin(), found.end(), [&](const auto& d) { return d.id == wanted; });
       ASSERT_NE(it, found.end()) << name << ": marker " << id << " not found";
       for (int k = 0; k < 4; ++k) {
         EXPECT_NEAR(it->corners[std::size_t(k)].x, xy[std::size_t(2 * k)].get<double>(), tol)

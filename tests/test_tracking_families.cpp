@@ -16,6 +16,7 @@
 #include "core/input_error.hpp"
 #include "error_of.hpp"
 #include "fresh_dir.hpp"
+#include "median.hpp"
 #include "replay/replay.hpp"
 #include "test_terrains.hpp"
 #include "tracking/detector.hpp"
@@ -31,11 +32,9 @@ using tracking::MarkerLayout;
 
 namespace {
 
-const std::filesystem::path kRoot = app::sourceDir();
-
 // The committed board in another family, its ids from `firstId` on (the same geometry).
 std::shared_ptr<const MarkerLayout> boardOf(const std::string& family, int firstId) {
-  MarkerLayout l = tracking::loadMarkerLayout(tracking::defaultBoardPath(kRoot));
+  MarkerLayout l = tracking::loadMarkerLayout(tracking::defaultBoardPath(app::sourceDir()));
   l.family = family;
   for (std::size_t i = 0; i < l.markers.size(); ++i) l.markers[i].id = firstId + int(i);
   l.source = family + " board";
@@ -44,25 +43,21 @@ std::shared_ptr<const MarkerLayout> boardOf(const std::string& family, int first
 
 std::shared_ptr<const MarkerLayout> committedCube() {
   return std::make_shared<const MarkerLayout>(
-      tracking::loadMarkerLayout(tracking::defaultToolLayoutPath(kRoot)));
+      tracking::loadMarkerLayout(tracking::defaultToolLayoutPath(app::sourceDir())));
 }
 
 // The board sweep with an ArUco board holding ids 20..28 beside the tag36h11 cube (ids 20..24):
 // the case that was refused as "both hold id 20".
 // (Its frames at 0.6 m, 160..239, show both the board and the cube.)
 tracking::SynthScript mixedSweep() {
-  tracking::SynthScript s = tracking::builtinScene("board-sweep", kRoot);
+  tracking::SynthScript s = tracking::builtinScene("board-sweep", app::sourceDir());
   s.board = boardOf("DICT_4X4_50", 20);
   s.toolLayout = committedCube();
   return s;
 }
 constexpr int kFirstFrame = 160;
 
-double median(std::vector<double> v) {
-  if (v.empty()) return 1e9;
-  std::nth_element(v.begin(), v.begin() + std::ptrdiff_t(v.size() / 2), v.end());
-  return v[v.size() / 2];
-}
+using testkit::median;
 
 }  // namespace
 
@@ -185,7 +180,8 @@ TEST(TrackingFamilies, MarkersPrintsABoardAndAToolOfAnyFamilyWithTheirLayouts) {
   ASSERT_EQ(std::system(command.c_str()), 0) << command;
   const MarkerLayout board = tracking::loadMarkerLayout(dir / "planet-board.json");
   const MarkerLayout tool = tracking::loadMarkerLayout(dir / "tool-cube.json");
-  const MarkerLayout committedBoard = tracking::loadMarkerLayout(tracking::defaultBoardPath(kRoot));
+  const MarkerLayout committedBoard =
+      tracking::loadMarkerLayout(tracking::defaultBoardPath(app::sourceDir()));
   const MarkerLayout committedTool = *committedCube();
   EXPECT_EQ(board.family, "DICT_4X4_50");
   EXPECT_EQ(tool.family, "tag25h9");

@@ -25,9 +25,7 @@ using tracking::Pose;
 
 namespace {
 
-void writeText(const std::filesystem::path& p, const std::string& text) {
-  std::ofstream(p) << text;
-}
+using testkit::writeText;
 
 const std::string kK =
     "camera_matrix: !!opencv-matrix\n   rows: 3\n   cols: 3\n   dt: d\n"

@@ -35,8 +35,8 @@ using namespace ps;
 
 namespace {
 
-constexpr double kMajor = 4.5e6, kMinor = 1.8e6;        // the torus
-constexpr double kTubeRadius = 6.0e6, kLength = 4.0e6;  // the cylinder
+constexpr double kTorusMajor = 4.5e6, kTorusMinor = 1.8e6;          // the torus
+constexpr double kCylinderRadius = 6.0e6, kCylinderLength = 4.0e6;  // the cylinder
 
 terrain::Terrain withRelief(std::shared_ptr<const core::Chart> chart) {
   terrain::ReliefParams params;
@@ -51,8 +51,9 @@ struct Tube {
 };
 std::vector<Tube> tubes(int n) {
   return {
-      {"torus", std::make_shared<core::TorusChart>(core::GridSize(n), kMajor, kMinor)},
-      {"cylinder", std::make_shared<core::CylinderChart>(core::GridSize(n), kTubeRadius, kLength)}};
+      {"torus", std::make_shared<core::TorusChart>(core::GridSize(n), kTorusMajor, kTorusMinor)},
+      {"cylinder",
+       std::make_shared<core::CylinderChart>(core::GridSize(n), kCylinderRadius, kCylinderLength)}};
 }
 
 // The largest distance between neighbouring grid vertices at height 0 (a cell's side).
@@ -131,7 +132,8 @@ TEST(TubeScene, ControlVertexAndHeightAgreeWithBruteForce) {
 // to the rim circle, so a tip over the opening does not touch; on the axis there is no contact,
 // nor on the torus's axis and centre circle.
 TEST(TubeScene, CylinderEndsAndDegeneratePoints) {
-  const auto chart = std::make_shared<core::CylinderChart>(core::GridSize(6), kTubeRadius, kLength);
+  const auto chart =
+      std::make_shared<core::CylinderChart>(core::GridSize(6), kCylinderRadius, kCylinderLength);
   const terrain::Terrain t = withRelief(chart);
   const int m = chart->grid().m();
   for (int u = 0; u < m; u += 7) {
@@ -144,13 +146,14 @@ TEST(TubeScene, CylinderEndsAndDegeneratePoints) {
     const auto inside =
         edit::surfaceContact(t, 0.5 * rim + Eigen::Vector3d(0, 0, 0.5 * rim.z() + 1e3));
     ASSERT_TRUE(inside.has_value());
-    EXPECT_GT(inside->height, 0.4 * kTubeRadius);
+    EXPECT_GT(inside->height, 0.4 * kCylinderRadius);
   }
   EXPECT_FALSE(edit::surfaceContact(t, {0, 0, 1e5}).has_value());
-  const auto torus = std::make_shared<core::TorusChart>(core::GridSize(6), kMajor, kMinor);
+  const auto torus =
+      std::make_shared<core::TorusChart>(core::GridSize(6), kTorusMajor, kTorusMinor);
   const terrain::Terrain tt = withRelief(torus);
-  EXPECT_FALSE(edit::surfaceContact(tt, {0, 0, 3e5}).has_value());     // the axis
-  EXPECT_FALSE(edit::surfaceContact(tt, {kMajor, 0, 0}).has_value());  // the centre circle
+  EXPECT_FALSE(edit::surfaceContact(tt, {0, 0, 3e5}).has_value());          // the axis
+  EXPECT_FALSE(edit::surfaceContact(tt, {kTorusMajor, 0, 0}).has_value());  // the centre circle
   EXPECT_FALSE(edit::surfaceContact(tt, {NAN, 0, 0}).has_value());
 }
 
@@ -165,8 +168,8 @@ TEST(TubeScene, StepperScalesByTheBoundingSphereAndMeasuresTheTipsHeight) {
     terrain::Terrain t = withRelief(tube.chart);
     const double bound = core::boundingRadius(t.chart());
     EXPECT_DOUBLE_EQ(bound, tube.chart->name() == std::string("torus")
-                                ? kMajor + kMinor
-                                : std::hypot(kTubeRadius, 0.5 * kLength));
+                                ? kTorusMajor + kTorusMinor
+                                : std::hypot(kCylinderRadius, 0.5 * kCylinderLength));
     tracking::FrameSource src(testkit::shortSceneVideo());
     const auto options = testkit::shortSceneOptions();
     replay::FrameStepper stepper(testkit::shortSceneCamera().forImageSize(src.size()), t, options);
