@@ -212,6 +212,113 @@ inline bool sameDoubles(const std::vector<double>& a, const std::vector<double>&
   return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(double)) == 0;
 }
 
+// One thermal step of docs/SAND.md's rule ("Thermal erosion") on a glued chart, cell by cell from
+// SandGrid's links, chords and areas: the reference the tiled kernels must equal bit for bit (the
+// same operations in the same order; a missing link adds nothing). h holds every grid vertex,
+// twins equal; so does the result.
+inline void thermalReferenceStep(const sand::SandGrid& g, std::vector<double>& h,
+                                 const sand::Material& mat) {
+  const core::GridSize& gs = g.grid();
+  const int m = g.m();
+  const double T = mat.tanTalus(), coh = mat.cohesion, eta = mat.talusTolerance;
+  const double halfRate = 0.5 * mat.erosionRate;
+  auto act = [](double e, double eps) { return e > eps ? e : 0.0; };
+  auto cap = [&](int u, int v) {
+    return g.cellArea(u, v) * (g.linkCount(u, v) == 4 ? 0.25 : 0.125);
+  };
+  std::vector<double> s(gs.count(), 0.0), next = h;
+  for (int v = 0; v <= m; ++v) {
+    for (int u = 0; u <= m; ++u) {
+      if (!g.isCell(u, v)) continue;
+      const double hi = h[gs.index(u, v)];
+      double e[8];
+      for (int k = 0; k < 8; ++k) {
+        const core::GridPoint n = g.neighbour(u, v, k);
+        const double d = g.chord(u, v, k);
+        e[k] = n.u < 0 ? 0.0 : act(hi - h[gs.index(n.u, n.v)] - (T * d + coh), eta * T * d);
+      }
+      const double E = ((e[0] + e[1]) + (e[2] + e[3])) + ((e[4] + e[7]) + (e[5] + e[6]));
+      const double mx = std::max(std::max(std::max(e[0], e[1]), std::max(e[2], e[3])),
+                                 std::max(std::max(e[4], e[7]), std::max(e[5], e[6])));
+      s[gs.index(u, v)] = E > 0.0 ? (halfRate * g.cellArea(u, v)) * mx / E : 0.0;
+    }
+  }
+  for (int v = 0; v <= m; ++v) {
+    for (int u = 0; u <= m; ++u) {
+      if (!g.isCell(u, v)) continue;
+      const std::size_t i = gs.index(u, v);
+      double f[8];
+      for (int k = 0; k < 8; ++k) {
+        const core::GridPoint n = g.neighbour(u, v, k);
+        f[k] = 0.0;
+        if (n.u < 0) continue;
+        const std::size_t j = gs.index(n.u, n.v);
+        const double dist = g.chord(u, v, k), d = h[i] - h[j];
+        const double a = act(std::abs(d) - (T * dist + coh), eta * T * dist);
+        const double coef = d > 0.0 ? -std::min(s[i], cap(n.u, n.v)) : std::min(s[j], cap(u, v));
+        f[k] = coef * a;
+      }
+      const double net = ((f[0] + f[1]) + (f[2] + f[3])) + ((f[4] + f[7]) + (f[5] + f[6]));
+      next[i] = h[i] + net * (1.0 / g.cellArea(u, v));
+    }
+  }
+  for (int v = 0; v <= m; ++v) {
+    for (int u = 0; u <= m; ++u) {
+      const core::GridPoint c = g.chart().canonical(u, v);
+      next[gs.index(u, v)] = next[gs.index(c.u, c.v)];
+    }
+  }
+  h.swap(next);
+}
+
+// Thermal steps on a glued chart's field against thermalReferenceStep, bit for bit after each:
+// noise everywhere (every tile in P), then noise in a disc about `spot` (radius 7 cells) with only
+// its box marked (P's edges: walls in the tiles' halos).
+inline void checkThermalAgainstReference(std::shared_ptr<const core::Chart> chart,
+                                         core::GridPoint spot, double amplitude, int steps,
+                                         const std::string& what) {
+  const sand::SandGrid g(chart);
+  const core::GridSize& gs = g.grid();
+  const int m = g.m();
+  const sand::Material mat = sand::Material::sand();
+  for (const bool everywhere : {true, false}) {
+    std::mt19937 rng(everywhere ? 11 : 12);
+    std::uniform_real_distribution<double> noise(0.0, amplitude);
+    const Eigen::Vector3d c = g.point(spot.u, spot.v);
+    const double radius = 7.0 * g.chord(spot.u, spot.v, 1);
+    std::vector<float> h(gs.count(), 0.0f);
+    int u0 = m, u1 = 0, v0 = m, v1 = 0;
+    for (int v = 0; v <= m; ++v) {
+      for (int u = 0; u <= m; ++u) {
+        if (!g.isCell(u, v)) continue;
+        if (!everywhere && (g.point(u, v) - c).norm() > radius) continue;
+        h[gs.index(u, v)] = float(noise(rng));
+        u0 = std::min(u0, u), u1 = std::max(u1, u), v0 = std::min(v0, v), v1 = std::max(v1, v);
+      }
+    }
+    for (int v = 0; v <= m; ++v) {
+      for (int u = 0; u <= m; ++u) {
+        const core::GridPoint p = chart->canonical(u, v);
+        h[gs.index(u, v)] = h[gs.index(p.u, p.v)];
+      }
+    }
+    std::vector<double> ref(h.begin(), h.end()), got;
+    sand::SandField f(chart, h);
+    if (everywhere) {
+      f.markAll();
+    } else {
+      f.mark({u0, u1, v0, v1});
+    }
+    for (int step = 0; step < steps; ++step) {
+      f.thermalStep(mat);
+      thermalReferenceStep(g, ref, mat);
+      f.copyHeights(got);
+      ASSERT_TRUE(sameDoubles(got, ref))
+          << what << (everywhere ? ", noise everywhere" : ", a disc marked") << ", step " << step;
+    }
+  }
+}
+
 // Runs thermal steps until rest (or maxSteps); returns the steps run.
 inline int settle(sand::SandField& f, const sand::Material& mat, int maxSteps) {
   int steps = 0;

@@ -121,12 +121,12 @@ struct GluedPlanes {
 PS_SAND_CLONES
 void gluedThermalPass1(const double* __restrict hm, const double* __restrict h0,
                        const double* __restrict hp, double* __restrict s, const GluedRow& g,
-                       double T, double coh, double eta, double halfRate) {
+                       double T, double coh, double eta, double halfRate, int n) {
   const GluedPlanes p{g.d[0], g.d[1], g.d[2], g.d[3], g.d[4], g.d[5], g.d[6], g.d[7], g.area};
   auto ex = [T, coh, eta](double h, double hn, double d) {
     return act(h - hn - (T * d + coh), eta * T * d);
   };
-  for (int c = 0; c < kGluedRow; ++c) {
+  for (int c = 0; c < n; ++c) {
     const double h = h0[c];
     const double eW = ex(h, h0[c - 1], p.d0[c]), eE = ex(h, h0[c + 1], p.d1[c]);
     const double eS = ex(h, hm[c], p.d2[c]), eN = ex(h, hp[c], p.d3[c]);
@@ -136,7 +136,7 @@ void gluedThermalPass1(const double* __restrict hm, const double* __restrict h0,
     const double mx = std::max(std::max(std::max(eW, eE), std::max(eS, eN)),
                                std::max(std::max(eSW, eNE), std::max(eSE, eNW)));
     const double q = (halfRate * p.area[c]) * mx / (E > 0.0 ? E : 1.0);
-    s[c] = ((E > 0.0) & (p.area[c] > 0.0)) ? q : 0.0;
+    s[c] = ((E > 0.0) & (p.area[c] > 0.0) & (h < kLive)) ? q : 0.0;
   }
 }
 

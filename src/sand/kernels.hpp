@@ -109,10 +109,10 @@ struct GluedRow {
   const double* inv[4];
   const double* area;
 };
-// s of each cell, as thermalPass1 (0 where no cell).
+// s of the n cells from h0[0], as thermalPass1 (0 where no cell or a wall).
 void gluedThermalPass1(const double* hm, const double* h0, const double* hp, double* s,
                        const GluedRow& g, double tanTalus, double cohesion, double tolerance,
-                       double halfRate);
+                       double halfRate, int n = kGluedRow);
 // The new heights, as thermalPass2 with every neighbour's receiver cap from c* (the caps'
 // scratch rows).
 void gluedThermalPass2(const double* hm, const double* h0, const double* hp, const double* sm,

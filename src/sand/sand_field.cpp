@@ -139,6 +139,7 @@ std::size_t SandField::residentBytes() const {
     if (t->geo) bytes += std::size_t(kGeoPlanes) * kT * kT * sizeof(double);
     if (t->s) bytes += std::size_t(kT) * kT * sizeof(double);
     if (t->capHalo) bytes += std::size_t(kW) * kW * sizeof(double);
+    if (t->thermalPlanes) bytes += std::size_t(kThermalPlanes) * kW * kW * sizeof(double);
     bytes += t->haloSource.size() * sizeof(std::uint32_t);
   }
   return bytes;

@@ -189,6 +189,12 @@ class SandField {
   void thermalGluedPass1(int t, const Material& material, double* hs);
   void thermalGluedPass2(int t, const Material& material, double* hs, double* ss,
                          std::uint8_t& busy);
+  // A tile away from the glued sides in one pass, as lat-long's: the s of its cells and their
+  // ring from a two-cell halo, then its heights (the links arrive in grid order there, so the
+  // ring's s has the bits its own tile computes).
+  void thermalGluedInner(int t, const Material& material, double* hs, double* ss,
+                         std::uint8_t& busy);
+  void loadThermalPlanes(Tile& tile, int t) const;
   void diffusionGluedTile(int t, const DiffusionTables& tb, double dt, const PushForce* force,
                           double* hs, std::uint8_t& busy);
   double netDriftFluxGlued(const PushForce& force, double zetaInv, int u, int v) const;

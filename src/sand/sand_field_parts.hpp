@@ -53,6 +53,9 @@ struct SandField::Tile {
   // kNoSource where none), so that a step's gather makes no chart look-ups.
   std::unique_ptr<double[]> capHalo;
   std::vector<std::uint32_t> haloSource;
+  // Glued, a tile away from the glued sides (not SandField::gluedBorderTile): thermal erosion's
+  // planes (kThermal* below), made on the tile's first thermal step.
+  std::unique_ptr<double[]> thermalPlanes;
   static constexpr std::uint32_t kNoSource = ~std::uint32_t(0);
 
   void snapshot() {
@@ -123,6 +126,21 @@ inline constexpr int kGeoInv = 12;
 inline constexpr int kGeoArea = 16;
 inline constexpr int kGeoCap = 17;
 inline constexpr int kGeoPlanes = 18;
+
+// Tile::thermalPlanes, each detail::kW^2 in the scratch layout (the tile at offset 2): the chords
+// of the links E, N, NE and NW of every position (+inf where the other end lies beyond the
+// scratch; each link once: a cell's W link is its west neighbour's E, S its south neighbour's N,
+// SW its south-west neighbour's NE, SE its south-east neighbour's NW), then the area and the
+// receiver cap A / 8 of the tile's cells and their ring (0 beyond). 62 KB against the 72 bytes a
+// cell that each of the two passes reads from Tile::geo (docs/SAND.md, "Where the octahedral
+// chart's time went").
+inline constexpr int kThermalE = 0;
+inline constexpr int kThermalN = 1;
+inline constexpr int kThermalNE = 2;
+inline constexpr int kThermalNW = 3;
+inline constexpr int kThermalArea = 4;
+inline constexpr int kThermalCap = 5;
+inline constexpr int kThermalPlanes = 6;
 
 template <class F>
 void SandField::forEachCellOf(int t, F&& f) const {

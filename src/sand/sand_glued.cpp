@@ -346,6 +346,82 @@ void SandField::thermalGluedPass2(int t, const Material& material, double* hs, d
   busy = any ? 1 : 0;
 }
 
+// Each link's chord once (Tile::thermalPlanes), from the same points in the same order as
+// computeGeometry's: SandGrid::chordBetween gives (a, b) and (b, a) the same bits, and no twin,
+// fold or cone point lies within two cells of such a tile, so the same bits as Tile::geo's.
+void SandField::loadThermalPlanes(Tile& tile, int t) const {
+  const int u0 = (t % tilesU_) * kT - 2, v0 = (t / tilesU_) * kT - 2;
+  constexpr std::size_t kP = std::size_t(kW) * kW;
+  std::vector<Eigen::Vector3d> pts(kP);
+  for (int r = 0; r < kW; ++r) {
+    for (int c = 0; c < kW; ++c) pts[std::size_t(r * kW + c)] = grid_.point(u0 + c, v0 + r);
+  }
+  tile.thermalPlanes = std::make_unique<double[]>(kThermalPlanes * kP);
+  double* planes = tile.thermalPlanes.get();
+  std::fill_n(planes, kThermalArea * kP, std::numeric_limits<double>::infinity());
+  std::fill_n(planes + kThermalArea * kP, (kThermalPlanes - kThermalArea) * kP, 0.0);
+  constexpr int kDu[4] = {1, 0, 1, -1}, kDv[4] = {0, 1, 1, 1};  // E N NE NW
+  for (int k = 0; k < 4; ++k) {
+    for (int r = 0; r + kDv[k] < kW; ++r) {
+      for (int c = std::max(0, -kDu[k]); c < kW && c + kDu[k] < kW; ++c) {
+        planes[std::size_t(k) * kP + std::size_t(r * kW + c)] = SandGrid::chordBetween(
+            pts[std::size_t(r * kW + c)], pts[std::size_t((r + kDv[k]) * kW + c + kDu[k])]);
+      }
+    }
+  }
+  for (int r = 1; r < kW - 1; ++r) {
+    for (int c = 1; c < kW - 1; ++c) {
+      const double A = grid_.cellArea(u0 + c, v0 + r);
+      planes[kThermalArea * kP + std::size_t(r * kW + c)] = A;
+      planes[kThermalCap * kP + std::size_t(r * kW + c)] = A * 0.125;  // computeGeometry's cap
+    }
+  }
+}
+
+void SandField::thermalGluedInner(int t, const Material& material, double* hs, double* ss,
+                                  std::uint8_t& busy) {
+  gather(t % tilesU_, t / tilesU_, hs);  // a two-cell halo, walls outside P
+  Tile& tile = *tiles_[std::size_t(t)];
+  if (!tile.thermalPlanes) loadThermalPlanes(tile, t);
+  if (!tile.s) tile.s = std::make_unique<double[]>(kCells);
+  constexpr std::size_t kP = std::size_t(kW) * kW;
+  const double* planes = tile.thermalPlanes.get();
+  const double* pE = planes + kThermalE * kP;
+  const double* pN = planes + kThermalN * kP;
+  const double* pNE = planes + kThermalNE * kP;
+  const double* pNW = planes + kThermalNW * kP;
+  const double* cap = planes + kThermalCap * kP;
+  // The chords of the 8 links of the cells from scratch position `at` on (W E S N SW SE NW NE).
+  auto row = [&](int at) {
+    kernels::GluedRow g{};
+    g.d[0] = pE + at - 1, g.d[1] = pE + at, g.d[2] = pN + at - kW, g.d[3] = pN + at;
+    g.d[4] = pNE + at - kW - 1, g.d[5] = pNW + at - kW + 1, g.d[6] = pNW + at, g.d[7] = pNE + at;
+    g.area = planes + kThermalArea * kP + at;
+    return g;
+  };
+  const double T = material.tanTalus(), coh = material.cohesion, eta = material.talusTolerance;
+  // s of the tile's cells and their ring (scratch rows and columns 1 .. kW - 2).
+  for (int r = 1; r < kW - 1; ++r) {
+    const int at = r * kW + 1;
+    kernels::gluedThermalPass1(hs + at - kW, hs + at, hs + at + kW, ss + at, row(at), T, coh, eta,
+                               0.5 * material.erosionRate, kW - 2);
+  }
+  // Busy: some cell of the tile or of its ring sends (as thermalGluedPass2).
+  unsigned any = 0;
+  for (int r = 1; r < kW - 1; ++r) {
+    for (int c = 1; c < kW - 1; ++c) any |= unsigned(ss[r * kW + c] > 0.0);
+  }
+  // The tile's own s, for the border tiles' pass 2 after the barrier.
+  for (int lv = 0; lv < kT; ++lv) std::copy_n(ss + (lv + 2) * kW + 2, kT, tile.s.get() + lv * kT);
+  for (int lv = 0; lv < kT; ++lv) {
+    const int at = (lv + 2) * kW + 2;
+    kernels::gluedThermalPass2(hs + at - kW, hs + at, hs + at + kW, ss + at - kW, ss + at,
+                               ss + at + kW, cap + at - kW, cap + at, cap + at + kW,
+                               tile.cur.get() + lv * kT, row(at), T, coh, eta);
+  }
+  busy = any ? 1 : 0;
+}
+
 StepReport SandField::thermalStepGlued(const Material& material) {
   StepReport rep;
   if (atRest()) return rep;
@@ -358,13 +434,22 @@ StepReport SandField::thermalStepGlued(const Material& material) {
 #pragma omp for schedule(static)
     for (int j = 0; j < n; ++j) tiles_[std::size_t(tileList_[std::size_t(j)])]->snapshot();
       // (barrier: every tile's edge holds the heights before the step)
-#pragma omp for schedule(dynamic, 1)
-    for (int j = 0; j < n; ++j) thermalGluedPass1(tileList_[std::size_t(j)], material, hs.data());
-      // (barrier: every cell's s is known)
+      // The tiles away from the glued sides step in one pass; the others store their s, then
+      // (after the barrier, every cell's s known) step.
 #pragma omp for schedule(dynamic, 1)
     for (int j = 0; j < n; ++j) {
-      thermalGluedPass2(tileList_[std::size_t(j)], material, hs.data(), ss.data(),
-                        busyOut[std::size_t(j)]);
+      const int t = tileList_[std::size_t(j)];
+      if (gluedBorderTile(t % tilesU_, t / tilesU_)) {
+        thermalGluedPass1(t, material, hs.data());
+      } else {
+        thermalGluedInner(t, material, hs.data(), ss.data(), busyOut[std::size_t(j)]);
+      }
+    }
+#pragma omp for schedule(dynamic, 1)
+    for (int j = 0; j < n; ++j) {
+      const int t = tileList_[std::size_t(j)];
+      if (gluedBorderTile(t % tilesU_, t / tilesU_))
+        thermalGluedPass2(t, material, hs.data(), ss.data(), busyOut[std::size_t(j)]);
     }
   }
   for (int j = 0; j < n; ++j)
