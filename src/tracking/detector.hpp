@@ -69,9 +69,10 @@ struct DetectorConfig {
   // pose the plane it lies on carries), its markers are looked for in the expected boxes every
   // frame and the whole frame only every expectedSearchEvery frames: a marker showing again
   // where it is expected is found in that frame, one showing elsewhere (a wrong prediction)
-  // within expectedSearchEvery frames. 0: expectations are ignored (the whole frame every
-  // searchEvery frames, as without them).
-  int expectedSearchEvery = 8;
+  // within expectedSearchEvery frames. 0 (the default): expectations are ignored (the whole
+  // frame every searchEvery frames). Off because on board-covered-move 8 measured slower and
+  // less accurate than without (docs/TRACKING.md, "Expected markers").
+  int expectedSearchEvery = 0;
   double regionMargin = 0.3;  // box margin, as a fraction of the marker's size in the image
   // A box that holds at least coarseRegionMarkers markers, each at least coarseRegionPx
   // pixels across, is searched at `decimate` (the quads found on the smaller image, their edges
