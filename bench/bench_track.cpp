@@ -416,6 +416,11 @@ void addTrackOptions(CLI::App& command, TrackSettings& s) {
       ->delimiter(',')
       ->expected(9);
   command
+      .add_option("--expected-search-every", s.boards.expectedSearchEvery,
+                  "Board rows: whole-frame search every N frames while a covered board's markers "
+                  "are expected (0: expectations ignored, as before)")
+      ->check(CLI::Range(0, 1000));
+  command
       .add_option("--dump", s.boards.dumpDir,
                   "Board scenes: one JSON line per frame in DIR/SCENE.jsonl")
       ->check(CLI::ExistingDirectory);

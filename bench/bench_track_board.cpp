@@ -160,6 +160,10 @@ struct BoardTally {
   int drawnOff10 = 0;  // frames with a planet more than 10 mm off
   tracking::Pose lastSeenCamera;
   bool seen = false;
+  // Re-acquisition: from a frame where a board marker shows whole (in view, facing the camera,
+  // nothing over it) while the board is not measured, the frames until it is measured.
+  int frameNo = 0, waitingSince = -1;
+  std::vector<double> reacquireFrames;
 
   void add(const replay::StepResult& step, const tracking::FrameTruth& truth,
            const core::LatLongChart& cvChart, double planetRadius) {
@@ -168,6 +172,18 @@ struct BoardTally {
     trackMs.push_back(step.times.trackMs);
     addPlanet(step.scene, truth);
     addTool(step, truth, cvChart, planetRadius);
+    if (step.scene.planet.measured) {
+      if (waitingSince >= 0) reacquireFrames.push_back(frameNo - waitingSince);
+      waitingSince = -1;
+    } else if (waitingSince < 0 && truth.planetVisible) {
+      waitingSince = frameNo;
+    }
+    ++frameNo;
+  }
+  // A wait still open at the end counts as re-acquired after the last frame.
+  void finish() {
+    if (waitingSince >= 0) reacquireFrames.push_back(frameNo - waitingSince);
+    waitingSince = -1;
   }
 
   // The planet's pose: with the board half visible, hidden with the camera where it was when
@@ -227,12 +243,13 @@ struct BoardTally {
 };
 
 nlohmann::json boardRow(const std::string& scene, const tracking::SynthScript& script, int frames,
-                        const BoardTally& t, double singleMarkerMs) {
+                        const BoardTally& t, double singleMarkerMs, int expectedSearchEvery) {
   nlohmann::json j = {
       {"bench", "track"},
       {"scene", scene},
       {"detector", "apriltag d2 + regions"},
       {"markers", "board + cube"},
+      {"expected_search_every", expectedSearchEvery},
       {"resolution", std::to_string(script.size.width) + "x" + std::to_string(script.size.height)},
       {"frames", frames},
       {"ms", r3(median(t.ms))},
@@ -252,6 +269,12 @@ nlohmann::json boardRow(const std::string& scene, const tracking::SynthScript& s
       {"hidden_moved_centre_error_p95_mm", r3(percentile(t.movedErr, 0.95))},
       {"drawn_off_10mm_frames", t.drawnOff10},
       {"drawn_off_10mm_fraction", r3(fraction(t.drawnOff10, frames))},
+      {"reacquisitions", t.reacquireFrames.size()},
+      {"reacquire_frames_median", r3(median(t.reacquireFrames))},
+      {"reacquire_frames_max",
+       t.reacquireFrames.empty()
+           ? 0.0
+           : *std::max_element(t.reacquireFrames.begin(), t.reacquireFrames.end())},
       {"planet_centre_error_median_mm", r3(median(t.centreErr))},
       {"planet_centre_error_p95_mm", r3(percentile(t.centreErr, 0.95))},
       {"tool_visible_frames", t.toolVisible},
@@ -269,7 +292,7 @@ nlohmann::json boardRow(const std::string& scene, const tracking::SynthScript& s
   return j;
 }
 
-void evaluateScene(const std::string& scene, bool quick, const std::string& dumpDir,
+void evaluateScene(const std::string& scene, bool quick, const BoardBenchSettings& settings,
                    double singleMarkerMs, std::ostream& out) {
   const tracking::SynthScript script = tracking::builtinScene(scene, app::sourceDir());
   const tracking::SynthRenderer renderer(script);
@@ -281,13 +304,15 @@ void evaluateScene(const std::string& scene, bool quick, const std::string& dump
   o.scene.useToolLayout(script.toolLayout);
   o.scene.planetRadius = script.planetRadius;
   o.scene.touchDistance = kTouch;
+  if (settings.expectedSearchEvery >= 0)
+    o.detector.expectedSearchEvery = settings.expectedSearchEvery;
   replay::FrameStepper stepper(script.camera, planet, o);
   const core::LatLongChart cvChart(core::GridSize::fromSide(2049), 1.0);
 
   BoardTally tally;
   const int frames = quick ? std::min(renderer.frames(), 120) : renderer.frames();
   app::Progress progress("track " + scene);
-  FrameDump dump(dumpDir, scene, script, o);
+  FrameDump dump(settings.dumpDir, scene, script, o);
   for (int f = 0; f < frames; ++f) {
     const auto truth = renderer.truth(f);
     // Grey, as the single-marker rows' recordings are (bench_track.cpp): the colour conversion a
@@ -299,8 +324,11 @@ void evaluateScene(const std::string& scene, bool quick, const std::string& dump
     tally.add(step, truth, cvChart, script.planetRadius);
     progress.update(double(f + 1) / frames);
   }
+  tally.finish();
   progress.done(std::to_string(frames) + " frames");
-  out << boardRow(scene, script, frames, tally, singleMarkerMs).dump() << std::endl;
+  out << boardRow(scene, script, frames, tally, singleMarkerMs, o.detector.expectedSearchEvery)
+             .dump()
+      << std::endl;
 }
 
 }  // namespace
@@ -315,7 +343,7 @@ void benchTrackBoards(const BenchOptions& o, const BoardBenchSettings& settings,
                       const std::function<double()>& singleMarkerMs, std::ostream& out) {
   for (const std::string& scene : boardSceneNames())
     if ((!o.quick || scene != "board-demo") && (settings.scene.empty() || scene == settings.scene))
-      evaluateScene(scene, o.quick, settings.dumpDir, singleMarkerMs(), out);
+      evaluateScene(scene, o.quick, settings, singleMarkerMs(), out);
 }
 
 }  // namespace ps::bench

@@ -13,6 +13,9 @@ namespace ps::bench {
 struct BoardBenchSettings {
   std::string scene;    // run only this scene ("" = all)
   std::string dumpDir;  // one JSON line per frame in DIR/SCENE.jsonl ("" = none)
+  // The detector's expectedSearchEvery (0: the covered board's expected markers ignored, as
+  // before; -1: the default).
+  int expectedSearchEvery = -1;
 };
 
 // The board scenes the rows run (--quick leaves board-demo out).

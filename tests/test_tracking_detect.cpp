@@ -237,6 +237,83 @@ TEST(TrackingDetect, CoarseRegionSearchOnlyWhereABoxHoldsManyMarkers) {
   }
 }
 
+// A covered board's markers expected where a carried pose puts them (Detector::expect): a board
+// showing again there is found in that frame, whatever the frame's phase in the whole-frame
+// search's cycle; one showing elsewhere (the expectation wrong) is found by the whole-frame
+// search within expectedSearchEvery frames, however long the board was gone before.
+TEST(TrackingDetect, ExpectedBoardIsFoundAtOnceThereAndWithinTheSearchCycleElsewhere) {
+  const auto root = ps::app::sourceDir();
+  const auto board = tracking::loadMarkerLayout(tracking::defaultBoardPath(root));
+  const auto script = tracking::builtinScene("board-covered-move", root);
+  tracking::SynthRenderer renderer(script);
+  const auto truth = renderer.truth(0);  // the hand is off the board
+  ASSERT_GE(truth.boardHalfVisible, 6);
+  cv::Mat shown = renderer.render(0);
+  if (shown.channels() == 3) cv::cvtColor(shown, shown, cv::COLOR_BGR2GRAY);
+  const cv::Mat covered(shown.size(), CV_8U, cv::Scalar(128));
+  const auto truePx = tracking::projectLayout(board, truth.planet, script.camera);
+  // Right: the board's own corners. Wrong: the board shrunk into the image's top-left corner,
+  // clear of where it is.
+  double x0 = 1e9, y0 = 1e9;
+  cv::Rect2d trueExtent(truePx[0][0], truePx[0][0]);
+  for (const auto& q : truePx)
+    for (const auto& c : q) {
+      x0 = std::min(x0, c.x), y0 = std::min(y0, c.y);
+      trueExtent |= cv::Rect2d(c, c + cv::Point2d(1, 1));
+    }
+  std::vector<tracking::Detection> right, wrong;
+  cv::Rect2d wrongExtent(8, 8, 1, 1);
+  for (std::size_t i = 0; i < board.markers.size(); ++i) {
+    tracking::Detection d;
+    d.id = board.markers[i].id;
+    d.corners = truePx[i];
+    right.push_back(d);
+    for (auto& c : d.corners) {
+      c = cv::Point2d(8, 8) + 0.4 * (c - cv::Point2d(x0, y0));
+      wrongExtent |= cv::Rect2d(c, c + cv::Point2d(1, 1));
+    }
+    wrong.push_back(d);
+  }
+  // Apart by more than the search boxes' margins.
+  const double gap = std::max(trueExtent.x - wrongExtent.br().x, trueExtent.y - wrongExtent.br().y);
+  ASSERT_GT(gap, 40.0);
+  tracking::DetectorConfig config;
+  config.ids = board.ids();
+  config.sets = {board.ids()};
+  config.expectedSearchEvery = 8;  // off by default (detector.hpp)
+  auto boardFound = [&](const std::vector<tracking::Detection>& found) {
+    return std::count_if(found.begin(), found.end(),
+                         [&](const auto& d) { return board.find(d.id) != nullptr; }) >= 4;
+  };
+  int slowest = 0;
+  for (int coveredFrames = 1; coveredFrames <= 2 * config.expectedSearchEvery; ++coveredFrames) {
+    for (const auto* expected : {&right, &wrong}) {
+      auto det = tracking::makeDetector(config);
+      ASSERT_TRUE(boardFound(det->detect(shown)));
+      for (int f = 0; f < coveredFrames; ++f) {
+        det->expect(*expected);
+        ASSERT_TRUE(det->detect(covered).empty());
+      }
+      int waited = 0;
+      for (;; ++waited) {
+        det->expect(*expected);
+        if (boardFound(det->detect(shown)) || waited > 3 * config.expectedSearchEvery) break;
+      }
+      if (expected == &right) {
+        EXPECT_EQ(waited, 0) << "shown where expected after " << coveredFrames << " frames";
+      } else {
+        EXPECT_LT(waited, config.expectedSearchEvery)
+            << "shown elsewhere after " << coveredFrames << " covered frames";
+        slowest = std::max(slowest, waited);
+      }
+    }
+  }
+  // The whole frame was searched less often than every searchEvery frames: the expectation
+  // took effect (else this test checks nothing of it).
+  EXPECT_GE(slowest, config.searchEvery);
+  RecordProperty("frames_to_find_elsewhere_max", slowest);
+}
+
 TEST(TrackingDetect, ArucoDictionariesAndIdFilter) {
   const std::array<cv::Point2d, 4> truth = {cv::Point2d(60.5, 50.25), cv::Point2d(170.0, 40.0),
                                             cv::Point2d(180.0, 160.0), cv::Point2d(55.0, 150.0)};

@@ -14,6 +14,7 @@
 #include "edit/surface_height.hpp"
 #include "replay/session_timeline.hpp"
 #include "sand/tin_sand_tool.hpp"
+#include "tracking/body_pose.hpp"
 #include "tracking/camera_motion.hpp"
 #include "tracking/plane_tracker.hpp"
 
@@ -118,6 +119,14 @@ struct FrameStepper::Parts {
   // log's camera_shift_px and plane entries.
   tracking::BoardHint boardHint(const cv::Mat& grey, const std::vector<tracking::Detection>& found,
                                 const tracking::CameraCalibration& calib, nlohmann::json& log);
+  // The board's last measured pose (camera-from-body): where its markers are while the camera
+  // stands and they are covered.
+  std::optional<tracking::Pose> boardMeasured;
+  // Tells the detector where the covered board's markers are in the next frame, while a pose
+  // carries them (the plane's, or the last measured one while the camera stands): it searches
+  // there every frame and the whole frame less often (DetectorConfig::expectedSearchEvery).
+  void expectBoard(const tracking::BoardHint& hint, const tracking::SceneFrame& f,
+                   const tracking::CameraCalibration& calib);
   tracking::ToolShape toolShape;  // the tool's solid and stick in its body frame
   Parts(std::unique_ptr<tracking::Detector> d, const tracking::SceneConfig& sc,
         terrain::Terrain& planet)
@@ -349,6 +358,32 @@ tracking::BoardHint FrameStepper::Parts::boardHint(const cv::Mat& grey,
   return hint;
 }
 
+void FrameStepper::Parts::expectBoard(const tracking::BoardHint& hint,
+                                      const tracking::SceneFrame& f,
+                                      const tracking::CameraCalibration& calib) {
+  const auto& layout = scene.config().planet.layout;
+  if (!motion || !layout) return;
+  if (f.planet.measured) {
+    boardMeasured = f.planet.raw;
+    return;  // the detector follows the markers it found
+  }
+  std::optional<tracking::Pose> where = hint.carried;
+  if (!where && hint.cameraStill && f.planet.usable()) where = boardMeasured;
+  if (!where) return;
+  const auto corners = tracking::projectLayout(*layout, *where, calib);
+  std::vector<tracking::Detection> expected;
+  for (std::size_t i = 0; i < layout->markers.size(); ++i) {
+    // In front of the camera (behind it the projection folds back into the image).
+    if (!((*where * layout->markers[i].inBody()).t.z() > 0.01)) continue;
+    tracking::Detection d;
+    d.family = layout->family;
+    d.id = layout->markers[i].id;
+    d.corners = corners[i];
+    expected.push_back(d);
+  }
+  detector->expect(expected);
+}
+
 StepResult FrameStepper::step(const cv::Mat& image, int frame, double time) {
   const core::Chart& chart = planet_.chart();
   const double R = chart.sphereRadius();
@@ -393,6 +428,7 @@ StepResult FrameStepper::step(const cv::Mat& image, int frame, double time) {
   const tracking::BoardHint hint = p_->boardHint(grey.empty() ? image : grey, found, calib_, j);
   out.scene = p_->scene.update(found, calib_, frame, time, hint);
   p_->planetHadPose = out.scene.planet.usable();
+  p_->expectBoard(hint, out.scene, calib_);
   if (p_->motion && out.scene.planet.measured) {
     std::vector<std::array<cv::Point2d, 4>> quads, toolQuads;
     for (const auto& d : found) {

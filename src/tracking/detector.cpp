@@ -47,6 +47,9 @@ void DetectorConfig::validate() const {
                            " is not in 0..255");
   if (searchEvery < 1 || searchEvery > 1000)
     throw core::InputError("search every = " + std::to_string(searchEvery) + " is not in 1..1000");
+  if (expectedSearchEvery < 0 || expectedSearchEvery > 1000)
+    throw core::InputError("expected search every = " + std::to_string(expectedSearchEvery) +
+                           " is not in 0..1000");
   if (setSearchEvery < 1 || setSearchEvery > 1000)
     throw core::InputError("set search every = " + std::to_string(setSearchEvery) +
                            " is not in 1..1000");
@@ -96,8 +99,9 @@ namespace {
 
 class MultiFamilyDetector final : public Detector {
  public:
-  explicit MultiFamilyDetector(std::vector<std::unique_ptr<Detector>> parts)
-      : parts_(std::move(parts)) {}
+  MultiFamilyDetector(std::vector<std::unique_ptr<Detector>> parts,
+                      std::vector<std::string> families)
+      : parts_(std::move(parts)), families_(std::move(families)) {}
   std::string name() const override {
     std::string n;
     for (const auto& p : parts_) n += (n.empty() ? "" : " | ") + p->name();
@@ -115,9 +119,18 @@ class MultiFamilyDetector final : public Detector {
     }
     return all;
   }
+  void expect(const std::vector<Detection>& markers) override {
+    for (std::size_t i = 0; i < parts_.size(); ++i) {
+      std::vector<Detection> mine;
+      for (const auto& m : markers)
+        if (m.family.empty() || m.family == families_[i]) mine.push_back(m);
+      parts_[i]->expect(mine);
+    }
+  }
 
  private:
   std::vector<std::unique_ptr<Detector>> parts_;
+  std::vector<std::string> families_;  // parts_[i]'s family
 };
 
 }  // namespace
@@ -131,8 +144,12 @@ std::unique_ptr<Detector> makeDetector(const std::vector<DetectorConfig>& famili
                                " is given twice to one detector");
   if (families.size() == 1) return makeDetector(families.front());
   std::vector<std::unique_ptr<Detector>> parts;
-  for (const auto& c : families) parts.push_back(makeDetector(c));
-  return std::make_unique<MultiFamilyDetector>(std::move(parts));
+  std::vector<std::string> names;
+  for (const auto& c : families) {
+    parts.push_back(makeDetector(c));
+    names.push_back(c.family);
+  }
+  return std::make_unique<MultiFamilyDetector>(std::move(parts), std::move(names));
 }
 
 std::unique_ptr<Detector> makeDetector(const DetectorConfig& config) {

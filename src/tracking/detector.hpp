@@ -65,6 +65,14 @@ struct DetectorConfig {
   // whole-frame search running every searchEvery frames).
   std::vector<std::vector<int>> sets;
   int setSearchEvery = 8;
+  // While every missing set is expected somewhere (Detector::expect: a covered board whose
+  // pose the plane it lies on carries), its markers are looked for in the expected boxes every
+  // frame and the whole frame only every expectedSearchEvery frames: a marker showing again
+  // where it is expected is found in that frame, one showing elsewhere (a wrong prediction)
+  // within expectedSearchEvery frames. 0 (the default): expectations are ignored (the whole
+  // frame every searchEvery frames). Off because on board-covered-move 8 measured slower and
+  // less accurate than without (docs/TRACKING.md, "Expected markers").
+  int expectedSearchEvery = 0;
   double regionMargin = 0.3;  // box margin, as a fraction of the marker's size in the image
   // A box that holds at least coarseRegionMarkers markers, each at least coarseRegionPx
   // pixels across, is searched at `decimate` (the quads found on the smaller image, their edges
@@ -95,6 +103,12 @@ class Detector {
   virtual Backend backend() const = 0;
   // Markers in an 8-bit grey image (a BGR image is converted), sorted by id, then by TL corner.
   virtual std::vector<Detection> detect(const cv::Mat& image) = 0;
+  // Where markers that were not found are expected in the next detect()'s image (a covered
+  // board's markers placed by a pose carried without them), for that call only. The region
+  // tracker searches there as around a marker seen last frame (DetectorConfig::
+  // expectedSearchEvery); a detection's family, when set, picks the detector of that family.
+  // Others ignore it.
+  virtual void expect(const std::vector<Detection>& markers) { (void)markers; }
 };
 
 // The back end named in config (kAuto: AprilTag when the family is one of its own). Throws

@@ -46,6 +46,9 @@ class RegionDetector final : public Detector {
   }
 
   std::string name() const override { return finder_->name() + " + regions"; }
+  void expect(const std::vector<Detection>& markers) override {
+    if (config_.expectedSearchEvery > 0) expectedNext_ = markers;
+  }
   Backend backend() const override { return finder_->backend(); }
 
   std::vector<Detection> detect(const cv::Mat& image) override {
@@ -54,22 +57,33 @@ class RegionDetector final : public Detector {
     if (grey.size() != lastSize_) {
       last_.clear();
       previous_.clear();
+      expectedBefore_.clear();
       lastSize_ = grey.size();
     }
     ++frameNo_;
     std::vector<Detection> found;
-    // 1. Where each marker was, moved on by its last motion.
+    // 1. Where each marker was, moved on by its last motion; and where markers not seen last
+    // frame are expected (moved on by how their expectation moved).
     std::vector<SearchBox> boxes, coarseBoxes;
-    for (const auto& [id, d] : last_) {
+    auto addBox = [&](const Detection& d, const std::map<int, Detection>& before) {
       Detection p = d;
-      const auto prev = previous_.find(id);
-      if (prev != previous_.end()) {
+      const auto prev = before.find(d.id);
+      if (prev != before.end()) {
         const cv::Point2d motion = centre(d) - centre(prev->second);
         for (auto& c : p.corners) c += motion;
       }
-      const bool inLargeSet = largeSet(id) && side(d) >= config_.coarseRegionPx;
+      const bool inLargeSet = largeSet(d.id) && side(d) >= config_.coarseRegionPx;
       (inLargeSet ? coarseBoxes : boxes).push_back({box(p, frame) | box(d, frame), 1});
-    }
+    };
+    for (const auto& [id, d] : last_) addBox(d, previous_);
+    std::map<int, Detection> expected;
+    for (const auto& d : expectedNext_)
+      if (wanted(d.id) && !last_.count(d.id) && box(d, frame).width >= 16 &&
+          box(d, frame).height >= 16)
+        expected[d.id] = d;
+    expectedNext_.clear();
+    for (const auto& [id, d] : expected) addBox(d, expectedBefore_);
+    expectedBefore_ = expected;
     // Few or small markers first, at full resolution; then the large sets' boxes, at the
     // frame's decimation where enough of their markers are in one box (what the first pass
     // found there already is kept).
@@ -83,22 +97,29 @@ class RegionDetector final : public Detector {
       return std::any_of(found.begin(), found.end(),
                          [&](const Detection& d) { return d.id == id; });
     };
-    bool missing = config_.ids.empty(), partial = false;
+    // Missing and expected in the frame (some of its markers' boxes were searched above): the
+    // whole frame is searched less often for it.
+    auto isExpected = [&](int id) { return expected.count(id) > 0; };
+    bool missing = config_.ids.empty(), partial = false, unexpected = config_.ids.empty();
     for (int id : config_.ids) {
       const auto set = std::find_if(config_.sets.begin(), config_.sets.end(), [&](const auto& g) {
         return std::find(g.begin(), g.end(), id) != g.end();
       });
       if (set == config_.sets.end()) {
         missing |= !seen(id);
+        unexpected |= !seen(id) && !isExpected(id);
       } else if (!seen(id)) {
-        if (std::any_of(set->begin(), set->end(), seen))
+        if (std::any_of(set->begin(), set->end(), seen)) {
           partial = true;
-        else
+        } else {
           missing = true;
+          unexpected |= std::none_of(set->begin(), set->end(), isExpected);
+        }
       }
     }
     const int since = frameNo_ - lastSearch_;
-    if ((missing && since >= config_.searchEvery) || (partial && since >= config_.setSearchEvery)) {
+    const int every = unexpected ? config_.searchEvery : config_.expectedSearchEvery;
+    if ((missing && since >= every) || (partial && since >= config_.setSearchEvery)) {
       lastSearch_ = frameNo_;
       std::vector<SearchBox> fresh;
       for (const auto& d : finder_->detect(grey)) {
@@ -214,6 +235,8 @@ class RegionDetector final : public Detector {
   CornerRefiner cornerRefiner_{config_.family};
   std::unique_ptr<Detector> finder_, refiner_, coarseRefiner_;
   std::map<int, Detection> last_, previous_;
+  std::vector<Detection> expectedNext_;      // for the next detect() only
+  std::map<int, Detection> expectedBefore_;  // what the last detect() expected
   cv::Size lastSize_;
   long long frameNo_ = 0, lastSearch_ = -1000000;
 };
