@@ -46,8 +46,6 @@ struct BenchRegistration {
       : BenchRegistration(name, description, [run](CLI::App&) { return BenchFunction(run); }) {}
 };
 
-void benchTessellate(const BenchOptions& options, std::ostream& out);
-
 // `bench occlusion`'s hand rows (bench_occlusion_hand.cpp), after its tool rows.
 struct HandBenchSettings {
   std::vector<std::string> testsOff;  // hand-mask tests turned off: chroma, bright, texture

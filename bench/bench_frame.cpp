@@ -1,5 +1,6 @@
 // `planetsculpt bench frame`: the whole frame of the AR app, per frame of data/demo.mkv (640x480)
-// on the default planet, one thread:
+// on the default planet's relief, on each chart of `--charts` (lat-long and octahedral by default;
+// every row names its chart), one thread:
 //   track      = marker detection + scene tracking (replay::FrameStepper),
 //   edit       = the brush stroke through the edit pipeline (the same stepper),
 //   tessellate = the AR view's tessellation (<= 70,000 triangles),
@@ -14,6 +15,7 @@
 // machine (nproc, /proc/loadavg before and after, GL_RENDERER) goes with the figures: on a
 // shared 2-core machine the load moves them. Without a headless OpenGL context (or the demo
 // video) it prints one line saying so and returns.
+#include <CLI/CLI.hpp>
 #include <chrono>
 #include <filesystem>
 #include <fstream>
@@ -22,12 +24,13 @@
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <thread>
-#include <tuple>
+#include <vector>
 
 #include "app/build_paths.hpp"
 #include "app/default_planet.hpp"
 #include "bench/bench.hpp"
 #include "bench/bench_util.hpp"
+#include "bench/chart_option.hpp"
 #include "bench/demo_options.hpp"
 #include "bench/frame_skips.hpp"
 #include "bench/gl_context.hpp"
@@ -79,11 +82,17 @@ struct Series {
   }
 };
 
-void benchCase(const BenchOptions& options, std::ostream& out, nlohmann::json machine,
-               render::EglContext& context, int gridLevel, const std::string& name,
-               double distMaxPx, render::Shading shading);
+struct FrameCase {
+  std::string name;
+  double distMaxPx;
+  render::Shading shading;
+};
 
-void benchFrame(const BenchOptions& options, std::ostream& out) {
+void benchCase(const BenchOptions& options, std::ostream& out, nlohmann::json machine,
+               render::EglContext& context, int gridLevel, core::ChartShape chart,
+               const FrameCase& frameCase);
+
+void benchFrame(const BenchOptions& options, const ChartChoice& charts, std::ostream& out) {
   namespace fs = std::filesystem;
   nlohmann::json machine = {{"nproc", std::thread::hardware_concurrency()},
                             {"load_avg_before", loadAverage()}};
@@ -109,18 +118,19 @@ void benchFrame(const BenchOptions& options, std::ostream& out) {
   // the demo's also in facets without them (the AR view before per-pixel shading), as the
   // baseline of its frame rate in the same run.
   const auto perPixel = render::Shading::kPerPixel, faceted = render::Shading::kFaceted;
-  for (const auto& [name, distMaxPx, shading] :
-       {std::tuple{"demo", 4.0, perPixel}, std::tuple{"demo_faceted", 4.0, faceted},
-        std::tuple{"dense", 0.05, perPixel}})
-    benchCase(options, out, machine, *context, gridLevel, name, distMaxPx, shading);
+  const std::vector<FrameCase> cases{
+      {"demo", 4.0, perPixel}, {"demo_faceted", 4.0, faceted}, {"dense", 0.05, perPixel}};
+  for (const core::ChartShape chart : charts.shapes())
+    for (const FrameCase& frameCase : cases)
+      benchCase(options, out, machine, *context, gridLevel, chart, frameCase);
 }
 
 // One case's replay of the demo video: the frame stepper, the AR view's tessellation and render
 // and the overview, each timed per frame, with what the case's rows report.
 class CaseReplay {
  public:
-  CaseReplay(int gridLevel, double distMaxPx, render::Shading shading)
-      : planet_(app::makeDefaultPlanet(gridLevel, 1, core::ChartShape::kLatLong)),
+  CaseReplay(int gridLevel, core::ChartShape chart, double distMaxPx, render::Shading shading)
+      : planet_(app::makeDefaultPlanet(gridLevel, 1, chart)),
         source_(ps::app::sourceDir() / "data" / "demo.mkv"),
         calib_(tracking::loadCalibration(ps::app::sourceDir() / "calib" / "synthetic-640x480.yml")
                    .forImageSize(source_.size())),
@@ -166,6 +176,7 @@ class CaseReplay {
     const double medianFrame = median(s_.total);
     return {{"bench", "frame"},
             {"case", name},
+            {"chart", planet_->chart().name()},
             {"video", "data/demo.mkv"},
             {"size", std::to_string(W_) + "x" + std::to_string(H_)},
             {"grid", planet_->grid().side()},
@@ -231,6 +242,7 @@ class CaseReplay {
     }
     return nlohmann::json{{"bench", "frame"},
                           {"case", name + "_still"},
+                          {"chart", planet_->chart().name()},
                           {"repeats", repeats},
                           {"triangles", mesh->triangleCount()},
                           {"tessellate_ms", round3(median(tess))},
@@ -251,6 +263,7 @@ class CaseReplay {
     skips_.repeats = repeats;
     return {{"bench", "frame"},
             {"case", name + "_skips"},
+            {"chart", planet_->chart().name()},
             {"grid", planet_->grid().side()},
             {"skips", measureSkips(renderer_, *planet_, skips_)},
             {"load_avg", loadAverage()}};
@@ -342,19 +355,20 @@ class CaseReplay {
 };
 
 void benchCase(const BenchOptions& options, std::ostream& out, nlohmann::json machine,
-               render::EglContext& context, int gridLevel, const std::string& name,
-               double distMaxPx, render::Shading shading) {
+               render::EglContext& context, int gridLevel, core::ChartShape chart,
+               const FrameCase& frameCase) {
+  const std::string& name = frameCase.name;
   context.makeCurrent();
   machine["load_avg_before"] = loadAverage();
-  CaseReplay replay(gridLevel, distMaxPx, shading);
+  CaseReplay replay(gridLevel, chart, frameCase.distMaxPx, frameCase.shading);
   replay.run(options.quick ? 90 : 0);
   machine["load_avg_after"] = loadAverage();
   out << replay.row(name, machine).dump() << std::endl;
   if (const auto still = replay.stillRow(name, std::max(10, options.repeats * 2)))
     out << still->dump() << std::endl;
   // The faceted baseline only measures its frame rate.
-  if (shading == render::Shading::kFaceted) return;
-  std::cerr << "bench frame: skips (" << name << ")\n";
+  if (frameCase.shading == render::Shading::kFaceted) return;
+  std::cerr << "bench frame: skips (" << core::toString(chart) << " " << name << ")\n";
   out << replay.skipsRow(name, options.quick ? 2 : 5).dump() << std::endl;
 }
 
@@ -362,6 +376,10 @@ void benchCase(const BenchOptions& options, std::ostream& out, nlohmann::json ma
 
 static const BenchRegistration kRegistered(
     "frame", "The AR app's whole frame on data/demo.mkv: track, edit, tessellate, render",
-    benchFrame);
+    [](CLI::App& command) -> BenchFunction {
+      auto charts = std::make_shared<ChartChoice>();
+      addChartsOption(command, *charts);
+      return [charts](const BenchOptions& o, std::ostream& out) { benchFrame(o, *charts, out); };
+    });
 
 }  // namespace ps::bench

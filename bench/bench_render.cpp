@@ -4,7 +4,9 @@
 // pixel: the full-resolution surface as the shader shows it) and with its own shading's
 // reference: SSIM and the mean absolute colour difference over the planet's pixels, the
 // triangles, the render's time (median of repeats of an unchanged mesh, read-back included) and
-// the height texture's bytes. One JSON row per view, dist_max and shading.
+// the height texture's bytes. One JSON row per chart (`--charts`: lat-long and octahedral by
+// default, the same relief and grid), view, dist_max and shading.
+#include <CLI/CLI.hpp>
 #include <chrono>
 #include <iostream>
 #include <memory>
@@ -14,6 +16,7 @@
 #include "app/default_planet.hpp"
 #include "bench/bench.hpp"
 #include "bench/bench_util.hpp"
+#include "bench/chart_option.hpp"
 #include "bench/gl_context.hpp"
 #include "render/egl_context.hpp"
 #include "render/image_compare.hpp"
@@ -45,11 +48,11 @@ std::vector<View> views(double R, int w, int h) {
 
 }  // namespace
 
-void benchRender(const BenchOptions& o, std::ostream& out) {
-  const auto gl = glContextOrSkip("render", out);
-  if (!gl) return;
+// One chart's planet: every view, dist_max and shading against the view's references.
+void benchRenderOn(core::ChartShape shape, const BenchOptions& o, const std::string& glRenderer,
+                   std::ostream& out) {
   const int level = o.quick ? 10 : 12;
-  const auto planet = app::makeDefaultPlanet(level, 1, core::ChartShape::kLatLong);
+  const auto planet = app::makeDefaultPlanet(level, 1, shape);
   const double R = planet->chart().sphereRadius();
   render::PlanetRenderer renderer;
   const int repeats = o.quick ? 3 : 9;
@@ -76,7 +79,7 @@ void benchRender(const BenchOptions& o, std::ostream& out) {
   };
   for (const auto& v : views(R, 640, 480)) {
     if (o.quick && v.name == "100 km") continue;
-    std::cerr << "bench render: " << v.name << "\n";
+    std::cerr << "bench render: " << planet->chart().name() << " " << v.name << "\n";
     const cv::Mat perPixelRef = draw(v.camera, 0.1, render::Shading::kPerPixel, nullptr, nullptr);
     const cv::Mat facetedRef = draw(v.camera, 0.1, render::Shading::kFaceted, nullptr, nullptr);
     for (double px : {1.0, 4.0, 16.0}) {
@@ -90,6 +93,7 @@ void benchRender(const BenchOptions& o, std::ostream& out) {
             image, shading == render::Shading::kPerPixel ? perPixelRef : facetedRef, mask);
         auto r3 = [](double x) { return std::round(x * 1e3) / 1e3; };
         out << nlohmann::json{{"bench", "render"},
+                              {"chart", planet->chart().name()},
                               {"view", v.name},
                               {"grid", planet->grid().label()},
                               {"size", "640x480"},
@@ -109,7 +113,7 @@ void benchRender(const BenchOptions& o, std::ostream& out) {
                               {"height_tiles_needed", shading == render::Shading::kPerPixel
                                                           ? renderer.stats().heightTilesNeeded
                                                           : 0},
-                              {"gl_renderer", gl->renderer()}}
+                              {"gl_renderer", glRenderer}}
                    .dump()
             << std::endl;
       }
@@ -117,10 +121,22 @@ void benchRender(const BenchOptions& o, std::ostream& out) {
   }
 }
 
+void benchRender(const BenchOptions& o, const ChartChoice& charts, std::ostream& out) {
+  const auto gl = glContextOrSkip("render", out);
+  if (!gl) return;
+  for (const core::ChartShape shape : charts.shapes()) benchRenderOn(shape, o, gl->renderer(), out);
+}
+
 namespace {
 const BenchRegistration kRender("render",
                                 "Per-pixel shading against facets: SSIM, triangles, render time",
-                                benchRender);
+                                [](CLI::App& command) -> BenchFunction {
+                                  auto charts = std::make_shared<ChartChoice>();
+                                  addChartsOption(command, *charts);
+                                  return [charts](const BenchOptions& o, std::ostream& out) {
+                                    benchRender(o, *charts, out);
+                                  };
+                                });
 }  // namespace
 
 }  // namespace ps::bench

@@ -26,7 +26,8 @@
 //     with the removal on (--quick: 10^3): the relative volume drift.
 // Every row: "model" ("tin" or "grid"), vertices, memory_bytes (the TIN: its triangulation's
 // containers; the grid: its float heights and the sand field's resident tiles), surface_error_m,
-// volume_drift (|V_end - V_start| / V_start, each model's own V), ms.
+// volume_drift (|V_end - V_start| / V_start, each model's own V), ms. The scene and the stroke on
+// each model are bench/sand_tin_strokes.cpp.
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <cmath>
@@ -41,6 +42,7 @@
 #include "app/plot.hpp"
 #include "bench/bench.hpp"
 #include "bench/bench_util.hpp"
+#include "bench/sand_tin_strokes.hpp"
 #include "core/flat_chart.hpp"
 #include "core/input_error.hpp"
 #include "sand/sand_field.hpp"
@@ -51,202 +53,7 @@ namespace ps::bench {
 
 namespace {
 
-struct Scene {
-  double side = 10.0, sand = 1.0, radius = 0.25, depth = 0.15, spacing = 0.25;
-  int erosionSteps = 2;
-  double bottom() const { return sand - depth; }
-  // Stamp centres along the diagonal: `trace` of its length, centred.
-  std::vector<Eigen::Vector2d> stroke(double trace) const {
-    const Eigen::Vector2d mid(0.5 * side, 0.5 * side), dir = Eigen::Vector2d(1, 1).normalized();
-    const double half = 0.5 * trace * side * std::sqrt(2.0);
-    std::vector<Eigen::Vector2d> out;
-    for (double s = -half; s <= half + 1e-12; s += spacing * radius) out.push_back(mid + s * dir);
-    return out;
-  }
-};
-
-tin::DynamicTin flatTin(const Scene& scene, int n) {
-  std::vector<Eigen::Vector3d> points;
-  for (int j = 0; j < n; ++j)
-    for (int i = 0; i < n; ++i)
-      points.emplace_back(scene.side * i / (n - 1), scene.side * j / (n - 1), scene.sand);
-  return tin::DynamicTin(points);
-}
-
-double maxEdgeSlope(const tin::DynamicTin& t) {
-  double worst = 0;
-  std::vector<tin::DynamicTin::Vertex> nb;
-  for (const auto v : t.vertices()) {
-    t.neighbours(v, nb);
-    for (const auto u : nb)
-      worst = std::max(
-          worst, std::abs(t.height(u) - t.height(v)) / (t.position(u) - t.position(v)).norm());
-  }
-  return worst;
-}
-
-struct TinRun {
-  std::unique_ptr<sand::TinSand> sand;
-  double ms = 0, drift = 0;
-  std::size_t stamps = 0, erosionSteps = 0, removed = 0;
-};
-
-TinRun runTin(const Scene& scene, int n, double trace, bool erosion, bool pushAside = true) {
-  TinRun run;
-  run.sand = std::make_unique<sand::TinSand>(flatTin(scene, n));
-  const double v0 = run.sand->tin().volume();
-  sand::TinStampTool tool = sand::TinStampTool::disc(scene.radius);
-  tool.pushAside = pushAside;
-  run.ms = timeMs([&] {
-    for (const Eigen::Vector2d& c : scene.stroke(trace)) {
-      run.sand->stamp(c, scene.bottom(), tool);
-      ++run.stamps;
-      if (!erosion) continue;
-      for (int s = 0; s < scene.erosionSteps; ++s) run.sand->erode(), ++run.erosionSteps;
-      run.removed += run.sand->removeRedundant();
-    }
-  });
-  run.drift = std::abs(run.sand->tin().volume() - v0) / v0;
-  return run;
-}
-
-// The grid core on the same stroke: the same press (every vertex inside the tool's outline to
-// its bottom) and the same rampart (what was pressed out, spread with the same profile beyond
-// the outer contour), on the float heights, then SandField's thermal erosion.
-struct GridRun {
-  int side = 0;
-  std::shared_ptr<core::FlatChart> chart;
-  std::vector<float> heights;
-  double ms = 0, stampMs = 0, erodeMs = 0, drift = 0;
-  std::size_t stamps = 0, erosionSteps = 0, memory = 0;
-  double at(double x, double y) const {  // bilinear
-    const double d = chart->dx();
-    const double u = std::clamp(x / d, 0.0, double(side - 1)),
-                 v = std::clamp(y / d, 0.0, double(side - 1));
-    const int i = std::min(int(u), side - 2), j = std::min(int(v), side - 2);
-    const double fu = u - i, fv = v - j;
-    const auto h = [&](int a, int b) { return double(heights[std::size_t(b) * side + a]); };
-    return (1 - fv) * ((1 - fu) * h(i, j) + fu * h(i + 1, j)) +
-           fv * ((1 - fu) * h(i, j + 1) + fu * h(i + 1, j + 1));
-  }
-};
-
-void gridStamp(GridRun& g, const Scene& scene, const sand::TinStampTool& tool,
-               const Eigen::Vector2d& c, terrain::VertexBox& touched) {
-  const double d = g.chart->dx(), area = d * d;
-  const double outer = tool.outerRadius(), reach = tool.reach();
-  // Inside the outline (a polygon about c; crossing number).
-  const auto pressed = [&](const Eigen::Vector2d& p) {
-    bool inside = false;
-    const std::size_t n = tool.outline.size();
-    for (std::size_t a = 0, b = n - 1; a < n; b = a++) {
-      const Eigen::Vector2d pa = c + tool.outline[a], pb = c + tool.outline[b];
-      if ((pa.y() > p.y()) != (pb.y() > p.y()) &&
-          p.x() < (pb.x() - pa.x()) * (p.y() - pa.y()) / (pb.y() - pa.y()) + pa.x())
-        inside = !inside;
-    }
-    return inside;
-  };
-  const int i0 = std::max(0, int((c.x() - reach) / d) - 1),
-            i1 = std::min(g.side - 1, int((c.x() + reach) / d) + 1);
-  const int j0 = std::max(0, int((c.y() - reach) / d) - 1),
-            j1 = std::min(g.side - 1, int((c.y() + reach) / d) + 1);
-  double displaced = 0, weighted = 0;
-  for (int j = j0; j <= j1; ++j)
-    for (int i = i0; i <= i1; ++i) {
-      float& h = g.heights[std::size_t(j) * g.side + i];
-      const Eigen::Vector2d p(i * d, j * d);
-      const double r = (p - c).norm();
-      if (pressed(p)) {
-        // The bottom as a float: what is pressed out is then exactly what the floats lose.
-        const float bottom = float(scene.bottom());
-        if (h > bottom) displaced += area * (double(h) - bottom), h = bottom;
-      } else {
-        const double t = std::clamp((r - outer) / tool.rampartWidth, 0.0, 1.0);
-        weighted += area * (1 - 3 * t * t + 2 * t * t * t) * (r <= reach);
-      }
-    }
-  double carry = 0;
-  if (weighted > 0)
-    for (int j = j0; j <= j1; ++j)
-      for (int i = i0; i <= i1; ++i) {
-        const Eigen::Vector2d p(i * d, j * d);
-        const double r = (p - c).norm();
-        if (pressed(p) || r > reach) continue;
-        const double t = std::clamp((r - outer) / tool.rampartWidth, 0.0, 1.0);
-        float& h = g.heights[std::size_t(j) * g.side + i];
-        // Rounded with the residual carried on, as the grid core's displacement tool does.
-        const double exact = h + displaced / weighted * (1 - 3 * t * t + 2 * t * t * t);
-        const float f = float(exact + carry / area);
-        carry += area * (exact - double(f));
-        h = f;
-      }
-  touched = {i0, i1, j0, j1};
-}
-
-GridRun runGrid(const Scene& scene, int n, double trace, bool erosion) {
-  GridRun g;
-  const core::GridSize size(n);
-  g.side = size.side();
-  g.chart =
-      std::make_shared<core::FlatChart>(size, scene.side / (g.side - 1), scene.side / (g.side - 1));
-  g.heights.assign(std::size_t(g.side) * g.side, float(scene.sand));
-  const sand::SandGrid grid(g.chart);
-  const double v0 = grid.volume(g.heights);
-  sand::SandField field(g.chart, g.heights);
-  const sand::TinStampTool tool = sand::TinStampTool::disc(scene.radius);
-  const sand::Material material = sand::Material::sand();
-  std::size_t resident = 0;
-  g.ms = timeMs([&] {
-    for (const Eigen::Vector2d& c : scene.stroke(trace)) {
-      terrain::VertexBox touched;
-      g.stampMs += timeMs([&] {
-        field.writeBack(1e9);
-        gridStamp(g, scene, tool, c, touched);
-        field.mark(touched);
-      });
-      ++g.stamps;
-      if (!erosion) continue;
-      g.erodeMs += timeMs([&] {
-        for (int s = 0; s < scene.erosionSteps; ++s) field.thermalStep(material), ++g.erosionSteps;
-      });
-      resident = std::max(resident, field.residentBytes());
-    }
-    field.writeBack(1e9);
-  });
-  g.memory = g.heights.size() * sizeof(float) + resident;
-  g.drift = std::abs(grid.volume(g.heights) - v0) / v0;
-  return g;
-}
-
-double gridSteepest(const GridRun& g) {
-  const double d = g.chart->dx();
-  double worst = 0;
-  for (int j = 0; j < g.side; ++j)
-    for (int i = 0; i < g.side; ++i) {
-      const double h = g.heights[std::size_t(j) * g.side + i];
-      if (i + 1 < g.side)
-        worst = std::max(worst, std::abs(g.heights[std::size_t(j) * g.side + i + 1] - h) / d);
-      if (j + 1 < g.side)
-        worst = std::max(worst, std::abs(g.heights[std::size_t(j + 1) * g.side + i] - h) / d);
-    }
-  return worst;
-}
-
-// RMS and largest difference of a surface from the reference grid's, over its vertices.
-template <class F>
-std::pair<double, double> surfaceError(const GridRun& reference, F&& heightAt) {
-  const double d = reference.chart->dx();
-  double sum2 = 0, worst = 0;
-  for (int j = 0; j < reference.side; ++j)
-    for (int i = 0; i < reference.side; ++i) {
-      const double e =
-          heightAt(i * d, j * d) - double(reference.heights[std::size_t(j) * reference.side + i]);
-      sum2 += e * e;
-      worst = std::max(worst, std::abs(e));
-    }
-  return {std::sqrt(sum2 / (double(reference.side) * reference.side)), worst};
-}
+using namespace sandtin;
 
 nlohmann::json tinRow(const std::string& experiment, const TinRun& r, double trace, int startN) {
   const auto& t = r.sand->tin();
@@ -341,86 +148,6 @@ void equalErrorRatio(nlohmann::json& tinRowJson, const std::vector<nlohmann::jso
       tinRowJson["memory_bytes"].get<double>() / at.memory;
   tinRowJson["equal_error_between" + suffix] = at.between;
   tinRowJson["equal_error_extrapolated" + suffix] = at.extrapolated;
-}
-
-// The exact surface a press-only stroke leaves on the flat sand: the minimum over its stamps of
-// the tool's shape (the regular polygon at the bottom, its wall rising linearly across the rim to
-// the sand's surface, as the TIN's contours make it), capped by the sand's surface.
-struct ExactStroke {
-  double sand = 0, bottom = 0, apothem = 0, rimFraction = 0, outerRadius = 0, step = 0;
-  std::vector<Eigen::Vector2d> centres, normals;
-  Eigen::Vector2d dir;
-
-  ExactStroke(const Scene& scene, const sand::TinStampTool& tool, double trace)
-      : sand(scene.sand), bottom(scene.bottom()), centres(scene.stroke(trace)) {
-    const std::size_t n = tool.outline.size();
-    for (std::size_t k = 0; k < n; ++k) {
-      const Eigen::Vector2d e = tool.outline[(k + 1) % n] - tool.outline[k];
-      normals.emplace_back(e.y() / e.norm(), -e.x() / e.norm());
-    }
-    apothem = tool.outline[0].dot(normals[0]);
-    rimFraction = tool.rim / tool.outline[0].norm();
-    outerRadius = tool.outerRadius();
-    step = scene.spacing * scene.radius;
-    dir = Eigen::Vector2d(1, 1).normalized();
-  }
-  // One stamp's shape at x (the polygon's gauge: a regular polygon's outer contour is the
-  // outline scaled by 1 + rim / radius).
-  double tool(const Eigen::Vector2d& c, const Eigen::Vector2d& x) const {
-    const Eigen::Vector2d d = x - c;
-    if (d.squaredNorm() > outerRadius * outerRadius) return sand;
-    double g = -INFINITY;
-    for (const Eigen::Vector2d& nrm : normals) g = std::max(g, d.dot(nrm));
-    const double t = std::clamp((g / apothem - 1.0) / rimFraction, 0.0, 1.0);
-    return bottom + (sand - bottom) * t;
-  }
-  double at(const Eigen::Vector2d& x) const {
-    const double s = (x - centres.front()).dot(dir) / step;
-    const double reach = outerRadius / step + 1;
-    const long k0 = std::max(0L, long(std::floor(s - reach)));
-    const long k1 = std::min(long(centres.size()) - 1, long(std::ceil(s + reach)));
-    double h = sand;
-    for (long k = k0; k <= k1; ++k) h = std::min(h, tool(centres[std::size_t(k)], x));
-    return h;
-  }
-  double distanceToStroke(const Eigen::Vector2d& x) const {
-    return tin::pointSegmentDistance(x, centres.front(), centres.back());
-  }
-};
-
-// A grid holding the exact stamped shape at its vertices (a float each), bilinear between.
-struct ExactGrid {
-  int side = 0;
-  double d = 0;
-  std::vector<float> h;
-  double at(double x, double y) const {
-    const double u = std::clamp(x / d, 0.0, double(side - 1)),
-                 v = std::clamp(y / d, 0.0, double(side - 1));
-    const int i = std::min(int(u), side - 2), j = std::min(int(v), side - 2);
-    const double fu = u - i, fv = v - j;
-    const auto g = [&](int a, int b) { return double(h[std::size_t(b) * side + a]); };
-    return (1 - fv) * ((1 - fu) * g(i, j) + fu * g(i + 1, j)) +
-           fv * ((1 - fu) * g(i, j + 1) + fu * g(i + 1, j + 1));
-  }
-};
-
-ExactGrid exactGrid(const Scene& scene, const ExactStroke& exact, int n) {
-  ExactGrid g;
-  g.side = core::GridSize(n).side();
-  g.d = scene.side / (g.side - 1);
-  g.h.assign(std::size_t(g.side) * g.side, float(scene.sand));
-  for (const Eigen::Vector2d& c : exact.centres) {
-    const int i0 = std::max(0, int((c.x() - exact.outerRadius) / g.d)),
-              i1 = std::min(g.side - 1, int((c.x() + exact.outerRadius) / g.d) + 1);
-    const int j0 = std::max(0, int((c.y() - exact.outerRadius) / g.d)),
-              j1 = std::min(g.side - 1, int((c.y() + exact.outerRadius) / g.d) + 1);
-    for (int j = j0; j <= j1; ++j)
-      for (int i = i0; i <= i1; ++i) {
-        float& h = g.h[std::size_t(j) * g.side + i];
-        h = std::min(h, float(exact.tool(c, {i * g.d, j * g.d})));
-      }
-  }
-  return g;
 }
 
 // The press-only stroke (no rampart, no erosion) on the TIN and on grids of 129^2 .. 8193^2

@@ -1,11 +1,13 @@
 // `planetsculpt bench tessellate`: view-dependent tessellation time against measured screen
-// error, on the default planet, from orbit, 1,000 km and 1 km up, at 1280x720; then the same
-// relief on the lat-long and the octahedral chart (the same grid, so the same memory), 1,000 km
-// over the north pole and over the equator (rows `tessellate_chart`). `ms` is the median
+// error, on the default planet, from orbit, 1,000 km and 1 km up, at 1280x720, on each chart of
+// `--charts` (lat-long and octahedral by default: the same relief and grid, so the same memory;
+// every row names its chart); then 1,000 km over the north pole and over the equator (rows
+// `tessellate_chart`). `ms` is the median
 // of repeated full tessellations of the same view by one tessellator (as frame after frame: a
 // bound budget starts where the last call settled); `first_ms` / `first_passes` are the first,
 // from a fresh tessellator. `host_memory_probe_ms` is a fixed memory workload timed just before
 // the row (bench/host_probe.hpp): the host's slow phases show in it as well as in `ms`.
+#include <CLI/CLI.hpp>
 #include <cmath>
 #include <iostream>
 #include <nlohmann/json.hpp>
@@ -14,6 +16,7 @@
 #include "app/default_planet.hpp"
 #include "bench/bench.hpp"
 #include "bench/bench_util.hpp"
+#include "bench/chart_option.hpp"
 #include "bench/host_probe.hpp"
 #include "terrain/screen_error.hpp"
 #include "terrain/tessellator.hpp"
@@ -73,15 +76,18 @@ std::vector<View> standardViews(const terrain::Terrain& t) {
 
 }  // namespace
 
-void benchTessellate(const BenchOptions& options, std::ostream& out) {
+// The standard views on one chart's planet: its memory row, then one row per view, dist_max and
+// budget.
+void benchTessellateOn(core::ChartShape shape, const BenchOptions& options, std::ostream& out) {
   const int level = options.quick ? 11 : 13;
   const double rssBefore = procStatusMiB("VmRSS");
   double buildS = 0;
   std::unique_ptr<terrain::Terrain> planet;
-  buildS = timeMs([&] { planet = app::makeDefaultPlanet(level, 1, core::ChartShape::kLatLong); }) /
-           1000.0;
+  buildS = timeMs([&] { planet = app::makeDefaultPlanet(level, 1, shape); }) / 1000.0;
   const double rssAfter = procStatusMiB("VmRSS");
+  const std::string chart = planet->chart().name();
   out << nlohmann::json{{"bench", "tessellate_memory"},
+                        {"chart", chart},
                         {"grid", planet->grid().label()},
                         {"planet_mib", double(planet->bytes()) / (1 << 20)},
                         {"bytes_per_vertex",
@@ -121,6 +127,7 @@ void benchTessellate(const BenchOptions& options, std::ostream& out) {
         const auto err = terrain::measureScreenError(*planet, view.camera, tess.mesh());
         const double fullMs = median(full), cachedMs = median(cached);
         out << nlohmann::json{{"bench", "tessellate"},
+                              {"chart", chart},
                               {"grid", planet->grid().label()},
                               {"view", view.label},
                               {"width", 1280},
@@ -154,11 +161,12 @@ void benchTessellate(const BenchOptions& options, std::ostream& out) {
 // The same relief (terrain/relief: a function of the direction) on both sphere charts at the
 // same grid: triangles and time against the measured screen error, over a pole (lat-long's
 // crowded rows; on the octahedral chart an ordinary place) and over the equator.
-void benchTessellateCharts(const BenchOptions& options, std::ostream& out) {
+void benchTessellateCharts(const BenchOptions& options, const ChartChoice& charts,
+                           std::ostream& out) {
   const int level = options.quick ? 11 : 13;
   const std::vector<double> sweep =
       options.quick ? std::vector<double>{1, 4} : std::vector<double>{0.5, 1, 2, 4, 8};
-  for (const core::ChartShape shape : {core::ChartShape::kLatLong, core::ChartShape::kOctahedral}) {
+  for (const core::ChartShape shape : charts.shapes()) {
     const auto planet = app::makeDefaultPlanet(level, 1, shape);
     const double R = planet->chart().sphereRadius();
     for (const View& view :
@@ -192,13 +200,18 @@ void benchTessellateCharts(const BenchOptions& options, std::ostream& out) {
   }
 }
 
-void benchTessellateAll(const BenchOptions& options, std::ostream& out) {
-  benchTessellate(options, out);
-  benchTessellateCharts(options, out);
+void benchTessellate(const BenchOptions& options, const ChartChoice& charts, std::ostream& out) {
+  for (const core::ChartShape shape : charts.shapes()) benchTessellateOn(shape, options, out);
+  benchTessellateCharts(options, charts, out);
 }
 
 static const BenchRegistration kRegistered(
     "tessellate", "View-dependent tessellation time against measured screen error",
-    benchTessellateAll);
+    [](CLI::App& command) -> BenchFunction {
+      auto charts = std::make_shared<ChartChoice>();
+      addChartsOption(command, *charts);
+      return
+          [charts](const BenchOptions& o, std::ostream& out) { benchTessellate(o, *charts, out); };
+    });
 
 }  // namespace ps::bench

@@ -3,7 +3,7 @@
 // frustum and horizon culling, reusing an unchanged view's tessellation, uploading only a
 // changed mesh, thermal erosion on the active cells only, no edit work while the tool does not
 // touch, and the overview drawn every Nth frame. Their "changes nothing visible" tests are
-// tests/test_skips.cpp and the Skips tests in tests/test_render.cpp.
+// tests/test_skips.cpp and the Skips tests in tests/test_render_ar_frame.cpp.
 #include <nlohmann/json.hpp>
 #include <opencv2/core.hpp>
 #include <vector>

@@ -2,7 +2,7 @@
 // for an unchanged view and terrain is the mesh a fresh tessellation makes, and a tool that does
 // not touch leaves the terrain alone (the replay skips the pipeline; a displacement sphere that
 // does not reach the surface changes nothing when applied). The renderer's skips (culling,
-// uploads, the overview's rate) are in test_render.cpp; erosion on active cells only is
+// uploads, the overview's rate) are in test_render_ar_frame.cpp; erosion on active cells only is
 // SandThermal/SandDiffusion.ActiveSetStepEqualsWholeGridStepBitForBit.
 #include <gtest/gtest.h>
 
