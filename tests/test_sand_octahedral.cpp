@@ -157,7 +157,7 @@ TEST(SandOctahedral, ThermalStepsEqualACellByCellReferenceBitForBit) {
   // 129^2: border tiles (by the folds) and inner tiles (stepped in one pass from planes of shared
   // chords) both. A 1 km planet (cells ~28 m), noise of 40 m: slopes far past the talus. The
   // disc straddles a border tile and an inner one.
-  for (Mapping mapping : kMappings) {
+  for (Mapping mapping : kOctahedralMappings) {
     auto chart = octa(7, 1000.0, mapping);
     ASSERT_NO_FATAL_FAILURE(
         sandtest::checkThermalAgainstReference(chart, {31, 64}, 40.0, 6, nameOf(mapping)));

@@ -144,8 +144,8 @@ TEST(SandTubes, ThermalStepsEqualACellByCellReferenceBitForBit) {
   // 129^2: border tiles (by the seams and rims) and inner tiles (one pass from shared chords);
   // cells ~200 m and ~100 m, noise of 300 m.
   for (const bool torus : {true, false}) {
-    ASSERT_NO_FATAL_FAILURE(
-        sandtest::checkThermalAgainstReference(tube(torus, 7), {31, 64}, 300.0, 6, nameOf(torus)));
+    ASSERT_NO_FATAL_FAILURE(sandtest::checkThermalAgainstReference(smallTube(torus, 7), {31, 64},
+                                                                   300.0, 6, tubeName(torus)));
   }
 }
 
