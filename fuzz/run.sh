@@ -23,17 +23,31 @@ if [ ! -f build/fuzz/build.ninja ]; then
 fi
 cmake --build build/fuzz -j"$(nproc)" --target $(printf 'fuzz_%s ' "${targets[@]}")
 mkdir -p build/fuzz/artifacts
-status=0
-for t in "${targets[@]}"; do
+# One fuzzer per core at a time (each is single-threaded); each one's log is printed when it ends.
+fuzz_one() {
+  local t="$1" work log
   work="$(mktemp -d)"
+  log="$(mktemp)"
   cp -r "fuzz/corpus/$t/." "$work/"
-  echo "== fuzz_$t: ${seconds}s" >&2
+  local rc=0
   # Heightmap decoders print libpng/libtiff complaints on stderr: keep only libFuzzer's lines.
-  if ! ASAN_OPTIONS=detect_leaks=1:allocator_may_return_null=1 UBSAN_OPTIONS=print_stacktrace=1 \
-      "build/fuzz/fuzz/fuzz_$t" -max_total_time="$seconds" -max_len=16384 -rss_limit_mb=2048 -timeout=10 \
-      -print_final_stats=1 -artifact_prefix="build/fuzz/artifacts/$t-" "$work" 2> >(grep -E '^(==|SUMMARY|stat::|Done|artifact|Test unit|#[0-9]+[[:space:]]+DONE)|ERROR' >&2); then
-    status=1
+  ASAN_OPTIONS=detect_leaks=1:allocator_may_return_null=1 UBSAN_OPTIONS=print_stacktrace=1 \
+    "build/fuzz/fuzz/fuzz_$t" -max_total_time="$seconds" -max_len=16384 -rss_limit_mb=2048 -timeout=10 \
+    -print_final_stats=1 -artifact_prefix="build/fuzz/artifacts/$t-" "$work" 2>"$log" || rc=1
+  { echo "== fuzz_$t: ${seconds}s$([ $rc = 0 ] || echo ': FOUND A CRASH')"
+    grep -E '^(==|SUMMARY|stat::|Done|artifact|Test unit|#[0-9]+[[:space:]]+DONE)|ERROR' "$log" || true; } >&2
+  rm -rf "$work" "$log"
+  return $rc
+}
+status=0
+pids=()
+for t in "${targets[@]}"; do
+  fuzz_one "$t" &
+  pids+=($!)
+  if [ ${#pids[@]} -ge "$(nproc)" ]; then
+    wait "${pids[0]}" || status=1
+    pids=("${pids[@]:1}")
   fi
-  rm -rf "$work"
 done
+for p in "${pids[@]}"; do wait "$p" || status=1; done
 exit $status
