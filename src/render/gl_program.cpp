@@ -48,6 +48,16 @@ unsigned linkProgram(const char* vertexSource, const char* fragmentSource) {
   return p;
 }
 
+void makePositionArray(unsigned& vertexArray, unsigned& buffer) {
+  glGenVertexArrays(1, &vertexArray);
+  glGenBuffers(1, &buffer);
+  glBindVertexArray(vertexArray);
+  glBindBuffer(GL_ARRAY_BUFFER, buffer);
+  glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, 3 * sizeof(float), nullptr);
+  glEnableVertexAttribArray(0);
+  glBindVertexArray(0);
+}
+
 std::array<float, 16> columnMajor(const Eigen::Matrix4d& m) {
   std::array<float, 16> a{};
   for (int c = 0; c < 4; ++c)

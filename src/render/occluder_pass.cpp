@@ -13,12 +13,6 @@ namespace ps::render {
 
 namespace {
 
-constexpr const char* kOccluderVertex = R"(#version 330 core
-layout(location = 0) in vec3 position;  // relative to the camera (planet frame)
-uniform mat4 clipFromEyeRelative;
-void main() { gl_Position = clipFromEyeRelative * vec4(position, 1.0); }
-)";
-
 // The camera image's own texel under the pixel (the background's, renderAR), or black.
 constexpr const char* kOccluderFragment = R"(#version 330 core
 uniform sampler2D image;
@@ -38,14 +32,8 @@ void main() {
 }  // namespace
 
 OccluderPass::OccluderPass() {
-  program_ = linkProgram(kOccluderVertex, kOccluderFragment);
-  glGenVertexArrays(1, &vao_);
-  glGenBuffers(1, &buffer_);
-  glBindVertexArray(vao_);
-  glBindBuffer(GL_ARRAY_BUFFER, buffer_);
-  glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, 3 * sizeof(float), nullptr);
-  glEnableVertexAttribArray(0);
-  glBindVertexArray(0);
+  program_ = linkProgram(kEyeRelativeVertex, kOccluderFragment);
+  makePositionArray(vao_, buffer_);
 }
 
 OccluderPass::~OccluderPass() {

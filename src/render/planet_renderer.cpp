@@ -32,12 +32,6 @@ namespace ps::render {
 
 namespace {
 
-constexpr const char* kLineVertex = R"(#version 330 core
-layout(location = 0) in vec3 position;  // relative to the camera (planet frame)
-uniform mat4 clipFromEyeRelative;
-void main() { gl_Position = clipFromEyeRelative * vec4(position, 1.0); }
-)";
-
 constexpr const char* kLineFragment = R"(#version 330 core
 uniform vec3 lineColour;
 out vec4 colour;
@@ -102,7 +96,7 @@ PlanetRenderer::PlanetRenderer() : gl_(new Gl) {
   Gl& g = *gl_;
   g.meshProgram = linkProgram(kMeshVertex, kMeshFragment);
   g.patchProgram = linkProgram(kMeshVertex, ownSurfaceFragment().c_str());
-  g.lineProgram = linkProgram(kLineVertex, kLineFragment);
+  g.lineProgram = linkProgram(kEyeRelativeVertex, kLineFragment);
   g.backgroundProgram = linkProgram(kBackgroundVertex, kBackgroundFragment);
   glGenVertexArrays(1, &g.meshVao);
   glGenBuffers(1, &g.positionBuffer);
@@ -127,14 +121,8 @@ PlanetRenderer::PlanetRenderer() : gl_(new Gl) {
     glEnableVertexAttribArray(3 + k);
   }
   glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, g.indexBuffer);
-  glGenVertexArrays(1, &g.lineVao);
-  glGenBuffers(1, &g.lineBuffer);
-  glBindVertexArray(g.lineVao);
-  glBindBuffer(GL_ARRAY_BUFFER, g.lineBuffer);
-  glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, 3 * sizeof(float), nullptr);
-  glEnableVertexAttribArray(0);
+  makePositionArray(g.lineVao, g.lineBuffer);
   glGenVertexArrays(1, &g.emptyVao);
-  glBindVertexArray(0);
 
   // The colour ramp as a 1D texture, from the same function as the relief previews.
   std::vector<float> ramp(3 * 512);
