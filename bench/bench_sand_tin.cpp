@@ -321,34 +321,28 @@ void drift(const BenchOptions& options, const Scene& scene, std::ostream& out) {
 }
 
 void plots(const std::vector<nlohmann::json>& rows, const std::string& outDir) {
-  const auto partSeries = [&](const char* experiment, const char* x) {
+  // One series per column `keys[p]` (labelled `labels[p]`) of the experiment's rows, against x.
+  const auto experimentSeries = [&](const char* experiment, const char* x,
+                                    const std::vector<const char*>& keys,
+                                    const std::vector<const char*>& labels) {
     std::vector<app::PlotSeries> out;
-    const char* parts[] = {"stamp_ms", "erosion_ms", "detect_ms", "removal_ms"};
-    const char* names[] = {"stamping", "erosion", "redundancy detection", "vertex removal"};
-    for (int p = 0; p < 4; ++p) {
+    for (std::size_t p = 0; p < keys.size(); ++p) {
       app::PlotSeries s;
-      s.label = names[p];
-      s.colour = app::seriesColour(std::size_t(p));
-      for (const auto& r : rows)
-        if (r["experiment"] == experiment)
-          s.x.push_back(app::jsonNumber(r, x)), s.y.push_back(app::jsonNumber(r, parts[p]));
-      out.push_back(s);
-    }
-    return out;
-  };
-  const auto countSeries = [&](const char* experiment, const char* x) {
-    std::vector<app::PlotSeries> out;
-    const char* keys[] = {"vertices", "triangles"};
-    for (int p = 0; p < 2; ++p) {
-      app::PlotSeries s;
-      s.label = keys[p];
-      s.colour = app::seriesColour(std::size_t(p));
+      s.label = labels[p];
+      s.colour = app::seriesColour(p);
       for (const auto& r : rows)
         if (r["experiment"] == experiment)
           s.x.push_back(app::jsonNumber(r, x)), s.y.push_back(app::jsonNumber(r, keys[p]));
       out.push_back(s);
     }
     return out;
+  };
+  const auto partSeries = [&](const char* experiment, const char* x) {
+    return experimentSeries(experiment, x, {"stamp_ms", "erosion_ms", "detect_ms", "removal_ms"},
+                            {"stamping", "erosion", "redundancy detection", "vertex removal"});
+  };
+  const auto countSeries = [&](const char* experiment, const char* x) {
+    return experimentSeries(experiment, x, {"vertices", "triangles"}, {"vertices", "triangles"});
   };
   const std::vector<app::PlotPanel> times = {
       {"time per part (trace 0.55)", "TIN size (start vertices)", "ms, whole stroke", false, false,
