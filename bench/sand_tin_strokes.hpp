@@ -49,6 +49,19 @@ struct TinRun {
 // radius, then (with `erosion`) two erosion iterations and the removal of redundant vertices.
 TinRun runTin(const Scene& scene, int n, double trace, bool erosion, bool pushAside = true);
 
+// The height at (x, y) metres, bilinear between the vertices of a side x side grid of heights
+// `spacing` apart (row-major, v rows of u); clamped to the grid at its edges.
+inline double bilinearAt(const std::vector<float>& heights, int side, double spacing, double x,
+                         double y) {
+  const double u = std::clamp(x / spacing, 0.0, double(side - 1)),
+               v = std::clamp(y / spacing, 0.0, double(side - 1));
+  const int i = std::min(int(u), side - 2), j = std::min(int(v), side - 2);
+  const double fu = u - i, fv = v - j;
+  const auto h = [&](int a, int b) { return double(heights[std::size_t(b) * side + a]); };
+  return (1 - fv) * ((1 - fu) * h(i, j) + fu * h(i + 1, j)) +
+         fv * ((1 - fu) * h(i, j + 1) + fu * h(i + 1, j + 1));
+}
+
 // The grid core on the same stroke: the same press (every vertex inside the tool's outline to
 // its bottom) and the same rampart (what was pressed out, spread with the same profile beyond
 // the outer contour), on the float heights, then SandField's thermal erosion.
@@ -58,16 +71,7 @@ struct GridRun {
   std::vector<float> heights;
   double ms = 0, stampMs = 0, erodeMs = 0, drift = 0;
   std::size_t stamps = 0, erosionSteps = 0, memory = 0;
-  double at(double x, double y) const {  // bilinear
-    const double d = chart->dx();
-    const double u = std::clamp(x / d, 0.0, double(side - 1)),
-                 v = std::clamp(y / d, 0.0, double(side - 1));
-    const int i = std::min(int(u), side - 2), j = std::min(int(v), side - 2);
-    const double fu = u - i, fv = v - j;
-    const auto h = [&](int a, int b) { return double(heights[std::size_t(b) * side + a]); };
-    return (1 - fv) * ((1 - fu) * h(i, j) + fu * h(i + 1, j)) +
-           fv * ((1 - fu) * h(i, j + 1) + fu * h(i + 1, j + 1));
-  }
+  double at(double x, double y) const { return bilinearAt(heights, side, chart->dx(), x, y); }
 };
 
 // The same stroke on a grid of 2^n + 1 squared vertices.
@@ -141,15 +145,7 @@ struct ExactGrid {
   int side = 0;
   double d = 0;
   std::vector<float> h;
-  double at(double x, double y) const {
-    const double u = std::clamp(x / d, 0.0, double(side - 1)),
-                 v = std::clamp(y / d, 0.0, double(side - 1));
-    const int i = std::min(int(u), side - 2), j = std::min(int(v), side - 2);
-    const double fu = u - i, fv = v - j;
-    const auto g = [&](int a, int b) { return double(h[std::size_t(b) * side + a]); };
-    return (1 - fv) * ((1 - fu) * g(i, j) + fu * g(i + 1, j)) +
-           fv * ((1 - fu) * g(i, j + 1) + fu * g(i + 1, j + 1));
-  }
+  double at(double x, double y) const { return bilinearAt(h, side, d, x, y); }
 };
 
 // A grid of 2^n + 1 squared vertices holding the exact stamped shape.
