@@ -172,6 +172,15 @@ fs::path writeHeightsF32(const Heightmap& h, const fs::path& work) {
   return file;
 }
 
+void writeSkippedPeerRow(const std::string& tool, const Heightmap& h, std::ostream& out) {
+  out << nlohmann::json{{"bench", "export"},
+                        {"tool", tool},
+                        {"heightmap", h.name},
+                        {"skipped", true}}
+             .dump()
+      << std::endl;
+}
+
 namespace {
 
 struct OurMesh {
@@ -242,12 +251,7 @@ std::optional<std::vector<MartiniMesh>> benchMartini(const Heightmap& h, const t
                                                      const std::string& grid, std::ostream& out) {
   const std::string martiniJson = runMartini(h, thresholds, repeats, work);
   if (martiniJson.empty()) {
-    out << nlohmann::json{{"bench", "export"},
-                          {"tool", "martini"},
-                          {"heightmap", h.name},
-                          {"skipped", true}}
-               .dump()
-        << std::endl;
+    writeSkippedPeerRow("martini", h, out);
     return std::nullopt;
   }
   std::ifstream f(martiniJson);

@@ -24,6 +24,10 @@ bool peerMesherReady(const std::string& module);
 // Writes h.heights as little-endian float32 into `work` and returns the file.
 std::filesystem::path writeHeightsF32(const Heightmap& h, const std::filesystem::path& work);
 
+// The row that says a peer (`tool`: "martini", "delatin") was not run on h: node or its package
+// missing, or its script failed.
+void writeSkippedPeerRow(const std::string& tool, const Heightmap& h, std::ostream& out);
+
 // The TIN rows: our greedy and quality TINs against Delatin at each request, and paper 001's
 // control-map experiment, with its picture in outDir (when not empty) (bench/bench_export_tin.cpp).
 void benchExportTin(const Heightmap& h, const std::vector<double>& requests, int repeats,

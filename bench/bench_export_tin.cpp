@@ -232,12 +232,7 @@ void benchExportTin(const Heightmap& h, const std::vector<double>& requests, int
   }
   const std::vector<Run> theirs = runDelatin(h, requests, repeats, work);
   if (theirs.empty()) {
-    out << nlohmann::json{{"bench", "export"},
-                          {"tool", "delatin"},
-                          {"heightmap", h.name},
-                          {"skipped", true}}
-               .dump()
-        << std::endl;
+    writeSkippedPeerRow("delatin", h, out);
   }
   for (const Run& d : theirs) {
     out << nlohmann::json{{"bench", "export"},
