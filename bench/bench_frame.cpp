@@ -235,9 +235,10 @@ class CaseReplay {
             {"edit_ms_touching", round3(median(s_.editTouching))},
             {"hand_mask_ms", round3(median(s_.handMask))},
             {"hand_mask_ms_p90", round3(percentile(s_.handMask, 0.9))},
-            {"hand_mask_ms_when_masked", round3(handMasked)},
+            {"hand_mask_ms_mean_masked", round3(handMasked)},
             {"hand_mask_masked_frames", int(handMaskedMs_.size())},
-            {"hand_mask_shown_frames", handShown_},
+            {"hand_mask_shown_frames", int(handShownPx_.size())},
+            {"hand_mask_shown_px", std::llround(median(handShownPx_))},
             {"touching_frames", s_.editTouching.size()},
             {"tessellate_ms", round3(median(s_.tessellate))},
             {"render_ms", round3(median(s_.render))},
@@ -339,7 +340,7 @@ class CaseReplay {
     t0 = std::chrono::steady_clock::now();
     const cv::Mat shown = render::occludeByHand(view, image_, handMaskNow_, cam, r.toolTriangles);
     t.handMask = ms(t0);
-    handShown_ += !shown.empty();
+    if (!shown.empty()) handShownPx_.push_back(cv::countNonZero(handMaskNow_ > 0.5f));
     if (frame % kOverviewEvery == 0) {
       t0 = std::chrono::steady_clock::now();
       renderer_.renderOverview(*planet_, mesh, cam, 240, 240);
@@ -411,7 +412,8 @@ class CaseReplay {
   cv::Mat raw_;                       // the frame last read, tracked
   cv::Mat image_;                     // undistorted, drawn over
   std::vector<double> handMaskedMs_;  // the hand mask's time in the frames that masked
-  int handShown_ = 0;                 // frames that showed the camera image over part of the planet
+  // Per frame that showed the camera image over part of the planet: its pixels (mask > 0.5).
+  std::vector<double> handShownPx_;
   double wallMs_ = 0;
 };
 
