@@ -4,7 +4,11 @@
 //   track      = marker detection + scene tracking (replay::FrameStepper),
 //   edit       = the brush stroke through the edit pipeline (the same stepper),
 //   tessellate = the AR view's tessellation (<= 70,000 triangles),
+//   hand_mask  = where a hand is in front of the planet: the board's look learned and the mask
+//                made (replay::HandOcclusion), the camera image blended over the view there
+//                (render::occludeByHand), the live loop's and the AR recorder's path,
 //   render     = PlanetRenderer::renderAR on headless EGL (llvmpipe here) with its read-back,
+//                the tracked tool's shape drawn into the depth buffer first,
 //   overview   = PlanetRenderer::renderOverview, every 4th frame only (as the live app does).
 // Medians over the frames with the planet in view (every frame's in "all_frames"; fps_wall is
 // every frame by the wall clock, video decoding included), each stage's share of the summed
@@ -13,8 +17,12 @@
 // renders one view repeatedly with nothing changed, showing what a skip costs. Two cases: the
 // app's dist_max of 4 px, and a dense view at 0.05 px that runs into the triangle budget. The
 // machine (nproc, /proc/loadavg before and after, GL_RENDERER) goes with the figures: on a
-// shared 2-core machine the load moves them. Without a headless OpenGL context (or the demo
-// video) it prints one line saying so and returns.
+// shared 2-core machine the load moves them. The frames are undistorted for the renderer and
+// the hand mask as the live loop does (a pass-through for the demo's distortion-free
+// calibration). `demo_no_hand_mask` is the demo case with the hand mask off (the live panel's
+// toggle), run beside it: the mask's share of the frame, measured both ways in one run.
+// Without a headless OpenGL context (or the demo video) it prints one line saying so and
+// returns.
 #include <CLI/CLI.hpp>
 #include <chrono>
 #include <filesystem>
@@ -34,12 +42,17 @@
 #include "bench/demo_options.hpp"
 #include "bench/frame_skips.hpp"
 #include "bench/gl_context.hpp"
+#include "core/chart_factory.hpp"
 #include "render/egl_context.hpp"
+#include "render/occlusion_composite.hpp"
 #include "render/planet_renderer.hpp"
 #include "render/projection.hpp"
+#include "replay/hand_occlusion.hpp"
 #include "replay/replay.hpp"
+#include "terrain/mesh_patch.hpp"
 #include "terrain/tessellator.hpp"
 #include "tracking/calibration.hpp"
+#include "tracking/undistort.hpp"
 #include "tracking/video.hpp"
 
 namespace ps::bench {
@@ -72,7 +85,7 @@ Eigen::Matrix3d eigenK(const cv::Matx33d& K) {
 }
 
 struct Series {
-  std::vector<double> track, detect, scene, edit, tessellate, render, overview, total;
+  std::vector<double> track, detect, scene, edit, handMask, tessellate, render, overview, total;
   std::vector<double> triangles;     // frames with the planet in view
   std::vector<double> editTouching;  // frames whose tool touched (a stroke stamped)
   double sum(const std::vector<double>& v) const {
@@ -86,6 +99,7 @@ struct FrameCase {
   std::string name;
   double distMaxPx;
   render::Shading shading;
+  bool handMask = true;  // the live app's default
 };
 
 void benchCase(const BenchOptions& options, std::ostream& out, nlohmann::json machine,
@@ -118,8 +132,10 @@ void benchFrame(const BenchOptions& options, const ChartChoice& charts, std::ost
   // the demo's also in facets without them (the AR view before per-pixel shading), as the
   // baseline of its frame rate in the same run.
   const auto perPixel = render::Shading::kPerPixel, faceted = render::Shading::kFaceted;
-  const std::vector<FrameCase> cases{
-      {"demo", 4.0, perPixel}, {"demo_faceted", 4.0, faceted}, {"dense", 0.05, perPixel}};
+  const std::vector<FrameCase> cases{{"demo", 4.0, perPixel},
+                                     {"demo_no_hand_mask", 4.0, perPixel, false},
+                                     {"demo_faceted", 4.0, faceted},
+                                     {"dense", 0.05, perPixel}};
   for (const core::ChartShape chart : charts.shapes())
     for (const FrameCase& frameCase : cases)
       benchCase(options, out, machine, *context, gridLevel, chart, frameCase);
@@ -129,19 +145,21 @@ void benchFrame(const BenchOptions& options, const ChartChoice& charts, std::ost
 // and the overview, each timed per frame, with what the case's rows report.
 class CaseReplay {
  public:
-  CaseReplay(int gridLevel, core::ChartShape chart, double distMaxPx, render::Shading shading)
-      : planet_(app::makeDefaultPlanet(gridLevel, 1, chart)),
+  CaseReplay(int gridLevel, core::ChartShape chart, const FrameCase& frameCase)
+      : handMask_(frameCase.handMask),
+        planet_(app::makeDefaultPlanet(gridLevel, 1, chart)),
         source_(ps::app::sourceDir() / "data" / "demo.mkv"),
         calib_(tracking::loadCalibration(ps::app::sourceDir() / "calib" / "synthetic-640x480.yml")
                    .forImageSize(source_.size())),
         ro_(demoReplayOptions()),
         stepper_(calib_, *planet_, ro_),
+        undistort_(calib_),
         K_(eigenK(calib_.K)),
         W_(source_.size().width),
         H_(source_.size().height) {
-    style_.shading = shading;
-    style_.boardShadow = style_.atmosphere = shading == render::Shading::kPerPixel;
-    ts_.distMaxPx = distMaxPx;
+    style_.shading = frameCase.shading;
+    style_.boardShadow = style_.atmosphere = frameCase.shading == render::Shading::kPerPixel;
+    ts_.distMaxPx = frameCase.distMaxPx;
     ts_.triangleBudget = kBudget;
   }
 
@@ -153,10 +171,20 @@ class CaseReplay {
     const terrain::Camera placeholder = render::arCamera(
         Eigen::Matrix3d::Identity(), Eigen::Vector3d(0, 0, 1), stepper_.scale(), K_, W_, H_);
     const auto wall0 = std::chrono::steady_clock::now();
-    while ((maxFrames == 0 || frames_ < maxFrames) && source_.read(image_)) {
+    while ((maxFrames == 0 || frames_ < maxFrames) && source_.read(raw_)) {
       const int frame = source_.index();
-      const auto r = stepper_.step(image_, frame, frame / fps);
-      const StageTimes t = r.planetInCamera ? drawPlanet(r, frame) : drawWithout(placeholder);
+      // As the live loop: tracked as the camera gave it, drawn (and masked) undistorted.
+      auto t0 = std::chrono::steady_clock::now();
+      image_ = undistort_.apply(raw_);
+      const double undistortMs = ms(t0);
+      const auto r = stepper_.step(raw_, frame, frame / fps);
+      t0 = std::chrono::steady_clock::now();
+      handMaskNow_ = handOcclusion_.update(handMask_, image_, calib_.K, r.scene.planet,
+                                           r.planetInCamera, planetRadius());
+      const double maskMs = ms(t0);
+      StageTimes t = r.planetInCamera ? drawPlanet(r, frame) : drawWithout(placeholder);
+      t.undistort = undistortMs;
+      t.handMask += maskMs;
       noUpload_ += !renderer_.stats().uploadedThisFrame;
       if (r.scene.tipValid && !r.touching) idleEdit_.push_back(r.times.editMs);
       addTimes(r, t);
@@ -169,6 +197,8 @@ class CaseReplay {
 
   // The case's row: medians over the frames with the planet in view, shares, skips.
   nlohmann::json row(const std::string& name, const nlohmann::json& machine) const {
+    const double handMasked =
+        handMaskedMs_.empty() ? 0.0 : s_.sum(handMaskedMs_) / double(handMaskedMs_.size());
     const double all = s_.sum(s_.total);
     auto share = [&](const std::vector<double>& v) {
       return all > 0 ? std::round(s_.sum(v) / all * 1000) / 1000 : 0.0;
@@ -183,6 +213,8 @@ class CaseReplay {
             {"dist_max_px", ts_.distMaxPx},
             {"shading", style_.shading == render::Shading::kPerPixel ? "per_pixel" : "faceted"},
             {"board_shadow_and_rim", style_.boardShadow},
+            {"hand_mask", handMask_},
+            {"tool_depth_pass", true},
             {"triangle_budget", kBudget},
             {"frames", frames_},
             {"planet_frames", planetFrames_},
@@ -201,6 +233,12 @@ class CaseReplay {
             {"edit_ms", round3(median(s_.edit))},
             {"edit_ms_p90", round3(percentile(s_.edit, 0.9))},
             {"edit_ms_touching", round3(median(s_.editTouching))},
+            {"hand_mask_ms", round3(median(s_.handMask))},
+            {"hand_mask_ms_p90", round3(percentile(s_.handMask, 0.9))},
+            {"hand_mask_ms_mean_masked", round3(handMasked)},
+            {"hand_mask_masked_frames", int(handMaskedMs_.size())},
+            {"hand_mask_shown_frames", int(handShownPx_.size())},
+            {"hand_mask_shown_px", std::llround(median(handShownPx_))},
             {"touching_frames", s_.editTouching.size()},
             {"tessellate_ms", round3(median(s_.tessellate))},
             {"render_ms", round3(median(s_.render))},
@@ -210,6 +248,7 @@ class CaseReplay {
             {"share",
              {{"track", share(s_.track)},
               {"edit", share(s_.edit)},
+              {"hand_mask", share(s_.handMask)},
               {"tessellate", share(s_.tessellate)},
               {"render", share(s_.render)},
               {"overview", share(s_.overview)}}},
@@ -271,8 +310,11 @@ class CaseReplay {
 
  private:
   struct StageTimes {
-    double tessellate = 0, render = 0, overview = 0;
+    double undistort = 0, handMask = 0, tessellate = 0, render = 0, overview = 0;
   };
+
+  // The planet's bounding sphere in the board's metres (what the hand mask's silhouette needs).
+  double planetRadius() const { return core::boundingRadius(planet_->chart()) / stepper_.scale(); }
 
   // The planet in view: tessellated, drawn over the frame, the overview every 4th frame.
   StageTimes drawPlanet(const replay::StepResult& r, int frame) {
@@ -280,7 +322,9 @@ class CaseReplay {
     const terrain::Camera cam =
         render::arCamera(r.planetInCamera->R, r.planetInCamera->t, stepper_.scale(), K_, W_, H_);
     auto t0 = std::chrono::steady_clock::now();
-    const terrain::Mesh& mesh = tessellator_.tessellate(*planet_, cam, ts_);
+    // The sand TIN's region at its own detail, as the live loop (none with the demo's brush).
+    const terrain::Mesh& mesh = spliced_.view(tessellator_.tessellate(*planet_, cam, ts_),
+                                              stepper_.viewPatch(), planet_->chart());
     t.tessellate = ms(t0);
     ++planetFrames_;
     reused_ += tessellator_.stats().reused;
@@ -289,8 +333,14 @@ class CaseReplay {
     std::optional<render::Cursor> cursor;
     if (r.control) cursor = render::Cursor{*r.control, stepper_.toolRadius()};
     t0 = std::chrono::steady_clock::now();
-    renderer_.renderAR(image_, *planet_, mesh, cam, style_, cursor, r.toolTriangles);
+    // The tool's shape into the depth buffer first (the occluders), then the planet.
+    const cv::Mat view =
+        renderer_.renderAR(image_, *planet_, mesh, cam, style_, cursor, r.toolTriangles);
     t.render = ms(t0);
+    t0 = std::chrono::steady_clock::now();
+    const cv::Mat shown = render::occludeByHand(view, image_, handMaskNow_, cam, r.toolTriangles);
+    t.handMask = ms(t0);
+    if (!shown.empty()) handShownPx_.push_back(cv::countNonZero(handMaskNow_ > 0.5f));
     if (frame % kOverviewEvery == 0) {
       t0 = std::chrono::steady_clock::now();
       renderer_.renderOverview(*planet_, mesh, cam, 240, 240);
@@ -315,29 +365,38 @@ class CaseReplay {
   }
 
   void addTimes(const replay::StepResult& r, const StageTimes& t) {
-    const double trackMs = r.times.detectMs + r.times.trackMs;
+    // Undistorting is part of the live loop's tracking step (a pass-through here).
+    const double trackMs = r.times.detectMs + r.times.trackMs + t.undistort;
+    if (handOcclusion_.lastMs() > 0) handMaskedMs_.push_back(t.handMask);
     for (Series* series : {&every_, &s_}) {
       if (series == &s_ && !r.planetInCamera) continue;
       series->detect.push_back(r.times.detectMs);
       series->scene.push_back(r.times.trackMs);
       series->track.push_back(trackMs);
       series->edit.push_back(r.times.editMs);
+      series->handMask.push_back(t.handMask);
       if (r.touching) series->editTouching.push_back(r.times.editMs);
       series->tessellate.push_back(t.tessellate);
       series->render.push_back(t.render);
       series->overview.push_back(t.overview);
-      series->total.push_back(trackMs + r.times.editMs + t.tessellate + t.render + t.overview);
+      series->total.push_back(trackMs + r.times.editMs + t.handMask + t.tessellate + t.render +
+                              t.overview);
     }
   }
 
+  bool handMask_;  // the case's: the hand mask on (the live app's default) or off
   render::RenderStyle style_;
   render::PlanetRenderer renderer_;
   terrain::Tessellator tessellator_;
+  terrain::SplicedView spliced_;  // the sand TIN's region in the view (the live loop's)
   std::unique_ptr<terrain::Terrain> planet_;
   tracking::FrameSource source_;
   tracking::CameraCalibration calib_;
   replay::ReplayOptions ro_;
   replay::FrameStepper stepper_;
+  tracking::FrameUndistorter undistort_;
+  replay::HandOcclusion handOcclusion_;  // the live loop's hand mask
+  cv::Mat handMaskNow_;                  // this frame's (empty: nothing in front)
   Eigen::Matrix3d K_;
   int W_, H_;
   terrain::TessellationSettings ts_;
@@ -350,7 +409,11 @@ class CaseReplay {
   std::optional<terrain::Camera> lastView_;
   SkipInputs skips_;  // a sample of the views and the edit times, for the skips' line
   std::vector<double> idleEdit_;
-  cv::Mat image_;  // the frame last read, drawn over
+  cv::Mat raw_;                       // the frame last read, tracked
+  cv::Mat image_;                     // undistorted, drawn over
+  std::vector<double> handMaskedMs_;  // the hand mask's time in the frames that masked
+  // Per frame that showed the camera image over part of the planet: its pixels (mask > 0.5).
+  std::vector<double> handShownPx_;
   double wallMs_ = 0;
 };
 
@@ -360,14 +423,14 @@ void benchCase(const BenchOptions& options, std::ostream& out, nlohmann::json ma
   const std::string& name = frameCase.name;
   context.makeCurrent();
   machine["load_avg_before"] = loadAverage();
-  CaseReplay replay(gridLevel, chart, frameCase.distMaxPx, frameCase.shading);
+  CaseReplay replay(gridLevel, chart, frameCase);
   replay.run(options.quick ? 90 : 0);
   machine["load_avg_after"] = loadAverage();
   out << replay.row(name, machine).dump() << std::endl;
   if (const auto still = replay.stillRow(name, std::max(10, options.repeats * 2)))
     out << still->dump() << std::endl;
-  // The faceted baseline only measures its frame rate.
-  if (frameCase.shading == render::Shading::kFaceted) return;
+  // The faceted baseline and the hand mask's off case only measure their frame rates.
+  if (frameCase.shading == render::Shading::kFaceted || !frameCase.handMask) return;
   std::cerr << "bench frame: skips (" << core::toString(chart) << " " << name << ")\n";
   out << replay.skipsRow(name, options.quick ? 2 : 5).dump() << std::endl;
 }

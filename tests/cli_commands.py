@@ -741,6 +741,35 @@ def group_bench():
         for chart in ("latlong", "octahedral"):
             if not any(r.get("chart") == chart and r.get("bench") == name for r in rows):
                 fail(f"bench {name} wrote no {chart} row")
+    # The frame bench does what the live app does per frame, the hand mask included (its stage in
+    # every row, on in the app's cases), and the demo case again with the mask off in the same
+    # run: the same frames, the mask's stage spending nothing; with it on, the mask made in the
+    # frames the planet's board is seen and its time counted in the frame's.
+    if name == "frame" and not any(r.get("skipped") for r in rows):
+        for chart in ("latlong", "octahedral"):
+            cases = {r["case"]: r for r in rows if r.get("chart") == chart and "frames" in r}
+            if set(cases) != {"demo", "demo_no_hand_mask", "demo_faceted", "dense"}:
+                fail(f"bench frame {chart}: cases {sorted(cases)}")
+            on, off = cases["demo"], cases["demo_no_hand_mask"]
+            for case, r in cases.items():
+                if r["frames"] != on["frames"] or r["frames"] <= 0 or r["tool_depth_pass"] is not True:
+                    fail(f"bench frame {chart} {case}: {r['frames']} frames against demo's {on['frames']}")
+                if r["hand_mask"] != (case != "demo_no_hand_mask") or "hand_mask" not in r["share"]:
+                    fail(f"bench frame {chart} {case}: the hand mask's setting or share missing: {r}")
+                if not (r["frame_ms"] > 0 and r["fps"] > 0 and 0 <= r["share"]["hand_mask"] < 1):
+                    fail(f"bench frame {chart} {case}: times {r}")
+                if abs(sum(r["share"].values()) - 1) > 0.01:
+                    fail(f"bench frame {chart} {case}: the stages' shares do not add up to the frame: {r['share']}")
+            if off["hand_mask_masked_frames"] != 0 or off["hand_mask_shown_frames"] != 0 or \
+                    off["share"]["hand_mask"] != 0:
+                fail(f"bench frame {chart}: the hand mask ran with it off: {off}")
+            for case in ("demo", "demo_faceted", "dense"):
+                r = cases[case]
+                if not (0 < r["hand_mask_masked_frames"] <= r["planet_frames"] and r["hand_mask_ms"] > 0
+                        and r["hand_mask_ms_mean_masked"] > 0 and r["share"]["hand_mask"] > 0
+                        and r["hand_mask_shown_frames"] <= r["hand_mask_masked_frames"]
+                        and (r["hand_mask_shown_frames"] == 0) == (r["hand_mask_shown_px"] == 0)):
+                    fail(f"bench frame {chart} {case}: the hand mask did not run: {r}")
     # Per-pixel shading's claim (docs/RENDERING.md): a 4 px mesh shaded per pixel is closer to
     # the full-resolution surface than a 1 px mesh in facets, in every view, on every chart.
     rendered = [r for r in rows if r.get("bench") == "render" and not r.get("skipped")]

@@ -1,7 +1,10 @@
 // The hand mask (tracking/hand_mask.hpp, issue 42): on synthetic frames of the planet board
 // (tracking/synth.hpp, true poses), a hand in front of the planet is found (IoU against the
 // scene's geometry), and nothing is hidden under a global gain change, a cast shadow or camera
-// noise; bad settings are refused by name; the compositing step blends as it says.
+// noise; bad settings are refused by name; the compositing step blends as it says. The frame's
+// path shared by the live loop, the AR recorder and `bench frame` (replay::HandOcclusion,
+// render::occludeByHand) masks what the masker masks, only with the frame's own board pose, and
+// starts afresh when switched back on.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -14,6 +17,7 @@
 #include "app/build_paths.hpp"
 #include "core/input_error.hpp"
 #include "render/occlusion_composite.hpp"
+#include "replay/hand_occlusion.hpp"
 #include "tracking/hand_mask.hpp"
 #include "tracking/synth.hpp"
 
@@ -359,4 +363,103 @@ TEST(HandMask, LearnsEveryTexelInSightInTurn) {
   ASSERT_GT(inSight, 1000);
   EXPECT_EQ(masker.appearance().learnedTexels(), inSight);
   EXPECT_LT(afterFirst, inSight / 2);
+}
+
+namespace {
+
+// A hand over the planet after 10 frames of the board alone, from one side.
+tracking::SynthScript handAfterLearning() {
+  auto keys = learning(10, -90);
+  tracking::SynthKey k = frameKey(10, -90, 1.0, 1.0);
+  k.handX = 0.035;  // FindsAHandInFrontOfThePlanet's hand from -90 degrees
+  k.handY = -0.08;
+  k.handRadius = 0.05;
+  k.handHeight = 0.16;
+  keys.push_back(k);
+  return boardScript(keys);
+}
+
+// The frame's board as the scene tracker reports it, with its true pose.
+tracking::MarkerEstimate measuredBoard(const tracking::Pose& pose) {
+  tracking::MarkerEstimate board;
+  board.state = tracking::TrackState::kTracked;
+  board.measured = true;
+  board.pose = pose;
+  return board;
+}
+
+}  // namespace
+
+TEST(HandOcclusion, MasksWhatTheMaskerMasksWithTheFramesOwnBoardPose) {
+  const auto s = handAfterLearning();
+  tracking::HandMasker masker;
+  const MaskRun direct = runFrames(s, masker);
+  const tracking::SynthRenderer renderer(s);
+  replay::HandOcclusion occlusion;
+  cv::Mat mask;
+  for (int f = 0; f < renderer.frames(); ++f) {
+    const auto t = renderer.truth(f);
+    const std::optional<tracking::Pose> planet = tracking::Pose{t.camera.R, t.planetCentreCamera};
+    mask = occlusion.update(true, renderer.render(f), s.camera.K, measuredBoard(t.camera), planet,
+                            s.planetRadius);
+  }
+  ASSERT_FALSE(mask.empty());
+  EXPECT_GT(occlusion.lastMs(), 0);
+  EXPECT_EQ(cv::norm(mask, direct.last.soft, cv::NORM_INF), 0);
+
+  // The same frame with a board pose that is not its own (held over a moving camera), or no
+  // planet pose: no mask, no time spent.
+  const auto t = renderer.truth(10);
+  const cv::Mat image = renderer.render(10);
+  tracking::MarkerEstimate held = measuredBoard(t.camera);
+  held.measured = false;
+  held.state = tracking::TrackState::kHeld;
+  const std::optional<tracking::Pose> planet = tracking::Pose{t.camera.R, t.planetCentreCamera};
+  EXPECT_TRUE(occlusion.update(true, image, s.camera.K, held, planet, s.planetRadius).empty());
+  EXPECT_EQ(occlusion.lastMs(), 0);
+  EXPECT_TRUE(
+      occlusion
+          .update(true, image, s.camera.K, measuredBoard(t.camera), std::nullopt, s.planetRadius)
+          .empty());
+  held.heldStill = true;  // held while the camera stands still: its own pose
+  EXPECT_FALSE(occlusion.update(true, image, s.camera.K, held, planet, s.planetRadius).empty());
+
+  // Off, then on again: the model starts afresh, so the hand's frame is learned as the board.
+  EXPECT_TRUE(
+      occlusion.update(false, image, s.camera.K, measuredBoard(t.camera), planet, s.planetRadius)
+          .empty());
+  EXPECT_TRUE(
+      occlusion.update(true, image, s.camera.K, measuredBoard(t.camera), planet, s.planetRadius)
+          .empty());
+}
+
+// The frame's last step: nothing shown where the mask lies over the tool only (the depth pass
+// decides there), the camera image blended where it lies elsewhere.
+TEST(OcclusionComposite, OccludeByHandLeavesTheToolToTheDepthPass) {
+  terrain::Camera camera;
+  camera.fx = camera.fy = 500;
+  camera.cx = 320, camera.cy = 240;
+  camera.width = 640, camera.height = 480;
+  const std::vector<Eigen::Vector3d> tool = {{0, -0.2, 1}, {-0.2, 0.2, 1}, {0.2, 0.2, 1}};
+  cv::RNG rng(3);
+  cv::Mat view(480, 640, CV_8UC3), image(480, 640, CV_8UC3);
+  rng.fill(view, cv::RNG::UNIFORM, 0, 256);
+  rng.fill(image, cv::RNG::UNIFORM, 0, 256);
+  cv::Mat overTool = cv::Mat::zeros(480, 640, CV_32F);
+  overTool(cv::Rect(300, 250, 40, 40)).setTo(1.0f);  // inside the tool's triangle
+  EXPECT_TRUE(render::occludeByHand(view, image, overTool, camera, tool).empty());
+  EXPECT_EQ(cv::countNonZero(overTool), 0);
+  cv::Mat empty;
+  EXPECT_TRUE(render::occludeByHand(view, image, empty, camera, tool).empty());
+
+  cv::Mat hand = cv::Mat::zeros(480, 640, CV_32F);
+  hand(cv::Rect(300, 250, 40, 40)).setTo(1.0f);
+  hand(cv::Rect(20, 20, 50, 50)).setTo(0.8f);  // away from the tool
+  const cv::Mat shown = render::occludeByHand(view, image, hand, camera, tool);
+  ASSERT_FALSE(shown.empty());
+  EXPECT_EQ(cv::countNonZero(hand), 50 * 50);
+  EXPECT_EQ(cv::norm(shown, render::composeOcclusion(view, image, hand), cv::NORM_INF), 0);
+  EXPECT_EQ(
+      cv::norm(shown(cv::Rect(300, 250, 40, 40)), view(cv::Rect(300, 250, 40, 40)), cv::NORM_INF),
+      0);
 }

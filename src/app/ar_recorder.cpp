@@ -34,26 +34,20 @@ void ArRecorder::onFrame(const replay::FrameContext& f, const Eigen::Vector3d& f
     run_.clear();
   };
   if (!f.touching) closeRun();
-  // The hand mask learns the board's look from every frame, drawn or not, whose board pose is
-  // this frame's (measured, or held while the camera stands still): a pose held over a moving
-  // camera would compare the board with what is beside it.
-  const auto& board = f.scene.planet;
-  const bool maskHands = settings_.handMask && f.planetInCamera && board.usable() &&
-                         (board.measured || board.heldStill);
+  // The hand mask learns the board's look from every frame, drawn or not, that has its own
+  // board pose (replay/hand_occlusion.hpp: the live loop's and `bench frame`'s path too).
+  const bool maskHands =
+      settings_.handMask && replay::HandOcclusion::masks(f.scene.planet, f.planetInCamera);
   if (!wantSequence && !wantShowcase && !maskHands) return;
   const auto t0 = std::chrono::steady_clock::now();
   // The camera image as the pinhole K sees it, so the planet lands on its board
   // (tracking/undistort.hpp); made once, for the calibration the replay runs with.
   if (!undistort_) undistort_.emplace(f.calibration.forImageSize(f.image.size()));
   const cv::Mat image = undistort_->apply(f.image);
-  cv::Mat handMask;
-  if (maskHands) {
-    // The planet's bounding sphere in the board's metres (FrameContext::scale).
-    const double radius = core::boundingRadius(f.planet.chart()) / f.scale;
-    handMask =
-        handMasker_.update(image, f.calibration.K, f.scene.planet.pose, f.planetInCamera->t, radius)
-            .soft;
-  }
+  // The planet's bounding sphere in the board's metres (FrameContext::scale).
+  cv::Mat handMask =
+      handOcclusion_.update(settings_.handMask, image, f.calibration.K, f.scene.planet,
+                            f.planetInCamera, core::boundingRadius(f.planet.chart()) / f.scale);
   if (!wantSequence && !wantShowcase) {
     renderMs_ +=
         std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
@@ -95,9 +89,9 @@ void ArRecorder::onFrame(const replay::FrameContext& f, const Eigen::Vector3d& f
     }
     // The tracked tool hides the planet where it is in front of it.
     view = renderer_.renderAR(image, f.planet, mesh, cam, style, cursor, f.toolTriangles);
-    render::clearToolFromMask(handMask, cam, f.toolTriangles);
-    if (!handMask.empty() && cv::countNonZero(handMask > 0.5f) > 0) {
-      view = render::composeOcclusion(view, image, handMask);
+    if (cv::Mat occluded = render::occludeByHand(view, image, handMask, cam, f.toolTriangles);
+        !occluded.empty()) {
+      view = occluded;
       ++handMaskFrames_;
     }
     overview = renderer_.renderOverview(f.planet, mesh, cam, 480, 480);

@@ -12,10 +12,10 @@
 
 #include "render/egl_context.hpp"
 #include "render/planet_renderer.hpp"
+#include "replay/hand_occlusion.hpp"
 #include "replay/replay.hpp"
 #include "terrain/mesh_patch.hpp"
 #include "terrain/tessellator.hpp"
-#include "tracking/hand_mask.hpp"
 #include "tracking/undistort.hpp"
 
 namespace ps::app {
@@ -32,7 +32,7 @@ struct ArRecorderSettings {
   Eigen::Vector3d sun = Eigen::Vector3d(1, 1, 1).normalized();
   bool boardShadow = true, atmosphere = true;
   // The camera image shown over the planet where something is in front of it (a hand:
-  // tracking/hand_mask.hpp, learned from every frame; render/occlusion_composite.hpp).
+  // replay/hand_occlusion.hpp, learned from every frame; render/occlusion_composite.hpp).
   bool handMask = true;
 };
 
@@ -61,7 +61,7 @@ class ArRecorder {
   terrain::Tessellator tessellator_;
   terrain::SplicedView spliced_;  // the view with the sand TIN's region (FrameContext::patch)
   std::optional<tracking::FrameUndistorter> undistort_;
-  tracking::HandMasker handMasker_;
+  replay::HandOcclusion handOcclusion_;
   // Frames whose AR view showed the camera image over part of the planet (a hand in front).
   int handMaskFrames_ = 0;
   int written_ = 0;

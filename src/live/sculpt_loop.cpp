@@ -26,13 +26,13 @@
 #include "live/window_layout.hpp"
 #include "render/occlusion_composite.hpp"
 #include "render/projection.hpp"
+#include "replay/hand_occlusion.hpp"
 #include "replay/session_timeline.hpp"
 #include "sand/displacement.hpp"
 #include "session/frame_recorder.hpp"
 #include "session/planet_export.hpp"
 #include "terrain/mesh_patch.hpp"
 #include "terrain/tessellator.hpp"
-#include "tracking/hand_mask.hpp"
 #include "tracking/undistort.hpp"
 
 namespace ps::live {
@@ -161,29 +161,17 @@ class SculptLoop {
     status_.toolState = tracking::toString(r.scene.tool.state);
   }
 
-  // Where a hand is in front of the planet (tracking/hand_mask.hpp): the board's look learned
-  // from every tracked frame, the mask kept for drawView.
+  // Where a hand is in front of the planet (replay/hand_occlusion.hpp, the AR recorder's and
+  // `bench frame`'s path too): the board's look learned from every tracked frame, the mask kept
+  // for drawView.
   void maskHands(const replay::StepResult& r) {
-    handMask_.release();
-    // Off in the panel: nothing learned meanwhile, so the model starts afresh when it is on again
-    // (what it held may have changed while it was off).
-    if (!panel_.handMask) {
-      handMaskOn_ = false;
-      return;
-    }
-    if (!handMaskOn_) handMasker_.reset();
-    handMaskOn_ = true;
-    // Only with this frame's board pose (measured, or held while the camera stands still).
-    const auto& board = r.scene.planet;
-    if (!pose_ || !board.usable() || !(board.measured || board.heldStill)) return;
-    const auto t0 = std::chrono::steady_clock::now();
     cv::Matx33d K;
     for (int i = 0; i < 3; ++i)
       for (int j = 0; j < 3; ++j) K(i, j) = K_(i, j);
     const double radius = core::boundingRadius(planet_.chart()) / stepper_.scale();
-    handMask_ = handMasker_.update(shell_.image, K, r.scene.planet.pose, pose_->t, radius).soft;
-    if (cv::countNonZero(handMask_ > 0.5f) == 0) handMask_.release();
-    status_.trackMs += msSince(t0);
+    handMask_ =
+        handOcclusion_.update(panel_.handMask, shell_.image, K, r.scene.planet, pose_, radius);
+    status_.trackMs += handOcclusion_.lastMs();
   }
 
   // No frame (camera lost, video ended): the tool is not seen, so no stroke goes on; the last
@@ -283,10 +271,11 @@ class SculptLoop {
                                            : std::span<const Eigen::Vector3d>());
     // A hand in front of the planet: the camera image over it, drawn over the blitted view by
     // drawInterface (render/occlusion_composite.hpp; the renderer's framebuffer is left as it is).
-    if (cam) render::clearToolFromMask(handMask_, *cam, toolTriangles_);
-    showHandView_ = cam && !handMask_.empty();
-    if (showHandView_)
-      handView_.update(render::composeOcclusion(shell_.lastView, shell_.image, handMask_));
+    const cv::Mat handView =
+        cam ? render::occludeByHand(shell_.lastView, shell_.image, handMask_, *cam, toolTriangles_)
+            : cv::Mat();
+    showHandView_ = !handView.empty();
+    if (showHandView_) handView_.update(handView);
     status_.renderMs = msSince(t1);
     return fb;
   }
@@ -501,11 +490,10 @@ class SculptLoop {
   terrain::Tessellator tessellator_;
   terrain::SplicedView spliced_;  // the view with the sand TIN's region (viewPatch)
   Texture overview_;
-  tracking::HandMasker handMasker_;
+  replay::HandOcclusion handOcclusion_;
   cv::Mat handMask_;  // this frame's, empty when nothing is in front of the planet
   Texture handView_;  // the AR view with the camera image over the hand
   bool showHandView_ = false;
-  bool handMaskOn_ = false;  // the panel's toggle at the last frame masked
   session::SessionStore store_;
   std::uint64_t savesSeen_ = 1;  // the store's save at the start
   replay::SettingsControl settingsControl_;

@@ -56,4 +56,12 @@ void clearToolFromMask(cv::Mat& mask, const terrain::Camera& camera,
   mask.setTo(0.0f, tool);
 }
 
+cv::Mat occludeByHand(const cv::Mat& view, const cv::Mat& camera, cv::Mat& mask,
+                      const terrain::Camera& cam, std::span<const Eigen::Vector3d> toolTriangles) {
+  if (mask.empty()) return {};
+  clearToolFromMask(mask, cam, toolTriangles);
+  if (cv::countNonZero(mask > 0.5f) == 0) return {};
+  return composeOcclusion(view, camera, mask);
+}
+
 }  // namespace ps::render

@@ -23,4 +23,12 @@ cv::Mat composeOcclusion(const cv::Mat& view, const cv::Mat& camera, const cv::M
 void clearToolFromMask(cv::Mat& mask, const terrain::Camera& camera,
                        std::span<const Eigen::Vector3d> toolTriangles, int marginPx = 3);
 
+// The AR frame's last step where a hand may be in front of the planet, one path for the live
+// loop, the AR recorder and `bench frame` (the mask from replay::HandOcclusion): `mask` cleared
+// over the tool (clearToolFromMask), then, where it still holds a pixel over 0.5, `view` with
+// the camera image blended over it (composeOcclusion). Empty when nothing is in front: the view
+// stands as rendered.
+cv::Mat occludeByHand(const cv::Mat& view, const cv::Mat& camera, cv::Mat& mask,
+                      const terrain::Camera& cam, std::span<const Eigen::Vector3d> toolTriangles);
+
 }  // namespace ps::render
