@@ -139,9 +139,50 @@ void SandField::applyDriftGlued(const PushForce& force, const DiffusionTables& t
   }
 }
 
-// The lines of direction `dir` with a cell in P, each solved over its runs of cells in P (a
-// cell outside P is a wall, as in the explicit step), next -> next.
-void SandField::solveGluedLines(int dir, const DiffusionTables& tb, double dt, BusyFlags& busy) {
+namespace {
+
+// Lines solved together: their cells are read position by position, line after line, so that
+// neighbouring lines (neighbouring rows or columns, which cross the same tiles in step) read
+// neighbouring cells together, a column's cells from a tile row's cache lines rather than one
+// line each (docs/SAND.md, "The semi-implicit step's lines in groups").
+constexpr int kLineGroup = 8;
+
+// Each face's weight w and K = dt D l^2 (L / d) w, from cell p to p + 1 (round to 0 on a
+// circle), from the heights before the step: the per-face operations of the cell-by-cell solve.
+void faceWeights(const double* __restrict h, const double* __restrict ratio,
+                 const double* __restrict inv, double* __restrict w, double* __restrict k, int n,
+                 bool circle, double dt, double Dl2, kernels::Repose rep) {
+  for (int p = 0; p + 1 < n; ++p) {
+    const double wp = kernels::weight(std::abs(h[p] - h[p + 1]), inv[p], rep);
+    w[p] = wp;
+    k[p] = dt * (Dl2 * ratio[p]) * wp;
+  }
+  if (circle) {
+    const double wp = kernels::weight(std::abs(h[n - 1] - h[0]), inv[n - 1], rep);
+    w[n - 1] = wp;
+    k[n - 1] = dt * (Dl2 * ratio[n - 1]) * wp;
+  }
+}
+
+}  // namespace
+
+// One line's cells in line order: right-hand side x (the solution on return), area, height before
+// the step and its link's L / d and 1 / d (0 for a cell outside P), then each face's w and K;
+// and the scratch of its runs' solves.
+struct SandField::LineRunScratch {
+  const GluedLines::Direction* L = nullptr;
+  int b = 0;  // the line's first cell in L->cells
+  std::vector<double> x, area, h, ratio, inv, w, k;
+  std::vector<double> K, xs, as, ks, work;
+  std::vector<int> run, chain;  // positions in the line
+  void resize(int n) {
+    for (std::vector<double>* v : {&x, &area, &h, &ratio, &inv, &w, &k}) v->resize(std::size_t(n));
+  }
+  std::size_t tileOf(int p) const { return L->cells[std::size_t(b + p)] >> kLocalBits; }
+};
+
+// The lines of direction `dir` with a cell in P, in the order of their rows (columns).
+std::vector<int> SandField::gluedLinesToSolve(int dir) const {
   const GluedLines::Direction& L = gluedLines_->dir[std::size_t(dir)];
   const int nTiles = dir == 0 ? tilesV_ : tilesU_;
   std::vector<std::uint8_t> bandUsed(std::size_t(nTiles), 0), lineUsed(L.cyclic.size(), 0);
@@ -155,122 +196,159 @@ void SandField::solveGluedLines(int dir, const DiffusionTables& tb, double dt, B
       }
     }
   }
-  const kernels::Repose rep = tb.repose;
-  const double Dl2 = diffusionMaterial_.diffusion * grid_.cellSize() * grid_.cellSize();
-  auto tileOf = [](std::uint32_t c) { return int(c >> kLocalBits); };
-  auto localOf = [](std::uint32_t c) { return std::size_t(c & ((1u << kLocalBits) - 1u)); };
-#pragma omp parallel if (int(tileList_.size()) >= kParallelTiles)
-  {
-    std::vector<double> x, a, K, xs, as, ks, work;
-    std::vector<std::uint32_t> run;
-    std::vector<std::uint8_t> runLink;
-    std::vector<int> chain;
-    // Solves the open chain of run positions `chain` (faces ks between them) or, with `circle`,
-    // the whole run round.
-    auto solveChain = [&](bool circle) {
-      const int n = int(chain.size());
-      xs.resize(std::size_t(n));
-      as.resize(std::size_t(n));
-      for (int i = 0; i < n; ++i) {
-        xs[std::size_t(i)] = x[std::size_t(chain[std::size_t(i)])];
-        as[std::size_t(i)] = a[std::size_t(chain[std::size_t(i)])];
-      }
-      kernels::solveLine(xs, as, ks, circle, work);
-      for (int i = 0; i < n; ++i) {
-        const std::uint32_t c = run[std::size_t(chain[std::size_t(i)])];
-        tiles_[std::size_t(tileOf(c))]->next[localOf(c)] = xs[std::size_t(i)];
-      }
-    };
-    // Solves the run of cells in `run` (a circle when `circle`): each stretch of active faces
-    // apart, so that cells at rest keep their bits and a step over P is the step over the grid.
-    auto solveRun = [&](bool circle) {
-      const int n = int(run.size());
-      if (n < 2) return;
-      x.resize(std::size_t(n));
-      a.resize(std::size_t(n));
-      K.assign(std::size_t(n), 0.0);
-      for (int i = 0; i < n; ++i) {
-        const std::uint32_t c = run[std::size_t(i)];
-        const Tile& tile = *tiles_[std::size_t(tileOf(c))];
-        const std::size_t li = localOf(c);
-        x[std::size_t(i)] = tile.next[li];
-        a[std::size_t(i)] = tile.geo[std::size_t(kGeoArea) * kCells + li];
-      }
-      const int faces = circle ? n : n - 1;
-      int rest = -1;  // a face at rest, if any
-      for (int i = 0; i < faces; ++i) {
-        const std::uint32_t c = run[std::size_t(i)], cn = run[std::size_t((i + 1) % n)];
-        const Tile& tile = *tiles_[std::size_t(tileOf(c))];
-        const Tile& tn = *tiles_[std::size_t(tileOf(cn))];
-        const std::size_t li = localOf(c), k = runLink[std::size_t(i)];
-        const double ratio = tile.geo[(std::size_t(kGeoRatio) + k) * kCells + li];
-        const double inv = tile.geo[(std::size_t(kGeoInv) + k) * kCells + li];
-        const double w = kernels::weight(std::abs(tile.cur[li] - tn.cur[localOf(cn)]), inv, rep);
-        K[std::size_t(i)] = dt * (Dl2 * ratio) * w;
-        if (w > 0.0) {
-          busy[std::size_t(tileOf(c))].store(1, std::memory_order_relaxed);
-          busy[std::size_t(tileOf(cn))].store(1, std::memory_order_relaxed);
-        } else if (rest < 0) {
-          rest = i;
-        }
-      }
-      if (circle && rest < 0) {
-        chain.resize(std::size_t(n));
-        for (int i = 0; i < n; ++i) chain[std::size_t(i)] = i;
-        ks = K;
-        solveChain(true);
-        return;
-      }
-      // From just after a face at rest (a circle's), chains of active faces.
-      const int s = circle ? rest + 1 : 0;
-      chain.clear();
-      ks.clear();
-      for (int j = 0; j < n; ++j) {
-        const int i = (s + j) % n;
-        chain.push_back(i);
-        const bool face = j + 1 < n && (circle || i + 1 < n);
-        if (face && K[std::size_t(i)] > 0.0) {
-          ks.push_back(K[std::size_t(i)]);
-          continue;
-        }
-        if (chain.size() > 1) {
-          ks.push_back(0.0);
-          solveChain(false);
-        }
-        chain.clear();
-        ks.clear();
-      }
-    };
-#pragma omp for schedule(dynamic, 4)
-    for (int j = 0; j < int(todo.size()); ++j) {
-      const int l = todo[std::size_t(j)];
-      const int b = int(L.start[std::size_t(l)]), n = int(L.start[std::size_t(l) + 1]) - b;
-      auto inside = [&](int i) { return inP_[std::size_t(tileOf(L.cells[std::size_t(b + i)]))]; };
-      // A circle is cut after a cell outside P (if any); runs are the cells in P between.
-      int s = 0;
-      const bool circle = L.cyclic[std::size_t(l)] != 0;
-      bool whole = false;
-      if (circle) {
-        while (s < n && inside(s)) ++s;
-        whole = s == n;
-        s = whole ? 0 : s + 1;
-      }
-      run.clear();
-      runLink.clear();
-      for (int q = 0; q < n; ++q) {
-        const int i = circle ? (s + q) % n : q;
-        if (!inside(i)) {
-          solveRun(false);
-          run.clear();
-          runLink.clear();
-          continue;
-        }
-        run.push_back(L.cells[std::size_t(b + i)]);
-        runLink.push_back(L.link[std::size_t(b + i)]);
-      }
-      solveRun(whole);
+  return todo;
+}
+
+// One line (s.x .. s.k read), solved over its runs of cells in P: a circle is cut after a cell
+// outside P (if any); runs are the cells in P between.
+void SandField::solveGluedLine(LineRunScratch& s, int n, bool circle, BusyFlags& busy) const {
+  auto inside = [&](int p) { return inP_[s.tileOf(p)] != 0; };
+  int first = 0;
+  bool whole = false;
+  if (circle) {
+    while (first < n && inside(first)) ++first;
+    whole = first == n;
+    first = whole ? 0 : first + 1;
+  }
+  s.run.clear();
+  for (int q = 0; q < n; ++q) {
+    const int i = circle ? (first + q) % n : q;
+    if (!inside(i)) {
+      solveGluedRun(s, false, busy);
+      s.run.clear();
+      continue;
+    }
+    s.run.push_back(i);
+  }
+  solveGluedRun(s, whole, busy);
+}
+
+// The run of line positions s.run (a circle when `circle`): each stretch of active faces apart,
+// so that cells at rest keep their bits and a step over P is the step over the grid.
+void SandField::solveGluedRun(LineRunScratch& s, bool circle, BusyFlags& busy) const {
+  const std::vector<int>& run = s.run;
+  const int n = int(run.size());
+  if (n < 2) return;
+  // Solves the open chain of run positions s.chain (faces s.ks between them) or, with `round`,
+  // the whole run round.
+  auto solveChain = [&](bool round) {
+    const int c = int(s.chain.size());
+    s.xs.resize(std::size_t(c));
+    s.as.resize(std::size_t(c));
+    for (int i = 0; i < c; ++i) {
+      const std::size_t p = std::size_t(run[std::size_t(s.chain[std::size_t(i)])]);
+      s.xs[std::size_t(i)] = s.x[p];
+      s.as[std::size_t(i)] = s.area[p];
+    }
+    kernels::solveLine(s.xs, s.as, s.ks, round, s.work);
+    for (int i = 0; i < c; ++i)
+      s.x[std::size_t(run[std::size_t(s.chain[std::size_t(i)])])] = s.xs[std::size_t(i)];
+  };
+  s.K.assign(std::size_t(n), 0.0);
+  const int faces = circle ? n : n - 1;
+  int rest = -1;  // a face at rest, if any
+  for (int i = 0; i < faces; ++i) {
+    const std::size_t p = std::size_t(run[std::size_t(i)]);
+    s.K[std::size_t(i)] = s.k[p];
+    if (s.w[p] > 0.0) {
+      busy[s.tileOf(int(p))].store(1, std::memory_order_relaxed);
+      busy[s.tileOf(run[std::size_t((i + 1) % n)])].store(1, std::memory_order_relaxed);
+    } else if (rest < 0) {
+      rest = i;
     }
   }
+  if (circle && rest < 0) {
+    s.chain.resize(std::size_t(n));
+    for (int i = 0; i < n; ++i) s.chain[std::size_t(i)] = i;
+    s.ks = s.K;
+    solveChain(true);
+    return;
+  }
+  // From just after a face at rest (a circle's), chains of active faces.
+  const int st = circle ? rest + 1 : 0;
+  s.chain.clear();
+  s.ks.clear();
+  for (int j = 0; j < n; ++j) {
+    const int i = (st + j) % n;
+    s.chain.push_back(i);
+    const bool face = j + 1 < n && (circle || i + 1 < n);
+    if (face && s.K[std::size_t(i)] > 0.0) {
+      s.ks.push_back(s.K[std::size_t(i)]);
+      continue;
+    }
+    if (s.chain.size() > 1) {
+      s.ks.push_back(0.0);
+      solveChain(false);
+    }
+    s.chain.clear();
+    s.ks.clear();
+  }
+}
+
+// The lines of direction `dir` with a cell in P, each solved over its runs of cells in P (a
+// cell outside P is a wall, as in the explicit step), next -> next; kLineGroup lines at a time.
+void SandField::solveGluedLines(int dir, const DiffusionTables& tb, double dt, BusyFlags& busy) {
+  const GluedLines::Direction& L = gluedLines_->dir[std::size_t(dir)];
+  const std::vector<int> todo = gluedLinesToSolve(dir);
+  const kernels::Repose rep = tb.repose;
+  const double Dl2 = diffusionMaterial_.diffusion * grid_.cellSize() * grid_.cellSize();
+  const int groups = (int(todo.size()) + kLineGroup - 1) / kLineGroup;
+#pragma omp parallel if (int(tileList_.size()) >= kParallelTiles)
+  {
+    LineRunScratch lines[kLineGroup];
+#pragma omp for schedule(dynamic, 1)
+    for (int gi = 0; gi < groups; ++gi) {
+      const int g0 = gi * kLineGroup;
+      const int count = std::min(kLineGroup, int(todo.size()) - g0);
+      int n[kLineGroup], longest = 0;
+      for (int j = 0; j < count; ++j) {
+        const int l = todo[std::size_t(g0 + j)];
+        lines[j].L = &L;
+        lines[j].b = int(L.start[std::size_t(l)]);
+        n[j] = int(L.start[std::size_t(l) + 1]) - lines[j].b;
+        lines[j].resize(n[j]);
+        longest = std::max(longest, n[j]);
+      }
+      for (int q = 0; q < longest; ++q) {
+        for (int j = 0; j < count; ++j) {
+          if (q < n[j]) readLineCell(lines[j], q);
+        }
+      }
+      for (int j = 0; j < count; ++j) {
+        LineRunScratch& s = lines[j];
+        const bool circle = L.cyclic[std::size_t(todo[std::size_t(g0 + j)])] != 0;
+        faceWeights(s.h.data(), s.ratio.data(), s.inv.data(), s.w.data(), s.k.data(), n[j], circle,
+                    dt, Dl2, rep);
+        solveGluedLine(s, n[j], circle, busy);
+      }
+      for (int q = 0; q < longest; ++q) {
+        for (int j = 0; j < count; ++j) {
+          if (q >= n[j]) continue;
+          const std::uint32_t c = L.cells[std::size_t(lines[j].b + q)];
+          const std::size_t t = c >> kLocalBits;
+          if (inP_[t]) tiles_[t]->next[c & ((1u << kLocalBits) - 1u)] = lines[j].x[std::size_t(q)];
+        }
+      }
+    }
+  }
+}
+
+// Cell q of the line s: its right-hand side, area, height and link's L / d and 1 / d.
+void SandField::readLineCell(LineRunScratch& s, int q) const {
+  const std::uint32_t c = s.L->cells[std::size_t(s.b + q)];
+  const std::size_t t = c >> kLocalBits, p = std::size_t(q);
+  if (!inP_[t]) {
+    s.x[p] = s.area[p] = s.h[p] = s.ratio[p] = s.inv[p] = 0.0;
+    return;
+  }
+  const Tile& tile = *tiles_[t];
+  const std::size_t li = c & ((1u << kLocalBits) - 1u), k = s.L->link[std::size_t(s.b + q)];
+  const double* geo = tile.geo.get();
+  s.x[p] = tile.next[li];
+  s.area[p] = geo[std::size_t(kGeoArea) * kCells + li];
+  s.h[p] = tile.cur[li];
+  s.ratio[p] = geo[(std::size_t(kGeoRatio) + k) * kCells + li];
+  s.inv[p] = geo[(std::size_t(kGeoInv) + k) * kCells + li];
 }
 
 }  // namespace ps::sand
