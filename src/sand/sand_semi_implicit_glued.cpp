@@ -141,12 +141,6 @@ void SandField::applyDriftGlued(const PushForce& force, const DiffusionTables& t
 
 namespace {
 
-// Lines solved together: their cells are read position by position, line after line, so that
-// neighbouring lines (neighbouring rows or columns, which cross the same tiles in step) read
-// neighbouring cells together, a column's cells from a tile row's cache lines rather than one
-// line each (docs/SAND.md, "The semi-implicit step's lines in groups").
-constexpr int kLineGroup = 8;
-
 // Each face's weight w and K = dt D l^2 (L / d) w, from cell p to p + 1 (round to 0 on a
 // circle), from the heights before the step: the per-face operations of the cell-by-cell solve.
 void faceWeights(const double* __restrict h, const double* __restrict ratio,
@@ -162,6 +156,26 @@ void faceWeights(const double* __restrict h, const double* __restrict ratio,
     w[n - 1] = wp;
     k[n - 1] = dt * (Dl2 * ratio[n - 1]) * wp;
   }
+}
+
+// kernels::solveLine's open chain (not cyclic) on the n >= 2 cells of x, a with the faces K[i]
+// between i and i + 1 (K[n - 1] not read), in place: the same operations in the same order
+// without its copies (cp: n doubles of scratch).
+void solveOpenChain(double* __restrict x, const double* __restrict a, const double* __restrict K,
+                    int n, double* __restrict cp) {
+  double kPrev = 0.0, cPrev = 0.0, yPrev = 0.0;
+  for (int i = 0; i < n; ++i) {
+    const double kr = i + 1 < n ? K[i] : 0.0;
+    const double diag = a[i] + kPrev + kr;
+    const double denom = diag + kPrev * cPrev;
+    cp[i] = -kr / denom;
+    const double y = (a[i] * x[i] + kPrev * yPrev) / denom;
+    x[i] = y;
+    yPrev = y;
+    cPrev = cp[i];
+    kPrev = kr;
+  }
+  for (int i = n - 2; i >= 0; --i) x[i] -= cp[i] * x[i + 1];
 }
 
 }  // namespace
@@ -233,6 +247,13 @@ void SandField::solveGluedRun(LineRunScratch& s, bool circle, BusyFlags& busy) c
   // the whole run round.
   auto solveChain = [&](bool round) {
     const int c = int(s.chain.size());
+    const int p0 = run[std::size_t(s.chain[0])];
+    if (!round && run[std::size_t(s.chain.back())] == p0 + c - 1) {
+      // Consecutive cells of the line: solved where they lie.
+      s.work.resize(std::size_t(c));
+      solveOpenChain(s.x.data() + p0, s.area.data() + p0, s.k.data() + p0, c, s.work.data());
+      return;
+    }
     s.xs.resize(std::size_t(c));
     s.as.resize(std::size_t(c));
     for (int i = 0; i < c; ++i) {
@@ -256,6 +277,11 @@ void SandField::solveGluedRun(LineRunScratch& s, bool circle, BusyFlags& busy) c
     } else if (rest < 0) {
       rest = i;
     }
+  }
+  if (rest < 0 && n == int(s.x.size()) && circle) {
+    // The whole circle, every face active: its arrays are the system.
+    kernels::solveLine(s.x, s.area, s.k, true, s.work);
+    return;
   }
   if (circle && rest < 0) {
     s.chain.resize(std::size_t(n));
@@ -286,48 +312,33 @@ void SandField::solveGluedRun(LineRunScratch& s, bool circle, BusyFlags& busy) c
 }
 
 // The lines of direction `dir` with a cell in P, each solved over its runs of cells in P (a
-// cell outside P is a wall, as in the explicit step), next -> next; kLineGroup lines at a time.
+// cell outside P is a wall, as in the explicit step), next -> next. Each line's cells are read
+// into arrays in line order, its faces' weights computed over them (the arctangents in one
+// loop, apart from the scattered reads), then its runs solved on those arrays.
 void SandField::solveGluedLines(int dir, const DiffusionTables& tb, double dt, BusyFlags& busy) {
   const GluedLines::Direction& L = gluedLines_->dir[std::size_t(dir)];
   const std::vector<int> todo = gluedLinesToSolve(dir);
   const kernels::Repose rep = tb.repose;
   const double Dl2 = diffusionMaterial_.diffusion * grid_.cellSize() * grid_.cellSize();
-  const int groups = (int(todo.size()) + kLineGroup - 1) / kLineGroup;
 #pragma omp parallel if (int(tileList_.size()) >= kParallelTiles)
   {
-    LineRunScratch lines[kLineGroup];
-#pragma omp for schedule(dynamic, 1)
-    for (int gi = 0; gi < groups; ++gi) {
-      const int g0 = gi * kLineGroup;
-      const int count = std::min(kLineGroup, int(todo.size()) - g0);
-      int n[kLineGroup], longest = 0;
-      for (int j = 0; j < count; ++j) {
-        const int l = todo[std::size_t(g0 + j)];
-        lines[j].L = &L;
-        lines[j].b = int(L.start[std::size_t(l)]);
-        n[j] = int(L.start[std::size_t(l) + 1]) - lines[j].b;
-        lines[j].resize(n[j]);
-        longest = std::max(longest, n[j]);
-      }
-      for (int q = 0; q < longest; ++q) {
-        for (int j = 0; j < count; ++j) {
-          if (q < n[j]) readLineCell(lines[j], q);
-        }
-      }
-      for (int j = 0; j < count; ++j) {
-        LineRunScratch& s = lines[j];
-        const bool circle = L.cyclic[std::size_t(todo[std::size_t(g0 + j)])] != 0;
-        faceWeights(s.h.data(), s.ratio.data(), s.inv.data(), s.w.data(), s.k.data(), n[j], circle,
-                    dt, Dl2, rep);
-        solveGluedLine(s, n[j], circle, busy);
-      }
-      for (int q = 0; q < longest; ++q) {
-        for (int j = 0; j < count; ++j) {
-          if (q >= n[j]) continue;
-          const std::uint32_t c = L.cells[std::size_t(lines[j].b + q)];
-          const std::size_t t = c >> kLocalBits;
-          if (inP_[t]) tiles_[t]->next[c & ((1u << kLocalBits) - 1u)] = lines[j].x[std::size_t(q)];
-        }
+    LineRunScratch s;
+    s.L = &L;
+#pragma omp for schedule(dynamic, 4)
+    for (int j = 0; j < int(todo.size()); ++j) {
+      const int l = todo[std::size_t(j)];
+      s.b = int(L.start[std::size_t(l)]);
+      const int n = int(L.start[std::size_t(l) + 1]) - s.b;
+      const bool circle = L.cyclic[std::size_t(l)] != 0;
+      s.resize(n);
+      for (int q = 0; q < n; ++q) readLineCell(s, q);
+      faceWeights(s.h.data(), s.ratio.data(), s.inv.data(), s.w.data(), s.k.data(), n, circle, dt,
+                  Dl2, rep);
+      solveGluedLine(s, n, circle, busy);
+      for (int q = 0; q < n; ++q) {
+        const std::uint32_t c = L.cells[std::size_t(s.b + q)];
+        const std::size_t t = c >> kLocalBits;
+        if (inP_[t]) tiles_[t]->next[c & ((1u << kLocalBits) - 1u)] = s.x[std::size_t(q)];
       }
     }
   }
