@@ -141,23 +141,6 @@ void SandField::applyDriftGlued(const PushForce& force, const DiffusionTables& t
 
 namespace {
 
-// Each face's weight w and K = dt D l^2 (L / d) w, from cell p to p + 1 (round to 0 on a
-// circle), from the heights before the step: the per-face operations of the cell-by-cell solve.
-void faceWeights(const double* __restrict h, const double* __restrict ratio,
-                 const double* __restrict inv, double* __restrict w, double* __restrict k, int n,
-                 bool circle, double dt, double Dl2, kernels::Repose rep) {
-  for (int p = 0; p + 1 < n; ++p) {
-    const double wp = kernels::weight(std::abs(h[p] - h[p + 1]), inv[p], rep);
-    w[p] = wp;
-    k[p] = dt * (Dl2 * ratio[p]) * wp;
-  }
-  if (circle) {
-    const double wp = kernels::weight(std::abs(h[n - 1] - h[0]), inv[n - 1], rep);
-    w[n - 1] = wp;
-    k[n - 1] = dt * (Dl2 * ratio[n - 1]) * wp;
-  }
-}
-
 // kernels::solveLine's open chain (not cyclic) on the n >= 2 cells of x, a with the faces K[i]
 // between i and i + 1 (K[n - 1] not read), in place: the same operations in the same order
 // without its copies (cp: n doubles of scratch).
@@ -332,8 +315,8 @@ void SandField::solveGluedLines(int dir, const DiffusionTables& tb, double dt, B
       const bool circle = L.cyclic[std::size_t(l)] != 0;
       s.resize(n);
       for (int q = 0; q < n; ++q) readLineCell(s, q);
-      faceWeights(s.h.data(), s.ratio.data(), s.inv.data(), s.w.data(), s.k.data(), n, circle, dt,
-                  Dl2, rep);
+      kernels::lineWeights(s.h.data(), s.ratio.data(), s.inv.data(), s.w.data(), s.k.data(), n,
+                           circle, dt, Dl2, rep);
       solveGluedLine(s, n, circle, busy);
       for (int q = 0; q < n; ++q) {
         const std::uint32_t c = L.cells[std::size_t(s.b + q)];
