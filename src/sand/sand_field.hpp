@@ -233,6 +233,7 @@ class SandField {
   struct LineRunScratch;  // one line's cells read in line order, and a solve's scratch
   void solveGluedLine(LineRunScratch& s, int n, bool circle, BusyFlags& busy) const;
   void solveGluedRun(LineRunScratch& s, bool circle, BusyFlags& busy) const;
+  void solveGluedChain(LineRunScratch& s, int first, int c) const;
   void readLineCell(LineRunScratch& s, int q) const;
 
   SandGrid grid_;

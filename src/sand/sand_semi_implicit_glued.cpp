@@ -170,8 +170,8 @@ struct SandField::LineRunScratch {
   const GluedLines::Direction* L = nullptr;
   int b = 0;  // the line's first cell in L->cells
   std::vector<double> x, area, h, ratio, inv, w, k;
-  std::vector<double> K, xs, as, ks, work;
-  std::vector<int> run, chain;  // positions in the line
+  std::vector<double> xs, as, ks, work;
+  std::vector<int> run;  // positions in the line
   void resize(int n) {
     for (std::vector<double>* v : {&x, &area, &h, &ratio, &inv, &w, &k}) v->resize(std::size_t(n));
   }
@@ -220,78 +220,71 @@ void SandField::solveGluedLine(LineRunScratch& s, int n, bool circle, BusyFlags&
   solveGluedRun(s, whole, busy);
 }
 
-// The run of line positions s.run (a circle when `circle`): each stretch of active faces apart,
-// so that cells at rest keep their bits and a step over P is the step over the grid.
+// The run of line positions s.run (a circle when `circle`: then the whole line): each stretch of
+// active faces apart, so that cells at rest keep their bits and a step over P is the step over
+// the grid.
 void SandField::solveGluedRun(LineRunScratch& s, bool circle, BusyFlags& busy) const {
   const std::vector<int>& run = s.run;
   const int n = int(run.size());
   if (n < 2) return;
-  // Solves the open chain of run positions s.chain (faces s.ks between them) or, with `round`,
-  // the whole run round.
-  auto solveChain = [&](bool round) {
-    const int c = int(s.chain.size());
-    const int p0 = run[std::size_t(s.chain[0])];
-    if (!round && run[std::size_t(s.chain.back())] == p0 + c - 1) {
-      // Consecutive cells of the line: solved where they lie.
-      s.work.resize(std::size_t(c));
-      solveOpenChain(s.x.data() + p0, s.area.data() + p0, s.k.data() + p0, c, s.work.data());
-      return;
-    }
-    s.xs.resize(std::size_t(c));
-    s.as.resize(std::size_t(c));
-    for (int i = 0; i < c; ++i) {
-      const std::size_t p = std::size_t(run[std::size_t(s.chain[std::size_t(i)])]);
-      s.xs[std::size_t(i)] = s.x[p];
-      s.as[std::size_t(i)] = s.area[p];
-    }
-    kernels::solveLine(s.xs, s.as, s.ks, round, s.work);
-    for (int i = 0; i < c; ++i)
-      s.x[std::size_t(run[std::size_t(s.chain[std::size_t(i)])])] = s.xs[std::size_t(i)];
-  };
-  s.K.assign(std::size_t(n), 0.0);
   const int faces = circle ? n : n - 1;
   int rest = -1;  // a face at rest, if any
+  std::size_t marked = ~std::size_t(0);
+  auto mark = [&](std::size_t t) {
+    if (t == marked) return;
+    busy[t].store(1, std::memory_order_relaxed);
+    marked = t;
+  };
   for (int i = 0; i < faces; ++i) {
-    const std::size_t p = std::size_t(run[std::size_t(i)]);
-    s.K[std::size_t(i)] = s.k[p];
-    if (s.w[p] > 0.0) {
-      busy[s.tileOf(int(p))].store(1, std::memory_order_relaxed);
-      busy[s.tileOf(run[std::size_t((i + 1) % n)])].store(1, std::memory_order_relaxed);
+    const int p = run[std::size_t(i)];
+    if (s.w[std::size_t(p)] > 0.0) {
+      mark(s.tileOf(p));
+      mark(s.tileOf(run[std::size_t((i + 1) % n)]));
     } else if (rest < 0) {
       rest = i;
     }
   }
-  if (rest < 0 && n == int(s.x.size()) && circle) {
+  if (circle && rest < 0) {
     // The whole circle, every face active: its arrays are the system.
     kernels::solveLine(s.x, s.area, s.k, true, s.work);
     return;
   }
-  if (circle && rest < 0) {
-    s.chain.resize(std::size_t(n));
-    for (int i = 0; i < n; ++i) s.chain[std::size_t(i)] = i;
-    s.ks = s.K;
-    solveChain(true);
-    return;
-  }
-  // From just after a face at rest (a circle's), chains of active faces.
+  // From just after a face at rest (a circle's), chains of active faces: the run's cells
+  // st + j0 .. st + j (mod n).
   const int st = circle ? rest + 1 : 0;
-  s.chain.clear();
-  s.ks.clear();
+  int j0 = 0;
   for (int j = 0; j < n; ++j) {
     const int i = (st + j) % n;
-    s.chain.push_back(i);
     const bool face = j + 1 < n && (circle || i + 1 < n);
-    if (face && s.K[std::size_t(i)] > 0.0) {
-      s.ks.push_back(s.K[std::size_t(i)]);
-      continue;
-    }
-    if (s.chain.size() > 1) {
-      s.ks.push_back(0.0);
-      solveChain(false);
-    }
-    s.chain.clear();
-    s.ks.clear();
+    if (face && s.k[std::size_t(run[std::size_t(i)])] > 0.0) continue;
+    if (j > j0) solveGluedChain(s, st + j0, j - j0 + 1);
+    j0 = j + 1;
   }
+}
+
+// The open chain of the run's cells first .. first + c - 1 (mod the run's length), every face
+// between them active: kernels::solveLine's open chain.
+void SandField::solveGluedChain(LineRunScratch& s, int first, int c) const {
+  const std::vector<int>& run = s.run;
+  const int n = int(run.size());
+  auto at = [&](int t) { return std::size_t(run[std::size_t((first + t) % n)]); };
+  const std::size_t p0 = at(0);
+  s.work.resize(std::size_t(c));
+  if (at(c - 1) == p0 + std::size_t(c - 1)) {
+    // Consecutive cells of the line: solved where they lie.
+    solveOpenChain(s.x.data() + p0, s.area.data() + p0, s.k.data() + p0, c, s.work.data());
+    return;
+  }
+  s.xs.resize(std::size_t(c));
+  s.as.resize(std::size_t(c));
+  s.ks.resize(std::size_t(c));
+  for (int t = 0; t < c; ++t) {
+    s.xs[std::size_t(t)] = s.x[at(t)];
+    s.as[std::size_t(t)] = s.area[at(t)];
+    s.ks[std::size_t(t)] = t + 1 < c ? s.k[at(t)] : 0.0;
+  }
+  kernels::solveLine(s.xs, s.as, s.ks, false, s.work);
+  for (int t = 0; t < c; ++t) s.x[at(t)] = s.xs[std::size_t(t)];
 }
 
 // The lines of direction `dir` with a cell in P, each solved over its runs of cells in P (a
