@@ -345,6 +345,23 @@ void solveColumns(std::vector<double>& x, const std::vector<double>& K,
   }
 }
 
+void solveChainInPlace(double* __restrict x, const double* __restrict a, const double* __restrict K,
+                       int n, double* __restrict cp) {
+  double kPrev = 0.0, cPrev = 0.0, yPrev = 0.0;
+  for (int i = 0; i < n; ++i) {
+    const double kr = i + 1 < n ? K[i] : 0.0;
+    const double diag = a[i] + kPrev + kr;
+    const double denom = diag + kPrev * cPrev;
+    cp[i] = -kr / denom;
+    const double y = (a[i] * x[i] + kPrev * yPrev) / denom;
+    x[i] = y;
+    yPrev = y;
+    cPrev = cp[i];
+    kPrev = kr;
+  }
+  for (int i = n - 2; i >= 0; --i) x[i] -= cp[i] * x[i + 1];
+}
+
 namespace {
 
 // Thomas algorithm for diag[i] x_i - K[i-1] x_{i-1} - K[i] x_{i+1} = x_i (x holds the right-hand

@@ -139,30 +139,6 @@ void SandField::applyDriftGlued(const PushForce& force, const DiffusionTables& t
   }
 }
 
-namespace {
-
-// kernels::solveLine's open chain (not cyclic) on the n >= 2 cells of x, a with the faces K[i]
-// between i and i + 1 (K[n - 1] not read), in place: the same operations in the same order
-// without its copies (cp: n doubles of scratch).
-void solveOpenChain(double* __restrict x, const double* __restrict a, const double* __restrict K,
-                    int n, double* __restrict cp) {
-  double kPrev = 0.0, cPrev = 0.0, yPrev = 0.0;
-  for (int i = 0; i < n; ++i) {
-    const double kr = i + 1 < n ? K[i] : 0.0;
-    const double diag = a[i] + kPrev + kr;
-    const double denom = diag + kPrev * cPrev;
-    cp[i] = -kr / denom;
-    const double y = (a[i] * x[i] + kPrev * yPrev) / denom;
-    x[i] = y;
-    yPrev = y;
-    cPrev = cp[i];
-    kPrev = kr;
-  }
-  for (int i = n - 2; i >= 0; --i) x[i] -= cp[i] * x[i + 1];
-}
-
-}  // namespace
-
 // One line's cells in line order: right-hand side x (the solution on return), area, height before
 // the step and its link's L / d and 1 / d (0 for a cell outside P), then each face's w and K;
 // and the scratch of its runs' solves.
@@ -272,7 +248,8 @@ void SandField::solveGluedChain(LineRunScratch& s, int first, int c) const {
   s.work.resize(std::size_t(c));
   if (at(c - 1) == p0 + std::size_t(c - 1)) {
     // Consecutive cells of the line: solved where they lie.
-    solveOpenChain(s.x.data() + p0, s.area.data() + p0, s.k.data() + p0, c, s.work.data());
+    kernels::solveChainInPlace(s.x.data() + p0, s.area.data() + p0, s.k.data() + p0, c,
+                               s.work.data());
     return;
   }
   s.xs.resize(std::size_t(c));
