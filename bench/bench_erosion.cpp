@@ -36,6 +36,7 @@
 #include <omp.h>
 #include <time.h>
 
+#include <CLI/CLI.hpp>
 #include <cmath>
 #include <iostream>
 #include <memory>
@@ -43,6 +44,7 @@
 #include <numbers>
 #include <numeric>
 #include <random>
+#include <string>
 #include <vector>
 
 #include "bench/bench.hpp"
@@ -348,21 +350,32 @@ void crater(bool sphere, bool quick, int threads, std::ostream& out, bool octahe
 
 }  // namespace
 
+// `bench erosion-charts --method M --sphere-only`: one method's rows, lat-long and octahedral
+// alone (the comparison of two builds in turn on a shared machine).
+struct ChartsSettings {
+  std::string method;  // "" = all three
+  bool sphereOnly = false;
+};
+
 // The sphere: lat-long, octahedral, torus and cylinder stepped in turn in one run (the glued
 // charts' per-cell loops against lat-long's rows). Also `bench erosion-charts` alone.
-void benchErosionCharts(const BenchOptions& options, std::ostream& out) {
+void benchErosionCharts(const BenchOptions& options, const ChartsSettings& only,
+                        std::ostream& out) {
   const int saved = omp_get_max_threads();
   const int repeats =
       std::max(3, options.quick ? std::min(options.repeats, 5) : std::min(options.repeats, 9));
   const int ns = options.quick ? 8 : 10;
+  std::vector<Surface> surfaces = {Surface::kLatLong, Surface::kOctahedral};
+  if (!only.sphereOnly) surfaces.insert(surfaces.end(), {Surface::kTorus, Surface::kCylinder});
   for (Method method : {Method::kThermal, Method::kExplicit, Method::kSemiImplicit}) {
-    for (int threads : {1, 2}) {
-      sphereThroughput(
-          ns, {Surface::kLatLong, Surface::kOctahedral, Surface::kTorus, Surface::kCylinder},
-          method, threads, repeats, out);
-    }
+    if (!only.method.empty() && only.method != methodName(method)) continue;
+    for (int threads : {1, 2}) sphereThroughput(ns, surfaces, method, threads, repeats, out);
   }
   omp_set_num_threads(saved);
+}
+
+void benchErosionCharts(const BenchOptions& options, std::ostream& out) {
+  benchErosionCharts(options, ChartsSettings{}, out);
 }
 
 void benchErosion(const BenchOptions& options, std::ostream& out) {
@@ -385,6 +398,14 @@ static const BenchRegistration kRegistered(
     "erosion", "The sand core's throughput and the frames a crater needs to settle", benchErosion);
 static const BenchRegistration kRegisteredCharts(
     "erosion-charts", "The sand core's rate on the four sphere charts in turn, ratios to lat-long",
-    benchErosionCharts);
+    [](CLI::App& command) -> BenchFunction {
+      auto only = std::make_shared<ChartsSettings>();
+      command.add_option("--method", only->method, "Only this method's rows")
+          ->check(CLI::IsMember({"thermal", "diffusion-explicit", "diffusion-implicit"}));
+      command.add_flag("--sphere-only", only->sphereOnly,
+                       "Lat-long and octahedral only (no torus, no cylinder)");
+      return
+          [only](const BenchOptions& o, std::ostream& out) { benchErosionCharts(o, *only, out); };
+    });
 
 }  // namespace ps::bench

@@ -1,6 +1,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstring>
 #include <numbers>
 #include <random>
 
@@ -93,6 +94,63 @@ TEST(SandKernels, RowSolverMatchesADenseSolveIncludingTheCircle) {
       EXPECT_NEAR(sumX, sumB, 1e-12);
     }
   }
+}
+
+// The glued lines' kernels against the forms they replace, bit for bit: lineWeights (a loop the
+// compiler vectorises) against weight() face by face, solveChainInPlace against solveLine's open
+// chain (which copies), on random lines with faces at rest, some cohesion and steep and flat
+// faces.
+TEST(SandKernels, LineWeightsAndChainsInPlaceEqualTheOneAtATimeFormsBitForBit) {
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> uni(0.0, 1.0);
+  sand::Material mat = sand::Material::sand();
+  mat.cohesion = 0.05;
+  const sand::kernels::Repose rep = sand::kernels::Repose::of(mat);
+  int active = 0, rest = 0;
+  for (int n : {2, 3, 5, 33, 200}) {
+    for (bool circle : {false, true}) {
+      const std::size_t len = std::size_t(n);
+      std::vector<double> h(len), ratio(len), inv(len);
+      for (int i = 0; i < n; ++i) {
+        h[std::size_t(i)] = 10.0 * uni(rng) * (uni(rng) < 0.3 ? 0.01 : 1.0);
+        ratio[std::size_t(i)] = 0.5 + uni(rng);
+        inv[std::size_t(i)] = 0.2 + 2.0 * uni(rng);
+      }
+      const double dt = 0.7, Dl2 = 1.3;
+      std::vector<double> w(len, -1.0), k(len, -1.0);
+      sand::kernels::lineWeights(h.data(), ratio.data(), inv.data(), w.data(), k.data(), n, circle,
+                                 dt, Dl2, rep);
+      const int faces = circle ? n : n - 1;
+      for (int p = 0; p < faces; ++p) {
+        const std::size_t i = std::size_t(p), j = std::size_t((p + 1) % n);
+        const double wp = sand::kernels::weight(std::abs(h[i] - h[j]), inv[i], rep);
+        EXPECT_EQ(std::memcmp(&w[i], &wp, sizeof wp), 0) << "n " << n << " face " << p;
+        const double kp = dt * (Dl2 * ratio[i]) * wp;
+        EXPECT_EQ(std::memcmp(&k[i], &kp, sizeof kp), 0) << "n " << n << " face " << p;
+        (wp > 0.0 ? active : rest) += 1;
+      }
+      if (!circle) {
+        EXPECT_EQ(w[std::size_t(n - 1)], -1.0) << "n " << n << ": no face there";
+      }
+      // An open chain with every face active.
+      std::vector<double> x(len), a(len), K(len);
+      for (int i = 0; i < n; ++i) {
+        x[std::size_t(i)] = 100.0 * uni(rng) - 50.0;
+        a[std::size_t(i)] = 0.5 + uni(rng);
+        K[std::size_t(i)] = 1e-3 + 30.0 * uni(rng);
+      }
+      std::vector<double> ref = x, work, cp(len);
+      sand::kernels::solveLine(ref, a, K, false, work);
+      sand::kernels::solveChainInPlace(x.data(), a.data(), K.data(), n, cp.data());
+      for (int i = 0; i < n; ++i) {
+        EXPECT_EQ(std::memcmp(&x[std::size_t(i)], &ref[std::size_t(i)], sizeof(double)), 0)
+            << "n " << n << " cell " << i << ": " << x[std::size_t(i)] << " vs "
+            << ref[std::size_t(i)];
+      }
+    }
+  }
+  EXPECT_GT(active, 50);  // both kinds of face were checked
+  EXPECT_GT(rest, 20);
 }
 
 TEST(SandDiffusion, ExplicitBoundIsAQuarterOverDOnASquareGrid) {

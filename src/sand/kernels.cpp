@@ -204,6 +204,22 @@ unsigned gluedDiffusionRow(const double* __restrict hm, const double* __restrict
   return any;
 }
 
+void lineWeights(const double* __restrict h, const double* __restrict ratio,
+                 const double* __restrict inv, double* __restrict w, double* __restrict k, int n,
+                 bool circle, double dt, double Dl2, const Repose& r) {
+  const Repose rr = r;
+  for (int p = 0; p + 1 < n; ++p) {
+    const double wp = weight(std::abs(h[p] - h[p + 1]), inv[p], rr);
+    w[p] = wp;
+    k[p] = dt * (Dl2 * ratio[p]) * wp;
+  }
+  if (circle && n > 0) {
+    const double wp = weight(std::abs(h[n - 1] - h[0]), inv[n - 1], rr);
+    w[n - 1] = wp;
+    k[n - 1] = dt * (Dl2 * ratio[n - 1]) * wp;
+  }
+}
+
 namespace {
 
 // Thomas algorithm for (1 + k_{i-1} + k_i) x_i - k_{i-1} x_{i-1} - k_i x_{i+1} = d_i, faces
@@ -327,6 +343,23 @@ void solveColumns(std::vector<double>& x, const std::vector<double>& K,
     const double* ci = cp + std::size_t(i) * lanes;
     for (int l = 0; l < lanes; ++l) xi[l] -= ci[l] * xn[l];
   }
+}
+
+void solveChainInPlace(double* __restrict x, const double* __restrict a, const double* __restrict K,
+                       int n, double* __restrict cp) {
+  double kPrev = 0.0, cPrev = 0.0, yPrev = 0.0;
+  for (int i = 0; i < n; ++i) {
+    const double kr = i + 1 < n ? K[i] : 0.0;
+    const double diag = a[i] + kPrev + kr;
+    const double denom = diag + kPrev * cPrev;
+    cp[i] = -kr / denom;
+    const double y = (a[i] * x[i] + kPrev * yPrev) / denom;
+    x[i] = y;
+    yPrev = y;
+    cPrev = cp[i];
+    kPrev = kr;
+  }
+  for (int i = n - 2; i >= 0; --i) x[i] -= cp[i] * x[i + 1];
 }
 
 namespace {

@@ -134,6 +134,16 @@ void solveRow(std::vector<double>& x, const std::vector<double>& k, bool circle,
 // between rows i and i + 1.
 void solveColumns(std::vector<double>& x, const std::vector<double>& K,
                   const std::vector<double>& a, int n, int lanes, std::vector<double>& work);
+// The faces of one line of the glued charts (sand_semi_implicit_glued.cpp), cell p to p + 1 for
+// p < n - 1 and, on a `circle`, n - 1 to 0: the weight w from the heights h and the link's 1 / d
+// (inv), and K = dt (Dl2 ratio) w, ratio the link's L / d. Here so that it vectorises as the row
+// kernels do (the same operations per face as a face taken alone).
+void lineWeights(const double* h, const double* ratio, const double* inv, double* w, double* k,
+                 int n, bool circle, double dt, double Dl2, const Repose& r);
+// solveLine's open chain (not cyclic) on the n >= 2 cells of x, a with the faces K[i] between i
+// and i + 1 (K[n - 1] not read), every K[i] > 0, in place: the same operations in the same order
+// without its copies (cp: n doubles of scratch).
+void solveChainInPlace(double* x, const double* a, const double* K, int n, double* cp);
 // Implicit Euler along one line of cells with their own areas (the glued charts' lines,
 // sand_semi_implicit_glued.cpp): (a_i + K_{i-1} + K_i) x_i - K_{i-1} x_{i-1} - K_i x_{i+1} =
 // a_i b_i, K[i] the face between i and i + 1 and, when `cyclic`, K[n-1] the face between n - 1

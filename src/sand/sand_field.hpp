@@ -229,6 +229,12 @@ class SandField {
   void applyDriftGlued(const PushForce& force, const DiffusionTables& tb, double dt,
                        BusyFlags& busy);
   void solveGluedLines(int dir, const DiffusionTables& tb, double dt, BusyFlags& busy);
+  std::vector<int> gluedLinesToSolve(int dir) const;
+  struct LineRunScratch;  // one line's cells read in line order, and a solve's scratch
+  void solveGluedLine(LineRunScratch& s, int n, bool circle, BusyFlags& busy) const;
+  void solveGluedRun(LineRunScratch& s, bool circle, BusyFlags& busy) const;
+  void solveGluedChain(LineRunScratch& s, int first, int c) const;
+  void readLineCell(LineRunScratch& s, int q) const;
 
   SandGrid grid_;
   std::span<float> heights_;

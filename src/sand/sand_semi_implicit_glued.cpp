@@ -139,9 +139,23 @@ void SandField::applyDriftGlued(const PushForce& force, const DiffusionTables& t
   }
 }
 
-// The lines of direction `dir` with a cell in P, each solved over its runs of cells in P (a
-// cell outside P is a wall, as in the explicit step), next -> next.
-void SandField::solveGluedLines(int dir, const DiffusionTables& tb, double dt, BusyFlags& busy) {
+// One line's cells in line order: right-hand side x (the solution on return), area, height before
+// the step and its link's L / d and 1 / d (0 for a cell outside P), then each face's w and K;
+// and the scratch of its runs' solves.
+struct SandField::LineRunScratch {
+  const GluedLines::Direction* L = nullptr;
+  int b = 0;  // the line's first cell in L->cells
+  std::vector<double> x, area, h, ratio, inv, w, k;
+  std::vector<double> xs, as, ks, work;
+  std::vector<int> run;  // positions in the line
+  void resize(int n) {
+    for (std::vector<double>* v : {&x, &area, &h, &ratio, &inv, &w, &k}) v->resize(std::size_t(n));
+  }
+  std::size_t tileOf(int p) const { return L->cells[std::size_t(b + p)] >> kLocalBits; }
+};
+
+// The lines of direction `dir` with a cell in P, in the order of their rows (columns).
+std::vector<int> SandField::gluedLinesToSolve(int dir) const {
   const GluedLines::Direction& L = gluedLines_->dir[std::size_t(dir)];
   const int nTiles = dir == 0 ? tilesV_ : tilesU_;
   std::vector<std::uint8_t> bandUsed(std::size_t(nTiles), 0), lineUsed(L.cyclic.size(), 0);
@@ -155,122 +169,150 @@ void SandField::solveGluedLines(int dir, const DiffusionTables& tb, double dt, B
       }
     }
   }
+  return todo;
+}
+
+// One line (s.x .. s.k read), solved over its runs of cells in P: a circle is cut after a cell
+// outside P (if any); runs are the cells in P between.
+void SandField::solveGluedLine(LineRunScratch& s, int n, bool circle, BusyFlags& busy) const {
+  auto inside = [&](int p) { return inP_[s.tileOf(p)] != 0; };
+  int first = 0;
+  bool whole = false;
+  if (circle) {
+    while (first < n && inside(first)) ++first;
+    whole = first == n;
+    first = whole ? 0 : first + 1;
+  }
+  s.run.clear();
+  for (int q = 0; q < n; ++q) {
+    const int i = circle ? (first + q) % n : q;
+    if (!inside(i)) {
+      solveGluedRun(s, false, busy);
+      s.run.clear();
+      continue;
+    }
+    s.run.push_back(i);
+  }
+  solveGluedRun(s, whole, busy);
+}
+
+// The run of line positions s.run (a circle when `circle`: then the whole line): each stretch of
+// active faces apart, so that cells at rest keep their bits and a step over P is the step over
+// the grid.
+void SandField::solveGluedRun(LineRunScratch& s, bool circle, BusyFlags& busy) const {
+  const std::vector<int>& run = s.run;
+  const int n = int(run.size());
+  if (n < 2) return;
+  const int faces = circle ? n : n - 1;
+  int rest = -1;  // a face at rest, if any
+  std::size_t marked = ~std::size_t(0);
+  auto mark = [&](std::size_t t) {
+    if (t == marked) return;
+    busy[t].store(1, std::memory_order_relaxed);
+    marked = t;
+  };
+  for (int i = 0; i < faces; ++i) {
+    const int p = run[std::size_t(i)];
+    if (s.w[std::size_t(p)] > 0.0) {
+      mark(s.tileOf(p));
+      mark(s.tileOf(run[std::size_t((i + 1) % n)]));
+    } else if (rest < 0) {
+      rest = i;
+    }
+  }
+  if (circle && rest < 0) {
+    // The whole circle, every face active: its arrays are the system.
+    kernels::solveLine(s.x, s.area, s.k, true, s.work);
+    return;
+  }
+  // From just after a face at rest (a circle's), chains of active faces: the run's cells
+  // st + j0 .. st + j (mod n).
+  const int st = circle ? rest + 1 : 0;
+  int j0 = 0;
+  for (int j = 0; j < n; ++j) {
+    const int i = (st + j) % n;
+    const bool face = j + 1 < n && (circle || i + 1 < n);
+    if (face && s.k[std::size_t(run[std::size_t(i)])] > 0.0) continue;
+    if (j > j0) solveGluedChain(s, st + j0, j - j0 + 1);
+    j0 = j + 1;
+  }
+}
+
+// The open chain of the run's cells first .. first + c - 1 (mod the run's length), every face
+// between them active: kernels::solveLine's open chain.
+void SandField::solveGluedChain(LineRunScratch& s, int first, int c) const {
+  const std::vector<int>& run = s.run;
+  const int n = int(run.size());
+  auto at = [&](int t) { return std::size_t(run[std::size_t((first + t) % n)]); };
+  const std::size_t p0 = at(0);
+  s.work.resize(std::size_t(c));
+  if (at(c - 1) == p0 + std::size_t(c - 1)) {
+    // Consecutive cells of the line: solved where they lie.
+    kernels::solveChainInPlace(s.x.data() + p0, s.area.data() + p0, s.k.data() + p0, c,
+                               s.work.data());
+    return;
+  }
+  s.xs.resize(std::size_t(c));
+  s.as.resize(std::size_t(c));
+  s.ks.resize(std::size_t(c));
+  for (int t = 0; t < c; ++t) {
+    s.xs[std::size_t(t)] = s.x[at(t)];
+    s.as[std::size_t(t)] = s.area[at(t)];
+    s.ks[std::size_t(t)] = t + 1 < c ? s.k[at(t)] : 0.0;
+  }
+  kernels::solveLine(s.xs, s.as, s.ks, false, s.work);
+  for (int t = 0; t < c; ++t) s.x[at(t)] = s.xs[std::size_t(t)];
+}
+
+// The lines of direction `dir` with a cell in P, each solved over its runs of cells in P (a
+// cell outside P is a wall, as in the explicit step), next -> next. Each line's cells are read
+// into arrays in line order, its faces' weights computed over them (the arctangents in one
+// loop, apart from the scattered reads), then its runs solved on those arrays.
+void SandField::solveGluedLines(int dir, const DiffusionTables& tb, double dt, BusyFlags& busy) {
+  const GluedLines::Direction& L = gluedLines_->dir[std::size_t(dir)];
+  const std::vector<int> todo = gluedLinesToSolve(dir);
   const kernels::Repose rep = tb.repose;
   const double Dl2 = diffusionMaterial_.diffusion * grid_.cellSize() * grid_.cellSize();
-  auto tileOf = [](std::uint32_t c) { return int(c >> kLocalBits); };
-  auto localOf = [](std::uint32_t c) { return std::size_t(c & ((1u << kLocalBits) - 1u)); };
 #pragma omp parallel if (int(tileList_.size()) >= kParallelTiles)
   {
-    std::vector<double> x, a, K, xs, as, ks, work;
-    std::vector<std::uint32_t> run;
-    std::vector<std::uint8_t> runLink;
-    std::vector<int> chain;
-    // Solves the open chain of run positions `chain` (faces ks between them) or, with `circle`,
-    // the whole run round.
-    auto solveChain = [&](bool circle) {
-      const int n = int(chain.size());
-      xs.resize(std::size_t(n));
-      as.resize(std::size_t(n));
-      for (int i = 0; i < n; ++i) {
-        xs[std::size_t(i)] = x[std::size_t(chain[std::size_t(i)])];
-        as[std::size_t(i)] = a[std::size_t(chain[std::size_t(i)])];
-      }
-      kernels::solveLine(xs, as, ks, circle, work);
-      for (int i = 0; i < n; ++i) {
-        const std::uint32_t c = run[std::size_t(chain[std::size_t(i)])];
-        tiles_[std::size_t(tileOf(c))]->next[localOf(c)] = xs[std::size_t(i)];
-      }
-    };
-    // Solves the run of cells in `run` (a circle when `circle`): each stretch of active faces
-    // apart, so that cells at rest keep their bits and a step over P is the step over the grid.
-    auto solveRun = [&](bool circle) {
-      const int n = int(run.size());
-      if (n < 2) return;
-      x.resize(std::size_t(n));
-      a.resize(std::size_t(n));
-      K.assign(std::size_t(n), 0.0);
-      for (int i = 0; i < n; ++i) {
-        const std::uint32_t c = run[std::size_t(i)];
-        const Tile& tile = *tiles_[std::size_t(tileOf(c))];
-        const std::size_t li = localOf(c);
-        x[std::size_t(i)] = tile.next[li];
-        a[std::size_t(i)] = tile.geo[std::size_t(kGeoArea) * kCells + li];
-      }
-      const int faces = circle ? n : n - 1;
-      int rest = -1;  // a face at rest, if any
-      for (int i = 0; i < faces; ++i) {
-        const std::uint32_t c = run[std::size_t(i)], cn = run[std::size_t((i + 1) % n)];
-        const Tile& tile = *tiles_[std::size_t(tileOf(c))];
-        const Tile& tn = *tiles_[std::size_t(tileOf(cn))];
-        const std::size_t li = localOf(c), k = runLink[std::size_t(i)];
-        const double ratio = tile.geo[(std::size_t(kGeoRatio) + k) * kCells + li];
-        const double inv = tile.geo[(std::size_t(kGeoInv) + k) * kCells + li];
-        const double w = kernels::weight(std::abs(tile.cur[li] - tn.cur[localOf(cn)]), inv, rep);
-        K[std::size_t(i)] = dt * (Dl2 * ratio) * w;
-        if (w > 0.0) {
-          busy[std::size_t(tileOf(c))].store(1, std::memory_order_relaxed);
-          busy[std::size_t(tileOf(cn))].store(1, std::memory_order_relaxed);
-        } else if (rest < 0) {
-          rest = i;
-        }
-      }
-      if (circle && rest < 0) {
-        chain.resize(std::size_t(n));
-        for (int i = 0; i < n; ++i) chain[std::size_t(i)] = i;
-        ks = K;
-        solveChain(true);
-        return;
-      }
-      // From just after a face at rest (a circle's), chains of active faces.
-      const int s = circle ? rest + 1 : 0;
-      chain.clear();
-      ks.clear();
-      for (int j = 0; j < n; ++j) {
-        const int i = (s + j) % n;
-        chain.push_back(i);
-        const bool face = j + 1 < n && (circle || i + 1 < n);
-        if (face && K[std::size_t(i)] > 0.0) {
-          ks.push_back(K[std::size_t(i)]);
-          continue;
-        }
-        if (chain.size() > 1) {
-          ks.push_back(0.0);
-          solveChain(false);
-        }
-        chain.clear();
-        ks.clear();
-      }
-    };
+    LineRunScratch s;
+    s.L = &L;
 #pragma omp for schedule(dynamic, 4)
     for (int j = 0; j < int(todo.size()); ++j) {
       const int l = todo[std::size_t(j)];
-      const int b = int(L.start[std::size_t(l)]), n = int(L.start[std::size_t(l) + 1]) - b;
-      auto inside = [&](int i) { return inP_[std::size_t(tileOf(L.cells[std::size_t(b + i)]))]; };
-      // A circle is cut after a cell outside P (if any); runs are the cells in P between.
-      int s = 0;
+      s.b = int(L.start[std::size_t(l)]);
+      const int n = int(L.start[std::size_t(l) + 1]) - s.b;
       const bool circle = L.cyclic[std::size_t(l)] != 0;
-      bool whole = false;
-      if (circle) {
-        while (s < n && inside(s)) ++s;
-        whole = s == n;
-        s = whole ? 0 : s + 1;
-      }
-      run.clear();
-      runLink.clear();
+      s.resize(n);
+      for (int q = 0; q < n; ++q) readLineCell(s, q);
+      kernels::lineWeights(s.h.data(), s.ratio.data(), s.inv.data(), s.w.data(), s.k.data(), n,
+                           circle, dt, Dl2, rep);
+      solveGluedLine(s, n, circle, busy);
       for (int q = 0; q < n; ++q) {
-        const int i = circle ? (s + q) % n : q;
-        if (!inside(i)) {
-          solveRun(false);
-          run.clear();
-          runLink.clear();
-          continue;
-        }
-        run.push_back(L.cells[std::size_t(b + i)]);
-        runLink.push_back(L.link[std::size_t(b + i)]);
+        const std::uint32_t c = L.cells[std::size_t(s.b + q)];
+        const std::size_t t = c >> kLocalBits;
+        if (inP_[t]) tiles_[t]->next[c & ((1u << kLocalBits) - 1u)] = s.x[std::size_t(q)];
       }
-      solveRun(whole);
     }
   }
+}
+
+// Cell q of the line s: its right-hand side, area, height and link's L / d and 1 / d.
+void SandField::readLineCell(LineRunScratch& s, int q) const {
+  const std::uint32_t c = s.L->cells[std::size_t(s.b + q)];
+  const std::size_t t = c >> kLocalBits, p = std::size_t(q);
+  if (!inP_[t]) {
+    s.x[p] = s.area[p] = s.h[p] = s.ratio[p] = s.inv[p] = 0.0;
+    return;
+  }
+  const Tile& tile = *tiles_[t];
+  const std::size_t li = c & ((1u << kLocalBits) - 1u), k = s.L->link[std::size_t(s.b + q)];
+  const double* geo = tile.geo.get();
+  s.x[p] = tile.next[li];
+  s.area[p] = geo[std::size_t(kGeoArea) * kCells + li];
+  s.h[p] = tile.cur[li];
+  s.ratio[p] = geo[(std::size_t(kGeoRatio) + k) * kCells + li];
+  s.inv[p] = geo[(std::size_t(kGeoInv) + k) * kCells + li];
 }
 
 }  // namespace ps::sand
