@@ -271,7 +271,8 @@ void benchOcclusionHandDemo(const BenchOptions& o, const tracking::HandMaskConfi
     ++t.frames;
     const cv::Mat image = undistort.apply(frame);
     const double radius = core::boundingRadius(planet->chart()) / stepper.scale();
-    cv::Mat mask = occlusion.update(true, image, K, r.scene.planet, r.planetInCamera, radius);
+    cv::Mat mask = occlusion.update(true, image, K, r.scene.planet, r.planetInCamera, radius,
+                                    r.toolTriangles, stepper.scale());
     progress.update(double(f + 1) / frames);
     if (!r.planetInCamera || !replay::HandOcclusion::masks(r.scene.planet, r.planetInCamera))
       continue;
