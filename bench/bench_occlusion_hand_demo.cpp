@@ -13,12 +13,15 @@
 //   * board: nothing there but the board and the table: a false hide of the mask's own.
 // false_hidden pools everything shown but not in front (all but the first class) over the
 // planet's pixels in every frame the mask ran; hidden_by_mistake is the same over the frames with
-// nothing in front of the planet nor drawn over it (the target, <= 1 %).
+// nothing in front of the planet nor drawn over it (the target, <= 1 %); iou: the shown
+// pixels against the hand in front, over the frames it covers >= 0.5 % of the planet (the other
+// hand rows' measure; the hand drawn behind the sphere lowers it).
 #include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <memory>
 #include <nlohmann/json.hpp>
+#include <numbers>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <span>
@@ -104,7 +107,7 @@ cv::Mat handDrawn(const tracking::SynthScript& s, const tracking::SynthKey& k,
   if (!(k.handRadius > 0)) return out;
   std::vector<cv::Point> poly;
   for (int i = 0; i < 96; ++i) {
-    const double a = 2 * M_PI * i / 96;
+    const double a = 2 * std::numbers::pi * i / 96;
     const Eigen::Vector3d p = camera.apply(
         {k.handX + k.handRadius * std::cos(a), k.handY + k.handRadius * std::sin(a), k.handHeight});
     if (p.z() <= 1e-4) return out;
@@ -213,6 +216,7 @@ nlohmann::json demoRow(const DemoTally& t) {
           {"recording", "demo"},
           {"pose", "tracked"},
           {"frames", t.frames},
+          {"frames_with_pose", t.masked},
           {"frames_masked", t.masked},
           {"frames_showing", t.framesShowing},
           {"shown_px_median", r4(median(t.shownPerFrame))},
@@ -228,7 +232,7 @@ nlohmann::json demoRow(const DemoTally& t) {
           {"false_hidden_frame_max", r4(t.worstFalse)},
           {"false_hidden_worst_frame", t.worstFrame},
           {"frames_with_false_hides", t.framesWithFalse},
-          {"hand_iou", r4(t.uni > 0 ? t.inter / t.uni : -1)},
+          {"iou", r4(t.uni > 0 ? t.inter / t.uni : -1)},
           {"clear_frames", t.clearFrames},
           {"clear_frames_showing", t.clearFramesShowing},
           {"hidden_by_mistake", r4(t.clearShownPx / std::max(1.0, t.clearPlanetPx))},
