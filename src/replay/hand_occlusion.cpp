@@ -40,10 +40,22 @@ cv::Mat HandOcclusion::toolFootprint(cv::Size size, const cv::Matx33d& K,
     extent = any ? (extent | box) : box;
     any = true;
   }
-  if (!any) return {};
-  const int margin = std::max(4, int(std::lround(0.1 * std::max(extent.width, extent.height))));
-  cv::dilate(out, out,
+  // The extent within the image (a stick reaching toward the camera projects far out), the
+  // margin at most 32 px.
+  extent &= cv::Rect2d(0, 0, size.width, size.height);
+  if (!any || extent.area() <= 0) return {};
+  const int margin =
+      std::clamp(int(std::lround(0.1 * std::max(extent.width, extent.height))), 4, 32);
+  // Grown only around the tool (a full frame's dilation by a 65 px disc costs milliseconds).
+  const cv::Rect around =
+      cv::Rect(int(std::floor(extent.x)) - 2 * margin, int(std::floor(extent.y)) - 2 * margin,
+               int(std::ceil(extent.width)) + 4 * margin + 1,
+               int(std::ceil(extent.height)) + 4 * margin + 1) &
+      cv::Rect(0, 0, size.width, size.height);
+  cv::Mat grown;
+  cv::dilate(out(around), grown,
              cv::getStructuringElement(cv::MORPH_ELLIPSE, {2 * margin + 1, 2 * margin + 1}));
+  grown.copyTo(out(around));
   return out;
 }
 
@@ -56,7 +68,10 @@ cv::Mat HandOcclusion::update(bool enabled, const cv::Mat& image, const cv::Matx
     on_ = false;
     return {};
   }
-  if (!on_) masker_.reset(), framesSinceTool_ = kToolLostFrames;
+  if (!on_) {
+    masker_.reset();
+    framesSinceTool_ = kToolLostFrames;
+  }
   on_ = true;
   if (!masks(board, planetInCamera)) return {};
   const auto t0 = std::chrono::steady_clock::now();

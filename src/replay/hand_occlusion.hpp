@@ -37,9 +37,9 @@ class HandOcclusion {
                  const std::optional<tracking::Pose>& planetInCamera, double radius,
                  std::span<const Eigen::Vector3d> toolTriangles = {}, double scale = 1);
   // The pixels (CV_8U 255, `size`) the tool's triangles cover seen from `planetInCamera`'s
-  // camera, grown by a margin of its blur and its pose's error: 4 px, or a tenth of the tool's
-  // projected size when larger (a tool near the camera moves and blurs over more pixels). Empty
-  // when no triangle is wholly in front of the camera.
+  // camera, grown by a margin of its blur and its pose's error: a tenth of the tool's projected
+  // size within the image (a tool near the camera moves and blurs over more pixels), 4 to 32 px.
+  // Empty when no triangle wholly in front of the camera reaches into the image.
   static constexpr int kToolLostFrames = 30;
   static cv::Mat toolFootprint(cv::Size size, const cv::Matx33d& K,
                                const tracking::Pose& planetInCamera, double scale,
