@@ -179,8 +179,9 @@ class CaseReplay {
       const double undistortMs = ms(t0);
       const auto r = stepper_.step(raw_, frame, frame / fps);
       t0 = std::chrono::steady_clock::now();
-      handMaskNow_ = handOcclusion_.update(handMask_, image_, calib_.K, r.scene.planet,
-                                           r.planetInCamera, planetRadius());
+      handMaskNow_ =
+          handOcclusion_.update(handMask_, image_, calib_.K, r.scene.planet, r.planetInCamera,
+                                planetRadius(), r.toolTriangles, stepper_.scale());
       const double maskMs = ms(t0);
       StageTimes t = r.planetInCamera ? drawPlanet(r, frame) : drawWithout(placeholder);
       t.undistort = undistortMs;

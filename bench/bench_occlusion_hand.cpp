@@ -27,6 +27,7 @@
 #include "app/progress.hpp"
 #include "bench/bench.hpp"
 #include "bench/bench_util.hpp"
+#include "bench/occlusion_hand_demo.hpp"
 #include "core/latlong_chart.hpp"
 #include "replay/replay.hpp"
 #include "tracking/hand_mask.hpp"
@@ -287,7 +288,7 @@ void addHandOptions(CLI::App& command, HandBenchSettings& settings) {
       ->check(CLI::IsMember({"chroma", "bright", "texture"}));
   // The names recordings() gives.
   command.add_option("--hand-recording", settings.recording, "Hand rows: this recording only")
-      ->check(CLI::IsMember({"hand-sweep", "hand-orbit", "hand-low", "lighting-noise"}));
+      ->check(CLI::IsMember({"hand-sweep", "hand-orbit", "hand-low", "lighting-noise", "demo"}));
   command
       .add_option("--texel-mm", settings.texelMm,
                   "Hand rows: the mask's texel in mm (default: the hand mask's own)")
@@ -299,6 +300,9 @@ void benchOcclusionHand(const BenchOptions& o, const HandBenchSettings& settings
   for (const auto& rec : recordings(o.quick))
     if (settings.recording.empty() || rec.name == settings.recording)
       runRecording(rec, o, settings, out);
+  // The shipped demo, through the demo's own path (bench_occlusion_hand_demo.cpp).
+  if (settings.recording.empty() || settings.recording == "demo")
+    benchOcclusionHandDemo(o, handMaskConfig(settings), out);
 }
 
 // The hand rows alone, without the tool rows' GL context and renders: the mask's own figures

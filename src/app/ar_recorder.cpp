@@ -45,9 +45,9 @@ void ArRecorder::onFrame(const replay::FrameContext& f, const Eigen::Vector3d& f
   if (!undistort_) undistort_.emplace(f.calibration.forImageSize(f.image.size()));
   const cv::Mat image = undistort_->apply(f.image);
   // The planet's bounding sphere in the board's metres (FrameContext::scale).
-  cv::Mat handMask =
-      handOcclusion_.update(settings_.handMask, image, f.calibration.K, f.scene.planet,
-                            f.planetInCamera, core::boundingRadius(f.planet.chart()) / f.scale);
+  cv::Mat handMask = handOcclusion_.update(
+      settings_.handMask, image, f.calibration.K, f.scene.planet, f.planetInCamera,
+      core::boundingRadius(f.planet.chart()) / f.scale, f.toolTriangles, f.scale);
   if (!wantSequence && !wantShowcase) {
     renderMs_ +=
         std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();

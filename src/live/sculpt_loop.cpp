@@ -169,8 +169,8 @@ class SculptLoop {
     for (int i = 0; i < 3; ++i)
       for (int j = 0; j < 3; ++j) K(i, j) = K_(i, j);
     const double radius = core::boundingRadius(planet_.chart()) / stepper_.scale();
-    handMask_ =
-        handOcclusion_.update(panel_.handMask, shell_.image, K, r.scene.planet, pose_, radius);
+    handMask_ = handOcclusion_.update(panel_.handMask, shell_.image, K, r.scene.planet, pose_,
+                                      radius, r.toolTriangles, stepper_.scale());
     status_.trackMs += handOcclusion_.lastMs();
   }
 

@@ -7,6 +7,7 @@
 #include <Eigen/Core>
 #include <opencv2/core.hpp>
 #include <optional>
+#include <span>
 
 #include "tracking/hand_mask.hpp"
 #include "tracking/tracker.hpp"
@@ -26,16 +27,30 @@ class HandOcclusion {
   // live panel's toggle, `--no-hand-mask`): nothing is learned, and the model starts afresh when
   // it is on again (what it held may have changed meanwhile). `image`: the undistorted frame the
   // planet is drawn over, `K` its pinhole; `radius`: the planet's bounding sphere in the board's
-  // metres.
+  // metres. `toolTriangles` (the tracked tool, planet frame, `scale` planet metres per board
+  // metre: StepResult's): the board's look is not learned where the tool covers it
+  // (toolFootprint), or it would be seen as a change where the tool was once the tool moves;
+  // nor anywhere for kToolLostFrames after the tool was last tracked (lost under a hand or in a
+  // blur, it is still over the board, where no footprint says).
   cv::Mat update(bool enabled, const cv::Mat& image, const cv::Matx33d& K,
                  const tracking::MarkerEstimate& board,
-                 const std::optional<tracking::Pose>& planetInCamera, double radius);
+                 const std::optional<tracking::Pose>& planetInCamera, double radius,
+                 std::span<const Eigen::Vector3d> toolTriangles = {}, double scale = 1);
+  // The pixels (CV_8U 255, `size`) the tool's triangles cover seen from `planetInCamera`'s
+  // camera, grown by a margin of its blur and its pose's error: a tenth of the tool's projected
+  // size within the image (a tool near the camera moves and blurs over more pixels), 4 to 32 px.
+  // Empty when no triangle wholly in front of the camera reaches into the image.
+  static constexpr int kToolLostFrames = 30;
+  static cv::Mat toolFootprint(cv::Size size, const cv::Matx33d& K,
+                               const tracking::Pose& planetInCamera, double scale,
+                               std::span<const Eigen::Vector3d> toolTriangles);
   // The last update's time (ms; 0 when it did not mask).
   double lastMs() const { return lastMs_; }
 
  private:
   tracking::HandMasker masker_;
-  bool on_ = false;  // `enabled` at the last update
+  bool on_ = false;                        // `enabled` at the last update
+  int framesSinceTool_ = kToolLostFrames;  // masked frames since the tool was last tracked
   double lastMs_ = 0;
 };
 

@@ -261,7 +261,7 @@ cv::Rect BoardAppearance::nextTile() {
 }
 
 PlaneView BoardAppearance::view(const cv::Mat& image, const cv::Matx33d& imageFromTexel,
-                                cv::Rect region) {
+                                cv::Rect region, const cv::Mat& notBoard) {
   PlaneView v;
   v.region = region & square();
   v.imageFromTexel = imageFromTexel;
@@ -283,6 +283,12 @@ PlaneView BoardAppearance::view(const cv::Mat& image, const cv::Matx33d& imageFr
     auto* ok = v.valid.ptr<uchar>(j);
     for (int i = 0; i < size.width; ++i)
       if (H(2, 0) * i + H(2, 1) * j + H(2, 2) < 0.02) ok[i] = 0;  // camera z (m)
+  }
+  if (!notBoard.empty() && notBoard.size() == image.size() && cv::countNonZero(notBoard) > 0) {
+    // Grown by the bilinear footprint's texel, as `valid` is shrunk.
+    cv::warpPerspective(notBoard, v.notBoard, H, size, cv::INTER_NEAREST | cv::WARP_INVERSE_MAP,
+                        cv::BORDER_CONSTANT);
+    cv::dilate(v.notBoard, v.notBoard, cv::Mat(), {-1, -1}, 1);
   }
   return v;
 }
@@ -332,13 +338,14 @@ void BoardAppearance::learn(const PlaneView& v, const ForegroundScore& fg, const
     const auto* no = busy.ptr<uchar>(j - o.y);
     const auto* steady = fg.steady.ptr<uchar>(j - o.y);
     const auto* in = v.image.ptr<cv::Vec3f>(j - o.y);
+    const auto* other = v.notBoard.empty() ? nullptr : v.notBoard.ptr<uchar>(j - o.y);
     auto* m = mean_.ptr<cv::Vec3f>(j);
     auto* n = count_.ptr<float>(j);
     auto* kept = kept_.ptr<float>(j);
     const bool skipRow = j >= skip.y && j < skip.y + skip.height;
     for (int i = area.x; i < area.x + area.width; ++i) {
       const int k = i - o.x;  // in the view
-      if (!ok[k]) continue;
+      if (!ok[k] || (other && other[k])) continue;
       if (skipRow && i >= skip.x && i < skip.x + skip.width) continue;
       if (n[i] > 0 && (no[k] || !steady[k])) {
         if (++kept[i] < forget) continue;

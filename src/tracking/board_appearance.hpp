@@ -65,6 +65,9 @@ struct PlaneView {
   cv::Mat image;               // CV_32FC3 (b, g, r) over the region, the camera image on the texels
   cv::Mat valid;               // CV_8U, 255 where the texel is in the image, in front of it
   cv::Matx33d imageFromTexel;  // texel (column, row, 1) of the square -> camera pixel (homogeneous)
+  // CV_8U over the region, 255 where the caller knows the image shows something else than the
+  // board (the tracked tool): never learned there (empty: nowhere).
+  cv::Mat notBoard;
 };
 
 struct ForegroundScore {
@@ -100,11 +103,15 @@ class BoardAppearance {
   // The frame's gain and white balance over the model: the per-channel median ratio over a
   // sparse sample of the square's learned texels. `image`: BGR or grey 8-bit, undistorted.
   FrameGain gain(const cv::Mat& image, const cv::Matx33d& imageFromTexel) const;
-  // The camera image on the texels of `region` (within the square).
-  PlaneView view(const cv::Mat& image, const cv::Matx33d& imageFromTexel, cv::Rect region);
+  // The camera image on the texels of `region` (within the square). `notBoard` (CV_8U at the
+  // image's size, or empty): pixels known not to show the board, which are not learned (what is
+  // learned there would be seen as a change once it moves: a ghost of the tool in the mask).
+  PlaneView view(const cv::Mat& image, const cv::Matx33d& imageFromTexel, cv::Rect region,
+                 const cv::Mat& notBoard = {});
   ForegroundScore foreground(const PlaneView& view, const cv::Vec3d& gain) const;
   // Learns the frame within `where` (square texels, within the view's region), except within
-  // `skip`, where `fg` says it shows the board, unshadowed (texels never seen take the frame).
+  // `skip` and the view's notBoard, where `fg` says it shows the board, unshadowed (texels never
+  // seen take the frame).
   void learn(const PlaneView& view, const ForegroundScore& fg, const cv::Rect& where,
              const cv::Rect& skip = {});
   // This frame's tile of the square for learning beyond the worked region (one per call, in

@@ -175,7 +175,8 @@ cv::Mat HandMasker::keepComponents(const cv::Mat& score, const cv::Mat& silhouet
 }
 
 HandMaskFrame HandMasker::update(const cv::Mat& image, const cv::Matx33d& K, const Pose& board,
-                                 const Eigen::Vector3d& planetCentreCamera, double radius) {
+                                 const Eigen::Vector3d& planetCentreCamera, double radius,
+                                 const cv::Mat& notBoard) {
   HandMaskFrame out;
   const cv::Size size = image.size();
   out.soft = cv::Mat::zeros(size, CV_32F);
@@ -204,14 +205,14 @@ HandMaskFrame HandMasker::update(const cv::Mat& image, const cv::Matx33d& K, con
   ForegroundScore fg;
   if (box.area() > 0) {
     behind = appearance_.texelsSeenIn(imageFromTexel, rowEnds(search, box));
-    view = appearance_.view(image, imageFromTexel, grownWithin(behind, margin, square));
+    view = appearance_.view(image, imageFromTexel, grownWithin(behind, margin, square), notBoard);
     fg = appearance_.foreground(view, gain.gain);
     learnt = shrunkWithin(view.region, margin - 1, square);
   }
   const cv::Rect tile = appearance_.nextTile();
   if ((tile & learnt) != tile) {
     const PlaneView tileView =
-        appearance_.view(image, imageFromTexel, grownWithin(tile, margin, square));
+        appearance_.view(image, imageFromTexel, grownWithin(tile, margin, square), notBoard);
     const ForegroundScore tileFg = appearance_.foreground(tileView, gain.gain);
     appearance_.learn(tileView, tileFg, tile, learnt);
   }

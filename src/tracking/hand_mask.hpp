@@ -49,9 +49,11 @@ class HandMasker {
   const HandMaskConfig& config() const { return config_; }
   // One frame: `image` undistorted BGR or grey; `board` board -> camera; the planet's centre in
   // the camera frame and its radius (the board's metres). Learns the frame where it shows the
-  // board.
+  // board, except where `notBoard` (CV_8U at the image's size, or empty) says it does not (the
+  // tracked tool: BoardAppearance::view).
   HandMaskFrame update(const cv::Mat& image, const cv::Matx33d& K, const Pose& board,
-                       const Eigen::Vector3d& planetCentreCamera, double radius);
+                       const Eigen::Vector3d& planetCentreCamera, double radius,
+                       const cv::Mat& notBoard = {});
   // Frames without a board pose: nothing to compare with (the model is kept).
   void reset() { appearance_.reset(); }
   const BoardAppearance& appearance() const { return appearance_; }

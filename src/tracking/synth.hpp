@@ -145,9 +145,10 @@ class SynthRenderer {
   int frames() const { return script_.frames(); }
   FrameTruth truth(double frame) const;
   cv::Mat render(int frame) const;
+  // The key frame `frame` is drawn from: its neighbours' values through the smoothstep.
+  SynthKey keyAt(double frame) const;
 
  private:
-  SynthKey keyAt(double frame) const;
   void poses(const SynthKey& k, Pose& camera, Pose& tool) const;
   cv::Mat background(const Pose& camera) const;
   // What is drawn over the markers, in pixels: the tool's card and stick, the hand's disc.
