@@ -141,11 +141,21 @@ class RegionDetector final : public Detector {
       // coarse search, with one at `decimate` every expectedFullSearchEvery frames for what it
       // misses (a set missing without a pose, the tool under the same hand, is looked for
       // by both).
-      const bool coarse = expectedFinder_ && missing && carried && !partial &&
-                          frameNo_ - lastFullSearch_ < config_.expectedFullSearchEvery;
+      bool coarse = expectedFinder_ && missing && carried && !partial &&
+                    frameNo_ - lastFullSearch_ < config_.expectedFullSearchEvery;
+      std::vector<Detection> candidates = (coarse ? *expectedFinder_ : *finder_).detect(grey);
+      // The coarse search only says whether something came back: what it saw, the search at
+      // `decimate` takes in this frame (a tool found coarsely showed two of its three faces,
+      // and its tip was 14 mm off in that frame).
+      if (coarse && std::any_of(candidates.begin(), candidates.end(), [&](const Detection& d) {
+            return wanted(d.id) && !known(found, d);
+          })) {
+        coarse = false;
+        candidates = finder_->detect(grey);
+      }
       if (!coarse) lastFullSearch_ = frameNo_;
       std::vector<SearchBox> fresh;
-      for (const auto& d : (coarse ? *expectedFinder_ : *finder_).detect(grey)) {
+      for (const auto& d : candidates) {
         if (!wanted(d.id) || known(found, d)) continue;
         fresh.push_back({box(d, frame), 1});
       }
