@@ -421,6 +421,11 @@ void addTrackOptions(CLI::App& command, TrackSettings& s) {
                   "are expected (0: expectations ignored, as before)")
       ->check(CLI::Range(0, 1000));
   command
+      .add_option("--expected-search-decimate", s.boards.expectedSearchDecimate,
+                  "Board rows: AprilTag decimation of the whole-frame search while a covered "
+                  "board is carried (0: off, the detector's own)")
+      ->check(CLI::Range(0.0, 8.0));
+  command
       .add_option("--dump", s.boards.dumpDir,
                   "Board scenes: one JSON line per frame in DIR/SCENE.jsonl")
       ->check(CLI::ExistingDirectory);

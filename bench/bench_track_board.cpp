@@ -243,13 +243,15 @@ struct BoardTally {
 };
 
 nlohmann::json boardRow(const std::string& scene, const tracking::SynthScript& script, int frames,
-                        const BoardTally& t, double singleMarkerMs, int expectedSearchEvery) {
+                        const BoardTally& t, double singleMarkerMs,
+                        const tracking::DetectorConfig& detector) {
   nlohmann::json j = {
       {"bench", "track"},
       {"scene", scene},
       {"detector", "apriltag d2 + regions"},
       {"markers", "board + cube"},
-      {"expected_search_every", expectedSearchEvery},
+      {"expected_search_every", detector.expectedSearchEvery},
+      {"expected_search_decimate", detector.expectedSearchDecimate},
       {"resolution", std::to_string(script.size.width) + "x" + std::to_string(script.size.height)},
       {"frames", frames},
       {"ms", r3(median(t.ms))},
@@ -306,6 +308,8 @@ void evaluateScene(const std::string& scene, bool quick, const BoardBenchSetting
   o.scene.touchDistance = kTouch;
   if (settings.expectedSearchEvery >= 0)
     o.detector.expectedSearchEvery = settings.expectedSearchEvery;
+  if (settings.expectedSearchDecimate >= 0)
+    o.detector.expectedSearchDecimate = settings.expectedSearchDecimate;
   replay::FrameStepper stepper(script.camera, planet, o);
   const core::LatLongChart cvChart(core::GridSize::fromSide(2049), 1.0);
 
@@ -326,9 +330,7 @@ void evaluateScene(const std::string& scene, bool quick, const BoardBenchSetting
   }
   tally.finish();
   progress.done(std::to_string(frames) + " frames");
-  out << boardRow(scene, script, frames, tally, singleMarkerMs, o.detector.expectedSearchEvery)
-             .dump()
-      << std::endl;
+  out << boardRow(scene, script, frames, tally, singleMarkerMs, o.detector).dump() << std::endl;
 }
 
 }  // namespace

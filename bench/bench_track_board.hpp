@@ -16,6 +16,9 @@ struct BoardBenchSettings {
   // The detector's expectedSearchEvery (0: the covered board's expected markers ignored, as
   // before; -1: the default).
   int expectedSearchEvery = -1;
+  // The detector's expectedSearchDecimate (0: off, every whole-frame search at decimate 2;
+  // -1: the default).
+  double expectedSearchDecimate = -1;
 };
 
 // The board scenes the rows run (--quick leaves board-demo out).

@@ -314,6 +314,86 @@ TEST(TrackingDetect, ExpectedBoardIsFoundAtOnceThereAndWithinTheSearchCycleElsew
   RecordProperty("frames_to_find_elsewhere_max", slowest);
 }
 
+// A covered board carried by a pose (Detector::expect, whatever expectedSearchEvery says) is
+// looked for by a whole-frame search at expectedSearchDecimate every searchEvery frames, and at
+// `decimate` every expectedFullSearchEvery frames. Its markers at arm's length show to the coarse
+// search: found within searchEvery frames of showing again, as without the expectation. A board
+// too small for the coarse search (a marker of it found at decimate 2, none at 3) is still found
+// within expectedFullSearchEvery frames, whatever the cycle's phase; without an expectation it is
+// found within searchEvery frames, so the slower finds are the coarse search's doing.
+TEST(TrackingDetect, CarriedBoardIsSearchedCoarselyAndWithinTheFullSearchCycle) {
+  const auto root = ps::app::sourceDir();
+  const auto board = tracking::loadMarkerLayout(tracking::defaultBoardPath(root));
+  const auto script = tracking::builtinScene("board-covered-move", root);
+  tracking::SynthRenderer renderer(script);
+  const auto truth = renderer.truth(0);  // the hand is off the board
+  ASSERT_GE(truth.boardHalfVisible, 6);
+  cv::Mat shown = renderer.render(0);
+  if (shown.channels() == 3) cv::cvtColor(shown, shown, cv::COLOR_BGR2GRAY);
+  const cv::Mat covered(shown.size(), CV_8U, cv::Scalar(128));
+  tracking::DetectorConfig config;
+  config.ids = board.ids();
+  config.sets = {board.ids()};
+  ASSERT_EQ(config.expectedSearchEvery, 0);  // the default: no expected boxes
+  ASSERT_GT(config.expectedSearchDecimate, config.decimate);
+  auto boardCount = [&](const std::vector<tracking::Detection>& found) {
+    return std::count_if(found.begin(), found.end(),
+                         [&](const auto& d) { return board.find(d.id) != nullptr; });
+  };
+  // The frame shrunk onto a grey canvas of its size, until the coarse search alone misses it.
+  auto wholeFrame = [&](double decimate) {
+    tracking::DetectorConfig c = config;
+    c.regions = false;
+    c.decimate = decimate;
+    return tracking::makeDetector(c);
+  };
+  cv::Mat small;
+  for (double scale = 0.9; scale > 0.15 && small.empty(); scale -= 0.05) {
+    cv::Mat canvas(shown.size(), CV_8U, cv::Scalar(128)), shrunk;
+    cv::resize(shown, shrunk, cv::Size(), scale, scale, cv::INTER_AREA);
+    shrunk.copyTo(canvas(cv::Rect(0, 0, shrunk.cols, shrunk.rows)));
+    const auto fine = boardCount(wholeFrame(config.decimate)->detect(canvas));
+    const auto coarse = boardCount(wholeFrame(config.expectedSearchDecimate)->detect(canvas));
+    if (fine >= 1 && coarse == 0) small = canvas;
+  }
+  ASSERT_FALSE(small.empty()) << "no size at which only the finer search finds the board";
+  std::vector<tracking::Detection> expected;
+  for (int id : board.ids()) {
+    tracking::Detection d;
+    d.id = id;
+    expected.push_back(d);  // where does not matter here: expectedSearchEvery is 0
+  }
+  // Frames until the board is found again after `coveredFrames` covered ones.
+  auto framesToFind = [&](const cv::Mat& image, int coveredFrames, bool carried) {
+    auto det = tracking::makeDetector(config);
+    EXPECT_GE(boardCount(det->detect(image)), 1);
+    for (int f = 0; f < coveredFrames; ++f) {
+      if (carried) det->expect(expected);
+      EXPECT_TRUE(det->detect(covered).empty());
+    }
+    int waited = 0;
+    for (; waited <= 3 * config.expectedFullSearchEvery; ++waited) {
+      if (carried) det->expect(expected);
+      if (boardCount(det->detect(image)) >= 1) break;
+    }
+    return waited;
+  };
+  int slowestSmall = 0;
+  for (int coveredFrames = 1; coveredFrames <= 2 * config.expectedFullSearchEvery;
+       ++coveredFrames) {
+    EXPECT_LT(framesToFind(shown, coveredFrames, true), config.searchEvery)
+        << "carried, after " << coveredFrames << " covered frames";
+    const int smallCarried = framesToFind(small, coveredFrames, true);
+    EXPECT_LT(smallCarried, config.expectedFullSearchEvery)
+        << "small, carried, after " << coveredFrames << " covered frames";
+    slowestSmall = std::max(slowestSmall, smallCarried);
+    EXPECT_LT(framesToFind(small, coveredFrames, false), config.searchEvery)
+        << "small, not carried, after " << coveredFrames << " covered frames";
+  }
+  EXPECT_GE(slowestSmall, config.searchEvery) << "the coarse search never took the full one's turn";
+  RecordProperty("small_board_frames_to_find_max", slowestSmall);
+}
+
 TEST(TrackingDetect, ArucoDictionariesAndIdFilter) {
   const std::array<cv::Point2d, 4> truth = {cv::Point2d(60.5, 50.25), cv::Point2d(170.0, 40.0),
                                             cv::Point2d(180.0, 160.0), cv::Point2d(55.0, 150.0)};

@@ -50,6 +50,13 @@ void DetectorConfig::validate() const {
   if (expectedSearchEvery < 0 || expectedSearchEvery > 1000)
     throw core::InputError("expected search every = " + std::to_string(expectedSearchEvery) +
                            " is not in 0..1000");
+  if (expectedSearchDecimate != 0 && (!std::isfinite(expectedSearchDecimate) ||
+                                      expectedSearchDecimate < 1.0 || expectedSearchDecimate > 8.0))
+    throw core::InputError("expected search decimate = " + std::to_string(expectedSearchDecimate) +
+                           " is not 0 or in [1, 8]");
+  if (expectedFullSearchEvery < 1 || expectedFullSearchEvery > 1000)
+    throw core::InputError("expected full search every = " +
+                           std::to_string(expectedFullSearchEvery) + " is not in 1..1000");
   if (setSearchEvery < 1 || setSearchEvery > 1000)
     throw core::InputError("set search every = " + std::to_string(setSearchEvery) +
                            " is not in 1..1000");

@@ -73,6 +73,15 @@ struct DetectorConfig {
   // frame every searchEvery frames). Off because on board-covered-move 8 measured slower and
   // less accurate than without (docs/TRACKING.md, "Expected markers").
   int expectedSearchEvery = 0;
+  // While a missing set is expected (Detector::expect, whatever expectedSearchEvery says) and
+  // none is partly seen, the whole-frame search is made at this coarser decimation, and at
+  // `decimate` every expectedFullSearchEvery frames: a board's markers at arm's length show at
+  // 1/3 (the textured table around the hands is what a whole-frame search pays for). A coarse
+  // search that returns any marker only says so: that frame is searched again at `decimate` and
+  // its markers are taken (what is found is what the full search finds; markers the coarse one
+  // misses, within expectedFullSearchEvery frames). 0: off (every search at `decimate`).
+  double expectedSearchDecimate = 3.0;
+  int expectedFullSearchEvery = 8;
   double regionMargin = 0.3;  // box margin, as a fraction of the marker's size in the image
   // A box that holds at least coarseRegionMarkers markers, each at least coarseRegionPx
   // pixels across, is searched at `decimate` (the quads found on the smaller image, their edges

@@ -40,6 +40,12 @@ class RegionDetector final : public Detector {
       return x.backend == Backend::kAprilTag ? makeAprilTagDetector(x) : makeArucoDetector(x);
     };
     finder_ = make(base);
+    if (c.backend == Backend::kAprilTag && c.expectedSearchDecimate > 0 &&
+        c.expectedSearchDecimate != c.decimate) {
+      DetectorConfig coarse = base;
+      coarse.decimate = c.expectedSearchDecimate;
+      expectedFinder_ = make(coarse);
+    }
     coarseRefiner_ = c.coarseRegionPx > 0 ? make(base) : nullptr;
     base.decimate = 1.0;
     refiner_ = make(base);
@@ -48,6 +54,8 @@ class RegionDetector final : public Detector {
   std::string name() const override { return finder_->name() + " + regions"; }
   void expect(const std::vector<Detection>& markers) override {
     if (config_.expectedSearchEvery > 0) expectedNext_ = markers;
+    expectedIdsNext_.clear();
+    for (const auto& d : markers) expectedIdsNext_.push_back(d.id);
   }
   Backend backend() const override { return finder_->backend(); }
 
@@ -82,6 +90,8 @@ class RegionDetector final : public Detector {
           box(d, frame).height >= 16)
         expected[d.id] = d;
     expectedNext_.clear();
+    const std::vector<int> expectedIds = std::move(expectedIdsNext_);
+    expectedIdsNext_.clear();
     for (const auto& [id, d] : expected) addBox(d, expectedBefore_);
     expectedBefore_ = expected;
     // Few or small markers first, at full resolution; then the large sets' boxes, at the
@@ -100,7 +110,12 @@ class RegionDetector final : public Detector {
     // Missing and expected in the frame (some of its markers' boxes were searched above): the
     // whole frame is searched less often for it.
     auto isExpected = [&](int id) { return expected.count(id) > 0; };
+    // Missing and expected anywhere (a pose carries it): the coarse whole-frame search will do.
+    auto isCarried = [&](int id) {
+      return std::find(expectedIds.begin(), expectedIds.end(), id) != expectedIds.end();
+    };
     bool missing = config_.ids.empty(), partial = false, unexpected = config_.ids.empty();
+    bool carried = false;
     for (int id : config_.ids) {
       const auto set = std::find_if(config_.sets.begin(), config_.sets.end(), [&](const auto& g) {
         return std::find(g.begin(), g.end(), id) != g.end();
@@ -114,6 +129,7 @@ class RegionDetector final : public Detector {
         } else {
           missing = true;
           unexpected |= std::none_of(set->begin(), set->end(), isExpected);
+          carried |= std::any_of(set->begin(), set->end(), isCarried);
         }
       }
     }
@@ -121,8 +137,25 @@ class RegionDetector final : public Detector {
     const int every = unexpected ? config_.searchEvery : config_.expectedSearchEvery;
     if ((missing && since >= every) || (partial && since >= config_.setSearchEvery)) {
       lastSearch_ = frameNo_;
+      // A missing set carried by a pose, no partial set to complete at full detail: the
+      // coarse search, with one at `decimate` every expectedFullSearchEvery frames for what it
+      // misses (a set missing without a pose, the tool under the same hand, is looked for
+      // by both).
+      bool coarse = expectedFinder_ && missing && carried && !partial &&
+                    frameNo_ - lastFullSearch_ < config_.expectedFullSearchEvery;
+      std::vector<Detection> candidates = (coarse ? *expectedFinder_ : *finder_).detect(grey);
+      // The coarse search only says whether something came back: what it saw, the search at
+      // `decimate` takes in this frame (a tool found coarsely showed two of its three faces,
+      // and its tip was 14 mm off in that frame).
+      if (coarse && std::any_of(candidates.begin(), candidates.end(), [&](const Detection& d) {
+            return wanted(d.id) && !known(found, d);
+          })) {
+        coarse = false;
+        candidates = finder_->detect(grey);
+      }
+      if (!coarse) lastFullSearch_ = frameNo_;
       std::vector<SearchBox> fresh;
-      for (const auto& d : finder_->detect(grey)) {
+      for (const auto& d : candidates) {
         if (!wanted(d.id) || known(found, d)) continue;
         fresh.push_back({box(d, frame), 1});
       }
@@ -234,11 +267,13 @@ class RegionDetector final : public Detector {
   DetectorConfig config_;
   CornerRefiner cornerRefiner_{config_.family};
   std::unique_ptr<Detector> finder_, refiner_, coarseRefiner_;
+  std::unique_ptr<Detector> expectedFinder_;  // the whole frame at expectedSearchDecimate
   std::map<int, Detection> last_, previous_;
   std::vector<Detection> expectedNext_;      // for the next detect() only
   std::map<int, Detection> expectedBefore_;  // what the last detect() expected
+  std::vector<int> expectedIdsNext_;         // ids expected by the next detect(), any setting
   cv::Size lastSize_;
-  long long frameNo_ = 0, lastSearch_ = -1000000;
+  long long frameNo_ = 0, lastSearch_ = -1000000, lastFullSearch_ = -1000000;
 };
 
 }  // namespace
