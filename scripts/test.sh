@@ -37,6 +37,10 @@ configure_and_build() {
   cmake --build --preset "${preset}" -j"${jobs}"
 }
 timed "setup (apt)" scripts/setup.sh
+# OpenCV's chessboard photographs for the calibration test on real images (best effort: the
+# test skips with a message where apt cannot fetch them).
+fetch_photos() { PS_OPENCV_SAMPLES="$(scripts/fetch-test-photos.sh)" && export PS_OPENCV_SAMPLES; }
+timed "test photographs" fetch_photos
 for preset in release asan; do
   [ "$preset" = asan ] && [ "${1:-}" = "--quick" ] && break
   echo "== ${preset}: configure and build" >&2
