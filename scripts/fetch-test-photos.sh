@@ -6,7 +6,7 @@
 # the test skips with a message, as it does without this script (docs/TRACKING.md).
 set -uo pipefail
 installed=/usr/share/doc/opencv-doc/examples/data
-cache="${XDG_CACHE_HOME:-$HOME/.cache}/planetsculpt/opencv-samples"
+cache="${XDG_CACHE_HOME:-${HOME:-/tmp}/.cache}/planetsculpt/opencv-samples"
 for dir in "${PS_OPENCV_SAMPLES:-}" "$installed" "$cache"; do
   if [ -n "$dir" ] && [ -f "$dir/left01.jpg" ]; then
     echo "$dir"

@@ -43,7 +43,7 @@ ChessboardSpec smallBoard() {
 
 // OpenCV's sample photographs: $PS_OPENCV_SAMPLES, else where Debian's opencv-doc puts them.
 std::filesystem::path opencvSamples() {
-  if (const char* env = std::getenv("PS_OPENCV_SAMPLES")) return env;
+  if (const char* env = std::getenv("PS_OPENCV_SAMPLES"); env && *env) return env;
   return "/usr/share/doc/opencv-doc/examples/data";
 }
 
