@@ -234,8 +234,8 @@ void SandField::solveGluedLine(LineRunScratch& s, int n, bool circle, BusyFlags&
     first = whole ? 0 : first + 1;
   }
   s.run.clear();
-  for (int q = 0; q < n; ++q) {
-    const int i = circle ? (first + q) % n : q;
+  // Positions first, first + 1, .. round the circle (no division a cell).
+  for (int q = 0, i = first == n ? 0 : first; q < n; ++q, i = i + 1 < n ? i + 1 : 0) {
     if (!inside(i)) {
       solveGluedRun(s, false, busy);
       s.run.clear();
@@ -261,14 +261,16 @@ void SandField::solveGluedRun(LineRunScratch& s, bool circle, BusyFlags& busy) c
     busy[t].store(1, std::memory_order_relaxed);
     marked = t;
   };
+  std::size_t tileHere = s.tileOf(run[0]);
   for (int i = 0; i < faces; ++i) {
-    const int p = run[std::size_t(i)];
-    if (s.w[std::size_t(p)] > 0.0) {
-      mark(s.tileOf(p));
-      mark(s.tileOf(run[std::size_t((i + 1) % n)]));
+    const std::size_t tileNext = s.tileOf(run[std::size_t(i + 1 < n ? i + 1 : 0)]);
+    if (s.w[std::size_t(run[std::size_t(i)])] > 0.0) {
+      mark(tileHere);
+      mark(tileNext);
     } else if (rest < 0) {
       rest = i;
     }
+    tileHere = tileNext;
   }
   if (circle && rest < 0) {
     // The whole circle, every face active: its arrays are the system.
@@ -280,8 +282,7 @@ void SandField::solveGluedRun(LineRunScratch& s, bool circle, BusyFlags& busy) c
   // st + j0 .. st + j (mod n).
   const int st = circle ? rest + 1 : 0;
   int j0 = 0;
-  for (int j = 0; j < n; ++j) {
-    const int i = (st + j) % n;
+  for (int j = 0, i = st < n ? st : st - n; j < n; ++j, i = i + 1 < n ? i + 1 : 0) {
     const bool face = j + 1 < n && (circle || i + 1 < n);
     if (face && s.k[std::size_t(run[std::size_t(i)])] > 0.0) continue;
     if (j > j0) solveGluedChain(s, st + j0, j - j0 + 1);
