@@ -349,6 +349,10 @@ void SandField::solveGluedLines(int dir, const DiffusionTables& tb, double dt, B
 // for each stretch of the line within it.
 void SandField::readLine(LineRunScratch& s, int n) const {
   const std::uint32_t* cells = s.L->cells.data() + s.b;
+  // Local pointers: the byte stores to s.in would otherwise reload the vectors' a cell.
+  double* __restrict x = s.x.data();
+  double* __restrict h = s.h.data();
+  std::uint8_t* __restrict inside = s.in.data();
   std::size_t t = ~std::size_t(0);
   const double *next = nullptr, *cur = nullptr;
   std::uint8_t in = 0;
@@ -360,9 +364,9 @@ void SandField::readLine(LineRunScratch& s, int n) const {
       if (in) next = tiles_[t]->next.get(), cur = tiles_[t]->cur.get();
     }
     const std::size_t li = c & ((1u << kLocalBits) - 1u), p = std::size_t(q);
-    s.in[p] = in;
-    s.x[p] = in ? next[li] : 0.0;
-    s.h[p] = in ? cur[li] : 0.0;
+    inside[p] = in;
+    x[p] = in ? next[li] : 0.0;
+    h[p] = in ? cur[li] : 0.0;
   }
 }
 
