@@ -225,6 +225,7 @@ class SandField {
   // along lines of canonical cells continued across the folds and seams (GluedLines).
   struct GluedLines;
   const GluedLines& gluedLines();
+  void fillLineGeometry(GluedLines& lines) const;
   void semiImplicitGlued(const DiffusionTables& tb, double dt, const PushForce* force);
   void applyDriftGlued(const PushForce& force, const DiffusionTables& tb, double dt,
                        BusyFlags& busy);
@@ -234,7 +235,8 @@ class SandField {
   void solveGluedLine(LineRunScratch& s, int n, bool circle, BusyFlags& busy) const;
   void solveGluedRun(LineRunScratch& s, bool circle, BusyFlags& busy) const;
   void solveGluedChain(LineRunScratch& s, int first, int c) const;
-  void readLineCell(LineRunScratch& s, int q) const;
+  void readLine(LineRunScratch& s, int n) const;
+  void writeLine(const LineRunScratch& s, int n);
 
   SandGrid grid_;
   std::span<float> heights_;

@@ -113,8 +113,12 @@ struct SandField::GluedLines {
     std::vector<std::uint32_t> start;  // line l: cells[start[l] .. start[l + 1])
     std::vector<std::uint8_t> cyclic;
     std::vector<std::vector<int>> byRow;  // by grid row (direction 0) or column (1): its lines
+    // Each cell's static geometry in line order (Tile::geo's area, and L / d and 1 / d of its
+    // link to the next cell): a sub-step reads only the heights scattered.
+    std::vector<double> area, ratio, inv;
   };
   Direction dir[2];
+  std::size_t bytes() const;
 };
 
 // Tile::geo: the 8 links' chords d (+inf where none), the 4 axis links' face over chord L / d
