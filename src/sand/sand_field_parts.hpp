@@ -56,6 +56,9 @@ struct SandField::Tile {
   // Glued, a tile away from the glued sides (not SandField::gluedBorderTile): thermal erosion's
   // planes (kThermal* below), made on the tile's first thermal step.
   std::unique_ptr<double[]> thermalPlanes;
+  // Glued explicit diffusion: 1 when the planes of each face between two of the tile's cells
+  // hold the same bits from both cells (its faces weighed once), 2 when not, 0 not known yet.
+  std::uint8_t facesShared = 0;
   static constexpr std::uint32_t kNoSource = ~std::uint32_t(0);
 
   void snapshot() {
