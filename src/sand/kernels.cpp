@@ -215,9 +215,9 @@ void gluedFaceWeights(const double* __restrict a, const double* __restrict b,
 PS_SAND_CLONES
 unsigned gluedDiffusionFromFaces(const double* __restrict hm, const double* __restrict h0,
                                  const double* __restrict hp, double* __restrict out,
-                                 const double* __restrict wE, const double* __restrict wS,
-                                 const double* __restrict wN, const double* __restrict area,
-                                 double dt) {
+                                 const double* __restrict wW, const double* __restrict wE,
+                                 const double* __restrict wS, const double* __restrict wN,
+                                 const double* __restrict area, double dt) {
   // faceFlux with g * weight known: (g w) d, 0 unless both cells live.
   auto flux = [](double h, double hn, double gw) {
     const double f = gw * (h - hn);
@@ -226,8 +226,8 @@ unsigned gluedDiffusionFromFaces(const double* __restrict hm, const double* __re
   unsigned any = 0;
   for (int c = 0; c < kGluedRow; ++c) {
     const double h = h0[c];
-    const double fW = flux(h, h0[c - 1], wE[c]);
-    const double fE = flux(h, h0[c + 1], wE[c + 1]);
+    const double fW = flux(h, h0[c - 1], wW[c]);
+    const double fE = flux(h, h0[c + 1], wE[c]);
     const double fS = flux(h, hm[c], wS[c]);
     const double fN = flux(h, hp[c], wN[c]);
     const double net = (fW + fE) + (fS + fN);

@@ -197,8 +197,9 @@ class SandField {
   void loadThermalPlanes(Tile& tile, int t) const;
   void diffusionGluedTile(int t, const DiffusionTables& tb, double dt, const PushForce* force,
                           double* hs, std::uint8_t& busy);
-  // Explicit diffusion with each face of the tile weighed once (sand_glued_faces.cpp), where
-  // the tile's planes give both cells of each inner face the same conductance and 1 / d.
+  // Explicit diffusion with each face of the tile weighed once (sand_glued_faces.cpp) where
+  // the tile's planes give both cells of the face the same conductance and 1 / d; false when
+  // no row of the tile has such faces.
   bool gluedFacesShared(Tile& tile) const;
   unsigned diffusionGluedFaces(Tile& tile, const double* hs, const DiffusionTables& tb, double Dl2,
                                double dt) const;

@@ -468,8 +468,9 @@ void SandField::diffusionGluedTile(int t, const DiffusionTables& tb, double dt,
   Tile& tile = *tiles_[std::size_t(t)];
   const double* geo = tile.geo.get();
   const double Dl2 = diffusionMaterial_.diffusion * grid_.cellSize() * grid_.cellSize();
-  // Each face weighed once where both its cells see it alike (sand_glued_faces.cpp); the
-  // force's drift below reads no heights, so it may follow the rows.
+  // Each face weighed once where both its cells see it alike (sand_glued_faces.cpp); a tile
+  // where no row's do keeps the row kernel. The force's drift below reads no heights, so it
+  // may follow the rows.
   const bool shared = gluedFacesShared(tile);
   unsigned any = shared ? diffusionGluedFaces(tile, hs, tb, Dl2, dt) : 0;
   for (int lv = 0; lv < kT; ++lv) {
