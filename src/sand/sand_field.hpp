@@ -197,6 +197,12 @@ class SandField {
   void loadThermalPlanes(Tile& tile, int t) const;
   void diffusionGluedTile(int t, const DiffusionTables& tb, double dt, const PushForce* force,
                           double* hs, std::uint8_t& busy);
+  // Explicit diffusion with each face of the tile weighed once (sand_glued_faces.cpp) where
+  // the tile's planes give both cells of the face the same conductance and 1 / d; false when
+  // no row of the tile has such faces.
+  bool gluedFacesShared(Tile& tile) const;
+  unsigned diffusionGluedFaces(Tile& tile, const double* hs, const DiffusionTables& tb, double Dl2,
+                               double dt) const;
   double netDriftFluxGlued(const PushForce& force, double zetaInv, int u, int v) const;
   double driftBetween(const PushForce& force, double zetaInv, const Eigen::Vector3d& pa,
                       const Eigen::Vector3d& pb, double faceLength) const;

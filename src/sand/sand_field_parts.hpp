@@ -56,6 +56,11 @@ struct SandField::Tile {
   // Glued, a tile away from the glued sides (not SandField::gluedBorderTile): thermal erosion's
   // planes (kThermal* below), made on the tile's first thermal step.
   std::unique_ptr<double[]> thermalPlanes;
+  // Glued explicit diffusion (sand_glued_faces.cpp), once facesKnown: bit lv of sharedE set
+  // when the L / d and 1 / d planes give each E face between two cells of row lv the same bits
+  // from both cells, bit lv of sharedN when they do so for the N faces from row lv to lv + 1.
+  bool facesKnown = false;
+  std::uint32_t sharedE = 0, sharedN = 0;
   static constexpr std::uint32_t kNoSource = ~std::uint32_t(0);
 
   void snapshot() {
