@@ -21,6 +21,7 @@
 #include "sand/settler.hpp"
 #include "terrain/terrain.hpp"
 #include "test_edit_util.hpp"
+#include "test_sand_explicit_reference.hpp"
 #include "test_sand_util.hpp"
 #include "test_terrains.hpp"
 
@@ -146,6 +147,14 @@ TEST(SandTubes, ThermalStepsEqualACellByCellReferenceBitForBit) {
   for (const bool torus : {true, false}) {
     ASSERT_NO_FATAL_FAILURE(sandtest::checkThermalAgainstReference(smallTube(torus, 7), {31, 64},
                                                                    300.0, 6, tubeName(torus)));
+  }
+}
+
+TEST(SandTubes, ExplicitStepsEqualACellByCellReferenceBitForBit) {
+  // 129^2 (tiles weighed once face by face and tiles by the seams and rims); noise of 300 m.
+  for (const bool torus : {true, false}) {
+    ASSERT_NO_FATAL_FAILURE(sandtest::checkExplicitAgainstReference(smallTube(torus, 7), {31, 64},
+                                                                    300.0, 6, tubeName(torus)));
   }
 }
 

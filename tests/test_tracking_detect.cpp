@@ -59,6 +59,23 @@ double maxCornerError(const tracking::Detection& d, const std::array<cv::Point2d
   return e;
 }
 
+// The first frame of the board-covered-move scene (the hand off the board), in grey, and a
+// frame of the same size with nothing in it (the board covered).
+struct CoveredBoardScene {
+  std::filesystem::path root = ps::app::sourceDir();
+  tracking::MarkerLayout board = tracking::loadMarkerLayout(tracking::defaultBoardPath(root));
+  tracking::SynthScript script = tracking::builtinScene("board-covered-move", root);
+  tracking::FrameTruth truth;
+  cv::Mat shown, covered;
+  CoveredBoardScene() {
+    tracking::SynthRenderer renderer(script);
+    truth = renderer.truth(0);
+    shown = renderer.render(0);
+    if (shown.channels() == 3) cv::cvtColor(shown, shown, cv::COLOR_BGR2GRAY);
+    covered = cv::Mat(shown.size(), CV_8U, cv::Scalar(128));
+  }
+};
+
 }  // namespace
 
 TEST(TrackingDetect, RealPhotographsMatchOpenCVsExpectedCorners) {
@@ -242,16 +259,12 @@ TEST(TrackingDetect, CoarseRegionSearchOnlyWhereABoxHoldsManyMarkers) {
 // search's cycle; one showing elsewhere (the expectation wrong) is found by the whole-frame
 // search within expectedSearchEvery frames, however long the board was gone before.
 TEST(TrackingDetect, ExpectedBoardIsFoundAtOnceThereAndWithinTheSearchCycleElsewhere) {
-  const auto root = ps::app::sourceDir();
-  const auto board = tracking::loadMarkerLayout(tracking::defaultBoardPath(root));
-  const auto script = tracking::builtinScene("board-covered-move", root);
-  tracking::SynthRenderer renderer(script);
-  const auto truth = renderer.truth(0);  // the hand is off the board
-  ASSERT_GE(truth.boardHalfVisible, 6);
-  cv::Mat shown = renderer.render(0);
-  if (shown.channels() == 3) cv::cvtColor(shown, shown, cv::COLOR_BGR2GRAY);
-  const cv::Mat covered(shown.size(), CV_8U, cv::Scalar(128));
-  const auto truePx = tracking::projectLayout(board, truth.planet, script.camera);
+  const CoveredBoardScene scene;
+  ASSERT_GE(scene.truth.boardHalfVisible, 6);
+  const auto& board = scene.board;
+  const cv::Mat& shown = scene.shown;
+  const cv::Mat& covered = scene.covered;
+  const auto truePx = tracking::projectLayout(board, scene.truth.planet, scene.script.camera);
   // Right: the board's own corners. Wrong: the board shrunk into the image's top-left corner,
   // clear of where it is.
   double x0 = 1e9, y0 = 1e9;
@@ -322,15 +335,11 @@ TEST(TrackingDetect, ExpectedBoardIsFoundAtOnceThereAndWithinTheSearchCycleElsew
 // within expectedFullSearchEvery frames, whatever the cycle's phase; without an expectation it is
 // found within searchEvery frames, so the slower finds are the coarse search's doing.
 TEST(TrackingDetect, CarriedBoardIsSearchedCoarselyAndWithinTheFullSearchCycle) {
-  const auto root = ps::app::sourceDir();
-  const auto board = tracking::loadMarkerLayout(tracking::defaultBoardPath(root));
-  const auto script = tracking::builtinScene("board-covered-move", root);
-  tracking::SynthRenderer renderer(script);
-  const auto truth = renderer.truth(0);  // the hand is off the board
-  ASSERT_GE(truth.boardHalfVisible, 6);
-  cv::Mat shown = renderer.render(0);
-  if (shown.channels() == 3) cv::cvtColor(shown, shown, cv::COLOR_BGR2GRAY);
-  const cv::Mat covered(shown.size(), CV_8U, cv::Scalar(128));
+  const CoveredBoardScene scene;
+  ASSERT_GE(scene.truth.boardHalfVisible, 6);
+  const auto& board = scene.board;
+  const cv::Mat& shown = scene.shown;
+  const cv::Mat& covered = scene.covered;
   tracking::DetectorConfig config;
   config.ids = board.ids();
   config.sets = {board.ids()};

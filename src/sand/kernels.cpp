@@ -204,6 +204,41 @@ unsigned gluedDiffusionRow(const double* __restrict hm, const double* __restrict
   return any;
 }
 
+PS_SAND_CLONES
+void gluedFaceWeights(const double* __restrict a, const double* __restrict b,
+                      const double* __restrict ratio, const double* __restrict inv,
+                      double* __restrict gw, int n, double Dl2, const Repose& r) {
+  const Repose rr = r;
+  for (int c = 0; c < n; ++c) gw[c] = (Dl2 * ratio[c]) * weight(std::abs(a[c] - b[c]), inv[c], rr);
+}
+
+PS_SAND_CLONES
+unsigned gluedDiffusionFromFaces(const double* __restrict hm, const double* __restrict h0,
+                                 const double* __restrict hp, double* __restrict out,
+                                 const double* __restrict wW, const double* __restrict wE,
+                                 const double* __restrict wS, const double* __restrict wN,
+                                 const double* __restrict area, double dt) {
+  // faceFlux with g * weight known: (g w) d, 0 unless both cells live.
+  auto flux = [](double h, double hn, double gw) {
+    const double f = gw * (h - hn);
+    return ((h < kLive) & (hn < kLive)) ? f : 0.0;
+  };
+  unsigned any = 0;
+  for (int c = 0; c < kGluedRow; ++c) {
+    const double h = h0[c];
+    const double fW = flux(h, h0[c - 1], wW[c]);
+    const double fE = flux(h, h0[c + 1], wE[c]);
+    const double fS = flux(h, hm[c], wS[c]);
+    const double fN = flux(h, hp[c], wN[c]);
+    const double net = (fW + fE) + (fS + fN);
+    const double A = area[c];
+    const double dtInvA = dt * (1.0 / (A > 0.0 ? A : 1.0));
+    out[c] = A > 0.0 ? h - dtInvA * net : out[c];
+    any |= unsigned(((std::abs(fW) + std::abs(fE)) + (std::abs(fS) + std::abs(fN))) > 0.0);
+  }
+  return any;
+}
+
 void lineWeights(const double* __restrict h, const double* __restrict ratio,
                  const double* __restrict inv, double* __restrict w, double* __restrict k, int n,
                  bool circle, double dt, double Dl2, const Repose& r) {

@@ -123,6 +123,17 @@ void gluedThermalPass2(const double* hm, const double* h0, const double* hp, con
 // non-zero when a face moved material.
 unsigned gluedDiffusionRow(const double* hm, const double* h0, const double* hp, double* out,
                            const GluedRow& g, double Dl2, double dt, const Repose& r);
+// Explicit diffusion with each face weighed once (sand_glued_faces.cpp): gw[c] = (Dl2 ratio[c])
+// weight(|a[c] - b[c]|, inv[c]) for c < n, the face's conductance times its weight, which both of
+// its cells read (|x - y| == |y - x|, so either cell's view gives the same bits).
+void gluedFaceWeights(const double* a, const double* b, const double* ratio, const double* inv,
+                      double* gw, int n, double Dl2, const Repose& r);
+// gluedDiffusionRow's result from the faces' gw: wW[c], wE[c], wS[c] and wN[c] those of cell c
+// (where faces are shared, wW is wE - 1). Each face's flux is gw (h - hn), 0 unless both cells
+// live: faceFlux's operations, so the same bits.
+unsigned gluedDiffusionFromFaces(const double* hm, const double* h0, const double* hp, double* out,
+                                 const double* wW, const double* wE, const double* wS,
+                                 const double* wN, const double* area, double dt);
 
 // Implicit Euler along one row of equal-area cells: (1 + k_{i-1} + k_i) x_i - k_{i-1} x_{i-1} -
 // k_i x_{i+1} = b_i, with k[i] the scaled conductance of the face between i and i + 1 (and, when

@@ -142,6 +142,7 @@ std::size_t SandField::residentBytes() const {
     if (t->thermalPlanes) bytes += std::size_t(kThermalPlanes) * kW * kW * sizeof(double);
     bytes += t->haloSource.size() * sizeof(std::uint32_t);
   }
+  if (gluedLines_) bytes += gluedLines_->bytes();
   return bytes;
 }
 

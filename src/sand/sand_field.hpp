@@ -197,6 +197,12 @@ class SandField {
   void loadThermalPlanes(Tile& tile, int t) const;
   void diffusionGluedTile(int t, const DiffusionTables& tb, double dt, const PushForce* force,
                           double* hs, std::uint8_t& busy);
+  // Explicit diffusion with each face of the tile weighed once (sand_glued_faces.cpp) where
+  // the tile's planes give both cells of the face the same conductance and 1 / d; false when
+  // no row of the tile has such faces.
+  bool gluedFacesShared(Tile& tile) const;
+  unsigned diffusionGluedFaces(Tile& tile, const double* hs, const DiffusionTables& tb, double Dl2,
+                               double dt) const;
   double netDriftFluxGlued(const PushForce& force, double zetaInv, int u, int v) const;
   double driftBetween(const PushForce& force, double zetaInv, const Eigen::Vector3d& pa,
                       const Eigen::Vector3d& pb, double faceLength) const;
@@ -225,6 +231,7 @@ class SandField {
   // along lines of canonical cells continued across the folds and seams (GluedLines).
   struct GluedLines;
   const GluedLines& gluedLines();
+  void fillLineGeometry(GluedLines& lines) const;
   void semiImplicitGlued(const DiffusionTables& tb, double dt, const PushForce* force);
   void applyDriftGlued(const PushForce& force, const DiffusionTables& tb, double dt,
                        BusyFlags& busy);
@@ -234,7 +241,8 @@ class SandField {
   void solveGluedLine(LineRunScratch& s, int n, bool circle, BusyFlags& busy) const;
   void solveGluedRun(LineRunScratch& s, bool circle, BusyFlags& busy) const;
   void solveGluedChain(LineRunScratch& s, int first, int c) const;
-  void readLineCell(LineRunScratch& s, int q) const;
+  void readLine(LineRunScratch& s, int n) const;
+  void writeLine(const LineRunScratch& s, int n);
 
   SandGrid grid_;
   std::span<float> heights_;

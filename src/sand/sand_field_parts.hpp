@@ -56,6 +56,11 @@ struct SandField::Tile {
   // Glued, a tile away from the glued sides (not SandField::gluedBorderTile): thermal erosion's
   // planes (kThermal* below), made on the tile's first thermal step.
   std::unique_ptr<double[]> thermalPlanes;
+  // Glued explicit diffusion (sand_glued_faces.cpp), once facesKnown: bit lv of sharedE set
+  // when the L / d and 1 / d planes give each E face between two cells of row lv the same bits
+  // from both cells, bit lv of sharedN when they do so for the N faces from row lv to lv + 1.
+  bool facesKnown = false;
+  std::uint32_t sharedE = 0, sharedN = 0;
   static constexpr std::uint32_t kNoSource = ~std::uint32_t(0);
 
   void snapshot() {
@@ -113,8 +118,12 @@ struct SandField::GluedLines {
     std::vector<std::uint32_t> start;  // line l: cells[start[l] .. start[l + 1])
     std::vector<std::uint8_t> cyclic;
     std::vector<std::vector<int>> byRow;  // by grid row (direction 0) or column (1): its lines
+    // Each cell's static geometry in line order (Tile::geo's area, and L / d and 1 / d of its
+    // link to the next cell): a sub-step reads only the heights scattered.
+    std::vector<double> area, ratio, inv;
   };
   Direction dir[2];
+  std::size_t bytes() const;
 };
 
 // Tile::geo: the 8 links' chords d (+inf where none), the 4 axis links' face over chord L / d

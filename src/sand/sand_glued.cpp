@@ -468,12 +468,17 @@ void SandField::diffusionGluedTile(int t, const DiffusionTables& tb, double dt,
   Tile& tile = *tiles_[std::size_t(t)];
   const double* geo = tile.geo.get();
   const double Dl2 = diffusionMaterial_.diffusion * grid_.cellSize() * grid_.cellSize();
-  unsigned any = 0;
+  // Each face weighed once where both its cells see it alike (sand_glued_faces.cpp); a tile
+  // where no row's do keeps the row kernel. The force's drift below reads no heights, so it
+  // may follow the rows.
+  const bool shared = gluedFacesShared(tile);
+  unsigned any = shared ? diffusionGluedFaces(tile, hs, tb, Dl2, dt) : 0;
   for (int lv = 0; lv < kT; ++lv) {
     const double* h0 = hs + (lv + 2) * kW + 2;
     double* out = tile.cur.get() + lv * kT;
     const kernels::GluedRow g = rowOf(geo, lv);
-    any |= kernels::gluedDiffusionRow(h0 - kW, h0, h0 + kW, out, g, Dl2, dt, tb.repose);
+    if (!shared)
+      any |= kernels::gluedDiffusionRow(h0 - kW, h0, h0 + kW, out, g, Dl2, dt, tb.repose);
     if (force) {
       for (int c = 0; c < kT; ++c) {
         const double A = g.area[c];

@@ -104,8 +104,55 @@ const SandField::GluedLines& SandField::gluedLines() {
           std::uint32_t((v % kT) * kT + u % kT);
     }
   }
+  fillLineGeometry(*lines);
   gluedLines_ = std::move(lines);
   return *gluedLines_;
+}
+
+std::size_t SandField::GluedLines::bytes() const {
+  std::size_t b = 0;
+  for (const Direction& d : dir) {
+    b += d.cells.size() * sizeof(std::uint32_t) + d.link.size() + d.cyclic.size() +
+         d.start.size() * sizeof(std::uint32_t) +
+         (d.area.size() + d.ratio.size() + d.inv.size()) * sizeof(double);
+    for (const std::vector<int>& r : d.byRow) b += r.size() * sizeof(int);
+  }
+  return b;
+}
+
+// Each line cell's area, L / d and 1 / d from its tile's geometry planes (the same function
+// Tile::geo is filled by, so the same bits), tile by tile.
+void SandField::fillLineGeometry(GluedLines& lines) const {
+  const std::size_t nTiles = tiles_.size();
+  std::vector<std::uint32_t> posOf[2];
+  for (int d = 0; d < 2; ++d) {
+    GluedLines::Direction& dir = lines.dir[d];
+    const std::size_t n = dir.cells.size();
+    dir.area.assign(n, 0.0), dir.ratio.assign(n, 0.0), dir.inv.assign(n, 0.0);
+    posOf[d].assign(nTiles * kCells, kNone);
+    for (std::size_t p = 0; p < n; ++p) posOf[d][dir.cells[p]] = std::uint32_t(p);
+  }
+#pragma omp parallel
+  {
+    std::vector<double> scratch(std::size_t(kGeoPlanes) * kCells);
+#pragma omp for schedule(dynamic, 8)
+    for (int t = 0; t < int(nTiles); ++t) {
+      const Tile* tile = tiles_[std::size_t(t)].get();
+      const double* geo = tile && tile->geo ? tile->geo.get() : scratch.data();
+      if (geo == scratch.data()) computeGeometry(t, scratch.data());
+      for (int d = 0; d < 2; ++d) {
+        GluedLines::Direction& dir = lines.dir[d];
+        for (std::size_t i = 0; i < kCells; ++i) {
+          const std::uint32_t p = posOf[d][(std::size_t(t) << kLocalBits) | i];
+          if (p == kNone) continue;
+          const std::size_t k = dir.link[p];
+          dir.area[p] = geo[std::size_t(kGeoArea) * kCells + i];
+          dir.ratio[p] = geo[(std::size_t(kGeoRatio) + k) * kCells + i];
+          dir.inv[p] = geo[(std::size_t(kGeoInv) + k) * kCells + i];
+        }
+      }
+    }
+  }
 }
 
 void SandField::semiImplicitGlued(const DiffusionTables& tb, double dt, const PushForce* force) {
@@ -139,17 +186,20 @@ void SandField::applyDriftGlued(const PushForce& force, const DiffusionTables& t
   }
 }
 
-// One line's cells in line order: right-hand side x (the solution on return), area, height before
-// the step and its link's L / d and 1 / d (0 for a cell outside P), then each face's w and K;
-// and the scratch of its runs' solves.
+// One line's cells in line order: right-hand side x (the solution on return) and height before
+// the step (0 for a cell outside P), whether in P, its area (the line's static geometry), then
+// each face's w and K; and the scratch of its runs' solves.
 struct SandField::LineRunScratch {
   const GluedLines::Direction* L = nullptr;
   int b = 0;  // the line's first cell in L->cells
-  std::vector<double> x, area, h, ratio, inv, w, k;
+  const double* area = nullptr;
+  std::vector<double> x, h, w, k;
+  std::vector<std::uint8_t> in;
   std::vector<double> xs, as, ks, work;
   std::vector<int> run;  // positions in the line
   void resize(int n) {
-    for (std::vector<double>* v : {&x, &area, &h, &ratio, &inv, &w, &k}) v->resize(std::size_t(n));
+    for (std::vector<double>* v : {&x, &h, &w, &k}) v->resize(std::size_t(n));
+    in.resize(std::size_t(n));
   }
   std::size_t tileOf(int p) const { return L->cells[std::size_t(b + p)] >> kLocalBits; }
 };
@@ -175,7 +225,7 @@ std::vector<int> SandField::gluedLinesToSolve(int dir) const {
 // One line (s.x .. s.k read), solved over its runs of cells in P: a circle is cut after a cell
 // outside P (if any); runs are the cells in P between.
 void SandField::solveGluedLine(LineRunScratch& s, int n, bool circle, BusyFlags& busy) const {
-  auto inside = [&](int p) { return inP_[s.tileOf(p)] != 0; };
+  auto inside = [&](int p) { return s.in[std::size_t(p)] != 0; };
   int first = 0;
   bool whole = false;
   if (circle) {
@@ -184,8 +234,8 @@ void SandField::solveGluedLine(LineRunScratch& s, int n, bool circle, BusyFlags&
     first = whole ? 0 : first + 1;
   }
   s.run.clear();
-  for (int q = 0; q < n; ++q) {
-    const int i = circle ? (first + q) % n : q;
+  // Positions first, first + 1, .. round the circle (no division a cell).
+  for (int q = 0, i = first == n ? 0 : first; q < n; ++q, i = i + 1 < n ? i + 1 : 0) {
     if (!inside(i)) {
       solveGluedRun(s, false, busy);
       s.run.clear();
@@ -211,26 +261,28 @@ void SandField::solveGluedRun(LineRunScratch& s, bool circle, BusyFlags& busy) c
     busy[t].store(1, std::memory_order_relaxed);
     marked = t;
   };
+  std::size_t tileHere = s.tileOf(run[0]);
   for (int i = 0; i < faces; ++i) {
-    const int p = run[std::size_t(i)];
-    if (s.w[std::size_t(p)] > 0.0) {
-      mark(s.tileOf(p));
-      mark(s.tileOf(run[std::size_t((i + 1) % n)]));
+    const std::size_t tileNext = s.tileOf(run[std::size_t(i + 1 < n ? i + 1 : 0)]);
+    if (s.w[std::size_t(run[std::size_t(i)])] > 0.0) {
+      mark(tileHere);
+      mark(tileNext);
     } else if (rest < 0) {
       rest = i;
     }
+    tileHere = tileNext;
   }
   if (circle && rest < 0) {
     // The whole circle, every face active: its arrays are the system.
-    kernels::solveLine(s.x, s.area, s.k, true, s.work);
+    s.as.assign(s.area, s.area + n);
+    kernels::solveLine(s.x, s.as, s.k, true, s.work);
     return;
   }
   // From just after a face at rest (a circle's), chains of active faces: the run's cells
   // st + j0 .. st + j (mod n).
   const int st = circle ? rest + 1 : 0;
   int j0 = 0;
-  for (int j = 0; j < n; ++j) {
-    const int i = (st + j) % n;
+  for (int j = 0, i = st < n ? st : st - n; j < n; ++j, i = i + 1 < n ? i + 1 : 0) {
     const bool face = j + 1 < n && (circle || i + 1 < n);
     if (face && s.k[std::size_t(run[std::size_t(i)])] > 0.0) continue;
     if (j > j0) solveGluedChain(s, st + j0, j - j0 + 1);
@@ -248,8 +300,7 @@ void SandField::solveGluedChain(LineRunScratch& s, int first, int c) const {
   s.work.resize(std::size_t(c));
   if (at(c - 1) == p0 + std::size_t(c - 1)) {
     // Consecutive cells of the line: solved where they lie.
-    kernels::solveChainInPlace(s.x.data() + p0, s.area.data() + p0, s.k.data() + p0, c,
-                               s.work.data());
+    kernels::solveChainInPlace(s.x.data() + p0, s.area + p0, s.k.data() + p0, c, s.work.data());
     return;
   }
   s.xs.resize(std::size_t(c));
@@ -265,9 +316,9 @@ void SandField::solveGluedChain(LineRunScratch& s, int first, int c) const {
 }
 
 // The lines of direction `dir` with a cell in P, each solved over its runs of cells in P (a
-// cell outside P is a wall, as in the explicit step), next -> next. Each line's cells are read
-// into arrays in line order, its faces' weights computed over them (the arctangents in one
-// loop, apart from the scattered reads), then its runs solved on those arrays.
+// cell outside P is a wall, as in the explicit step), next -> next. Each line's heights are read
+// into arrays in line order (its geometry lies in line order already), its faces' weights
+// computed over them (the arctangents in one loop), then its runs solved on those arrays.
 void SandField::solveGluedLines(int dir, const DiffusionTables& tb, double dt, BusyFlags& busy) {
   const GluedLines::Direction& L = gluedLines_->dir[std::size_t(dir)];
   const std::vector<int> todo = gluedLinesToSolve(dir);
@@ -284,35 +335,49 @@ void SandField::solveGluedLines(int dir, const DiffusionTables& tb, double dt, B
       const int n = int(L.start[std::size_t(l) + 1]) - s.b;
       const bool circle = L.cyclic[std::size_t(l)] != 0;
       s.resize(n);
-      for (int q = 0; q < n; ++q) readLineCell(s, q);
-      kernels::lineWeights(s.h.data(), s.ratio.data(), s.inv.data(), s.w.data(), s.k.data(), n,
-                           circle, dt, Dl2, rep);
+      s.area = L.area.data() + s.b;
+      readLine(s, n);
+      kernels::lineWeights(s.h.data(), L.ratio.data() + s.b, L.inv.data() + s.b, s.w.data(),
+                           s.k.data(), n, circle, dt, Dl2, rep);
       solveGluedLine(s, n, circle, busy);
-      for (int q = 0; q < n; ++q) {
-        const std::uint32_t c = L.cells[std::size_t(s.b + q)];
-        const std::size_t t = c >> kLocalBits;
-        if (inP_[t]) tiles_[t]->next[c & ((1u << kLocalBits) - 1u)] = s.x[std::size_t(q)];
-      }
+      writeLine(s, n);
     }
   }
 }
 
-// Cell q of the line s: its right-hand side, area, height and link's L / d and 1 / d.
-void SandField::readLineCell(LineRunScratch& s, int q) const {
-  const std::uint32_t c = s.L->cells[std::size_t(s.b + q)];
-  const std::size_t t = c >> kLocalBits, p = std::size_t(q);
-  if (!inP_[t]) {
-    s.x[p] = s.area[p] = s.h[p] = s.ratio[p] = s.inv[p] = 0.0;
-    return;
+// The line's cells' right-hand sides and heights (0 outside P), a tile's pointers looked up once
+// for each stretch of the line within it.
+void SandField::readLine(LineRunScratch& s, int n) const {
+  const std::uint32_t* cells = s.L->cells.data() + s.b;
+  // Local pointers: the byte stores to s.in would otherwise reload the vectors' a cell.
+  double* __restrict x = s.x.data();
+  double* __restrict h = s.h.data();
+  std::uint8_t* __restrict inside = s.in.data();
+  std::size_t t = ~std::size_t(0);
+  const double *next = nullptr, *cur = nullptr;
+  std::uint8_t in = 0;
+  for (int q = 0; q < n; ++q) {
+    const std::uint32_t c = cells[q];
+    if ((c >> kLocalBits) != t) {
+      t = c >> kLocalBits;
+      in = inP_[t];
+      if (in) next = tiles_[t]->next.get(), cur = tiles_[t]->cur.get();
+    }
+    const std::size_t li = c & ((1u << kLocalBits) - 1u), p = std::size_t(q);
+    inside[p] = in;
+    x[p] = in ? next[li] : 0.0;
+    h[p] = in ? cur[li] : 0.0;
   }
-  const Tile& tile = *tiles_[t];
-  const std::size_t li = c & ((1u << kLocalBits) - 1u), k = s.L->link[std::size_t(s.b + q)];
-  const double* geo = tile.geo.get();
-  s.x[p] = tile.next[li];
-  s.area[p] = geo[std::size_t(kGeoArea) * kCells + li];
-  s.h[p] = tile.cur[li];
-  s.ratio[p] = geo[(std::size_t(kGeoRatio) + k) * kCells + li];
-  s.inv[p] = geo[(std::size_t(kGeoInv) + k) * kCells + li];
+}
+
+// The solution back into the cells in P.
+void SandField::writeLine(const LineRunScratch& s, int n) {
+  const std::uint32_t* cells = s.L->cells.data() + s.b;
+  for (int q = 0; q < n; ++q) {
+    if (!s.in[std::size_t(q)]) continue;
+    const std::uint32_t c = cells[q];
+    tiles_[c >> kLocalBits]->next[c & ((1u << kLocalBits) - 1u)] = s.x[std::size_t(q)];
+  }
 }
 
 }  // namespace ps::sand
