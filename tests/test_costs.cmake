@@ -23,7 +23,7 @@ if(PS_SANITIZE)
       TrackingUndistort.ThePlanetsAnchorLandsOnItsMarkerThroughADistortingLens 9)
 else()
   set(ps_test_costs
-      TrackingChessboard.CommandCalibratesAFolderOfRenderedViews 45
+      TrackingChessboard.CommandCalibratesAFolderOfRenderedViews 11
       SessionWriter.SigkillDuringBackgroundSavesRecoversAPlanetTheSessionHad 33
       StressReplay.LongReplayKeepsMemoryFlat 14
       LargeGrid.Grid8193ViewsAreCrackFreeAndWithinDistMax 13
