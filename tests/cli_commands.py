@@ -760,8 +760,10 @@ def group_bench():
                     fail(f"bench frame {chart} {case}: times {r}")
                 if abs(sum(r["share"].values()) - 1) > 0.01:
                     fail(f"bench frame {chart} {case}: the stages' shares do not add up to the frame: {r['share']}")
+            # Off, the live loop's calls still run and return at once: microseconds, which a
+            # preempted frame can round to a share of 0.001; a mask that ran costs 7-23 %.
             if off["hand_mask_masked_frames"] != 0 or off["hand_mask_shown_frames"] != 0 or \
-                    off["share"]["hand_mask"] != 0:
+                    off["share"]["hand_mask"] >= 0.01:
                 fail(f"bench frame {chart}: the hand mask ran with it off: {off}")
             for case in ("demo", "demo_faceted", "dense"):
                 r = cases[case]
