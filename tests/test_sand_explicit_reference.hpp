@@ -46,12 +46,7 @@ inline void explicitReferenceStep(const sand::SandGrid& g, std::vector<double>& 
       next[i] = h[i] - (dt * (1.0 / g.cellArea(u, v))) * net;
     }
   }
-  for (int v = 0; v <= m; ++v) {
-    for (int u = 0; u <= m; ++u) {
-      const core::GridPoint c = g.chart().canonical(u, v);
-      next[gs.index(u, v)] = next[gs.index(c.u, c.v)];
-    }
-  }
+  copyFromCanonical(g.chart(), next);
   h.swap(next);
 }
 
@@ -62,37 +57,16 @@ inline void checkExplicitAgainstReference(std::shared_ptr<const core::Chart> cha
                                           core::GridPoint spot, double amplitude, int steps,
                                           const std::string& what) {
   const sand::SandGrid g(chart);
-  const core::GridSize& gs = g.grid();
-  const int m = g.m();
   const sand::Material mat = sand::Material::sand();
   for (const bool everywhere : {true, false}) {
-    std::mt19937 rng(everywhere ? 21 : 22);
-    std::uniform_real_distribution<double> noise(0.0, amplitude);
-    const Eigen::Vector3d c = g.point(spot.u, spot.v);
-    const double radius = 7.0 * g.chord(spot.u, spot.v, 1);
-    std::vector<float> h(gs.count(), 0.0f);
-    int u0 = m, u1 = 0, v0 = m, v1 = 0;
-    for (int v = 0; v <= m; ++v) {
-      for (int u = 0; u <= m; ++u) {
-        if (!g.isCell(u, v)) continue;
-        if (!everywhere && (g.point(u, v) - c).norm() > radius) continue;
-        h[gs.index(u, v)] = float(noise(rng));
-        u0 = std::min(u0, u), u1 = std::max(u1, u), v0 = std::min(v0, v), v1 = std::max(v1, v);
-      }
-    }
-    for (int v = 0; v <= m; ++v) {
-      for (int u = 0; u <= m; ++u) {
-        const core::GridPoint p = chart->canonical(u, v);
-        h[gs.index(u, v)] = h[gs.index(p.u, p.v)];
-      }
-    }
-    std::vector<double> ref(h.begin(), h.end()), got;
-    sand::SandField f(chart, h);
+    ReferenceScene scene = referenceScene(g, spot, amplitude, everywhere, everywhere ? 21 : 22);
+    std::vector<double> ref(scene.h.begin(), scene.h.end()), got;
+    sand::SandField f(chart, scene.h);
     const double bound = f.explicitBound(mat);
     if (everywhere) {
       f.markAll();
     } else {
-      f.mark({u0, u1, v0, v1});
+      f.mark(scene.box);
     }
     for (int step = 0; step < steps; ++step) {
       const sand::StepReport rep = f.diffusionStep(mat, bound, sand::DiffusionScheme::kExplicit);

@@ -212,6 +212,46 @@ inline bool sameDoubles(const std::vector<double>& a, const std::vector<double>&
   return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(double)) == 0;
 }
 
+// Every grid vertex takes its canonical point's value (twins equal), as a field's heights are.
+template <class T>
+void copyFromCanonical(const core::Chart& chart, std::vector<T>& h) {
+  const core::GridSize& gs = chart.grid();
+  for (int v = 0; v <= gs.m(); ++v) {
+    for (int u = 0; u <= gs.m(); ++u) {
+      const core::GridPoint c = chart.canonical(u, v);
+      h[gs.index(u, v)] = h[gs.index(c.u, c.v)];
+    }
+  }
+}
+
+// The reference checks' field: noise in [0, amplitude) at every cell, or only at the cells
+// within 7 cells of `spot` (box: the noisy cells' bounds), twins equal.
+struct ReferenceScene {
+  std::vector<float> h;
+  terrain::VertexBox box;
+};
+inline ReferenceScene referenceScene(const sand::SandGrid& g, core::GridPoint spot,
+                                     double amplitude, bool everywhere, unsigned seed) {
+  const core::GridSize& gs = g.grid();
+  const int m = g.m();
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> noise(0.0, amplitude);
+  const Eigen::Vector3d c = g.point(spot.u, spot.v);
+  const double radius = 7.0 * g.chord(spot.u, spot.v, 1);
+  std::vector<float> h(gs.count(), 0.0f);
+  int u0 = m, u1 = 0, v0 = m, v1 = 0;
+  for (int v = 0; v <= m; ++v) {
+    for (int u = 0; u <= m; ++u) {
+      if (!g.isCell(u, v)) continue;
+      if (!everywhere && (g.point(u, v) - c).norm() > radius) continue;
+      h[gs.index(u, v)] = float(noise(rng));
+      u0 = std::min(u0, u), u1 = std::max(u1, u), v0 = std::min(v0, v), v1 = std::max(v1, v);
+    }
+  }
+  copyFromCanonical(g.chart(), h);
+  return {std::move(h), {u0, u1, v0, v1}};
+}
+
 // One thermal step of docs/SAND.md's rule ("Thermal erosion") on a glued chart, cell by cell from
 // SandGrid's links, chords and areas: the reference the tiled kernels must equal bit for bit (the
 // same operations in the same order; a missing link adds nothing). h holds every grid vertex,
@@ -262,12 +302,7 @@ inline void thermalReferenceStep(const sand::SandGrid& g, std::vector<double>& h
       next[i] = h[i] + net * (1.0 / g.cellArea(u, v));
     }
   }
-  for (int v = 0; v <= m; ++v) {
-    for (int u = 0; u <= m; ++u) {
-      const core::GridPoint c = g.chart().canonical(u, v);
-      next[gs.index(u, v)] = next[gs.index(c.u, c.v)];
-    }
-  }
+  copyFromCanonical(g.chart(), next);
   h.swap(next);
 }
 
@@ -278,36 +313,15 @@ inline void checkThermalAgainstReference(std::shared_ptr<const core::Chart> char
                                          core::GridPoint spot, double amplitude, int steps,
                                          const std::string& what) {
   const sand::SandGrid g(chart);
-  const core::GridSize& gs = g.grid();
-  const int m = g.m();
   const sand::Material mat = sand::Material::sand();
   for (const bool everywhere : {true, false}) {
-    std::mt19937 rng(everywhere ? 11 : 12);
-    std::uniform_real_distribution<double> noise(0.0, amplitude);
-    const Eigen::Vector3d c = g.point(spot.u, spot.v);
-    const double radius = 7.0 * g.chord(spot.u, spot.v, 1);
-    std::vector<float> h(gs.count(), 0.0f);
-    int u0 = m, u1 = 0, v0 = m, v1 = 0;
-    for (int v = 0; v <= m; ++v) {
-      for (int u = 0; u <= m; ++u) {
-        if (!g.isCell(u, v)) continue;
-        if (!everywhere && (g.point(u, v) - c).norm() > radius) continue;
-        h[gs.index(u, v)] = float(noise(rng));
-        u0 = std::min(u0, u), u1 = std::max(u1, u), v0 = std::min(v0, v), v1 = std::max(v1, v);
-      }
-    }
-    for (int v = 0; v <= m; ++v) {
-      for (int u = 0; u <= m; ++u) {
-        const core::GridPoint p = chart->canonical(u, v);
-        h[gs.index(u, v)] = h[gs.index(p.u, p.v)];
-      }
-    }
-    std::vector<double> ref(h.begin(), h.end()), got;
-    sand::SandField f(chart, h);
+    ReferenceScene scene = referenceScene(g, spot, amplitude, everywhere, everywhere ? 11 : 12);
+    std::vector<double> ref(scene.h.begin(), scene.h.end()), got;
+    sand::SandField f(chart, scene.h);
     if (everywhere) {
       f.markAll();
     } else {
-      f.mark({u0, u1, v0, v1});
+      f.mark(scene.box);
     }
     for (int step = 0; step < steps; ++step) {
       f.thermalStep(mat);
