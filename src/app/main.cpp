@@ -3,6 +3,7 @@
 #include <iostream>
 
 #include "app/command_registry.hpp"
+#include "app/openmp_wait.hpp"
 #include "core/input_error.hpp"
 
 namespace ps::app {
@@ -13,6 +14,7 @@ std::vector<CommandRegistrar>& registeredCommands() {
 }  // namespace ps::app
 
 int main(int argc, char** argv) {
+  ps::app::settleOpenMpWaiting(argc, argv);
   CLI::App cli{"PlanetSculpt: sculpt spherical planets in augmented reality"};
   cli.require_subcommand(1);
   std::vector<std::pair<CLI::App*, ps::app::CommandAction>> commands;
