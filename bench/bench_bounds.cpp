@@ -39,7 +39,7 @@ void benchBounds(const BenchOptions& options, std::ostream& out) {
   }
 }
 
-static const BenchRegistration kRegistered(
+static const BenchRegistration kBounds(
     "bounds", "The wedgie rule against hybrid-exact bounds: build time, triangles for an error",
     benchBounds);
 

@@ -243,7 +243,7 @@ void benchDeform(const BenchOptions& options, const DeformSettings& only, std::o
   }
 }
 
-static const BenchRegistration kRegistered(
+static const BenchRegistration kDeform(
     "deform", "Paper 003's tables: one brush edit through the pipeline per grid, latitude, radius",
     [](CLI::App& command) -> BenchFunction {
       auto only = std::make_shared<DeformSettings>();

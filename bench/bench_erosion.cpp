@@ -394,9 +394,9 @@ void benchErosion(const BenchOptions& options, std::ostream& out) {
   omp_set_num_threads(saved);
 }
 
-static const BenchRegistration kRegistered(
+static const BenchRegistration kErosion(
     "erosion", "The sand core's throughput and the frames a crater needs to settle", benchErosion);
-static const BenchRegistration kRegisteredCharts(
+static const BenchRegistration kErosionCharts(
     "erosion-charts", "The sand core's rate on the four sphere charts in turn, ratios to lat-long",
     [](CLI::App& command) -> BenchFunction {
       auto only = std::make_shared<ChartsSettings>();

@@ -368,7 +368,7 @@ void benchExport(const BenchOptions& options, std::ostream& out) {
   fs::remove_all(work, ec);
 }
 
-static const BenchRegistration kRegistered(
+static const BenchRegistration kExport(
     "export", "View-independent meshes and TINs against Martini and Delatin", benchExport);
 
 }  // namespace ps::bench

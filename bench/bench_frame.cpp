@@ -62,19 +62,8 @@ namespace {
 constexpr int kOverviewEvery = 4;
 constexpr std::size_t kBudget = 70000;
 
-std::string loadAverage() {
-  std::ifstream f("/proc/loadavg");
-  std::string a, b, c;
-  f >> a >> b >> c;
-  return a + " " + b + " " + c;
-}
-
 double ms(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-}
-
-double round3(double v) {
-  return std::round(v * 1000) / 1000;
 }
 
 Eigen::Matrix3d eigenK(const cv::Matx33d& K) {
@@ -438,7 +427,7 @@ void benchCase(const BenchOptions& options, std::ostream& out, nlohmann::json ma
 
 }  // namespace
 
-static const BenchRegistration kRegistered(
+static const BenchRegistration kFrame(
     "frame", "The AR app's whole frame on data/demo.mkv: track, edit, tessellate, render",
     [](CLI::App& command) -> BenchFunction {
       auto charts = std::make_shared<ChartChoice>();

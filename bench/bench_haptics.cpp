@@ -52,7 +52,7 @@ namespace {
 
 constexpr double kGlobe = 0.06;  // m: the displayed planet's radius (tracking's default)
 
-std::array<double, 3> loadAverage() {
+std::array<double, 3> loadAverageValues() {
   std::array<double, 3> l{-1, -1, -1};
   std::ifstream f("/proc/loadavg");
   f >> l[0] >> l[1] >> l[2];
@@ -103,7 +103,7 @@ void run(bool withEditor, const BenchOptions& options, terrain::Terrain& planet,
   session.focus(dirAt(30, 20) * R);
   haptics::LoopOptions lo;
   lo.timingCapacity = std::size_t(seconds * cfg.haptics.rateHz * 1.5) + 1000;
-  const auto load0 = loadAverage();
+  const auto load0 = loadAverageValues();
   const int savedThreads = omp_get_max_threads();
   omp_set_num_threads(1);
   terrain::Tessellator tess;
@@ -139,7 +139,7 @@ void run(bool withEditor, const BenchOptions& options, terrain::Terrain& planet,
   if (withEditor) session.editorFrame();
   session.stopLoop();
   omp_set_num_threads(savedThreads);
-  const auto load1 = loadAverage();
+  const auto load1 = loadAverageValues();
 
   std::vector<double> period, compute;
   for (const haptics::TickTiming& x : tt) {
@@ -276,7 +276,7 @@ void tickCompare(const BenchOptions& options, const std::vector<const terrain::T
           {"tick_time_ratio_vs_latlong", median(ratios)},
           {"tick_time_ratio_vs_latlong_min", *std::min_element(ratios.begin(), ratios.end())},
           {"tick_time_ratio_vs_latlong_max", *std::max_element(ratios.begin(), ratios.end())},
-          {"load_avg", loadAverage()},
+          {"load_avg", loadAverageValues()},
           {"note", "offline ticks (no sleeps), charts in turn; shared machine"}};
       out << j.dump() << "\n" << std::flush;
       std::cerr << "haptics tick " << scene.name << " " << r.planet->chart().name() << ": "
@@ -379,7 +379,7 @@ void demoReplay(const BenchOptions& options, std::ostream& out) {
                       {"on_frame_ms_median", median(frameMs)},
                       {"on_frame_ms_max",
                        frameMs.empty() ? 0.0 : *std::max_element(frameMs.begin(), frameMs.end())},
-                      {"load_avg", loadAverage()}};
+                      {"load_avg", loadAverageValues()}};
   out << j.dump() << "\n" << std::flush;
   std::cerr << "haptics demo-replay: " << frames << " frames, " << rs.size() << " ticks, "
             << touchingTicks << " touching, max " << maxF << " N, onFrame median "
@@ -400,8 +400,8 @@ void benchHaptics(const BenchOptions& options, std::ostream& out) {
   demoReplay(options, out);
 }
 
-static const BenchRegistration kRegistered("haptics",
-                                           "The 1 kHz haptic loop beside the editor thread's work",
-                                           benchHaptics);
+static const BenchRegistration kHaptics("haptics",
+                                        "The 1 kHz haptic loop beside the editor thread's work",
+                                        benchHaptics);
 
 }  // namespace ps::bench

@@ -41,13 +41,6 @@ namespace ps::bench {
 
 namespace {
 
-std::string loadAverage() {
-  std::ifstream f("/proc/loadavg");
-  std::string a, b, c;
-  f >> a >> b >> c;
-  return a + " " + b + " " + c;
-}
-
 struct LiveRun {
   std::vector<double> frameMs;
   int strokes = 0;
@@ -128,10 +121,6 @@ LiveRun runSession(terrain::Terrain& planet, double seconds, double autosave, do
   return run;
 }
 
-double r3(double v) {
-  return std::round(v * 1000) / 1000;
-}
-
 }  // namespace
 
 // `bench live`'s options; 0 / empty: the defaults (below).
@@ -187,20 +176,20 @@ void benchLive(const BenchOptions& options, const LiveSettings& settings, std::o
           {"chart", core::toString(app::kDefaultChart)},
           {"frames", r->frameMs.size()},
           {"strokes", r->strokes},
-          {"frame_p50_ms", r3(median(r->frameMs))},
-          {"frame_p99_ms", r3(percentile(r->frameMs, 0.99))},
-          {"frame_max_ms", r3(percentile(r->frameMs, 1.0))},
-          {"frame_mean_ms", r3(std::accumulate(r->frameMs.begin(), r->frameMs.end(), 0.0) /
-                               double(r->frameMs.size()))}};
+          {"frame_p50_ms", round3(median(r->frameMs))},
+          {"frame_p99_ms", round3(percentile(r->frameMs, 0.99))},
+          {"frame_max_ms", round3(percentile(r->frameMs, 1.0))},
+          {"frame_mean_ms", round3(std::accumulate(r->frameMs.begin(), r->frameMs.end(), 0.0) /
+                                   double(r->frameMs.size()))}};
       if (saving) {
         row["autosave_s"] = autosave;
         row["saves_started"] = r->savesStarted;
         row["saves_done"] = r->writer.savesDone;
-        row["save_max_ms"] = r3(r->writer.saveMaxMs);
+        row["save_max_ms"] = round3(r->writer.saveMaxMs);
         row["records"] = r->writer.records;
-        row["record_write_max_ms"] = r3(r->writer.recordMaxMs);
-        row["record_on_disk_after_max_ms"] = r3(r->writer.recordLagMaxMs);
-        row["frame_copy_max_ms"] = r3(r->copyMaxMs);
+        row["record_write_max_ms"] = round3(r->writer.recordMaxMs);
+        row["record_on_disk_after_max_ms"] = round3(r->writer.recordLagMaxMs);
+        row["frame_copy_max_ms"] = round3(r->copyMaxMs);
       }
       out << row.dump() << std::endl;
     }
@@ -208,8 +197,8 @@ void benchLive(const BenchOptions& options, const LiveSettings& settings, std::o
                           {"side", side},
                           {"case", "saving_on_vs_off"},
                           {"pace", pace},
-                          {"p99_ratio", r3(p99On / p99Off)},
-                          {"max_ratio", r3(maxOn / maxOff)},
+                          {"p99_ratio", round3(p99On / p99Off)},
+                          {"max_ratio", round3(maxOn / maxOff)},
                           {"p99_target", 1.2},
                           {"max_target", 2.0},
                           {"nproc", std::thread::hardware_concurrency()},
@@ -235,7 +224,7 @@ std::string notAGridSide(const std::string& text) {
   return "side " + text + " is not 2^n + 1 (3 .. 16385)";
 }
 
-static const BenchRegistration kRegistered(
+static const BenchRegistration kLive(
     "live", "The live frame loop with the session's saving on and off",
     [](CLI::App& command) -> BenchFunction {
       auto s = std::make_shared<LiveSettings>();

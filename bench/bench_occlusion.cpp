@@ -154,10 +154,6 @@ Tally measureTool(const OcclusionRecording& rec, int gridLevel, render::PlanetRe
   return t;
 }
 
-double r4(double v) {
-  return std::isfinite(v) ? std::round(v * 1e4) / 1e4 : -1;
-}
-
 nlohmann::json toolRow(const OcclusionRecording& rec, const Tally& t) {
   std::vector<double> ious = t.frameIoU;
   nlohmann::json row = {{"bench", "occlusion"},
@@ -174,18 +170,19 @@ nlohmann::json toolRow(const OcclusionRecording& rec, const Tally& t) {
                         {"target_false_hidden", kFalseHiddenTarget}};
   if (t.inFront > 0) {
     std::sort(ious.begin(), ious.end());
-    row["iou"] = r4(t.intersection / t.unionPx);  // over all the frames' pixels
+    row["iou"] = round4OrMinusOne(t.intersection / t.unionPx);  // over all the frames' pixels
     // Over the frames the tracker gave the tool a pose (a tool lost hides nothing).
-    row["iou_tool_tracked"] = r4(t.trackedUnion > 0 ? t.trackedIntersection / t.trackedUnion : 0.0);
-    row["iou_frame_median"] = r4(median(ious));
-    row["iou_frame_p10"] = r4(percentile(ious, 0.1));
-    row["iou_frame_min"] = r4(ious.front());
+    row["iou_tool_tracked"] =
+        round4OrMinusOne(t.trackedUnion > 0 ? t.trackedIntersection / t.trackedUnion : 0.0);
+    row["iou_frame_median"] = round4OrMinusOne(median(ious));
+    row["iou_frame_p10"] = round4OrMinusOne(percentile(ious, 0.1));
+    row["iou_frame_min"] = round4OrMinusOne(ious.front());
     row["hidden_px_true"] = t.trueHidden;
     row["hidden_px_estimated"] = t.estimatedHidden;
   }
   if (t.nothingInFront > 0) {
-    row["false_hidden"] = r4(t.planetPx > 0 ? t.falseHidden / t.planetPx : 0.0);
-    row["false_hidden_frame_max"] = r4(t.worstFalse);
+    row["false_hidden"] = round4OrMinusOne(t.planetPx > 0 ? t.falseHidden / t.planetPx : 0.0);
+    row["false_hidden_frame_max"] = round4OrMinusOne(t.worstFalse);
     row["frames_with_false_hides"] = t.framesWithFalseHides;
     row["planet_px"] = t.planetPx;
   }
@@ -298,7 +295,7 @@ void benchOcclusion(const BenchOptions& o, const HandBenchSettings& hand, std::o
   benchOcclusionHand(o, hand, out);
 }
 
-static const BenchRegistration kRegistered(
+static const BenchRegistration kOcclusion(
     "occlusion", "The tool and the hand in front of the planet: masks against the truth",
     [](CLI::App& command) -> BenchFunction {
       auto hand = std::make_shared<HandBenchSettings>();

@@ -37,11 +37,7 @@ namespace ps::bench {
 
 namespace {
 
-double r4(double v) {
-  return std::isfinite(v) ? std::round(v * 10000) / 10000 : -1;
-}
-
-tracking::SynthKey key(double frame, double azimuth, double gain, double noise) {
+tracking::SynthKey handKey(double frame, double azimuth, double gain, double noise) {
   tracking::SynthKey k;
   k.frame = frame;
   k.camDistance = 0.6;
@@ -66,16 +62,16 @@ tracking::SynthKey withHand(tracking::SynthKey k, double x, double y, double rad
   return k;
 }
 
-struct Recording {
+struct HandRecording {
   std::string name;
   tracking::SynthScript script;
   bool shadow = false;  // the moving cast shadow laid over the frames
 };
 
 // The board scenes the rows run: the board and tool layouts from the source tree.
-std::vector<Recording> recordings(bool quick) {
+std::vector<HandRecording> recordings(bool quick) {
   const tracking::SynthScript board = tracking::builtinScene("board-hand", app::sourceDir());
-  std::vector<Recording> out;
+  std::vector<HandRecording> out;
   auto make = [&](const std::string& name, std::uint64_t seed, std::vector<tracking::SynthKey> keys,
                   bool shadow) {
     tracking::SynthScript s = board;
@@ -87,31 +83,31 @@ std::vector<Recording> recordings(bool quick) {
   // A hand held high (16 cm, above the planet's top) sweeping across the planet from the left
   // while the camera stands, after 20 frames of the board alone.
   make("hand-sweep", 41,
-       {withHand(key(0, -90, 1, 1.5), -0.4, -0.03, 0.06, 0.16),
-        withHand(key(20, -90, 1, 1.5), -0.4, -0.03, 0.06, 0.16),
-        withHand(key(20 + 80 * n, -90, 1, 1.5), 0.4, -0.03, 0.06, 0.16)},
+       {withHand(handKey(0, -90, 1, 1.5), -0.4, -0.03, 0.06, 0.16),
+        withHand(handKey(20, -90, 1, 1.5), -0.4, -0.03, 0.06, 0.16),
+        withHand(handKey(20 + 80 * n, -90, 1, 1.5), 0.4, -0.03, 0.06, 0.16)},
        false);
   // The camera orbiting while a hand comes in from the camera's side, lower (12 cm), rests in
   // front of the planet and leaves.
   make("hand-orbit", 43,
-       {withHand(key(0, -100, 1, 2), 0.0, -0.45, 0.05, 0.12),
-        withHand(key(20, -95, 1, 2), 0.0, -0.45, 0.05, 0.12),
-        withHand(key(20 + 40 * n, -85, 1, 2), 0.02, -0.06, 0.05, 0.12),
-        withHand(key(20 + 70 * n, -75, 1, 2), 0.02, -0.06, 0.05, 0.12),
-        withHand(key(20 + 110 * n, -70, 1, 2), 0.0, -0.45, 0.05, 0.12)},
+       {withHand(handKey(0, -100, 1, 2), 0.0, -0.45, 0.05, 0.12),
+        withHand(handKey(20, -95, 1, 2), 0.0, -0.45, 0.05, 0.12),
+        withHand(handKey(20 + 40 * n, -85, 1, 2), 0.02, -0.06, 0.05, 0.12),
+        withHand(handKey(20 + 70 * n, -75, 1, 2), 0.02, -0.06, 0.05, 0.12),
+        withHand(handKey(20 + 110 * n, -70, 1, 2), 0.0, -0.45, 0.05, 0.12)},
        false);
   // A hand at 9 cm, lower than the planet's top: where its disc passes through the sphere the
   // planet is in front (the truth's ray test), which the camera image cannot tell.
   make("hand-low", 47,
-       {withHand(key(0, -90, 1, 1.5), 0.45, -0.02, 0.06, 0.09),
-        withHand(key(20, -90, 1, 1.5), 0.45, -0.02, 0.06, 0.09),
-        withHand(key(20 + 80 * n, -90, 1, 1.5), -0.45, -0.02, 0.06, 0.09)},
+       {withHand(handKey(0, -90, 1, 1.5), 0.45, -0.02, 0.06, 0.09),
+        withHand(handKey(20, -90, 1, 1.5), 0.45, -0.02, 0.06, 0.09),
+        withHand(handKey(20 + 80 * n, -90, 1, 1.5), -0.45, -0.02, 0.06, 0.09)},
        false);
   // Nothing in front: the light drops to 60 % and comes back brighter, camera noise sigma 3,
   // the camera drifting, a shadow crossing the planet.
   make("lighting-noise", 53,
-       {key(0, -90, 1.0, 3), key(20, -90, 1.0, 3), key(20 + 40 * n, -80, 0.6, 3),
-        key(20 + 80 * n, -75, 1.15, 3), key(20 + 110 * n, -85, 0.8, 3)},
+       {handKey(0, -90, 1.0, 3), handKey(20, -90, 1.0, 3), handKey(20 + 40 * n, -80, 0.6, 3),
+        handKey(20 + 80 * n, -75, 1.15, 3), handKey(20 + 110 * n, -85, 0.8, 3)},
        true);
   return out;
 }
@@ -132,7 +128,7 @@ void castShadow(cv::Mat& image, double progress, const Eigen::Vector3d& centreCa
   f.convertTo(image, CV_8UC3);
 }
 
-struct Tally {
+struct HandTally {
   double inter = 0, uni = 0, hidden = 0;
   int handFrames = 0, clearFrames = 0, frames = 0;
   std::vector<double> ious, hiddenPerFrame, ms;
@@ -160,16 +156,16 @@ struct Tally {
   nlohmann::json json() const {
     return {{"frames_masked", frames},
             {"hand_frames", handFrames},
-            {"iou", r4(uni > 0 ? inter / uni : -1)},
-            {"iou_median", r4(median(ious))},
-            {"iou_p10", r4(percentile(ious, 0.1))},
+            {"iou", round4OrMinusOne(uni > 0 ? inter / uni : -1)},
+            {"iou_median", round4OrMinusOne(median(ious))},
+            {"iou_p10", round4OrMinusOne(percentile(ious, 0.1))},
             {"clear_frames", clearFrames},
-            {"hidden_by_mistake", r4(clearFrames > 0 ? hidden / clearFrames : 0)},
+            {"hidden_by_mistake", round4OrMinusOne(clearFrames > 0 ? hidden / clearFrames : 0)},
             {"hidden_by_mistake_worst_frame",
-             r4(hiddenPerFrame.empty()
-                    ? 0
-                    : *std::max_element(hiddenPerFrame.begin(), hiddenPerFrame.end()))},
-            {"mask_ms", r4(median(ms))}};
+             round4OrMinusOne(hiddenPerFrame.empty() ? 0
+                                                     : *std::max_element(hiddenPerFrame.begin(),
+                                                                         hiddenPerFrame.end()))},
+            {"mask_ms", round4OrMinusOne(median(ms))}};
   }
 };
 
@@ -186,8 +182,8 @@ tracking::HandMaskConfig handMaskConfig(const HandBenchSettings& settings) {
   return hc;
 }
 
-void runRecording(const Recording& rec, const BenchOptions& o, const HandBenchSettings& settings,
-                  std::ostream& out) {
+void runRecording(const HandRecording& rec, const BenchOptions& o,
+                  const HandBenchSettings& settings, std::ostream& out) {
   const tracking::SynthRenderer renderer(rec.script);
   const auto chart = std::make_shared<core::LatLongChart>(core::GridSize::fromSide(129), 1.0e6);
   terrain::Terrain planet(chart, std::vector<float>(chart->grid().count(), 0.0f));
@@ -198,7 +194,7 @@ void runRecording(const Recording& rec, const BenchOptions& o, const HandBenchSe
   replay::FrameStepper stepper(rec.script.camera, planet, ro);
   const tracking::HandMaskConfig hc = handMaskConfig(settings);
   tracking::HandMasker tracked(hc), truthPosed(hc);
-  Tally onTracked, onTruth;
+  HandTally onTracked, onTruth;
   std::vector<double> trackMs;
   int withPose = 0;
   const int frames = renderer.frames();
@@ -270,10 +266,11 @@ void runRecording(const Recording& rec, const BenchOptions& o, const HandBenchSe
                         {"pose", onTrackedPose ? "tracked" : "truth"},
                         {"frames", frames},
                         {"frames_with_pose", onTrackedPose ? withPose : frames},
-                        {"track_ms", r4(median(trackMs))}};
+                        {"track_ms", round4OrMinusOne(median(trackMs))}};
     const auto& tally = onTrackedPose ? onTracked : onTruth;
     j.update(tally.json());
-    j["mask_ms_over_track_ms"] = r4(median(tally.ms) / std::max(1e-9, median(trackMs)));
+    j["mask_ms_over_track_ms"] =
+        round4OrMinusOne(median(tally.ms) / std::max(1e-9, median(trackMs)));
     out << j.dump() << std::endl;
   }
 }
@@ -307,7 +304,7 @@ void benchOcclusionHand(const BenchOptions& o, const HandBenchSettings& settings
 
 // The hand rows alone, without the tool rows' GL context and renders: the mask's own figures
 // (and its time beside the tracking's) in a minute, on a machine without a display too.
-static const BenchRegistration kRegistered(
+static const BenchRegistration kOcclusionHand(
     "occlusion-hand", "The hand rows of `bench occlusion` alone (no GL context needed)",
     [](CLI::App& command) -> BenchFunction {
       auto hand = std::make_shared<HandBenchSettings>();

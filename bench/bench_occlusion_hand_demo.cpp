@@ -48,10 +48,6 @@ namespace {
 
 constexpr int kToolEdgePx = 4;
 
-double r4(double v) {
-  return std::isfinite(v) ? std::round(v * 1e4) / 1e4 : -1;
-}
-
 // The ray through pixel (u, v) of pinhole K, z = 1.
 Eigen::Vector3d rayOf(const cv::Matx33d& K, double u, double v) {
   return {(u - K(0, 2)) / K(0, 0), (v - K(1, 2)) / K(1, 1), 1.0};
@@ -219,7 +215,7 @@ nlohmann::json demoRow(const DemoTally& t) {
           {"frames_with_pose", t.masked},
           {"frames_masked", t.masked},
           {"frames_showing", t.framesShowing},
-          {"shown_px_median", r4(median(t.shownPerFrame))},
+          {"shown_px_median", round4OrMinusOne(median(t.shownPerFrame))},
           {"planet_px", t.planetPx},
           {"shown_px", t.shownPx},
           {"shown_hand_in_front_px", t.handFront},
@@ -227,16 +223,16 @@ nlohmann::json demoRow(const DemoTally& t) {
           {"shown_hand_behind_px", t.handBehind},
           {"shown_tool_edge_px", t.toolEdge},
           {"shown_board_px", t.board},
-          {"false_hidden", r4(falsePx / planet)},
-          {"false_hidden_board", r4(t.board / planet)},
-          {"false_hidden_frame_max", r4(t.worstFalse)},
+          {"false_hidden", round4OrMinusOne(falsePx / planet)},
+          {"false_hidden_board", round4OrMinusOne(t.board / planet)},
+          {"false_hidden_frame_max", round4OrMinusOne(t.worstFalse)},
           {"false_hidden_worst_frame", t.worstFrame},
           {"frames_with_false_hides", t.framesWithFalse},
-          {"iou", r4(t.uni > 0 ? t.inter / t.uni : -1)},
+          {"iou", round4OrMinusOne(t.uni > 0 ? t.inter / t.uni : -1)},
           {"clear_frames", t.clearFrames},
           {"clear_frames_showing", t.clearFramesShowing},
-          {"hidden_by_mistake", r4(t.clearShownPx / std::max(1.0, t.clearPlanetPx))},
-          {"hidden_by_mistake_worst_frame", r4(t.clearWorst)},
+          {"hidden_by_mistake", round4OrMinusOne(t.clearShownPx / std::max(1.0, t.clearPlanetPx))},
+          {"hidden_by_mistake_worst_frame", round4OrMinusOne(t.clearWorst)},
           {"target_hidden_by_mistake", 0.01}};
 }
 

@@ -27,12 +27,12 @@ namespace ps::bench {
 
 namespace {
 
-struct View {
+struct RenderView {
   std::string name;
   terrain::Camera camera;
 };
 
-std::vector<View> views(double R, int w, int h) {
+std::vector<RenderView> views(double R, int w, int h) {
   using Eigen::Vector3d;
   const double fov = 2 * std::atan(0.5 * h / 600.0);  // the demo camera's 600 px focal length
   auto look = [&](const Vector3d& eye, const Vector3d& at) {

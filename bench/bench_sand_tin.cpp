@@ -49,11 +49,10 @@
 #include "sand/tin_sand.hpp"
 #include "tin/triangle_error.hpp"
 
-namespace ps::bench {
+// In the namespace of the experiments' helpers (sand_tin_strokes.hpp), which it uses throughout.
+namespace ps::bench::sandtin {
 
 namespace {
-
-using namespace sandtin;
 
 nlohmann::json tinRow(const std::string& experiment, const TinRun& r, double trace, int startN) {
   const auto& t = r.sand->tin();
@@ -405,7 +404,7 @@ void benchSandTin(const BenchOptions& options, const std::vector<std::string>& o
 
 }  // namespace
 
-static const BenchRegistration kRegistered(
+static const BenchRegistration kSandTin(
     "sand-tin", "The sand TIN in paper 000's experiments, beside the grid core",
     [](CLI::App& command) -> BenchFunction {
       auto only = std::make_shared<std::vector<std::string>>();
@@ -415,4 +414,4 @@ static const BenchRegistration kRegistered(
       return [only](const BenchOptions& o, std::ostream& out) { benchSandTin(o, *only, out); };
     });
 
-}  // namespace ps::bench
+}  // namespace ps::bench::sandtin

@@ -102,7 +102,7 @@ void benchSandTinCharts(const BenchOptions& options, std::ostream& out) {
 
 }  // namespace
 
-static const BenchRegistration kRegistered(
+static const BenchRegistration kSandTinCharts(
     "sand-tin-charts", "the TIN sand tool's same stamp on every chart: time, points, volume",
     benchSandTinCharts);
 

@@ -205,7 +205,7 @@ void benchTessellate(const BenchOptions& options, const ChartChoice& charts, std
   benchTessellateCharts(options, charts, out);
 }
 
-static const BenchRegistration kRegistered(
+static const BenchRegistration kTessellate(
     "tessellate", "View-dependent tessellation time against measured screen error",
     [](CLI::App& command) -> BenchFunction {
       auto charts = std::make_shared<ChartChoice>();

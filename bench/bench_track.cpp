@@ -212,10 +212,6 @@ struct TrackTally {
   }
 };
 
-double r3(double v) {
-  return std::round(v * 1000) / 1000;
-}
-
 // The recording's row: times, detection rates, tip and rotation errors, flips, the five worst
 // frames and the tip error by distance and tilt.
 nlohmann::json trackRow(const Recording& rec, const Config& c, TrackTally& t) {
@@ -226,28 +222,28 @@ nlohmann::json trackRow(const Recording& rec, const Config& c, TrackTally& t) {
       {"resolution",
        std::to_string(rec.script.size.width) + "x" + std::to_string(rec.script.size.height)},
       {"frames", rec.frames.size()},
-      {"ms", r3(median(t.ms))},
-      {"ms_p95", r3(percentile(t.ms, 0.95))},
-      {"cpu_ms", r3(median(t.cpuMs))},
-      {"cpu_ms_p95", r3(percentile(t.cpuMs, 0.95))},
-      {"tool_detected", r3(t.toolVisible ? double(t.toolFound) / t.toolVisible : 0)},
-      {"planet_detected", r3(t.planetVisible ? double(t.planetFound) / t.planetVisible : 0)},
+      {"ms", round3(median(t.ms))},
+      {"ms_p95", round3(percentile(t.ms, 0.95))},
+      {"cpu_ms", round3(median(t.cpuMs))},
+      {"cpu_ms_p95", round3(percentile(t.cpuMs, 0.95))},
+      {"tool_detected", round3(t.toolVisible ? double(t.toolFound) / t.toolVisible : 0)},
+      {"planet_detected", round3(t.planetVisible ? double(t.planetFound) / t.planetVisible : 0)},
       {"tip_frames", t.trackedBoth},
-      {"tip_error_median_mm", r3(median(t.tipErr))},
-      {"tip_error_p95_mm", r3(percentile(t.tipErr, 0.95))},
-      {"tip_error_raw_median_mm", r3(median(t.tipRawErr))},
-      {"tip_error_raw_p95_mm", r3(percentile(t.tipRawErr, 0.95))},
-      {"tip_camera_error_median_mm", r3(median(t.tipCamErr))},
-      {"rotation_error_median_deg", r3(median(t.rotErr))},
+      {"tip_error_median_mm", round3(median(t.tipErr))},
+      {"tip_error_p95_mm", round3(percentile(t.tipErr, 0.95))},
+      {"tip_error_raw_median_mm", round3(median(t.tipRawErr))},
+      {"tip_error_raw_p95_mm", round3(percentile(t.tipRawErr, 0.95))},
+      {"tip_camera_error_median_mm", round3(median(t.tipCamErr))},
+      {"rotation_error_median_deg", round3(median(t.rotErr))},
       {"flips", t.flips},
       {"raw_flips", t.rawFlips},
       {"touching_frames", t.touchingFrames},
       {"control_vertex_within_3mm",
-       r3(t.touchingFrames ? double(t.cvWithin) / t.touchingFrames : 0)},
-      {"tool_tilt_max_deg", r3(t.maxToolTilt)},
+       round3(t.touchingFrames ? double(t.cvWithin) / t.touchingFrames : 0)},
+      {"tool_tilt_max_deg", round3(t.maxToolTilt)},
       {"drawn_off_10mm_frames", t.drawnOff10},
       {"drawn_off_10mm_fraction",
-       r3(rec.frames.empty() ? 0 : double(t.drawnOff10) / rec.frames.size())},
+       round3(rec.frames.empty() ? 0 : double(t.drawnOff10) / rec.frames.size())},
       {"filtered", c.filter}};
   std::sort(t.worst.begin(), t.worst.end(),
             [](const auto& a, const auto& b) { return a.first > b.first; });
@@ -255,10 +251,10 @@ nlohmann::json trackRow(const Recording& rec, const Config& c, TrackTally& t) {
     j["worst"].push_back(t.worst[w].second);
   for (const auto& [k, v] : t.byDistance)
     j["tip_error_by_distance_m"][k] = {
-        {"median_mm", r3(median(v))}, {"p95_mm", r3(percentile(v, 0.95))}, {"n", v.size()}};
+        {"median_mm", round3(median(v))}, {"p95_mm", round3(percentile(v, 0.95))}, {"n", v.size()}};
   for (const auto& [k, v] : t.byTilt)
     j["tip_error_by_tool_tilt_deg"][k] = {
-        {"median_mm", r3(median(v))}, {"p95_mm", r3(percentile(v, 0.95))}, {"n", v.size()}};
+        {"median_mm", round3(median(v))}, {"p95_mm", round3(percentile(v, 0.95))}, {"n", v.size()}};
   return j;
 }
 

@@ -39,10 +39,6 @@ namespace {
 
 constexpr double kTouch = 0.004;  // m, the replay's default touch distance
 
-double r3(double v) {
-  return std::isfinite(v) ? std::round(v * 1000) / 1000 : -1;
-}
-
 double fraction(int part, int whole) {
   return whole > 0 ? double(part) / whole : 1.0;
 }
@@ -76,17 +72,17 @@ class FrameDump {
         {"state", tracking::toString(sf.tool.state)},
         {"measured", sf.tool.measured},
         {"ids", sf.tool.ids},
-        {"rms", r3(sf.tool.rms)},
-        {"ratio", r3(sf.tool.ratio)},
+        {"rms", round3OrMinusOne(sf.tool.rms)},
+        {"ratio", round3OrMinusOne(sf.tool.ratio)},
         {"by_continuity", sf.tool.byContinuity},
-        {"dist_m", r3(truth.tool.t.norm())},
+        {"dist_m", round3OrMinusOne(truth.tool.t.norm())},
         {"planet_valid", sf.planetCentreValid},
         {"time", truth.time},
         {"truth_touch", truth.tipHeight <= kTouch && truth.toolVisible},
         {"step_touch", step.touching},
         {"truth_tip_cam", {truth.tipCamera.x(), truth.tipCamera.y(), truth.tipCamera.z()}},
-        {"detect_ms", r3(step.times.detectMs)},
-        {"track_ms", r3(step.times.trackMs)},
+        {"detect_ms", round3OrMinusOne(step.times.detectMs)},
+        {"track_ms", round3OrMinusOne(step.times.trackMs)},
         {"board_markers", sf.planet.ids.size()}};
     const Eigen::Quaterniond tq(truth.tool.R);
     dj["truth_q"] = {tq.w(), tq.x(), tq.y(), tq.z()};
@@ -103,14 +99,16 @@ class FrameDump {
     }
     if (sf.tipValid) dj["tip_cam"] = {sf.tipCamera.x(), sf.tipCamera.y(), sf.tipCamera.z()};
     if (sf.tool.measured)
-      dj["raw_rot_err"] = r3(tracking::rotationAngle(sf.tool.raw.R, truth.tool.R) * 180 / M_PI);
+      dj["raw_rot_err"] =
+          round3OrMinusOne(tracking::rotationAngle(sf.tool.raw.R, truth.tool.R) * 180 / M_PI);
     if (sf.tool.usable())
-      dj["rot_err"] = r3(tracking::rotationAngle(sf.tool.pose.R, truth.tool.R) * 180 / M_PI);
+      dj["rot_err"] =
+          round3OrMinusOne(tracking::rotationAngle(sf.tool.pose.R, truth.tool.R) * 180 / M_PI);
     if (sf.tipValid) {
-      dj["tip_err_mm"] = r3(1e3 * (sf.tipPlanet - truth.tipPlanet).norm());
+      dj["tip_err_mm"] = round3OrMinusOne(1e3 * (sf.tipPlanet - truth.tipPlanet).norm());
       if (sf.tool.measured)
         dj["raw_tip_err_mm"] =
-            r3(1e3 * (sf.tool.raw.apply(*L.tip) - truth.tool.apply(*L.tip)).norm());
+            round3OrMinusOne(1e3 * (sf.tool.raw.apply(*L.tip) - truth.tool.apply(*L.tip)).norm());
     }
     dump_ << dj.dump() << "\n";
   }
@@ -126,19 +124,20 @@ class FrameDump {
       const tracking::Pose inCam = truth.tool * L.markers[i].inBody();
       const double tilt =
           std::acos(std::clamp(inCam.R.col(2).dot(-inCam.t.normalized()), -1.0, 1.0)) * 180 / M_PI;
-      nlohmann::json fj = {{"id", L.markers[i].id}, {"tilt", r3(tilt)}};
+      nlohmann::json fj = {{"id", L.markers[i].id}, {"tilt", round3OrMinusOne(tilt)}};
       double area = 0;
       for (std::size_t k = 0; k < 4; ++k) area += truePx[i][k].cross(truePx[i][(k + 1) % 4]);
-      fj["area_px"] = r3(0.5 * std::abs(area));
+      fj["area_px"] = round3OrMinusOne(0.5 * std::abs(area));
       for (const auto& d : found)
         if (d.id == L.markers[i].id) {
           double e = 0;
           for (std::size_t k = 0; k < 4; ++k)
             e = std::max(e, cv::norm(d.corners[k] - truePx[i][k]));
-          fj["corner_err_px"] = r3(e);
+          fj["corner_err_px"] = round3OrMinusOne(e);
           nlohmann::json v = nlohmann::json::array();
           for (std::size_t k = 0; k < 4; ++k)
-            v.push_back({r3(d.corners[k].x - truePx[i][k].x), r3(d.corners[k].y - truePx[i][k].y)});
+            v.push_back({round3OrMinusOne(d.corners[k].x - truePx[i][k].x),
+                         round3OrMinusOne(d.corners[k].y - truePx[i][k].y)});
           fj["corner_err"] = v;
         }
       faces.push_back(fj);
@@ -254,42 +253,42 @@ nlohmann::json boardRow(const std::string& scene, const tracking::SynthScript& s
       {"expected_search_decimate", detector.expectedSearchDecimate},
       {"resolution", std::to_string(script.size.width) + "x" + std::to_string(script.size.height)},
       {"frames", frames},
-      {"ms", r3(median(t.ms))},
-      {"ms_p95", r3(percentile(t.ms, 0.95))},
-      {"detect_ms", r3(median(t.detectMs))},
-      {"track_ms", r3(median(t.trackMs))},
+      {"ms", round3OrMinusOne(median(t.ms))},
+      {"ms_p95", round3OrMinusOne(percentile(t.ms, 0.95))},
+      {"detect_ms", round3OrMinusOne(median(t.detectMs))},
+      {"track_ms", round3OrMinusOne(median(t.trackMs))},
       {"half_visible_frames", t.halfVisible},
-      {"pose_when_half_visible", r3(fraction(t.halfVisibleWithPose, t.halfVisible))},
+      {"pose_when_half_visible", round3OrMinusOne(fraction(t.halfVisibleWithPose, t.halfVisible))},
       {"hidden_still_frames", t.hiddenStill},
-      {"pose_when_hidden_still", r3(fraction(t.hiddenStillWithPose, t.hiddenStill))},
+      {"pose_when_hidden_still", round3OrMinusOne(fraction(t.hiddenStillWithPose, t.hiddenStill))},
       {"false_losses", t.hiddenStill - t.hiddenStillWithPose},
       {"hidden_moved_frames", t.hiddenMoved},
       {"held_after_camera_moved", t.heldMoved},
       {"false_holds", t.falseHolds},
-      {"pose_when_hidden_moved", r3(fraction(t.heldMoved, t.hiddenMoved))},
-      {"hidden_moved_centre_error_median_mm", r3(median(t.movedErr))},
-      {"hidden_moved_centre_error_p95_mm", r3(percentile(t.movedErr, 0.95))},
+      {"pose_when_hidden_moved", round3OrMinusOne(fraction(t.heldMoved, t.hiddenMoved))},
+      {"hidden_moved_centre_error_median_mm", round3OrMinusOne(median(t.movedErr))},
+      {"hidden_moved_centre_error_p95_mm", round3OrMinusOne(percentile(t.movedErr, 0.95))},
       {"drawn_off_10mm_frames", t.drawnOff10},
-      {"drawn_off_10mm_fraction", r3(fraction(t.drawnOff10, frames))},
+      {"drawn_off_10mm_fraction", round3OrMinusOne(fraction(t.drawnOff10, frames))},
       {"reacquisitions", t.reacquireFrames.size()},
-      {"reacquire_frames_median", r3(median(t.reacquireFrames))},
+      {"reacquire_frames_median", round3OrMinusOne(median(t.reacquireFrames))},
       {"reacquire_frames_max",
        t.reacquireFrames.empty()
            ? 0.0
            : *std::max_element(t.reacquireFrames.begin(), t.reacquireFrames.end())},
-      {"planet_centre_error_median_mm", r3(median(t.centreErr))},
-      {"planet_centre_error_p95_mm", r3(percentile(t.centreErr, 0.95))},
+      {"planet_centre_error_median_mm", round3OrMinusOne(median(t.centreErr))},
+      {"planet_centre_error_p95_mm", round3OrMinusOne(percentile(t.centreErr, 0.95))},
       {"tool_visible_frames", t.toolVisible},
-      {"tip_when_tool_visible", r3(fraction(t.toolWithTip, t.toolVisible))},
-      {"tip_error_median_mm", r3(median(t.tipErr))},
-      {"tip_error_p95_mm", r3(percentile(t.tipErr, 0.95))},
+      {"tip_when_tool_visible", round3OrMinusOne(fraction(t.toolWithTip, t.toolVisible))},
+      {"tip_error_median_mm", round3OrMinusOne(median(t.tipErr))},
+      {"tip_error_p95_mm", round3OrMinusOne(percentile(t.tipErr, 0.95))},
       {"flips", t.flips},
       {"touching_frames", t.touching},
-      {"sculpted_when_touching", r3(fraction(t.sculpted, t.touching))},
-      {"control_vertex_within_3mm", r3(fraction(t.cvWithin, t.sculpted))}};
+      {"sculpted_when_touching", round3OrMinusOne(fraction(t.sculpted, t.touching))},
+      {"control_vertex_within_3mm", round3OrMinusOne(fraction(t.cvWithin, t.sculpted))}};
   if (singleMarkerMs > 0) {
-    j["single_marker_ms"] = r3(singleMarkerMs);
-    j["ms_over_single_marker_default"] = r3(median(t.ms) / singleMarkerMs);
+    j["single_marker_ms"] = round3OrMinusOne(singleMarkerMs);
+    j["ms_over_single_marker_default"] = round3OrMinusOne(median(t.ms) / singleMarkerMs);
   }
   return j;
 }

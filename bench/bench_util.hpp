@@ -2,6 +2,7 @@
 // Small helpers shared by the benchmarks: medians, resident memory, wall clocks.
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <fstream>
 #include <string>
 #include <vector>
@@ -34,6 +35,27 @@ inline double procStatusMiB(const std::string& field) {
     std::getline(f, key);
   }
   return 0;
+}
+
+// A figure for a JSON row, rounded to 3 places.
+inline double round3(double v) {
+  return std::round(v * 1000) / 1000;
+}
+
+// Rounded to 3 or 4 places, and -1 where the figure is not finite (a ratio of nothing).
+inline double round3OrMinusOne(double v) {
+  return std::isfinite(v) ? std::round(v * 1000) / 1000 : -1;
+}
+inline double round4OrMinusOne(double v) {
+  return std::isfinite(v) ? std::round(v * 10000) / 10000 : -1;
+}
+
+// The machine's load averages over 1, 5 and 15 minutes, as /proc/loadavg writes them.
+inline std::string loadAverage() {
+  std::ifstream f("/proc/loadavg");
+  std::string a, b, c;
+  f >> a >> b >> c;
+  return a + " " + b + " " + c;
 }
 
 template <class F>

@@ -18,10 +18,6 @@ double msSince(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
 }
 
-double round3(double v) {
-  return std::round(v * 1000) / 1000;
-}
-
 // "with" is the time with the skip, "without" the time of doing the work.
 nlohmann::json saving(double withMs, double withoutMs) {
   return {{"with_ms", round3(withMs)},

@@ -22,7 +22,7 @@ namespace ps::io {
 
 namespace {
 
-[[noreturn]] void fail(const std::string& name, const std::string& what) {
+[[noreturn]] void failRaster(const std::string& name, const std::string& what) {
   throw core::InputError(name + ": " + what);
 }
 
@@ -56,16 +56,18 @@ struct DatasetCloser {
 };
 using Dataset = std::unique_ptr<void, DatasetCloser>;
 
-std::string dims(std::uint64_t w, std::uint64_t h) {
+std::string rasterDims(std::uint64_t w, std::uint64_t h) {
   return std::to_string(w) + "x" + std::to_string(h);
 }
 
-void checkDims(std::uint64_t w, std::uint64_t h, const std::string& name, std::uint64_t maxPixels) {
-  if (w == 0 || h == 0) fail(name, "image has no pixels (" + dims(w, h) + ")");
+void checkRasterDims(std::uint64_t w, std::uint64_t h, const std::string& name,
+                     std::uint64_t maxPixels) {
+  if (w == 0 || h == 0) failRaster(name, "image has no pixels (" + rasterDims(w, h) + ")");
   if (w > kMaxImageSide || h > kMaxImageSide || w * h > maxPixels) {
-    fail(name, "image is " + dims(w, h) + " pixels (" + std::to_string(w * h) +
-                   "), more than this build accepts (" + std::to_string(maxPixels) + " pixels, " +
-                   std::to_string(kMaxImageSide) + " per side): crop or downsample it first");
+    failRaster(name, "image is " + rasterDims(w, h) + " pixels (" + std::to_string(w * h) +
+                         "), more than this build accepts (" + std::to_string(maxPixels) +
+                         " pixels, " + std::to_string(kMaxImageSide) +
+                         " per side): crop or downsample it first");
   }
 }
 
@@ -97,9 +99,9 @@ std::optional<GeoReference> georeference(GDALDatasetH ds, const std::string& nam
   double gt[6];
   if (GDALGetGeoTransform(ds, gt) != CE_None) return std::nullopt;
   if (gt[2] != 0.0 || gt[4] != 0.0)
-    fail(name,
-         "rotated or sheared georeferencing is not supported (warp it north-up first, e.g. "
-         "gdalwarp)");
+    failRaster(name,
+               "rotated or sheared georeferencing is not supported (warp it north-up first, e.g. "
+               "gdalwarp)");
   GeoReference g;
   g.originX = gt[0];
   g.originY = gt[3];
@@ -135,15 +137,15 @@ std::optional<GeoReference> georeference(GDALDatasetH ds, const std::string& nam
 HeightImage readDataset(GDALDatasetH ds, const std::string& name, std::uint64_t maxPixels,
                         std::uint64_t fileBytes) {
   const int w = GDALGetRasterXSize(ds), h = GDALGetRasterYSize(ds);
-  checkDims(std::uint64_t(std::max(w, 0)), std::uint64_t(std::max(h, 0)), name, maxPixels);
+  checkRasterDims(std::uint64_t(std::max(w, 0)), std::uint64_t(std::max(h, 0)), name, maxPixels);
   const int bands = GDALGetRasterCount(ds);
   if (bands != 1)
-    fail(name,
-         "has " + std::to_string(bands) + " bands: a heightmap must have one (a single band)");
+    failRaster(
+        name, "has " + std::to_string(bands) + " bands: a heightmap must have one (a single band)");
   GDALRasterBandH band = GDALGetRasterBand(ds, 1);
   const GDALDataType type = GDALGetRasterDataType(band);
   if (GDALDataTypeIsComplex(type) || type == GDT_Unknown)
-    fail(name, "sample type " + typeName(type) + " is not supported: use integers or floats");
+    failRaster(name, "sample type " + typeName(type) + " is not supported: use integers or floats");
   const std::string driver = GDALGetDriverShortName(GDALGetDatasetDriver(ds));
   HeightImage img;
   img.kind = typeName(type) + " " + (driver == "GTiff" ? std::string("TIFF") : driver);
@@ -154,10 +156,10 @@ HeightImage readDataset(GDALDatasetH ds, const std::string& name, std::uint64_t 
   const char* compression = GDALGetMetadataItem(ds, "COMPRESSION", "IMAGE_STRUCTURE");
   if (driver == "GTiff" && !compression && fileBytes > 0 &&
       std::uint64_t(w) * std::uint64_t(h) * sampleBytes > fileBytes) {
-    fail(name, "truncated TIFF: " + dims(std::uint64_t(w), std::uint64_t(h)) + " uncompressed " +
-                   typeName(type) + " samples need " +
-                   std::to_string(std::uint64_t(w) * std::uint64_t(h) * sampleBytes) +
-                   " bytes, the file has " + std::to_string(fileBytes));
+    failRaster(name, "truncated TIFF: " + rasterDims(std::uint64_t(w), std::uint64_t(h)) +
+                         " uncompressed " + typeName(type) + " samples need " +
+                         std::to_string(std::uint64_t(w) * std::uint64_t(h) * sampleBytes) +
+                         " bytes, the file has " + std::to_string(fileBytes));
   }
   int bw = 0, bh = 0;
   GDALGetBlockSize(band, &bw, &bh);
@@ -165,9 +167,9 @@ HeightImage readDataset(GDALDatasetH ds, const std::string& name, std::uint64_t 
   if (driver == "GTiff" && bh > 1 &&
       (std::uint64_t(bw) > roundUp16(std::uint64_t(w)) ||
        std::uint64_t(bh) > roundUp16(std::uint64_t(h)))) {
-    fail(name, "TIFF tile is " + dims(std::uint64_t(bw), std::uint64_t(bh)) +
-                   " pixels, larger than the " + dims(std::uint64_t(w), std::uint64_t(h)) +
-                   " image");
+    failRaster(name, "TIFF tile is " + rasterDims(std::uint64_t(bw), std::uint64_t(bh)) +
+                         " pixels, larger than the " +
+                         rasterDims(std::uint64_t(w), std::uint64_t(h)) + " image");
   }
   int has = 0;
   const double noData = GDALGetRasterNoDataValue(band, &has);
@@ -187,8 +189,8 @@ HeightImage readDataset(GDALDatasetH ds, const std::string& name, std::uint64_t 
   img.values.resize(img.pixelCount());
   if (GDALRasterIO(band, GF_Read, 0, 0, w, h, img.values.data(), w, h, GDT_Float32, 0, 0) !=
       CE_None)
-    fail(name, "corrupt or truncated " + (driver == "GTiff" ? std::string("TIFF") : driver) +
-                   ": the samples cannot be read" + gdalMessage());
+    failRaster(name, "corrupt or truncated " + (driver == "GTiff" ? std::string("TIFF") : driver) +
+                         ": the samples cannot be read" + gdalMessage());
   return img;
 }
 
@@ -201,7 +203,8 @@ HeightImage readGdalRaster(const std::filesystem::path& path, std::uint64_t maxP
   Dataset ds(
       GDALOpenEx(name.c_str(), GDAL_OF_RASTER | GDAL_OF_READONLY, nullptr, nullptr, nullptr));
   if (!ds)
-    fail(name, (tiff ? "corrupt or truncated TIFF" : "not a raster GDAL can open") + gdalMessage());
+    failRaster(name,
+               (tiff ? "corrupt or truncated TIFF" : "not a raster GDAL can open") + gdalMessage());
   std::error_code ec;
   const auto size = std::filesystem::file_size(path, ec);
   return readDataset(ds.get(), name, std::min(maxPixels, kMaxImagePixels), ec ? 0 : size);
@@ -217,7 +220,7 @@ HeightImage decodeGdalTiff(std::span<const unsigned char> bytes, const std::stri
   QuietErrors quiet;
   VSILFILE* f = VSIFileFromMemBuffer(mem.c_str(), const_cast<GByte*>(bytes.data()),
                                      vsi_l_offset(bytes.size()), FALSE);
-  if (!f) fail(name, "cannot hand the TIFF to GDAL" + gdalMessage());
+  if (!f) failRaster(name, "cannot hand the TIFF to GDAL" + gdalMessage());
   VSIFCloseL(f);
   struct Unlink {
     std::string path;
@@ -225,7 +228,7 @@ HeightImage decodeGdalTiff(std::span<const unsigned char> bytes, const std::stri
   } unlink{mem};
   const char* const drivers[] = {"GTiff", nullptr};
   Dataset ds(GDALOpenEx(mem.c_str(), GDAL_OF_RASTER | GDAL_OF_READONLY, drivers, nullptr, nullptr));
-  if (!ds) fail(name, "corrupt or truncated TIFF" + gdalMessage());
+  if (!ds) failRaster(name, "corrupt or truncated TIFF" + gdalMessage());
   return readDataset(ds.get(), name, std::min(maxPixels, kMaxImagePixels), bytes.size());
 }
 

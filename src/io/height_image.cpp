@@ -19,21 +19,22 @@ namespace ps::io {
 
 namespace {
 
-[[noreturn]] void fail(const std::string& name, const std::string& what) {
+[[noreturn]] void failImage(const std::string& name, const std::string& what) {
   throw core::InputError(name + ": " + what);
 }
 
-std::string dims(std::uint64_t w, std::uint64_t h) {
+std::string imageDims(std::uint64_t w, std::uint64_t h) {
   return std::to_string(w) + "x" + std::to_string(h);
 }
 
-void checkDims(std::uint64_t w, std::uint64_t h, const std::string& name,
-               std::uint64_t maxPixels = kMaxImagePixels) {
-  if (w == 0 || h == 0) fail(name, "image is " + dims(w, h) + " pixels: it is empty");
+void checkImageDims(std::uint64_t w, std::uint64_t h, const std::string& name,
+                    std::uint64_t maxPixels = kMaxImagePixels) {
+  if (w == 0 || h == 0) failImage(name, "image is " + imageDims(w, h) + " pixels: it is empty");
   if (w > kMaxImageSide || h > kMaxImageSide || w * h > maxPixels) {
-    fail(name, "image is " + dims(w, h) + " pixels (" + std::to_string(w * h) +
-                   "), more than this build accepts (" + std::to_string(maxPixels) + " pixels, " +
-                   std::to_string(kMaxImageSide) + " per side): crop or downsample it first");
+    failImage(name, "image is " + imageDims(w, h) + " pixels (" + std::to_string(w * h) +
+                        "), more than this build accepts (" + std::to_string(maxPixels) +
+                        " pixels, " + std::to_string(kMaxImageSide) +
+                        " per side): crop or downsample it first");
   }
 }
 
@@ -67,21 +68,22 @@ HeightImage decodeRgbHeights(PngReader& reader, std::span<const unsigned char> b
   const PngHeader& hd = reader.header();
   const std::string what = toString(encoding);
   if (hd.colourType != 2 && hd.colourType != 6 && hd.colourType != 3)
-    fail(name, "a " + what +
-                   " tile must be an RGB, RGBA or palette PNG; this one has colour type " +
-                   std::to_string(hd.colourType) + " (a grey heightmap needs no --encoding)");
+    failImage(name, "a " + what +
+                        " tile must be an RGB, RGBA or palette PNG; this one has colour type " +
+                        std::to_string(hd.colourType) + " (a grey heightmap needs no --encoding)");
   if (hd.bitDepth != 8 && !(hd.colourType == 3 && hd.bitDepth <= 8))
-    fail(name, "a " + what + " tile has 8-bit channels; this one has " +
-                   std::to_string(hd.bitDepth) + "-bit samples");
+    failImage(name, "a " + what + " tile has 8-bit channels; this one has " +
+                        std::to_string(hd.bitDepth) + "-bit samples");
   const std::uint64_t w = std::uint64_t(hd.width), h = std::uint64_t(hd.height);
   if (h * (1 + 4 * w) > 1032 * std::uint64_t(b.size()))
-    fail(name, "truncated PNG: " + std::to_string(b.size()) + " bytes cannot hold the " +
-                   dims(std::uint32_t(w), std::uint32_t(h)) + " pixels its header declares");
+    failImage(name, "truncated PNG: " + std::to_string(b.size()) + " bytes cannot hold the " +
+                        imageDims(std::uint32_t(w), std::uint32_t(h)) +
+                        " pixels its header declares");
   cv::Mat m;
   try {
     m = reader.pixels();
   } catch (const PngError& e) {
-    fail(name, std::string("corrupt or truncated PNG: ") + e.what());
+    failImage(name, std::string("corrupt or truncated PNG: ") + e.what());
   }
   HeightImage img;
   img.kind = what + " PNG";
@@ -108,35 +110,36 @@ HeightImage decodePng(std::span<const unsigned char> b, const std::string& name,
   try {
     reader.emplace(b);
   } catch (const PngError& e) {
-    fail(name, std::string("truncated PNG, or a corrupt header (") + e.what() + ")");
+    failImage(name, std::string("truncated PNG, or a corrupt header (") + e.what() + ")");
   }
   const PngHeader& hd = reader->header();
   const std::uint32_t w = std::uint32_t(hd.width), h = std::uint32_t(hd.height);
   const int depth = hd.bitDepth, colour = hd.colourType;
-  checkDims(w, h, name, maxPixels);
+  checkImageDims(w, h, name, maxPixels);
   if (encoding != PngHeightEncoding::kStored) return decodeRgbHeights(*reader, b, name, encoding);
   if (colour != 0) {
     static const char* kinds[] = {"grey", "?", "RGB", "palette", "grey+alpha", "?", "RGBA"};
-    fail(name, std::string("PNG colour type ") + std::to_string(colour) + " (" +
-                   (colour <= 6 ? kinds[colour] : "invalid") +
-                   "): a heightmap must be a single-channel grey PNG (8 or 16 bits), or a web "
-                   "DEM tile read with --encoding terrain-rgb or terrarium");
+    failImage(name, std::string("PNG colour type ") + std::to_string(colour) + " (" +
+                        (colour <= 6 ? kinds[colour] : "invalid") +
+                        "): a heightmap must be a single-channel grey PNG (8 or 16 bits), or a web "
+                        "DEM tile read with --encoding terrain-rgb or terrarium");
   }
   if (depth != 8 && depth != 16) {
-    fail(name, "grey PNG with " + std::to_string(depth) + "-bit samples: 8 and 16 are supported");
+    failImage(name,
+              "grey PNG with " + std::to_string(depth) + "-bit samples: 8 and 16 are supported");
   }
   // Deflate expands at most 1032:1 (two bits per 258-byte match), so a file too small to hold
   // its filtered rows is refused before the decoder allocates for them.
   const std::uint64_t rowBytes = 1 + std::uint64_t(w) * std::uint64_t(depth / 8);
   if (std::uint64_t(h) * rowBytes > 1032 * std::uint64_t(b.size())) {
-    fail(name, "truncated PNG: " + std::to_string(b.size()) + " bytes cannot hold the " +
-                   dims(w, h) + " pixels its header declares");
+    failImage(name, "truncated PNG: " + std::to_string(b.size()) + " bytes cannot hold the " +
+                        imageDims(w, h) + " pixels its header declares");
   }
   cv::Mat m;
   try {
     m = reader->pixels();
   } catch (const PngError& e) {
-    fail(name, std::string("corrupt or truncated PNG: ") + e.what());
+    failImage(name, std::string("corrupt or truncated PNG: ") + e.what());
   }
   HeightImage img;
   img.kind = std::to_string(depth) + "-bit grey PNG";
@@ -172,9 +175,9 @@ HeightImage decodePng(std::span<const unsigned char> b, const std::string& name,
 
 double numberField(const nlohmann::json& j, const char* key, const std::string& name) {
   const auto& v = j.at(key);
-  if (!v.is_number()) fail(name, std::string("sidecar field '") + key + "' must be a number");
+  if (!v.is_number()) failImage(name, std::string("sidecar field '") + key + "' must be a number");
   const double x = v.get<double>();
-  if (!std::isfinite(x)) fail(name, std::string("sidecar field '") + key + "' is not finite");
+  if (!std::isfinite(x)) failImage(name, std::string("sidecar field '") + key + "' is not finite");
   return x;
 }
 
@@ -210,48 +213,49 @@ PngHeightEncoding pngHeightEncodingFromString(const std::string& s) {
 
 HeightImage decodeHeightImage(std::span<const unsigned char> bytes, const std::string& name,
                               std::uint64_t maxPixels, PngHeightEncoding encoding) {
-  if (bytes.empty()) fail(name, "empty file (0 bytes)");
+  if (bytes.empty()) failImage(name, "empty file (0 bytes)");
   maxPixels = std::min(maxPixels, kMaxImagePixels);
   const ImageFormat format = sniffFormat(bytes);
   if (encoding != PngHeightEncoding::kStored && format != ImageFormat::kPng)
-    fail(name, "--encoding " + toString(encoding) + " applies to PNG tiles; this is not a PNG");
+    failImage(name,
+              "--encoding " + toString(encoding) + " applies to PNG tiles; this is not a PNG");
   switch (format) {
     case ImageFormat::kPng:
       return decodePng(bytes, name, maxPixels, encoding);
     case ImageFormat::kTiff:
       return decodeGdalTiff(bytes, name, maxPixels);
     case ImageFormat::kPlanet:
-      fail(name, "this is a planet file, not a heightmap image");
+      failImage(name, "this is a planet file, not a heightmap image");
     default:
       break;
   }
-  fail(name, "not a PNG or TIFF image (unrecognised first bytes)");
+  failImage(name, "not a PNG or TIFF image (unrecognised first bytes)");
 }
 
 RawSidecar parseRawSidecar(std::string_view text, const std::string& name) {
   const nlohmann::json j = nlohmann::json::parse(text, nullptr, false);
-  if (j.is_discarded()) fail(name, "sidecar is not valid JSON");
-  if (!j.is_object()) fail(name, "sidecar must be a JSON object");
+  if (j.is_discarded()) failImage(name, "sidecar is not valid JSON");
+  if (!j.is_object()) failImage(name, "sidecar must be a JSON object");
   RawSidecar s;
   if (!j.contains("format") || !j["format"].is_string()) {
-    fail(name, "sidecar has no \"format\" string (expected \"float32le\")");
+    failImage(name, "sidecar has no \"format\" string (expected \"float32le\")");
   }
   const std::string format = j["format"].get<std::string>();
   if (format != "float32le") {
-    fail(name, "sidecar format '" + format + "' is not supported (expected \"float32le\")");
+    failImage(name, "sidecar format '" + format + "' is not supported (expected \"float32le\")");
   }
   for (const char* key : {"width", "height"}) {
-    if (!j.contains(key)) fail(name, std::string("sidecar has no \"") + key + "\"");
+    if (!j.contains(key)) failImage(name, std::string("sidecar has no \"") + key + "\"");
     const auto& v = j[key];
     if (!v.is_number_integer() || v.get<std::int64_t>() <= 0) {
-      fail(name, std::string("sidecar \"") + key + "\" must be a positive integer");
+      failImage(name, std::string("sidecar \"") + key + "\" must be a positive integer");
     }
     if (v.get<std::int64_t>() > std::int64_t(kMaxImageSide)) {
-      checkDims(std::uint64_t(v.get<std::int64_t>()), 1, name);
+      checkImageDims(std::uint64_t(v.get<std::int64_t>()), 1, name);
     }
   }
   const auto w = j["width"].get<std::int64_t>(), h = j["height"].get<std::int64_t>();
-  checkDims(std::uint64_t(w), std::uint64_t(h), name);
+  checkImageDims(std::uint64_t(w), std::uint64_t(h), name);
   s.width = int(w);
   s.height = int(h);
   if (j.contains("nodata") && !j["nodata"].is_null()) {
@@ -261,36 +265,36 @@ RawSidecar parseRawSidecar(std::string_view text, const std::string& name) {
     } else if (v.is_number()) {
       s.noData = v.get<double>();
     } else {
-      fail(name, "sidecar \"nodata\" must be a number or \"nan\"");
+      failImage(name, "sidecar \"nodata\" must be a number or \"nan\"");
     }
   }
   if (j.contains("column0_longitude_deg"))
     s.column0LongitudeDeg = numberField(j, "column0_longitude_deg", name);
   if (j.contains("projection")) {
-    if (!j["projection"].is_string()) fail(name, "sidecar \"projection\" must be a string");
+    if (!j["projection"].is_string()) failImage(name, "sidecar \"projection\" must be a string");
     s.projection = j["projection"].get<std::string>();
     if (s.projection != "equirectangular" && s.projection != "flat" && s.projection != "torus" &&
         s.projection != "cylinder") {
-      fail(name, "sidecar projection '" + s.projection +
-                     "' is unknown (equirectangular, flat, torus or cylinder)");
+      failImage(name, "sidecar projection '" + s.projection +
+                          "' is unknown (equirectangular, flat, torus or cylinder)");
     }
   }
   if (j.contains("radius_m")) {
     s.radiusMetres = numberField(j, "radius_m", name);
-    if (!(*s.radiusMetres > 0)) fail(name, "sidecar \"radius_m\" must be positive");
+    if (!(*s.radiusMetres > 0)) failImage(name, "sidecar \"radius_m\" must be positive");
   }
   for (const auto& [key, field] : {std::pair{"minor_radius_m", &s.minorRadiusMetres},
                                    std::pair{"length_m", &s.lengthMetres}}) {
     if (!j.contains(key)) continue;
     *field = numberField(j, key, name);
-    if (!(**field > 0)) fail(name, std::string("sidecar \"") + key + "\" must be positive");
+    if (!(**field > 0)) failImage(name, std::string("sidecar \"") + key + "\" must be positive");
   }
   if (j.contains("pixel_spacing_m")) {
     const auto& v = j["pixel_spacing_m"];
     if (!v.is_array() || v.size() != 2 || !v[0].is_number() || !v[1].is_number() ||
         !(v[0].get<double>() > 0) || !(v[1].get<double>() > 0) ||
         !std::isfinite(v[0].get<double>()) || !std::isfinite(v[1].get<double>())) {
-      fail(name, "sidecar \"pixel_spacing_m\" must be two positive numbers");
+      failImage(name, "sidecar \"pixel_spacing_m\" must be two positive numbers");
     }
     s.pixelSpacingX = v[0].get<double>();
     s.pixelSpacingY = v[1].get<double>();
@@ -302,10 +306,10 @@ HeightImage decodeRaw(std::span<const unsigned char> bytes, const RawSidecar& s,
                       const std::string& name) {
   const std::uint64_t want = std::uint64_t(s.width) * std::uint64_t(s.height) * 4;
   if (bytes.size() != want) {
-    fail(name, std::string(bytes.size() < want ? "truncated: " : "too long: ") +
-                   std::to_string(bytes.size()) + " bytes, the sidecar's " +
-                   dims(std::uint64_t(s.width), std::uint64_t(s.height)) +
-                   " float32 raster needs " + std::to_string(want));
+    failImage(name, std::string(bytes.size() < want ? "truncated: " : "too long: ") +
+                        std::to_string(bytes.size()) + " bytes, the sidecar's " +
+                        imageDims(std::uint64_t(s.width), std::uint64_t(s.height)) +
+                        " float32 raster needs " + std::to_string(want));
   }
   HeightImage img;
   img.kind = "float32 raw";
@@ -337,19 +341,19 @@ std::vector<unsigned char> readFileBytes(const std::filesystem::path& path,
   const std::string name = path.string();
   std::error_code ec;
   const auto status = std::filesystem::status(path, ec);
-  if (ec || !std::filesystem::exists(status)) fail(name, "no such file");
-  if (std::filesystem::is_directory(status)) fail(name, "is a directory");
+  if (ec || !std::filesystem::exists(status)) failImage(name, "no such file");
+  if (std::filesystem::is_directory(status)) failImage(name, "is a directory");
   const std::uint64_t size = std::filesystem::file_size(path, ec);
-  if (ec) fail(name, "cannot read its size: " + ec.message());
+  if (ec) failImage(name, "cannot read its size: " + ec.message());
   if (size > maxBytes) {
-    fail(name, "file is " + std::to_string(size) + " bytes, more than the " +
-                   std::to_string(maxBytes) + " this reader accepts");
+    failImage(name, "file is " + std::to_string(size) + " bytes, more than the " +
+                        std::to_string(maxBytes) + " this reader accepts");
   }
   std::ifstream f(path, std::ios::binary);
-  if (!f) fail(name, "cannot open for reading");
+  if (!f) failImage(name, "cannot open for reading");
   std::vector<unsigned char> bytes(static_cast<std::size_t>(size));
   f.read(reinterpret_cast<char*>(bytes.data()), std::streamsize(size));
-  if (std::uint64_t(f.gcount()) != size) fail(name, "read error");
+  if (std::uint64_t(f.gcount()) != size) failImage(name, "read error");
   return bytes;
 }
 
@@ -358,9 +362,9 @@ namespace {
 // Up to n bytes from the start of a file (what sniffFormat needs); "no such file" as readFileBytes.
 std::vector<unsigned char> readFileHead(const std::filesystem::path& path, std::size_t n) {
   std::error_code ec;
-  if (!std::filesystem::exists(path, ec)) fail(path.string(), "no such file");
+  if (!std::filesystem::exists(path, ec)) failImage(path.string(), "no such file");
   std::ifstream f(path, std::ios::binary);
-  if (!f) fail(path.string(), "cannot open for reading");
+  if (!f) failImage(path.string(), "cannot open for reading");
   std::vector<unsigned char> head(n);
   f.read(reinterpret_cast<char*>(head.data()), std::streamsize(n));
   head.resize(std::size_t(f.gcount()));
@@ -393,16 +397,16 @@ HeightImage readHeightImage(const std::filesystem::path& path, PngHeightEncoding
                         sidecar.string());
     return decodeRaw(readFileBytes(path), s, name);
   }
-  if (head.empty()) fail(name, "empty file (0 bytes)");
+  if (head.empty()) failImage(name, "empty file (0 bytes)");
   try {
     return readGdalRaster(path);
   } catch (const core::InputError& e) {
     const std::string why = e.what();
     if (why.find("not a raster GDAL can open") == std::string::npos) throw;
   }
-  fail(name, "not a PNG or TIFF image, nor a raster GDAL opens, and no sidecar " +
-                 sidecar.filename().string() +
-                 " describes it as raw float32: cannot tell what it holds");
+  failImage(name, "not a PNG or TIFF image, nor a raster GDAL opens, and no sidecar " +
+                      sidecar.filename().string() +
+                      " describes it as raw float32: cannot tell what it holds");
 }
 
 }  // namespace ps::io

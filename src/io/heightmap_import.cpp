@@ -21,9 +21,8 @@
 
 namespace ps::io {
 
-using namespace import_detail;
-
 ImportResult importHeightImage(HeightImage img, const ImportOptions& o, const std::string& name) {
+  using namespace import_detail;  // in the function: a unity batch would carry it further
   ImportResult res;
   const int w = img.width, h = img.height;
   const std::size_t n = img.values.size();
@@ -111,6 +110,7 @@ ImportResult importHeightImage(HeightImage img, const ImportOptions& o, const st
 
 HeightSamples heightSamples(HeightImage img, const ImportOptions& options,
                             const std::string& name) {
+  using namespace import_detail;
   ImportOptions o = options;
   o.chart = ChartKind::kFlat;
   const int w = img.width, h = img.height;

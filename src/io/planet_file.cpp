@@ -107,7 +107,7 @@ std::size_t sampleBytes(HeightEncoding e) {
   return e == HeightEncoding::kFloat32 ? 4 : 2;
 }
 
-[[noreturn]] void fail(const std::string& name, const std::string& what) {
+[[noreturn]] void failPlanet(const std::string& name, const std::string& what) {
   throw core::InputError(name + ": " + what);
 }
 
@@ -236,29 +236,30 @@ struct Header {
 };
 
 Header parseHeader(const unsigned char* p, std::size_t available, const std::string& name) {
-  if (available == 0) fail(name, "empty file (0 bytes); expected a PlanetSculpt planet file");
+  if (available == 0) failPlanet(name, "empty file (0 bytes); expected a PlanetSculpt planet file");
   if (!looksLikePlanetFile({p, std::min<std::size_t>(available, 8)})) {
     std::string what = "not a PlanetSculpt planet file (wrong magic bytes";
     if (available >= 8 && std::memcmp(p, "\x89PNG", 4) == 0) what += "; this is a PNG image";
     if (available >= 4 && (std::memcmp(p, "II*", 4) == 0 || std::memcmp(p, "MM\0*", 4) == 0)) {
       what += "; this is a TIFF image";
     }
-    fail(name, what + ": use `planetsculpt import` for heightmaps)");
+    failPlanet(name, what + ": use `planetsculpt import` for heightmaps)");
   }
   if (available < kPlanetHeaderBytes) {
-    fail(name, "truncated: " + std::to_string(available) + " bytes, the header alone needs " +
-                   std::to_string(kPlanetHeaderBytes));
+    failPlanet(name, "truncated: " + std::to_string(available) + " bytes, the header alone needs " +
+                         std::to_string(kPlanetHeaderBytes));
   }
   const std::uint32_t version = get<std::uint32_t>(p + kOffVersion);
   if (version < 1 || version > kPlanetFileVersion) {
-    fail(name, "format version " + std::to_string(version) +
-                   " is not supported (this build reads 1 to " +
-                   std::to_string(kPlanetFileVersion) + ")");
+    failPlanet(name, "format version " + std::to_string(version) +
+                         " is not supported (this build reads 1 to " +
+                         std::to_string(kPlanetFileVersion) + ")");
   }
   const std::uint32_t headerBytes = get<std::uint32_t>(p + kOffHeaderBytes);
   if (headerBytes != kPlanetHeaderBytes) {
-    fail(name, "header size field is " + std::to_string(headerBytes) + ", version " +
-                   std::to_string(version) + " requires " + std::to_string(kPlanetHeaderBytes));
+    failPlanet(name, "header size field is " + std::to_string(headerBytes) + ", version " +
+                         std::to_string(version) + " requires " +
+                         std::to_string(kPlanetHeaderBytes));
   }
   const std::uint32_t storedCrc = get<std::uint32_t>(p + kOffHeaderCrc);
   const std::uint32_t actualCrc = crc(0, p, kOffHeaderCrc);
@@ -266,34 +267,34 @@ Header parseHeader(const unsigned char* p, std::size_t available, const std::str
     char buf[96];
     std::snprintf(buf, sizeof buf, "header checksum mismatch (stored CRC-32 %08x, computed %08x)",
                   storedCrc, actualCrc);
-    fail(name, std::string(buf) + ": the header is corrupt");
+    failPlanet(name, std::string(buf) + ": the header is corrupt");
   }
   Header h;
   h.version = version;
   const char* chart = reinterpret_cast<const char*>(p + kOffChart);
   const std::size_t len = std::find(chart, chart + kChartNameBytes, '\0') - chart;
-  if (len == kChartNameBytes) fail(name, "chart name is not NUL-terminated");
+  if (len == kChartNameBytes) failPlanet(name, "chart name is not NUL-terminated");
   h.chart.assign(chart, len);
   for (std::size_t i = len; i < kChartNameBytes; ++i) {
-    if (chart[i] != '\0') fail(name, "chart name field has bytes after its terminating NUL");
+    if (chart[i] != '\0') failPlanet(name, "chart name field has bytes after its terminating NUL");
   }
   const bool v1Chart = h.chart == "latlong" || h.chart == "flat";
   if (!v1Chart && h.chart != "octahedral" && h.chart != "torus" && h.chart != "cylinder") {
-    fail(name, "unknown chart '" + h.chart +
-                   "' (this build knows latlong, flat, octahedral, torus and cylinder)");
+    failPlanet(name, "unknown chart '" + h.chart +
+                         "' (this build knows latlong, flat, octahedral, torus and cylinder)");
   }
   if (!v1Chart && version < 2) {
-    fail(name, "chart '" + h.chart + "' needs format version 2, the header says " +
-                   std::to_string(version));
+    failPlanet(name, "chart '" + h.chart + "' needs format version 2, the header says " +
+                         std::to_string(version));
   }
   std::uint32_t variant = 0;
   if (version >= 2) {
     variant = get<std::uint32_t>(p + kOffVariant);
     const std::uint32_t variants = h.chart == "octahedral" ? 2 : 1;
     if (variant >= variants) {
-      fail(name, "chart variant " + std::to_string(variant) + " is not one of the " +
-                     std::to_string(variants) + " that chart '" + h.chart + "' has" +
-                     (h.chart == "octahedral" ? " (0 = equal area, 1 = central)" : ""));
+      failPlanet(name, "chart variant " + std::to_string(variant) + " is not one of the " +
+                           std::to_string(variants) + " that chart '" + h.chart + "' has" +
+                           (h.chart == "octahedral" ? " (0 = equal area, 1 = central)" : ""));
     }
   }
   h.shape = h.chart == "octahedral" && variant == 1 ? core::ChartShape::kOctahedralCentral
@@ -302,12 +303,13 @@ Header parseHeader(const unsigned char* p, std::size_t available, const std::str
   try {
     h.side = core::GridSize::fromSide(side).side();
   } catch (const core::InputError& e) {
-    fail(name, std::string("grid: ") + e.what());
+    failPlanet(name, std::string("grid: ") + e.what());
   }
   const std::uint32_t enc = get<std::uint32_t>(p + kOffEncoding);
   if (enc != std::uint32_t(HeightEncoding::kFloat32) &&
       enc != std::uint32_t(HeightEncoding::kUint16)) {
-    fail(name, "unknown height encoding " + std::to_string(enc) + " (1 = float32, 2 = uint16)");
+    failPlanet(name,
+               "unknown height encoding " + std::to_string(enc) + " (1 = float32, 2 = uint16)");
   }
   h.encoding = HeightEncoding(enc);
   h.radius = get<double>(p + kOffRadius);
@@ -317,72 +319,74 @@ Header parseHeader(const unsigned char* p, std::size_t available, const std::str
   const bool torus = h.shape == core::ChartShape::kTorus,
              tube = h.shape == core::ChartShape::kCylinder;
   if (h.second != 0 && !torus && !tube)
-    fail(name, withArticle(h.chart) + " planet must store 0 in the second length field");
+    failPlanet(name, withArticle(h.chart) + " planet must store 0 in the second length field");
   if (torus || tube) {
     if (!std::isfinite(h.radius) || h.radius <= 0)
-      fail(name, "radius " + core::exactNumber(h.radius) + " m must be positive and finite");
+      failPlanet(name, "radius " + core::exactNumber(h.radius) + " m must be positive and finite");
     if (!std::isfinite(h.second) || h.second <= 0)
-      fail(name, std::string(torus ? "minor radius " : "length ") + core::exactNumber(h.second) +
-                     " m must be positive and finite");
+      failPlanet(name, std::string(torus ? "minor radius " : "length ") +
+                           core::exactNumber(h.second) + " m must be positive and finite");
     if (torus && h.second >= h.radius)
-      fail(name, "minor radius " + core::exactNumber(h.second) +
-                     " m must be below the major radius " + core::exactNumber(h.radius) + " m");
+      failPlanet(name, "minor radius " + core::exactNumber(h.second) +
+                           " m must be below the major radius " + core::exactNumber(h.radius) +
+                           " m");
     if (h.dx != 0 || h.dy != 0)
-      fail(name, withArticle(h.chart) + " planet must store 0 in the flat spacing fields");
+      failPlanet(name, withArticle(h.chart) + " planet must store 0 in the flat spacing fields");
   } else if (core::isSphere(h.shape)) {
     if (!std::isfinite(h.radius) || h.radius <= 0) {
-      fail(name, "radius " + core::exactNumber(h.radius) + " m must be positive and finite");
+      failPlanet(name, "radius " + core::exactNumber(h.radius) + " m must be positive and finite");
     }
     if (h.dx != 0 || h.dy != 0)
-      fail(name, withArticle(h.chart) + " planet must store 0 in the flat spacing fields");
+      failPlanet(name, withArticle(h.chart) + " planet must store 0 in the flat spacing fields");
   } else {
     if (!std::isfinite(h.dx) || h.dx <= 0 || !std::isfinite(h.dy) || h.dy <= 0) {
-      fail(name, "flat grid spacing " + core::exactNumber(h.dx) + " x " + core::exactNumber(h.dy) +
-                     " m must be positive and finite");
+      failPlanet(name, "flat grid spacing " + core::exactNumber(h.dx) + " x " +
+                           core::exactNumber(h.dy) + " m must be positive and finite");
     }
-    if (h.radius != 0) fail(name, "a flat planet must store radius 0");
+    if (h.radius != 0) failPlanet(name, "a flat planet must store radius 0");
   }
   h.scale = get<double>(p + kOffScale);
   h.offset = get<double>(p + kOffOffset);
   if (!std::isfinite(h.scale) || h.scale <= 0) {
-    fail(name, "height scale " + core::exactNumber(h.scale) + " must be positive and finite");
+    failPlanet(name, "height scale " + core::exactNumber(h.scale) + " must be positive and finite");
   }
   if (!std::isfinite(h.offset))
-    fail(name, "height offset " + core::exactNumber(h.offset) + " must be finite");
+    failPlanet(name, "height offset " + core::exactNumber(h.offset) + " must be finite");
   const std::uint32_t rule = get<std::uint32_t>(p + kOffRule);
   if (rule > 1)
-    fail(name, "unknown error rule " + std::to_string(rule) + " (0 = wedgie, 1 = hybrid-exact)");
+    failPlanet(name,
+               "unknown error rule " + std::to_string(rule) + " (0 = wedgie, 1 = hybrid-exact)");
   h.rule = rule == 0 ? terrain::ErrorRule::kWedgie : terrain::ErrorRule::kHybridExact;
   h.metadataBytes = get<std::uint32_t>(p + kOffMetadataBytes);
   if (h.metadataBytes > kPlanetMaxMetadataBytes) {
-    fail(name, "metadata block of " + std::to_string(h.metadataBytes) +
-                   " bytes exceeds the limit of " + std::to_string(kPlanetMaxMetadataBytes));
+    failPlanet(name, "metadata block of " + std::to_string(h.metadataBytes) +
+                         " bytes exceeds the limit of " + std::to_string(kPlanetMaxMetadataBytes));
   }
   h.heightBytes = get<std::uint64_t>(p + kOffHeightBytes);
   const std::uint64_t want =
       std::uint64_t(h.side) * std::uint64_t(h.side) * sampleBytes(h.encoding);
   if (h.heightBytes != want) {
-    fail(name, "height block is " + std::to_string(h.heightBytes) + " bytes, a " +
-                   std::to_string(h.side) + "x" + std::to_string(h.side) + " grid of " +
-                   toString(h.encoding) + " needs " + std::to_string(want));
+    failPlanet(name, "height block is " + std::to_string(h.heightBytes) + " bytes, a " +
+                         std::to_string(h.side) + "x" + std::to_string(h.side) + " grid of " +
+                         toString(h.encoding) + " needs " + std::to_string(want));
   }
   h.bodyCrc = get<std::uint32_t>(p + kOffBodyCrc);
   for (std::size_t i = version >= 2 ? kOffReserved2 : kOffReserved; i < kOffHeaderCrc; ++i) {
-    if (p[i] != 0) fail(name, "reserved header byte " + std::to_string(i) + " is not zero");
+    if (p[i] != 0) failPlanet(name, "reserved header byte " + std::to_string(i) + " is not zero");
   }
   return h;
 }
 
 void checkSize(const Header& h, std::uint64_t actual, const std::string& name) {
   if (actual < h.fileBytes()) {
-    fail(name, "truncated: " + std::to_string(actual) + " bytes, the header announces " +
-                   std::to_string(h.fileBytes()) + " (" + std::to_string(h.fileBytes() - actual) +
-                   " missing)");
+    failPlanet(name, "truncated: " + std::to_string(actual) + " bytes, the header announces " +
+                         std::to_string(h.fileBytes()) + " (" +
+                         std::to_string(h.fileBytes() - actual) + " missing)");
   }
   if (actual > h.fileBytes()) {
-    fail(name, std::to_string(actual - h.fileBytes()) +
-                   " unexpected bytes after the end of the planet (" +
-                   std::to_string(h.fileBytes()) + " bytes announced)");
+    failPlanet(name, std::to_string(actual - h.fileBytes()) +
+                         " unexpected bytes after the end of the planet (" +
+                         std::to_string(h.fileBytes()) + " bytes announced)");
   }
 }
 
@@ -396,13 +400,14 @@ PlanetData parseBody(const Header& h, const unsigned char* body, const std::stri
         buf, sizeof buf,
         "checksum mismatch: stored CRC-32 %08x, computed %08x over the metadata and heights",
         h.bodyCrc, bodyCrc);
-    fail(name, std::string(buf) + ": the file is corrupt");
+    failPlanet(name, std::string(buf) + ": the file is corrupt");
   }
   PlanetData d;
   if (h.metadataBytes > 0) {
     const std::string text(reinterpret_cast<const char*>(body), h.metadataBytes);
     nlohmann::json meta = nlohmann::json::parse(text, nullptr, false);
-    if (meta.is_discarded() || !meta.is_object()) fail(name, "metadata block is not a JSON object");
+    if (meta.is_discarded() || !meta.is_object())
+      failPlanet(name, "metadata block is not a JSON object");
     d.metadata = std::move(meta);
   }
   const core::GridSize g = core::GridSize::fromSide(h.side);
@@ -415,7 +420,7 @@ PlanetData parseBody(const Header& h, const unsigned char* body, const std::stri
   try {
     d.chart = core::makeChart(h.shape, g, dims);
   } catch (const core::InputError& e) {
-    fail(name, e.what());
+    failPlanet(name, e.what());
   }
   d.rule = h.rule;
   d.encoding = h.encoding;
@@ -439,7 +444,7 @@ PlanetData parseBody(const Header& h, const unsigned char* body, const std::stri
   try {
     terrain::Terrain::validateHeights(*d.chart, d.heights);
   } catch (const core::InputError& e) {
-    fail(name, e.what());
+    failPlanet(name, e.what());
   }
   return d;
 }
@@ -491,24 +496,24 @@ PlanetData readPlanetFile(const std::filesystem::path& path) {
   const std::string name = path.string();
   std::error_code ec;
   const auto status = std::filesystem::status(path, ec);
-  if (ec || !std::filesystem::exists(status)) fail(name, "no such file");
-  if (std::filesystem::is_directory(status)) fail(name, "is a directory, not a planet file");
+  if (ec || !std::filesystem::exists(status)) failPlanet(name, "no such file");
+  if (std::filesystem::is_directory(status)) failPlanet(name, "is a directory, not a planet file");
   std::ifstream f(path, std::ios::binary);
-  if (!f) fail(name, "cannot open for reading");
+  if (!f) failPlanet(name, "cannot open for reading");
   const std::uint64_t size = std::filesystem::file_size(path, ec);
-  if (ec) fail(name, "cannot read its size: " + ec.message());
+  if (ec) failPlanet(name, "cannot read its size: " + ec.message());
   std::array<unsigned char, kPlanetHeaderBytes> head{};
   const std::size_t first = std::size_t(std::min<std::uint64_t>(size, kPlanetHeaderBytes));
   f.read(reinterpret_cast<char*>(head.data()), std::streamsize(first));
-  if (std::size_t(f.gcount()) != first) fail(name, "read error in the header");
+  if (std::size_t(f.gcount()) != first) failPlanet(name, "read error in the header");
   const Header h = parseHeader(head.data(), first, name);
   checkSize(h, size, name);
   std::vector<unsigned char> body(std::size_t(h.metadataBytes + h.heightBytes));
   f.read(reinterpret_cast<char*>(body.data()), std::streamsize(body.size()));
   if (std::size_t(f.gcount()) != body.size()) {
-    fail(name, "read error: got " + std::to_string(f.gcount()) + " of " +
-                   std::to_string(body.size()) +
-                   " body bytes (was the file truncated while reading?)");
+    failPlanet(name, "read error: got " + std::to_string(f.gcount()) + " of " +
+                         std::to_string(body.size()) +
+                         " body bytes (was the file truncated while reading?)");
   }
   return parseBody(h, body.data(), name);
 }
@@ -518,7 +523,7 @@ std::unique_ptr<terrain::Terrain> loadPlanet(const std::filesystem::path& path) 
   try {
     return std::make_unique<terrain::Terrain>(d.chart, std::move(d.heights), d.rule);
   } catch (const core::InputError& e) {
-    fail(path.string(), e.what());
+    failPlanet(path.string(), e.what());
   }
 }
 

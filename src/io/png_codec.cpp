@@ -14,14 +14,17 @@ namespace ps::io {
 // libpng reports errors through a callback that must not return: it stores the message and
 // jumps back to the setjmp of the function that called libpng, which then throws. Between a
 // setjmp and its longjmp only libpng calls run, and what they change lives on the heap.
-namespace {
-
+// Named, not anonymous: PngReader::State (a member of the header's class) holds one.
+namespace png_detail {
 struct ErrorSink {
   char message[256] = {0};
 };
+}  // namespace png_detail
+
+namespace {
 
 [[noreturn]] void onError(png_structp png, png_const_charp what) {
-  auto* sink = static_cast<ErrorSink*>(png_get_error_ptr(png));
+  auto* sink = static_cast<png_detail::ErrorSink*>(png_get_error_ptr(png));
   std::snprintf(sink->message, sizeof sink->message, "%s", what ? what : "libpng error");
   std::longjmp(png_jmpbuf(png), 1);
 }
@@ -46,7 +49,7 @@ struct WriteJob {
   png_uint_32 pixelsPerMetre = 0;
   int compression = 6;
   std::vector<unsigned char>* out = nullptr;
-  ErrorSink sink;
+  png_detail::ErrorSink sink;
   png_structp png = nullptr;
   png_infop info = nullptr;
 };
@@ -133,7 +136,7 @@ std::vector<unsigned char> encodePng(const cv::Mat& image, const PngWriteOptions
 struct PngReader::State {
   std::span<const unsigned char> bytes;
   std::size_t pos = 0;
-  ErrorSink sink;
+  png_detail::ErrorSink sink;
   png_structp png = nullptr;
   png_infop info = nullptr;
   std::vector<png_bytep> rows;

@@ -22,10 +22,10 @@ namespace ps::io {
 namespace {
 
 // 0x89, "PSJ", CR LF, ^Z, LF (the planet file's pattern, J for journal).
-constexpr unsigned char kMagic[8] = {0x89, 'P', 'S', 'J', '\r', '\n', 0x1a, '\n'};
+constexpr unsigned char kJournalMagic[8] = {0x89, 'P', 'S', 'J', '\r', '\n', 0x1a, '\n'};
 constexpr unsigned char kRecordTag[4] = {'R', 'E', 'C', '1'};
 
-std::uint32_t crc(std::uint32_t c, const unsigned char* p, std::size_t n) {
+std::uint32_t journalCrc(std::uint32_t c, const unsigned char* p, std::size_t n) {
   while (n > 0) {  // zlib takes a uInt length
     const std::size_t k = std::min<std::size_t>(n, std::size_t(1) << 30);
     c = std::uint32_t(::crc32(c, p, uInt(k)));
@@ -77,14 +77,15 @@ std::string toString(JournalRecordKind kind) {
 std::uint32_t heightsChecksum(std::span<const float> heights) {
   std::uint32_t c = std::uint32_t(::crc32(0, nullptr, 0));
   if constexpr (std::endian::native == std::endian::little) {
-    return crc(c, reinterpret_cast<const unsigned char*>(heights.data()), heights.size_bytes());
+    return journalCrc(c, reinterpret_cast<const unsigned char*>(heights.data()),
+                      heights.size_bytes());
   } else {
     std::vector<unsigned char> le;
     le.reserve(4096);
     for (std::size_t i = 0; i < heights.size(); ++i) {
       put32(le, std::bit_cast<std::uint32_t>(heights[i]));
       if (le.size() >= 4096 || i + 1 == heights.size()) {
-        c = crc(c, le.data(), le.size());
+        c = journalCrc(c, le.data(), le.size());
         le.clear();
       }
     }
@@ -102,7 +103,7 @@ JournalBase journalBaseOf(const terrain::Terrain& planet, std::uint64_t generati
 }
 
 std::vector<unsigned char> encodeJournalHeader(const JournalBase& base) {
-  std::vector<unsigned char> h(kMagic, kMagic + 8);
+  std::vector<unsigned char> h(kJournalMagic, kJournalMagic + 8);
   put32(h, kStrokeJournalVersion);
   put32(h, std::uint32_t(kStrokeJournalHeaderBytes));
   put32(h, base.side);
@@ -110,7 +111,7 @@ std::vector<unsigned char> encodeJournalHeader(const JournalBase& base) {
   put64(h, std::bit_cast<std::uint64_t>(base.radius));
   put64(h, base.generation);
   h.resize(kStrokeJournalHeaderBytes - 4, 0);  // reserved
-  put32(h, crc(0, h.data(), h.size()));
+  put32(h, journalCrc(0, h.data(), h.size()));
   return h;
 }
 
@@ -126,7 +127,7 @@ void encodeJournalRecord(JournalRecordKind kind, std::uint32_t sequence,
     put32(out, h.index);
     put32(out, std::bit_cast<std::uint32_t>(h.height));
   }
-  put32(out, crc(0, out.data() + start, out.size() - start));
+  put32(out, journalCrc(0, out.data() + start, out.size() - start));
 }
 
 void encodeJournalMark(const JournalMark& mark, std::uint32_t sequence,
@@ -139,14 +140,14 @@ void encodeJournalMark(const JournalMark& mark, std::uint32_t sequence,
   put32(out, mark.heightsCrc);
   put32(out, mark.resumeAt);
   put64(out, mark.generation);
-  put32(out, crc(0, out.data() + start, out.size() - start));
+  put32(out, journalCrc(0, out.data() + start, out.size() - start));
 }
 
 JournalContents parseStrokeJournal(std::span<const unsigned char> bytes, const std::string& name) {
   JournalContents j;
   j.fileBytes = bytes.size();
   if (bytes.empty()) throw core::InputError(name + ": empty file: not a stroke journal");
-  if (bytes.size() < 8 || std::memcmp(bytes.data(), kMagic, 8) != 0)
+  if (bytes.size() < 8 || std::memcmp(bytes.data(), kJournalMagic, 8) != 0)
     throw core::InputError(name + ": not a PlanetSculpt stroke journal (wrong magic bytes)");
   if (bytes.size() < kStrokeJournalHeaderBytes)
     throw core::InputError(name + ": truncated header (" + std::to_string(bytes.size()) +
@@ -159,7 +160,7 @@ JournalContents parseStrokeJournal(std::span<const unsigned char> bytes, const s
                            " (this program reads versions 1 to " +
                            std::to_string(kStrokeJournalVersion) + ")");
   const std::uint32_t stored = get32(h + kStrokeJournalHeaderBytes - 4),
-                      computed = crc(0, h, kStrokeJournalHeaderBytes - 4);
+                      computed = journalCrc(0, h, kStrokeJournalHeaderBytes - 4);
   if (stored != computed || get32(h + 12) != kStrokeJournalHeaderBytes)
     throw core::InputError(name + ": header checksum mismatch (stored " + hex(stored) +
                            ", computed " + hex(computed) + "): the journal is corrupt");
@@ -203,7 +204,7 @@ JournalContents parseStrokeJournal(std::span<const unsigned char> bytes, const s
            " bytes: a crash while it was written?)");
       break;
     }
-    const std::uint32_t want = get32(r + size - 4), got = crc(0, r, size - 4);
+    const std::uint32_t want = get32(r + size - 4), got = journalCrc(0, r, size - 4);
     if (want != got) {
       stop("fails its checksum (stored " + hex(want) + ", computed " + hex(got) + ")");
       break;

@@ -12,7 +12,7 @@ namespace ps::tracking {
 
 namespace {
 
-void require(bool ok, const std::string& field, const std::string& rule, double value) {
+void requireHandMask(bool ok, const std::string& field, const std::string& rule, double value) {
   if (!ok)
     throw core::InputError("hand mask: " + field + " " + rule + " (got " +
                            core::exactNumber(value) + ")");
@@ -26,20 +26,20 @@ cv::Mat disc(int radius) {
 
 void HandMaskConfig::validate() const {
   appearance.validate();
-  require(std::isfinite(silhouetteMargin) && silhouetteMargin >= 0 && silhouetteMargin <= 1,
-          "silhouette_margin", "is not in [0, 1]", silhouetteMargin);
-  require(std::isfinite(ringFraction) && ringFraction > 0 && ringFraction <= 2, "ring_fraction",
-          "is not in (0, 2]", ringFraction);
-  require(std::isfinite(strongScore) && strongScore >= 1, "strong_score", "is not >= 1",
-          strongScore);
-  require(minAreaFraction >= 0 && minAreaFraction < 1, "min_area_fraction", "is not in [0, 1)",
-          minAreaFraction);
-  require(minInteriorAreaFraction >= 0 && minInteriorAreaFraction < 1, "min_interior_area_fraction",
-          "is not in [0, 1)", minInteriorAreaFraction);
-  require(openPx >= 0 && openPx <= 20, "open_px", "is not in 0..20", openPx);
-  require(closePx >= 0 && closePx <= 20, "close_px", "is not in 0..20", closePx);
-  require(std::isfinite(featherPx) && featherPx >= 0 && featherPx <= 50, "feather_px",
-          "is not in [0, 50]", featherPx);
+  requireHandMask(std::isfinite(silhouetteMargin) && silhouetteMargin >= 0 && silhouetteMargin <= 1,
+                  "silhouette_margin", "is not in [0, 1]", silhouetteMargin);
+  requireHandMask(std::isfinite(ringFraction) && ringFraction > 0 && ringFraction <= 2,
+                  "ring_fraction", "is not in (0, 2]", ringFraction);
+  requireHandMask(std::isfinite(strongScore) && strongScore >= 1, "strong_score", "is not >= 1",
+                  strongScore);
+  requireHandMask(minAreaFraction >= 0 && minAreaFraction < 1, "min_area_fraction",
+                  "is not in [0, 1)", minAreaFraction);
+  requireHandMask(minInteriorAreaFraction >= 0 && minInteriorAreaFraction < 1,
+                  "min_interior_area_fraction", "is not in [0, 1)", minInteriorAreaFraction);
+  requireHandMask(openPx >= 0 && openPx <= 20, "open_px", "is not in 0..20", openPx);
+  requireHandMask(closePx >= 0 && closePx <= 20, "close_px", "is not in 0..20", closePx);
+  requireHandMask(std::isfinite(featherPx) && featherPx >= 0 && featherPx <= 50, "feather_px",
+                  "is not in [0, 50]", featherPx);
 }
 
 namespace {
