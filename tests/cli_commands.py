@@ -848,7 +848,6 @@ def group_errors():
             fail(f"bench --help does not name {option}:\n{stdout}")
 
 
-
 def environment_after_exec(env, args):
     """Starts the program with env and returns the environment its running image holds
     (/proc/PID/environ, read until the process ends: after main re-executes itself, the
@@ -894,6 +893,7 @@ def group_openmp():
     got = environment_after_exec(base, ("markers", "--out", out("sheets"), "--paper", "a4"))
     if b"GOMP_SPINCOUNT" in got:
         fail("markers (no frame loop) was executed again with GOMP_SPINCOUNT set")
+
 
 if __name__ == "__main__":
     shutil.rmtree(OUT, ignore_errors=True)
