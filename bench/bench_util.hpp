@@ -44,7 +44,7 @@ inline double round3(double v) {
 
 // Rounded to 3 or 4 places, and -1 where the figure is not finite (a ratio of nothing).
 inline double round3OrMinusOne(double v) {
-  return std::isfinite(v) ? std::round(v * 1000) / 1000 : -1;
+  return std::isfinite(v) ? round3(v) : -1;
 }
 inline double round4OrMinusOne(double v) {
   return std::isfinite(v) ? std::round(v * 10000) / 10000 : -1;
