@@ -263,6 +263,12 @@ void EditPipeline::undo() {
   journal_.undo(terrain_);
 }
 
+void EditPipeline::recordOutside(std::vector<HeightChange> changes,
+                                 const terrain::VertexBox& dirty) {
+  if (!undoEnabled_) return;
+  journal_.recordOutside(std::move(changes), terrain_.grid(), dirty, terrain_.chart().wrapsU());
+}
+
 void EditPipeline::redo() {
   checkJournalMove("redo", inStroke(), undoEnabled_, journal_.redoCount());
   if (observer_) observer_->onRedo();

@@ -96,6 +96,9 @@ class EditPipeline {
   const UndoJournal& journal() const { return journal_; }
   void undo();
   void redo();
+  // Heights something else changed as a consequence of the strokes (sand settling): they join the
+  // open or latest stroke's undo step (UndoJournal::recordOutside). Nothing when undo is off.
+  void recordOutside(std::vector<HeightChange> changes, const terrain::VertexBox& dirty);
 
   void setObserver(EditObserver* observer) { observer_ = observer; }
   EditObserver* observer() const { return observer_; }

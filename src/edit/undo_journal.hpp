@@ -36,7 +36,8 @@ class JournalListener {
 };
 
 // Undo and redo of whole strokes. A stroke stores only the vertices whose height it changed
-// (bitwise), each once with its height before the stroke's first stamp and after its last:
+// (bitwise; with the settling that followed it, recordOutside), each once with its height before
+// the stroke's first stamp and after its last:
 // 12 bytes per changed vertex, plus the stroke's dirty rectangle. Undo writes the "before"
 // heights back and commits the dirty rectangle, so the error bounds are recomputed over it and -
 // being bit-for-bit a function of the heights - come back bit for bit too. (Terrain's
@@ -55,6 +56,15 @@ class UndoJournal {
   void recordStamp(const Region& footprint, std::span<const float> before,
                    std::span<const float> heights, const core::GridSize& grid,
                    const terrain::VertexBox& dirty, bool wrapsU);
+  // Heights changed outside the journal's strokes, by something that follows from them (sand
+  // settling): `changes` (any order, each with its height before this change and after it) join
+  // the open stroke, or when none is open the latest stroke, so that undoing a stroke also takes
+  // back the settling that followed it, and the planet returns to its state at the stroke's
+  // beginning. When there is nothing to undo the changes are not recorded (the heights the
+  // journal began with). What can be redone stays redoable (a redo writes its stroke's "after"
+  // heights over what settled since the undo).
+  void recordOutside(std::vector<HeightChange> changes, const core::GridSize& grid,
+                     const terrain::VertexBox& dirty, bool wrapsU);
   // Closes the stroke and returns its changed-vertex count. A stroke that changed nothing is still
   // one undo step (so "undo" always takes back the user's last stroke).
   std::size_t endStroke(const core::GridSize& grid);
@@ -75,7 +85,8 @@ class UndoJournal {
   std::size_t maxBytes() const { return maxBytes_; }
   // Lowering the cap forgets the oldest strokes until the journal fits (always keeping one).
   void setMaxBytes(std::size_t maxBytes);
-  // Changed vertices of the most recent undoable stroke (0 when none).
+  // Changed vertices of the most recent undoable stroke (0 when none); settling recorded since it
+  // ended may not be counted yet.
   std::size_t lastStrokeChanges() const { return done_.empty() ? 0 : done_.back().changes.size(); }
 
  private:
@@ -87,7 +98,13 @@ class UndoJournal {
   };
   void apply(terrain::Terrain& terrain, const Stroke& s, bool forward);
   void trim();
-  void compact();  // pending_: one entry per vertex, no-op entries dropped
+  void compact();       // pending_: one entry per vertex, no-op entries dropped (but see kOutside)
+  void mergeOutside();  // outside_ into done_.back()
+
+  // pending_'s entries from recordOutside carry this bit in `index` (grids hold < 2^31 vertices)
+  // until the stroke ends: a vertex that settling moved and a stamp put back where it began is
+  // kept (a no-op for undo), so the stroke's record (JournalListener) writes its height.
+  static constexpr std::uint32_t kOutside = 0x80000000u;
 
   std::size_t maxBytes_;
   std::size_t bytes_ = 0;
@@ -95,6 +112,7 @@ class UndoJournal {
   std::vector<HeightChange> pending_;
   std::size_t compacted_ = 0;  // pending_.size() after the last compact()
   terrain::VertexBox pendingDirty_;
+  std::vector<HeightChange> outside_;  // recordOutside's since the latest stroke, not merged yet
   std::deque<Stroke> done_;
   std::vector<Stroke> undone_;
   JournalListener* listener_ = nullptr;

@@ -253,7 +253,10 @@ void FrameStepper::rebuildTools() {
     return;
   }
   const bool wantSettler = o_.tool == ReplayTool::kDisplace && o_.settle;
-  if (wantSettler && !p_->settler) p_->settler.emplace(planet_, o_.displace.material, o_.settling);
+  if (wantSettler && !p_->settler) {
+    p_->settler.emplace(planet_, o_.displace.material, o_.settling);
+    p_->settler->attachUndo(&p_->pipeline);  // undoing a sand stroke takes its settling back
+  }
   p_->displacer.emplace(planet_.chartPtr(), o_.displace, p_->settler ? &*p_->settler : nullptr);
   if (o_.tool == ReplayTool::kDisplace) p_->displacer->validate();
   // Sand on a TIN: the displacement's radius, spacing and material; it erodes in its TIN.

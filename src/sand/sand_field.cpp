@@ -6,6 +6,7 @@
 #include <cstdint>
 
 #include "core/input_error.hpp"
+#include "edit/undo_journal.hpp"
 
 #include "sand/sand_field_parts.hpp"
 
@@ -195,7 +196,7 @@ void SandField::gather(int tu, int tv, double* hs) const {
 // ---------------------------------------------------------------------------------------------
 // Output
 
-terrain::VertexBox SandField::writeBack(double limit) {
+terrain::VertexBox SandField::writeBack(double limit, std::vector<edit::HeightChange>* changes) {
   const core::GridSize& g = grid_.grid();
   const bool sphere = grid_.sphere(), glued = grid_.glued();
   terrain::VertexBox dirty = terrain::VertexBox::none();
@@ -214,8 +215,10 @@ terrain::VertexBox SandField::writeBack(double limit) {
     return f;
   };
   auto store = [&](int u, int v, float f) {
-    float& dst = heights_[g.index(u, v)];
+    const std::size_t k = g.index(u, v);
+    float& dst = heights_[k];
     if (std::bit_cast<std::uint32_t>(f) == std::bit_cast<std::uint32_t>(dst)) return false;
+    if (changes) changes->push_back({std::uint32_t(k), dst, f});
     dst = f;
     return true;
   };

@@ -14,6 +14,10 @@
 #include "sand/sand_grid.hpp"
 #include "terrain/vertex_box.hpp"
 
+namespace ps::edit {
+struct HeightChange;
+}
+
 namespace ps::sand {
 
 // How an explicit diffusion step treats a requested time step above its stability bound.
@@ -109,8 +113,9 @@ class SandField {
 
   // Writes the floats of every tile changed since the last write-back (rounded to nearest,
   // clamped to +-limit; seam twins and whole pole rows) and returns the rectangle of floats
-  // that changed (empty when none did).
-  terrain::VertexBox writeBack(double limit);
+  // that changed (empty when none did). With `changes`, each float written is appended to it
+  // with its height before and after (the undo journal's record of settling).
+  terrain::VertexBox writeBack(double limit, std::vector<edit::HeightChange>* changes = nullptr);
 
   // Current height (double) of a grid vertex.
   double height(int u, int v) const;

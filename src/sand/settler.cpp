@@ -107,12 +107,14 @@ FrameReport Settler::frame() {
     if (rep.cellSteps + s.cells > settings_.cellBudget) break;
   }
   const auto t1 = Clock::now();
-  rep.dirty = field_.writeBack(limit_);
+  changes_.clear();
+  rep.dirty = field_.writeBack(limit_, undo_ ? &changes_ : nullptr);
   const auto t2 = Clock::now();
   if (!rep.dirty.empty()) {
     terrain_.commitEdit(rep.dirty);
     rep.boundsVertices = terrain_.bounds().lastUpdateVertexCount();
   }
+  if (undo_ && !changes_.empty()) undo_->recordOutside(std::move(changes_), rep.dirty);
   expectedRevision_ = terrain_.revision();
   const auto t3 = Clock::now();
   rep.atRest = atRest();

@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "edit/edit_pipeline.hpp"
 #include "sand/listener.hpp"
 #include "sand/material.hpp"
 #include "sand/sand_field.hpp"
@@ -53,7 +54,8 @@ struct FrameReport {
 //   2. runs whole steps of the current material's method while the budget lasts;
 //   3. writes the changed floats back and calls Terrain::commitEdit over exactly the rectangle
 //      of floats that changed: the error bounds are updated there only.
-// Settling is not recorded in the edit pipeline's undo journal.
+// With attachUndo(pipeline), what settling changes joins the undo step of the stroke it
+// follows (edit::EditPipeline::recordOutside): undoing a sand stroke takes its settling back too.
 class Settler final : public EditListener {
  public:
   explicit Settler(terrain::Terrain& terrain, Material material = Material::sand(),
@@ -71,6 +73,10 @@ class Settler final : public EditListener {
   // A drift force (paper 002) applied during diffusion frames until cleared.
   void setForce(std::optional<PushForce> force) { force_ = force; }
 
+  // The pipeline whose undo journal records each frame's changes (nullptr: none). It must
+  // outlive the settler or be detached first.
+  void attachUndo(edit::EditPipeline* pipeline) { undo_ = pipeline; }
+
   FrameReport frame();
   bool atRest() const { return pending_.empty() && field_.atRest(); }
 
@@ -83,6 +89,8 @@ class Settler final : public EditListener {
   Material material_;
   SettleSettings settings_;
   std::optional<PushForce> force_;
+  edit::EditPipeline* undo_ = nullptr;
+  std::vector<edit::HeightChange> changes_;  // a frame's write-back, for undo_
   std::vector<terrain::VertexBox> pending_;
   std::uint64_t expectedRevision_ = 0;
   float limit_ = 0;
