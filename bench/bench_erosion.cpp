@@ -37,7 +37,10 @@
 #include <time.h>
 
 #include <CLI/CLI.hpp>
+#include <algorithm>
+#include <bit>
 #include <cmath>
+#include <cstdint>
 #include <iostream>
 #include <memory>
 #include <nlohmann/json.hpp>
@@ -271,7 +274,10 @@ void sphereThroughput(int n, const std::vector<Surface>& surfaces, Method method
   }
 }
 
-void crater(bool sphere, bool quick, int threads, std::ostream& out, bool octahedral = false) {
+// `undo`: the live configuration, the settler reporting what it writes to the pipeline's undo
+// journal (Settler::attachUndo); the row then says whether undo gives back the start bit for bit.
+void crater(bool sphere, bool quick, int threads, std::ostream& out, bool octahedral = false,
+            bool undo = false) {
   std::shared_ptr<const core::Chart> chart;
   double r, depth, base;
   if (sphere && octahedral) {
@@ -293,10 +299,12 @@ void crater(bool sphere, bool quick, int threads, std::ostream& out, bool octahe
   const core::GridSize g = chart->grid();
   terrain::Terrain t(chart, std::vector<float>(g.count(), float(base)));
   edit::EditPipeline pipe(t);
-  pipe.setUndoEnabled(false);
+  pipe.setUndoEnabled(undo);
   omp_set_num_threads(threads);
   const std::size_t budget = std::size_t(1) << 20;
   sand::Settler settler(t, sand::Material::sand(), {.cellBudget = budget});
+  if (undo) settler.attachUndo(&pipe);
+  const std::vector<float> start(t.heights().begin(), t.heights().end());
   sand::DisplacementTool tool(chart, {.radius = r}, &settler);
   const sand::SandGrid grid(chart);
   const double v0 = grid.volume(t.heights());
@@ -321,9 +329,20 @@ void crater(bool sphere, bool quick, int threads, std::ostream& out, bool octahe
     if (f.atRest) break;
   }
   const double drift = std::abs(grid.volume(t.heights()) - v0) / grid.absVolume(t.heights());
+  const double journalMb = double(pipe.journal().bytes()) / double(1 << 20);
+  bool restored = false;
+  if (undo) {
+    pipe.undo();
+    restored = std::equal(
+        start.begin(), start.end(), t.heights().begin(), t.heights().end(), [](float a, float b) {
+          return std::bit_cast<std::uint32_t>(a) == std::bit_cast<std::uint32_t>(b);
+        });
+  }
   nlohmann::json j = {
       {"bench", "erosion"},
       {"method", "crater-settle"},
+      {"undo_journal", undo},
+      {"journal_mb", journalMb},
       {"chart", chart->name()},
       {"grid", g.label()},
       {"threads", threads},
@@ -342,10 +361,13 @@ void crater(bool sphere, bool quick, int threads, std::ostream& out, bool octahe
       {"bounds_vertices", boundsVertices},
       {"volume_drift", drift},
       {"note", "volume_drift of the float heights; shared machine: timings are noisy"}};
+  if (undo) j["undo_restores_start"] = restored;
   out << j.dump() << "\n" << std::flush;
   std::cerr << "erosion crater " << chart->name() << " " << g.label() << " threads " << threads
-            << ": " << frames << " frames, " << steps << " steps, median frame " << median(frameMs)
-            << " ms\n";
+            << (undo ? " undo journal" : "") << ": " << frames << " frames, " << steps
+            << " steps, median frame " << median(frameMs) << " ms"
+            << (undo ? restored ? ", undo restores the start" : ", UNDO DOES NOT RESTORE" : "")
+            << "\n";
 }
 
 }  // namespace
@@ -390,7 +412,9 @@ void benchErosion(const BenchOptions& options, std::ostream& out) {
     for (int threads : {1, 2}) crater(sphere, options.quick, threads, out);
   }
   benchErosionCharts(options, out);
-  for (int threads : {1, 2}) crater(true, options.quick, threads, out, true);
+  for (int threads : {1, 2}) {
+    for (bool undo : {false, true}) crater(true, options.quick, threads, out, true, undo);
+  }
   omp_set_num_threads(saved);
 }
 

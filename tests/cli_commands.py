@@ -720,6 +720,11 @@ def group_bench():
         for method in ("thermal", "diffusion-explicit", "diffusion-implicit", "crater-settle"):
             if not any(r.get("method") == method and r.get("chart") == "octahedral" for r in rows):
                 fail(f"bench erosion wrote no octahedral {method} row")
+        # The crater settled with the undo journal attached (the live configuration): undo
+        # gives back the start bit for bit (docs/SAND.md, "Undo takes settling back").
+        undone = [r for r in rows if r.get("method") == "crater-settle" and r.get("undo_journal")]
+        if not undone or not all(r.get("undo_restores_start") is True for r in undone):
+            fail(f"bench erosion: no crater row with the undo journal, or its undo did not restore: {undone}")
     if name == "sand-tin-charts":
         for chart in ("latlong", "octahedral", "torus", "cylinder"):
             if not any(r.get("chart") == chart for r in rows):
