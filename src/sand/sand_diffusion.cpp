@@ -291,6 +291,7 @@ StepReport SandField::diffusionStep(const Material& material, double dt, Diffusi
   StepReport rep;
   rep.dt = dt;
   if (atRest()) return rep;
+  if (grid_.glued() && !geometryEverywhere_) loadGeometryEverywhere();
   buildActiveSet(Predicate::kDiffusion, material);
   if (scheme == DiffusionScheme::kExplicit) {
     // The bound over the rows this step visits (the closed active set).

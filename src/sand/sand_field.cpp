@@ -61,7 +61,13 @@ SandField::Tile& SandField::loadTile(int t) {
           cellExists(u, v) ? double(heights_[g.index(u, v)]) : kWall;
     }
   }
-  if (grid_.glued()) loadGeometry(*ptr, t);
+  if (grid_.glued()) {
+    if (geometryEverywhere_ || gluedBorderTile(tu, tv)) {
+      loadGeometry(*ptr, t);
+    } else {
+      loadInnerLinks(*ptr, t);
+    }
+  }
   return *ptr;
 }
 

@@ -176,6 +176,12 @@ class SandField {
   // glued sides through the chart's gluing, the thermal step in two passes over the tiles.
   void markRegion(const terrain::VertexBox& region);
   void loadGeometry(Tile& tile, int t);
+  // A tile away from the glued sides while only thermal steps have run: no Tile::geo (its step
+  // reads Tile::thermalPlanes), only the tiles it links to, its 8 neighbours.
+  void loadInnerLinks(Tile& tile, int t) const;
+  // Tile::geo for every resident tile, and for every tile loaded from now on (the diffusion
+  // steps read it on every tile).
+  void loadGeometryEverywhere();
   // Fills the kGeoPlanes planes of tile t's cells into geo; returns min A / sum_f (L_f / d_f).
   double computeGeometry(int t, double* geo) const;
   // The source of scratch position (r, c) of tile (tu, tv) (a one-cell halo, the grid continued
@@ -260,6 +266,7 @@ class SandField {
   std::size_t totalCellSteps_ = 0;
   // m^3 the floats written so far hold less than the doubles did (writeBack's error diffusion).
   double carry_ = 0.0;
+  bool geometryEverywhere_ = false;  // glued: Tile::geo on every tile (see loadInnerLinks)
   // A tube's push force (markForce): the surface point under the tool and its normal, set
   // before a step's tiles run.
   Eigen::Vector3d tubeFoot_ = Eigen::Vector3d::Zero(), tubeFootUp_ = Eigen::Vector3d::Zero();

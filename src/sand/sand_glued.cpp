@@ -55,6 +55,25 @@ void SandField::loadGeometry(Tile& tile, int t) {
   }
 }
 
+void SandField::loadInnerLinks(Tile& tile, int t) const {
+  // No cell of such a tile lies within two of a glued side, so its cells' links reach the grid
+  // neighbours of the tile, which all exist.
+  const int tu = t % tilesU_, tv = t / tilesU_;
+  tile.linked.clear();
+  for (int dv = -1; dv <= 1; ++dv) {
+    for (int du = -1; du <= 1; ++du) {
+      if (du != 0 || dv != 0) tile.linked.push_back(tileIndex(tu + du, tv + dv));
+    }
+  }
+}
+
+void SandField::loadGeometryEverywhere() {
+  geometryEverywhere_ = true;
+  for (std::size_t t = 0; t < tiles_.size(); ++t) {
+    if (tiles_[t] && !tiles_[t]->geo) loadGeometry(*tiles_[t], int(t));
+  }
+}
+
 double SandField::computeGeometry(int t, double* geo) const {
   const int tu = t % tilesU_, tv = t / tilesU_;
   const double inf = std::numeric_limits<double>::infinity();
@@ -245,10 +264,24 @@ bool SandField::gluedLinkActive(Predicate pred, int u, int v, int k,
                                 const Material& material) const {
   const core::GridPoint n = grid_.neighbour(u, v, k);
   if (n.u < 0) return false;
-  // The chord the step uses: the tile's cached one (bit for bit grid_.chord).
+  // The chord the step uses: the tile's cached one (bit for bit grid_.chord), from Tile::geo or,
+  // on a tile that has none (loadInnerLinks), Tile::thermalPlanes, or before the tile's first
+  // thermal step, grid_.chord itself.
   const Tile& tile = *tiles_[std::size_t(tileIndex(u / kT, v / kT))];
-  const double dist =
-      tile.geo[std::size_t(kGeoChord + k) * kCells + std::size_t((v % kT) * kT + u % kT)];
+  double dist;
+  if (tile.geo) {
+    dist = tile.geo[std::size_t(kGeoChord + k) * kCells + std::size_t((v % kT) * kT + u % kT)];
+  } else if (tile.thermalPlanes) {
+    // Link k of the scratch position `at` in the planes (thermalGluedInner's row()).
+    constexpr std::size_t kP = std::size_t(kW) * kW;
+    constexpr int kPlane[8] = {kThermalE,  kThermalE,  kThermalN,  kThermalN,
+                               kThermalNE, kThermalNW, kThermalNW, kThermalNE};
+    constexpr int kOffset[8] = {-1, 0, -kW, 0, -kW - 1, -kW + 1, 0, 0};
+    const int at = (v % kT + 2) * kW + (u % kT + 2) + kOffset[k];
+    dist = tile.thermalPlanes[std::size_t(kPlane[k]) * kP + std::size_t(at)];
+  } else {
+    dist = grid_.chord(u, v, k);
+  }
   const double d = value(u, v) - value(n.u, n.v);
   if (pred == Predicate::kThermal) {
     const double T = material.tanTalus();
