@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdint>
 #include <random>
 #include <vector>
 
@@ -101,6 +102,39 @@ TEST(DynamicTin, ConstraintsKeepTheirGenerationAndAreFreedNearAStamp) {
   EXPECT_GT(tin.freeConstraintsNear({10.0, 5.0}, 1.0), 0u);
   EXPECT_TRUE(tin.isValid());
   EXPECT_LT(tin.constrainedEdgeCount(), 3u);
+}
+
+TEST(DynamicTin, DeeperThanAnswersAsDepthInsideDoesForEveryPoint) {
+  // Random point sets (their border a convex hull of any shape), then points inside, on and
+  // outside it in grid order and at random: the batch answer equals the point-by-point one.
+  std::mt19937 rng(31);
+  std::uniform_real_distribution<double> uni(-1.0, 1.0);
+  for (int trial = 0; trial < 20; ++trial) {
+    std::vector<Eigen::Vector3d> pts;
+    const int n = 3 + int(rng() % 400);
+    const double sx = 1.0 + 40.0 * std::abs(uni(rng)), sy = 1.0 + 40.0 * std::abs(uni(rng));
+    for (int i = 0; i < n; ++i) pts.emplace_back(sx * uni(rng), sy * uni(rng), uni(rng));
+    const DynamicTin tin(pts);
+    std::vector<Eigen::Vector2d> queries;
+    for (int y = -60; y <= 60; ++y) {
+      for (int x = -60; x <= 60; ++x) queries.emplace_back(0.8 * x, 0.8 * y);
+    }
+    for (int i = 0; i < 2000; ++i) queries.emplace_back(50.0 * uni(rng), 50.0 * uni(rng));
+    for (const auto& p : pts) queries.emplace_back(p.x(), p.y());  // on the border, some
+    for (double depth : {1e-3, 0.5, 2.0, 7.5, 100.0}) {
+      const std::vector<std::uint8_t> deep = tin.deeperThan(queries, depth);
+      ASSERT_EQ(deep.size(), queries.size());
+      int inside = 0;
+      for (std::size_t i = 0; i < queries.size(); ++i) {
+        ASSERT_EQ(deep[i] != 0, tin.depthInside(queries[i]) >= depth)
+            << "trial " << trial << " depth " << depth << " point " << queries[i].transpose();
+        inside += deep[i];
+      }
+      if (depth == 0.5 && n > 50) {
+        EXPECT_GT(inside, 0) << "trial " << trial;
+      }
+    }
+  }
 }
 
 TEST(TinSand, AStampPressesItsBottomKeepsTheVolumeAndLeavesACrispWall) {

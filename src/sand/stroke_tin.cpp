@@ -183,8 +183,13 @@ terrain::MeshPatch StrokeTin::patch(double marginCells) const {
   // replaces then lie well inside it, and its border ring overlaps the view's kept triangles
   // (a triangle with a corner on the border to rounding left out could uncover a sliver).
   const double margin = marginCells * spacing_;
-  for (const Point& q : points_) {
-    if (sand_->tin().depthInside(q.xy) < margin) continue;
+  std::vector<Eigen::Vector2d> xy;
+  xy.reserve(points_.size());
+  for (const Point& q : points_) xy.push_back(q.xy);
+  const std::vector<std::uint8_t> deep = sand_->tin().deeperThan(xy, margin);
+  for (std::size_t i = 0; i < points_.size(); ++i) {
+    if (!deep[i]) continue;
+    const Point& q = points_[i];
     if (chart_->hasPoleRows() && (q.v == 0 || q.v == m)) {
       for (int u = 0; u <= m; ++u) p.replaces.push_back(g.index(u, q.v));
       continue;

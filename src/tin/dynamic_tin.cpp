@@ -282,6 +282,69 @@ double DynamicTin::depthInside(const Eigen::Vector2d& p) const {
   return contains(p) ? nearest : -nearest;
 }
 
+std::vector<std::uint8_t> DynamicTin::deeperThan(std::span<const Eigen::Vector2d> points,
+                                                 double depth) const {
+  const lean::Cdt& cdt = impl_->cdt;
+  std::vector<std::uint8_t> out(points.size(), 0);
+  if (points.empty() || cdt.dimension() < 2 || !(depth > 0.0)) {
+    for (std::size_t i = 0; i < points.size(); ++i) out[i] = depthInside(points[i]) >= depth;
+    return out;
+  }
+  // The border's edges, and a grid of cells over its box grown by `depth`: an edge closer than
+  // `depth` to p has p within `depth` of its box, so it is listed in p's cell.
+  std::vector<std::pair<Eigen::Vector2d, Eigen::Vector2d>> edges;
+  Eigen::Vector2d lo = Eigen::Vector2d::Constant(INFINITY), hi = -lo;
+  auto c = cdt.incident_vertices(cdt.infinite_vertex()), done = c;
+  do {
+    auto next = c;
+    ++next;
+    edges.emplace_back(xyOf(c->point()), xyOf(next->point()));
+    lo = lo.cwiseMin(edges.back().first);
+    hi = hi.cwiseMax(edges.back().first);
+  } while (++c != done);
+  lo.array() -= depth;
+  hi.array() += depth;
+  const double cell = std::max(depth, (hi - lo).maxCoeff() / 1024.0);  // at most 1024^2 cells
+  const int nx = std::max(1, int(std::ceil((hi.x() - lo.x()) / cell)));
+  const int ny = std::max(1, int(std::ceil((hi.y() - lo.y()) / cell)));
+  auto cellOf = [&](double v, double origin, int n) {
+    return std::clamp(int(std::floor((v - origin) / cell)), 0, n - 1);
+  };
+  std::vector<std::vector<std::uint32_t>> bucket(std::size_t(nx) * std::size_t(ny));
+  for (std::size_t e = 0; e < edges.size(); ++e) {
+    const auto& [a, b] = edges[e];
+    const int x0 = cellOf(std::min(a.x(), b.x()) - depth, lo.x(), nx);
+    const int x1 = cellOf(std::max(a.x(), b.x()) + depth, lo.x(), nx);
+    const int y0 = cellOf(std::min(a.y(), b.y()) - depth, lo.y(), ny);
+    const int y1 = cellOf(std::max(a.y(), b.y()) + depth, lo.y(), ny);
+    for (int y = y0; y <= y1; ++y) {
+      for (int x = x0; x <= x1; ++x) bucket[std::size_t(y) * nx + x].push_back(std::uint32_t(e));
+    }
+  }
+  lean::FaceHandle walk = impl_->startFace();
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const Eigen::Vector2d& p = points[i];
+    if ((p.array() < lo.array()).any() || (p.array() > hi.array()).any()) continue;  // outside
+    bool near = false;
+    for (std::uint32_t e :
+         bucket[std::size_t(cellOf(p.y(), lo.y(), ny)) * nx + cellOf(p.x(), lo.x(), nx)]) {
+      if (pointSegmentDistance(p, edges[e].first, edges[e].second) < depth) {
+        near = true;
+        break;
+      }
+    }
+    if (near) continue;
+    lean::Cdt::Locate_type lt;
+    int li = 0;
+    const lean::FaceHandle f = cdt.locate(Point(p.x(), p.y()), lt, li, walk);
+    const bool inside =
+        lt != lean::Cdt::OUTSIDE_CONVEX_HULL && lt != lean::Cdt::OUTSIDE_AFFINE_HULL;
+    if (inside) walk = f;
+    out[i] = inside;
+  }
+  return out;
+}
+
 double DynamicTin::heightAt(const Eigen::Vector2d& p) const {
   lean::Cdt::Locate_type lt;
   int li = 0;

@@ -75,6 +75,11 @@ class DynamicTin {
   bool contains(const Eigen::Vector2d& p) const;
   // How far p lies inside the domain: the distance to its border, negative outside.
   double depthInside(const Eigen::Vector2d& p) const;
+  // For each point, depthInside(p) >= depth, answered for many points at once: the border's
+  // edges are bucketed once (each in the cells of `depth` its box reaches), so a point checks
+  // the few edges near it, not the whole border; point location walks from the last point's
+  // triangle (points in a sensible order, such as grid order, walk a few triangles each).
+  std::vector<std::uint8_t> deeperThan(std::span<const Eigen::Vector2d> points, double depth) const;
   // The surface's height at p (NaN outside the domain): point location walks from the last
   // triangle found, as the paper's rectangular walk does.
   double heightAt(const Eigen::Vector2d& p) const;
