@@ -140,7 +140,7 @@ void changeOutside(edit::EditPipeline& pipe, const std::vector<std::pair<int, in
     box = box.unite(terrain::VertexBox{u, u, v, v}, g, t.chart().wrapsU());
   }
   t.commitEdit(box);
-  pipe.recordOutside(std::move(changes), box);
+  pipe.recordOutside(changes, box);
 }
 
 struct HeardChanges final : edit::JournalListener {

@@ -263,10 +263,10 @@ void EditPipeline::undo() {
   journal_.undo(terrain_);
 }
 
-void EditPipeline::recordOutside(std::vector<HeightChange> changes,
+void EditPipeline::recordOutside(std::span<const HeightChange> changes,
                                  const terrain::VertexBox& dirty) {
   if (!undoEnabled_) return;
-  journal_.recordOutside(std::move(changes), terrain_.grid(), dirty, terrain_.chart().wrapsU());
+  journal_.recordOutside(changes, terrain_.grid(), dirty, terrain_.chart().wrapsU());
 }
 
 void EditPipeline::redo() {

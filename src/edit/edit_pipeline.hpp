@@ -1,6 +1,7 @@
 #pragma once
 #include <Eigen/Core>
 #include <cstddef>
+#include <span>
 #include <vector>
 
 #include "core/grid.hpp"
@@ -98,7 +99,7 @@ class EditPipeline {
   void redo();
   // Heights something else changed as a consequence of the strokes (sand settling): they join the
   // open or latest stroke's undo step (UndoJournal::recordOutside). Nothing when undo is off.
-  void recordOutside(std::vector<HeightChange> changes, const terrain::VertexBox& dirty);
+  void recordOutside(std::span<const HeightChange> changes, const terrain::VertexBox& dirty);
 
   void setObserver(EditObserver* observer) { observer_ = observer; }
   EditObserver* observer() const { return observer_; }

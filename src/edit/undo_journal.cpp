@@ -43,12 +43,12 @@ bool sameBits(float a, float b) {
 }
 }  // namespace
 
-void UndoJournal::recordOutside(std::vector<HeightChange> changes, const core::GridSize& grid,
+void UndoJournal::recordOutside(std::span<const HeightChange> changes, const core::GridSize& grid,
                                 const terrain::VertexBox& dirty, bool wrapsU) {
   if (changes.empty()) return;
   if (open_) {
-    for (HeightChange& c : changes) c.index |= kOutside;
-    pending_.insert(pending_.end(), changes.begin(), changes.end());
+    for (const HeightChange& c : changes)
+      pending_.push_back({c.index | kOutside, c.before, c.after});
     pendingDirty_ = pendingDirty_.unite(dirty, grid, wrapsU);
     if (pending_.size() > 2 * compacted_ + (std::size_t(1) << 20)) compact();
     return;

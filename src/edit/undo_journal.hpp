@@ -63,7 +63,7 @@ class UndoJournal {
   // beginning. When there is nothing to undo the changes are not recorded (the heights the
   // journal began with). What can be redone stays redoable (a redo writes its stroke's "after"
   // heights over what settled since the undo).
-  void recordOutside(std::vector<HeightChange> changes, const core::GridSize& grid,
+  void recordOutside(std::span<const HeightChange> changes, const core::GridSize& grid,
                      const terrain::VertexBox& dirty, bool wrapsU);
   // Closes the stroke and returns its changed-vertex count. A stroke that changed nothing is still
   // one undo step (so "undo" always takes back the user's last stroke).

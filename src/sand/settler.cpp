@@ -114,7 +114,7 @@ FrameReport Settler::frame() {
     terrain_.commitEdit(rep.dirty);
     rep.boundsVertices = terrain_.bounds().lastUpdateVertexCount();
   }
-  if (undo_ && !changes_.empty()) undo_->recordOutside(std::move(changes_), rep.dirty);
+  if (undo_ && !changes_.empty()) undo_->recordOutside(changes_, rep.dirty);
   expectedRevision_ = terrain_.revision();
   const auto t3 = Clock::now();
   rep.atRest = atRest();
