@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <numeric>
 #include <vector>
 
@@ -93,9 +94,13 @@ DynamicTin errorBoundedTin(std::span<const Eigen::Vector3d> points, double spaci
   std::vector<Eigen::Vector3d> start;
   for (const std::size_t k : convexHull(points)) start.push_back(points[k]);
   report.hullVertices = start.size();
-  for (const Eigen::Vector2d& ij : greedy.xy) {
-    const Eigen::Vector2d p = lo + spacing * ij;
-    if (all.depthInside(p) >= 0.5 * spacing) start.emplace_back(p.x(), p.y(), all.heightAt(p));
+  std::vector<Eigen::Vector2d> lattice2d;
+  lattice2d.reserve(greedy.xy.size());
+  for (const Eigen::Vector2d& ij : greedy.xy) lattice2d.push_back(lo + spacing * ij);
+  const std::vector<std::uint8_t> deep = all.deeperThan(lattice2d, 0.5 * spacing);
+  for (std::size_t k = 0; k < lattice2d.size(); ++k) {
+    const Eigen::Vector2d& p = lattice2d[k];
+    if (deep[k]) start.emplace_back(p.x(), p.y(), all.heightAt(p));
   }
   DynamicTin tin(start);
   report.startVertices = tin.vertexCount();
