@@ -445,6 +445,18 @@ def group_charts():
         fail(f"the octahedral sand replay: {s}")
     if open(out("octa_sand_a", "planet.planet"), "rb").read() != open(out("octa_sand_b", "planet.planet"), "rb").read():
         fail("two sand replays onto the octahedral planet wrote different planet files")
+    # The same frames pressed deeper (walls steeper than sand's 30 degrees on these 4 km cells),
+    # in sand and in pebbles (--material), which hold 60: the same stamps, another planet.
+    deep = {}
+    for material in ("sand", "pebbles"):
+        run("replay", video, "--calib", CALIB, "--chart", "octahedral", "--grid", "1025", "--max-frames", "90",
+            "--tool", "displace", "--press-m", "30000", "--material", material, "--out", out(f"octa_{material}"))
+        with open(out(f"octa_{material}", "summary.json")) as f:
+            deep[material] = json.load(f)
+    if [deep[m]["material"] for m in deep] != ["sand", "pebbles"] or deep["sand"]["stamps"] != deep["pebbles"]["stamps"]:
+        fail(f"the sand and pebbles replays: {deep}")
+    if open(out("octa_sand", "planet.planet"), "rb").read() == open(out("octa_pebbles", "planet.planet"), "rb").read():
+        fail("pebbles and sand left the same planet")
     # The TIN sand tool on the octahedral chart (issue 43): its region TIN drawn in the AR view,
     # stamps written back, forces felt.
     run("replay", video, "--calib", CALIB, "--chart", "octahedral", "--grid", "513", "--max-frames", "60",
@@ -456,6 +468,7 @@ def group_charts():
         fail(f"the octahedral TIN sand replay: {s}")
     # Refusals, named: an unknown chart, --chart with a planet file (it has its own).
     for args, said in ((("--chart", "cube"), "chart 'cube' is not one of"),
+                       (("--material", "clay"), "material 'clay' is not one of sand, mud, pebbles"),
                        (("--chart", "octahedral", "--planet", out("octa_a", "planet.planet")), "has its own chart")):
         p = subprocess.run([EXE, "replay", video, "--calib", CALIB, "--grid", "1025", "--max-frames", "5", *args,
                             "--out", out("refused")], capture_output=True, text=True)

@@ -62,17 +62,18 @@ grep -q '"frames": *346' "$out/d/replay/summary.json" || fail "the recording did
 cmp -s "$out/d/planet.planet" "$out/d/replay/planet.planet" ||
   fail "replaying the recording sculpted another planet than the live session"
 # A session whose settings change while it records (--at FRAME:SETTING=VALUE, as if set in the
-# panel; undo and redo, the last two after the video's end): the recording's sidecar
+# panel, the sand's material among them; undo and redo, the last two after the video's end): the recording's sidecar
 # (session.mkv.session.jsonl) makes the replay sculpt the same planet, byte for byte; without it
 # (--no-session) the replay sculpts another; a damaged sidecar is refused naming its line.
 run "$out/live12.txt" --frames 350 --out "$out/i" --record "$out/i/session.mkv" \
   --at 50:radius_km=400 --at 80:strength_m=1500 --at 100:size_cm=6.5 --at 130:undo \
-  --at 140:redo --at 170:mode=lower --at 200:tool=displace --at 230:tool=brush \
+  --at 140:redo --at 170:mode=lower --at 200:tool=displace --at 210:material=pebbles --at 230:tool=brush \
   --at 290:spin_deg=15 --at 347:undo --at 348:redo --at 349:undo ||
   { cat "$out/live12.txt"; fail "live with scripted settings failed"; }
 side="$out/i/session.mkv.session.jsonl"
 [ "$(wc -l <"$side")" -ge 11 ] || { cat "$side"; fail "the sidecar lacks the session's changes"; }
 grep -q '"frame":51,.*"brush_radius_m":400000' "$side" || { cat "$side"; fail "no r_d change at frame 51"; }
+grep -q '"frame":211,"material":"pebbles"' "$side" || { cat "$side"; fail "no material change at frame 211"; }
 grep -q '"frame":346,"event":"redo"' "$side" ||
   { cat "$side"; fail "no redo after the video's end"; }
 "$exe" replay "$out/i/session.mkv" --calib "$src/calib/synthetic-640x480.yml" \

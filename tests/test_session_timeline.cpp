@@ -15,6 +15,7 @@
 #include "fresh_dir.hpp"
 #include "replay/replay.hpp"
 #include "replay/session_timeline.hpp"
+#include "sand/material.hpp"
 #include "session/frame_recorder.hpp"
 #include "short_scene.hpp"
 #include "test_terrains.hpp"
@@ -274,6 +275,48 @@ TEST(SessionTimeline, AnotherStartPlanetOrCalibrationIsRefusedNamingTheSidecar) 
   EXPECT_NO_THROW(replay::checkSessionStart(timeline, same, calib));
 }
 
+TEST(SessionTimeline, TheSandsMaterialIsRecordedReplayedAndSettlesAsChosen) {
+  // The displacement tool from frame 1, sand or pebbles (a chosen material is a settings change
+  // of its own, recorded like the others).
+  auto session = [](const std::string& name, bool pebbles) {
+    Script script = {{1, [pebbles](SettingsControl& c) {
+                        auto s = c.settings();
+                        s.tool = replay::ReplayTool::kDisplace;
+                        // Deep enough for walls steeper than sand holds on 313 km cells.
+                        s.displace.radius = 800e3;
+                        s.pressDepth = 250e3;
+                        if (pebbles) s.displace.material = sand::Material::pebbles();
+                        c.apply(s);
+                      }}};
+    return recordOnTheSessionsPlanet(name, script);
+  };
+  auto sand = session("timeline_sand", false);
+  auto pebbles = session("timeline_pebbles", true);
+  ASSERT_FALSE(sameHeights(sand.live, sand.start)) << "the session pressed nothing";
+  // Sand slides down to 30 degrees, pebbles hold 60: the same strokes leave other heights.
+  EXPECT_FALSE(sameHeights(sand.live, pebbles.live));
+
+  const auto timeline = replay::readSessionTimeline(replay::sessionSidecarPath(pebbles.video));
+  ASSERT_EQ(timeline.entries.size(), 1u);
+  EXPECT_EQ(timeline.entries[0].settings.displace.material, sand::Material::pebbles());
+  auto replayed = pebbles.start;
+  const auto s = replayFiles(pebbles.video, replayed, &timeline);
+  EXPECT_TRUE(s.warnings.empty()) << s.warnings.front();
+  EXPECT_TRUE(sameHeights(replayed, pebbles.live)) << "the replay pressed another planet";
+
+  // A sidecar from before materials were recorded names none: its sand was sand.
+  std::ifstream in(replay::sessionSidecarPath(pebbles.video));
+  std::string header;
+  std::getline(in, header);
+  const std::string field = "\"material\":\"sand\",";
+  const auto at = header.find(field);
+  ASSERT_NE(at, std::string::npos) << header;
+  header.erase(at, field.size());
+  const auto old = pebbles.dir / "old.jsonl";
+  std::ofstream(old) << header << "\n";
+  EXPECT_EQ(replay::readSessionTimeline(old).settings.displace.material, sand::Material::sand());
+}
+
 TEST(SessionTimeline, BadSidecarsAreRefusedNamingFileAndLine) {
   const auto dir = testkit::freshDir("timeline_bad");
   expectRefused(sidecarWith(dir, "json.jsonl", {R"({"frame": 3, "sigma": 0.2})", "{nope"}),
@@ -284,6 +327,8 @@ TEST(SessionTimeline, BadSidecarsAreRefusedNamingFileAndLine) {
                 ":2: ", "\"strength_m\" is not a number");
   expectRefused(sidecarWith(dir, "value.jsonl", {R"({"frame": 3, "brush_radius_m": -5})"}),
                 ":2: ", "radius");
+  expectRefused(sidecarWith(dir, "material.jsonl", {R"({"frame": 3, "material": "clay"})"}),
+                ":2: ", "\"material\" material 'clay' is not one of sand, mud, pebbles");
   expectRefused(sidecarWith(dir, "order.jsonl",
                             {R"({"frame": 5, "sigma": 0.2})", R"({"frame": 4, "sigma": 0.3})"}),
                 ":3: ", "comes after frame 5");

@@ -71,7 +71,8 @@ const CommandRegistration kLive([](CLI::App& root, CLI::App*& sub) -> CommandAct
                   "FRAME:ACTION, repeatable: a panel action at a window frame as if its key were "
                   "pressed (export, record, save, undo, redo, quit), or FRAME:SETTING=VALUE as "
                   "if the panel were set "
-                  "so (tool=brush|displace, mode=raise|lower, radius_km, strength_m, sigma, "
+                  "so (tool=brush|displace|tin-sand, mode=raise|lower, material=sand|mud|pebbles, "
+                  "radius_km, strength_m, sigma, "
                   "displace_radius_km, press_m, size_cm, spin_deg, tilt_deg): scripted sessions "
                   "for tests and demos");
   a->cli.addOptions(sub);

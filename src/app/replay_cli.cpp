@@ -7,6 +7,7 @@
 #include "core/grid.hpp"
 #include "core/input_error.hpp"
 #include "render/sun.hpp"
+#include "sand/material.hpp"
 #include "tracking/marker_layout.hpp"
 
 namespace ps::app {
@@ -83,6 +84,10 @@ void ReplayCli::addOptions(CLI::App* sub) {
       ->capture_default_str();
   sub->add_option("--press-m", pressM, "How deep the displacement sphere presses in (m)")
       ->capture_default_str();
+  sub->add_option("--material", material,
+                  "What the sand tools press and settle: sand (talus 30 deg), mud (72 deg, "
+                  "cohesive) or pebbles (60 deg) (docs/SAND.md, \"Materials\")")
+      ->capture_default_str();
   sub->add_flag("--no-settle", noSettle, "Displace: do not let the sand settle");
   sub->add_option("--max-frames", o.maxFrames, "Stop after this many frames (0: all)");
   sub->add_flag("--no-filter", noFilter, "Use raw poses (no One Euro filters)");
@@ -106,6 +111,7 @@ void ReplayCli::apply() {
   o.brush.mode = edit::brushModeFromString(mode);
   o.displace.radius = displaceRadiusKm * 1e3;
   o.pressDepth = pressM;
+  o.displace.material = sand::Material::preset(material);
   o.settle = !noSettle;
   if (noFilter) o.scene.planet.filter = o.scene.tool.filter = o.scene.filterTip = false;
   o.scene.useBoard(board == "single" ? nullptr
@@ -152,6 +158,7 @@ void ReplayCli::apply() {
                            "--mode",
                            "--displace-radius-km",
                            "--press-m",
+                           "--material",
                            "--no-settle",
                            "--no-filter"})
     if (sub_ && sub_->get_option(name)->count() > 0) job.givenOptions.push_back(name);

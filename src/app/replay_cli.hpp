@@ -11,7 +11,7 @@ namespace ps::app {
 
 struct ReplayCli {
   ReplayJob job;
-  std::string family = "tag36h11", mode = "raise", tool = "brush";
+  std::string family = "tag36h11", mode = "raise", tool = "brush", material = "sand";
   long long grid = 2049;
   std::vector<double> tip = {0.0, -0.08, 0.0};
   double brushRadiusKm = 250, strengthM = 600, displaceRadiusKm = 400, pressM = 8000;

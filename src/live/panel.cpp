@@ -12,6 +12,7 @@
 
 #include "core/input_error.hpp"
 #include "live/window_layout.hpp"
+#include "sand/material.hpp"
 
 namespace ps::live {
 
@@ -61,6 +62,9 @@ ScriptedAction parseScriptedAction(const std::string& text) {
       known = value == "brush" || value == "displace" || value == "tin-sand";
     else if (a.setting == "mode")
       known = value == "raise" || value == "lower";
+    else if (a.setting == "material")
+      known = std::ranges::find(sand::Material::presetNames(), value) !=
+              sand::Material::presetNames().end();
     else if (PanelSettings probe; scriptedNumber(probe, a.setting)) {
       std::size_t n = 0;
       try {
@@ -73,13 +77,13 @@ ScriptedAction parseScriptedAction(const std::string& text) {
     a.word = value;
   }
   if (colon == std::string::npos || used != colon || a.frame < 0 || !known) {
-    throw core::InputError(
-        "--at " + text +
-        ": expected FRAME:ACTION with FRAME >= 0 and ACTION one of export, "
-        "record, save, undo, redo, quit, or FRAME:SETTING="
-        "VALUE with tool=brush|displace|tin-sand, mode=raise|lower or a number for "
-        "radius_km, strength_m, sigma, displace_radius_km, press_m, size_cm, "
-        "spin_deg, tilt_deg");
+    throw core::InputError("--at " + text +
+                           ": expected FRAME:ACTION with FRAME >= 0 and ACTION one of export, "
+                           "record, save, undo, redo, quit, or FRAME:SETTING="
+                           "VALUE with tool=brush|displace|tin-sand, mode=raise|lower, "
+                           "material=sand|mud|pebbles or a number for "
+                           "radius_km, strength_m, sigma, displace_radius_km, press_m, size_cm, "
+                           "spin_deg, tilt_deg");
   }
   return a;
 }
@@ -101,6 +105,7 @@ void applyScript(const std::vector<ScriptedAction>& script, int frame, PanelActi
       settings.tinSand = s.word == "tin-sand";
     }
     if (s.setting == "mode") settings.lower = s.word == "lower";
+    if (s.setting == "material") settings.material = s.word;
     if (float* f = scriptedNumber(settings, s.setting)) *f = s.number;
   }
 }
@@ -213,6 +218,11 @@ float drawControlPanel(PanelSettings& s, PanelActions& a, const PanelStatus& st)
     ImGui::SliderFloat("sphere r (km)", &s.displaceRadiusKm, 50, 2000, "%.0f",
                        ImGuiSliderFlags_Logarithmic);
     ImGui::SliderFloat("press (m)", &s.pressM, 500, 50000, "%.0f", ImGuiSliderFlags_Logarithmic);
+    const auto& names = sand::Material::presetNames();
+    for (std::size_t i = 0; i < names.size(); ++i) {
+      if (i > 0) ImGui::SameLine();
+      if (ImGui::RadioButton(names[i].c_str(), s.material == names[i])) s.material = names[i];
+    }
   }
   ImGui::Separator();
   ImGui::SliderFloat("dist_max (px)", &s.distMaxPx, 0.25f, 16, "%.2f",

@@ -1,9 +1,9 @@
 #pragma once
 // The live app's on-screen panel (Dear ImGui) and its keyboard shortcuts: what the user can
-// change (tool, r_d, strength, raise/lower, dist_max, triangle budget, wireframe) and ask for
-// (undo, redo, save, export, record), and what the app shows (frame rate, triangles, tracking
-// state, autosave and journal, recording, messages), and the recovery question at start.
-// Drawing only: the app (live/live_app.cpp) applies the settings and runs the actions.
+// change (tool, r_d, strength, raise/lower, the sand's material, dist_max, triangle budget,
+// wireframe) and ask for (undo, redo, save, export, record), and what the app shows (frame rate,
+// triangles, tracking state, autosave and journal, recording, messages), and the recovery question
+// at start. Drawing only: the app (live/live_app.cpp) applies the settings and runs the actions.
 #include <cstddef>
 #include <string>
 #include <vector>
@@ -19,6 +19,7 @@ struct PanelSettings {
   float brushRadiusKm = 250, strengthM = 600, sigma = 0.17f;
   bool lower = false;  // brush: raise (false) or lower
   float displaceRadiusKm = 400, pressM = 8000;
+  std::string material = "sand";  // the sand tools' (sand::Material::presetNames())
   float distMaxPx = 4;
   int triangleBudget = 70000;
   bool wireframe = false, contours = false;
@@ -48,10 +49,10 @@ struct PanelActions {
 struct ScriptedAction {
   int frame = 0;
   std::string action;  // export, record, save, undo, redo, quit, interrupt, crash; "" : a setting
-  // tool (brush, displace, tin-sand), mode (raise, lower), radius_km, strength_m, sigma,
-  // displace_radius_km, press_m, size_cm, spin_deg, tilt_deg
+  // tool (brush, displace, tin-sand), mode (raise, lower), material (sand, mud, pebbles),
+  // radius_km, strength_m, sigma, displace_radius_km, press_m, size_cm, spin_deg, tilt_deg
   std::string setting;
-  std::string word;  // tool, mode
+  std::string word;  // tool, mode, material
   float number = 0;  // the others
 };
 // Parses "FRAME:ACTION" or "FRAME:SETTING=VALUE"; throws core::InputError naming the text

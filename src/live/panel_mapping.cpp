@@ -1,5 +1,7 @@
 #include "live/panel_mapping.hpp"
 
+#include "sand/material.hpp"
+
 namespace ps::live {
 
 PanelSettings panelFrom(const LiveSettings& s) {
@@ -13,6 +15,7 @@ PanelSettings panelFrom(const LiveSettings& s) {
   p.lower = o.brush.mode == edit::BrushMode::kLower;
   p.displaceRadiusKm = float(o.displace.radius / 1e3);
   p.pressM = float(o.pressDepth);
+  p.material = o.displace.material.name;
   p.distMaxPx = float(s.distMaxPx);
   p.triangleBudget = int(s.triangleBudget);
   p.planetSizeCm = float(o.scene.planetRadius * 100);
@@ -26,7 +29,8 @@ bool sculptingChanged(const PanelSettings& a, const PanelSettings& b) {
   return a.displace != b.displace || a.tinSand != b.tinSand || a.brushRadiusKm != b.brushRadiusKm ||
          a.strengthM != b.strengthM || a.sigma != b.sigma || a.lower != b.lower ||
          a.displaceRadiusKm != b.displaceRadiusKm || a.pressM != b.pressM ||
-         a.spinDeg != b.spinDeg || a.tiltDeg != b.tiltDeg || a.planetSizeCm != b.planetSizeCm;
+         a.material != b.material || a.spinDeg != b.spinDeg || a.tiltDeg != b.tiltDeg ||
+         a.planetSizeCm != b.planetSizeCm;
 }
 
 replay::SessionSettings panelTarget(const PanelSettings& p, const PanelSettings& applied,
@@ -42,6 +46,8 @@ replay::SessionSettings panelTarget(const PanelSettings& p, const PanelSettings&
     t.brush.mode = p.lower ? edit::BrushMode::kLower : edit::BrushMode::kRaise;
   t.displace.radius = p.displaceRadiusKm * 1e3;
   t.pressDepth = p.pressM;
+  if (p.material != now.displace.material.name)
+    t.displace.material = sand::Material::preset(p.material);
   t.spinDeg = p.spinDeg;
   t.tiltDeg = p.tiltDeg;
   t.planetRadius = double(p.planetSizeCm) / 100;

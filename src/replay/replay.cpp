@@ -313,9 +313,11 @@ void FrameStepper::setDisplacement(const sand::DisplacementSettings& displace, d
   o.displace = displace;
   o.pressDepth = pressDepth;
   o.validate();
-  if (displace.material.name != o_.displace.material.name) {
+  // Another material: what is still settling goes on settling, as the new one (the settler
+  // settles one material at a time, docs/SAND.md "The settler").
+  if (!(displace.material == o_.displace.material)) {
     endStroke();
-    p_->settler.reset();
+    if (p_->settler) p_->settler->setMaterial(displace.material);
   }
   o_ = o;
   rebuildTools();

@@ -54,6 +54,7 @@ nlohmann::json toJson(const SessionSettings& s) {
           {"rampart_width", s.displace.rampartWidth},
           {"displace_spacing", s.displace.spacing},
           {"press_m", s.pressDepth},
+          {"material", s.displace.material.name},
           {"planet_radius_m", s.planetRadius},
           {"spin_deg", s.spinDeg},
           {"tilt_deg", s.tiltDeg}};

@@ -11,10 +11,10 @@
 #include <utility>
 
 #include "core/chart_factory.hpp"
-
 #include "core/grid.hpp"
 #include "core/input_error.hpp"
 #include "io/stroke_journal.hpp"
+#include "sand/material.hpp"
 #include "tracking/marker_layout.hpp"
 
 namespace ps::replay {
@@ -53,12 +53,16 @@ const std::map<std::string, FieldSetter>& fields() {
       {"rampart_width", [](auto& s, auto& v) { s.displace.rampartWidth = number(v); }},
       {"displace_spacing", [](auto& s, auto& v) { s.displace.spacing = number(v); }},
       {"press_m", [](auto& s, auto& v) { s.pressDepth = number(v); }},
+      {"material", [](auto& s, auto& v) { s.displace.material = sand::Material::preset(text(v)); }},
       {"planet_radius_m", [](auto& s, auto& v) { s.planetRadius = number(v); }},
       {"spin_deg", [](auto& s, auto& v) { s.spinDeg = number(v); }},
       {"tilt_deg", [](auto& s, auto& v) { s.tiltDeg = number(v); }},
   };
   return f;
 }
+
+// Sidecars before 2026-12-07 name no material: theirs was sand, the settings' default.
+constexpr const char* kMaterialKey = "material";
 
 [[noreturn]] void fail(const std::filesystem::path& path, int line, const std::string& what) {
   throw core::InputError(path.string() + ":" + std::to_string(line) + ": " + what);
@@ -250,7 +254,8 @@ SessionTimeline parseSessionTimeline(const std::string& all, const std::filesyst
       const nlohmann::json& settings = member(j, "settings", path, line);
       if (!settings.is_object()) fail(path, line, "\"settings\" is not an object");
       for (const auto& [key, value] : fields())
-        if (!settings.contains(key)) fail(path, line, "\"settings\" has no \"" + key + "\"");
+        if (!settings.contains(key) && key != kMaterialKey)
+          fail(path, line, "\"settings\" has no \"" + key + "\"");
       applyFields(settings, t.settings, {}, path, line);
       try {
         t.settings.validate();

@@ -96,7 +96,14 @@ Material Material::preset(const std::string& name) {
   if (name == "sand") return sand();
   if (name == "mud") return mud();
   if (name == "pebbles") return pebbles();
-  throw core::InputError("material '" + name + "' is not one of sand, mud, pebbles");
+  std::string names;
+  for (const std::string& n : presetNames()) names += (names.empty() ? "" : ", ") + n;
+  throw core::InputError("material '" + name + "' is not one of " + names);
+}
+
+const std::vector<std::string>& Material::presetNames() {
+  static const std::vector<std::string> names = {"sand", "mud", "pebbles"};
+  return names;
 }
 
 }  // namespace ps::sand

@@ -1,5 +1,6 @@
 #pragma once
 #include <string>
+#include <vector>
 
 namespace ps::sand {
 
@@ -43,8 +44,10 @@ struct Material {
   static Material sand();
   static Material mud();
   static Material pebbles();
-  // By name ("sand", "mud", "pebbles"); throws core::InputError otherwise.
+  // By name (one of presetNames()); throws core::InputError otherwise.
   static Material preset(const std::string& name);
+  // "sand", "mud", "pebbles": what a user may choose (`--material`, the live panel).
+  static const std::vector<std::string>& presetNames();
 
   bool operator==(const Material&) const = default;
 };
