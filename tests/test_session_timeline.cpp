@@ -128,6 +128,20 @@ std::filesystem::path sidecarWith(const std::filesystem::path& dir, const std::s
   return path;
 }
 
+// Writes `to`, the header line of the sidecar `from` without `field` (a sidecar written before
+// that field was); false when the header has no such field.
+bool headerWithout(const std::filesystem::path& from, const std::string& field,
+                   const std::filesystem::path& to) {
+  std::ifstream in(from);
+  std::string header;
+  std::getline(in, header);
+  const auto at = header.find(field);
+  if (at == std::string::npos) return false;
+  header.erase(at, field.size());
+  std::ofstream(to) << header << "\n";
+  return true;
+}
+
 void expectRefused(const std::filesystem::path& path, const std::string& where,
                    const std::string& what) {
   try {
@@ -305,15 +319,9 @@ TEST(SessionTimeline, TheSandsMaterialIsRecordedReplayedAndSettlesAsChosen) {
   EXPECT_TRUE(sameHeights(replayed, pebbles.live)) << "the replay pressed another planet";
 
   // A sidecar from before materials were recorded names none: its sand was sand.
-  std::ifstream in(replay::sessionSidecarPath(pebbles.video));
-  std::string header;
-  std::getline(in, header);
-  const std::string field = "\"material\":\"sand\",";
-  const auto at = header.find(field);
-  ASSERT_NE(at, std::string::npos) << header;
-  header.erase(at, field.size());
   const auto old = pebbles.dir / "old.jsonl";
-  std::ofstream(old) << header << "\n";
+  ASSERT_TRUE(
+      headerWithout(replay::sessionSidecarPath(pebbles.video), "\"material\":\"sand\",", old));
   EXPECT_EQ(replay::readSessionTimeline(old).settings.displace.material, sand::Material::sand());
 }
 
@@ -445,15 +453,8 @@ TEST(SessionTimeline, SidecarsNameTheirChartAndOnesThatNameNoneAreLatLong) {
   EXPECT_EQ(octa.start.chart, "octahedral");
   EXPECT_TRUE(octa.start.chartNamed);
   // The same header without its "chart" field: an old sidecar.
-  std::ifstream in(octaPath);
-  std::string header;
-  std::getline(in, header);
-  const std::string field = "\"chart\":\"octahedral\",";
-  const auto at = header.find(field);
-  ASSERT_NE(at, std::string::npos) << header;
-  header.erase(at, field.size());
   const auto old = dir / "old.jsonl";
-  std::ofstream(old) << header << "\n";
+  ASSERT_TRUE(headerWithout(octaPath, "\"chart\":\"octahedral\",", old));
   const auto before = replay::readSessionTimeline(old);
   EXPECT_EQ(before.start.chart, "latlong");
   EXPECT_FALSE(before.start.chartNamed);
