@@ -373,6 +373,28 @@ def group_import_export():
     r = json.loads(stdout)
     if r["euler"] != 2 or r["border_edges"] != 0 or r["road_group_triangles"] < road["triangles"]:
         fail(f"a demo stroke overlaid on the globe: {r}")
+    # On the octahedral chart (the default) a road is laid in one piece of the grid: across a fold
+    # (a southern half-meridian at 0, 90, 180 or -90 degrees, where the grid's sides are glued)
+    # it is refused by name, nothing written (it used to be mirrored into a wrong road, or refused
+    # as crossing itself); over the north pole (the grid's centre, where creases meet) it goes in.
+    run("import", out("globe.raw"), "--chart", "octahedral", "--grid", "257", "--radius", "1737400",
+        "--out", out("globe_octa.planet"))
+    with open(out("strip.obj"), "w") as f:
+        for i in range(9):
+            y = -100e3 + 25e3 * i
+            f.write(f"v -5000 {y} 0\nv 5000 {y} 0\n")
+        for i in range(8):
+            a = 2 * i + 1
+            f.write(f"f {a} {a + 1} {a + 3}\nf {a} {a + 3} {a + 2}\n")
+    _, err = run("overlay", out("globe_octa.planet"), out("strip.obj"), "--at", "-45,0,0", "--error", "200",
+                 "--out", out("fold_road.obj"), expect=2)
+    if "crosses a fold of the octahedral chart" not in err or os.path.exists(out("fold_road.obj")):
+        fail(f"a road across an octahedral fold was not refused as such:\n{err}")
+    stdout, _ = run("overlay", out("globe_octa.planet"), out("strip.obj"), "--at", "89,0,0", "--error", "200",
+                    "--out", out("pole_road.obj"))
+    r = json.loads(stdout)
+    if r["euler"] != 2 or r["border_edges"] != 0 or r["non_manifold_edges"] != 0 or r["road_group_triangles"] < 16:
+        fail(f"a road over the octahedral planet's north pole: {r}")
 
 
 def group_road():
