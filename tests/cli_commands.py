@@ -533,6 +533,13 @@ def group_tube_charts():
             fail(f"the {chart} planet file's header: {planet[:32]!r}")
     if open(out("torus_a", "planet.planet"), "rb").read() != open(out("torus_b", "planet.planet"), "rb").read():
         fail("two replays onto the torus wrote different planet files")
+    # A road has no --at LAT,LON on a tube: refused by name (it was laid about the torus's centre).
+    with open(out("tube_road.obj"), "w") as f:
+        f.write("v -5000 -50000 0\nv 5000 -50000 0\nv -5000 50000 0\nv 5000 50000 0\nf 1 2 4\nf 1 4 3\n")
+    _, err = run("overlay", out("torus_a", "planet.planet"), out("tube_road.obj"), "--at", "10,10,0",
+                 "--error", "200", "--out", out("tube_road_out.obj"), expect=2)
+    if "the torus planet has no latitude and longitude" not in err or os.path.exists(out("tube_road_out.obj")):
+        fail(f"a road onto the torus was not refused by name:\n{err}")
     # The sand core on the tubes: the displacement tool with settling along the same frames, twice
     # onto the torus (the same planet file and forces), once onto the cylinder; the haptic force
     # path beside them writes forces.csv.

@@ -230,6 +230,9 @@ tin::Road placeRoad(const ObjTriangles& obj, const tin::SampleField& field, cons
     return road;
   }
   if (!o.at) throw core::InputError(name + ": on a planet the road needs --at LAT,LON[,HEADING]");
+  if (!(field.chart->sphereRadius() > 0))
+    throw core::InputError(name + ": a road is laid on a flat terrain or a sphere planet; the " +
+                           field.chart->name() + " planet has no latitude and longitude for --at");
   if (!(std::abs(at[0]) <= 90 && std::abs(at[1]) <= 180))
     throw core::InputError("--at " + core::exactNumber(at[0]) + "," + core::exactNumber(at[1]) +
                            ": latitude must be within +-90 and longitude within +-180 degrees");
