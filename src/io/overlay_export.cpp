@@ -11,6 +11,7 @@
 #include "io/mesh_export.hpp"
 #include "io/mesh_writers.hpp"
 #include "io/planet_file.hpp"
+#include "io/road_unfolding.hpp"
 #include "io/tin_export.hpp"
 #include "tin/tin_check.hpp"
 #include "tin/tin_locator.hpp"
@@ -113,103 +114,6 @@ MeshTerrain meshTerrain(const ObjTriangles& mesh, std::optional<double> spacing,
   return t;
 }
 
-// The plane around the grid continues it as the chart glues its sides: beyond a seam the grid
-// again, shifted by m; beyond a fold (the octahedral chart's sides, each glued to itself
-// mirrored at its midpoint) the grid turned half round that midpoint. x -> s x + t.
-struct PlaneMove {
-  double s;
-  Eigen::Vector2d t;
-  Eigen::Vector2d operator()(const Eigen::Vector2d& x) const { return s * x + t; }
-};
-
-std::vector<PlaneMove> sideMoves(const core::Chart& chart, double m) {
-  const core::Gluing g = chart.gluing();
-  std::vector<PlaneMove> moves;
-  if (g.uSides == core::SideGluing::kSeam)
-    moves.push_back({1, {m, 0}}), moves.push_back({1, {-m, 0}});
-  if (g.vSides == core::SideGluing::kSeam)
-    moves.push_back({1, {0, m}}), moves.push_back({1, {0, -m}});
-  if (g.uSides == core::SideGluing::kMirror)
-    moves.push_back({-1, {0, m}}), moves.push_back({-1, {2 * m, m}});
-  if (g.vSides == core::SideGluing::kMirror)
-    moves.push_back({-1, {m, 0}}), moves.push_back({-1, {m, 2 * m}});
-  return moves;
-}
-
-// A point of the plane around the grid moved back into the grid by the sides' gluing.
-Eigen::Vector2d intoGrid(const core::Chart& chart, double m, Eigen::Vector2d p) {
-  const core::Gluing g = chart.gluing();
-  for (int k = 0; k < 8; ++k) {
-    if (p.x() < 0 || p.x() > m) {
-      const bool low = p.x() < 0;
-      if (g.uSides == core::SideGluing::kSeam)
-        p.x() += low ? m : -m;
-      else if (g.uSides == core::SideGluing::kMirror)
-        p = {low ? -p.x() : 2 * m - p.x(), m - p.y()};
-      else
-        p.x() = std::clamp(p.x(), 0.0, m);
-    } else if (p.y() < 0 || p.y() > m) {
-      const bool low = p.y() < 0;
-      if (g.vSides == core::SideGluing::kSeam)
-        p.y() += low ? m : -m;
-      else if (g.vSides == core::SideGluing::kMirror)
-        p = {m - p.x(), low ? -p.y() : 2 * m - p.y()};
-      else
-        p.y() = std::clamp(p.y(), 0.0, m);
-    } else {
-      break;
-    }
-  }
-  return {std::clamp(p.x(), 0.0, m), std::clamp(p.y(), 0.0, m)};
-}
-
-// The road is laid in the chart's grid, one piece of the plane: an edge whose ends lie on two
-// sides of a glued side of the grid (lat-long's seam, an octahedral fold) would join points far
-// apart in the grid, or mirrored, and make a wrong road. Such an edge is told by its midpoint: put
-// on the sphere, the grid's midpoint of its ends is far from the edge's own, and the midpoint
-// with one end moved across a glued side (as the plane around the grid continues it) is near.
-void refuseGluedSideCrossing(const tin::Road& road, const std::vector<Eigen::Vector3d>& onSphere,
-                             const tin::SampleField& field, const std::string& name) {
-  const core::Chart& chart = *field.chart;
-  const double r = chart.sphereRadius(), m = field.width - 1;
-  std::vector<PlaneMove> moves = sideMoves(chart, m);
-  for (const PlaneMove& a : std::vector<PlaneMove>(moves))  // and two sides at a corner
-    for (const PlaneMove& b : std::vector<PlaneMove>(moves))
-      moves.push_back({a.s * b.s, a.s * b.t + a.t});
-  const Eigen::Vector2d origin(field.i0, field.j0);
-  for (const auto& t : road.triangles)
-    for (int k = 0; k < 3; ++k) {
-      const std::uint32_t ia = t[std::size_t(k)], ib = t[std::size_t((k + 1) % 3)];
-      const Eigen::Vector2d a = road.xy[ia] + origin, b = road.xy[ib] + origin;
-      const Eigen::Vector3d own = (onSphere[ia] + onSphere[ib]).normalized() * r;
-      const auto miss = [&](const Eigen::Vector2d& bb) {
-        const Eigen::Vector2d mid = intoGrid(chart, m, 0.5 * (a + bb));
-        return (chart.positionAt(mid.x(), mid.y(), 0.0) - own).norm();
-      };
-      const double straight = miss(b);
-      if (!(straight > 0.05 * (onSphere[ia] - onSphere[ib]).norm())) continue;
-      double across = INFINITY;
-      for (const PlaneMove& move : moves) across = std::min(across, miss(move(b)));
-      if (!(across < 0.5 * straight)) continue;
-      if (chart.wrapsU() && chart.hasPoleRows())
-        throw core::InputError(name +
-                               ": the road crosses the +-180 degree meridian (the chart's "
-                               "seam); place it elsewhere");
-      const bool fold = chart.gluing().uSides == core::SideGluing::kMirror;
-      const double lat = std::asin(std::clamp(own.z() / r, -1.0, 1.0)) / kDeg;
-      const double lon = std::atan2(own.y(), own.x()) / kDeg;
-      throw core::InputError(
-          name + ": the road crosses " +
-          (fold ? "a fold of the " + chart.name() +
-                      " chart (the southern half-meridians at longitudes 0, 90, 180 and -90 "
-                      "degrees, where the grid's sides meet)"
-                : "a seam of the " + chart.name() + " chart") +
-          " near latitude " + exactNumber(std::round(lat * 100) / 100) + ", longitude " +
-          exactNumber(std::round(lon * 100) / 100) +
-          "; a road is laid in one piece of the grid: place it elsewhere");
-    }
-}
-
 }  // namespace
 
 tin::Road placeRoad(const ObjTriangles& obj, const tin::SampleField& field, const OverlayOptions& o,
@@ -243,21 +147,48 @@ tin::Road placeRoad(const ObjTriangles& obj, const tin::SampleField& field, cons
   const Eigen::Vector3d north = up.cross(east);
   const Eigen::Vector3d xAxis = east * ch - north * sh, yAxis = north * ch + east * sh;
   const double m = field.width - 1;
-  std::vector<Eigen::Vector3d> onSphere;
-  for (const Eigen::Vector3d& p : obj.vertices) {
-    // Onto the sphere through its centre (the tangent plane's gnomonic projection).
-    const Eigen::Vector3d onPlane = r * up + p.x() * xAxis + p.y() * yAxis;
-    const auto uv = field.chart->inverse(onPlane);
-    if (!uv) throw core::InputError(name + ": a road vertex has no place on the planet");
-    if (field.chart->hasPoleRows() && (uv->y() < 1 || uv->y() > m - 1))
-      throw core::InputError(name +
-                             ": the road reaches a pole's row of the lat-long chart; "
-                             "place it away from the poles");
-    onSphere.push_back(onPlane.normalized() * r);
-    road.xy.push_back(*uv - Eigen::Vector2d(field.i0, field.j0));
-    road.h.push_back(p.z());
+  const core::Chart& chart = *field.chart;
+  // Onto the sphere through its centre (the tangent plane's gnomonic projection).
+  const auto onPlane = [&](const Eigen::Vector3d& p) {
+    return Eigen::Vector3d(r * up + p.x() * xAxis + p.y() * yAxis);
+  };
+  const auto lay = [&](const std::vector<Eigen::Vector3d>& vertices,
+                       const std::vector<std::array<std::uint32_t, 3>>& triangles) {
+    tin::Road grid;
+    grid.triangles = triangles;
+    std::vector<Eigen::Vector3d> onSphere;
+    for (const Eigen::Vector3d& p : vertices) {
+      const auto uv = chart.inverse(onPlane(p));
+      if (!uv) throw core::InputError(name + ": a road vertex has no place on the planet");
+      if (chart.hasPoleRows() && (uv->y() < 1 || uv->y() > m - 1))
+        throw core::InputError(name +
+                               ": the road reaches a pole's row of the lat-long chart; "
+                               "place it away from the poles");
+      // A point cut on a glued side lies on it (the inverse leaves it a rounding off).
+      Eigen::Vector2d g = *uv;
+      for (int k = 0; k < 2; ++k)
+        for (const double side : {0.0, m})
+          if (std::abs(g[k] - side) < 1e-9 * m) g[k] = side;
+      onSphere.push_back(onPlane(p).normalized() * r);
+      grid.xy.push_back(g);
+      grid.h.push_back(p.z());
+    }
+    // Across lat-long's seam or an octahedral fold: the pieces on either side of it.
+    return unfoldRoad(grid, onSphere, chart, m, name);
+  };
+  road = lay(obj.vertices, obj.triangles);
+  if (road.triangles.size() > obj.triangles.size()) {
+    // It crosses a glued side: cut along the sides' great circles first, so that each edge that
+    // crossed one meets it where the sphere's edge does (the grid's straight edge across a fold
+    // bends, by kilometres at the octahedral folds), then laid again.
+    std::vector<Eigen::Vector3d> vertices = obj.vertices;
+    std::vector<std::array<std::uint32_t, 3>> triangles = obj.triangles;
+    for (const Eigen::Vector3d& n : gluedSidePlanes(chart, m))
+      cutRoadAlong(vertices, triangles,
+                   [&](const Eigen::Vector3d& p) { return n.dot(onPlane(p)); });
+    road = lay(vertices, triangles);
   }
-  refuseGluedSideCrossing(road, onSphere, field, name);
+  for (Eigen::Vector2d& p : road.xy) p -= Eigen::Vector2d(field.i0, field.j0);
   return road;
 }
 
@@ -330,8 +261,11 @@ nlohmann::json overlayFromFiles(const std::filesystem::path& terrainPath,
                             {"mode", stitch ? "stitch" : "stencil"},
                             {"error_m", o.errorM},
                             {"terrain_tin_vertices", rep.terrainVertices},
-                            {"road_vertices", rep.roadVertices},
-                            {"road_triangles", rep.roadTriangles},
+                            {"road_vertices", roadObj.vertices.size()},
+                            {"road_triangles", roadObj.triangles.size()},
+                            // in the grid: cut along a planet's glued sides and a copy beyond each
+                            // (= road_triangles when it crosses none)
+                            {"road_triangles_laid", rep.roadTriangles},
                             {"road_triangles_clipped", rep.clippedRoadTriangles},
                             {"vertices", welded.vertices},
                             {"triangles", welded.triangles.size()},

@@ -25,8 +25,10 @@ struct OverlayOptions {
 };
 
 // The road's vertices (x, y: metres in its own frame; z: height in metres above the terrain's
-// datum) in the terrain's lattice coordinates. Throws core::InputError for a placement off the
-// lattice's usable part (a planet's pole rows, across its seam).
+// datum) in the terrain's lattice coordinates; on a planet, a road across a glued side of the
+// chart's grid (lat-long's seam, an octahedral fold) in one copy for each side it reaches
+// (io/road_unfolding.hpp). Throws core::InputError for a placement off the lattice's usable part
+// (lat-long's pole rows, a road around the end of an octahedral fold, a tube).
 tin::Road placeRoad(const ObjTriangles& road, const tin::SampleField& field,
                     const OverlayOptions& options, const std::string& name);
 

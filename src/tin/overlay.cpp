@@ -77,6 +77,25 @@ Road clipRoad(const Road& in, double xMax, double yMax, std::size_t& clipped) {
   return out;
 }
 
+// A road cut at a glued side of a whole chart's grid has a vertex on each side of it, twins that
+// the weld must key alike (tin_check's weldKey: a seam's y, a fold's min(x, m - x)), though each
+// was cut from its own copy of the road with its own rounding. On 2^-20 of a lattice unit both are
+// exact, their twin's coordinate too (m - x of two such numbers), and they agree: the roundings
+// differ by ulps, far below half a step.
+void snapGluedSideVertices(Road& road, const SampleField& field) {
+  if (!field.wholeChart()) return;
+  const core::Gluing g = field.chart->gluing();
+  const auto glued = [](core::SideGluing s) {
+    return s == core::SideGluing::kSeam || s == core::SideGluing::kMirror;
+  };
+  const double xMax = field.width - 1, yMax = field.height - 1, step = std::ldexp(1.0, 20);
+  const auto snap = [&](double t) { return std::round(t * step) / step; };
+  for (Eigen::Vector2d& p : road.xy) {
+    if (glued(g.uSides) && (p.x() == 0 || p.x() == xMax)) p.y() = snap(p.y());
+    if (glued(g.vSides) && (p.y() == 0 || p.y() == yMax)) p.x() = snap(p.x());
+  }
+}
+
 std::set<std::pair<std::uint32_t, std::uint32_t>> edgesOf(
     const std::vector<std::array<std::uint32_t, 3>>& triangles) {
   std::set<std::pair<std::uint32_t, std::uint32_t>> edges;
@@ -140,7 +159,8 @@ OverlayResult overlayRoad(const SampleField& field, const Tin& terrain, const Ro
   rep.roadTriangles = roadIn.triangles.size();
   const double xMax = field.width - 1, yMax = field.height - 1;
   refuseDegenerateTriangles(roadIn);
-  const Road road = clipRoad(roadIn, xMax, yMax, rep.clippedRoadTriangles);
+  Road road = clipRoad(roadIn, xMax, yMax, rep.clippedRoadTriangles);
+  snapGluedSideVertices(road, field);
   if (road.triangles.empty()) throw core::InputError("the road lies wholly outside the terrain");
   const TinLocator footprint(road.xy, road.triangles, field.width, field.height);
   refuseSelfIntersection(road, footprint);
