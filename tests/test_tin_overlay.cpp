@@ -300,11 +300,23 @@ TEST(TinOverlay, APlanetKeepsItsClosedSurfaceWithARoadStitchedIn) {
                                     dir / "x.obj", io::ExportFormat::kObj, o, notes),
                core::InputError)
       << "a planet needs --at";
+  // Across the seam (since 2026-12-07; refused before): a piece on either side, one surface.
   o.at = std::array<double, 3>{10.0, 179.9, 0.0};
-  EXPECT_THROW(io::overlayFromFiles(dir / "p.planet", io::ImportOptions{}, dir / "road.obj",
-                                    dir / "x.obj", io::ExportFormat::kObj, o, notes),
-               core::InputError)
-      << "across the seam";
+  const nlohmann::json seam =
+      io::overlayFromFiles(dir / "p.planet", io::ImportOptions{}, dir / "road.obj",
+                           dir / "seam.obj", io::ExportFormat::kObj, o, notes);
+  EXPECT_EQ(seam["euler"], 2) << seam.dump();
+  EXPECT_EQ(seam["border_edges"], 0);
+  EXPECT_EQ(seam["non_manifold_edges"], 0);
+  EXPECT_GT(seam["road_triangles_laid"].get<int>(), seam["road_triangles"].get<int>());
+  o.at = std::array<double, 3>{89.0, 0.0, 0.0};
+  try {
+    io::overlayFromFiles(dir / "p.planet", io::ImportOptions{}, dir / "road.obj", dir / "x.obj",
+                         io::ExportFormat::kObj, o, notes);
+    ADD_FAILURE() << "a road over lat-long's pole row was laid";
+  } catch (const core::InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("pole's row"), std::string::npos) << e.what();
+  }
 }
 
 }  // namespace
