@@ -379,7 +379,8 @@ def group_import_export():
     # road group within 1 % of the road's width of its footprint on the sphere. (An octahedral
     # road along a fold was mirrored into a wrong road before 2026-12-07, and one across it refused
     # as "crossing itself".) Around the end of a fold (the equator at those longitudes, where
-    # the grid turns half round) a road is refused by name, nothing written.
+    # the grid turns half round) a road is laid in two halves that meet across the fold (refused
+    # by name before 2026-12-07).
     run("import", out("globe.raw"), "--chart", "octahedral", "--grid", "257", "--radius", "1737400",
         "--out", out("globe_octa.planet"))
     with open(out("strip.obj"), "w") as f:  # 200 km x 10 km, along its +y axis
@@ -416,24 +417,23 @@ def group_import_export():
                 worst = max(worst, abs(x) - 5000, abs(y) - 100e3)
         return worst, len(road_faces)
 
-    # Near the octahedral chart's poles (the grid's centre and its corners) the map turns a
-    # straight grid edge into a curve: a road's 25 km edges 2 degrees from the pole stray about
-    # 2 km (docs/EXPORT.md), hence the looser bound there.
+    # Near the poles the chart bends a straight grid edge: the road's edges are halved until they
+    # stray at most --error (200 m) from its path (25 km edges 2 degrees from the octahedral
+    # south pole strayed 2.1 km before 2026-12-07), hence the looser bound there. (The vertices
+    # are then put on the terrain's mesh at their grid points, whose 24 km cells at 257^2 are flat:
+    # that moves them too, up to 210 m at 75 degrees N on lat-long, docs/EXPORT.md.)
     for planet, at, crosses, bound in (("globe_octa", (-45, 0, 0), True, 100), ("globe_octa", (-45, 0, 90), True, 100),
                                        ("globe_octa", (-30, -90, 35), True, 100), ("globe", (10, 180, 90), True, 100),
-                                       ("globe_octa", (-88, 30, 0), True, 2500), ("globe_octa", (89, 0, 0), False, 2500)):
+                                       ("globe_octa", (-88, 30, 0), True, 250), ("globe_octa", (89, 0, 0), False, 250),
+                                       ("globe", (75, 20, 60), False, 250), ("globe_octa", (0, -90, 0), True, 100)):
         where = ",".join(str(a) for a in at)
         stdout, _ = run("overlay", out(f"{planet}.planet"), out("strip.obj"), "--at", where, "--error", "200",
                         "--out", out("folded_road.obj"))
         r = json.loads(stdout)
         worst, faces = off_footprint(out("folded_road.obj"), *at, 1737400)
         if (r["euler"] != 2 or r["border_edges"] != 0 or r["non_manifold_edges"] != 0 or faces < 16
-                or worst > bound or (r["road_triangles_laid"] > r["road_triangles"]) != crosses):
+                or worst > bound or (r["road_pieces"] > 1) != crosses or r["road_stray_m"] > 200):
             fail(f"a road at {where} on {planet}: {r}, {faces} road triangles, {worst:.0f} m off its footprint")
-    _, err = run("overlay", out("globe_octa.planet"), out("strip.obj"), "--at", "0,-90,0", "--error", "200",
-                 "--out", out("fold_end_road.obj"), expect=2)
-    if "wraps around the end of a fold of the octahedral chart" not in err or os.path.exists(out("fold_end_road.obj")):
-        fail(f"a road around the end of an octahedral fold was not refused as such:\n{err}")
 
 
 def group_road():
@@ -572,13 +572,24 @@ def group_tube_charts():
             fail(f"the {chart} planet file's header: {planet[:32]!r}")
     if open(out("torus_a", "planet.planet"), "rb").read() != open(out("torus_b", "planet.planet"), "rb").read():
         fail("two replays onto the torus wrote different planet files")
-    # A road has no --at LAT,LON on a tube: refused by name (it was laid about the torus's centre).
+    # A road on a tube: --at AROUND,ACROSS (torus, degrees) or AROUND,ALONG (cylinder, degrees and
+    # metres), one surface with the road in it, in pieces across the seams (refused until
+    # 2026-12-07; before that laid about the torus's centre).
     with open(out("tube_road.obj"), "w") as f:
         f.write("v -5000 -50000 0\nv 5000 -50000 0\nv -5000 50000 0\nv 5000 50000 0\nf 1 2 4\nf 1 4 3\n")
-    _, err = run("overlay", out("torus_a", "planet.planet"), out("tube_road.obj"), "--at", "10,10,0",
-                 "--error", "200", "--out", out("tube_road_out.obj"), expect=2)
-    if "the torus planet has no latitude and longitude" not in err or os.path.exists(out("tube_road_out.obj")):
-        fail(f"a road onto the torus was not refused by name:\n{err}")
+    for name, at, pieces, euler in (("torus_a", "10,10,0", 1, 0), ("torus_a", "0,0,45", 4, 0),
+                                    ("tube", "0,100000,90", 2, 0)):
+        stdout, _ = run("overlay", out(name, "planet.planet"), out("tube_road.obj"), "--at", at,
+                        "--error", "200", "--out", out("tube_road_out.obj"))
+        r = json.loads(stdout)
+        rims = name == "tube"  # the cylinder's open ends are the mesh's only border
+        if (r["euler"] != euler or (r["border_edges"] > 0) != rims or r["non_manifold_edges"] != 0
+                or r["road_group_triangles"] < 2 or r["road_pieces"] != pieces or r["road_stray_m"] > 200):
+            fail(f"a road at {at} on the {name} planet: {r}")
+    _, err = run("overlay", out("tube", "planet.planet"), out("tube_road.obj"), "--at", "0,9000000",
+                 "--error", "200", "--out", out("tube_road_off.obj"), expect=2)
+    if "metres along it from its middle" not in err or os.path.exists(out("tube_road_off.obj")):
+        fail(f"a road off the cylinder's length was not refused by name:\n{err}")
     # The sand core on the tubes: the displacement tool with settling along the same frames, twice
     # onto the torus (the same planet file and forces), once onto the cylinder; the haptic force
     # path beside them writes forces.csv.

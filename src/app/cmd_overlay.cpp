@@ -87,11 +87,14 @@ const CommandRegistration kOverlay([](CLI::App& root, CLI::App*& sub) -> Command
       ->capture_default_str();
   sub->add_option(
       "--error", a->error,
-      "The terrain TIN's largest error in metres (the stencil keeps it around the road)");
+      "The terrain TIN's largest error in metres (the stencil keeps it around the road; on a "
+      "planet the road's edges are cut until they stray no further from its path)");
   sub->add_option("--at", a->at,
-                  "Planets: LAT,LON[,HEADING] in degrees of the road's origin (heading of its +y "
-                  "axis, clockwise from north); flat terrains: X,Y[,HEADING] in metres (default "
-                  "0,0,0)");
+                  "Where the road's origin lies and the heading of its +y axis (degrees clockwise "
+                  "from north): on a sphere LAT,LON[,HEADING]; on a torus AROUND,ACROSS[,HEADING] "
+                  "(degrees round the big circle and round the tube from its outer equator); on a "
+                  "cylinder AROUND,ALONG[,HEADING] (degrees round the axis, metres along it from "
+                  "the middle); on a flat terrain X,Y[,HEADING] in metres (default 0,0,0)");
   sub->add_option("--format", a->format, "obj | ply | glb (overrides the extension)");
   sub->add_option("--spacing", a->spacing,
                   "Heightmap terrain: metres between pixels; mesh terrain: the step it is sampled "

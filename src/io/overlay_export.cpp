@@ -11,7 +11,7 @@
 #include "io/mesh_export.hpp"
 #include "io/mesh_writers.hpp"
 #include "io/planet_file.hpp"
-#include "io/road_unfolding.hpp"
+#include "io/road_placement.hpp"
 #include "io/tin_export.hpp"
 #include "tin/tin_check.hpp"
 #include "tin/tin_locator.hpp"
@@ -116,80 +116,29 @@ MeshTerrain meshTerrain(const ObjTriangles& mesh, std::optional<double> spacing,
 
 }  // namespace
 
-tin::Road placeRoad(const ObjTriangles& obj, const tin::SampleField& field, const OverlayOptions& o,
-                    const std::string& name) {
-  tin::Road road;
-  road.triangles = obj.triangles;
-  const std::array<double, 3> at = o.at.value_or(std::array<double, 3>{0, 0, 0});
-  const double heading = at[2] * kDeg;
-  // The road's +y axis points at azimuth `heading`, its +x axis 90 degrees clockwise from it.
-  const double ch = std::cos(heading), sh = std::sin(heading);
+LaidRoad placeRoad(const ObjTriangles& obj, const tin::SampleField& field, const OverlayOptions& o,
+                   const std::string& name) {
+  LaidRoad laid;
   if (field.metric == tin::ErrorMetric::kVertical) {
+    const std::array<double, 3> at = o.at.value_or(std::array<double, 3>{0, 0, 0});
+    // The road's +y axis points at azimuth `heading`, its +x axis 90 degrees clockwise from it.
+    const double heading = at[2] * kDeg, ch = std::cos(heading), sh = std::sin(heading);
+    laid.road.triangles = obj.triangles;
     for (const Eigen::Vector3d& p : obj.vertices) {
       const double east = at[0] + p.x() * ch + p.y() * sh;
       const double north = at[1] - p.x() * sh + p.y() * ch;
-      road.xy.emplace_back(east / field.dx, north / field.dy);
-      road.h.push_back(p.z());
+      laid.road.xy.emplace_back(east / field.dx, north / field.dy);
+      laid.road.h.push_back(p.z());
     }
-    return road;
+    return laid;
   }
-  if (!o.at) throw core::InputError(name + ": on a planet the road needs --at LAT,LON[,HEADING]");
-  if (!(field.chart->sphereRadius() > 0))
-    throw core::InputError(name + ": a road is laid on a flat terrain or a sphere planet; the " +
-                           field.chart->name() + " planet has no latitude and longitude for --at");
-  if (!(std::abs(at[0]) <= 90 && std::abs(at[1]) <= 180))
-    throw core::InputError("--at " + core::exactNumber(at[0]) + "," + core::exactNumber(at[1]) +
-                           ": latitude must be within +-90 and longitude within +-180 degrees");
-  const double lat = at[0] * kDeg, lon = at[1] * kDeg, r = field.chart->sphereRadius();
-  const Eigen::Vector3d up(std::cos(lat) * std::cos(lon), std::cos(lat) * std::sin(lon),
-                           std::sin(lat));
-  const Eigen::Vector3d east(-std::sin(lon), std::cos(lon), 0);
-  const Eigen::Vector3d north = up.cross(east);
-  const Eigen::Vector3d xAxis = east * ch - north * sh, yAxis = north * ch + east * sh;
-  const double m = field.width - 1;
-  const core::Chart& chart = *field.chart;
-  // Onto the sphere through its centre (the tangent plane's gnomonic projection).
-  const auto onPlane = [&](const Eigen::Vector3d& p) {
-    return Eigen::Vector3d(r * up + p.x() * xAxis + p.y() * yAxis);
-  };
-  const auto lay = [&](const std::vector<Eigen::Vector3d>& vertices,
-                       const std::vector<std::array<std::uint32_t, 3>>& triangles) {
-    tin::Road grid;
-    grid.triangles = triangles;
-    std::vector<Eigen::Vector3d> onSphere;
-    for (const Eigen::Vector3d& p : vertices) {
-      const auto uv = chart.inverse(onPlane(p));
-      if (!uv) throw core::InputError(name + ": a road vertex has no place on the planet");
-      if (chart.hasPoleRows() && (uv->y() < 1 || uv->y() > m - 1))
-        throw core::InputError(name +
-                               ": the road reaches a pole's row of the lat-long chart; "
-                               "place it away from the poles");
-      // A point cut on a glued side lies on it (the inverse leaves it a rounding off).
-      Eigen::Vector2d g = *uv;
-      for (int k = 0; k < 2; ++k)
-        for (const double side : {0.0, m})
-          if (std::abs(g[k] - side) < 1e-9 * m) g[k] = side;
-      onSphere.push_back(onPlane(p).normalized() * r);
-      grid.xy.push_back(g);
-      grid.h.push_back(p.z());
-    }
-    // Across lat-long's seam or an octahedral fold: the pieces on either side of it.
-    return unfoldRoad(grid, onSphere, chart, m, name);
-  };
-  road = lay(obj.vertices, obj.triangles);
-  if (road.triangles.size() > obj.triangles.size()) {
-    // It crosses a glued side: cut along the sides' great circles first, so that each edge that
-    // crossed one meets it where the sphere's edge does (the grid's straight edge across a fold
-    // bends, by kilometres at the octahedral folds), then laid again.
-    std::vector<Eigen::Vector3d> vertices = obj.vertices;
-    std::vector<std::array<std::uint32_t, 3>> triangles = obj.triangles;
-    for (const Eigen::Vector3d& n : gluedSidePlanes(chart, m))
-      cutRoadAlong(vertices, triangles,
-                   [&](const Eigen::Vector3d& p) { return n.dot(onPlane(p)); });
-    road = lay(vertices, triangles);
-  }
-  for (Eigen::Vector2d& p : road.xy) p -= Eigen::Vector2d(field.i0, field.j0);
-  return road;
+  if (!o.at)
+    throw core::InputError(name +
+                           ": on a planet the road needs --at (LAT,LON[,HEADING] on a "
+                           "sphere; AROUND,ACROSS on a torus; AROUND,ALONG on a cylinder)");
+  laid = layRoadOnPlanet(obj, *field.chart, field.width - 1, *o.at, o.errorM, name);
+  for (Eigen::Vector2d& p : laid.road.xy) p -= Eigen::Vector2d(field.i0, field.j0);
+  return laid;
 }
 
 nlohmann::json overlayFromFiles(const std::filesystem::path& terrainPath,
@@ -226,7 +175,8 @@ nlohmann::json overlayFromFiles(const std::filesystem::path& terrainPath,
     field = heightSampleField(samples);
   }
   field.uniformTolerance = o.errorM;
-  const tin::Road road = placeRoad(roadObj, field, o, roadPath.string());
+  const LaidRoad laid = placeRoad(roadObj, field, o, roadPath.string());
+  const tin::Road& road = laid.road;
   const tin::Tin terrainTin = meshTin ? *meshTin : tin::buildTin(field, {});
   tin::OverlayResult r;
   try {
@@ -263,9 +213,12 @@ nlohmann::json overlayFromFiles(const std::filesystem::path& terrainPath,
                             {"terrain_tin_vertices", rep.terrainVertices},
                             {"road_vertices", roadObj.vertices.size()},
                             {"road_triangles", roadObj.triangles.size()},
-                            // in the grid: cut along a planet's glued sides and a copy beyond each
-                            // (= road_triangles when it crosses none)
+                            // in the grid: cut along a planet's glued sides, edges halved where
+                            // the chart bends them, a copy beyond each glued side it crosses
                             {"road_triangles_laid", rep.roadTriangles},
+                            {"road_pieces", laid.pieces},
+                            {"road_stray_m", laid.strayM},
+                            {"road_halved_edges", laid.halvedEdges},
                             {"road_triangles_clipped", rep.clippedRoadTriangles},
                             {"vertices", welded.vertices},
                             {"triangles", welded.triangles.size()},

@@ -11,26 +11,29 @@
 #include "io/export.hpp"
 #include "io/heightmap_import.hpp"
 #include "io/obj_triangles.hpp"
+#include "io/road_placement.hpp"
 #include "tin/overlay.hpp"
 
 namespace ps::io {
 
 struct OverlayOptions {
   tin::OverlayMode mode = tin::OverlayMode::kStitch;
-  double errorM = 0;  // the terrain TIN's error, which the stencil's re-meshing keeps too
-  // Planets (required): latitude and longitude in degrees of the road's origin, and the
-  // heading of its +y axis (degrees clockwise from north). Flat terrains (optional): the origin
-  // in the terrain's metres (x east, y north) and the heading; default 0, 0, 0.
+  double errorM = 0;  // the terrain TIN's error, which the stencil's re-meshing and a planet
+                      // road's edges (how far they may stray from the surface's paths) keep too
+  // Planets (required): where the road's origin lies (io/road_placement.hpp: LAT,LON on a
+  // sphere, AROUND,ACROSS on a torus, AROUND,ALONG on a cylinder) and the heading of its +y axis
+  // (degrees clockwise from north). Flat terrains (optional): the origin in the terrain's metres
+  // (x east, y north) and the heading; default 0, 0, 0.
   std::optional<std::array<double, 3>> at = {};
 };
 
 // The road's vertices (x, y: metres in its own frame; z: height in metres above the terrain's
-// datum) in the terrain's lattice coordinates; on a planet, a road across a glued side of the
-// chart's grid (lat-long's seam, an octahedral fold) in one copy for each side it reaches
-// (io/road_unfolding.hpp). Throws core::InputError for a placement off the lattice's usable part
-// (lat-long's pole rows, a road around the end of an octahedral fold, a tube).
-tin::Road placeRoad(const ObjTriangles& road, const tin::SampleField& field,
-                    const OverlayOptions& options, const std::string& name);
+// datum) in the terrain's lattice coordinates; on a planet laid by io/road_placement.hpp, a road
+// across a glued side of the chart's grid in one copy for each side it reaches. Throws
+// core::InputError for a placement off the lattice's usable part (lat-long's pole rows, a road
+// around the end of an octahedral fold, one that folds over on a tube).
+LaidRoad placeRoad(const ObjTriangles& road, const tin::SampleField& field,
+                   const OverlayOptions& options, const std::string& name);
 
 nlohmann::json overlayFromFiles(const std::filesystem::path& terrain,
                                 const ImportOptions& heightmapOptions,

@@ -103,7 +103,8 @@ void cutRoadAlong(std::vector<Eigen::Vector3d>& vertices,
     const auto [it, fresh] = cut.emplace(std::pair(a, b), std::uint32_t(vertices.size()));
     if (fresh) {
       const double t = side[a] / (side[a] - side[b]);
-      vertices.push_back(vertices[a] + t * (vertices[b] - vertices[a]));
+      const Eigen::Vector3d p = vertices[a] + t * (vertices[b] - vertices[a]);
+      vertices.push_back(p);  // (evaluated first: the push may move the vertices)
       side.push_back(0.0);
     }
     return it->second;
@@ -133,9 +134,10 @@ void cutRoadAlong(std::vector<Eigen::Vector3d>& vertices,
   triangles = std::move(out);
 }
 
-tin::Road unfoldRoad(const tin::Road& road, const std::vector<Eigen::Vector3d>& onSphere,
-                     const core::Chart& chart, double m, const std::string& name) {
-  const double r = chart.sphereRadius();
+UnfoldedRoad unfoldRoad(
+    const tin::Road& road, const std::vector<Eigen::Vector3d>& onSurface,
+    const std::function<Eigen::Vector3d(std::uint32_t, std::uint32_t)>& midpoint,
+    const core::Chart& chart, double m, const std::string& name) {
   const std::vector<PlaneMove> moves = gluingMoves(chart, m);
   const std::size_t n = road.xy.size();
   std::vector<std::vector<std::uint32_t>> next(n);
@@ -145,14 +147,23 @@ tin::Road unfoldRoad(const tin::Road& road, const std::vector<Eigen::Vector3d>& 
       next[a].push_back(b), next[b].push_back(a);
     }
   // How far the grid's midpoint of an edge's ends A and B (in the plane around the grid), put on
-  // the sphere, lies from the edge's own midpoint.
+  // the surface, lies from the edge's own midpoint.
   const auto miss = [&](std::uint32_t a, const Eigen::Vector2d& A, std::uint32_t b,
                         const Eigen::Vector2d& B) {
-    const Eigen::Vector3d own = (onSphere[a] + onSphere[b]).normalized() * r;
+    const Eigen::Vector3d own = midpoint(a, b);
     const Eigen::Vector2d mid = intoGrid(chart, m, 0.5 * (A + B));
     return (chart.positionAt(mid.x(), mid.y(), 0.0) - own).norm();
   };
 
+  // A vertex at the end of a fold, which a half turn keeps in place, continues an edge alike in
+  // the images on both sides of the fold: the edges from it say nothing of which, so the
+  // unfolding does not go on from there (io/road_placement.hpp parts a road there in two halves
+  // that meet across the fold).
+  const auto foldEnd = [&](std::uint32_t a) {
+    for (const PlaneMove& move : moves)
+      if (!(move == PlaneMove{}) && (move(road.xy[a]) - road.xy[a]).norm() <= 1e-9 * m) return true;
+    return false;
+  };
   // Unfolded: breadth first from a vertex of each piece, every next vertex at the image of its
   // grid point that continues the edge it is reached by.
   std::vector<Eigen::Vector2d> unfolded(n);
@@ -164,12 +175,13 @@ tin::Road unfoldRoad(const tin::Road& road, const std::vector<Eigen::Vector3d>& 
     std::vector<std::uint32_t> queue{std::uint32_t(start)};
     for (std::size_t q = 0; q < queue.size(); ++q) {
       const std::uint32_t a = queue[q];
+      if (q > 0 && foldEnd(a)) continue;
       for (const std::uint32_t b : next[a]) {
         if (placed[b]) continue;
         // The images that continue the edge best, within a tenth of it (images a translation of
         // the grid's gluing apart move the midpoint by a gluing too, so they continue it alike),
         // and of those the nearest.
-        const double chord = (onSphere[a] - onSphere[b]).norm();
+        const double chord = (onSurface[a] - onSurface[b]).norm();
         std::vector<std::pair<double, Eigen::Vector2d>> images;
         double best = INFINITY;
         for (const PlaneMove& move : moves) {
@@ -189,18 +201,25 @@ tin::Road unfoldRoad(const tin::Road& road, const std::vector<Eigen::Vector3d>& 
 
   // One piece: no edge would be continued better by moving an end across a side. (Around an end
   // of a fold the sphere's full turn is the grid's half turn: a road around it cannot be.)
-  for (const auto& t : road.triangles)
+  UnfoldedRoad out;
+  for (const auto& t : road.triangles) {
+    std::array<double, 3>& strays = out.edgeStrayM.emplace_back();
     for (int k = 0; k < 3; ++k) {
       const std::uint32_t a = t[std::size_t(k)], b = t[std::size_t((k + 1) % 3)];
       const double straight = miss(a, unfolded[a], b, unfolded[b]);
-      if (!(straight > 0.05 * (onSphere[a] - onSphere[b]).norm())) continue;
+      strays[std::size_t(k)] = straight;
+      out.strayM = std::max(out.strayM, straight);
+      if (!(straight > 0.05 * (onSurface[a] - onSurface[b]).norm())) continue;
       double across = INFINITY;
       for (const PlaneMove& move : moves)
         if (!(move == PlaneMove{}))
           across = std::min(across, miss(a, unfolded[a], b, move(unfolded[b])));
       if (!(across < 0.5 * straight)) continue;
-      const Eigen::Vector3d own = (onSphere[a] + onSphere[b]).normalized();
+      const Eigen::Vector3d own = midpoint(a, b).normalized();
       const double deg = 180.0 / std::numbers::pi;
+      if (!(chart.sphereRadius() > 0))
+        throw core::InputError(name + ": the road reaches too far round the " + chart.name() +
+                               " to be laid in one piece; make it smaller");
       throw core::InputError(
           name + ": the road wraps around the end of a fold of the " + chart.name() +
           " chart near latitude " +
@@ -210,9 +229,9 @@ tin::Road unfoldRoad(const tin::Road& road, const std::vector<Eigen::Vector3d>& 
           core::exactNumber(std::round(std::atan2(own.y(), own.x()) * deg * 100) / 100) +
           " (the grid turns half round there where the sphere turns whole): place it elsewhere");
     }
+  }
 
   // Each gluing that brings some of the unfolded road into the grid: a copy (clipped later).
-  tin::Road out;
   for (const PlaneMove& move : moves) {
     Eigen::Vector2d lo = Eigen::Vector2d::Constant(INFINITY), hi = -lo;
     for (const Eigen::Vector2d& p : unfolded) {
@@ -220,13 +239,15 @@ tin::Road unfoldRoad(const tin::Road& road, const std::vector<Eigen::Vector3d>& 
       hi = hi.cwiseMax(move(p));
     }
     if (hi.x() < 0 || lo.x() > m || hi.y() < 0 || lo.y() > m) continue;
-    const std::uint32_t offset = std::uint32_t(out.xy.size());
+    const std::uint32_t offset = std::uint32_t(out.road.xy.size());
     for (std::size_t v = 0; v < n; ++v) {
-      out.xy.push_back(move(unfolded[v]));
-      out.h.push_back(road.h[v]);
+      const Eigen::Vector2d p = move(unfolded[v]);
+      out.road.xy.push_back((p - road.xy[v]).norm() <= 1e-9 * m ? road.xy[v] : p);
+      out.road.h.push_back(road.h[v]);
     }
     for (const auto& t : road.triangles)
-      out.triangles.push_back({t[0] + offset, t[1] + offset, t[2] + offset});
+      out.road.triangles.push_back({t[0] + offset, t[1] + offset, t[2] + offset});
+    ++out.pieces;
   }
   return out;
 }

@@ -45,13 +45,25 @@ void cutRoadAlong(std::vector<Eigen::Vector3d>& vertices,
                   std::vector<std::array<std::uint32_t, 3>>& triangles,
                   const std::function<double(const Eigen::Vector3d&)>& f);
 
-// `road.xy` holds each vertex's grid point (the chart's inverse of `onSphere`, the vertex on the
-// sphere of radius chart.sphereRadius()). Returns the road unfolded and moved back into the grid,
-// one copy of its vertices and triangles for each gluing that brings some of it into [0, m]^2
-// (the overlay clips each copy at the grid's border). Throws core::InputError, prefixed with
-// `name`, for a road that cannot be unfolded in one piece (one around an end of a fold, where the
-// grid has a corner of 180 degrees), naming the place.
-tin::Road unfoldRoad(const tin::Road& road, const std::vector<Eigen::Vector3d>& onSphere,
-                     const core::Chart& chart, double m, const std::string& name);
+// `road.xy` holds each vertex's grid point (the chart's inverse of `onSurface`, the vertex on the
+// surface); `midpoint(a, b)` is the surface's point halfway along the edge from vertex a to b (the
+// road's own path, which a straight grid edge is judged against). Returns the road unfolded and
+// moved back into the grid, one copy of its vertices and triangles for each gluing that brings some
+// of it into [0, m]^2 (the overlay clips each copy at the grid's border); a vertex a copy brings
+// home (within 1e-9 of the grid's side of its own grid point) gets that point's exact bits, so
+// copies weld where they meet. Throws core::InputError, prefixed with `name`, for a road that
+// cannot be unfolded in one piece (one around an end of a fold, where the grid has a corner of 180
+// degrees), naming the place.
+struct UnfoldedRoad {
+  tin::Road road;
+  int pieces = 0;     // copies laid: 1 + one for each glued side the road crosses into
+  double strayM = 0;  // the largest distance of an edge's grid midpoint, on the surface, from
+                      // the edge's own midpoint: how far a straight grid edge strays
+  std::vector<std::array<double, 3>> edgeStrayM;  // each triangle's edges (k to k + 1), alike
+};
+UnfoldedRoad unfoldRoad(
+    const tin::Road& road, const std::vector<Eigen::Vector3d>& onSurface,
+    const std::function<Eigen::Vector3d(std::uint32_t, std::uint32_t)>& midpoint,
+    const core::Chart& chart, double m, const std::string& name);
 
 }  // namespace ps::io

@@ -1,0 +1,36 @@
+#pragma once
+// A road laid on a planet's surface (docs/EXPORT.md, "overlay"): its plane tangent at the place
+// `--at` names, taken onto the surface by each point's nearest surface point (on a sphere,
+// through the centre: the gnomonic projection), cut where it crosses a glued side of the chart's
+// grid (io/road_unfolding.hpp), and its edges halved until, straight in the grid, they follow
+// the surface's paths within a tolerance.
+#include <array>
+#include <string>
+
+#include "core/chart.hpp"
+#include "io/obj_triangles.hpp"
+#include "tin/overlay.hpp"
+
+namespace ps::io {
+
+struct LaidRoad {
+  tin::Road road;       // grid coordinates in [0, m]^2 (one copy per piece, clipped later)
+  int pieces = 1;       // the copies: 1 + one per glued side the road crosses into
+  double strayM = 0;    // the largest distance of a laid edge's grid midpoint from its own
+  int halvedEdges = 0;  // edges halved so that none strays beyond the tolerance
+};
+
+// `at`: on a sphere LAT, LON (degrees); on a torus AROUND, ACROSS (degrees round the big circle
+// from +x and round the tube from its outer equator); on a cylinder AROUND (degrees from +x) and
+// ALONG (metres along the axis from the tube's middle); then the heading of the road's +y axis,
+// degrees clockwise from north (the direction of growing latitude, ACROSS or ALONG) seen from
+// outside. Edges are halved until every edge's stray is at most `toleranceM` (or shorter than
+// 1e-5 of the road's extent). Throws core::InputError,
+// prefixed with `name`, for a place off the surface, a road reaching lat-long's pole rows or
+// around the end of an octahedral fold, and one that folds over in the grid (larger than its
+// place on a tube allows).
+LaidRoad layRoadOnPlanet(const ObjTriangles& road, const core::Chart& chart, double m,
+                         const std::array<double, 3>& at, double toleranceM,
+                         const std::string& name);
+
+}  // namespace ps::io

@@ -1,0 +1,200 @@
+// A road laid on a planet (io/road_placement.hpp): every point of every laid edge, taken back from
+// the surface into the road's plane, lies within the tolerance of the road's footprint, on the
+// sphere charts at random places (the poles, the folds, their ends and the seam included) and on
+// the torus and the cylinder; a road too large for its place on a tube is refused by name.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <memory>
+#include <numbers>
+#include <random>
+
+#include "core/cylinder_chart.hpp"
+#include "core/input_error.hpp"
+#include "core/latlong_chart.hpp"
+#include "core/octahedral_chart.hpp"
+#include "core/torus_chart.hpp"
+#include "io/road_placement.hpp"
+#include "io/road_unfolding.hpp"
+
+using namespace ps;
+
+namespace {
+
+constexpr double kDeg = std::numbers::pi / 180.0;
+constexpr double kHalfWidth = 5000, kHalfLength = 100000;
+
+// 200 x 10 km along +y, 16 triangles of 25 km edges (the CLI test's strip).
+io::ObjTriangles strip() {
+  io::ObjTriangles s;
+  for (int i = 0; i <= 8; ++i)
+    s.vertices.emplace_back(-kHalfWidth, -kHalfLength + 25000 * i, 0),
+        s.vertices.emplace_back(kHalfWidth, -kHalfLength + 25000 * i, 0);
+  for (std::uint32_t i = 0; i < 8; ++i)
+    s.triangles.push_back({2 * i, 2 * i + 1, 2 * i + 3}),
+        s.triangles.push_back({2 * i, 2 * i + 3, 2 * i + 2});
+  return s;
+}
+
+// The place and the surface's outward normal anywhere, written from each surface's formula (not
+// from the code under test).
+struct Place {
+  Eigen::Vector3d origin, up, x, y;
+};
+
+Place placeOn(const core::Chart& chart, double a, double b, double heading) {
+  Place p;
+  double azimuth = a * kDeg;
+  if (const auto* torus = dynamic_cast<const core::TorusChart*>(&chart)) {
+    const Eigen::Vector3d out(std::cos(azimuth), std::sin(azimuth), 0);
+    p.up = std::cos(b * kDeg) * out + Eigen::Vector3d(0, 0, std::sin(b * kDeg));
+    p.origin = torus->majorRadius() * out + torus->minorRadius() * p.up;
+  } else if (const auto* tube = dynamic_cast<const core::CylinderChart*>(&chart)) {
+    p.up = {std::cos(azimuth), std::sin(azimuth), 0};
+    p.origin = tube->tubeRadius() * p.up + Eigen::Vector3d(0, 0, b);
+  } else {
+    azimuth = b * kDeg;
+    p.up = {std::cos(a * kDeg) * std::cos(azimuth), std::cos(a * kDeg) * std::sin(azimuth),
+            std::sin(a * kDeg)};
+    p.origin = chart.sphereRadius() * p.up;
+  }
+  const Eigen::Vector3d east(-std::sin(azimuth), std::cos(azimuth), 0);
+  const Eigen::Vector3d north = p.up.cross(east);
+  p.x = east * std::cos(heading * kDeg) - north * std::sin(heading * kDeg);
+  p.y = north * std::cos(heading * kDeg) + east * std::sin(heading * kDeg);
+  return p;
+}
+
+Eigen::Vector3d normalAt(const core::Chart& chart, const Eigen::Vector3d& s) {
+  if (const auto* torus = dynamic_cast<const core::TorusChart*>(&chart)) {
+    const Eigen::Vector3d centre =
+        torus->majorRadius() * Eigen::Vector3d(s.x(), s.y(), 0).normalized();
+    return (s - centre).normalized();
+  }
+  if (dynamic_cast<const core::CylinderChart*>(&chart))
+    return Eigen::Vector3d(s.x(), s.y(), 0).normalized();
+  return s.normalized();
+}
+
+// The largest distance outside the strip's footprint of points along every laid edge: each point
+// put on the surface from the grid, then along the surface's normal into the road's plane.
+double offFootprint(const core::Chart& chart, double m, const Place& place, const tin::Road& road) {
+  double worst = 0;
+  for (const auto& t : road.triangles)
+    for (int k = 0; k < 3; ++k) {
+      const Eigen::Vector2d a = road.xy[t[std::size_t(k)]],
+                            b = road.xy[t[std::size_t((k + 1) % 3)]];
+      for (int i = 0; i <= 8; ++i) {
+        const Eigen::Vector2d g = io::intoGrid(chart, m, a + (b - a) * (i / 8.0));
+        const Eigen::Vector3d s = chart.positionAt(g.x(), g.y(), 0.0);
+        const Eigen::Vector3d n = normalAt(chart, s);
+        const Eigen::Vector3d q = s + n * ((place.origin - s).dot(place.up) / n.dot(place.up));
+        const double x = (q - place.origin).dot(place.x), y = (q - place.origin).dot(place.y);
+        worst = std::max({worst, std::abs(x) - kHalfWidth, std::abs(y) - kHalfLength});
+      }
+    }
+  return worst;
+}
+
+}  // namespace
+
+TEST(RoadPlacement, LaidEdgesFollowTheSphereWithinTheTolerance) {
+  const double r = 1737400, tolerance = 50;
+  const core::OctahedralChart octa(core::GridSize(8), r);
+  const core::LatLongChart latlong(core::GridSize(8), r);
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  int laid = 0, cut = 0, wouldStray = 0;
+  for (const core::Chart* chart :
+       {static_cast<const core::Chart*>(&octa), static_cast<const core::Chart*>(&latlong)}) {
+    const double m = chart->grid().m();
+    const double polar = chart == &latlong ? 84.0 : 90.0;  // lat-long's pole rows are refused
+    for (int trial = 0; trial < 40; ++trial) {
+      // Half of them near a pole, where the chart bends straight grid lines most.
+      const double lat =
+          trial % 2 ? (2 * unit(rng) - 1) * polar : (trial % 4 ? 1 : -1) * (polar - 6 * unit(rng));
+      const double lon = 360 * unit(rng) - 180, heading = 360 * unit(rng);
+      const io::LaidRoad road =
+          io::layRoadOnPlanet(strip(), *chart, m, {lat, lon, heading}, tolerance, "road");
+      ++laid;
+      cut += road.halvedEdges > 0;
+      EXPECT_LE(road.strayM, tolerance)
+          << chart->name() << " at " << lat << ", " << lon << " heading " << heading << ", halved "
+          << road.halvedEdges;
+      const double off = offFootprint(*chart, m, placeOn(*chart, lat, lon, heading), road.road);
+      EXPECT_LT(off, 1.25 * tolerance)
+          << chart->name() << " at " << lat << ", " << lon << " heading " << heading << ": "
+          << road.road.triangles.size() << " triangles, " << road.halvedEdges << " halved";
+      // Without halving the same road strays beyond the tolerance (so the check can fail).
+      if (road.halvedEdges > 0) {
+        const io::LaidRoad coarse =
+            io::layRoadOnPlanet(strip(), *chart, m, {lat, lon, heading}, 1e9, "road");
+        wouldStray += offFootprint(*chart, m, placeOn(*chart, lat, lon, heading), coarse.road) >
+                      1.25 * tolerance;
+      }
+    }
+  }
+  EXPECT_EQ(laid, 80);
+  EXPECT_GT(cut, 10);
+  EXPECT_GT(wouldStray, 5);
+}
+
+TEST(RoadPlacement, RoadsAroundTheEndsOfTheOctahedralFoldsAreLaidInTwoHalves) {
+  // The ends of the folds are the equator at longitudes 0, 90, 180 and -90, where the grid turns
+  // half round while the sphere turns whole (refused until 2026-12-07).
+  const double r = 1737400, tolerance = 50;
+  const core::OctahedralChart octa(core::GridSize(8), r);
+  const double m = octa.grid().m();
+  for (const auto& at : {std::array<double, 3>{0, -90, 0}, std::array<double, 3>{0, 0, 45},
+                         std::array<double, 3>{0.1, 90, 90}, std::array<double, 3>{-1, 180, 30},
+                         std::array<double, 3>{0, 0.1, 0}}) {
+    const io::LaidRoad road = io::layRoadOnPlanet(strip(), octa, m, at, tolerance, "road");
+    EXPECT_GE(road.pieces, 2) << at[0] << ", " << at[1];
+    EXPECT_LE(road.strayM, tolerance);
+    EXPECT_LT(offFootprint(octa, m, placeOn(octa, at[0], at[1], at[2]), road.road),
+              1.25 * tolerance)
+        << at[0] << ", " << at[1];
+  }
+}
+
+TEST(RoadPlacement, RoadsLieOnTheTorusAndTheCylinderAcrossTheirSeams) {
+  const double tolerance = 50;
+  const core::TorusChart torus(core::GridSize(8), 4.5e6, 1.8e6);
+  const core::CylinderChart tube(core::GridSize(8), 6e5, 4e6);
+  struct Case {
+    const core::Chart* chart;
+    double a, b, heading;
+    int pieces;
+  };
+  for (const Case& c :
+       {Case{&torus, 30, 45, 20, 1}, Case{&torus, 0, 90, 0, 2}, Case{&torus, 90, 0, 70, 2},
+        Case{&torus, 0.01, 0.01, 45, 4}, Case{&torus, 10, 180, 90, 1}, Case{&tube, 45, 1e6, 30, 1},
+        Case{&tube, 0, -5e5, 90, 2}}) {
+    const double m = c.chart->grid().m();
+    const io::LaidRoad road =
+        io::layRoadOnPlanet(strip(), *c.chart, m, {c.a, c.b, c.heading}, tolerance, "road");
+    EXPECT_EQ(road.pieces, c.pieces) << c.chart->name() << " at " << c.a << ", " << c.b;
+    EXPECT_LE(road.strayM, tolerance);
+    EXPECT_LT(offFootprint(*c.chart, m, placeOn(*c.chart, c.a, c.b, c.heading), road.road),
+              1.25 * tolerance)
+        << c.chart->name() << " at " << c.a << ", " << c.b;
+  }
+  // A road longer than the torus's hole is wide, laid along the inner equator, would reach round
+  // to the outside: refused by name.
+  io::ObjTriangles long_ = strip();
+  for (Eigen::Vector3d& p : long_.vertices) p.y() *= 50;  // 10,000 km
+  try {
+    io::layRoadOnPlanet(long_, torus, torus.grid().m(), {0, 180, 90}, tolerance, "long.obj");
+    ADD_FAILURE() << "a road round the torus's hole was laid";
+  } catch (const core::InputError& e) {
+    const std::string what = e.what();
+    EXPECT_EQ(what.rfind("long.obj: ", 0), 0u) << what;
+    EXPECT_TRUE(what.find("folds over") != std::string::npos ||
+                what.find("too far round the torus") != std::string::npos ||
+                what.find("has no place") != std::string::npos)
+        << what;
+  }
+  // A place off the cylinder's length.
+  EXPECT_THROW(io::layRoadOnPlanet(strip(), tube, tube.grid().m(), {0, 3e6, 0}, tolerance, "r"),
+               core::InputError);
+}
