@@ -155,6 +155,15 @@ TEST(RoadPlacement, RoadsAroundTheEndsOfTheOctahedralFoldsAreLaidInTwoHalves) {
               1.25 * tolerance)
         << at[0] << ", " << at[1];
   }
+  // A square whose first vertex lies on the end itself (the unfolding may not start there: from
+  // the end both sides of the fold continue an edge alike).
+  io::ObjTriangles fan;
+  fan.vertices = {
+      {0, 0, 0}, {kHalfWidth, 0, 0}, {0, kHalfWidth, 0}, {-kHalfWidth, 0, 0}, {0, -kHalfWidth, 0}};
+  fan.triangles = {{0, 1, 2}, {0, 2, 3}, {0, 3, 4}, {0, 4, 1}};
+  const io::LaidRoad road = io::layRoadOnPlanet(fan, octa, m, {0, 180, 10}, tolerance, "fan");
+  EXPECT_EQ(road.pieces, 2);
+  EXPECT_LE(road.strayM, tolerance);
 }
 
 TEST(RoadPlacement, RoadsLieOnTheTorusAndTheCylinderAcrossTheirSeams) {

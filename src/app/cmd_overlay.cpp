@@ -88,7 +88,7 @@ const CommandRegistration kOverlay([](CLI::App& root, CLI::App*& sub) -> Command
   sub->add_option(
       "--error", a->error,
       "The terrain TIN's largest error in metres (the stencil keeps it around the road; on a "
-      "planet the road's edges are cut until they stray no further from its path)");
+      "planet the road's edges are halved until none strays further from its path)");
   sub->add_option("--at", a->at,
                   "Where the road's origin lies and the heading of its +y axis (degrees clockwise "
                   "from north): on a sphere LAT,LON[,HEADING]; on a torus AROUND,ACROSS[,HEADING] "

@@ -164,12 +164,14 @@ UnfoldedRoad unfoldRoad(
       if (!(move == PlaneMove{}) && (move(road.xy[a]) - road.xy[a]).norm() <= 1e-9 * m) return true;
     return false;
   };
-  // Unfolded: breadth first from a vertex of each piece, every next vertex at the image of its
-  // grid point that continues the edge it is reached by.
+  // Unfolded: breadth first from a vertex of each piece (not a fold's end while another is
+  // left), every next vertex at the image of its grid point that continues the edge it is
+  // reached by.
   std::vector<Eigen::Vector2d> unfolded(n);
   std::vector<char> placed(n, 0);
-  for (std::size_t start = 0; start < n; ++start) {
-    if (placed[start]) continue;
+  for (std::size_t k = 0; k < 2 * n; ++k) {
+    const std::size_t start = k % n;
+    if (placed[start] || (k < n && foldEnd(std::uint32_t(start)))) continue;
     placed[start] = 1;
     unfolded[start] = road.xy[start];
     std::vector<std::uint32_t> queue{std::uint32_t(start)};
@@ -199,8 +201,9 @@ UnfoldedRoad unfoldRoad(
     }
   }
 
-  // One piece: no edge would be continued better by moving an end across a side. (Around an end
-  // of a fold the sphere's full turn is the grid's half turn: a road around it cannot be.)
+  // One piece: no edge would be continued better by moving an end across a side. (Round an end
+  // of a fold the sphere's full turn is the grid's half turn: a road that io/road_placement did
+  // not part there cannot be; nor one that reaches round a tube.)
   UnfoldedRoad out;
   for (const auto& t : road.triangles) {
     std::array<double, 3>& strays = out.edgeStrayM.emplace_back();
