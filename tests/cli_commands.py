@@ -590,6 +590,30 @@ def group_tube_charts():
                  "--error", "200", "--out", out("tube_road_off.obj"), expect=2)
     if "metres along it from its middle" not in err or os.path.exists(out("tube_road_off.obj")):
         fail(f"a road off the cylinder's length was not refused by name:\n{err}")
+    # Half over the cylinder's rim (10 km from it): clipped there, as at a flat terrain's border
+    # (its grid point was clamped onto the rim before, a degenerate road refused).
+    stdout, _ = run("overlay", out("tube", "planet.planet"), out("tube_road.obj"), "--at", "30,1990000,0",
+                    "--error", "200", "--out", out("tube_road_rim.obj"))
+    r = json.loads(stdout)
+    if r["euler"] != 0 or r["non_manifold_edges"] != 0 or r["road_triangles_clipped"] < 1 or r["road_group_triangles"] < 2:
+        fail(f"a road over the cylinder's rim: {r}")
+    # A stroke sculpted on each tube becomes a road (`road` from the replay's log, its place in
+    # the tube's own terms) that overlay lays back where it was sculpted; a stroke file's points
+    # are a sphere's latitudes and longitudes, refused for a tube by name.
+    for name, stroke in (("torus_a", "2"), ("tube", "1")):
+        stdout, _ = run("road", out(name, "log.jsonl"), "--planet", out(name, "planet.planet"), "--width", "20000",
+                        "--stroke", stroke, "--out", out(f"{name}_stroke_road.obj"))
+        road = json.loads(stdout)
+        stdout, _ = run("overlay", out(name, "planet.planet"), out(f"{name}_stroke_road.obj"), "--at", road["at"],
+                        "--error", "200", "--out", out(f"{name}_stroke_overlay.obj"))
+        r = json.loads(stdout)
+        if (r["euler"] != 0 or r["non_manifold_edges"] != 0 or r["road_group_triangles"] < road["triangles"]
+                or r["road_stray_m"] > 200):
+            fail(f"the {name} replay's stroke {stroke} laid as a road: {road}, {r}")
+    _, err = run("road", os.path.join(SRC, "data", "demo-strokes.txt"), "--planet", out("torus_a", "planet.planet"),
+                 "--width", "5000", "--out", out("torus_file_road.obj"), expect=2)
+    if "a stroke file's points are latitudes and longitudes" not in err or os.path.exists(out("torus_file_road.obj")):
+        fail(f"a stroke file's road onto the torus was not refused by name:\n{err}")
     # The sand core on the tubes: the displacement tool with settling along the same frames, twice
     # onto the torus (the same planet file and forces), once onto the cylinder; the haptic force
     # path beside them writes forces.csv.

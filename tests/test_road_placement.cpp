@@ -10,6 +10,7 @@
 #include <random>
 
 #include "core/cylinder_chart.hpp"
+#include "core/flat_chart.hpp"
 #include "core/input_error.hpp"
 #include "core/latlong_chart.hpp"
 #include "core/octahedral_chart.hpp"
@@ -206,4 +207,32 @@ TEST(RoadPlacement, RoadsLieOnTheTorusAndTheCylinderAcrossTheirSeams) {
   // A place off the cylinder's length.
   EXPECT_THROW(io::layRoadOnPlanet(strip(), tube, tube.grid().m(), {0, 3e6, 0}, tolerance, "r"),
                core::InputError);
+}
+
+TEST(RoadPlacement, APlaceOnTheSurfaceIsWhereItsFrameStands) {
+  // `road` names a stroke's start by placeOf, and overlay lays the road's plane there by
+  // roadFrame: on every chart with places the two are inverse, and the frame's up is the
+  // surface's normal.
+  const core::OctahedralChart octa(core::GridSize(6), 1737400);
+  const core::LatLongChart latlong(core::GridSize(6), 1737400);
+  const core::TorusChart torus(core::GridSize(6), 4.5e6, 1.8e6);
+  const core::CylinderChart tube(core::GridSize(6), 6e5, 4e6);
+  std::mt19937 rng(3);
+  for (const core::Chart* chart :
+       std::initializer_list<const core::Chart*>{&octa, &latlong, &torus, &tube}) {
+    const double m = chart->grid().m();
+    std::uniform_real_distribution<double> in(0.5, m - 0.5);
+    for (int k = 0; k < 100; ++k) {
+      const Eigen::Vector3d p = chart->positionAt(in(rng), in(rng), 0.0);
+      const std::array<double, 2> place = io::placeOf(*chart, p);
+      const io::RoadFrame f = io::roadFrame(*chart, {place[0], place[1], 0}, "r");
+      EXPECT_LT((f.origin - p).norm(), 1e-6) << chart->name() << " " << p.transpose();
+      EXPECT_LT((f.up - io::surfaceNormal(*chart, p)).norm(), 1e-8) << chart->name();
+      EXPECT_NEAR(f.x.dot(f.up), 0.0, 1e-12);
+      EXPECT_NEAR(f.y.dot(f.up), 0.0, 1e-12);
+      EXPECT_NEAR(f.x.cross(f.y).dot(f.up), 1.0, 1e-12) << "x, y and up turn as east, north, up";
+    }
+  }
+  const core::FlatChart flat(core::GridSize(6), 1000.0, 1000.0);
+  EXPECT_THROW(io::placeOf(flat, Eigen::Vector3d(1, 2, 0)), core::InputError);
 }

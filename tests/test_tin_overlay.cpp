@@ -247,6 +247,18 @@ TEST(TinOverlay, AJitteryStrokeThatDoublesBackStillMakesAProperStrip) {
   EXPECT_NO_THROW(overlayRoad(s.field, s.terrain, road, OverlayMode::kStitch));
   EXPECT_THROW(stripAlong({{1, 1}, {1, 1}}, 2.0), core::InputError);
   EXPECT_THROW(stripAlong(path, 0.0), core::InputError);
+  // Out to a point and back to the last, as a stroke snapped to grid vertices jitters: once the
+  // turn is dropped the point before it comes twice in a row, which made a strip of no width
+  // there (a degenerate triangle, refused by the overlay).
+  for (const auto& jittery :
+       {std::vector<Eigen::Vector2d>{{0, 0}, {0, 5}, {0, 0}, {10, 0}, {20, 1}},
+        std::vector<Eigen::Vector2d>{{0, 0}, {10, 0}, {10, 5}, {10, 0}}}) {
+    const Strip s2 = stripAlong(jittery, 2.0);
+    for (const auto& t : s2.triangles) {
+      const Eigen::Vector2d a = s2.xy[t[0]], b = s2.xy[t[1]], c = s2.xy[t[2]];
+      EXPECT_GT(std::abs((b - a).x() * (c - a).y() - (b - a).y() * (c - a).x()), 1e-6);
+    }
+  }
 }
 
 TEST(TinOverlay, ObjRoadsAreReadOrRefusedWithTheLine) {

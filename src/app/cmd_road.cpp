@@ -1,7 +1,8 @@
 // `planetsculpt road STROKES --width M --out ROAD.obj [--stroke N] [--planet P]`: a stroke
 // sculpted in a recording (a replay's log.jsonl) or of a stroke file as a strip of the given width:
-// a road mesh that `overlay ... --at LAT,LON` stitches or stencils into a planet's TIN. `track`,
-// its name before issue 44 (which keeps "track" for markers), still runs it and says so.
+// a road mesh that `overlay ... --at PLACE` stitches or stencils into a planet's TIN (a sphere's;
+// from a replay's log a torus's or a cylinder's too). `track`, its name before issue 44 (which
+// keeps "track" for markers), still runs it and says so.
 #include <Eigen/Geometry>
 #include <cmath>
 #include <cstdio>
@@ -13,10 +14,12 @@
 
 #include "app/command_registry.hpp"
 #include "core/input_error.hpp"
+#include "core/latlong_chart.hpp"
 #include "edit/stroke_script.hpp"
 #include "io/heightmap_import.hpp"
 #include "io/mesh_writers.hpp"
 #include "io/planet_file.hpp"
+#include "io/road_placement.hpp"
 #include "tin/strip.hpp"
 
 namespace ps::app {
@@ -81,54 +84,58 @@ std::vector<std::vector<Eigen::Vector3d>> logPaths(const std::string& file,
 int runRoad(const RoadArgs& a) {
   std::unique_ptr<terrain::Terrain> planet;
   double radius = io::kDefaultImportRadius;
+  const bool replayLog = std::filesystem::path(a.strokes).extension() == ".jsonl";
   if (!a.planet.empty()) {
     planet = io::loadPlanet(a.planet);
-    // Any sphere: the track is laid on the tangent plane and read back through the chart's
-    // inverse (the default planet is octahedral).
-    if (!(planet->chart().sphereRadius() > 0))
-      throw core::InputError(a.planet +
-                             ": a stroke's track needs a sphere (a lat-long or "
-                             "octahedral planet), not a " +
-                             planet->chart().name() + " one");
-    radius = planet->chart().sphereRadius();
+    const bool sphere = planet->chart().sphereRadius() > 0;
+    if (!sphere && !replayLog)
+      throw core::InputError(a.strokes +
+                             ": a stroke file's points are latitudes and longitudes "
+                             "on a sphere; for the " +
+                             planet->chart().name() + " planet give the replay's log.jsonl");
+    if (sphere) radius = planet->chart().sphereRadius();
   }
-  const bool replayLog = std::filesystem::path(a.strokes).extension() == ".jsonl";
   if (replayLog && !planet)
     throw core::InputError(a.strokes +
                            ": a replay's log names grid vertices: give --planet (the "
                            "planet the replay sculpted, OUT/planet.planet)");
+  // Without a planet the stroke file's sphere of the default radius.
+  const core::LatLongChart fileSphere(core::GridSize(5), radius);
+  const core::Chart& chart = planet ? planet->chart() : fileSphere;
   const auto paths = replayLog ? logPaths(a.strokes, *planet)
                                : strokePaths(edit::loadStrokeScript(a.strokes), radius);
   if (a.stroke < 1 || a.stroke > int(paths.size()))
     throw core::InputError(a.strokes + ": --stroke " + std::to_string(a.stroke) +
                            ": the file has " + std::to_string(paths.size()) + " strokes");
   const auto& path = paths[std::size_t(a.stroke - 1)];
-  // The road's frame: the tangent plane at the stroke's start (x east, y north), points taken
-  // onto it through the planet's centre, as `overlay --at` puts them back.
-  const Eigen::Vector3d up = path.front().normalized();
-  const Eigen::Vector3d east = Eigen::Vector3d::UnitZ().cross(up).norm() > 1e-9
-                                   ? Eigen::Vector3d::UnitZ().cross(up).normalized()
-                                   : Eigen::Vector3d::UnitY();
-  const Eigen::Vector3d north = up.cross(east);
+  // The road's frame: the tangent plane at the stroke's start (x east, y north), each point
+  // taken onto it along the surface's normal (on a sphere through its centre), as `overlay --at`
+  // puts them back (io/road_placement).
+  std::array<double, 2> place;
+  try {
+    place = io::placeOf(chart, path.front());
+  } catch (const core::InputError& e) {
+    throw core::InputError(a.planet + ": " + e.what());
+  }
+  const io::RoadFrame frame = io::roadFrame(chart, {place[0], place[1], 0}, a.strokes);
   std::vector<Eigen::Vector2d> centre;
   double length = 0;
   for (const Eigen::Vector3d& p : path) {
-    const Eigen::Vector3d d = p.normalized();
-    if (d.dot(up) < 0.2)
-      throw core::InputError(
-          a.strokes + ": stroke " + std::to_string(a.stroke) +
-          " reaches more than 78 degrees from its start; one road cannot hold it");
-    const Eigen::Vector3d q = radius * d / d.dot(up) - radius * up;
-    if (!centre.empty())
-      length += (Eigen::Vector2d(q.dot(east), q.dot(north)) - centre.back()).norm();
-    centre.emplace_back(q.dot(east), q.dot(north));
+    const Eigen::Vector3d n = io::surfaceNormal(chart, p);
+    if (n.dot(frame.up) < 0.2)
+      throw core::InputError(a.strokes + ": stroke " + std::to_string(a.stroke) +
+                             " turns more than 78 degrees from its start; one road cannot hold it");
+    const Eigen::Vector3d q = p + n * ((frame.origin - p).dot(frame.up) / n.dot(frame.up));
+    const Eigen::Vector2d local((q - frame.origin).dot(frame.x), (q - frame.origin).dot(frame.y));
+    if (!centre.empty()) length += (local - centre.back()).norm();
+    centre.push_back(local);
   }
   const tin::Strip strip = tin::stripAlong(centre, a.width);
   io::MeshData mesh;
   for (const Eigen::Vector2d& v : strip.xy) {
     double z = 0;
     if (planet) {
-      const auto uv = planet->chart().inverse(radius * up + v.x() * east + v.y() * north);
+      const auto uv = chart.inverse(frame.at({v.x(), v.y(), 0}));
       if (uv) {
         const int m = planet->grid().m();
         const int u0 = std::min(int(uv->x()), m - 1), v0 = std::min(int(uv->y()), m - 1);
@@ -140,10 +147,8 @@ int runRoad(const RoadArgs& a) {
     mesh.positions.emplace_back(v.x(), v.y(), z);
   }
   for (const auto& t : strip.triangles) mesh.indices.insert(mesh.indices.end(), t.begin(), t.end());
-  const double lat = std::asin(std::clamp(up.z(), -1.0, 1.0)) * 180.0 / std::numbers::pi;
-  const double lon = std::atan2(up.y(), up.x()) * 180.0 / std::numbers::pi;
   char at[96];
-  std::snprintf(at, sizeof at, "%.10g,%.10g,0", lat, lon);
+  std::snprintf(at, sizeof at, "%.10g,%.10g,0", place[0], place[1]);
   mesh.description =
       "PlanetSculpt road: stroke " + std::to_string(a.stroke) + " of " + a.strokes + ", " +
       core::exactNumber(a.width) + " m wide; x east, y north in metres on the tangent plane at " +

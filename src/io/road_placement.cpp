@@ -20,17 +20,12 @@ namespace {
 using core::exactNumber;
 constexpr double kDeg = std::numbers::pi / 180.0;
 
-// The road's plane: its origin on the surface, the surface's outward normal there, and the road's
-// x and y axes in the tangent plane.
-struct TangentFrame {
-  Eigen::Vector3d origin, up, x, y;
-  Eigen::Vector3d at(const Eigen::Vector3d& p) const { return origin + p.x() * x + p.y() * y; }
-};
+}  // namespace
 
-TangentFrame tangentFrame(const core::Chart& chart, const std::array<double, 3>& at,
-                          const std::string& name) {
+RoadFrame roadFrame(const core::Chart& chart, const std::array<double, 3>& at,
+                    const std::string& name) {
   const std::string where = "--at " + exactNumber(at[0]) + "," + exactNumber(at[1]);
-  TangentFrame f;
+  RoadFrame f;
   double azimuth = 0;  // of the place about the z axis: east is the direction it grows in
   if (chart.sphereRadius() > 0) {
     if (!(std::abs(at[0]) <= 90 && std::abs(at[1]) <= 180))
@@ -75,6 +70,26 @@ TangentFrame tangentFrame(const core::Chart& chart, const std::array<double, 3>&
   return f;
 }
 
+std::array<double, 2> placeOf(const core::Chart& chart, const Eigen::Vector3d& p) {
+  constexpr double kToDeg = 180.0 / std::numbers::pi;
+  const double around = std::atan2(p.y(), p.x()) * kToDeg;
+  if (chart.sphereRadius() > 0)
+    return {std::asin(std::clamp(p.z() / p.norm(), -1.0, 1.0)) * kToDeg, around};
+  if (const auto* torus = dynamic_cast<const core::TorusChart*>(&chart))
+    return {around, std::atan2(p.z(), std::hypot(p.x(), p.y()) - torus->majorRadius()) * kToDeg};
+  if (dynamic_cast<const core::CylinderChart*>(&chart)) return {around, p.z()};
+  throw core::InputError("a road has no place on the " + chart.name() + " chart");
+}
+
+Eigen::Vector3d surfaceNormal(const core::Chart& chart, const Eigen::Vector3d& p) {
+  const auto uv = chart.inverse(p);
+  if (!uv) throw core::InputError("a point has no place on the " + chart.name() + " chart");
+  return (chart.positionAt(uv->x(), uv->y(), 1.0) - chart.positionAt(uv->x(), uv->y(), 0.0))
+      .normalized();
+}
+
+namespace {
+
 struct Mesh {
   std::vector<Eigen::Vector3d> vertices;
   std::vector<std::array<std::uint32_t, 3>> triangles;
@@ -90,7 +105,7 @@ double signedArea(const Eigen::Vector2d& a, const Eigen::Vector2d& b, const Eige
 // end, and its two halves are parted along the fold's other half (the meridian's northern part,
 // no glued side): they meet only across the fold, where the gluing turns one half round onto the
 // other, and each lies in one quarter turn of the grid about the end.
-void partAtFoldEnds(Mesh& mesh, const core::Chart& chart, double m, const TangentFrame& frame) {
+void partAtFoldEnds(Mesh& mesh, const core::Chart& chart, double m, const RoadFrame& frame) {
   const core::Gluing g = chart.gluing();
   std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>> ends;  // (end, a point of its fold)
   if (g.uSides == core::SideGluing::kMirror)
@@ -220,7 +235,7 @@ void halveStrayingEdges(Mesh& mesh, const std::vector<std::array<double, 3>>& st
 LaidRoad layRoadOnPlanet(const ObjTriangles& obj, const core::Chart& chart, double m,
                          const std::array<double, 3>& at, double toleranceM,
                          const std::string& name) {
-  const TangentFrame frame = tangentFrame(chart, at, name);
+  const RoadFrame frame = roadFrame(chart, at, name);
   const double r = chart.sphereRadius();
   // A point of the road's plane onto the surface: its grid point and the surface's point.
   const auto onto = [&](const Eigen::Vector3d& p, Eigen::Vector2d& grid, Eigen::Vector3d& surface) {
@@ -228,6 +243,10 @@ LaidRoad layRoadOnPlanet(const ObjTriangles& obj, const core::Chart& chart, doub
     const auto uv = chart.inverse(q);
     if (!uv) throw core::InputError(name + ": a road vertex has no place on the " + chart.name());
     grid = *uv;
+    // Beyond a cylinder's open rim the tube goes on in the grid (the inverse clamps to the rim),
+    // so that the overlay clips the road there as at a flat terrain's border.
+    if (const auto* tube = dynamic_cast<const core::CylinderChart*>(&chart))
+      grid.y() = (q.z() / tube->length() + 0.5) * m;
     surface = r > 0 ? Eigen::Vector3d(q.normalized() * r) : chart.positionAt(grid.x(), grid.y(), 0);
   };
   const auto lay = [&](const Mesh& mesh) {

@@ -4,6 +4,7 @@
 // through the centre: the gnomonic projection), cut where it crosses a glued side of the chart's
 // grid (io/road_unfolding.hpp), and its edges halved until, straight in the grid, they follow
 // the surface's paths within a tolerance.
+#include <Eigen/Core>
 #include <array>
 #include <string>
 
@@ -19,6 +20,24 @@ struct LaidRoad {
   double strayM = 0;    // the largest distance of a laid edge's grid midpoint from its own
   int halvedEdges = 0;  // edges halved so that none strays beyond the tolerance
 };
+
+// The road's plane at a place: its origin on the surface, the surface's outward normal there,
+// and the road's x and y axes in the tangent plane (y at the heading, x 90 degrees clockwise).
+struct RoadFrame {
+  Eigen::Vector3d origin, up, x, y;
+  Eigen::Vector3d at(const Eigen::Vector3d& p) const { return origin + p.x() * x + p.y() * y; }
+};
+// `at` as layRoadOnPlanet's below. Throws core::InputError for a place off the surface or a
+// chart with no places (a flat one), naming `name`.
+RoadFrame roadFrame(const core::Chart& chart, const std::array<double, 3>& at,
+                    const std::string& name);
+
+// The place of a point on the surface (`at` without its heading): the inverse of roadFrame's
+// origin. Throws core::InputError for a flat chart.
+std::array<double, 2> placeOf(const core::Chart& chart, const Eigen::Vector3d& p);
+
+// The surface's outward unit normal at the surface point nearest to p (heights displace along it).
+Eigen::Vector3d surfaceNormal(const core::Chart& chart, const Eigen::Vector3d& p);
 
 // `at`: on a sphere LAT, LON (degrees); on a torus AROUND, ACROSS (degrees round the big circle
 // from +x and round the tube from its outer equator); on a cylinder AROUND (degrees from +x) and

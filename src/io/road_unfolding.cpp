@@ -38,7 +38,7 @@ std::vector<PlaneMove> gluingMoves(const core::Chart& chart, double m, int depth
   return moves;
 }
 
-Eigen::Vector2d intoGrid(const core::Chart& chart, double m, Eigen::Vector2d p) {
+Eigen::Vector2d intoGrid(const core::Chart& chart, double m, Eigen::Vector2d p, bool clampOpen) {
   const core::Gluing g = chart.gluing();
   for (int k = 0; k < 8; ++k) {
     if (p.x() < 0 || p.x() > m) {
@@ -47,20 +47,25 @@ Eigen::Vector2d intoGrid(const core::Chart& chart, double m, Eigen::Vector2d p) 
         p.x() += low ? m : -m;
       else if (g.uSides == core::SideGluing::kMirror)
         p = {low ? -p.x() : 2 * m - p.x(), m - p.y()};
-      else
+      else if (clampOpen)
         p.x() = std::clamp(p.x(), 0.0, m);
+      else
+        break;
     } else if (p.y() < 0 || p.y() > m) {
       const bool low = p.y() < 0;
       if (g.vSides == core::SideGluing::kSeam)
         p.y() += low ? m : -m;
       else if (g.vSides == core::SideGluing::kMirror)
         p = {m - p.x(), low ? -p.y() : 2 * m - p.y()};
-      else
+      else if (clampOpen)
         p.y() = std::clamp(p.y(), 0.0, m);
+      else
+        break;
     } else {
       break;
     }
   }
+  if (!clampOpen) return p;
   return {std::clamp(p.x(), 0.0, m), std::clamp(p.y(), 0.0, m)};
 }
 
@@ -151,7 +156,9 @@ UnfoldedRoad unfoldRoad(
   const auto miss = [&](std::uint32_t a, const Eigen::Vector2d& A, std::uint32_t b,
                         const Eigen::Vector2d& B) {
     const Eigen::Vector3d own = midpoint(a, b);
-    const Eigen::Vector2d mid = intoGrid(chart, m, 0.5 * (A + B));
+    // (Beyond an open side the chart's formula goes on: a cylinder's road past its rim, clipped
+    // later, is judged as if the tube did.)
+    const Eigen::Vector2d mid = intoGrid(chart, m, 0.5 * (A + B), false);
     return (chart.positionAt(mid.x(), mid.y(), 0.0) - own).norm();
   };
 

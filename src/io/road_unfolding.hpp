@@ -31,8 +31,9 @@ struct PlaneMove {
 std::vector<PlaneMove> gluingMoves(const core::Chart& chart, double m, int depth = 3);
 
 // A point of the plane around the grid moved back into [0, m]^2 by the sides' gluing (open
-// sides and pole rows clamp).
-Eigen::Vector2d intoGrid(const core::Chart& chart, double m, Eigen::Vector2d p);
+// sides and pole rows clamp, or with `clampOpen` false leave it beyond them).
+Eigen::Vector2d intoGrid(const core::Chart& chart, double m, Eigen::Vector2d p,
+                         bool clampOpen = true);
 
 // The planes through the sphere's centre (unit normals, each once) of the chart's glued sides
 // that are great-circle arcs: lat-long's seam, the octahedral folds (southern half-meridians).

@@ -53,6 +53,9 @@ Strip stripAlong(const std::vector<Eigen::Vector2d>& centre, double width) {
     }
     if (sharpest == 0) break;
     p.erase(p.begin() + std::ptrdiff_t(sharpest));
+    // Out and back to the same point (a grid-snapped stroke's jitter) leaves it twice in a row.
+    if ((p[sharpest] - p[sharpest - 1]).norm() <= 1e-9 * width)
+      p.erase(p.begin() + std::ptrdiff_t(sharpest == p.size() - 1 ? sharpest - 1 : sharpest));
   }
   if (p.size() < 2) throw core::InputError("a strip needs a path of at least two distinct points");
   Strip s;
