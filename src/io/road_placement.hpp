@@ -15,7 +15,8 @@
 namespace ps::io {
 
 struct LaidRoad {
-  tin::Road road;       // grid coordinates in [0, m]^2 (one copy per piece, clipped later)
+  tin::Road road;       // grid coordinates, one copy per piece (the overlay clips each at the
+                        // grid's border; a cylinder's road may reach past its rims)
   int pieces = 1;       // the copies: 1 + one per glued side the road crosses into
   double strayM = 0;    // the largest distance of a laid edge's grid midpoint from its own
   int halvedEdges = 0;  // edges halved so that none strays beyond the tolerance
