@@ -1,10 +1,13 @@
 // A road laid on a planet (io/road_placement.hpp): every point of every laid edge, taken back from
 // the surface into the road's plane, lies within the tolerance of the road's footprint, on the
 // sphere charts at random places (the poles, the folds, their ends and the seam included) and on
-// the torus and the cylinder; a road too large for its place on a tube is refused by name.
+// the torus and the cylinder; a road too large for its place on a tube is refused by name. Stitched
+// into a terrain's TIN, the road is draped over the mesh onto that footprint.
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <iostream>
+#include <map>
 #include <memory>
 #include <numbers>
 #include <random>
@@ -17,6 +20,10 @@
 #include "core/torus_chart.hpp"
 #include "io/road_placement.hpp"
 #include "io/road_unfolding.hpp"
+#include "io/tin_export.hpp"
+#include "terrain/terrain.hpp"
+#include "test_terrains.hpp"
+#include "tin/overlay.hpp"
 
 using namespace ps;
 
@@ -235,4 +242,109 @@ TEST(RoadPlacement, APlaceOnTheSurfaceIsWhereItsFrameStands) {
   }
   const core::FlatChart flat(core::GridSize(6), 1000.0, 1000.0);
   EXPECT_THROW(io::placeOf(flat, Eigen::Vector3d(1, 2, 0)), core::InputError);
+}
+
+namespace {
+
+// Where a point of the stitched mesh lies in the road's plane, taken there along the surface's
+// normal through it (the line the road's own point was put on the surface by).
+Eigen::Vector2d inRoadPlane(const core::Chart& chart, const Place& place,
+                            const Eigen::Vector3d& p) {
+  const Eigen::Vector3d n = normalAt(chart, p);
+  const Eigen::Vector3d q = p + n * ((place.origin - p).dot(place.up) / n.dot(place.up));
+  return {(q - place.origin).dot(place.x), (q - place.origin).dot(place.y)};
+}
+
+}  // namespace
+
+TEST(RoadPlacement, AStitchedRoadIsDrapedOverTheTerrainMeshOntoItsFootprint) {
+  // A smooth Earth-sized planet's TIN at a 200 m error: flat triangles across many grid cells,
+  // whose blend of their corners puts a grid point up to kilometres along the surface from its
+  // chart point near the poles (before 2026-12-07 a road's vertices and crossings were put there).
+  const double tolerance = 200;
+  struct Case {
+    std::shared_ptr<const core::Chart> chart;
+    double a, b, heading;
+  };
+  std::vector<Case> cases;
+  const auto octa =
+      std::make_shared<core::OctahedralChart>(core::GridSize(7), testkit::kEarthRadius);
+  const auto latlong =
+      std::make_shared<core::LatLongChart>(core::GridSize(7), testkit::kEarthRadius);
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  for (int k = 0; k < 16; ++k) {
+    const bool isOcta = k % 2 == 0;
+    const double polar = isOcta ? 90.0 : 84.0;  // lat-long's pole rows are refused
+    const double lat =
+        k % 4 < 2 ? (2 * unit(rng) - 1) * polar : (k % 8 < 4 ? 1 : -1) * (polar - 8 * unit(rng));
+    cases.push_back({isOcta ? std::shared_ptr<const core::Chart>(octa)
+                            : std::shared_ptr<const core::Chart>(latlong),
+                     lat, 360 * unit(rng) - 180, 360 * unit(rng)});
+  }
+  cases.push_back(
+      {std::make_shared<core::TorusChart>(core::GridSize(7), 4.5e6, 1.8e6), 30, 45, 20});
+  cases.push_back(
+      {std::make_shared<core::CylinderChart>(core::GridSize(7), 6e5, 4e6), 45, 1e6, 30});
+  struct Ground {
+    terrain::Terrain terrain;
+    tin::SampleField field;
+    tin::Tin tin;
+  };
+  std::map<const core::Chart*, std::unique_ptr<Ground>> grounds;
+  int whole = 0;
+  double farthestMove = 0;
+  for (const Case& c : cases) {
+    std::unique_ptr<Ground>& g = grounds[c.chart.get()];
+    if (!g) {
+      g.reset(new Ground{{c.chart, testkit::bumpyHeights(*c.chart, 4, 600.0, 6)}, {}, {}});
+      g->field = io::terrainSampleField(g->terrain);
+      g->field.uniformTolerance = tolerance;
+      g->tin = tin::buildTin(g->field, {});
+    }
+    const tin::SampleField& field = g->field;
+    const tin::Tin& terrainTin = g->tin;
+    const double m = c.chart->grid().m();
+    const io::LaidRoad laid =
+        io::layRoadOnPlanet(strip(), *c.chart, m, {c.a, c.b, c.heading}, tolerance, "road");
+    const tin::OverlayResult r =
+        tin::overlayRoad(field, terrainTin, laid.road, tin::OverlayMode::kStitch);
+    const Place place = placeOn(*c.chart, c.a, c.b, c.heading);
+    double off = 0, area = 0;
+    for (std::size_t f = 0; f < r.tin.triangles.size(); ++f) {
+      if (!r.onRoad[f]) continue;
+      std::array<Eigen::Vector2d, 3> q;
+      for (int k = 0; k < 3; ++k) {
+        q[std::size_t(k)] =
+            inRoadPlane(*c.chart, place, r.positions[r.tin.triangles[f][std::size_t(k)]]);
+        off = std::max({off, std::abs(q[std::size_t(k)].x()) - kHalfWidth,
+                        std::abs(q[std::size_t(k)].y()) - kHalfLength});
+      }
+      area += 0.5 * std::abs((q[1] - q[0]).x() * (q[2] - q[0]).y() -
+                             (q[1] - q[0]).y() * (q[2] - q[0]).x());
+    }
+    const std::string where = c.chart->name() + " at " + std::to_string(c.a) + ", " +
+                              std::to_string(c.b) + " heading " + std::to_string(c.heading);
+    EXPECT_EQ(r.report.undrapedEdges, 0u) << where;
+    EXPECT_LT(r.report.addedVertexErrorM, 1e-3) << where << ": the vertices stay on the mesh";
+    const double ratio = area / (4 * kHalfWidth * kHalfLength);
+    if (laid.pieces == 1) {
+      // Every vertex on the normal through its own point, every edge on its own plane: the road
+      // group covers the footprint, no more and no less.
+      ++whole;
+      farthestMove = std::max(farthestMove, r.report.drapeMoveM);
+      const bool sphere = c.chart == octa || c.chart == latlong;
+      EXPECT_LT(off, sphere ? 0.05 : 5.0) << where;
+      EXPECT_NEAR(ratio, 1.0, sphere ? 1e-6 : 1e-3) << where;
+    } else {
+      // Cut at a glued side: its vertices there stay on the side (their twins' places), moved
+      // as the mesh moves them, the laid edges' stray at most.
+      EXPECT_LT(off, tolerance) << where;
+      EXPECT_NEAR(ratio, 1.0, 0.01) << where;
+    }
+  }
+  std::cout << whole << " placements whole, the farthest vertex moved " << farthestMove << " m\n";
+  EXPECT_GT(whole, 10);
+  // Without the drape those vertices would stand this far from their chart points' normals.
+  EXPECT_GT(farthestMove, 1000.0);
 }

@@ -229,6 +229,11 @@ nlohmann::json overlayFromFiles(const std::filesystem::path& terrainPath,
   if (stitch) {
     summary["crossing_vertices"] = rep.crossingVertices;
     summary["added_vertex_error_m"] = rep.addedVertexErrorM;
+    if (field.metric == tin::ErrorMetric::kChart3d) {
+      summary["road_draped_edges"] = rep.drapedEdges;
+      summary["road_undraped_edges"] = rep.undrapedEdges;
+      summary["road_drape_move_m"] = rep.drapeMoveM;
+    }
   } else {
     summary["removed_terrain_vertices"] = rep.removedTerrainVertices;
     summary["refill_vertices"] = rep.refillVertices;

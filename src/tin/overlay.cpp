@@ -9,6 +9,7 @@
 #include "core/input_error.hpp"
 #include "tin/cdt.hpp"
 #include "tin/greedy_inserter.hpp"
+#include "tin/road_drape.hpp"
 #include "tin/tin_check.hpp"
 #include "tin/tin_locator.hpp"
 #include "tin/triangle_error.hpp"
@@ -147,6 +148,34 @@ void refuseSelfIntersection(const Road& t, const TinLocator& footprint) {
                            core::exactNumber(covered) + " of ground");
 }
 
+// The road's vertices and edges into the triangulation, each edge a constraint (draped: a chain
+// of constraints through the points where it crosses the terrain's edges). Its vertices carry
+// its own heights where `ownHeights` (the stencil's road surface).
+std::vector<VertexHandle> insertRoad(Cdt& cdt, const Road& road, const DrapedRoad* drape,
+                                     bool ownHeights) {
+  std::vector<VertexHandle> roadVertex(road.xy.size());
+  for (std::size_t v = 0; v < road.xy.size(); ++v) {
+    const Eigen::Vector2d& p = drape ? drape->vertex[v] : road.xy[v];
+    roadVertex[v] = cdt.insert(Point(p.x(), p.y()));
+    if (ownHeights) roadVertex[v]->info().height = road.h[v];
+  }
+  for (const auto& [a, b] : edgesOf(road.triangles)) {
+    if (!drape) {
+      cdt.insert_constraint(roadVertex[a], roadVertex[b]);
+      continue;
+    }
+    const std::vector<Eigen::Vector2d> path = drape->path(a, b);
+    VertexHandle from = roadVertex[a];
+    for (std::size_t k = 1; k < path.size(); ++k) {
+      const VertexHandle to =
+          k + 1 == path.size() ? roadVertex[b] : cdt.insert(Point(path[k].x(), path[k].y()));
+      if (to != from) cdt.insert_constraint(from, to);
+      from = to;
+    }
+  }
+  return roadVertex;
+}
+
 }  // namespace
 
 OverlayResult overlayRoad(const SampleField& field, const Tin& terrain, const Road& roadIn,
@@ -189,13 +218,19 @@ OverlayResult overlayRoad(const SampleField& field, const Tin& terrain, const Ro
       }
     }
   }
-  std::vector<VertexHandle> roadVertex(road.xy.size());
-  for (std::size_t v = 0; v < road.xy.size(); ++v) {
-    roadVertex[v] = cdt.insert(Point(road.xy[v].x(), road.xy[v].y()));
-    if (mode == OverlayMode::kStencil) roadVertex[v]->info().height = road.h[v];
+  // On a planet a stitched road is draped over the mesh (tin/road_drape.hpp): its vertices
+  // over their chart points, its edges along the mesh; elsewhere the grid is the ground's frame.
+  std::optional<DrapedRoad> drape;
+  if (mode == OverlayMode::kStitch && drapeable(field, terrain)) {
+    drape = drapeRoad(field, terrain, terrainCorner, onTerrain, road);
+    rep.drapedEdges = drape->drapedEdges;
+    rep.undrapedEdges = drape->straightEdges;
+    rep.drapeMoveM = drape->largestMoveM;
   }
-  for (const auto& [a, b] : edgesOf(road.triangles))
-    cdt.insert_constraint(roadVertex[a], roadVertex[b]);
+  const std::vector<VertexHandle> roadVertex =
+      insertRoad(cdt, road, drape ? &*drape : nullptr, mode == OverlayMode::kStencil);
+  std::optional<DrapedFootprint> drapedFootprint;
+  if (drape) drapedFootprint.emplace(*drape, road.triangles, field.width, field.height);
 
   std::vector<float> tolerance;
   if (mode == OverlayMode::kStencil) {
@@ -251,7 +286,9 @@ OverlayResult overlayRoad(const SampleField& field, const Tin& terrain, const Ro
     result.tin.triangles.push_back(t);
     const Eigen::Vector2d centroid =
         (result.tin.xy[t[0]] + result.tin.xy[t[1]] + result.tin.xy[t[2]]) / 3.0;
-    result.onRoad.push_back(footprint.contains(centroid, 0.0) ? 1 : 0);
+    const bool inside =
+        drapedFootprint ? drapedFootprint->contains(centroid) : footprint.contains(centroid, 0.0);
+    result.onRoad.push_back(inside ? 1 : 0);
   }
 
   if (mode == OverlayMode::kStencil) {

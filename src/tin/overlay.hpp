@@ -5,7 +5,8 @@
 //   stitch: every edge of both meshes is kept, split where they cross (CGAL's constrained
 //     triangulation with intersecting constraints); each vertex the road brings or the crossings
 //     make lies on the terrain mesh (its position is the terrain triangle's own blend of its
-//     corners), so the terrain's surface is unchanged: zero height error.
+//     corners), so the terrain's surface is unchanged: zero height error. On a planet the road
+//     is draped over the mesh first (tin/road_drape.hpp).
 //   stencil: the road's vertices, edges and heights are kept; the terrain's vertices under it
 //     are removed, and the terrain around it is meshed again by greedy insertion to the error,
 //     every sample outside the footprint measured.
@@ -43,6 +44,10 @@ struct OverlayReport {
   double footprintErrorM = 0;
   // stencil: the largest error / tolerance over samples outside the footprint (<= 1).
   double outsideErrorRatio = 0;
+  // stitch on a planet (tin/road_drape.hpp): edges laid along the mesh, edges left straight
+  // (their walk left the mesh), and the farthest the drape moved a road vertex's point.
+  std::size_t drapedEdges = 0, undrapedEdges = 0;
+  double drapeMoveM = 0;
 };
 
 struct OverlayResult {
