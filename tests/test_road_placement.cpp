@@ -21,6 +21,7 @@
 #include "io/road_placement.hpp"
 #include "io/road_unfolding.hpp"
 #include "io/tin_export.hpp"
+#include "stress_util.hpp"
 #include "terrain/terrain.hpp"
 #include "test_terrains.hpp"
 #include "tin/overlay.hpp"
@@ -273,7 +274,8 @@ TEST(RoadPlacement, AStitchedRoadIsDrapedOverTheTerrainMeshOntoItsFootprint) {
       std::make_shared<core::LatLongChart>(core::GridSize(7), testkit::kEarthRadius);
   std::mt19937 rng(11);
   std::uniform_real_distribution<double> unit(0.0, 1.0);
-  for (int k = 0; k < 16; ++k) {
+  const int placements = testkit::underAsan() ? 8 : 16;  // an overlay of the whole TIN each
+  for (int k = 0; k < placements; ++k) {
     const bool isOcta = k % 2 == 0;
     const double polar = isOcta ? 90.0 : 84.0;  // lat-long's pole rows are refused
     const double lat =
@@ -344,7 +346,7 @@ TEST(RoadPlacement, AStitchedRoadIsDrapedOverTheTerrainMeshOntoItsFootprint) {
     }
   }
   std::cout << whole << " placements whole, the farthest vertex moved " << farthestMove << " m\n";
-  EXPECT_GT(whole, 10);
+  EXPECT_GT(whole, placements / 2);
   // Without the drape those vertices would stand this far from their chart points' normals.
   EXPECT_GT(farthestMove, 1000.0);
 }

@@ -1,7 +1,11 @@
 // The AprilTag C library back end (3.3; Debian splits it into apriltag and apriltag-utils).
 #include <algorithm>
 #include <cmath>
+#include <map>
+#include <mutex>
 #include <stdexcept>
+#include <string>
+#include <utility>
 
 #include "core/input_error.hpp"
 #include "tracking/apriltag_families.hpp"
@@ -11,14 +15,40 @@ namespace ps::tracking {
 
 namespace {
 
+// One family object per family and number of correctable bits, shared by every detector of the
+// process. The library builds a family's decoding table when the family is first added to a
+// detector (tag36h11 at 2 bits: 1.2 million entries, some 10 MB written) and frees it when a
+// detector holding the family is destroyed; a detector per setting change or test case rebuilt
+// it each time (under the sanitizers, whose allocator maps every large block afresh, most of a
+// tracking test's time, docs/CI.md). Detection only reads the table, so threads may share it.
+// The families are never freed (reachable from here to the end, so no leak is reported).
+void addSharedFamily(apriltag_detector_t* td, const std::string& name, int bits) {
+  static auto* const families = new std::map<std::pair<std::string, int>, apriltag_family_t*>;
+  static std::mutex lock;
+  const std::lock_guard<std::mutex> hold(lock);
+  apriltag_family_t*& family = (*families)[{name, bits}];
+  if (!family) {
+    detail::FamilyPtr made = detail::createAprilTagFamily(name);
+    if (!made) {
+      families->erase({name, bits});
+      throw core::InputError("the AprilTag library cannot read " + name);
+    }
+    family = made.release();
+  }
+  apriltag_detector_add_family_bits(td, family, bits);  // builds the table the first time only
+}
+
 class AprilTagDetector final : public Detector {
  public:
-  explicit AprilTagDetector(const DetectorConfig& c)
-      : config_(c), family_(detail::createAprilTagFamily(c.family)) {
-    if (!family_) throw core::InputError("the AprilTag library cannot read " + c.family);
+  explicit AprilTagDetector(const DetectorConfig& c) : config_(c) {
     td_ = apriltag_detector_create();
     if (!td_) throw std::runtime_error("apriltag_detector_create failed");
-    apriltag_detector_add_family_bits(td_, family_.get(), c.maxHamming);
+    try {
+      addSharedFamily(td_, c.family, c.maxHamming);
+    } catch (...) {
+      apriltag_detector_destroy(td_);
+      throw;
+    }
     td_->quad_decimate = float(c.decimate);
     td_->quad_sigma = float(c.blurSigma);
     td_->refine_edges = c.refineEdges;
@@ -27,7 +57,9 @@ class AprilTagDetector final : public Detector {
     td_->qtp.min_white_black_diff = c.minContrast;
   }
   ~AprilTagDetector() override {
-    apriltag_detector_remove_family(td_, family_.get());
+    // Not apriltag_detector_remove_family (or destroy with the family listed): both free the
+    // shared family's table.
+    zarray_clear(td_->tag_families);
     apriltag_detector_destroy(td_);
   }
   AprilTagDetector(const AprilTagDetector&) = delete;
@@ -75,7 +107,6 @@ class AprilTagDetector final : public Detector {
 
  private:
   DetectorConfig config_;
-  detail::FamilyPtr family_;
   apriltag_detector_t* td_ = nullptr;
 };
 

@@ -2,7 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <opencv2/imgproc.hpp>
+#include <vector>
 
 namespace ps::tracking {
 
@@ -32,9 +34,23 @@ cv::Rect coveredBox(const cv::Matx33d& H, cv::Size texSize, cv::Size imageSize, 
   return r & cv::Rect(0, 0, imageSize.width, imageSize.height);
 }
 
+// A matrix over storage kept between calls. A board's card at 8x supersampling fills tens of
+// megabytes, and a fresh allocation that large is a fresh mapping whose every page faults in on
+// first touch: most of a synthetic frame's time went there (under the sanitizers, whose
+// allocator maps and unmaps every large block, a third of the tracking tests' run, docs/CI.md).
+// Kept per thread up to 96 MB a buffer (a card over most of a 640x480 frame); larger ones are
+// made afresh, as before.
+cv::Mat kept(std::vector<std::uint8_t>& storage, cv::Size size, int type) {
+  const std::size_t bytes = std::size_t(size.area()) * std::size_t(CV_ELEM_SIZE(type));
+  if (bytes > (std::size_t(96) << 20)) return cv::Mat(size, type);
+  if (storage.size() < bytes) storage.resize(bytes);
+  return cv::Mat(size, type, storage.data());
+}
+
 // Coverage (CV_32F, 0..1) and colour (CV_32FC(n)) of the quad in box `roi` of the image.
 void renderBox(const cv::Mat& texture, const cv::Matx33d& H, cv::Rect roi, int s, cv::Mat& colour,
                cv::Mat& alpha) {
+  thread_local std::vector<std::uint8_t> colour8, colour32, cover8, cover32;
   // Supersampled pixel (xs, ys) has its centre at image x = roi.x + (xs + 0.5) / s - 0.5.
   const double is = 1.0 / s;
   const cv::Matx33d A(is, 0, roi.x + 0.5 * is - 0.5, 0, is, roi.y + 0.5 * is - 0.5, 0, 0, 1);
@@ -42,15 +58,17 @@ void renderBox(const cv::Mat& texture, const cv::Matx33d& H, cv::Rect roi, int s
   const cv::Matx33d shift(1, 0, -0.5, 0, 1, -0.5, 0, 0, 1);
   const cv::Matx33d M = shift * H.inv() * A;  // supersampled pixel -> texel index
   const cv::Size big(roi.width * s, roi.height * s);
-  cv::Mat tex32, ones(texture.size(), CV_8U, cv::Scalar(255)), c, a;
+  const cv::Mat ones(texture.size(), CV_8U, cv::Scalar(255));
+  cv::Mat c = kept(colour8, big, texture.type()), a = kept(cover8, big, CV_8U);
+  cv::Mat c32 = kept(colour32, big, CV_32FC(texture.channels())), a32 = kept(cover32, big, CV_32F);
   cv::warpPerspective(texture, c, M, big, cv::INTER_NEAREST | cv::WARP_INVERSE_MAP,
                       cv::BORDER_CONSTANT, cv::Scalar::all(0));
   cv::warpPerspective(ones, a, M, big, cv::INTER_NEAREST | cv::WARP_INVERSE_MAP,
                       cv::BORDER_CONSTANT, cv::Scalar(0));
-  c.convertTo(c, CV_32F);
-  a.convertTo(a, CV_32F, 1.0 / 255);
-  cv::resize(c, colour, roi.size(), 0, 0, cv::INTER_AREA);
-  cv::resize(a, alpha, roi.size(), 0, 0, cv::INTER_AREA);
+  c.convertTo(c32, CV_32F);
+  a.convertTo(a32, CV_32F, 1.0 / 255);
+  cv::resize(c32, colour, roi.size(), 0, 0, cv::INTER_AREA);
+  cv::resize(a32, alpha, roi.size(), 0, 0, cv::INTER_AREA);
 }
 
 void blend(cv::Mat& image, cv::Rect roi, const cv::Mat& colour, const cv::Mat& alpha) {
