@@ -53,8 +53,9 @@ DrapedRoad drapeRoad(const SampleField& field, const Tin& terrain,
 bool drapeable(const SampleField& field, const Tin& terrain);
 
 // The road's footprint as its draped triangles (polygons whose sides are the draped edges):
-// which of them holds a point. Points on a side count as outside, so a face of a triangulation
-// that has every draped side as a constraint is inside or out by its centroid.
+// whether one of them holds a point (even-odd, so a point on a side may go either way). A face of
+// a triangulation that has every draped side as a constraint is inside or out by its centroid,
+// which lies on no side.
 class DrapedFootprint {
  public:
   DrapedFootprint(const DrapedRoad& drape, const std::vector<std::array<std::uint32_t, 3>>& tris,
