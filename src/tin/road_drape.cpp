@@ -283,10 +283,7 @@ DrapedRoad drapeRoad(const SampleField& field, const Tin& terrain,
     std::optional<OnMesh> moved;
     if (!onBorder(p, xMax, yMax)) moved = draper.normalOntoMesh(p);
     if (!blend) throw std::logic_error("drapeRoad: a road vertex lies outside the terrain mesh");
-    if (moved && moved->xy != p) {
-      ++out.movedVertices;
-      out.largestMoveM = std::max(out.largestMoveM, (moved->at - blend->at).norm());
-    }
+    if (moved) out.largestMoveM = std::max(out.largestMoveM, (moved->at - blend->at).norm());
     at.push_back(moved ? *moved : *blend);
     out.vertex.push_back(at.back().xy);
   }

@@ -34,7 +34,7 @@ struct DrapedRoad {
   std::vector<Eigen::Vector2d> vertex;  // each road vertex's lattice point on the mesh
   // Each road edge (a < b) as the points between its two ends, from a towards b (empty: straight).
   std::map<std::pair<std::uint32_t, std::uint32_t>, std::vector<Eigen::Vector2d>> inner;
-  std::size_t movedVertices = 0, drapedEdges = 0;
+  std::size_t drapedEdges = 0;
   std::size_t straightEdges = 0;  // the walk over the mesh failed (left a border): kept straight
   double largestMoveM = 0;        // the farthest a road vertex's mesh point moved along the mesh
   // The points of road edge (a, b) from a to b, both ends included.

@@ -17,7 +17,7 @@ namespace {
 
 // One family object per family and number of correctable bits, shared by every detector of the
 // process. The library builds a family's decoding table when the family is first added to a
-// detector (tag36h11 at 2 bits: 1.2 million entries, some 10 MB written) and frees it when a
+// detector (tag36h11 at 2 bits: over a million entries, tens of MB) and frees it when a
 // detector holding the family is destroyed; a detector per setting change or test case rebuilt
 // it each time (under the sanitizers, whose allocator maps every large block afresh, most of a
 // tracking test's time, docs/CI.md). Detection only reads the table, so threads may share it.
