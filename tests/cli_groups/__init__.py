@@ -1,0 +1,1 @@
+"""The groups of tests/cli_commands.py, one module each."""
