@@ -1,37 +1,40 @@
 # ctest's start order on a clean clone (docs/CI.md, "ctest's order on a clean clone").
 # `ctest -j2` starts the tests with the highest COST first; without Testing/Temporary/
 # CTestCostData.txt (a clean clone) every test costs 0 and they start in the order they were
-# declared, so a long one declared late runs alone at the end. These are the longest tests'
-# seconds in stop 48's clean-clone run (2 cores), per build; a later run's own times (the cost
-# file) replace them. Included by ctest after the discovered GoogleTest tests (CMakeLists.txt sets
-# PS_SANITIZE before including this); a name that no longer exists is ignored.
+# declared, so a long one declared late runs alone at the end. These are the longest suites'
+# seconds (one ctest test per GoogleTest suite: tests/test_suites.cmake) in stop 54's clean-clone
+# run (2 cores; its tests' seconds summed by suite), per build; a later run's own times (the cost
+# file) replace them. Included by ctest after the suites' tests (CMakeLists.txt sets PS_SANITIZE
+# before including this); a name that no longer exists is ignored.
 if(PS_SANITIZE)
   set(ps_test_costs
-      SessionWriter.SigkillDuringBackgroundSavesRecoversAPlanetTheSessionHad 25
-      TrackingOcclusion.ACoveredBoardIsCarriedByTheTableWhileTheCameraMoves 23
-      TrackingOcclusion.ACoveredBoardOnAPlainTableIsLostNotDrawnWrong 22
-      StressEdits.RandomBrushActionsOnTheOctahedralChartKeepEveryInvariant 22
-      StressEdits.RandomActionsOfEveryToolKeepEveryInvariant 18
-      StressReplay.LongReplayKeepsMemoryFlat 18
-      TrackingDetect.CoarseRegionSearchOnlyWhereABoxHoldsManyMarkers 16
-      IoImport.RealMarsRoundTripIsAsStated 15
-      IoImport.RealMarsRoundTripOnTheOctahedralChart 13
-      LargeGrid.Grid8193ViewsAreCrackFreeAndWithinDistMax 12
-      TrackingFamilies.BoardAndToolOfTwoFamiliesTrackTogether 11
-      StrokeTinRender.ThePatchsPerPixelLightIsItsFacetsSlope 11
-      StrokeTinRender.InsideTheRegionTheDepthIsTheTinSurfaceNotTheGrids 11
-      TrackingUndistort.ThePlanetsAnchorLandsOnItsMarkerThroughADistortingLens 9)
+      TrackingOcclusion 97
+      StressTracking 69
+      IoImport 40
+      TrackingDetect 36
+      StressEdits 33
+      StrokeTinRender 32
+      SandOctahedral 31
+      SandTubes 28
+      SessionWriter 26
+      StressReplay 25
+      HandMask 25
+      SessionTimeline 23
+      ReplayStepper 22
+      TinSandTool 21
+      RenderShading 21)
 else()
   set(ps_test_costs
-      TrackingChessboard.CommandCalibratesAFolderOfRenderedViews 11
-      SessionWriter.SigkillDuringBackgroundSavesRecoversAPlanetTheSessionHad 33
-      StressReplay.LongReplayKeepsMemoryFlat 14
-      LargeGrid.Grid8193ViewsAreCrackFreeAndWithinDistMax 13
-      TrackingOcclusion.ACoveredBoardOnAPlainTableIsLostNotDrawnWrong 10
-      TrackingOcclusion.ACoveredBoardIsCarriedByTheTableWhileTheCameraMoves 9
-      StressEdits.RandomActionsOfEveryToolKeepEveryInvariant 9
-      StressEdits.RandomBrushActionsOnTheOctahedralChartKeepEveryInvariant 9
-      TrackingDetect.CoarseRegionSearchOnlyWhereABoxHoldsManyMarkers 6)
+      TrackingOcclusion 36
+      TrackingChessboard 21
+      StressEdits 18
+      TrackingFamilies 17
+      TrackingDetect 17
+      SessionWriter 15
+      StressTracking 15
+      StressReplay 14
+      IoImport 12
+      LargeGrid 11)
 endif()
 list(LENGTH ps_test_costs ps_n)
 math(EXPR ps_last "${ps_n} - 1")
