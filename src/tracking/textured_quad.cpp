@@ -1,6 +1,7 @@
 #include "tracking/textured_quad.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <opencv2/imgproc.hpp>
@@ -9,6 +10,8 @@
 namespace ps::tracking {
 
 namespace {
+
+constexpr int kMaxChannels = 4;
 
 // Image box covered by the quad, clipped to the image; empty when not visible.
 cv::Rect coveredBox(const cv::Matx33d& H, cv::Size texSize, cv::Size imageSize, bool& ok) {
@@ -34,53 +37,74 @@ cv::Rect coveredBox(const cv::Matx33d& H, cv::Size texSize, cv::Size imageSize, 
   return r & cv::Rect(0, 0, imageSize.width, imageSize.height);
 }
 
-// A matrix over storage kept between calls. A board's card at 8x supersampling fills tens of
-// megabytes, and a fresh allocation that large is a fresh mapping whose every page faults in on
-// first touch: most of a synthetic frame's time went there (under the sanitizers, whose
-// allocator maps and unmaps every large block, a third of the tracking tests' run, docs/CI.md).
-// Kept per thread up to 96 MB a buffer (a card over most of a 640x480 frame); larger ones are
-// made afresh, as before.
-cv::Mat kept(std::vector<std::uint8_t>& storage, cv::Size size, int type) {
-  const std::size_t bytes = std::size_t(size.area()) * std::size_t(CV_ELEM_SIZE(type));
-  if (bytes > (std::size_t(96) << 20)) return cv::Mat(size, type);
-  if (storage.size() < bytes) storage.resize(bytes);
-  return cv::Mat(size, type, storage.data());
-}
+// One homography's samples: image point -> continuous texture coordinates, and which texel
+// (texel (i, j) covers [j, j+1] x [i, i+1]) a point falls in, -1 outside the texture.
+struct TexelLookup {
+  double m[9];  // image point -> texture coordinates (homogeneous), row by row
+  int width = 0, height = 0;
 
-// Coverage (CV_32F, 0..1) and colour (CV_32FC(n)) of the quad in box `roi` of the image.
-void renderBox(const cv::Mat& texture, const cv::Matx33d& H, cv::Rect roi, int s, cv::Mat& colour,
-               cv::Mat& alpha) {
-  thread_local std::vector<std::uint8_t> colour8, colour32, cover8, cover32;
-  // Supersampled pixel (xs, ys) has its centre at image x = roi.x + (xs + 0.5) / s - 0.5.
-  const double is = 1.0 / s;
-  const cv::Matx33d A(is, 0, roi.x + 0.5 * is - 0.5, 0, is, roi.y + 0.5 * is - 0.5, 0, 0, 1);
-  // Texel index coordinates are continuous texture coordinates minus 0.5.
-  const cv::Matx33d shift(1, 0, -0.5, 0, 1, -0.5, 0, 0, 1);
-  const cv::Matx33d M = shift * H.inv() * A;  // supersampled pixel -> texel index
-  const cv::Size big(roi.width * s, roi.height * s);
-  const cv::Mat ones(texture.size(), CV_8U, cv::Scalar(255));
-  cv::Mat c = kept(colour8, big, texture.type()), a = kept(cover8, big, CV_8U);
-  cv::Mat c32 = kept(colour32, big, CV_32FC(texture.channels())), a32 = kept(cover32, big, CV_32F);
-  cv::warpPerspective(texture, c, M, big, cv::INTER_NEAREST | cv::WARP_INVERSE_MAP,
-                      cv::BORDER_CONSTANT, cv::Scalar::all(0));
-  cv::warpPerspective(ones, a, M, big, cv::INTER_NEAREST | cv::WARP_INVERSE_MAP,
-                      cv::BORDER_CONSTANT, cv::Scalar(0));
-  c.convertTo(c32, CV_32F);
-  a.convertTo(a32, CV_32F, 1.0 / 255);
-  cv::resize(c32, colour, roi.size(), 0, 0, cv::INTER_AREA);
-  cv::resize(a32, alpha, roi.size(), 0, 0, cv::INTER_AREA);
-}
+  TexelLookup(const cv::Matx33d& toTexture, cv::Size size)
+      : width(size.width), height(size.height) {
+    for (int k = 0; k < 9; ++k) m[k] = toTexture.val[k];
+  }
 
-void blend(cv::Mat& image, cv::Rect roi, const cv::Mat& colour, const cv::Mat& alpha) {
-  // colour is premultiplied by coverage (texture * mask averaged): out = img * (1 - a) + colour.
-  cv::Mat dst = image(roi), d32;
-  dst.convertTo(d32, CV_32F);
-  cv::Mat a = alpha;
-  if (d32.channels() == 3) cv::merge(std::vector<cv::Mat>{alpha, alpha, alpha}, a);
-  cv::Mat inv;
-  cv::subtract(cv::Scalar::all(1.0), a, inv);  // (1.0 - a would only fill the first channel)
-  cv::Mat out = d32.mul(inv) + colour;
-  out.convertTo(dst, image.type());
+  // Texel column and row of image point (x, y); false outside the texture. `side` gets a
+  // bit for each half-plane outside the texture the point lies in (and one for a point that
+  // sees the texture's plane from behind, beyond its horizon), 0 inside.
+  bool texel(double x, double y, int& col, int& row, int& side) const {
+    const double w = m[6] * x + m[7] * y + m[8];
+    if (!(w > 0)) {
+      side = 16;
+      return false;
+    }
+    const double iw = 1 / w;
+    const double u = (m[0] * x + m[1] * y + m[2]) * iw, v = (m[3] * x + m[4] * y + m[5]) * iw;
+    side = (u < 0 ? 1 : 0) | (u >= width ? 2 : 0) | (v < 0 ? 4 : 0) | (v >= height ? 8 : 0);
+    if (side != 0) return false;
+    col = std::min(int(u), width - 1);
+    row = std::min(int(v), height - 1);
+    return true;
+  }
+};
+
+// Accumulates one pixel's samples of one homography into `sum` (channel values) and `covered`
+// (samples inside the texture). The s x s samples of pixel (x, y) lie at
+// x + (i + 0.5) / s - 0.5, and likewise in y.
+//
+// Why not every sample every time: the cards are a texel per marker cell, so most pixels'
+// samples all fall in one texel. A homography in front of the camera maps the pixel's sample
+// square to a convex quadrilateral, so when its four corner samples share a texel (a convex
+// cell) every sample does, and when all four lie beyond one side of the texture every sample
+// does; only the pixels across a texel edge or the texture's outline are sampled one by one
+// (`TrackingTexturedQuad` compares both ways on random quads).
+void samplePixel(const cv::Mat& texture, const TexelLookup& look, int x, int y, int s,
+                 bool shortcut, std::array<double, kMaxChannels>& sum, int& covered) {
+  const int nch = texture.channels();
+  const double is = 1.0 / s, first = 0.5 * is - 0.5, last = (s - 0.5) * is - 0.5;
+  auto addTexel = [&](int col, int row, int count) {
+    const std::uint8_t* t = texture.ptr<std::uint8_t>(row) + std::size_t(col) * std::size_t(nch);
+    for (int c = 0; c < nch; ++c) sum[std::size_t(c)] += double(t[c]) * count;
+    covered += count;
+  };
+  if (shortcut) {
+    int col[4] = {}, row[4] = {}, side[4] = {};
+    bool in[4];
+    const double cx[4] = {x + first, x + last, x + first, x + last};
+    const double cy[4] = {y + first, y + first, y + last, y + last};
+    for (int k = 0; k < 4; ++k) in[k] = look.texel(cx[k], cy[k], col[k], row[k], side[k]);
+    if ((side[0] & side[1] & side[2] & side[3]) != 0) return;  // all beyond one side
+    if (in[0] && in[1] && in[2] && in[3] && col[0] == col[1] && col[0] == col[2] &&
+        col[0] == col[3] && row[0] == row[1] && row[0] == row[2] && row[0] == row[3]) {
+      addTexel(col[0], row[0], s * s);
+      return;
+    }
+  }
+  for (int j = 0; j < s; ++j)
+    for (int i = 0; i < s; ++i) {
+      int col = 0, row = 0, side = 0;
+      if (look.texel(x + (i + 0.5) * is - 0.5, y + (j + 0.5) * is - 0.5, col, row, side))
+        addTexel(col, row, 1);
+    }
 }
 
 }  // namespace
@@ -91,36 +115,39 @@ void drawTexturedQuad(cv::Mat& image, const cv::Mat& texture, const cv::Matx33d&
 }
 
 void drawTexturedQuadBlurred(cv::Mat& image, const cv::Mat& texture,
-                             const std::vector<cv::Matx33d>& Hs, int supersample) {
+                             const std::vector<cv::Matx33d>& Hs, int supersample, bool shortcut) {
+  CV_Assert(image.depth() == CV_8U && texture.depth() == CV_8U);
   CV_Assert(texture.type() == image.type() || (texture.channels() == 1));
+  CV_Assert(image.channels() <= kMaxChannels && !texture.empty());
   cv::Mat tex = texture;
   if (image.channels() == 3 && texture.channels() == 1)
     cv::cvtColor(texture, tex, cv::COLOR_GRAY2BGR);
   cv::Rect box;
+  std::vector<TexelLookup> looks;
   for (const auto& H : Hs) {
     bool ok = false;
     const cv::Rect r = coveredBox(H, tex.size(), image.size(), ok);
     if (!ok) return;
     box = box.area() == 0 ? r : (box | r);
+    looks.emplace_back(H.inv(), tex.size());
   }
   if (box.area() == 0) return;
-  cv::Mat colourSum, alphaSum;
-  for (const auto& H : Hs) {
-    cv::Mat c, a;
-    renderBox(tex, H, box, std::max(1, supersample), c, a);
-    // Premultiply: the warped texture is already 0 outside the quad (border 0).
-    if (colourSum.empty()) {
-      colourSum = c;
-      alphaSum = a;
-    } else {
-      colourSum += c;
-      alphaSum += a;
+  const int s = std::max(1, supersample), nch = image.channels();
+  const double samples = double(Hs.size()) * s * s;
+  for (int y = box.y; y < box.br().y; ++y) {
+    std::uint8_t* px = image.ptr<std::uint8_t>(y);
+    for (int x = box.x; x < box.br().x; ++x) {
+      std::array<double, kMaxChannels> sum{};
+      int covered = 0;
+      for (const auto& look : looks) samplePixel(tex, look, x, y, s, shortcut, sum, covered);
+      if (covered == 0) continue;
+      // The texture premultiplied by its coverage, over the image: img (1 - a) + colour.
+      const double a = covered / samples;
+      std::uint8_t* p = px + std::size_t(x) * std::size_t(nch);
+      for (int c = 0; c < nch; ++c)
+        p[c] = cv::saturate_cast<std::uint8_t>(p[c] * (1 - a) + sum[std::size_t(c)] / samples);
     }
   }
-  const double n = double(Hs.size());
-  colourSum /= n;
-  alphaSum /= n;
-  blend(image, box, colourSum, alphaSum);
 }
 
 }  // namespace ps::tracking

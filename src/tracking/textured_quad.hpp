@@ -13,8 +13,11 @@ namespace ps::tracking {
 void drawTexturedQuad(cv::Mat& image, const cv::Mat& texture, const cv::Matx33d& H,
                       int supersample = 8);
 
-// The same with several homographies averaged (motion blur within one exposure).
+// The same with several homographies averaged (motion blur within one exposure). `shortcut`
+// off samples every pixel's every sample (the reference the shortcut is tested against); on,
+// a pixel whose samples provably all fall in one texel, or all outside, is not sampled one by one.
 void drawTexturedQuadBlurred(cv::Mat& image, const cv::Mat& texture,
-                             const std::vector<cv::Matx33d>& Hs, int supersample = 8);
+                             const std::vector<cv::Matx33d>& Hs, int supersample = 8,
+                             bool shortcut = true);
 
 }  // namespace ps::tracking
