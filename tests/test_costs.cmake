@@ -2,39 +2,39 @@
 # `ctest -j2` starts the tests with the highest COST first; without Testing/Temporary/
 # CTestCostData.txt (a clean clone) every test costs 0 and they start in the order they were
 # declared, so a long one declared late runs alone at the end. These are the longest suites'
-# seconds (one ctest test per GoogleTest suite: tests/test_suites.cmake) in stop 54's clean-clone
-# run (2 cores; its tests' seconds summed by suite), per build; a later run's own times (the cost
+# seconds (one ctest test per GoogleTest suite: tests/test_suites.cmake) in stop 56's runs of
+# both passes (2 cores, `ctest -j2`), per build; a later run's own times (the cost
 # file) replace them. Included by ctest after the suites' tests (CMakeLists.txt sets PS_SANITIZE
 # before including this); a name that no longer exists is ignored.
 if(PS_SANITIZE)
   set(ps_test_costs
-      TrackingOcclusion 97
-      StressTracking 69
-      IoImport 40
-      TrackingDetect 36
-      StressEdits 33
-      StrokeTinRender 32
-      SandOctahedral 31
-      SandTubes 28
-      SessionWriter 26
-      StressReplay 25
-      HandMask 25
-      SessionTimeline 23
-      ReplayStepper 22
-      TinSandTool 21
-      RenderShading 21)
+      TrackingOcclusion 43
+      StressTracking 31
+      StressReplay 29
+      StressEdits 29
+      SessionWriter 29
+      StrokeTinRender 28
+      IoImport 24
+      SandOctahedral 23
+      TrackingDetect 20
+      TinSandTool 19
+      TrackingChessboard 18
+      TrackingCalibrate 16
+      StressTinSand 16
+      SandTubes 15
+      LargeGrid 14)
 else()
   set(ps_test_costs
-      TrackingOcclusion 36
-      TrackingChessboard 21
-      StressEdits 18
-      TrackingFamilies 17
-      TrackingDetect 17
-      SessionWriter 15
-      StressTracking 15
+      TrackingChessboard 15
+      TrackingOcclusion 14
       StressReplay 14
-      IoImport 12
-      LargeGrid 11)
+      StressEdits 14
+      SessionWriter 12
+      LargeGrid 10
+      TrackingFamilies 8
+      StressTracking 8
+      TrackingCalibrate 6
+      IoImport 6)
 endif()
 list(LENGTH ps_test_costs ps_n)
 math(EXPR ps_last "${ps_n} - 1")
