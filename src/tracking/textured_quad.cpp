@@ -38,7 +38,7 @@ cv::Rect coveredBox(const cv::Matx33d& H, cv::Size texSize, cv::Size imageSize, 
 }
 
 // One homography's samples: image point -> continuous texture coordinates, and which texel
-// (texel (i, j) covers [j, j+1] x [i, i+1]) a point falls in, -1 outside the texture.
+// (texel (i, j) covers [j, j+1] x [i, i+1]) a point falls in.
 struct TexelLookup {
   double m[9];  // image point -> texture coordinates (homogeneous), row by row
   int width = 0, height = 0;
@@ -60,7 +60,8 @@ struct TexelLookup {
     const double iw = 1 / w;
     const double u = (m[0] * x + m[1] * y + m[2]) * iw, v = (m[3] * x + m[4] * y + m[5]) * iw;
     side = (u < 0 ? 1 : 0) | (u >= width ? 2 : 0) | (v < 0 ? 4 : 0) | (v >= height ? 8 : 0);
-    if (side != 0) return false;
+    // Written so that a NaN (a singular homography) is outside too, on no side.
+    if (!(u >= 0 && u < width && v >= 0 && v < height)) return false;
     col = std::min(int(u), width - 1);
     row = std::min(int(v), height - 1);
     return true;

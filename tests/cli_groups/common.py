@@ -6,6 +6,7 @@ import os
 import struct
 import subprocess
 import sys
+import time
 
 GROUP, EXE, SRC, OUT = sys.argv[1:5]
 BENCH = sys.argv[5] if len(sys.argv) > 5 else ""
@@ -26,7 +27,10 @@ def run(*args, expect=0):
         # (the demo, a replay's pictures) is checked without leak detection; the unit tests
         # check the renderer's leaks.
         env["ASAN_OPTIONS"] = env.get("ASAN_OPTIONS", "") + ":detect_leaks=0"
+    start = time.monotonic()
     p = subprocess.run([EXE, *args], capture_output=True, text=True, env=env)
+    if os.environ.get("PS_CLI_TIMES"):  # where a group's time goes (docs/CI.md)
+        print(f"{time.monotonic() - start:7.2f} s  {' '.join(args)}", file=sys.stderr)
     if p.returncode < 0:
         fail(f"{' '.join(args)}: killed by signal {-p.returncode}\n{p.stderr[-3000:]}")
     if expect is not None and p.returncode != expect:
