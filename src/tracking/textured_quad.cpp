@@ -81,7 +81,8 @@ struct TexelLookup {
 void samplePixel(const cv::Mat& texture, const TexelLookup& look, int x, int y, int s,
                  bool shortcut, std::array<double, kMaxChannels>& sum, int& covered) {
   const int nch = texture.channels();
-  const double is = 1.0 / s, first = 0.5 * is - 0.5, last = (s - 0.5) * is - 0.5;
+  const double is = 1.0 / s;
+  auto at = [is](int pixel, int i) { return pixel + (i + 0.5) * is - 0.5; };  // sample i's
   auto addTexel = [&](int col, int row, int count) {
     const std::uint8_t* t = texture.ptr<std::uint8_t>(row) + std::size_t(col) * std::size_t(nch);
     for (int c = 0; c < nch; ++c) sum[std::size_t(c)] += double(t[c]) * count;
@@ -90,8 +91,8 @@ void samplePixel(const cv::Mat& texture, const TexelLookup& look, int x, int y, 
   if (shortcut) {
     int col[4] = {}, row[4] = {}, side[4] = {};
     bool in[4];
-    const double cx[4] = {x + first, x + last, x + first, x + last};
-    const double cy[4] = {y + first, y + first, y + last, y + last};
+    const double cx[4] = {at(x, 0), at(x, s - 1), at(x, 0), at(x, s - 1)};
+    const double cy[4] = {at(y, 0), at(y, 0), at(y, s - 1), at(y, s - 1)};
     for (int k = 0; k < 4; ++k) in[k] = look.texel(cx[k], cy[k], col[k], row[k], side[k]);
     if ((side[0] & side[1] & side[2] & side[3]) != 0) return;  // all beyond one side
     if (in[0] && in[1] && in[2] && in[3] && col[0] == col[1] && col[0] == col[2] &&
@@ -103,8 +104,7 @@ void samplePixel(const cv::Mat& texture, const TexelLookup& look, int x, int y, 
   for (int j = 0; j < s; ++j)
     for (int i = 0; i < s; ++i) {
       int col = 0, row = 0, side = 0;
-      if (look.texel(x + (i + 0.5) * is - 0.5, y + (j + 0.5) * is - 0.5, col, row, side))
-        addTexel(col, row, 1);
+      if (look.texel(at(x, i), at(y, j), col, row, side)) addTexel(col, row, 1);
     }
 }
 
