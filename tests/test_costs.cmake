@@ -13,7 +13,6 @@ if(PS_SANITIZE)
       StressReplay 29
       StressEdits 29
       SessionWriter 29
-      StrokeTinRender 28
       IoImport 24
       SandOctahedral 23
       TrackingDetect 20
@@ -22,7 +21,8 @@ if(PS_SANITIZE)
       TrackingCalibrate 16
       StressTinSand 16
       SandTubes 15
-      LargeGrid 14)
+      LargeGrid 14
+      StrokeTinRender 10)
 else()
   set(ps_test_costs
       TrackingChessboard 15
