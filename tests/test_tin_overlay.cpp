@@ -332,5 +332,47 @@ TEST(TinOverlay, APlanetKeepsItsClosedSurfaceWithARoadStitchedIn) {
   }
 }
 
+// A road whose vertices lie exactly on a glued side (a strip from `road` starts at its place:
+// x = 0 there), the rest of it on one side: before 2026-12-07 the other side got no twins of
+// those vertices and the welded surface stayed open along them (4-6 border edges).
+TEST(TinOverlay, ARoadTouchingAGluedSideKeepsTheSurfaceClosed) {
+  const auto dir = testkit::freshDir("tin_overlay_side");
+  // 150 km east of its place, 40 km wide: its first two vertices on the place's meridian.
+  std::ofstream(dir / "road.obj") << "v 0 -20000 0\nv 150000 -20000 0\nv 150000 20000 0\n"
+                                     "v 0 20000 0\nf 1 2 3\nf 1 3 4\n";
+  struct Case {
+    const char* what;
+    terrain::Terrain planet;
+    std::array<double, 3> at;
+  };
+  const std::vector<Case> cases{
+      {"lat-long's seam", testkit::bumpyTerrain(6, 2, 20000.0), {10.0, 180.0, 0.0}},
+      {"an octahedral fold", testkit::bumpyOctahedralTerrain(6, 2, 20000.0), {-30.0, 0.0, 0.0}},
+      {"another octahedral fold",
+       testkit::bumpyOctahedralTerrain(6, 2, 20000.0),
+       {-40.0, 90.0, 0.0}},
+      {"the octahedral south pole's fold",
+       testkit::bumpyOctahedralTerrain(6, 2, 20000.0),
+       {-60.0, -180.0, 0.0}}};
+  for (const Case& c : cases) {
+    io::savePlanet(c.planet, dir / "p.planet");
+    for (const auto mode : {OverlayMode::kStitch, OverlayMode::kStencil}) {
+      io::OverlayOptions o;
+      o.mode = mode;
+      o.errorM = 2000.0;
+      o.at = c.at;
+      std::vector<std::string> notes;
+      const nlohmann::json s =
+          io::overlayFromFiles(dir / "p.planet", io::ImportOptions{}, dir / "road.obj",
+                               dir / "out.obj", io::ExportFormat::kObj, o, notes);
+      SCOPED_TRACE(std::string(c.what) + (mode == OverlayMode::kStitch ? ", stitch" : ", stencil"));
+      EXPECT_EQ(s["euler"], 2) << s.dump();
+      EXPECT_EQ(s["border_edges"], 0);
+      EXPECT_EQ(s["non_manifold_edges"], 0);
+      EXPECT_GT(s["road_group_triangles"].get<int>(), 0);
+    }
+  }
+}
+
 }  // namespace
 }  // namespace ps::tin

@@ -1,8 +1,8 @@
 // `planetsculpt road STROKES --width M --out ROAD.obj [--stroke N] [--planet P]`: a stroke
 // sculpted in a recording (a replay's log.jsonl) or of a stroke file as a strip of the given width:
-// a road mesh that `overlay ... --at PLACE` stitches or stencils into a planet's TIN (a sphere's;
-// from a replay's log a torus's or a cylinder's too). `track`, its name before issue 44 (which
-// keeps "track" for markers), still runs it and says so.
+// a road mesh that `overlay ... --at PLACE` stitches or stencils into a planet's TIN (a sphere's,
+// a torus's or a cylinder's: on those from a replay's log or a stroke file of `xyz=` points).
+// `track`, its name before issue 44 (which keeps "track" for markers), still runs it and says so.
 #include <Eigen/Geometry>
 #include <cmath>
 #include <cstdio>
@@ -11,6 +11,7 @@
 #include <iostream>
 #include <memory>
 #include <numbers>
+#include <optional>
 
 #include "app/command_registry.hpp"
 #include "core/input_error.hpp"
@@ -51,6 +52,20 @@ std::vector<std::vector<Eigen::Vector3d>> strokePaths(const edit::StrokeScript& 
   return paths;
 }
 
+// A surface with no latitude and longitude (a torus, a cylinder) takes a stroke file whose
+// points are all `xyz=` points of the planet frame (what the recorder writes); a LAT LON point
+// is refused naming its line, as a stroke script's replay refuses it there.
+void requirePlanetFramePoints(const edit::StrokeScript& script, const std::string& chartName) {
+  using K = edit::ScriptCommand::Kind;
+  for (const auto& c : script.commands) {
+    if ((c.kind == K::kStroke || c.kind == K::kTo || c.kind == K::kStamp) && !c.point.xyz)
+      throw core::InputError(script.source + ":" + std::to_string(c.line) +
+                             ": a LAT LON point needs a sphere, and this planet's " + chartName +
+                             " chart is none: give the points as xyz=X,Y,Z (metres), or give "
+                             "the replay's log.jsonl");
+  }
+}
+
 // A replay's log (`replay`/`demo` write OUT/log.jsonl, one line per frame): each stroke the
 // frames from its "begin" through its "move"s, at their control vertices on the planet.
 std::vector<std::vector<Eigen::Vector3d>> logPaths(const std::string& file,
@@ -85,14 +100,12 @@ int runRoad(const RoadArgs& a) {
   std::unique_ptr<terrain::Terrain> planet;
   double radius = io::kDefaultImportRadius;
   const bool replayLog = std::filesystem::path(a.strokes).extension() == ".jsonl";
+  std::optional<edit::StrokeScript> script;
+  if (!replayLog) script = edit::loadStrokeScript(a.strokes);
   if (!a.planet.empty()) {
     planet = io::loadPlanet(a.planet);
     const bool sphere = planet->chart().sphereRadius() > 0;
-    if (!sphere && !replayLog)
-      throw core::InputError(a.strokes +
-                             ": a stroke file's points are latitudes and longitudes "
-                             "on a sphere; for the " +
-                             planet->chart().name() + " planet give the replay's log.jsonl");
+    if (!sphere && script) requirePlanetFramePoints(*script, planet->chart().name());
     if (sphere) radius = planet->chart().sphereRadius();
   }
   if (replayLog && !planet)
@@ -102,8 +115,7 @@ int runRoad(const RoadArgs& a) {
   // Without a planet the stroke file's sphere of the default radius.
   const core::LatLongChart fileSphere(core::GridSize(5), radius);
   const core::Chart& chart = planet ? planet->chart() : fileSphere;
-  const auto paths = replayLog ? logPaths(a.strokes, *planet)
-                               : strokePaths(edit::loadStrokeScript(a.strokes), radius);
+  const auto paths = replayLog ? logPaths(a.strokes, *planet) : strokePaths(*script, radius);
   if (a.stroke < 1 || a.stroke > int(paths.size()))
     throw core::InputError(a.strokes + ": --stroke " + std::to_string(a.stroke) +
                            ": the file has " + std::to_string(paths.size()) + " strokes");

@@ -97,6 +97,44 @@ void snapGluedSideVertices(Road& road, const SampleField& field) {
   }
 }
 
+// Every vertex on a glued side of a whole chart's grid with its twins there too: a road piece
+// that only touches a side (a vertex or an edge of it exactly on the side, the rest of the road
+// on one side of it) puts vertices on that side alone, and the weld then finds no twin for them
+// and leaves the surface open there. A twin inserted on the other side splits the terrain's
+// border edge as the road's vertex splits it here; it takes the vertex's height where that is
+// known (a stencil's own heights), else it sits on the terrain mesh as the vertex does.
+void addGluedTwins(Cdt& cdt, const SampleField& field) {
+  if (!field.wholeChart()) return;
+  const core::Gluing g = field.chart->gluing();
+  const auto glued = [](core::SideGluing s) {
+    return s == core::SideGluing::kSeam || s == core::SideGluing::kMirror;
+  };
+  const double xMax = field.width - 1, yMax = field.height - 1;
+  const auto twins = [&](const Eigen::Vector2d& p) {
+    std::vector<Eigen::Vector2d> out;
+    if (glued(g.uSides) && (p.x() == 0 || p.x() == xMax))
+      out.push_back(g.uSides == core::SideGluing::kSeam ? Eigen::Vector2d(xMax - p.x(), p.y())
+                                                        : Eigen::Vector2d(p.x(), yMax - p.y()));
+    if (glued(g.vSides) && (p.y() == 0 || p.y() == yMax))
+      out.push_back(g.vSides == core::SideGluing::kSeam ? Eigen::Vector2d(p.x(), yMax - p.y())
+                                                        : Eigen::Vector2d(xMax - p.x(), p.y()));
+    return out;
+  };
+  // Twice: a corner's twin across one side may need its twin across the other.
+  for (int pass = 0; pass < 2; ++pass) {
+    std::vector<std::pair<Eigen::Vector2d, double>> wanted;
+    for (auto v = cdt.finite_vertices_begin(); v != cdt.finite_vertices_end(); ++v) {
+      const Eigen::Vector2d p(v->point().x(), v->point().y());
+      for (const Eigen::Vector2d& q : twins(p))
+        if (q != p) wanted.emplace_back(q, v->info().height);
+    }
+    for (const auto& [q, h] : wanted) {
+      const VertexHandle t = cdt.insert(Point(q.x(), q.y()));
+      if (std::isnan(t->info().height)) t->info().height = h;
+    }
+  }
+}
+
 std::set<std::pair<std::uint32_t, std::uint32_t>> edgesOf(
     const std::vector<std::array<std::uint32_t, 3>>& triangles) {
   std::set<std::pair<std::uint32_t, std::uint32_t>> edges;
@@ -229,6 +267,7 @@ OverlayResult overlayRoad(const SampleField& field, const Tin& terrain, const Ro
   }
   const std::vector<VertexHandle> roadVertex =
       insertRoad(cdt, road, drape ? &*drape : nullptr, mode == OverlayMode::kStencil);
+  addGluedTwins(cdt, field);
   std::optional<DrapedFootprint> drapedFootprint;
   if (drape) drapedFootprint.emplace(*drape, road.triangles, field.width, field.height);
 
@@ -247,6 +286,7 @@ OverlayResult overlayRoad(const SampleField& field, const Tin& terrain, const Ro
     GreedyInserter greedy(cdt, refill);
     greedy.measureAll();
     greedy.run();
+    addGluedTwins(cdt, field);
     rep.refillVertices = cdt.number_of_vertices() - before;
   }
 

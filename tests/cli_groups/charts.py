@@ -1,6 +1,7 @@
 """`cli_charts` and `cli_tube_charts`: every command on the octahedral chart, the torus and the
 cylinder."""
 import json
+import math
 import os
 import struct
 import subprocess
@@ -159,10 +160,31 @@ def group_tube_charts():
         if (r["euler"] != 0 or r["non_manifold_edges"] != 0 or r["road_group_triangles"] < road["triangles"]
                 or r["road_stray_m"] > 200):
             fail(f"the {name} replay's stroke {stroke} laid as a road: {road}, {r}")
+    # A stroke file onto a tube: its points in the planet frame (xyz=), here along the torus's
+    # outer equator from the u seam (so the strip's first vertices lie on the seam, where the
+    # overlay must weld twins it makes on the other side); LAT LON points are refused by line.
+    outer = 4500000 + 1800000
+    with open(out("torus_strokes.txt"), "w") as f:
+        f.write("stroke xyz=%d,0,0\n" % outer)
+        for deg in (0.7, 1.4, 2.1):
+            a = math.radians(deg)
+            f.write("to xyz=%.3f,%.3f,0\n" % (outer * math.cos(a), outer * math.sin(a)))
+        f.write("end\n")
+    stdout, _ = run("road", out("torus_strokes.txt"), "--planet", out("torus_a", "planet.planet"),
+                    "--width", "20000", "--out", out("torus_file_road.obj"))
+    road = json.loads(stdout)
+    if road["at"] != "0,0,0" or abs(road["length_m"] - outer * math.radians(2.1)) > 1000:
+        fail(f"the torus stroke file's road: {road}")
+    stdout, _ = run("overlay", out("torus_a", "planet.planet"), out("torus_file_road.obj"), "--at", road["at"],
+                    "--error", "200", "--out", out("torus_file_overlay.obj"))
+    r = json.loads(stdout)
+    if r["euler"] != 0 or r["border_edges"] != 0 or r["non_manifold_edges"] != 0 or r["road_group_triangles"] < 2:
+        fail(f"the torus stroke file's road laid from the seam: {r}")
     _, err = run("road", os.path.join(SRC, "data", "demo-strokes.txt"), "--planet", out("torus_a", "planet.planet"),
-                 "--width", "5000", "--out", out("torus_file_road.obj"), expect=2)
-    if "a stroke file's points are latitudes and longitudes" not in err or os.path.exists(out("torus_file_road.obj")):
-        fail(f"a stroke file's road onto the torus was not refused by name:\n{err}")
+                 "--width", "5000", "--out", out("torus_latlon_road.obj"), expect=2)
+    if ("demo-strokes.txt:7: a LAT LON point needs a sphere" not in err
+            or os.path.exists(out("torus_latlon_road.obj"))):
+        fail(f"a stroke file of LAT LON points onto the torus was not refused by line:\n{err}")
     # The sand core on the tubes: the displacement tool with settling along the same frames, twice
     # onto the torus (the same planet file and forces), once onto the cylinder; the haptic force
     # path beside them writes forces.csv.
