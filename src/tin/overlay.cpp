@@ -78,6 +78,11 @@ Road clipRoad(const Road& in, double xMax, double yMax, std::size_t& clipped) {
   return out;
 }
 
+// Whether a side of the grid is glued to one (a seam) or to itself (a fold).
+bool isGluedSide(core::SideGluing s) {
+  return s == core::SideGluing::kSeam || s == core::SideGluing::kMirror;
+}
+
 // A road cut at a glued side of a whole chart's grid has a vertex on each side of it, twins that
 // the weld must key alike (tin_check's weldKey: a seam's y, a fold's min(x, m - x)), though each
 // was cut from its own copy of the road with its own rounding. On 2^-20 of a lattice unit both are
@@ -86,14 +91,11 @@ Road clipRoad(const Road& in, double xMax, double yMax, std::size_t& clipped) {
 void snapGluedSideVertices(Road& road, const SampleField& field) {
   if (!field.wholeChart()) return;
   const core::Gluing g = field.chart->gluing();
-  const auto glued = [](core::SideGluing s) {
-    return s == core::SideGluing::kSeam || s == core::SideGluing::kMirror;
-  };
   const double xMax = field.width - 1, yMax = field.height - 1, step = std::ldexp(1.0, 20);
   const auto snap = [&](double t) { return std::round(t * step) / step; };
   for (Eigen::Vector2d& p : road.xy) {
-    if (glued(g.uSides) && (p.x() == 0 || p.x() == xMax)) p.y() = snap(p.y());
-    if (glued(g.vSides) && (p.y() == 0 || p.y() == yMax)) p.x() = snap(p.x());
+    if (isGluedSide(g.uSides) && (p.x() == 0 || p.x() == xMax)) p.y() = snap(p.y());
+    if (isGluedSide(g.vSides) && (p.y() == 0 || p.y() == yMax)) p.x() = snap(p.x());
   }
 }
 
@@ -106,16 +108,13 @@ void snapGluedSideVertices(Road& road, const SampleField& field) {
 void addGluedTwins(Cdt& cdt, const SampleField& field) {
   if (!field.wholeChart()) return;
   const core::Gluing g = field.chart->gluing();
-  const auto glued = [](core::SideGluing s) {
-    return s == core::SideGluing::kSeam || s == core::SideGluing::kMirror;
-  };
   const double xMax = field.width - 1, yMax = field.height - 1;
   const auto twins = [&](const Eigen::Vector2d& p) {
     std::vector<Eigen::Vector2d> out;
-    if (glued(g.uSides) && (p.x() == 0 || p.x() == xMax))
+    if (isGluedSide(g.uSides) && (p.x() == 0 || p.x() == xMax))
       out.push_back(g.uSides == core::SideGluing::kSeam ? Eigen::Vector2d(xMax - p.x(), p.y())
                                                         : Eigen::Vector2d(p.x(), yMax - p.y()));
-    if (glued(g.vSides) && (p.y() == 0 || p.y() == yMax))
+    if (isGluedSide(g.vSides) && (p.y() == 0 || p.y() == yMax))
       out.push_back(g.vSides == core::SideGluing::kSeam ? Eigen::Vector2d(p.x(), yMax - p.y())
                                                         : Eigen::Vector2d(xMax - p.x(), p.y()));
     return out;
