@@ -117,7 +117,7 @@ TEST(RoadPlacement, LaidEdgesFollowTheSphereWithinTheTolerance) {
   for (const core::Chart* chart :
        {static_cast<const core::Chart*>(&octa), static_cast<const core::Chart*>(&latlong)}) {
     const double m = chart->grid().m();
-    const double polar = chart == &latlong ? 84.0 : 90.0;  // lat-long's pole rows are refused
+    const double polar = 90.0;  // lat-long's pole rows too (refused until 2026-12-07)
     for (int trial = 0; trial < 40; ++trial) {
       // Half of them near a pole, where the chart bends straight grid lines most.
       const double lat =
@@ -173,6 +173,57 @@ TEST(RoadPlacement, RoadsAroundTheEndsOfTheOctahedralFoldsAreLaidInTwoHalves) {
   const io::LaidRoad road = io::layRoadOnPlanet(fan, octa, m, {0, 180, 10}, tolerance, "fan");
   EXPECT_EQ(road.pieces, 2);
   EXPECT_LE(road.strayM, tolerance);
+}
+
+// Over one of lat-long's poles, where a whole grid row is one point (refused until 2026-12-07):
+// the road gets a vertex at the pole, spread along the pole's row under each of its neighbours,
+// so that its triangles cover the whole row (the pole's every direction) once, and its edges
+// follow the sphere as anywhere else.
+TEST(RoadPlacement, RoadsOverLatLongsPolesCoverThePolesRow) {
+  const double r = 1737400, tolerance = 50;
+  const core::LatLongChart latlong(core::GridSize(8), r);
+  const double m = latlong.grid().m();
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  for (int trial = 0; trial < 24; ++trial) {
+    // Within 0.12 degrees (3.6 km) of a pole: inside the 10 km wide strip at every heading.
+    const double side = trial % 2 ? 1 : -1;
+    const double lat = side * (90 - 0.12 * unit(rng)),
+                 lon = trial == 0 ? 180 : 360 * unit(rng) - 180;
+    const double heading = 360 * unit(rng);
+    SCOPED_TRACE(std::to_string(lat) + ", " + std::to_string(lon) + " heading " +
+                 std::to_string(heading));
+    const io::LaidRoad road =
+        io::layRoadOnPlanet(strip(), latlong, m, {lat, lon, heading}, tolerance, "road");
+    EXPECT_LE(road.strayM, tolerance);
+    EXPECT_LT(offFootprint(latlong, m, placeOn(latlong, lat, lon, heading), road.road),
+              1.25 * tolerance);
+    // The pole's row, as the triangles' edges along it cover it (each edge moved into the grid).
+    const double row = side > 0 ? m : 0;
+    std::vector<std::pair<double, double>> along;
+    double turn = 0;  // the grid triangles' summed signed area: all one way
+    double turnAbs = 0;
+    for (const auto& t : road.road.triangles) {
+      const Eigen::Vector2d a = road.road.xy[t[0]], b = road.road.xy[t[1]], c = road.road.xy[t[2]];
+      const double area = 0.5 * ((b - a).x() * (c - a).y() - (b - a).y() * (c - a).x());
+      turn += area, turnAbs += std::abs(area);
+      for (int k = 0; k < 3; ++k) {
+        const Eigen::Vector2d p = road.road.xy[t[std::size_t(k)]],
+                              q = road.road.xy[t[std::size_t((k + 1) % 3)]];
+        if (p.y() == row && q.y() == row) {
+          const double lo = std::clamp(std::min(p.x(), q.x()), 0.0, m),
+                       hi = std::clamp(std::max(p.x(), q.x()), 0.0, m);
+          if (hi > lo) along.emplace_back(lo, hi);
+        }
+      }
+    }
+    EXPECT_NEAR(std::abs(turn), turnAbs, 1e-9 * turnAbs) << "a grid triangle is turned over";
+    std::sort(along.begin(), along.end());
+    double reached = 0;
+    for (const auto& [lo, hi] : along)
+      if (lo <= reached + 1e-9 * m) reached = std::max(reached, hi);
+    EXPECT_GE(reached, m * (1 - 1e-12)) << along.size() << " edges along the pole's row";
+  }
 }
 
 TEST(RoadPlacement, RoadsLieOnTheTorusAndTheCylinderAcrossTheirSeams) {

@@ -176,6 +176,12 @@ nlohmann::json overlayFromFiles(const std::filesystem::path& terrainPath,
   }
   field.uniformTolerance = o.errorM;
   const LaidRoad laid = placeRoad(roadObj, field, o, roadPath.string());
+  if (laid.holdsPole && o.mode == tin::OverlayMode::kStitch)
+    throw core::InputError(
+        roadPath.string() +
+        ": the road holds a pole of the lat-long chart, where a grid row is one point: stitched, "
+        "its edges and the terrain's would cross there in points the surface cannot tell apart; "
+        "lay it with --mode stencil (or place it off the pole)");
   const tin::Road& road = laid.road;
   const tin::Tin terrainTin = meshTin ? *meshTin : tin::buildTin(field, {});
   tin::OverlayResult r;
@@ -217,6 +223,7 @@ nlohmann::json overlayFromFiles(const std::filesystem::path& terrainPath,
                             // the chart bends them, a copy beyond each glued side it crosses
                             {"road_triangles_laid", rep.roadTriangles},
                             {"road_pieces", laid.pieces},
+                            {"road_holds_pole", laid.holdsPole},
                             {"road_stray_m", laid.strayM},
                             {"road_halved_edges", laid.halvedEdges},
                             {"road_triangles_clipped", rep.clippedRoadTriangles},

@@ -11,6 +11,7 @@
 #include "core/input_error.hpp"
 #include "core/octahedral_chart.hpp"
 #include "core/torus_chart.hpp"
+#include "io/road_poles.hpp"
 #include "io/road_unfolding.hpp"
 
 namespace ps::io {
@@ -90,10 +91,7 @@ Eigen::Vector3d surfaceNormal(const core::Chart& chart, const Eigen::Vector3d& p
 
 namespace {
 
-struct Mesh {
-  std::vector<Eigen::Vector3d> vertices;
-  std::vector<std::array<std::uint32_t, 3>> triangles;
-};
+using Mesh = RoadMesh;
 
 double signedArea(const Eigen::Vector2d& a, const Eigen::Vector2d& b, const Eigen::Vector2d& c) {
   return 0.5 * ((b - a).x() * (c - a).y() - (b - a).y() * (c - a).x());
@@ -168,7 +166,8 @@ void partAtFoldEnds(Mesh& mesh, const core::Chart& chart, double m, const RoadFr
 // round after round: thin triangles fold over where the chart bends, near the poles); each
 // triangle split into 2, 3 or 4 as 1, 2 or 3 of its edges are, turning as it did.
 void halveStrayingEdges(Mesh& mesh, const std::vector<std::array<double, 3>>& strays,
-                        double tolerance, double shortest) {
+                        double tolerance, double shortest,
+                        const std::vector<std::pair<std::uint32_t, double>>& poles) {
   using Edge = std::pair<std::uint32_t, std::uint32_t>;
   const auto key = [](std::uint32_t a, std::uint32_t b) {
     return Edge(std::min(a, b), std::max(a, b));
@@ -180,6 +179,12 @@ void halveStrayingEdges(Mesh& mesh, const std::vector<std::array<double, 3>>& st
     return key(t[k % 3], t[(k + 1) % 3]);
   };
   const auto longest = [&](const std::array<std::uint32_t, 3>& t) {
+    // A triangle round a pole of lat-long's grid is halved from the pole (its edge across from
+    // it), so that every triangle near the pole stays one of its fan: a triangle beside the pole
+    // but not round it, spanning a wide angle of its meridians, would turn over in the grid.
+    for (std::size_t k = 0; k < 3; ++k)
+      for (const auto& pole : poles)
+        if (t[(k + 2) % 3] == pole.first) return k;
     std::size_t best = 0;
     for (std::size_t k = 1; k < 3; ++k)
       if (length(edge(t, k)) > length(edge(t, best))) best = k;
@@ -249,6 +254,12 @@ LaidRoad layRoadOnPlanet(const ObjTriangles& obj, const core::Chart& chart, doub
       grid.y() = (q.z() / tube->length() + 0.5) * m;
     surface = r > 0 ? Eigen::Vector3d(q.normalized() * r) : chart.positionAt(grid.x(), grid.y(), 0);
   };
+  Mesh base{obj.vertices, obj.triangles};
+  const std::vector<std::pair<Eigen::Vector2d, double>> polePoints = polesInPlane(chart, m, frame);
+  std::vector<std::int64_t> slits;  // each pole's parting edge's end on the border (or -1)
+  const std::vector<std::pair<std::uint32_t, double>> poles =
+      insertPoles(base, chart, m, frame, 0.25 * toleranceM, slits);
+  std::vector<std::size_t> turnedNearPole;  // lat-long: triangles the grid turns over (lay's)
   const auto lay = [&](const Mesh& mesh) {
     tin::Road grid;
     grid.triangles = mesh.triangles;
@@ -257,10 +268,6 @@ LaidRoad layRoadOnPlanet(const ObjTriangles& obj, const core::Chart& chart, doub
       Eigen::Vector2d g;
       Eigen::Vector3d s;
       onto(p, g, s);
-      if (chart.hasPoleRows() && (g.y() < 1 || g.y() > m - 1))
-        throw core::InputError(name +
-                               ": the road reaches a pole's row of the lat-long chart; "
-                               "place it away from the poles");
       // A point cut on a glued side lies on it (the inverse leaves it a rounding off).
       for (int k = 0; k < 2; ++k)
         for (const double side : {0.0, m})
@@ -269,24 +276,45 @@ LaidRoad layRoadOnPlanet(const ObjTriangles& obj, const core::Chart& chart, doub
       grid.xy.push_back(g);
       grid.h.push_back(p.z());
     }
+    for (const std::int64_t end : slits)
+      if (end >= 0) unwrapRoundPole(grid, onSurface, mesh.triangles, std::uint32_t(end), m);
+    const PoleFan fan = spreadPoles(grid, onSurface, mesh.triangles, poles);
     const auto midpoint = [&](std::uint32_t a, std::uint32_t b) {
       Eigen::Vector2d g;
       Eigen::Vector3d s;
-      onto(0.5 * (mesh.vertices[a] + mesh.vertices[b]), g, s);
+      onto(0.5 * (mesh.vertices[fan.origin[a]] + mesh.vertices[fan.origin[b]]), g, s);
       return s;
     };
     // Across a seam or an octahedral fold: the pieces on either side of it.
-    UnfoldedRoad unfolded = unfoldRoad(grid, onSurface, midpoint, chart, m, name);
+    UnfoldedRoad unfolded = unfoldRoad(
+        grid, onSurface, midpoint, chart, m, name,
+        std::any_of(slits.begin(), slits.end(), [](std::int64_t end) { return end >= 0; }));
+    if (!poles.empty()) {
+      // An edge from a pole's copy runs in the grid from the pole row to its other end, in
+      // space a spiral out of the pole where the road's edge is straight: it lies inside the
+      // road's fan about the pole either way (so no terrain is left under the road or taken from
+      // beside it), and halving it would not shorten its stray, so it is not judged.
+      unfolded.strayM = 0;
+      for (std::size_t k = 0; k < grid.triangles.size(); ++k)
+        for (std::size_t e = 0; e < 3; ++e) {
+          double& stray = unfolded.edgeStrayM[k][e];
+          if (fan.poleCopy[grid.triangles[k][e]] || fan.poleCopy[grid.triangles[k][(e + 1) % 3]])
+            stray = 0;
+          unfolded.strayM = std::max(unfolded.strayM, stray);
+        }
+    }
     // Laid without folding over: every triangle turns the same way in the grid as in the road's
     // plane as the largest does (the gluing's moves keep the turn, so the first copy tells), but
     // for slivers turned over by less than the tolerance where the chart bends most (within a
-    // kilometre or two of an octahedral pole: a few metres).
+    // kilometre or two of an octahedral pole: a few metres). A pole's filler triangles have no
+    // area of their own and are not judged.
     const auto& v = mesh.vertices;
     const auto& xy = unfolded.road.xy;
+    turnedNearPole.clear();
     std::vector<double> turned;  // own area x laid area: > 0 where a triangle keeps its turn
     std::size_t largest = 0;
-    for (std::size_t k = 0; k < mesh.triangles.size(); ++k) {
-      const auto& t = mesh.triangles[k];
+    for (std::size_t k = 0; k < fan.own.size(); ++k) {
+      const auto& t = fan.own[k];
       const double own = signedArea(v[t[0]].head<2>(), v[t[1]].head<2>(), v[t[2]].head<2>());
       const auto& g = unfolded.road.triangles[k];
       turned.push_back(own * signedArea(xy[g[0]], xy[g[1]], xy[g[2]]));
@@ -294,10 +322,18 @@ LaidRoad layRoadOnPlanet(const ObjTriangles& obj, const core::Chart& chart, doub
     }
     for (std::size_t k = 0; k < turned.size(); ++k) {
       if (turned[k] * turned[largest] > 0) continue;
-      const auto& t = mesh.triangles[k];
+      const auto& t = fan.own[k];
       const auto& g = unfolded.road.triangles[k];
       const double own = signedArea(v[t[0]].head<2>(), v[t[1]].head<2>(), v[t[2]].head<2>());
       if (own == 0) continue;  // a cut's sliver of no area
+      if (chart.hasPoleRows() && std::abs(turned[k]) <= 1e-18 * std::abs(turned[largest]))
+        continue;  // (nor one of no area in the grid: a cut's along a meridian)
+      if (chart.hasPoleRows()) {
+        // Near one of lat-long's poles: halved until it turns no more (the overlay would see
+        // the road cross itself there).
+        if (k < mesh.triangles.size()) turnedNearPole.push_back(k);
+        continue;
+      }
       // How far it is turned over, in metres: its height in the grid, over its longest edge,
       // at the surface's scale along that edge.
       double depth = INFINITY;
@@ -314,7 +350,6 @@ LaidRoad layRoadOnPlanet(const ObjTriangles& obj, const core::Chart& chart, doub
     return unfolded;
   };
 
-  Mesh base{obj.vertices, obj.triangles};
   if (dynamic_cast<const core::OctahedralChart*>(&chart)) {
     // The octants' borders (the equator and the meridians at 0, 90, 180 and -90 degrees), where
     // the chart's parallels turn a right angle: a straight grid edge across one strays by up to
@@ -327,7 +362,7 @@ LaidRoad layRoadOnPlanet(const ObjTriangles& obj, const core::Chart& chart, doub
     partAtFoldEnds(base, chart, m, frame);
   }
   UnfoldedRoad laid = lay(base);
-  if (laid.pieces > 1) {
+  if (laid.pieces > 1 && poles.empty()) {
     // It crosses a glued side: cut along the sides' planes first, so that each edge that crossed
     // one meets it where the surface's path does (the grid's straight edge across an octahedral
     // fold bends, by kilometres), then laid again.
@@ -344,14 +379,45 @@ LaidRoad layRoadOnPlanet(const ObjTriangles& obj, const core::Chart& chart, doub
     lo = lo.cwiseMin(p.head<2>()), hi = hi.cwiseMax(p.head<2>());
   const double shortest = (hi - lo).norm() * 1e-5;
   int halved = 0;
-  for (int round = 0; round < 40 && laid.strayM > toleranceM; ++round) {
+  constexpr double kWidest = 1.0 / 8;  // a triangle's size over its distance from the pole
+  for (int round = 0; round < 40; ++round) {
+    // Also every triangle near one of lat-long's poles that is large for its distance from it
+    // (io/road_poles.hpp) or that the grid turns over, each edge halved.
+    std::vector<std::array<double, 3>> strays = laid.edgeStrayM;
+    std::vector<std::size_t> wide = wideNearPoles(base, polePoints, poles, 2 * shortest, kWidest);
+    // Where the grid still turns a triangle over: it and the triangles round its corners.
+    std::set<std::uint32_t> near;
+    for (const std::size_t k : turnedNearPole)
+      near.insert(base.triangles[k].begin(), base.triangles[k].end());
+    for (const auto& pole : poles) near.erase(pole.first);
+    for (std::size_t k = 0; k < base.triangles.size() && !near.empty(); ++k)
+      for (const std::uint32_t v : base.triangles[k])
+        if (near.count(v)) {
+          wide.push_back(k);
+          break;
+        }
+    for (const std::size_t k : wide)
+      for (std::size_t e = 0; e < 3; ++e) {
+        // (not an edge from a pole: a triangle round it is halved across from it)
+        bool fromPole = false;
+        for (const auto& pole : poles)
+          fromPole |=
+              base.triangles[k][e] == pole.first || base.triangles[k][(e + 1) % 3] == pole.first;
+        if (!fromPole) strays[k][e] = INFINITY;
+      }
+    if (!(laid.strayM > toleranceM) && wide.empty()) break;
+    if (base.triangles.size() > 60000) break;  // (the checks below say what is left)
     const std::size_t before = base.vertices.size();
-    halveStrayingEdges(base, laid.edgeStrayM, toleranceM, shortest);
+    halveStrayingEdges(base, strays, toleranceM, shortest, poles);
     if (base.vertices.size() == before) break;  // what strays is shorter than the floor
     halved += int(base.vertices.size() - before);
     laid = lay(base);
   }
-  return {std::move(laid.road), laid.pieces, laid.strayM, halved};
+  if (!turnedNearPole.empty())
+    throw core::InputError(name + ": the road turns over in the " + chart.name() +
+                           " chart's grid near its pole, where the grid's columns meet; place "
+                           "it a little further from the pole or across it");
+  return {std::move(laid.road), laid.pieces, laid.strayM, halved, !poles.empty()};
 }
 
 }  // namespace ps::io

@@ -15,11 +15,12 @@
 namespace ps::io {
 
 struct LaidRoad {
-  tin::Road road;       // grid coordinates, one copy per piece (the overlay clips each at the
-                        // grid's border; a cylinder's road may reach past its rims)
-  int pieces = 1;       // the copies: 1 + one per glued side the road crosses into
-  double strayM = 0;    // the largest distance of a laid edge's grid midpoint from its own
-  int halvedEdges = 0;  // edges halved so that none strays beyond the tolerance
+  tin::Road road;          // grid coordinates, one copy per piece (the overlay clips each at the
+                           // grid's border; a cylinder's road may reach past its rims)
+  int pieces = 1;          // the copies: 1 + one per glued side the road crosses into
+  double strayM = 0;       // the largest distance of a laid edge's grid midpoint from its own
+  int halvedEdges = 0;     // edges halved so that none strays beyond the tolerance
+  bool holdsPole = false;  // its footprint holds one of lat-long's poles (a vertex there)
 };
 
 // The road's plane at a place: its origin on the surface, the surface's outward normal there,
@@ -46,9 +47,10 @@ Eigen::Vector3d surfaceNormal(const core::Chart& chart, const Eigen::Vector3d& p
 // degrees clockwise from north (the direction of growing latitude, ACROSS or ALONG) seen from
 // outside. Edges are halved until every edge's stray is at most `toleranceM` (or shorter than
 // 1e-5 of the road's extent). Throws core::InputError,
-// prefixed with `name`, for a place off the surface, a road reaching lat-long's pole rows or
-// around the end of an octahedral fold, and one that folds over in the grid (larger than its
-// place on a tube allows).
+// prefixed with `name`, for a place off the surface, a road around the end of an octahedral fold,
+// and one that folds over in the grid (larger than its place on a tube allows, or turned over
+// near lat-long's pole, where the grid's columns meet). A road over one of lat-long's poles gets a
+// vertex there, spread along the pole's grid row (docs/CHARTS.md).
 LaidRoad layRoadOnPlanet(const ObjTriangles& road, const core::Chart& chart, double m,
                          const std::array<double, 3>& at, double toleranceM,
                          const std::string& name);

@@ -142,7 +142,7 @@ void cutRoadAlong(std::vector<Eigen::Vector3d>& vertices,
 UnfoldedRoad unfoldRoad(
     const tin::Road& road, const std::vector<Eigen::Vector3d>& onSurface,
     const std::function<Eigen::Vector3d(std::uint32_t, std::uint32_t)>& midpoint,
-    const core::Chart& chart, double m, const std::string& name) {
+    const core::Chart& chart, double m, const std::string& name, bool unfoldedAlready) {
   const std::vector<PlaneMove> moves = gluingMoves(chart, m);
   const std::size_t n = road.xy.size();
   std::vector<std::vector<std::uint32_t>> next(n);
@@ -162,6 +162,11 @@ UnfoldedRoad unfoldRoad(
     return (chart.positionAt(mid.x(), mid.y(), 0.0) - own).norm();
   };
 
+  // An edge's length on the surface, at least a millionth of the radius: an edge of no length
+  // (between two copies of lat-long's pole) is continued by every image alike, within rounding.
+  const auto edgeScale = [&](std::uint32_t a, std::uint32_t b) {
+    return std::max((onSurface[a] - onSurface[b]).norm(), 1e-6 * onSurface[a].norm());
+  };
   // A vertex at the end of a fold, which a half turn keeps in place, continues an edge alike in
   // the images on both sides of the fold: the edges from it say nothing of which, so the
   // unfolding does not go on from there (io/road_placement.hpp parts a road there in two halves
@@ -176,6 +181,7 @@ UnfoldedRoad unfoldRoad(
   // reached by.
   std::vector<Eigen::Vector2d> unfolded(n);
   std::vector<char> placed(n, 0);
+  if (unfoldedAlready) unfolded = road.xy, placed.assign(n, 1);
   for (std::size_t k = 0; k < 2 * n; ++k) {
     const std::size_t start = k % n;
     if (placed[start] || (k < n && foldEnd(std::uint32_t(start)))) continue;
@@ -190,7 +196,7 @@ UnfoldedRoad unfoldRoad(
         // The images that continue the edge best, within a tenth of it (images a translation of
         // the grid's gluing apart move the midpoint by a gluing too, so they continue it alike),
         // and of those the nearest.
-        const double chord = (onSurface[a] - onSurface[b]).norm();
+        const double chord = edgeScale(a, b);
         std::vector<std::pair<double, Eigen::Vector2d>> images;
         double best = INFINITY;
         for (const PlaneMove& move : moves) {
@@ -219,7 +225,7 @@ UnfoldedRoad unfoldRoad(
       const double straight = miss(a, unfolded[a], b, unfolded[b]);
       strays[std::size_t(k)] = straight;
       out.strayM = std::max(out.strayM, straight);
-      if (!(straight > 0.05 * (onSurface[a] - onSurface[b]).norm())) continue;
+      if (unfoldedAlready || !(straight > 0.05 * edgeScale(a, b))) continue;
       double across = INFINITY;
       for (const PlaneMove& move : moves)
         if (!(move == PlaneMove{}))

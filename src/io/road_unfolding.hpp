@@ -54,7 +54,8 @@ void cutRoadAlong(std::vector<Eigen::Vector3d>& vertices,
 // home (within 1e-9 of the grid's side of its own grid point) gets that point's exact bits, so
 // copies weld where they meet. Throws core::InputError, prefixed with `name`, for a road that
 // cannot be unfolded in one piece (one around an end of a fold, where the grid has a corner of 180
-// degrees), naming the place.
+// degrees), naming the place. With `unfoldedAlready`, `road.xy` is taken as the road unfolded
+// (a road round lat-long's pole, io/road_placement.cpp's unwrapRoundPole).
 struct UnfoldedRoad {
   tin::Road road;
   int pieces = 0;     // copies laid: 1 + one for each glued side the road crosses into
@@ -65,6 +66,6 @@ struct UnfoldedRoad {
 UnfoldedRoad unfoldRoad(
     const tin::Road& road, const std::vector<Eigen::Vector3d>& onSurface,
     const std::function<Eigen::Vector3d(std::uint32_t, std::uint32_t)>& midpoint,
-    const core::Chart& chart, double m, const std::string& name);
+    const core::Chart& chart, double m, const std::string& name, bool unfoldedAlready = false);
 
 }  // namespace ps::io

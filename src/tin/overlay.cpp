@@ -97,6 +97,17 @@ void snapGluedSideVertices(Road& road, const SampleField& field) {
     if (isGluedSide(g.uSides) && (p.x() == 0 || p.x() == xMax)) p.y() = snap(p.y());
     if (isGluedSide(g.vSides) && (p.y() == 0 || p.y() == yMax)) p.x() = snap(p.x());
   }
+  // Two vertices that the snap put on one point are one (and a triangle left with no area goes).
+  std::map<std::pair<double, double>, std::uint32_t> at;
+  std::vector<std::uint32_t> same(road.xy.size());
+  for (std::uint32_t v = 0; v < road.xy.size(); ++v)
+    same[v] = at.emplace(std::pair(road.xy[v].x(), road.xy[v].y()), v).first->second;
+  std::vector<std::array<std::uint32_t, 3>> kept;
+  for (auto t : road.triangles) {
+    for (std::uint32_t& v : t) v = same[v];
+    if (signedArea(road.xy[t[0]], road.xy[t[1]], road.xy[t[2]]) != 0) kept.push_back(t);
+  }
+  road.triangles = std::move(kept);
 }
 
 // Every vertex on a glued side of a whole chart's grid with its twins there too: a road piece

@@ -83,17 +83,26 @@ class Draper {
         if (!host) host = h;
       });
       if (!host) return std::nullopt;
-      const auto& tri = t_.triangles[host->triangle];
-      const Eigen::Vector3d &p0 = corner_[tri[0]], &p1 = corner_[tri[1]], &p2 = corner_[tri[2]];
-      const Eigen::Vector3d n = (p1 - p0).cross(p2 - p0);
-      const double across = n.dot(u);
-      if (!(std::abs(across) > 1e-12 * n.norm())) return std::nullopt;
-      const Eigen::Vector3d y = x + (n.dot(p0 - x) / across) * u;
-      // y's barycentric coordinates in the triangle (in its plane).
-      const double area2 = n.squaredNorm();
-      double l1 = n.dot((y - p0).cross(p2 - p0)) / area2;
-      double l2 = n.dot((p1 - p0).cross(y - p0)) / area2;
-      double l0 = 1.0 - l1 - l2;
+      std::size_t face = host->triangle;
+      if (flat(face)) {
+        // No area on the surface (two corners on one of lat-long's pole rows, which is one
+        // point): the ray meets a triangle round one of its corners, or leads towards one.
+        std::optional<std::size_t> best;
+        double bestInside = -INFINITY;
+        for (const std::uint32_t c : t_.triangles[face])
+          for (const std::uint32_t g : adj_.vertexFaces[c]) {
+            const auto l = meeting(g, x, u);
+            if (l && std::min({(*l)[0], (*l)[1], (*l)[2]}) > bestInside)
+              bestInside = std::min({(*l)[0], (*l)[1], (*l)[2]}), best = g;
+          }
+        if (!best) return std::nullopt;
+        face = *best;
+      }
+      const auto& tri = t_.triangles[face];
+      // y, where the line meets the triangle's plane, by its barycentric coordinates.
+      const std::optional<std::array<double, 3>> l = meeting(face, x, u);
+      if (!l) return std::nullopt;
+      double l0 = (*l)[0], l1 = (*l)[1], l2 = (*l)[2];
       const bool inside = std::min({l0, l1, l2}) >= -1e-12;
       if (!inside && iter < 31) {
         const Eigen::Vector2d next = l0 * t_.xy[tri[0]] + l1 * t_.xy[tri[1]] + l2 * t_.xy[tri[2]];
@@ -108,6 +117,32 @@ class Draper {
       return onTriangle(tri, {l0 / sum, l1 / sum, l2 / sum});
     }
     return std::nullopt;
+  }
+
+  // Whether a terrain triangle has no area on the surface (its corners' points on one line: two
+  // of them on one of lat-long's pole rows).
+  bool flat(std::size_t face) const {
+    const auto& tri = t_.triangles[face];
+    const Eigen::Vector3d a = corner_[tri[1]] - corner_[tri[0]],
+                          b = corner_[tri[2]] - corner_[tri[0]];
+    return !(a.cross(b).norm() > 1e-12 * a.norm() * b.norm());
+  }
+
+  // The barycentric coordinates of the point where the line through x along u meets the plane
+  // of terrain triangle `face` (nullopt for a flat one or one the line runs along).
+  std::optional<std::array<double, 3>> meeting(std::size_t face, const Eigen::Vector3d& x,
+                                               const Eigen::Vector3d& u) const {
+    if (flat(face)) return std::nullopt;
+    const auto& tri = t_.triangles[face];
+    const Eigen::Vector3d &p0 = corner_[tri[0]], &p1 = corner_[tri[1]], &p2 = corner_[tri[2]];
+    const Eigen::Vector3d n = (p1 - p0).cross(p2 - p0);
+    const double across = n.dot(u);
+    if (!(std::abs(across) > 1e-12 * n.norm())) return std::nullopt;
+    const Eigen::Vector3d y = x + (n.dot(p0 - x) / across) * u;
+    const double area2 = n.squaredNorm();
+    const double l1 = n.dot((y - p0).cross(p2 - p0)) / area2;
+    const double l2 = n.dot((p1 - p0).cross(y - p0)) / area2;
+    return std::array<double, 3>{1.0 - l1 - l2, l1, l2};
   }
 
   // The point with barycentric coordinates l in terrain triangle tri, put exactly on an edge or
