@@ -226,6 +226,35 @@ TEST(RoadPlacement, RoadsOverLatLongsPolesCoverThePolesRow) {
   }
 }
 
+// A road whose pole lies among its inner vertices only (no edge from it reaches the border, so
+// it cannot be parted there) is refused by name, naming the road.
+TEST(RoadPlacement, APoleAmongInnerVerticesOnlyIsRefusedByName) {
+  const core::LatLongChart latlong(core::GridSize(8), 1737400);
+  io::ObjTriangles grid;  // 4 x 4 vertices 10 km apart, centred on the place
+  for (int j = 0; j < 4; ++j)
+    for (int i = 0; i < 4; ++i)
+      grid.vertices.emplace_back(10000.0 * i - 15000, 10000.0 * j - 15000, 0);
+  for (std::uint32_t j = 0; j < 3; ++j)
+    for (std::uint32_t i = 0; i < 3; ++i) {
+      const std::uint32_t a = 4 * j + i;
+      grid.triangles.push_back({a, a + 1, a + 5}), grid.triangles.push_back({a, a + 5, a + 4});
+    }
+  try {
+    io::layRoadOnPlanet(grid, latlong, latlong.grid().m(), {90, 0, 0}, 50, "square.obj");
+    ADD_FAILURE() << "a pole among inner vertices was laid";
+  } catch (const core::InputError& e) {
+    const std::string what = e.what();
+    EXPECT_EQ(what.rfind("square.obj: ", 0), 0u) << what;
+    EXPECT_NE(what.find("no edge from it reaches the road's border"), std::string::npos) << what;
+  }
+  // The same square placed so that the pole lies about 12 km north of its middle, in its top row
+  // of triangles, which have corners on the border: laid over the pole.
+  const io::LaidRoad top =
+      io::layRoadOnPlanet(grid, latlong, latlong.grid().m(), {89.6, 0, 0}, 50, "square.obj");
+  EXPECT_TRUE(top.holdsPole);
+  EXPECT_LE(top.strayM, 50);
+}
+
 TEST(RoadPlacement, RoadsLieOnTheTorusAndTheCylinderAcrossTheirSeams) {
   const double tolerance = 50;
   const core::TorusChart torus(core::GridSize(8), 4.5e6, 1.8e6);

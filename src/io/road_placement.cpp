@@ -258,7 +258,7 @@ LaidRoad layRoadOnPlanet(const ObjTriangles& obj, const core::Chart& chart, doub
   const std::vector<std::pair<Eigen::Vector2d, double>> polePoints = polesInPlane(chart, m, frame);
   std::vector<std::int64_t> slits;  // each pole's parting edge's end on the border (or -1)
   const std::vector<std::pair<std::uint32_t, double>> poles =
-      insertPoles(base, chart, m, frame, 0.25 * toleranceM, slits);
+      insertPoles(base, chart, m, frame, 0.25 * toleranceM, slits, name);
   std::vector<std::size_t> turnedNearPole;  // lat-long: triangles the grid turns over (lay's)
   const auto lay = [&](const Mesh& mesh) {
     tin::Road grid;

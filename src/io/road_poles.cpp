@@ -6,6 +6,7 @@
 #include <numbers>
 #include <optional>
 #include <set>
+#include <string>
 
 #include "core/input_error.hpp"
 
@@ -111,7 +112,8 @@ std::vector<std::pair<Eigen::Vector2d, double>> polesInPlane(const core::Chart& 
 std::vector<std::pair<std::uint32_t, double>> insertPoles(RoadMesh& mesh, const core::Chart& chart,
                                                           double m, const RoadFrame& frame,
                                                           double snap,
-                                                          std::vector<std::int64_t>& slits) {
+                                                          std::vector<std::int64_t>& slits,
+                                                          const std::string& name) {
   std::vector<std::pair<std::uint32_t, double>> poles;
   double extent = 0;
   for (const Eigen::Vector3d& p : mesh.vertices) extent = std::max(extent, p.head<2>().norm());
@@ -185,7 +187,8 @@ std::vector<std::pair<std::uint32_t, double>> insertPoles(RoadMesh& mesh, const 
     const std::optional<std::int64_t> slit = slitToBorder(mesh, std::uint32_t(pole));
     if (!slit)
       throw core::InputError(
-          "the road holds one of the lat-long chart's poles but no edge from it reaches the "
+          name +
+          ": the road holds one of the lat-long chart's poles but no edge from it reaches the "
           "road's border (make the vertex nearest the pole a corner of its border)");
     poles.emplace_back(std::uint32_t(pole), row);
     slits.push_back(*slit);
@@ -193,10 +196,10 @@ std::vector<std::pair<std::uint32_t, double>> insertPoles(RoadMesh& mesh, const 
   return poles;
 }
 
-// The triangles near one of lat-long's poles (not round one) that span more than `widest` of its
-// meridians, seen from it: the grid's straight edges bend from theirs by about d phi^2 / 8 (at a
-// distance d, spanning phi; the meridians' polar coordinates are not affine), which turns a thin
-// one over. Those longer than `shortest` are halved until none does.
+// The triangles near one of lat-long's poles (not round one) whose longest edge is above
+// `widest` times their distance from it: the grid's straight edges bend from theirs by about
+// d phi^2 / 8 (at a distance d, spanning an angle phi of the meridians, which are not affine in
+// the grid), which turns a thin one over. Those longer than `shortest` are halved until none is.
 std::vector<std::size_t> wideNearPoles(const RoadMesh& mesh,
                                        const std::vector<std::pair<Eigen::Vector2d, double>>& at,
                                        const std::vector<std::pair<std::uint32_t, double>>& poles,

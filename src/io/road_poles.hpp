@@ -8,6 +8,7 @@
 #include <Eigen/Core>
 #include <array>
 #include <cstdint>
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -28,12 +29,13 @@ std::vector<std::pair<Eigen::Vector2d, double>> polesInPlane(const core::Chart& 
                                                              const RoadFrame& frame);
 
 // The road's vertex at each pole its footprint holds (or lies within `snap` of), and its grid
-// row; `slits` gets each one's parting end (-1: none needed). Throws core::InputError for a road
-// whose pole no edge joins to its border.
+// row; `slits` gets each one's parting end (-1: none needed). Throws core::InputError, prefixed
+// with `name`, for a road whose pole no edge joins to its border.
 std::vector<std::pair<std::uint32_t, double>> insertPoles(RoadMesh& mesh, const core::Chart& chart,
                                                           double m, const RoadFrame& frame,
                                                           double snap,
-                                                          std::vector<std::int64_t>& slits);
+                                                          std::vector<std::int64_t>& slits,
+                                                          const std::string& name);
 
 // The triangles not round a pole whose longest edge, longer than `shortest`, is above `widest`
 // times their distance from a pole (`at`): those to halve.
