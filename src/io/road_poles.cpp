@@ -284,7 +284,9 @@ PoleFan spreadPoles(tin::Road& grid, std::vector<Eigen::Vector3d>& onSurface,
   fan.own = triangles;
   for (std::uint32_t v = 0; v < grid.xy.size(); ++v) fan.origin.push_back(v);
   fan.poleCopy.assign(grid.xy.size(), 0);
-  for (const auto& [pole, row] : poles) {
+  for (const auto& entry : poles) {
+    const std::uint32_t pole = entry.first;  // (not a structured binding: the lambda takes them)
+    const double row = entry.second;
     std::map<std::uint32_t, std::uint32_t> under;  // a neighbour -> the pole's copy under it
     const auto copyUnder = [&](std::uint32_t a) {
       const auto [it, fresh] = under.emplace(a, std::uint32_t(grid.xy.size()));
