@@ -289,20 +289,7 @@ LaidRoad layRoadOnPlanet(const ObjTriangles& obj, const core::Chart& chart, doub
     UnfoldedRoad unfolded = unfoldRoad(
         grid, onSurface, midpoint, chart, m, name,
         std::any_of(slits.begin(), slits.end(), [](std::int64_t end) { return end >= 0; }));
-    if (!poles.empty()) {
-      // An edge from a pole's copy runs in the grid from the pole row to its other end, in
-      // space a spiral out of the pole where the road's edge is straight: it lies inside the
-      // road's fan about the pole either way (so no terrain is left under the road or taken from
-      // beside it), and halving it would not shorten its stray, so it is not judged.
-      unfolded.strayM = 0;
-      for (std::size_t k = 0; k < grid.triangles.size(); ++k)
-        for (std::size_t e = 0; e < 3; ++e) {
-          double& stray = unfolded.edgeStrayM[k][e];
-          if (fan.poleCopy[grid.triangles[k][e]] || fan.poleCopy[grid.triangles[k][(e + 1) % 3]])
-            stray = 0;
-          unfolded.strayM = std::max(unfolded.strayM, stray);
-        }
-    }
+    if (!poles.empty()) leavePoleEdgesUnjudged(unfolded, grid, fan);
     // Laid without folding over: every triangle turns the same way in the grid as in the road's
     // plane as the largest does (the gluing's moves keep the turn, so the first copy tells), but
     // for slivers turned over by less than the tolerance where the chart bends most (within a
@@ -379,33 +366,11 @@ LaidRoad layRoadOnPlanet(const ObjTriangles& obj, const core::Chart& chart, doub
     lo = lo.cwiseMin(p.head<2>()), hi = hi.cwiseMax(p.head<2>());
   const double shortest = (hi - lo).norm() * 1e-5;
   int halved = 0;
-  constexpr double kWidest = 1.0 / 8;  // a triangle's size over its distance from the pole
   for (int round = 0; round < 40; ++round) {
-    // Also every triangle near one of lat-long's poles that is large for its distance from it
-    // (io/road_poles.hpp) or that the grid turns over, each edge halved.
+    // Also the triangles near one of lat-long's poles to halve (io/road_poles.hpp).
     std::vector<std::array<double, 3>> strays = laid.edgeStrayM;
-    std::vector<std::size_t> wide = wideNearPoles(base, polePoints, poles, 2 * shortest, kWidest);
-    // Where the grid still turns a triangle over: it and the triangles round its corners.
-    std::set<std::uint32_t> near;
-    for (const std::size_t k : turnedNearPole)
-      near.insert(base.triangles[k].begin(), base.triangles[k].end());
-    for (const auto& pole : poles) near.erase(pole.first);
-    for (std::size_t k = 0; k < base.triangles.size() && !near.empty(); ++k)
-      for (const std::uint32_t v : base.triangles[k])
-        if (near.count(v)) {
-          wide.push_back(k);
-          break;
-        }
-    for (const std::size_t k : wide)
-      for (std::size_t e = 0; e < 3; ++e) {
-        // (not an edge from a pole: a triangle round it is halved across from it)
-        bool fromPole = false;
-        for (const auto& pole : poles)
-          fromPole |=
-              base.triangles[k][e] == pole.first || base.triangles[k][(e + 1) % 3] == pole.first;
-        if (!fromPole) strays[k][e] = INFINITY;
-      }
-    if (!(laid.strayM > toleranceM) && wide.empty()) break;
+    const bool wide = markNearPoles(base, polePoints, poles, turnedNearPole, shortest, strays);
+    if (!(laid.strayM > toleranceM) && !wide) break;
     if (base.triangles.size() > 60000) break;  // (the checks below say what is left)
     const std::size_t before = base.vertices.size();
     halveStrayingEdges(base, strays, toleranceM, shortest, poles);

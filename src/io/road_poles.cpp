@@ -314,4 +314,44 @@ PoleFan spreadPoles(tin::Road& grid, std::vector<Eigen::Vector3d>& onSurface,
   return fan;
 }
 
+void leavePoleEdgesUnjudged(UnfoldedRoad& unfolded, const tin::Road& grid, const PoleFan& fan) {
+  unfolded.strayM = 0;
+  for (std::size_t k = 0; k < grid.triangles.size(); ++k)
+    for (std::size_t e = 0; e < 3; ++e) {
+      double& stray = unfolded.edgeStrayM[k][e];
+      if (fan.poleCopy[grid.triangles[k][e]] || fan.poleCopy[grid.triangles[k][(e + 1) % 3]])
+        stray = 0;
+      unfolded.strayM = std::max(unfolded.strayM, stray);
+    }
+}
+
+bool markNearPoles(const RoadMesh& mesh, const std::vector<std::pair<Eigen::Vector2d, double>>& at,
+                   const std::vector<std::pair<std::uint32_t, double>>& poles,
+                   const std::vector<std::size_t>& turned, double shortest,
+                   std::vector<std::array<double, 3>>& strays) {
+  constexpr double kWidest = 1.0 / 8;  // a triangle's size over its distance from the pole
+  std::vector<std::size_t> wide = wideNearPoles(mesh, at, poles, 2 * shortest, kWidest);
+  // Where the grid still turns a triangle over: it and the triangles round its corners.
+  std::set<std::uint32_t> near;
+  for (const std::size_t k : turned)
+    near.insert(mesh.triangles[k].begin(), mesh.triangles[k].end());
+  for (const auto& pole : poles) near.erase(pole.first);
+  for (std::size_t k = 0; k < mesh.triangles.size() && !near.empty(); ++k)
+    for (const std::uint32_t v : mesh.triangles[k])
+      if (near.count(v)) {
+        wide.push_back(k);
+        break;
+      }
+  for (const std::size_t k : wide)
+    for (std::size_t e = 0; e < 3; ++e) {
+      // (not an edge from a pole: a triangle round it is halved across from it)
+      bool fromPole = false;
+      for (const auto& pole : poles)
+        fromPole |=
+            mesh.triangles[k][e] == pole.first || mesh.triangles[k][(e + 1) % 3] == pole.first;
+      if (!fromPole) strays[k][e] = INFINITY;
+    }
+  return !wide.empty();
+}
+
 }  // namespace ps::io

@@ -14,6 +14,7 @@
 
 #include "core/chart.hpp"
 #include "io/road_placement.hpp"
+#include "io/road_unfolding.hpp"
 #include "tin/overlay.hpp"
 
 namespace ps::io {
@@ -58,5 +59,20 @@ struct PoleFan {
 PoleFan spreadPoles(tin::Road& grid, std::vector<Eigen::Vector3d>& onSurface,
                     const std::vector<std::array<std::uint32_t, 3>>& triangles,
                     const std::vector<std::pair<std::uint32_t, double>>& poles);
+
+// An edge from a pole's copy runs in the grid from the pole's row to its other end, on the
+// sphere a spiral out of the pole where the road's edge is straight: it lies inside the road's
+// fan about the pole either way (no terrain left under the road or taken from beside it), and
+// halving it would not shorten its stray, so its stray is set to 0 (and `strayM` taken again).
+void leavePoleEdgesUnjudged(UnfoldedRoad& unfolded, const tin::Road& grid, const PoleFan& fan);
+
+// Marks for halving (`strays` of every edge but those from a pole set infinite) the triangles
+// near a pole that are large for their distance from it (wideNearPoles, an eighth) and, where
+// the grid still turns one over (`turned`), it and the triangles round its corners. Returns
+// whether it marked any.
+bool markNearPoles(const RoadMesh& mesh, const std::vector<std::pair<Eigen::Vector2d, double>>& at,
+                   const std::vector<std::pair<std::uint32_t, double>>& poles,
+                   const std::vector<std::size_t>& turned, double shortest,
+                   std::vector<std::array<double, 3>>& strays);
 
 }  // namespace ps::io
