@@ -130,6 +130,7 @@ std::vector<std::pair<std::uint32_t, double>> insertPoles(RoadMesh& mesh, const 
       for (std::size_t k = 0; k < 3; ++k)
         ++uses[{std::min(t[k], t[(k + 1) % 3]), std::max(t[k], t[(k + 1) % 3])}];
     std::vector<std::array<std::uint32_t, 3>> out;
+    std::int64_t split = -1;
     for (const auto& t : mesh.triangles) {
       const Eigen::Vector2d corner[3] = {mesh.vertices[t[0]].head<2>(),
                                          mesh.vertices[t[1]].head<2>(),
@@ -150,11 +151,13 @@ std::vector<std::pair<std::uint32_t, double>> insertPoles(RoadMesh& mesh, const 
         out.push_back(t);
         continue;
       }
-      const auto p = std::uint32_t(mesh.vertices.size());
-      double z = 0;
-      for (int k = 0; k < 3; ++k) z += bary[k] * mesh.vertices[t[std::size_t(k)]].z();
-      mesh.vertices.emplace_back(e.x(), e.y(), z);
-      // (each triangle its own new vertex for now: merged below)
+      if (split < 0) {  // the pole's vertex, made with the first triangle split at it
+        split = std::int64_t(mesh.vertices.size());
+        double z = 0;
+        for (int k = 0; k < 3; ++k) z += bary[k] * mesh.vertices[t[std::size_t(k)]].z();
+        mesh.vertices.emplace_back(e.x(), e.y(), z);
+      }
+      const auto p = std::uint32_t(split);
       for (std::size_t k = 0; k < 3; ++k) {
         std::array<std::uint32_t, 3> piece = t;
         piece[k] = p;
@@ -172,18 +175,9 @@ std::vector<std::pair<std::uint32_t, double>> insertPoles(RoadMesh& mesh, const 
           out.push_back(piece);  // (a piece beyond an edge the pole lies past has no area)
       }
     }
-    // The split triangles' new vertices are one: the first.
-    for (auto& t : out)
-      for (std::uint32_t& v : t)
-        if (pole < 0 && mesh.vertices[v].head<2>() == e) pole = std::int64_t(v);
-    if (pole < 0) {
-      mesh.triangles = std::move(out);
-      continue;
-    }
-    for (auto& t : out)
-      for (std::uint32_t& v : t)
-        if (mesh.vertices[v].head<2>() == e) v = std::uint32_t(pole);
     mesh.triangles = std::move(out);
+    if (pole < 0) pole = split;
+    if (pole < 0) continue;
     const std::optional<std::int64_t> slit = slitToBorder(mesh, std::uint32_t(pole));
     if (!slit)
       throw core::InputError(
