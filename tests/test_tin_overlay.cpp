@@ -329,7 +329,8 @@ TEST(TinOverlay, APlanetKeepsItsClosedSurfaceWithARoadStitchedIn) {
   EXPECT_LE(seam["road_stray_m"].get<double>(), 2000.0);
   // Beside a pole and over it (since 2026-12-07; refused before: there a grid row is one point):
   // one closed surface, the pole one vertex. Over it, stenciled (the road's fan round the pole
-  // spread along the pole's row); stitched it is refused by name.
+  // spread along the pole's row) and stitched (since 2026-12-08, in the road's own plane:
+  // tin/plane_stitch.hpp; refused before).
   for (const auto& at :
        {std::array<double, 3>{89.0, 0.0, 0.0}, std::array<double, 3>{90.0, 30.0, 0.0},
         std::array<double, 3>{-89.9, 180.0, 75.0}}) {
@@ -339,20 +340,14 @@ TEST(TinOverlay, APlanetKeepsItsClosedSurfaceWithARoadStitchedIn) {
       SCOPED_TRACE(std::to_string(at[0]) + ", " + std::to_string(at[1]) +
                    (mode == OverlayMode::kStitch ? " stitch" : " stencil"));
       const bool over = at[0] != 89.0;
-      if (over && mode == OverlayMode::kStitch) {
-        try {
-          io::overlayFromFiles(dir / "p.planet", io::ImportOptions{}, dir / "road.obj",
-                               dir / "pole.obj", io::ExportFormat::kObj, o, notes);
-          ADD_FAILURE() << "a road over lat-long's pole was stitched";
-        } catch (const core::InputError& e) {
-          EXPECT_NE(std::string(e.what()).find("--mode stencil"), std::string::npos) << e.what();
-        }
-        continue;
-      }
       const nlohmann::json pole =
           io::overlayFromFiles(dir / "p.planet", io::ImportOptions{}, dir / "road.obj",
                                dir / "pole.obj", io::ExportFormat::kObj, o, notes);
       EXPECT_EQ(pole["road_holds_pole"], over) << pole.dump();
+      if (mode == OverlayMode::kStitch) {
+        EXPECT_EQ(pole["stitched_in"], over ? "road plane" : "grid");
+        EXPECT_LT(pole["added_vertex_error_m"].get<double>(), 1e-6);
+      }
       expectOneClosedSurface(pole);
       EXPECT_LE(pole["road_stray_m"].get<double>(), 2000.0);
       EXPECT_GT(pole["road_group_triangles"].get<int>(), 0);
@@ -361,11 +356,11 @@ TEST(TinOverlay, APlanetKeepsItsClosedSurfaceWithARoadStitchedIn) {
 }
 
 // Roads over and beside lat-long's poles at random places and headings (refused until
-// 2026-12-07): one closed surface each time, stenciled, and stitched where the road does not
-// hold the pole (over it a stitch is refused by name). Stitched, a road vertex whose grid point
-// lies in a terrain triangle with two corners on the pole's row (no area on the surface) is
-// draped onto the triangle its point lies on; blended there it lay on the triangle's one line,
-// and the surface folded (Euler 3, a non-manifold edge, at 89 N).
+// 2026-12-07): one closed surface each time, stenciled and stitched (a road that holds the pole
+// stitched in its own plane since 2026-12-08; refused by name before). Stitched, a road vertex
+// whose grid point lies in a terrain triangle with two corners on the pole's row (no area on the
+// surface) is draped onto the triangle its point lies on; blended there it lay on the triangle's
+// one line, and the surface folded (Euler 3, a non-manifold edge, at 89 N).
 TEST(TinOverlay, RoadsOverAndBesideLatLongsPolesKeepTheSurfaceClosed) {
   const auto dir = testkit::freshDir("tin_overlay_poles");
   io::savePlanet(testkit::bumpyTerrain(6, 2, 20000.0), dir / "p.planet");
@@ -381,7 +376,6 @@ TEST(TinOverlay, RoadsOverAndBesideLatLongsPolesKeepTheSurfaceClosed) {
     const double off = trial % 4 < 2 ? 0.15 * unit(rng) : 2 * unit(rng);
     const double lat = (trial % 2 ? 1 : -1) * (90 - off), lon = 360 * unit(rng) - 180;
     const double heading = 360 * unit(rng);
-    bool holds = false;
     for (const auto mode : {OverlayMode::kStencil, OverlayMode::kStitch}) {
       io::OverlayOptions o;
       o.mode = mode;
@@ -391,23 +385,20 @@ TEST(TinOverlay, RoadsOverAndBesideLatLongsPolesKeepTheSurfaceClosed) {
       SCOPED_TRACE(std::to_string(lat) + ", " + std::to_string(lon) + " heading " +
                    std::to_string(heading) +
                    (mode == OverlayMode::kStitch ? " stitch" : " stencil"));
-      if (holds && mode == OverlayMode::kStitch) {
-        EXPECT_THROW(io::overlayFromFiles(dir / "p.planet", io::ImportOptions{}, dir / "road.obj",
-                                          dir / "out.obj", io::ExportFormat::kObj, o, notes),
-                     core::InputError);
-        continue;
-      }
       const nlohmann::json s =
           io::overlayFromFiles(dir / "p.planet", io::ImportOptions{}, dir / "road.obj",
                                dir / "out.obj", io::ExportFormat::kObj, o, notes);
       expectOneClosedSurface(s);
       EXPECT_LE(s["road_stray_m"].get<double>(), 2000.0);
       EXPECT_GT(s["road_group_triangles"].get<int>(), 0);
-      holds = s["road_holds_pole"].get<bool>();
+      const bool holds = s["road_holds_pole"].get<bool>();
+      if (mode == OverlayMode::kStitch) {
+        EXPECT_EQ(s["stitched_in"], holds ? "road plane" : "grid");
+      }
       if (off < 0.15) {
         EXPECT_TRUE(holds);
       }
-      over += holds;
+      over += holds && mode == OverlayMode::kStitch;
     }
   }
   EXPECT_GE(over, trials / 2);

@@ -13,6 +13,8 @@
 #include "io/planet_file.hpp"
 #include "io/road_placement.hpp"
 #include "io/tin_export.hpp"
+#include "tin/plane_stitch.hpp"
+#include "tin/road_checks.hpp"
 #include "tin/tin_check.hpp"
 #include "tin/tin_locator.hpp"
 
@@ -114,6 +116,115 @@ MeshTerrain meshTerrain(const ObjTriangles& mesh, std::optional<double> spacing,
   return t;
 }
 
+// What an overlay made: the mesh (positions, groups), its triangles for the topology check, and
+// the summary's keys that depend on how it was made.
+struct OverlayMesh {
+  MeshData mesh;
+  std::vector<std::array<std::uint32_t, 3>> triangles;
+  nlohmann::json summary;
+};
+
+OverlayMesh toOverlayMesh(std::vector<Eigen::Vector3d> positions,
+                          std::vector<std::array<std::uint32_t, 3>> triangles,
+                          const std::vector<std::uint8_t>& group, tin::OverlayMode mode) {
+  OverlayMesh made;
+  made.mesh.positions = std::move(positions);
+  for (const auto& t : triangles)
+    made.mesh.indices.insert(made.mesh.indices.end(), t.begin(), t.end());
+  made.mesh.triangleGroup = group;
+  made.mesh.groupNames = {"terrain", "road"};
+  made.mesh.description =
+      "PlanetSculpt TIN with a road " +
+      std::string(mode == tin::OverlayMode::kStitch ? "stitched" : "stenciled") +
+      " in: " + std::to_string(made.mesh.positions.size()) + " vertices, " +
+      std::to_string(triangles.size()) + " triangles, metres";
+  made.triangles = std::move(triangles);
+  return made;
+}
+
+// The road laid in the terrain's grid (tin/overlay.hpp), then welded where the chart makes
+// lattice points one.
+OverlayMesh overlayInGrid(const tin::SampleField& field, const tin::Tin& terrainTin,
+                          const LaidRoad& laid, tin::OverlayMode mode, const std::string& name) {
+  tin::OverlayResult r;
+  try {
+    r = tin::overlayRoad(field, terrainTin, laid.road, mode);
+  } catch (const core::InputError& e) {
+    throw core::InputError(name + ": " + e.what());
+  }
+  const tin::WeldedMesh welded = tin::weldTin(field, r.tin);
+  std::vector<Eigen::Vector3d> positions(welded.vertices, Eigen::Vector3d::Zero());
+  for (std::size_t v = 0; v < r.tin.xy.size(); ++v) positions[welded.vertexOf[v]] = r.positions[v];
+  std::vector<std::uint8_t> group;
+  for (std::size_t k = 0; k < welded.triangles.size(); ++k)
+    group.push_back(r.onRoad[welded.sourceTriangle[k]]);
+  OverlayMesh made = toOverlayMesh(std::move(positions), welded.triangles, group, mode);
+  const tin::OverlayReport& rep = r.report;
+  // in the grid: cut along a planet's glued sides, edges halved where the chart bends them, a
+  // copy beyond each glued side it crosses
+  made.summary = {{"road_triangles_laid", rep.roadTriangles},
+                  {"road_pieces", laid.pieces},
+                  {"road_stray_m", laid.strayM},
+                  {"road_halved_edges", laid.halvedEdges},
+                  {"road_triangles_clipped", rep.clippedRoadTriangles}};
+  if (mode == tin::OverlayMode::kStitch) {
+    made.summary["stitched_in"] = "grid";
+    made.summary["crossing_vertices"] = rep.crossingVertices;
+    made.summary["added_vertex_error_m"] = rep.addedVertexErrorM;
+    if (field.metric == tin::ErrorMetric::kChart3d) {
+      made.summary["road_draped_edges"] = rep.drapedEdges;
+      made.summary["road_undraped_edges"] = rep.undrapedEdges;
+      made.summary["road_drape_move_m"] = rep.drapeMoveM;
+    }
+  } else {
+    made.summary["removed_terrain_vertices"] = rep.removedTerrainVertices;
+    made.summary["refill_vertices"] = rep.refillVertices;
+    made.summary["footprint_error_m"] = rep.footprintErrorM;
+    made.summary["outside_error_ratio"] = rep.outsideErrorRatio;
+  }
+  return made;
+}
+
+// The road stitched into the planet's welded terrain mesh in its own plane (tin/plane_stitch.hpp):
+// its vertices and edges exactly where the plane's rays through them meet the mesh.
+OverlayMesh stitchInRoadPlane(const tin::SampleField& field, const tin::Tin& terrainTin,
+                              const ObjTriangles& roadObj, const std::array<double, 3>& at,
+                              const std::string& name) {
+  const tin::WeldedMesh welded = tin::weldTin(field, terrainTin);
+  tin::SurfaceMesh surface;
+  surface.positions.assign(welded.vertices, Eigen::Vector3d::Zero());
+  for (std::size_t v = terrainTin.xy.size(); v-- > 0;)  // the first of a welded vertex's sources
+    surface.positions[welded.vertexOf[v]] =
+        field.positionAt(terrainTin.xy[v].x(), terrainTin.xy[v].y(), terrainTin.h[v]);
+  surface.triangles = welded.triangles;
+  const RoadFrame frame = roadFrame(*field.chart, at, name);
+  const tin::RoadPlane plane{Eigen::Vector3d::Zero(), frame.origin, frame.up, frame.x, frame.y};
+  std::vector<Eigen::Vector2d> xy;
+  for (const Eigen::Vector3d& p : roadObj.vertices) xy.emplace_back(p.x(), p.y());
+  tin::PlaneStitch stitched;
+  try {
+    stitched = tin::stitchInPlane(surface, plane, xy, roadObj.triangles);
+  } catch (const core::InputError& e) {
+    throw core::InputError(name + ": " + e.what());
+  }
+  OverlayMesh made = toOverlayMesh(std::move(stitched.mesh.positions), stitched.mesh.triangles,
+                                   stitched.onRoad, tin::OverlayMode::kStitch);
+  // Its edges run exactly along the planes through the centre: nothing strays, nothing halved.
+  made.summary = {{"stitched_in", "road plane"},
+                  {"road_triangles_laid", roadObj.triangles.size()},
+                  {"road_pieces", 1},
+                  {"road_stray_m", 0.0},
+                  {"road_halved_edges", 0},
+                  {"road_triangles_clipped", 0},
+                  {"remeshed_terrain_triangles", stitched.regionTriangles},
+                  {"crossing_vertices", stitched.crossingVertices},
+                  {"added_vertex_error_m", stitched.addedVertexErrorM},
+                  {"road_draped_edges", tin::edgesOf(roadObj.triangles).size()},
+                  {"road_undraped_edges", 0},
+                  {"road_drape_move_m", 0.0}};
+  return made;
+}
+
 }  // namespace
 
 LaidRoad placeRoad(const ObjTriangles& obj, const tin::SampleField& field, const OverlayOptions& o,
@@ -176,77 +287,33 @@ nlohmann::json overlayFromFiles(const std::filesystem::path& terrainPath,
   }
   field.uniformTolerance = o.errorM;
   const LaidRoad laid = placeRoad(roadObj, field, o, roadPath.string());
-  if (laid.holdsPole && o.mode == tin::OverlayMode::kStitch)
-    throw core::InputError(
-        roadPath.string() +
-        ": the road holds a pole of the lat-long chart, where a grid row is one point: stitched, "
-        "its edges and the terrain's would cross there in points the surface cannot tell apart; "
-        "lay it with --mode stencil (or place it off the pole)");
-  const tin::Road& road = laid.road;
   const tin::Tin terrainTin = meshTin ? *meshTin : tin::buildTin(field, {});
-  tin::OverlayResult r;
-  try {
-    r = tin::overlayRoad(field, terrainTin, road, o.mode);
-  } catch (const core::InputError& e) {
-    throw core::InputError(roadPath.string() + ": " + e.what());
-  }
-
-  const tin::WeldedMesh welded = tin::weldTin(field, r.tin);
-  const tin::MeshTopology top = tin::meshTopology(welded.vertices, welded.triangles);
-  MeshData mesh;
-  mesh.positions.assign(welded.vertices, Eigen::Vector3d::Zero());
-  for (std::size_t v = 0; v < r.tin.xy.size(); ++v)
-    mesh.positions[welded.vertexOf[v]] = r.positions[v];
-  std::size_t onRoad = 0;
-  for (std::size_t k = 0; k < welded.triangles.size(); ++k) {
-    const auto& t = welded.triangles[k];
-    mesh.indices.insert(mesh.indices.end(), t.begin(), t.end());
-    const std::uint8_t g = r.onRoad[welded.sourceTriangle[k]];
-    mesh.triangleGroup.push_back(g);
-    onRoad += g;
-  }
-  mesh.groupNames = {"terrain", "road"};
   const bool stitch = o.mode == tin::OverlayMode::kStitch;
-  mesh.description = "PlanetSculpt TIN with a road " +
-                     std::string(stitch ? "stitched" : "stenciled") +
-                     " in: " + std::to_string(welded.vertices) + " vertices, " +
-                     std::to_string(welded.triangles.size()) + " triangles, metres";
-  const tin::OverlayReport& rep = r.report;
+  // Over one of lat-long's poles a grid row is one point, and the grid's stitch cannot tell its
+  // crossings there apart: the road is stitched in its own plane instead (tin/plane_stitch.hpp).
+  const OverlayMesh made =
+      laid.holdsPole && stitch
+          ? stitchInRoadPlane(field, terrainTin, roadObj, *o.at, roadPath.string())
+          : overlayInGrid(field, terrainTin, laid, o.mode, roadPath.string());
+  const MeshData& mesh = made.mesh;
+  const tin::MeshTopology top = tin::meshTopology(mesh.positions.size(), made.triangles);
+  std::size_t onRoad = 0;
+  for (const std::uint8_t g : mesh.triangleGroup) onRoad += g;
   nlohmann::json summary = {{"file", out.string()},
                             {"format", toString(format)},
                             {"mode", stitch ? "stitch" : "stencil"},
                             {"error_m", o.errorM},
-                            {"terrain_tin_vertices", rep.terrainVertices},
+                            {"terrain_tin_vertices", terrainTin.xy.size()},
                             {"road_vertices", roadObj.vertices.size()},
                             {"road_triangles", roadObj.triangles.size()},
-                            // in the grid: cut along a planet's glued sides, edges halved where
-                            // the chart bends them, a copy beyond each glued side it crosses
-                            {"road_triangles_laid", rep.roadTriangles},
-                            {"road_pieces", laid.pieces},
                             {"road_holds_pole", laid.holdsPole},
-                            {"road_stray_m", laid.strayM},
-                            {"road_halved_edges", laid.halvedEdges},
-                            {"road_triangles_clipped", rep.clippedRoadTriangles},
-                            {"vertices", welded.vertices},
-                            {"triangles", welded.triangles.size()},
+                            {"vertices", mesh.positions.size()},
+                            {"triangles", made.triangles.size()},
                             {"road_group_triangles", onRoad},
                             {"euler", top.euler()},
                             {"border_edges", top.borderEdges},
                             {"non_manifold_edges", top.nonManifoldEdges}};
-  if (stitch) {
-    summary["crossing_vertices"] = rep.crossingVertices;
-    summary["added_vertex_error_m"] = rep.addedVertexErrorM;
-    if (field.metric == tin::ErrorMetric::kChart3d) {
-      summary["road_draped_edges"] = rep.drapedEdges;
-      summary["road_undraped_edges"] = rep.undrapedEdges;
-      summary["road_drape_move_m"] = rep.drapeMoveM;
-    }
-  } else {
-    summary["removed_terrain_vertices"] = rep.removedTerrainVertices;
-    summary["refill_vertices"] = rep.refillVertices;
-    summary["footprint_error_m"] = rep.footprintErrorM;
-    summary["outside_error_ratio"] = rep.outsideErrorRatio;
-  }
+  summary.update(made.summary);
   writeMeshFile(mesh, meshFormatOf(format), out,
                 nlohmann::json({{"planetsculpt", {{"overlay", summary}}}}).dump());
   return summary;

@@ -9,6 +9,7 @@
 #include "core/input_error.hpp"
 #include "tin/cdt.hpp"
 #include "tin/greedy_inserter.hpp"
+#include "tin/road_checks.hpp"
 #include "tin/road_drape.hpp"
 #include "tin/tin_check.hpp"
 #include "tin/tin_locator.hpp"
@@ -40,10 +41,6 @@ std::vector<PolyVertex> clipHalfPlane(const std::vector<PolyVertex>& in, int axi
     }
   }
   return out;
-}
-
-double signedArea(const Eigen::Vector2d& a, const Eigen::Vector2d& b, const Eigen::Vector2d& c) {
-  return 0.5 * ((b - a).x() * (c - a).y() - (b - a).y() * (c - a).x());
 }
 
 // The road's part inside [0, xMax] x [0, yMax]: triangles wholly inside kept, the others cut
@@ -143,57 +140,6 @@ void addGluedTwins(Cdt& cdt, const SampleField& field) {
       if (std::isnan(t->info().height)) t->info().height = h;
     }
   }
-}
-
-std::set<std::pair<std::uint32_t, std::uint32_t>> edgesOf(
-    const std::vector<std::array<std::uint32_t, 3>>& triangles) {
-  std::set<std::pair<std::uint32_t, std::uint32_t>> edges;
-  for (const auto& t : triangles)
-    for (int k = 0; k < 3; ++k) {
-      const std::uint32_t a = t[std::size_t(k)], b = t[std::size_t((k + 1) % 3)];
-      edges.insert({std::min(a, b), std::max(a, b)});
-    }
-  return edges;
-}
-
-// A road must be a proper mesh in the plane: no degenerate triangle (checked as given, before
-// clipping), no two edges crossing, no two triangles overlapping (checked on the clipped road).
-void refuseDegenerateTriangles(const Road& t) {
-  for (std::size_t k = 0; k < t.triangles.size(); ++k) {
-    const auto& tri = t.triangles[k];
-    for (const auto v : tri)
-      if (v >= t.xy.size() || v >= t.h.size())
-        throw core::InputError("road triangle " + std::to_string(k + 1) + " names vertex " +
-                               std::to_string(v + 1) + " of " + std::to_string(t.xy.size()));
-    if (std::abs(signedArea(t.xy[tri[0]], t.xy[tri[1]], t.xy[tri[2]])) < 1e-12)
-      throw core::InputError("road triangle " + std::to_string(k + 1) +
-                             " is degenerate (its corners are collinear or repeated)");
-  }
-}
-
-void refuseSelfIntersection(const Road& t, const TinLocator& footprint) {
-  Cdt cdt;
-  std::vector<VertexHandle> v;
-  for (const auto& p : t.xy) v.push_back(cdt.insert(Point(p.x(), p.y())));
-  const std::size_t distinct = cdt.number_of_vertices();
-  for (const auto& [a, b] : edgesOf(t.triangles)) cdt.insert_constraint(v[a], v[b]);
-  if (cdt.number_of_vertices() != distinct)
-    throw core::InputError(
-        "the road crosses itself: " + std::to_string(cdt.number_of_vertices() - distinct) +
-        " points where its edges cross (seen from above)");
-  double roadArea = 0, covered = 0;
-  for (const auto& tri : t.triangles)
-    roadArea += std::abs(signedArea(t.xy[tri[0]], t.xy[tri[1]], t.xy[tri[2]]));
-  for (auto f = cdt.finite_faces_begin(); f != cdt.finite_faces_end(); ++f) {
-    const Eigen::Vector2d a(f->vertex(0)->point().x(), f->vertex(0)->point().y());
-    const Eigen::Vector2d b(f->vertex(1)->point().x(), f->vertex(1)->point().y());
-    const Eigen::Vector2d c(f->vertex(2)->point().x(), f->vertex(2)->point().y());
-    if (footprint.contains((a + b + c) / 3.0, 0.0)) covered += std::abs(signedArea(a, b, c));
-  }
-  if (roadArea > covered * (1 + 1e-9) + 1e-12)
-    throw core::InputError("the road overlaps itself: its triangles cover " +
-                           core::exactNumber(roadArea) + " lattice units^2 but only " +
-                           core::exactNumber(covered) + " of ground");
 }
 
 // The road's vertices and edges into the triangulation, each edge a constraint (draped: a chain
