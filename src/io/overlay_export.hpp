@@ -30,8 +30,8 @@ struct OverlayOptions {
 // The road's vertices (x, y: metres in its own frame; z: height in metres above the terrain's
 // datum) in the terrain's lattice coordinates; on a planet laid by io/road_placement.hpp, a road
 // across a glued side of the chart's grid in one copy for each side it reaches. Throws
-// core::InputError for a placement off the lattice's usable part (lat-long's pole rows, a road
-// around the end of an octahedral fold, one that folds over on a tube).
+// core::InputError for a placement the grid cannot hold (a road wrapped round the end of an
+// octahedral fold, one that folds over on a tube or turns over by a lat-long pole).
 LaidRoad placeRoad(const ObjTriangles& road, const tin::SampleField& field,
                    const OverlayOptions& options, const std::string& name);
 
