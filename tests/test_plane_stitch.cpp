@@ -91,6 +91,7 @@ TEST(PlaneStitch, RandomRoadsLeaveThePlanetsSurfaceClosedAndUnchanged) {
   std::vector<Planet> planets;
   planets.push_back(weldedPlanet(testkit::bumpyTerrain(6, 2, 20000.0)));
   planets.push_back(weldedPlanet(testkit::bumpyOctahedralTerrain(6, 2, 20000.0)));
+  planets.push_back(weldedPlanet(testkit::levelTerrain(7)));
   std::mt19937 rng(11);
   std::uniform_real_distribution<double> unit(0.0, 1.0);
   const int trials = testkit::underAsan() ? 6 : 24;

@@ -319,18 +319,22 @@ TEST(TinOverlay, APlanetKeepsItsClosedSurfaceWithARoadStitchedIn) {
                                     dir / "x.obj", io::ExportFormat::kObj, o, notes),
                core::InputError)
       << "a planet needs --at";
-  // Across the seam (since 2026-12-07; refused before): a piece on either side, one surface.
+  // Across the seam (since 2026-12-07; refused before): stenciled, a piece on either side of it
+  // in the grid; stitched, in the road's plane, where there is no seam. One surface either way.
   o.at = std::array<double, 3>{10.0, 179.9, 0.0};
-  const nlohmann::json seam =
-      io::overlayFromFiles(dir / "p.planet", io::ImportOptions{}, dir / "road.obj",
-                           dir / "seam.obj", io::ExportFormat::kObj, o, notes);
-  expectOneClosedSurface(seam);
-  EXPECT_EQ(seam["road_pieces"], 2);
-  EXPECT_LE(seam["road_stray_m"].get<double>(), 2000.0);
+  for (const auto mode : {OverlayMode::kStencil, OverlayMode::kStitch}) {
+    o.mode = mode;
+    const nlohmann::json seam =
+        io::overlayFromFiles(dir / "p.planet", io::ImportOptions{}, dir / "road.obj",
+                             dir / "seam.obj", io::ExportFormat::kObj, o, notes);
+    expectOneClosedSurface(seam);
+    EXPECT_EQ(seam["road_pieces"], mode == OverlayMode::kStencil ? 2 : 1);
+    EXPECT_LE(seam["road_stray_m"].get<double>(), 2000.0);
+  }
   // Beside a pole and over it (since 2026-12-07; refused before: there a grid row is one point):
   // one closed surface, the pole one vertex. Over it, stenciled (the road's fan round the pole
-  // spread along the pole's row) and stitched (since 2026-12-08, in the road's own plane:
-  // tin/plane_stitch.hpp; refused before).
+  // spread along the pole's row) and stitched (since 2026-12-08 in the road's own plane, as every
+  // stitch on a sphere: tin/plane_stitch.hpp; refused before).
   for (const auto& at :
        {std::array<double, 3>{89.0, 0.0, 0.0}, std::array<double, 3>{90.0, 30.0, 0.0},
         std::array<double, 3>{-89.9, 180.0, 75.0}}) {
@@ -345,7 +349,7 @@ TEST(TinOverlay, APlanetKeepsItsClosedSurfaceWithARoadStitchedIn) {
                                dir / "pole.obj", io::ExportFormat::kObj, o, notes);
       EXPECT_EQ(pole["road_holds_pole"], over) << pole.dump();
       if (mode == OverlayMode::kStitch) {
-        EXPECT_EQ(pole["stitched_in"], over ? "road plane" : "grid");
+        EXPECT_EQ(pole["stitched_in"], "road plane");
         EXPECT_LT(pole["added_vertex_error_m"].get<double>(), 1e-6);
       }
       expectOneClosedSurface(pole);
@@ -356,11 +360,11 @@ TEST(TinOverlay, APlanetKeepsItsClosedSurfaceWithARoadStitchedIn) {
 }
 
 // Roads over and beside lat-long's poles at random places and headings (refused until
-// 2026-12-07): one closed surface each time, stenciled and stitched (a road that holds the pole
-// stitched in its own plane since 2026-12-08; refused by name before). Stitched, a road vertex
-// whose grid point lies in a terrain triangle with two corners on the pole's row (no area on the
-// surface) is draped onto the triangle its point lies on; blended there it lay on the triangle's
-// one line, and the surface folded (Euler 3, a non-manifold edge, at 89 N).
+// 2026-12-07): one closed surface each time, stenciled and stitched (stitched in the road's own
+// plane since 2026-12-08; one that holds the pole was refused by name before). Stitched, a road
+// vertex whose grid point lies in a terrain triangle with two corners on the pole's row (no area on
+// the surface) is draped onto the triangle its point lies on; blended there it lay on the
+// triangle's one line, and the surface folded (Euler 3, a non-manifold edge, at 89 N).
 TEST(TinOverlay, RoadsOverAndBesideLatLongsPolesKeepTheSurfaceClosed) {
   const auto dir = testkit::freshDir("tin_overlay_poles");
   io::savePlanet(testkit::bumpyTerrain(6, 2, 20000.0), dir / "p.planet");
@@ -393,7 +397,7 @@ TEST(TinOverlay, RoadsOverAndBesideLatLongsPolesKeepTheSurfaceClosed) {
       EXPECT_GT(s["road_group_triangles"].get<int>(), 0);
       const bool holds = s["road_holds_pole"].get<bool>();
       if (mode == OverlayMode::kStitch) {
-        EXPECT_EQ(s["stitched_in"], holds ? "road plane" : "grid");
+        EXPECT_EQ(s["stitched_in"], "road plane");
       }
       if (off < 0.15) {
         EXPECT_TRUE(holds);
@@ -442,6 +446,39 @@ TEST(TinOverlay, ARoadTouchingAGluedSideKeepsTheSurfaceClosed) {
       EXPECT_GT(s["road_group_triangles"].get<int>(), 0);
     }
   }
+}
+
+// Where the terrain's TIN is not seen one to one from the planet's centre a stitch goes in the
+// grid, with a note saying so: at the end of an octahedral fold (the equator at longitudes 0, 90,
+// 180 and -90 degrees, where the grid turns half round) a TIN triangle can have its three
+// corners on the equator, seen edge-on from the centre.
+TEST(TinOverlay, AStitchTheRoadsPlaneCannotSeeGoesInTheGrid) {
+  const auto dir = testkit::freshDir("tin_overlay_unseen");
+  // On this planet one of the four places has such a triangle (found by a scan over grids,
+  // reliefs and errors: such triangles are rare; a 1025^2 Mars at 50 m has one at 0 N, 180 E).
+  io::savePlanet(testkit::bumpyOctahedralTerrain(7, 2, 20000.0), dir / "p.planet");
+  std::ofstream(dir / "road.obj") << "v -150000 -20000 0\nv 150000 -20000 0\nv 150000 20000 0\n"
+                                     "v -150000 20000 0\nf 1 2 3\nf 1 3 4\n";
+  int inGrid = 0;
+  for (const double lon : {0.0, 90.0, 180.0, -90.0}) {
+    io::OverlayOptions o;
+    o.errorM = 2000.0;
+    o.at = std::array<double, 3>{0.0, lon, 0.0};
+    std::vector<std::string> notes;
+    const nlohmann::json s =
+        io::overlayFromFiles(dir / "p.planet", io::ImportOptions{}, dir / "road.obj",
+                             dir / "out.obj", io::ExportFormat::kObj, o, notes);
+    SCOPED_TRACE(std::to_string(lon));
+    expectOneClosedSurface(s);
+    EXPECT_GT(s["road_group_triangles"].get<int>(), 0);
+    const bool grid = s["stitched_in"] == "grid";
+    inGrid += grid;
+    EXPECT_EQ(grid, notes.size() == 1);
+    if (grid) {
+      EXPECT_NE(notes[0].find("grid, not in the road's plane"), std::string::npos) << notes[0];
+    }
+  }
+  EXPECT_GT(inGrid, 0);
 }
 
 }  // namespace

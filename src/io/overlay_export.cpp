@@ -12,6 +12,7 @@
 #include "io/mesh_writers.hpp"
 #include "io/planet_file.hpp"
 #include "io/road_placement.hpp"
+#include "io/road_poles.hpp"
 #include "io/tin_export.hpp"
 #include "tin/plane_stitch.hpp"
 #include "tin/road_checks.hpp"
@@ -188,7 +189,7 @@ OverlayMesh overlayInGrid(const tin::SampleField& field, const tin::Tin& terrain
 // The road stitched into the planet's welded terrain mesh in its own plane (tin/plane_stitch.hpp):
 // its vertices and edges exactly where the plane's rays through them meet the mesh.
 OverlayMesh stitchInRoadPlane(const tin::SampleField& field, const tin::Tin& terrainTin,
-                              const ObjTriangles& roadObj, const std::array<double, 3>& at,
+                              const ObjTriangles& roadObj, const RoadFrame& frame,
                               const std::string& name) {
   const tin::WeldedMesh welded = tin::weldTin(field, terrainTin);
   tin::SurfaceMesh surface;
@@ -197,13 +198,14 @@ OverlayMesh stitchInRoadPlane(const tin::SampleField& field, const tin::Tin& ter
     surface.positions[welded.vertexOf[v]] =
         field.positionAt(terrainTin.xy[v].x(), terrainTin.xy[v].y(), terrainTin.h[v]);
   surface.triangles = welded.triangles;
-  const RoadFrame frame = roadFrame(*field.chart, at, name);
   const tin::RoadPlane plane{Eigen::Vector3d::Zero(), frame.origin, frame.up, frame.x, frame.y};
   std::vector<Eigen::Vector2d> xy;
   for (const Eigen::Vector3d& p : roadObj.vertices) xy.emplace_back(p.x(), p.y());
   tin::PlaneStitch stitched;
   try {
     stitched = tin::stitchInPlane(surface, plane, xy, roadObj.triangles);
+  } catch (const tin::SurfaceUnseenInPlane&) {
+    throw;  // the caller's to stitch in the grid instead
   } catch (const core::InputError& e) {
     throw core::InputError(name + ": " + e.what());
   }
@@ -225,6 +227,62 @@ OverlayMesh stitchInRoadPlane(const tin::SampleField& field, const tin::Tin& ter
   return made;
 }
 
+void requirePlace(const OverlayOptions& o, const std::string& name) {
+  if (!o.at)
+    throw core::InputError(name +
+                           ": on a planet the road needs --at (LAT,LON[,HEADING] on a "
+                           "sphere; AROUND,ACROSS on a torus; AROUND,ALONG on a cylinder)");
+}
+
+// Whether the road's footprint in its plane holds one of lat-long's poles.
+bool holdsLatLongPole(const core::Chart& chart, double m, const RoadFrame& frame,
+                      const ObjTriangles& road) {
+  for (const auto& pole : polesInPlane(chart, m, frame)) {
+    const Eigen::Vector2d p = pole.first;
+    for (const auto& t : road.triangles) {
+      const Eigen::Vector2d a = road.vertices[t[0]].head<2>(), b = road.vertices[t[1]].head<2>(),
+                            c = road.vertices[t[2]].head<2>();
+      const double whole = tin::signedArea(a, b, c);
+      if (whole != 0 && tin::signedArea(p, b, c) / whole >= -1e-12 &&
+          tin::signedArea(a, p, c) / whole >= -1e-12 && tin::signedArea(a, b, p) / whole >= -1e-12)
+        return true;
+    }
+  }
+  return false;
+}
+
+struct Overlaid {
+  OverlayMesh made;
+  bool holdsPole = false;
+};
+
+// On a sphere a stitched road goes in its own plane (tin/plane_stitch.hpp): exact, and blind to
+// the chart's grid, whose pole rows and folds it never meets. Where the surface about it is not
+// seen one to one from the centre (a TIN triangle with three corners on one great circle, as at
+// the end of an octahedral fold), and for a stencil, a flat terrain or a tube, it is laid in the
+// grid (tin/overlay.hpp).
+Overlaid overlayRoadOnto(const tin::SampleField& field, const tin::Tin& terrainTin,
+                         const ObjTriangles& roadObj, const OverlayOptions& o,
+                         const std::string& name, std::vector<std::string>& notes) {
+  const bool sphere = field.metric == tin::ErrorMetric::kChart3d && field.wholeChart() &&
+                      field.chart->sphereRadius() > 0;
+  if (o.mode == tin::OverlayMode::kStitch && sphere) {
+    requirePlace(o, name);
+    const RoadFrame frame = roadFrame(*field.chart, *o.at, name);
+    const bool holds = holdsLatLongPole(*field.chart, field.width - 1, frame, roadObj);
+    try {
+      return {stitchInRoadPlane(field, terrainTin, roadObj, frame, name), holds};
+    } catch (const tin::SurfaceUnseenInPlane& e) {
+      // In the grid, a road over lat-long's pole folds the surface (its row is one point).
+      if (holds) throw core::InputError(name + ": " + e.what());
+      notes.push_back(name + ": stitched in the " + field.chart->name() +
+                      " chart's grid, not in the road's plane: " + e.what());
+    }
+  }
+  const LaidRoad laid = placeRoad(roadObj, field, o, name);
+  return {overlayInGrid(field, terrainTin, laid, o.mode, name), laid.holdsPole};
+}
+
 }  // namespace
 
 LaidRoad placeRoad(const ObjTriangles& obj, const tin::SampleField& field, const OverlayOptions& o,
@@ -243,10 +301,7 @@ LaidRoad placeRoad(const ObjTriangles& obj, const tin::SampleField& field, const
     }
     return laid;
   }
-  if (!o.at)
-    throw core::InputError(name +
-                           ": on a planet the road needs --at (LAT,LON[,HEADING] on a "
-                           "sphere; AROUND,ACROSS on a torus; AROUND,ALONG on a cylinder)");
+  requirePlace(o, name);
   laid = layRoadOnPlanet(obj, *field.chart, field.width - 1, *o.at, o.errorM, name);
   for (Eigen::Vector2d& p : laid.road.xy) p -= Eigen::Vector2d(field.i0, field.j0);
   return laid;
@@ -286,15 +341,11 @@ nlohmann::json overlayFromFiles(const std::filesystem::path& terrainPath,
     field = heightSampleField(samples);
   }
   field.uniformTolerance = o.errorM;
-  const LaidRoad laid = placeRoad(roadObj, field, o, roadPath.string());
   const tin::Tin terrainTin = meshTin ? *meshTin : tin::buildTin(field, {});
   const bool stitch = o.mode == tin::OverlayMode::kStitch;
-  // Over one of lat-long's poles a grid row is one point, and the grid's stitch cannot tell its
-  // crossings there apart: the road is stitched in its own plane instead (tin/plane_stitch.hpp).
-  const OverlayMesh made =
-      laid.holdsPole && stitch
-          ? stitchInRoadPlane(field, terrainTin, roadObj, *o.at, roadPath.string())
-          : overlayInGrid(field, terrainTin, laid, o.mode, roadPath.string());
+  const Overlaid overlaid =
+      overlayRoadOnto(field, terrainTin, roadObj, o, roadPath.string(), notes);
+  const OverlayMesh& made = overlaid.made;
   const MeshData& mesh = made.mesh;
   const tin::MeshTopology top = tin::meshTopology(mesh.positions.size(), made.triangles);
   std::size_t onRoad = 0;
@@ -306,7 +357,7 @@ nlohmann::json overlayFromFiles(const std::filesystem::path& terrainPath,
                             {"terrain_tin_vertices", terrainTin.xy.size()},
                             {"road_vertices", roadObj.vertices.size()},
                             {"road_triangles", roadObj.triangles.size()},
-                            {"road_holds_pole", laid.holdsPole},
+                            {"road_holds_pole", overlaid.holdsPole},
                             {"vertices", mesh.positions.size()},
                             {"triangles", made.triangles.size()},
                             {"road_group_triangles", onRoad},

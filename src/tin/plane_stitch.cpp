@@ -66,7 +66,7 @@ PlaneRegion planeRegion(const SurfaceMesh& surface, const std::vector<Eigen::Vec
   for (const std::uint32_t t : region.triangles) {
     const auto& tri = surface.triangles[t];
     if (!(region.orientation * signedArea(seen[tri[0]], seen[tri[1]], seen[tri[2]]) > 0))
-      throw core::InputError(
+      throw SurfaceUnseenInPlane(
           "the surface folds over about the road as seen from the planet's centre (a triangle "
           "there is seen edge-on or from behind): it cannot be stitched in the road's plane");
     for (int k = 0; k < 3; ++k) {
@@ -77,7 +77,7 @@ PlaneRegion planeRegion(const SurfaceMesh& surface, const std::vector<Eigen::Vec
   // Every point of the road's square covered once: no border edge of the region meets it.
   for (const auto& [edge, count] : uses)
     if (count == 1 && segmentMeetsSquare(seen[edge.first], seen[edge.second], roadHalf))
-      throw core::InputError(
+      throw SurfaceUnseenInPlane(
           "the surface's triangles about the road reach too far round the planet to be seen in "
           "the road's plane (a TIN this coarse: a smaller --error)");
   return region;
@@ -155,7 +155,7 @@ PlaneStitch stitchInPlane(const SurfaceMesh& surface, const RoadPlane& plane,
     regionVertex[k]->info().height = 0;  // a surface vertex; an added one keeps NaN
   }
   if (cdt.number_of_vertices() != local.size())
-    throw core::InputError(
+    throw SurfaceUnseenInPlane(
         "two of the surface's vertices about the road lie on one ray from the planet's centre: "
         "it cannot be stitched in the road's plane");
   for (const auto& [a, b] : edgesOf(regionTris))

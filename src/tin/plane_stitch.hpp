@@ -16,6 +16,8 @@
 #include <cstdint>
 #include <vector>
 
+#include "core/input_error.hpp"
+
 namespace ps::tin {
 
 struct SurfaceMesh {
@@ -38,10 +40,18 @@ struct PlaneStitch {
   double addedVertexErrorM = 0;      // largest distance of an added vertex from its triangle
 };
 
+// Thrown where the surface about the road is not seen one to one in its plane: a triangle there
+// seen edge-on or from behind (where a chart's grid folds, a triangle of its TIN may have three
+// corners on one great circle), two vertices on one ray, or triangles reaching too far round. A
+// caller may stitch in a chart's grid instead.
+class SurfaceUnseenInPlane : public core::InputError {
+ public:
+  using core::InputError::InputError;
+};
+
 // Throws core::InputError for a road that is not a proper mesh in its plane (degenerate or
-// overlapping triangles, crossing edges), one too large for its plane (the surface about it
-// must face the centre within 60 degrees), and a surface that folds over about the road as seen
-// from the centre (a triangle there seen edge-on or from behind).
+// overlapping triangles, crossing edges) or too large for it (the surface about it must face
+// the centre within 60 degrees), and SurfaceUnseenInPlane (above).
 PlaneStitch stitchInPlane(const SurfaceMesh& surface, const RoadPlane& plane,
                           const std::vector<Eigen::Vector2d>& roadXY,
                           const std::vector<std::array<std::uint32_t, 3>>& roadTriangles);
