@@ -83,12 +83,14 @@ const CommandRegistration kOverlay([](CLI::App& root, CLI::App*& sub) -> Command
       ->required();
   sub->add_option("--mode", a->mode,
                   "stitch (every edge of both kept, split where they cross, heights from the "
-                  "terrain) or stencil (the road's geometry kept, the terrain re-meshed around it)")
+                  "terrain; on a sphere in the road's own plane, its edges exact) or stencil (the "
+                  "road's geometry kept, the terrain re-meshed around it)")
       ->capture_default_str();
   sub->add_option(
       "--error", a->error,
       "The terrain TIN's largest error in metres (the stencil keeps it around the road; on a "
-      "planet the road's edges are halved until none strays further from its path)");
+      "planet a road laid in the grid has its edges halved until none strays further from its "
+      "path)");
   sub->add_option("--at", a->at,
                   "Where the road's origin lies and the heading of its +y axis (degrees clockwise "
                   "from north): on a sphere LAT,LON[,HEADING]; on a torus AROUND,ACROSS[,HEADING] "

@@ -6,7 +6,8 @@
 //     triangulation with intersecting constraints); each vertex the road brings or the crossings
 //     make lies on the terrain mesh (its position is the terrain triangle's own blend of its
 //     corners), so the terrain's surface is unchanged: zero height error. On a planet the road
-//     is draped over the mesh first (tin/road_drape.hpp).
+//     is draped over the mesh first (tin/road_drape.hpp); a sphere's stitch goes in the road's
+//     own plane instead where it can (tin/plane_stitch.hpp, io/overlay_export.cpp).
 //   stencil: the road's vertices, edges and heights are kept; the terrain's vertices under it
 //     are removed, and the terrain around it is meshed again by greedy insertion to the error,
 //     every sample outside the footprint measured.

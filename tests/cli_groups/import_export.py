@@ -231,28 +231,34 @@ def group_import_export():
                 worst = max(worst, abs(x) - 5000, abs(y) - 100e3)
         return worst, len(road_faces)
 
-    # Near the poles the chart bends a straight grid edge: the road's edges are halved until they
-    # stray at most --error (200 m) from its path (25 km edges 2 degrees from the octahedral
-    # south pole strayed 2.1 km before 2026-12-07). Stitched, the road is draped over the terrain's
-    # mesh, its vertices on the normals through their own points and its edges in their own planes
-    # (before, put on the mesh's flat 24 km triangles at their grid points, they slid up to 210 m
-    # at 75 degrees N on lat-long, 176 m at the octahedral south pole): within 1 m of its footprint
-    # where it is laid whole, within 50 m where it is cut at a glued side (its vertices on the
-    # side stay there, at their twins' places).
+    # Near the poles the chart bends a straight grid edge: a road laid in the grid (a stencil) has
+    # its edges halved until they stray at most --error (200 m) from its path (25 km edges 2
+    # degrees from the octahedral south pole strayed 2.1 km before 2026-12-07), and is cut in a
+    # piece on each side of a glued side it crosses (its vertices on the side within 50 m of its
+    # footprint, at their twins' places). A stitch on a sphere goes in the road's own plane since
+    # 2026-12-08 (tin/plane_stitch): one piece, nothing halved, every vertex on its footprint
+    # (draped in the grid before: within 1 m where laid whole, 50 m where cut; put on the mesh's
+    # flat 24 km triangles at their grid points before 2026-12-07, they slid up to 210 m).
     for planet, at, crosses in (("globe_octa", (-45, 0, 0), True), ("globe_octa", (-45, 0, 90), True),
                                 ("globe_octa", (-30, -90, 35), True), ("globe", (10, 180, 90), True),
                                 ("globe_octa", (-88, 30, 0), True), ("globe_octa", (89, 0, 0), False),
                                 ("globe", (75, 20, 60), False), ("globe_octa", (0, -90, 0), True)):
-        bound = 50 if crosses else 1
         where = ",".join(str(a) for a in at)
-        stdout, _ = run("overlay", out(f"{planet}.planet"), out("strip.obj"), "--at", where, "--error", "200",
-                        "--out", out("folded_road.obj"))
-        r = json.loads(stdout)
-        worst, faces = off_footprint(out("folded_road.obj"), *at, 1737400)
-        if (r["euler"] != 2 or r["border_edges"] != 0 or r["non_manifold_edges"] != 0 or faces < 16
-                or worst > bound or (r["road_pieces"] > 1) != crosses or r["road_stray_m"] > 200
-                or r["road_undraped_edges"] != 0):
-            fail(f"a road at {where} on {planet}: {r}, {faces} road triangles, {worst:.0f} m off its footprint")
+        for mode in ("stitch", "stencil"):
+            stdout, _ = run("overlay", out(f"{planet}.planet"), out("strip.obj"), "--at", where, "--error", "200",
+                            "--mode", mode, "--out", out("folded_road.obj"))
+            r = json.loads(stdout)
+            worst, faces = off_footprint(out("folded_road.obj"), *at, 1737400)
+            closed = r["euler"] == 2 and r["border_edges"] == 0 and r["non_manifold_edges"] == 0
+            if mode == "stitch" and r["stitched_in"] == "road plane":
+                ok = closed and faces >= 16 and worst <= 1 and r["road_pieces"] == 1 and r["road_stray_m"] == 0
+            elif mode == "stitch":  # the grid's, where the plane cannot see the mesh one to one
+                ok = closed and faces >= 16 and worst <= (50 if crosses else 1) and r["road_undraped_edges"] == 0
+            else:
+                ok = (closed and faces >= 16 and worst <= (50 if crosses else 1)
+                      and (r["road_pieces"] > 1) == crosses and r["road_stray_m"] <= 200)
+            if not ok:
+                fail(f"a road at {where} on {planet}, {mode}: {r}, {faces} road triangles, {worst:.0f} m off its footprint")
 
 
 def group_road():
