@@ -319,18 +319,36 @@ TEST(TinOverlay, APlanetKeepsItsClosedSurfaceWithARoadStitchedIn) {
                                     dir / "x.obj", io::ExportFormat::kObj, o, notes),
                core::InputError)
       << "a planet needs --at";
-  // Across the seam (since 2026-12-07; refused before): stenciled, a piece on either side of it
-  // in the grid; stitched, in the road's plane, where there is no seam. One surface either way.
+  // Across the seam (since 2026-12-07; refused before): laid in the grid (a stencil, or a stitch
+  // asked to go there), a piece on either side of it; stitched in the road's plane, where there is
+  // no seam, one. One surface either way.
   o.at = std::array<double, 3>{10.0, 179.9, 0.0};
-  for (const auto mode : {OverlayMode::kStencil, OverlayMode::kStitch}) {
-    o.mode = mode;
+  for (const int variant : {0, 1, 2}) {
+    o.mode = variant == 0 ? OverlayMode::kStencil : OverlayMode::kStitch;
+    o.stitchInGrid = variant == 2;
     const nlohmann::json seam =
         io::overlayFromFiles(dir / "p.planet", io::ImportOptions{}, dir / "road.obj",
                              dir / "seam.obj", io::ExportFormat::kObj, o, notes);
+    SCOPED_TRACE(seam.dump());
     expectOneClosedSurface(seam);
-    EXPECT_EQ(seam["road_pieces"], mode == OverlayMode::kStencil ? 2 : 1);
+    EXPECT_EQ(seam["road_pieces"], variant == 1 ? 1 : 2);
     EXPECT_LE(seam["road_stray_m"].get<double>(), 2000.0);
+    if (variant > 0) {
+      EXPECT_EQ(seam["stitched_in"], variant == 1 ? "road plane" : "grid");
+    }
   }
+  // Stitched over a pole in the grid the surface would fold (a grid row is one point): refused,
+  // naming the ways that work.
+  o.at = std::array<double, 3>{90.0, 30.0, 0.0};
+  try {
+    io::overlayFromFiles(dir / "p.planet", io::ImportOptions{}, dir / "road.obj", dir / "x.obj",
+                         io::ExportFormat::kObj, o, notes);
+    ADD_FAILURE() << "stitched over the pole in the grid";
+  } catch (const core::InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("--mode stencil"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("own plane"), std::string::npos) << e.what();
+  }
+  o.stitchInGrid = false;
   // Beside a pole and over it (since 2026-12-07; refused before: there a grid row is one point):
   // one closed surface, the pole one vertex. Over it, stenciled (the road's fan round the pole
   // spread along the pole's row) and stitched (since 2026-12-08 in the road's own plane, as every

@@ -13,7 +13,8 @@ namespace ps::app {
 namespace {
 
 struct OverlayArgs {
-  std::string terrain, road, output, mode = "stitch", at, format, encoding = "stored";
+  std::string terrain, road, output, mode = "stitch", at, format, encoding = "stored",
+                                     stitchIn = "plane";
   std::optional<double> error, spacing, scale, offset;
 };
 
@@ -48,6 +49,9 @@ int runOverlay(const OverlayArgs& a) {
   } else {
     throw core::InputError("--mode '" + a.mode + "' is not one of stitch, stencil");
   }
+  if (a.stitchIn != "plane" && a.stitchIn != "grid")
+    throw core::InputError("--stitch-in '" + a.stitchIn + "' is not one of plane, grid");
+  o.stitchInGrid = a.stitchIn == "grid";
   if (!a.error) throw core::InputError("overlay needs --error METRES (the terrain TIN's error)");
   o.errorM = *a.error;
   if (!a.at.empty()) o.at = parseAt(a.at);
@@ -97,6 +101,10 @@ const CommandRegistration kOverlay([](CLI::App& root, CLI::App*& sub) -> Command
                   "(degrees round the big circle and round the tube from its outer equator); on a "
                   "cylinder AROUND,ALONG[,HEADING] (degrees round the axis, metres along it from "
                   "the middle); on a flat terrain X,Y[,HEADING] in metres (default 0,0,0)");
+  sub->add_option("--stitch-in", a->stitchIn,
+                  "On a sphere: plane (the road's own, seen from the centre: its edges exact) or "
+                  "grid (the chart's, as before 2026-12-08; for comparison)")
+      ->capture_default_str();
   sub->add_option("--format", a->format, "obj | ply | glb (overrides the extension)");
   sub->add_option("--spacing", a->spacing,
                   "Heightmap terrain: metres between pixels; mesh terrain: the step it is sampled "

@@ -259,14 +259,15 @@ struct Overlaid {
 // On a sphere a stitched road goes in its own plane (tin/plane_stitch.hpp): exact, and blind to
 // the chart's grid, whose pole rows and folds it never meets. Where the surface about it is not
 // seen one to one from the centre (a TIN triangle with three corners on one great circle, as at
-// the end of an octahedral fold), and for a stencil, a flat terrain or a tube, it is laid in the
-// grid (tin/overlay.hpp).
+// the end of an octahedral fold), where options ask for it, and for a stencil, a flat terrain or
+// a tube, it is laid in the grid (tin/overlay.hpp).
 Overlaid overlayRoadOnto(const tin::SampleField& field, const tin::Tin& terrainTin,
                          const ObjTriangles& roadObj, const OverlayOptions& o,
                          const std::string& name, std::vector<std::string>& notes) {
   const bool sphere = field.metric == tin::ErrorMetric::kChart3d && field.wholeChart() &&
                       field.chart->sphereRadius() > 0;
-  if (o.mode == tin::OverlayMode::kStitch && sphere) {
+  const bool stitch = o.mode == tin::OverlayMode::kStitch;
+  if (stitch && sphere && !o.stitchInGrid) {
     requirePlace(o, name);
     const RoadFrame frame = roadFrame(*field.chart, *o.at, name);
     const bool holds = holdsLatLongPole(*field.chart, field.width - 1, frame, roadObj);
@@ -280,6 +281,12 @@ Overlaid overlayRoadOnto(const tin::SampleField& field, const tin::Tin& terrainT
     }
   }
   const LaidRoad laid = placeRoad(roadObj, field, o, name);
+  if (laid.holdsPole && stitch)
+    throw core::InputError(name +
+                           ": the road holds a pole of the lat-long chart, where a grid row is one "
+                           "point: stitched in the grid, its edges and the terrain's would cross "
+                           "there in points the surface cannot tell apart; stitch it in its own "
+                           "plane (the default) or lay it with --mode stencil");
   return {overlayInGrid(field, terrainTin, laid, o.mode, name), laid.holdsPole};
 }
 

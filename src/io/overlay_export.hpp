@@ -25,6 +25,9 @@ struct OverlayOptions {
   // (degrees clockwise from north). Flat terrains (optional): the origin in the terrain's metres
   // (x east, y north) and the heading; default 0, 0, 0.
   std::optional<std::array<double, 3>> at = {};
+  // A stitch on a sphere goes in the road's own plane (tin/plane_stitch.hpp) unless this asks for
+  // the chart's grid (tin/overlay.hpp; as before 2026-12-08, for comparison).
+  bool stitchInGrid = false;
 };
 
 // The road's vertices (x, y: metres in its own frame; z: height in metres above the terrain's
