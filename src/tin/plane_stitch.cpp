@@ -90,6 +90,112 @@ Eigen::Vector3d alongRayOnto(const Eigen::Vector3d& d, const Eigen::Vector3d& a,
   return d * (n.dot(a) / n.dot(d));
 }
 
+// Each surface vertex as seen in the plane from the centre, where it faces it within 60 degrees.
+struct SeenInPlane {
+  std::vector<Eigen::Vector2d> at;
+  std::vector<char> facing;
+};
+
+SeenInPlane seenFromCentre(const SurfaceMesh& surface, const RoadPlane& plane) {
+  const Eigen::Vector3d toOrigin = plane.origin - plane.centre;
+  const double reach = toOrigin.dot(plane.up);
+  SeenInPlane seen{std::vector<Eigen::Vector2d>(surface.positions.size(), Eigen::Vector2d::Zero()),
+                   std::vector<char>(surface.positions.size(), 0)};
+  for (std::size_t v = 0; v < surface.positions.size(); ++v) {
+    const Eigen::Vector3d d = surface.positions[v] - plane.centre;
+    const double w = d.dot(plane.up);
+    if (!(w > 0.5 * d.norm())) continue;
+    const Eigen::Vector3d s = d * (reach / w) - toOrigin;
+    seen.at[v] = {s.dot(plane.x), s.dot(plane.y)};
+    seen.facing[v] = 1;
+  }
+  return seen;
+}
+
+// The region's triangles with their own vertex numbers, shifted by `lo` so that every coordinate
+// the locators see is >= 0.
+struct LocalRegion {
+  Eigen::Vector2d lo;
+  double extent = 0;
+  std::vector<Eigen::Vector2d> xy;
+  std::vector<std::array<std::uint32_t, 3>> triangles;
+  std::map<std::uint32_t, std::uint32_t> local;  // surface vertex -> xy index
+};
+
+LocalRegion localRegion(const SurfaceMesh& surface, const std::vector<Eigen::Vector2d>& seen,
+                        const PlaneRegion& region, double box) {
+  LocalRegion r;
+  r.lo = Eigen::Vector2d::Constant(-box);
+  Eigen::Vector2d hi = Eigen::Vector2d::Constant(box);
+  for (const std::uint32_t t : region.triangles)
+    for (const auto v : surface.triangles[t])
+      r.lo = r.lo.cwiseMin(seen[v]), hi = hi.cwiseMax(seen[v]);
+  r.extent = (hi - r.lo).maxCoeff();
+  for (const std::uint32_t t : region.triangles) {
+    std::array<std::uint32_t, 3> lt{};
+    for (int k = 0; k < 3; ++k) {
+      const std::uint32_t v = surface.triangles[t][std::size_t(k)];
+      const auto [it, fresh] = r.local.emplace(v, std::uint32_t(r.xy.size()));
+      if (fresh) r.xy.push_back(seen[v] - r.lo);
+      lt[std::size_t(k)] = it->second;
+    }
+    r.triangles.push_back(lt);
+  }
+  return r;
+}
+
+// One triangulation: every region edge, then the road's, crossings made where they meet. A
+// surface vertex carries its number and height 0; an added one keeps NaN. Returns the distinct
+// vertices the road added.
+std::size_t triangulateInPlane(Cdt& cdt, const LocalRegion& region,
+                               const std::vector<Eigen::Vector2d>& road,
+                               const std::vector<std::array<std::uint32_t, 3>>& roadTriangles) {
+  std::vector<VertexHandle> regionVertex(region.xy.size());
+  for (const auto& [v, k] : region.local) {
+    regionVertex[k] = cdt.insert(Point(region.xy[k].x(), region.xy[k].y()));
+    regionVertex[k]->info().index = v;
+    regionVertex[k]->info().height = 0;
+  }
+  if (cdt.number_of_vertices() != region.local.size())
+    throw SurfaceUnseenInPlane(
+        "two of the surface's vertices about the road lie on one ray from the planet's centre: "
+        "it cannot be stitched in the road's plane");
+  for (const auto& [a, b] : edgesOf(region.triangles))
+    cdt.insert_constraint(regionVertex[a], regionVertex[b]);
+  std::size_t added = 0;
+  std::vector<VertexHandle> roadVertex;
+  for (const Eigen::Vector2d& p : road) {
+    const VertexHandle h = cdt.insert(Point(p.x(), p.y()));
+    if (std::isnan(h->info().height) && h->info().index == 0) {
+      h->info().index = 1;  // counted once, however many road vertices share it
+      ++added;
+    }
+    roadVertex.push_back(h);
+  }
+  for (const auto& [a, b] : edgesOf(roadTriangles))
+    if (roadVertex[a] != roadVertex[b]) cdt.insert_constraint(roadVertex[a], roadVertex[b]);
+  return added;
+}
+
+// Whether the region triangle t holds a, b and c (closed, within rounding).
+bool holdsCorners(const LocalRegion& region, const std::array<std::uint32_t, 3>& t,
+                  const Eigen::Vector2d& a, const Eigen::Vector2d& b, const Eigen::Vector2d& c) {
+  const Eigen::Vector2d &p = region.xy[t[0]], &q = region.xy[t[1]], &r = region.xy[t[2]];
+  const double whole = signedArea(p, q, r);
+  for (const Eigen::Vector2d* x : {&a, &b, &c})
+    if (signedArea(*x, q, r) / whole < -1e-9 || signedArea(p, *x, r) / whole < -1e-9 ||
+        signedArea(p, q, *x) / whole < -1e-9)
+      return false;
+  return true;
+}
+
+double areaOf(const std::vector<Eigen::Vector2d>& xy,
+              const std::vector<std::array<std::uint32_t, 3>>& triangles) {
+  double sum = 0;
+  for (const auto& t : triangles) sum += std::abs(signedArea(xy[t[0]], xy[t[1]], xy[t[2]]));
+  return sum;
+}
+
 }  // namespace
 
 PlaneStitch stitchInPlane(const SurfaceMesh& surface, const RoadPlane& plane,
@@ -106,74 +212,22 @@ PlaneStitch stitchInPlane(const SurfaceMesh& surface, const RoadPlane& plane,
         "the road reaches more than 45 degrees from its place, too far to be stitched in its "
         "plane");
   const double box = 1.25 * roadHalf;
-
-  // The surface as seen in the plane from the centre, where it faces it within 60 degrees.
-  const std::size_t n = surface.positions.size();
-  std::vector<Eigen::Vector2d> seen(n, Eigen::Vector2d::Zero());
-  std::vector<char> facing(n, 0);
-  for (std::size_t v = 0; v < n; ++v) {
-    const Eigen::Vector3d d = surface.positions[v] - plane.centre;
-    const double w = d.dot(plane.up);
-    if (!(w > 0.5 * d.norm())) continue;
-    const Eigen::Vector3d s = d * (reach / w) - toOrigin;
-    seen[v] = {s.dot(plane.x), s.dot(plane.y)};
-    facing[v] = 1;
-  }
-  const PlaneRegion region = planeRegion(surface, seen, facing, box, roadHalf);
-
-  // Shifted so that every coordinate the locators see is >= 0.
-  Eigen::Vector2d lo = Eigen::Vector2d::Constant(-box), hi = Eigen::Vector2d::Constant(box);
-  for (const std::uint32_t t : region.triangles)
-    for (const auto v : surface.triangles[t]) lo = lo.cwiseMin(seen[v]), hi = hi.cwiseMax(seen[v]);
-  const double extent = (hi - lo).maxCoeff(), bucket = extent / 256;
-  std::vector<Eigen::Vector2d> regionXY;
-  std::vector<std::array<std::uint32_t, 3>> regionTris;
-  std::map<std::uint32_t, std::uint32_t> local;  // surface vertex -> regionXY index
-  for (const std::uint32_t t : region.triangles) {
-    std::array<std::uint32_t, 3> lt{};
-    for (int k = 0; k < 3; ++k) {
-      const std::uint32_t v = surface.triangles[t][std::size_t(k)];
-      const auto [it, fresh] = local.emplace(v, std::uint32_t(regionXY.size()));
-      if (fresh) regionXY.push_back(seen[v] - lo);
-      lt[std::size_t(k)] = it->second;
-    }
-    regionTris.push_back(lt);
-  }
-  std::vector<Eigen::Vector2d> roadShifted;
-  for (const Eigen::Vector2d& p : roadXY) roadShifted.push_back(p - lo);
-  const TinLocator footprint(roadShifted, roadTriangles, extent, extent, bucket);
-  refuseSelfIntersection(Road{roadShifted, std::vector<double>(roadXY.size(), 0.0), roadTriangles},
+  const SeenInPlane seen = seenFromCentre(surface, plane);
+  const PlaneRegion region = planeRegion(surface, seen.at, seen.facing, box, roadHalf);
+  const LocalRegion local = localRegion(surface, seen.at, region, box);
+  const double bucket = local.extent / 256;
+  std::vector<Eigen::Vector2d> road;
+  for (const Eigen::Vector2d& p : roadXY) road.push_back(p - local.lo);
+  const TinLocator footprint(road, roadTriangles, local.extent, local.extent, bucket);
+  refuseSelfIntersection(Road{road, std::vector<double>(road.size(), 0.0), roadTriangles},
                          footprint, "m^2 (in its plane)");
-  const TinLocator onRegion(regionXY, regionTris, extent, extent, bucket);
-
-  // One triangulation: every region edge, then the road's, crossings made where they meet.
+  const TinLocator onRegion(local.xy, local.triangles, local.extent, local.extent, bucket);
   Cdt cdt;
-  std::vector<VertexHandle> regionVertex(regionXY.size());
-  for (const auto& [v, k] : local) {
-    regionVertex[k] = cdt.insert(Point(regionXY[k].x(), regionXY[k].y()));
-    regionVertex[k]->info().index = v;
-    regionVertex[k]->info().height = 0;  // a surface vertex; an added one keeps NaN
-  }
-  if (cdt.number_of_vertices() != local.size())
-    throw SurfaceUnseenInPlane(
-        "two of the surface's vertices about the road lie on one ray from the planet's centre: "
-        "it cannot be stitched in the road's plane");
-  for (const auto& [a, b] : edgesOf(regionTris))
-    cdt.insert_constraint(regionVertex[a], regionVertex[b]);
   PlaneStitch out;
-  std::vector<VertexHandle> roadVertex;
-  for (const Eigen::Vector2d& p : roadShifted) {
-    const VertexHandle h = cdt.insert(Point(p.x(), p.y()));
-    if (std::isnan(h->info().height) && h->info().index == 0) {
-      h->info().index = 1;  // counted once, however many road vertices share it
-      ++out.roadVertices;
-    }
-    roadVertex.push_back(h);
-  }
-  for (const auto& [a, b] : edgesOf(roadTriangles))
-    if (roadVertex[a] != roadVertex[b]) cdt.insert_constraint(roadVertex[a], roadVertex[b]);
+  out.roadVertices = triangulateInPlane(cdt, local, road, roadTriangles);
 
-  // Faces into triangles: each lies in one region triangle, or outside the region (dropped).
+  // The surface's triangles outside the region as they were; the faces, each in one region
+  // triangle or outside the region (dropped), with each added vertex lifted along its ray.
   out.mesh.positions = surface.positions;
   std::vector<char> remeshed(surface.triangles.size(), 0);
   for (const std::uint32_t t : region.triangles) remeshed[t] = 1;
@@ -181,21 +235,7 @@ PlaneStitch stitchInPlane(const SurfaceMesh& surface, const RoadPlane& plane,
   for (std::size_t t = 0; t < surface.triangles.size(); ++t)
     if (!remeshed[t]) out.mesh.triangles.push_back(surface.triangles[t]), out.onRoad.push_back(0);
   std::map<VertexHandle, std::uint32_t> added;
-  double regionArea = 0, keptArea = 0, roadArea = 0, keptRoadArea = 0;
-  for (const auto& t : regionTris)
-    regionArea += std::abs(signedArea(regionXY[t[0]], regionXY[t[1]], regionXY[t[2]]));
-  for (const auto& t : roadTriangles)
-    roadArea += std::abs(signedArea(roadShifted[t[0]], roadShifted[t[1]], roadShifted[t[2]]));
-  const auto holdsCorners = [&](const std::array<std::uint32_t, 3>& t, const Eigen::Vector2d& a,
-                                const Eigen::Vector2d& b, const Eigen::Vector2d& c) {
-    const Eigen::Vector2d &p = regionXY[t[0]], &q = regionXY[t[1]], &r = regionXY[t[2]];
-    const double whole = signedArea(p, q, r);
-    for (const Eigen::Vector2d* x : {&a, &b, &c})
-      if (signedArea(*x, q, r) / whole < -1e-9 || signedArea(p, *x, r) / whole < -1e-9 ||
-          signedArea(p, q, *x) / whole < -1e-9)
-        return false;
-    return true;
-  };
+  double keptArea = 0, keptRoadArea = 0;
   const auto flat = [](VertexHandle v) { return Eigen::Vector2d(v->point().x(), v->point().y()); };
   for (auto f = cdt.finite_faces_begin(); f != cdt.finite_faces_end(); ++f) {
     const Eigen::Vector2d a = flat(f->vertex(0)), b = flat(f->vertex(1)), c = flat(f->vertex(2));
@@ -206,7 +246,7 @@ PlaneStitch stitchInPlane(const SurfaceMesh& surface, const RoadPlane& plane,
     double best = -INFINITY;
     onRegion.visit(centroid, [&](const TinLocator::Hit& hit) {
       const double inside = std::min({hit.l0, hit.l1, hit.l2});
-      if (inside > best && holdsCorners(regionTris[hit.triangle], a, b, c))
+      if (inside > best && holdsCorners(local, local.triangles[hit.triangle], a, b, c))
         best = inside, host = hit;
     });
     if (!host) continue;
@@ -223,7 +263,7 @@ PlaneStitch stitchInPlane(const SurfaceMesh& surface, const RoadPlane& plane,
       }
       auto it = added.find(v);
       if (it == added.end()) {
-        const Eigen::Vector2d q = flat(v) + lo;
+        const Eigen::Vector2d q = flat(v) + local.lo;
         const Eigen::Vector3d ray = toOrigin + q.x() * plane.x + q.y() * plane.y;
         out.mesh.positions.push_back(plane.centre + alongRayOnto(ray, ta, tb, tc));
         it = added.emplace(v, std::uint32_t(out.mesh.positions.size() - 1)).first;
@@ -236,15 +276,17 @@ PlaneStitch stitchInPlane(const SurfaceMesh& surface, const RoadPlane& plane,
     }
     if (region.orientation < 0) std::swap(tri[1], tri[2]);
     const double area = std::abs(signedArea(a, b, c));
+    const bool onRoad = footprint.contains(centroid, 0.0);
     keptArea += area;
-    const bool road = footprint.contains(centroid, 0.0);
-    keptRoadArea += road ? area : 0.0;
+    keptRoadArea += onRoad ? area : 0.0;
     out.mesh.triangles.push_back(tri);
-    out.onRoad.push_back(road ? 1 : 0);
+    out.onRoad.push_back(onRoad ? 1 : 0);
   }
   out.crossingVertices = added.size() - std::min(added.size(), out.roadVertices);
   // The faces must tile the region and the road exactly (up to rounding): the projection is one
   // to one there (checked above), so a gap or an overlap would be this code's mistake.
+  const double regionArea = areaOf(local.xy, local.triangles),
+               roadArea = areaOf(road, roadTriangles);
   if (std::abs(keptArea - regionArea) > 1e-9 * regionArea ||
       std::abs(keptRoadArea - roadArea) > 1e-9 * regionArea)
     throw std::logic_error("stitchInPlane: the faces cover " + core::exactNumber(keptArea) +
