@@ -367,6 +367,7 @@ void benchExport(const BenchOptions& options, std::ostream& out) {
   }
   omp_set_num_threads(threadsBefore);
   benchExportPlanetTin(options.quick, out);
+  benchExportPlanetOverlay(options.quick, work, out);
   std::error_code ec;
   fs::remove_all(work, ec);
 }

@@ -37,4 +37,8 @@ void benchExportTin(const Heightmap& h, const std::vector<double>& requests, int
 // Whole planets as TINs (3D error) beside the bintree export.
 void benchExportPlanetTin(bool quick, std::ostream& out);
 
+// A road stitched into Mars on both sphere charts, in its own plane and in the chart's grid
+// (bench/bench_export_overlay.cpp); files in `work`.
+void benchExportPlanetOverlay(bool quick, const std::filesystem::path& work, std::ostream& out);
+
 }  // namespace ps::bench

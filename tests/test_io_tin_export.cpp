@@ -10,6 +10,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <random>
 
+#include "app/build_paths.hpp"
 #include "core/cylinder_chart.hpp"
 #include "core/flat_chart.hpp"
 #include "core/input_error.hpp"
@@ -17,8 +18,10 @@
 #include "fresh_dir.hpp"
 #include "io/export.hpp"
 #include "io/height_image.hpp"
+#include "io/heightmap_import.hpp"
 #include "io/planet_file.hpp"
 #include "io/tin_export.hpp"
+#include "stress_util.hpp"
 #include "test_terrains.hpp"
 #include "tin/tin_check.hpp"
 #include "tin/tin_mesher.hpp"
@@ -252,6 +255,69 @@ TEST(TinExport, EveryChartsPlanetTinIsWeldedByItsTopology) {
       EXPECT_EQ(top.borderEdges, 0u) << name;
     }
     EXPECT_EQ(weldedTop.euler(), c.euler) << name;
+  }
+}
+
+// At an octahedral fold's cone point (a grid side's midpoint) the side's two halves weld into one
+// line: a TIN triangle from the cone point to a vertex on one half and one across the square, with
+// its mirror image through the other half, welded into a flap, two triangles on the same three
+// vertices facing apart (a 1025^2 Mars at 50 m: Euler 3, one edge of four triangles, until
+// 2026-12-08). The cone point is joined to its two diagonal neighbours inward: every planet's
+// welded TIN closes, and no triangle at a cone point has corners on both lines.
+TEST(TinExport, AnOctahedralConePointWeldsIntoNoFlap) {
+  std::vector<terrain::Terrain> planets;
+  for (const int n : {6, 7})
+    for (const double amplitude : {0.0, 2000.0, 20000.0})
+      planets.push_back(
+          amplitude == 0
+              ? terrain::Terrain(testkit::octahedralChart(n),
+                                 std::vector<float>(std::size_t(((1 << n) + 1) * ((1 << n) + 1))))
+              : testkit::bumpyOctahedralTerrain(n, 5, amplitude));
+  const fs::path mars = ps::app::sharedDir() / "data/dem/mars_mola_1440x720_u16.png";
+  if (fs::exists(mars) && !testkit::underAsan()) {
+    io::ImportOptions o;
+    o.chart = io::ChartKind::kOctahedral;
+    o.radius = 3389500.0;
+    o.offset = -32768.0;
+    o.westLongitudeDeg = 0.0;
+    o.gridSide = 1025;
+    io::ImportResult r = io::importHeightmap(mars, o);
+    planets.emplace_back(r.planet.chart, std::move(r.planet.heights));
+  } else {
+    std::cerr << "TinExport.AnOctahedralConePointWeldsIntoNoFlap: the 1025^2 Mars is skipped ("
+              << (testkit::underAsan() ? "sanitizers" : mars.string() + " is absent") << ")\n";
+  }
+  for (const terrain::Terrain& t : planets) {
+    const double m = t.grid().m();
+    for (const double error : {50.0, 500.0, 5000.0}) {
+      tin::SampleField field = io::terrainSampleField(t);
+      field.uniformTolerance = error;
+      const tin::Tin tin = tin::buildTin(field, {});
+      const tin::WeldedMesh welded = tin::weldTin(field, tin);
+      const tin::MeshTopology top = tin::meshTopology(welded.vertices, welded.triangles);
+      SCOPED_TRACE(t.grid().label() + " at " + std::to_string(error) + " m");
+      EXPECT_EQ(top.euler(), 2);
+      EXPECT_EQ(top.nonManifoldEdges, 0u);
+      EXPECT_EQ(top.borderEdges, 0u);
+      const std::array<Eigen::Vector2d, 4> cones{{{m / 2, 0}, {m, m / 2}, {m / 2, m}, {0, m / 2}}};
+      for (const auto& tri : tin.triangles)
+        for (const Eigen::Vector2d& c : cones) {
+          const auto at =
+              std::find_if(tri.begin(), tri.end(), [&](std::uint32_t v) { return tin.xy[v] == c; });
+          if (at == tri.end()) continue;
+          // No corner on the side (beyond the cone point) with another on the line from it
+          // straight into the square: with its mirror image such a triangle welds into a flap.
+          const Eigen::Vector2d inward = (Eigen::Vector2d(m / 2, m / 2) - c).normalized();
+          const Eigen::Vector2d along(-inward.y(), inward.x());
+          bool onSide = false, onLine = false;
+          for (const std::uint32_t v : tri) {
+            const Eigen::Vector2d d = tin.xy[v] - c;
+            onSide = onSide || (d.dot(inward) == 0 && d.dot(along) != 0);
+            onLine = onLine || (d.dot(along) == 0 && d.dot(inward) > 0);
+          }
+          EXPECT_FALSE(onSide && onLine) << "a triangle at the cone point " << c.transpose();
+        }
+    }
   }
 }
 

@@ -60,7 +60,8 @@ PlaneRegion planeRegion(const SurfaceMesh& surface, const std::vector<Eigen::Vec
     areaSum += signedArea(seen[tri[0]], seen[tri[1]], seen[tri[2]]);
   }
   if (region.triangles.empty())
-    throw core::InputError("no part of the surface faces the road's plane");
+    throw SurfaceUnseenInPlane(
+        "no triangle of the surface about the road faces its plane within 60 degrees");
   region.orientation = areaSum >= 0 ? 1.0 : -1.0;
   std::map<std::pair<std::uint32_t, std::uint32_t>, int> uses;
   for (const std::uint32_t t : region.triangles) {

@@ -221,7 +221,23 @@ Tin buildTin(const SampleField& field, const TinOptions& o, TinReport* reportOut
     std::vector<std::array<int, 2>> cones;
     if (gl.vSides == core::SideGluing::kMirror) cones.insert(cones.end(), {{m / 2, 0}, {m / 2, m}});
     if (gl.uSides == core::SideGluing::kMirror) cones.insert(cones.end(), {{0, m / 2}, {m, m / 2}});
-    for (const auto& [i, j] : cones) cdt.insert(Point(i, j))->info().height = field.at(i, j);
+    for (const auto& [i, j] : cones) {
+      const VertexHandle cone = cdt.insert(Point(i, j));
+      cone->info().height = field.at(i, j);
+      // The side's two halves weld into one line through the cone point, and a triangle from
+      // the cone point to a vertex on one half and a vertex across the square, with its mirror
+      // image through the other half, would weld into a flap: two triangles on the same three
+      // vertices, facing apart (a 1025^2 Mars at 50 m: Euler 3, one edge of four triangles). The
+      // cone point's two diagonal neighbours inward, joined to it by constrained edges, keep
+      // every triangle at it within one half.
+      const int di = i == 0 ? 1 : i == m ? -1 : 0, dj = j == 0 ? 1 : j == m ? -1 : 0;
+      for (const int side : {-1, 1}) {
+        const int ni = i + (di != 0 ? di : side), nj = j + (dj != 0 ? dj : side);
+        const VertexHandle inward = cdt.insert(Point(ni, nj));
+        inward->info().height = field.at(ni, nj);
+        cdt.insert_constraint(cone, inward);
+      }
+    }
   }
 
   auto t0 = Clock::now();

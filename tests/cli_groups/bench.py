@@ -42,6 +42,12 @@ def check_bench_row(r):
                                                 or r.get("footprint_error_m", 0) > 1e-6
                                                 or r.get("outside_error_ratio", 0) > 1 + 1e-9):
         fail(f"export overlay: {r}")
+    if b == "export" and tool == "planet-overlay" and (
+            r["euler"] != 2 or r["border_edges"] != 0 or r["non_manifold_edges"] != 0
+            or r["added_vertex_error_m"] > 1e-6 or r["road_group_triangles"] <= 0
+            or (r["stitch_in"] == "grid" and r["stitched_in"] != "grid")
+            or (r["stitched_in"] == "road plane" and r["road_stray_m"] != 0)):
+        fail(f"export planet-overlay: {r}")
     if b == "live" and r.get("saving") and (r["saves_done"] < 2 or r["records"] <= 0
                                            or r["saves_done"] > r["saves_started"]):
         fail(f"live: the session with saving on saved or journaled nothing: {r}")
