@@ -225,10 +225,10 @@ Tin buildTin(const SampleField& field, const TinOptions& o, TinReport* reportOut
       const VertexHandle cone = cdt.insert(Point(i, j));
       cone->info().height = field.at(i, j);
       // The side's two halves weld into one line through the cone point, and a triangle from
-      // the cone point to a vertex on one half and a vertex across the square, with its mirror
-      // image through the other half, would weld into a flap: two triangles on the same three
-      // vertices, facing apart (a 1025^2 Mars at 50 m: Euler 3, one edge of four triangles). The
-      // cone point's two diagonal neighbours inward, joined to it by constrained edges, keep
+      // the cone point to a vertex on one half and one on the line straight into the square,
+      // with its mirror image through the other half, welds into a flap: two triangles on the same
+      // three vertices, facing apart (a 1025^2 Mars at 50 m: Euler 3, one edge of four triangles).
+      // The cone point's two diagonal neighbours inward, joined to it by constrained edges, keep
       // every triangle at it within one half. Not in the quality mode: its refinement did not
       // end with them (EveryChartsQualityTinKeepsItsAngleAndCloses ran for minutes; not
       // pursued), and it closed its test planets without them.
